@@ -1,0 +1,1 @@
+//! Wheel–rail rolling contact.

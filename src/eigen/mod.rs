@@ -1,0 +1,1 @@
+//! Eigenmodes of the wheel–track substructures (K φ = ω² M φ).

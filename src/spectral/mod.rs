@@ -1,0 +1,1 @@
+//! Spectral analysis of signals along the rail.
