@@ -1,1 +1,792 @@
-//! The model file.
+//! The model file: every parameter of the wheel–track model, with its unit.
+//!
+//! A model is a TOML file (see `models/dutch-base.toml`, which documents every key with its
+//! unit). Files are parsed with `deny_unknown_fields`: a misspelt key is an error that names
+//! the file and the dotted key, never a silently ignored value. A file may start with
+//! `extends = "other.toml"` (a path relative to the file) or `extends = "builtin:dutch"` (the
+//! embedded Dutch base model): the base is read first and the file's tables are merged over it,
+//! key by key. Command-line overrides `--set dotted.key=value` (TOML value syntax; a bare word
+//! is taken as a string) are merged last. The merged table is then deserialised and
+//! [validated](Model::validate): every numeric parameter is checked against a stated range.
+//!
+//! Units are SI everywhere, except `run.speed_kmh` (km/h), converted in [`crate::units`].
+//!
+//! The fastening models RPM1–RPM5 (method.md §3) are *data*: each is a [`HoldPattern`] — which
+//! rail-foot regions are held rigidly, in which direction — and any other pattern can be given
+//! with `fastening.model = "custom"` and a `[fastening.custom]` table.
+
+mod load;
+
+pub use load::{apply_override, load_model, load_model_str, ModelSource, BUILTIN_DUTCH};
+
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+use crate::fe::material::IsotropicElastic;
+
+/// Errors while reading or checking a model file. Each names the file and the key.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    /// The file could not be read.
+    #[error("{file}: cannot read model file: {source}")]
+    Io {
+        /// The file.
+        file: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// TOML syntax error.
+    #[error("{file}: TOML syntax error: {message}")]
+    Syntax {
+        /// The file.
+        file: String,
+        /// The parser's message (with line and column).
+        message: String,
+    },
+    /// A key is unknown, missing, or of the wrong type.
+    #[error("{file}: key `{key}`: {message}")]
+    Key {
+        /// The file (with the files it extends).
+        file: String,
+        /// The dotted key.
+        key: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A value outside its allowed range.
+    #[error("{file}: key `{key}` = {value}: out of range, allowed {allowed}")]
+    OutOfRange {
+        /// The file (with the files it extends).
+        file: String,
+        /// The dotted key.
+        key: String,
+        /// The value given.
+        value: String,
+        /// The allowed range, with unit.
+        allowed: String,
+    },
+    /// A `--set key=value` override that cannot be applied.
+    #[error("--set {arg}: {message}")]
+    Override {
+        /// The argument as given.
+        arg: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// `extends` chains that loop or go too deep.
+    #[error("{file}: `extends` chain too deep or circular (more than 8 levels)")]
+    ExtendsLoop {
+        /// The file.
+        file: String,
+    },
+}
+
+/// The complete model. Field docs state units; `models/dutch-base.toml` gives the defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Model {
+    /// Track layout.
+    pub track: Track,
+    /// Rail geometry and material.
+    pub rail: Rail,
+    /// Half sleeper.
+    pub sleeper: Sleeper,
+    /// Rail fastening (railpad springs and rigid holds).
+    pub fastening: Fastening,
+    /// Ballast under each half sleeper.
+    pub ballast: Ballast,
+    /// Wheel geometry and material.
+    pub wheel: Wheel,
+    /// Vehicle: static load and primary suspension.
+    pub vehicle: Vehicle,
+    /// Wheel–rail contact parameters.
+    pub contact: Contact,
+    /// Mesh sizes.
+    pub mesh: MeshParams,
+    /// Run parameters of a passage.
+    pub run: Run,
+}
+
+/// Track layout.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Track {
+    /// Number of sleeper bays (−); the track is `bays × sleeper_spacing` long.
+    pub bays: usize,
+    /// Sleeper spacing, centre to centre (m).
+    pub sleeper_spacing: f64,
+}
+
+/// Rail.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rail {
+    /// Cross-section profile: `"uic54"` (the embedded 54E1 half profile).
+    pub profile: String,
+    /// Rail cant as tan(angle) (−): 0.025 = 1/40; 0 = upright.
+    pub inclination: f64,
+    /// Young's modulus (Pa).
+    pub youngs_modulus: f64,
+    /// Poisson's ratio (−).
+    pub poisson_ratio: f64,
+    /// Density (kg/m³).
+    pub density: f64,
+}
+
+/// Half monoblock sleeper as a solid block.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sleeper {
+    /// Length across the track (m).
+    pub length: f64,
+    /// Width along the rail (m).
+    pub width: f64,
+    /// Height (m).
+    pub height: f64,
+    /// Distance from the sleeper's track-centre end to the rail centre line (m).
+    pub rail_seat: f64,
+    /// Young's modulus (Pa).
+    pub youngs_modulus: f64,
+    /// Poisson's ratio (−).
+    pub poisson_ratio: f64,
+    /// Density (kg/m³).
+    pub density: f64,
+}
+
+/// Named fastening models of method.md §3, or a custom hold pattern.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum FasteningModel {
+    /// V-3-4: railpad springs; longitudinally rigid at all three columns; laterally at four rows.
+    #[serde(rename = "RPM1")]
+    Rpm1,
+    /// V-∞-4: railpad springs; longitudinally rigid at every rail-foot node (continuous).
+    #[serde(rename = "RPM2")]
+    Rpm2,
+    /// V-1-4: railpad springs; longitudinally rigid at the middle column only (degraded).
+    #[serde(rename = "RPM3")]
+    Rpm3,
+    /// ∞-1-4: vertically rigid everywhere (no vertical bending); longitudinally the middle column.
+    #[serde(rename = "RPM4")]
+    Rpm4,
+    /// ∞-∞-4: vertically and longitudinally rigid everywhere (longitudinal shear alone).
+    #[serde(rename = "RPM5")]
+    Rpm5,
+    /// The pattern in `[fastening.custom]`.
+    #[serde(rename = "custom")]
+    Custom,
+}
+
+impl FasteningModel {
+    /// Name as in the model file.
+    pub fn name(self) -> &'static str {
+        match self {
+            FasteningModel::Rpm1 => "RPM1",
+            FasteningModel::Rpm2 => "RPM2",
+            FasteningModel::Rpm3 => "RPM3",
+            FasteningModel::Rpm4 => "RPM4",
+            FasteningModel::Rpm5 => "RPM5",
+            FasteningModel::Custom => "custom",
+        }
+    }
+}
+
+/// Which rail-foot region is held rigidly (fixed to the ground) in one direction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RigidRegion {
+    /// Not held rigidly (only the springs act).
+    None,
+    /// The listed columns: strips of width `strip_width` along x, across the whole foot.
+    Columns,
+    /// The listed rows: strips of width `strip_width` across y, over the footprint length.
+    Rows,
+    /// Every node of the rail-foot underside, along the whole rail.
+    Continuous,
+}
+
+/// Rigid hold in one direction.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionHold {
+    /// The held region.
+    pub rigid: RigidRegion,
+    /// Column or row indices (0-based; columns counted along +x, rows along +y) for
+    /// `columns`/`rows`; empty otherwise.
+    #[serde(default)]
+    pub indices: Vec<usize>,
+}
+
+impl DirectionHold {
+    fn none() -> Self {
+        DirectionHold {
+            rigid: RigidRegion::None,
+            indices: vec![],
+        }
+    }
+    fn continuous() -> Self {
+        DirectionHold {
+            rigid: RigidRegion::Continuous,
+            indices: vec![],
+        }
+    }
+    fn columns(indices: Vec<usize>) -> Self {
+        DirectionHold {
+            rigid: RigidRegion::Columns,
+            indices,
+        }
+    }
+    fn rows(indices: Vec<usize>) -> Self {
+        DirectionHold {
+            rigid: RigidRegion::Rows,
+            indices,
+        }
+    }
+}
+
+/// How the rail foot is held, per direction: the general description of which the RPM models
+/// are instances. Springs act in a direction whenever its stiffness or damping is non-zero.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HoldPattern {
+    /// Longitudinal (x).
+    pub x: DirectionHold,
+    /// Lateral (y).
+    pub y: DirectionHold,
+    /// Vertical (z).
+    pub z: DirectionHold,
+}
+
+impl HoldPattern {
+    /// The pattern of a named model for a `rows × columns` fastening grid (method.md table):
+    /// the first number of the Li et al. code (V-3-4) is the vertical hold (V = springs,
+    /// ∞ = rigid everywhere), the second the longitudinal one (number of rigid columns, ∞ =
+    /// continuous), the third the lateral one (number of rigid rows). `None` for `custom`.
+    pub fn preset(model: FasteningModel, rows: usize, columns: usize) -> Option<HoldPattern> {
+        let all_rows = DirectionHold::rows((0..rows).collect());
+        let middle = DirectionHold::columns(vec![columns / 2]);
+        let all_columns = DirectionHold::columns((0..columns).collect());
+        let (x, z) = match model {
+            FasteningModel::Rpm1 => (all_columns, DirectionHold::none()),
+            FasteningModel::Rpm2 => (DirectionHold::continuous(), DirectionHold::none()),
+            FasteningModel::Rpm3 => (middle, DirectionHold::none()),
+            FasteningModel::Rpm4 => (middle, DirectionHold::continuous()),
+            FasteningModel::Rpm5 => (DirectionHold::continuous(), DirectionHold::continuous()),
+            FasteningModel::Custom => return None,
+        };
+        Some(HoldPattern { x, y: all_rows, z })
+    }
+}
+
+/// Rail fastening: railpad springs on a `rows × columns` grid and rigid holds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fastening {
+    /// RPM1–RPM5 or custom.
+    pub model: FasteningModel,
+    /// The hold pattern when `model = "custom"` (must be absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub custom: Option<HoldPattern>,
+    /// Spring rows across the track (−).
+    pub rows: usize,
+    /// Spring columns along the rail (−).
+    pub columns: usize,
+    /// Footprint length along the rail (m).
+    pub footprint_length: f64,
+    /// Footprint width across the track (m).
+    pub footprint_width: f64,
+    /// Width of a rigidly held column strip (along x) or row strip (along y) (m).
+    pub strip_width: f64,
+    /// Gap between the rail-foot underside and the sleeper top (m).
+    pub pad_thickness: f64,
+    /// Vertical stiffness per fastening (N/m), spread evenly over the grid.
+    pub vertical_stiffness: f64,
+    /// Vertical damping per fastening (N·s/m).
+    pub vertical_damping: f64,
+    /// Lateral stiffness per fastening (N/m).
+    pub lateral_stiffness: f64,
+    /// Lateral damping per fastening (N·s/m).
+    pub lateral_damping: f64,
+    /// Longitudinal stiffness per fastening (N/m).
+    pub longitudinal_stiffness: f64,
+    /// Longitudinal damping per fastening (N·s/m).
+    pub longitudinal_damping: f64,
+}
+
+impl Fastening {
+    /// The hold pattern in force: the preset of the named model, or the custom one.
+    pub fn hold_pattern(&self) -> HoldPattern {
+        HoldPattern::preset(self.model, self.rows, self.columns).unwrap_or_else(|| {
+            self.custom
+                .clone()
+                .expect("validated: custom model has a pattern")
+        })
+    }
+
+    /// Stiffness per fastening in x, y, z (N/m).
+    pub fn stiffness(&self) -> [f64; 3] {
+        [
+            self.longitudinal_stiffness,
+            self.lateral_stiffness,
+            self.vertical_stiffness,
+        ]
+    }
+
+    /// Damping per fastening in x, y, z (N·s/m).
+    pub fn damping(&self) -> [f64; 3] {
+        [
+            self.longitudinal_damping,
+            self.lateral_damping,
+            self.vertical_damping,
+        ]
+    }
+}
+
+/// Ballast under each half sleeper (spread over its bottom face by area).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ballast {
+    /// Vertical stiffness (N/m).
+    pub vertical_stiffness: f64,
+    /// Vertical damping (N·s/m).
+    pub vertical_damping: f64,
+    /// Lateral stiffness (N/m).
+    pub lateral_stiffness: f64,
+    /// Lateral damping (N·s/m).
+    pub lateral_damping: f64,
+    /// Longitudinal stiffness (N/m).
+    pub longitudinal_stiffness: f64,
+    /// Longitudinal damping (N·s/m).
+    pub longitudinal_damping: f64,
+}
+
+impl Ballast {
+    /// Stiffness in x, y, z (N/m).
+    pub fn stiffness(&self) -> [f64; 3] {
+        [
+            self.longitudinal_stiffness,
+            self.lateral_stiffness,
+            self.vertical_stiffness,
+        ]
+    }
+    /// Damping in x, y, z (N·s/m).
+    pub fn damping(&self) -> [f64; 3] {
+        [
+            self.longitudinal_damping,
+            self.lateral_damping,
+            self.vertical_damping,
+        ]
+    }
+}
+
+/// Wheel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Wheel {
+    /// Nominal rolling radius (m).
+    pub radius: f64,
+    /// Tread conicity (−): 0.025 = 1/40.
+    pub conicity: f64,
+    /// Young's modulus (Pa).
+    pub youngs_modulus: f64,
+    /// Poisson's ratio (−).
+    pub poisson_ratio: f64,
+    /// Density (kg/m³).
+    pub density: f64,
+}
+
+/// Vehicle above the wheel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Vehicle {
+    /// Static vertical wheel load (N); the sprung mass is (load / g − unsprung mass).
+    pub wheel_load: f64,
+    /// Primary suspension stiffness per wheel (N/m).
+    pub primary_stiffness: f64,
+    /// Primary suspension damping per wheel (N·s/m).
+    pub primary_damping: f64,
+    /// Gravitational acceleration (m/s²).
+    pub gravity: f64,
+}
+
+/// Wheel–rail contact.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Contact {
+    /// Coulomb friction coefficient (−).
+    pub friction: f64,
+    /// Traction coefficient: mean F_L / F_N, set by the driving torque (−).
+    pub traction_coefficient: f64,
+    /// Lateral radius of the rail head crown (m).
+    pub rail_crown_radius: f64,
+}
+
+/// Mass matrix kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MassKind {
+    /// Diagonal (lumped) mass.
+    Lumped,
+    /// Consistent mass.
+    Consistent,
+}
+
+/// Mesh sizes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshParams {
+    /// Element length along the rail outside the fine zone (m).
+    pub element_length: f64,
+    /// Element length along the rail in and around the solution zone (m).
+    pub fine_element_length: f64,
+    /// Target element size in the rail foot and web (m).
+    pub section_size: f64,
+    /// Target element size near the running surface (m).
+    pub head_size: f64,
+    /// Hexahedra of a sleeper along x, y, z (−).
+    pub sleeper_elements: [usize; 3],
+    /// Circumferential divisions of the wheel (−).
+    pub wheel_segments: usize,
+    /// Lumped or consistent mass.
+    pub mass: MassKind,
+}
+
+/// Run parameters of a passage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Run {
+    /// Train speed (km/h; converted to m/s by [`Run::speed`]).
+    pub speed_kmh: f64,
+    /// Distance from the wheel's start to the solution zone (m).
+    pub solution_zone_offset: f64,
+    /// Length of the solution zone (m).
+    pub solution_zone_length: f64,
+}
+
+impl Run {
+    /// Speed (m/s).
+    pub fn speed(&self) -> f64 {
+        crate::units::kmh_to_ms(self.speed_kmh)
+    }
+}
+
+impl Model {
+    /// The embedded default model (Dutch track, RPM3).
+    pub fn default_model() -> Model {
+        load_model_str(BUILTIN_DUTCH, "builtin:dutch", &[]).expect("embedded model is valid")
+    }
+
+    /// Track length `bays × sleeper_spacing` (m).
+    pub fn track_length(&self) -> f64 {
+        self.track.bays as f64 * self.track.sleeper_spacing
+    }
+
+    /// Rail steel.
+    pub fn rail_material(&self) -> IsotropicElastic {
+        IsotropicElastic {
+            youngs_modulus: self.rail.youngs_modulus,
+            poisson_ratio: self.rail.poisson_ratio,
+            density: self.rail.density,
+        }
+    }
+
+    /// Sleeper concrete.
+    pub fn sleeper_material(&self) -> IsotropicElastic {
+        IsotropicElastic {
+            youngs_modulus: self.sleeper.youngs_modulus,
+            poisson_ratio: self.sleeper.poisson_ratio,
+            density: self.sleeper.density,
+        }
+    }
+
+    /// Wheel steel.
+    pub fn wheel_material(&self) -> IsotropicElastic {
+        IsotropicElastic {
+            youngs_modulus: self.wheel.youngs_modulus,
+            poisson_ratio: self.wheel.poisson_ratio,
+            density: self.wheel.density,
+        }
+    }
+
+    /// Checks every value against its allowed range; `file` names the source in the error.
+    pub fn validate(&self, file: &str) -> Result<(), ModelError> {
+        let mut c = Checker { file };
+        let t = &self.track;
+        c.int("track.bays", t.bays, 2, 400)?;
+        c.range("track.sleeper_spacing", t.sleeper_spacing, 0.2, 2.0, "m")?;
+        let r = &self.rail;
+        if r.profile != "uic54" {
+            return Err(ModelError::OutOfRange {
+                file: file.into(),
+                key: "rail.profile".into(),
+                value: format!("{:?}", r.profile),
+                allowed: "\"uic54\"".into(),
+            });
+        }
+        c.range(
+            "rail.inclination",
+            r.inclination,
+            0.0,
+            0.1,
+            "(tan of cant angle)",
+        )?;
+        c.elastic("rail", r.youngs_modulus, r.poisson_ratio, r.density)?;
+        let s = &self.sleeper;
+        c.pos("sleeper.length", s.length, 5.0, "m")?;
+        c.pos(
+            "sleeper.width",
+            s.width,
+            t.sleeper_spacing,
+            "m (below sleeper spacing)",
+        )?;
+        c.pos("sleeper.height", s.height, 1.0, "m")?;
+        c.range(
+            "sleeper.rail_seat",
+            s.rail_seat,
+            0.1,
+            s.length - 0.1,
+            "m (inside the sleeper)",
+        )?;
+        c.elastic("sleeper", s.youngs_modulus, s.poisson_ratio, s.density)?;
+        let f = &self.fastening;
+        c.int("fastening.rows", f.rows, 1, 16)?;
+        c.int("fastening.columns", f.columns, 1, 16)?;
+        c.pos(
+            "fastening.footprint_length",
+            f.footprint_length,
+            s.width,
+            "m (within the sleeper width)",
+        )?;
+        c.pos(
+            "fastening.footprint_width",
+            f.footprint_width,
+            0.14,
+            "m (within the 0.14 m rail foot)",
+        )?;
+        let max_strip =
+            (f.footprint_length / f.columns as f64).min(f.footprint_width / f.rows as f64);
+        c.pos(
+            "fastening.strip_width",
+            f.strip_width,
+            max_strip,
+            "m (at most one grid cell)",
+        )?;
+        c.range("fastening.pad_thickness", f.pad_thickness, 0.0, 0.05, "m")?;
+        for (k, v) in [
+            ("vertical_stiffness", f.vertical_stiffness),
+            ("vertical_damping", f.vertical_damping),
+            ("lateral_stiffness", f.lateral_stiffness),
+            ("lateral_damping", f.lateral_damping),
+            ("longitudinal_stiffness", f.longitudinal_stiffness),
+            ("longitudinal_damping", f.longitudinal_damping),
+        ] {
+            c.range(&format!("fastening.{k}"), v, 0.0, 1e12, "(N/m or N s/m)")?;
+        }
+        match (f.model, &f.custom) {
+            (FasteningModel::Custom, None) => {
+                return Err(ModelError::Key {
+                    file: file.into(),
+                    key: "fastening.custom".into(),
+                    message: "fastening.model = \"custom\" needs a [fastening.custom] table with x, y, z holds".into(),
+                })
+            }
+            (FasteningModel::Custom, Some(p)) => {
+                for (d, h) in [("x", &p.x), ("y", &p.y), ("z", &p.z)] {
+                    let n = match h.rigid {
+                        RigidRegion::Columns => f.columns,
+                        RigidRegion::Rows => f.rows,
+                        RigidRegion::None | RigidRegion::Continuous => 0,
+                    };
+                    let key = format!("fastening.custom.{d}.indices");
+                    if n == 0 && !h.indices.is_empty() {
+                        return Err(ModelError::Key {
+                            file: file.into(),
+                            key,
+                            message: "indices are only allowed with rigid = \"columns\" or \"rows\"".into(),
+                        });
+                    }
+                    if n > 0 && h.indices.is_empty() {
+                        return Err(ModelError::Key {
+                            file: file.into(),
+                            key,
+                            message: "give at least one column/row index".into(),
+                        });
+                    }
+                    if let Some(&i) = h.indices.iter().find(|&&i| i >= n.max(1)) {
+                        return Err(ModelError::OutOfRange {
+                            file: file.into(),
+                            key,
+                            value: i.to_string(),
+                            allowed: format!("0..={}", n.saturating_sub(1)),
+                        });
+                    }
+                }
+            }
+            (_, Some(_)) => {
+                return Err(ModelError::Key {
+                    file: file.into(),
+                    key: "fastening.custom".into(),
+                    message: format!(
+                        "only allowed with fastening.model = \"custom\" (model is {})",
+                        f.model.name()
+                    ),
+                })
+            }
+            (_, None) => {}
+        }
+        let b = &self.ballast;
+        for (k, v) in [
+            ("vertical_stiffness", b.vertical_stiffness),
+            ("vertical_damping", b.vertical_damping),
+            ("lateral_stiffness", b.lateral_stiffness),
+            ("lateral_damping", b.lateral_damping),
+            ("longitudinal_stiffness", b.longitudinal_stiffness),
+            ("longitudinal_damping", b.longitudinal_damping),
+        ] {
+            c.range(&format!("ballast.{k}"), v, 0.0, 1e12, "(N/m or N s/m)")?;
+        }
+        // Sleepers float on the ballast: they need a spring in every direction.
+        for (k, v) in [
+            ("vertical_stiffness", b.vertical_stiffness),
+            ("lateral_stiffness", b.lateral_stiffness),
+            ("longitudinal_stiffness", b.longitudinal_stiffness),
+        ] {
+            c.pos(
+                &format!("ballast.{k}"),
+                v,
+                1e12,
+                "N/m (> 0: a sleeper needs support in every direction)",
+            )?;
+        }
+        let w = &self.wheel;
+        c.range("wheel.radius", w.radius, 0.2, 0.8, "m")?;
+        c.range("wheel.conicity", w.conicity, 0.0, 0.2, "(-)")?;
+        c.elastic("wheel", w.youngs_modulus, w.poisson_ratio, w.density)?;
+        let v = &self.vehicle;
+        c.pos("vehicle.wheel_load", v.wheel_load, 500e3, "N")?;
+        c.pos(
+            "vehicle.primary_stiffness",
+            v.primary_stiffness,
+            1e10,
+            "N/m",
+        )?;
+        c.range(
+            "vehicle.primary_damping",
+            v.primary_damping,
+            0.0,
+            1e9,
+            "N s/m",
+        )?;
+        c.range("vehicle.gravity", v.gravity, 0.0, 100.0, "m/s^2")?;
+        let k = &self.contact;
+        c.range("contact.friction", k.friction, 0.0, 2.0, "(-)")?;
+        c.range(
+            "contact.traction_coefficient",
+            k.traction_coefficient,
+            0.0,
+            k.friction,
+            "(-) (below contact.friction)",
+        )?;
+        c.range(
+            "contact.rail_crown_radius",
+            k.rail_crown_radius,
+            0.05,
+            10.0,
+            "m",
+        )?;
+        let m = &self.mesh;
+        c.pos(
+            "mesh.element_length",
+            m.element_length,
+            t.sleeper_spacing / 4.0,
+            "m (at most a quarter of the sleeper spacing)",
+        )?;
+        c.pos(
+            "mesh.fine_element_length",
+            m.fine_element_length,
+            m.element_length,
+            "m (at most mesh.element_length)",
+        )?;
+        c.range("mesh.section_size", m.section_size, 0.002, 0.05, "m")?;
+        c.range(
+            "mesh.head_size",
+            m.head_size,
+            0.001,
+            m.section_size,
+            "m (at most mesh.section_size)",
+        )?;
+        for (i, n) in m.sleeper_elements.iter().enumerate() {
+            c.int(&format!("mesh.sleeper_elements[{i}]"), *n, 1, 64)?;
+        }
+        c.int("mesh.wheel_segments", m.wheel_segments, 12, 720)?;
+        let run = &self.run;
+        c.range("run.speed_kmh", run.speed_kmh, 1.0, 500.0, "km/h")?;
+        c.range(
+            "run.solution_zone_offset",
+            run.solution_zone_offset,
+            0.0,
+            10.0,
+            "m",
+        )?;
+        let room = self.track_length() - run.solution_zone_offset;
+        c.pos(
+            "run.solution_zone_length",
+            run.solution_zone_length,
+            room,
+            "m (zone must fit on the track)",
+        )?;
+        Ok(())
+    }
+}
+
+struct Checker<'a> {
+    file: &'a str,
+}
+
+impl Checker<'_> {
+    fn fail(&self, key: &str, value: String, allowed: String) -> Result<(), ModelError> {
+        Err(ModelError::OutOfRange {
+            file: self.file.into(),
+            key: key.into(),
+            value,
+            allowed,
+        })
+    }
+    /// lo ≤ v ≤ hi, finite.
+    fn range(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<(), ModelError> {
+        if !(v.is_finite() && v >= lo && v <= hi) {
+            return self.fail(key, v.to_string(), format!("{lo} to {hi} {unit}"));
+        }
+        Ok(())
+    }
+    /// 0 < v ≤ hi, finite.
+    fn pos(&mut self, key: &str, v: f64, hi: f64, unit: &str) -> Result<(), ModelError> {
+        if !(v.is_finite() && v > 0.0 && v <= hi) {
+            return self.fail(
+                key,
+                v.to_string(),
+                format!("greater than 0 and at most {hi} {unit}"),
+            );
+        }
+        Ok(())
+    }
+    fn int(&mut self, key: &str, v: usize, lo: usize, hi: usize) -> Result<(), ModelError> {
+        if v < lo || v > hi {
+            return self.fail(key, v.to_string(), format!("{lo} to {hi}"));
+        }
+        Ok(())
+    }
+    fn elastic(&mut self, part: &str, e: f64, nu: f64, rho: f64) -> Result<(), ModelError> {
+        self.pos(&format!("{part}.youngs_modulus"), e, 1e13, "Pa")?;
+        if !(nu.is_finite() && (0.0..0.5).contains(&nu)) {
+            return self.fail(
+                &format!("{part}.poisson_ratio"),
+                nu.to_string(),
+                "0 to 0.5 (0.5 excluded: incompressible material is not supported)".into(),
+            );
+        }
+        self.pos(&format!("{part}.density"), rho, 1e5, "kg/m^3")
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,174 @@
+//! Reading model files: `extends`, deep merge, `--set` overrides, key-path errors.
+
+use std::path::{Path, PathBuf};
+
+use super::{Model, ModelError};
+
+/// The embedded Dutch base model (`models/dutch-base.toml`), RPM3.
+pub const BUILTIN_DUTCH: &str = include_str!("../../models/dutch-base.toml");
+
+/// Where a model comes from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ModelSource {
+    /// The embedded default model.
+    Builtin,
+    /// A TOML file.
+    File(PathBuf),
+}
+
+impl ModelSource {
+    /// Display name for messages and reports.
+    pub fn display(&self) -> String {
+        match self {
+            ModelSource::Builtin => "builtin:dutch".into(),
+            ModelSource::File(p) => p.display().to_string(),
+        }
+    }
+}
+
+const MAX_DEPTH: usize = 8;
+
+/// Loads a model from its source, merging `extends` bases and then `overrides`
+/// (`dotted.key=value` strings), and validates it.
+pub fn load_model(source: &ModelSource, overrides: &[String]) -> Result<Model, ModelError> {
+    match source {
+        ModelSource::Builtin => load_model_str(BUILTIN_DUTCH, "builtin:dutch", overrides),
+        ModelSource::File(path) => {
+            let (table, chain) = read_table(path, 0)?;
+            finish(table, &chain, overrides)
+        }
+    }
+}
+
+/// Loads a model from TOML text (`name` is used in messages; `extends` in the text is resolved
+/// relative to the current directory), then applies overrides and validates.
+pub fn load_model_str(text: &str, name: &str, overrides: &[String]) -> Result<Model, ModelError> {
+    let table = parse(text, name)?;
+    let (table, chain) = resolve_extends(table, name, Path::new("."), 0)?;
+    finish(table, &chain, overrides)
+}
+
+fn finish(mut table: toml::Table, chain: &str, overrides: &[String]) -> Result<Model, ModelError> {
+    for arg in overrides {
+        apply_override(&mut table, arg)?;
+    }
+    let model: Model =
+        serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+            let key = e.path().to_string();
+            let message = e.into_inner().message().to_string();
+            ModelError::Key {
+                file: chain.to_string(),
+                key,
+                message,
+            }
+        })?;
+    model.validate(chain)?;
+    Ok(model)
+}
+
+fn parse(text: &str, name: &str) -> Result<toml::Table, ModelError> {
+    text.parse::<toml::Table>().map_err(|e| ModelError::Syntax {
+        file: name.to_string(),
+        message: e.to_string().trim().replace('\n', " "),
+    })
+}
+
+fn read_table(path: &Path, depth: usize) -> Result<(toml::Table, String), ModelError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    let name = path.display().to_string();
+    let table = parse(&text, &name)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    resolve_extends(table, &name, dir, depth)
+}
+
+/// Returns the merged table and the chain of file names ("a.toml (extends b.toml)").
+fn resolve_extends(
+    mut table: toml::Table,
+    name: &str,
+    dir: &Path,
+    depth: usize,
+) -> Result<(toml::Table, String), ModelError> {
+    if depth > MAX_DEPTH {
+        return Err(ModelError::ExtendsLoop { file: name.into() });
+    }
+    let Some(ext) = table.remove("extends") else {
+        return Ok((table, name.to_string()));
+    };
+    let toml::Value::String(base) = ext else {
+        return Err(ModelError::Key {
+            file: name.into(),
+            key: "extends".into(),
+            message: "must be a string: a path relative to this file, or \"builtin:dutch\"".into(),
+        });
+    };
+    let (mut merged, base_chain) = if base == "builtin:dutch" {
+        let t = parse(BUILTIN_DUTCH, "builtin:dutch")?;
+        resolve_extends(t, "builtin:dutch", Path::new("."), depth + 1)?
+    } else {
+        read_table(&dir.join(&base), depth + 1)?
+    };
+    merge(&mut merged, table);
+    Ok((merged, format!("{name} (extends {base_chain})")))
+}
+
+/// Deep merge: tables merge key by key, any other value replaces.
+fn merge(base: &mut toml::Table, over: toml::Table) {
+    for (k, v) in over {
+        match (base.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
+            (_, v) => {
+                base.insert(k, v);
+            }
+        }
+    }
+}
+
+/// Applies one `dotted.key=value` override to a model table. The value is TOML
+/// (`1.3e9`, `"RPM1"`, `[4, 10, 2]`, `true`); a bare word that is not valid TOML is taken as a
+/// string, so `--set fastening.model=RPM1` works. Only existing tables can be entered, so a
+/// misspelt section is an error; a misspelt leaf key is caught by `deny_unknown_fields`.
+pub fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(), ModelError> {
+    let err = |message: &str| ModelError::Override {
+        arg: arg.to_string(),
+        message: message.to_string(),
+    };
+    let (key, raw) = arg
+        .split_once('=')
+        .ok_or_else(|| err("expected dotted.key=value, e.g. fastening.model=\"RPM1\""))?;
+    let key = key.trim();
+    let raw = raw.trim();
+    if key.is_empty() || key.split('.').any(str::is_empty) {
+        return Err(err("empty key"));
+    }
+    let value = match format!("v = {raw}").parse::<toml::Table>() {
+        Ok(mut t) => t.remove("v").expect("parsed key"),
+        Err(_) if !raw.is_empty() && !raw.contains(['"', '\'', '[', '{', '=']) => {
+            toml::Value::String(raw.to_string())
+        }
+        Err(e) => return Err(err(&format!("value is not TOML: {}", e.message()))),
+    };
+    let parts: Vec<&str> = key.split('.').collect();
+    let (leaf, path) = parts.split_last().expect("non-empty");
+    let mut cur = table;
+    let mut walked = String::new();
+    for p in path {
+        if !walked.is_empty() {
+            walked.push('.');
+        }
+        walked.push_str(p);
+        let custom = walked == "fastening.custom" || walked.starts_with("fastening.custom.");
+        if custom && !cur.contains_key(*p) {
+            cur.insert(p.to_string(), toml::Value::Table(toml::Table::new()));
+        }
+        cur = match cur.get_mut(*p) {
+            Some(toml::Value::Table(t)) => t,
+            Some(_) => return Err(err(&format!("`{walked}` is not a table"))),
+            None => return Err(err(&format!("unknown section `{walked}`"))),
+        };
+    }
+    cur.insert(leaf.to_string(), value);
+    Ok(())
+}

@@ -1,0 +1,204 @@
+use super::*;
+
+fn dutch_with(overrides: &[&str]) -> Result<Model, ModelError> {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    load_model(&ModelSource::Builtin, &o)
+}
+
+#[test]
+fn embedded_default_is_dutch_rpm3_with_stated_parameters() {
+    let m = Model::default_model();
+    assert_eq!(m.fastening.model, FasteningModel::Rpm3);
+    // Stated / literature values of track-parameters.md.
+    assert_eq!(m.run.speed_kmh, 140.0);
+    assert_eq!(m.wheel.radius, 0.46);
+    assert_eq!(m.contact.friction, 0.4);
+    assert_eq!(m.contact.traction_coefficient, 0.15);
+    assert_eq!(m.track.sleeper_spacing, 0.6);
+    assert_eq!(m.fastening.vertical_stiffness, 1.3e9);
+    assert_eq!(m.fastening.vertical_damping, 45e3);
+    assert_eq!(m.ballast.vertical_stiffness, 45e6);
+    assert_eq!(m.vehicle.primary_stiffness, 1.15e6);
+    assert!((m.run.speed() - 38.888_888_888_9).abs() < 1e-9);
+}
+
+#[test]
+fn the_five_model_files_load_and_differ_only_in_the_fastening_model() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+    let base = Model::default_model();
+    for (i, want) in [
+        FasteningModel::Rpm1,
+        FasteningModel::Rpm2,
+        FasteningModel::Rpm3,
+        FasteningModel::Rpm4,
+        FasteningModel::Rpm5,
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let path = dir.join(format!("dutch-rpm{}.toml", i + 1));
+        let m = load_model(&ModelSource::File(path), &[]).unwrap();
+        assert_eq!(m.fastening.model, want);
+        let mut m2 = m.clone();
+        m2.fastening.model = base.fastening.model;
+        assert_eq!(
+            m2,
+            base,
+            "RPM{} differs from the base beyond the model",
+            i + 1
+        );
+    }
+}
+
+use std::path::Path;
+
+#[test]
+fn overrides_use_toml_syntax_and_accept_bare_words() {
+    let m = dutch_with(&[
+        "fastening.model=RPM1",
+        "track.bays=12",
+        "run.speed_kmh=54.8",
+    ])
+    .unwrap();
+    assert_eq!(m.fastening.model, FasteningModel::Rpm1);
+    assert_eq!(m.track.bays, 12);
+    assert_eq!(m.run.speed_kmh, 54.8);
+    let m = dutch_with(&[
+        "fastening.model=\"RPM5\"",
+        "mesh.sleeper_elements=[2, 6, 1]",
+    ])
+    .unwrap();
+    assert_eq!(m.fastening.model, FasteningModel::Rpm5);
+    assert_eq!(m.mesh.sleeper_elements, [2, 6, 1]);
+}
+
+fn err_text(r: Result<Model, ModelError>) -> String {
+    r.expect_err("must fail").to_string()
+}
+
+#[test]
+fn unknown_key_names_the_key() {
+    let e = err_text(dutch_with(&["fastening.stifness=1.0"]));
+    assert!(
+        e.contains("fastening.stifness") || e.contains("stifness"),
+        "{e}"
+    );
+    assert!(e.contains("unknown field"), "{e}");
+    let e = err_text(dutch_with(&["fastning.model=RPM1"]));
+    assert!(e.contains("unknown section `fastning`"), "{e}");
+}
+
+#[test]
+fn negative_stiffness_is_out_of_range_with_allowed_range() {
+    let e = err_text(dutch_with(&["fastening.vertical_stiffness=-1e9"]));
+    assert!(e.contains("fastening.vertical_stiffness"), "{e}");
+    assert!(e.contains("allowed"), "{e}");
+}
+
+#[test]
+fn poisson_ratio_of_one_half_is_rejected() {
+    let e = err_text(dutch_with(&["rail.poisson_ratio=0.5"]));
+    assert!(e.contains("rail.poisson_ratio") && e.contains("0.5"), "{e}");
+}
+
+#[test]
+fn unknown_fastening_model_lists_the_allowed_names() {
+    let e = err_text(dutch_with(&["fastening.model=RPM7"]));
+    assert!(e.contains("fastening.model"), "{e}");
+    assert!(e.contains("RPM1") && e.contains("custom"), "{e}");
+}
+
+#[test]
+fn nan_values_are_rejected_not_propagated() {
+    let e = err_text(dutch_with(&["vehicle.wheel_load=nan"]));
+    assert!(e.contains("vehicle.wheel_load"), "{e}");
+}
+
+#[test]
+fn syntax_error_names_the_file_and_line() {
+    let e = load_model_str("[track\nbays = 3", "bad.toml", &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("bad.toml: TOML syntax error"), "{e}");
+    assert!(e.contains("line 1"), "{e}");
+}
+
+#[test]
+fn custom_pattern_round_trips_and_is_checked() {
+    let m = dutch_with(&[
+        "fastening.model=custom",
+        "fastening.custom.x={ rigid = \"columns\", indices = [0, 2] }",
+        "fastening.custom.y={ rigid = \"rows\", indices = [0, 3] }",
+        "fastening.custom.z={ rigid = \"none\" }",
+    ])
+    .unwrap();
+    let p = m.fastening.hold_pattern();
+    assert_eq!(p.x.indices, vec![0, 2]);
+    assert_eq!(p.z.rigid, RigidRegion::None);
+    let e = err_text(dutch_with(&[
+        "fastening.model=custom",
+        "fastening.custom.x={ rigid = \"columns\", indices = [3] }",
+        "fastening.custom.y={ rigid = \"none\" }",
+        "fastening.custom.z={ rigid = \"none\" }",
+    ]));
+    assert!(
+        e.contains("fastening.custom.x.indices") && e.contains("0..=2"),
+        "{e}"
+    );
+    let e = err_text(dutch_with(&["fastening.model=custom"]));
+    assert!(e.contains("fastening.custom"), "{e}");
+}
+
+#[test]
+fn presets_follow_the_method_table() {
+    use RigidRegion::*;
+    let p = |m| HoldPattern::preset(m, 4, 3).unwrap();
+    // method.md §3 table: vertical / longitudinal / lateral.
+    let r1 = p(FasteningModel::Rpm1);
+    assert_eq!(
+        (r1.z.rigid, r1.x.rigid, &r1.x.indices[..]),
+        (None, Columns, &[0, 1, 2][..])
+    );
+    let r2 = p(FasteningModel::Rpm2);
+    assert_eq!((r2.z.rigid, r2.x.rigid), (None, Continuous));
+    let r3 = p(FasteningModel::Rpm3);
+    assert_eq!(
+        (r3.z.rigid, r3.x.rigid, &r3.x.indices[..]),
+        (None, Columns, &[1][..])
+    );
+    let r4 = p(FasteningModel::Rpm4);
+    assert_eq!(
+        (r4.z.rigid, r4.x.rigid, &r4.x.indices[..]),
+        (Continuous, Columns, &[1][..])
+    );
+    let r5 = p(FasteningModel::Rpm5);
+    assert_eq!((r5.z.rigid, r5.x.rigid), (Continuous, Continuous));
+    for r in [r1, r2, r3, r4, r5] {
+        assert_eq!((r.y.rigid, &r.y.indices[..]), (Rows, &[0, 1, 2, 3][..]));
+    }
+    assert!(HoldPattern::preset(FasteningModel::Custom, 4, 3).is_none());
+}
+
+#[test]
+fn extends_chain_resolves_relative_paths_and_detects_loops() {
+    let dir = std::env::temp_dir().join(format!("corrugation-model-test-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    std::fs::write(
+        dir.join("a.toml"),
+        "extends = \"builtin:dutch\"\n[track]\nbays = 10\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("sub/b.toml"),
+        "extends = \"../a.toml\"\n[run]\nspeed_kmh = 100.0\n",
+    )
+    .unwrap();
+    let m = load_model(&ModelSource::File(dir.join("sub/b.toml")), &[]).unwrap();
+    assert_eq!((m.track.bays, m.run.speed_kmh), (10, 100.0));
+    std::fs::write(dir.join("loop.toml"), "extends = \"loop.toml\"\n").unwrap();
+    let e = load_model(&ModelSource::File(dir.join("loop.toml")), &[]).unwrap_err();
+    assert!(matches!(e, ModelError::ExtendsLoop { .. }), "{e}");
+    let e = load_model(&ModelSource::File(dir.join("missing.toml")), &[]).unwrap_err();
+    assert!(e.to_string().contains("missing.toml: cannot read"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
