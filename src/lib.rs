@@ -11,6 +11,7 @@
 //! | module | what it models |
 //! |---|---|
 //! | [`units`] | the one place where mm, µm and km/h are converted to SI |
+//! | [`io`] | atomic output files: CSV, `.npy`, text |
 //! | [`model`] | the TOML model file: parameters with units, `extends`, `--set` overrides, validation |
 //! | [`mesh`] | UIC54 section, rail extrusion, sleepers, wheel of revolution |
 //! | [`fe`] | hexahedral elements, spring-dampers, constraints, sparse K/M/C assembly |
@@ -26,6 +27,7 @@
 pub mod contact;
 pub mod eigen;
 pub mod fe;
+pub mod io;
 pub mod mesh;
 pub mod model;
 pub mod spectral;

@@ -52,6 +52,12 @@ fn finish(mut table: toml::Table, chain: &str, overrides: &[String]) -> Result<M
     for arg in overrides {
         apply_override(&mut table, arg)?;
     }
+    let chain = if overrides.is_empty() {
+        chain.to_string()
+    } else {
+        format!("{chain} with --set overrides")
+    };
+    let chain = chain.as_str();
     let model: Model =
         serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
             let key = e.path().to_string();

@@ -1,0 +1,56 @@
+//! Command definitions (clap) and dispatch. Each command lives in its own file.
+
+mod model_cmd;
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+use corrugation::model::{load_model, Model, ModelSource};
+
+/// Short-pitch rail corrugation predictor (3D FE track model, modal reduction, transient
+/// rolling contact, wear growth). All inputs are SI unless a key or flag names its unit.
+#[derive(Debug, Parser)]
+#[command(name = "corrugation", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// The model every command works on.
+#[derive(Debug, Clone, Args)]
+pub struct ModelArgs {
+    /// Model file (TOML). Default: the embedded Dutch track model (RPM3).
+    #[arg(long, value_name = "FILE")]
+    pub model: Option<PathBuf>,
+    /// Override a model value, TOML syntax: --set fastening.model=RPM1 --set track.bays=20.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+impl ModelArgs {
+    /// The model source.
+    pub fn source(&self) -> ModelSource {
+        match &self.model {
+            Some(p) => ModelSource::File(p.clone()),
+            None => ModelSource::Builtin,
+        }
+    }
+
+    /// Loads and validates the model.
+    pub fn load(&self) -> anyhow::Result<Model> {
+        Ok(load_model(&self.source(), &self.set)?)
+    }
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Print the resolved model (after `extends` and `--set`) as TOML.
+    Model(model_cmd::ModelCmd),
+}
+
+/// Runs the parsed command.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Model(c) => c.run(),
+    }
+}

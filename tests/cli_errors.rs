@@ -1,0 +1,79 @@
+//! Bad input gets a clear one-line error naming the key, a non-zero exit code and no panic.
+//! These run the real binary.
+
+use std::process::Command;
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_corrugation"))
+        .args(args)
+        .output()
+        .expect("binary runs");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn assert_clean_error(args: &[&str], must_contain: &[&str]) {
+    let (code, _out, err) = run(args);
+    assert_ne!(code, 0, "{args:?} must fail");
+    assert_ne!(code, 101, "{args:?} panicked: {err}");
+    assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one-line error expected: {err}");
+    for s in must_contain {
+        assert!(err.contains(s), "{args:?}: error `{err}` lacks `{s}`");
+    }
+}
+
+fn tmp_file(name: &str, text: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("corrugation-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let p = d.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn missing_file() {
+    assert_clean_error(&["model", "--model", "/nonexistent/track.toml"], &["/nonexistent/track.toml", "cannot read"]);
+}
+
+#[test]
+fn toml_syntax_error() {
+    let p = tmp_file("syntax.toml", "extends = \"builtin:dutch\"\n[track\nbays = 3\n");
+    assert_clean_error(&["model", "--model", p.to_str().unwrap()], &["syntax.toml", "TOML syntax error", "line 2"]);
+}
+
+#[test]
+fn unknown_key() {
+    let p = tmp_file("unknown.toml", "extends = \"builtin:dutch\"\n[rail]\nyoungs_modulos = 2e11\n");
+    assert_clean_error(&["model", "--model", p.to_str().unwrap()], &["unknown.toml", "rail.youngs_modulos", "unknown field"]);
+}
+
+#[test]
+fn negative_stiffness() {
+    assert_clean_error(&["model", "--set", "ballast.vertical_stiffness=-45e6"], &["ballast.vertical_stiffness", "-45000000", "allowed"]);
+}
+
+#[test]
+fn poisson_ratio_at_least_one_half() {
+    assert_clean_error(&["model", "--set", "sleeper.poisson_ratio=0.55"], &["sleeper.poisson_ratio", "0.55"]);
+}
+
+#[test]
+fn unknown_fastening_model() {
+    assert_clean_error(&["model", "--set", "fastening.model=RPM9"], &["fastening.model", "RPM9", "RPM1"]);
+}
+
+#[test]
+fn resolved_model_round_trips_as_a_model_file() {
+    // `corrugation model` prints a complete model: saved to a file it loads to the same model.
+    let (code, out, err) = run(&["model", "--set", "fastening.model=RPM1", "--set", "track.bays=12"]);
+    assert_eq!(code, 0, "{err}");
+    let p = tmp_file("resolved.toml", &out);
+    let (code, out2, err) = run(&["model", "--model", p.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out, out2);
+    assert!(out.contains("model = \"RPM1\"") && out.contains("bays = 12"));
+}
