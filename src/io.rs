@@ -21,9 +21,9 @@ where
     if let Some(d) = dir {
         std::fs::create_dir_all(d)?;
     }
-    let name = path
-        .file_name()
-        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "output path has no file name"))?;
+    let name = path.file_name().ok_or_else(|| {
+        io::Error::new(io::ErrorKind::InvalidInput, "output path has no file name")
+    })?;
     let tmp = path.with_file_name(format!(
         "{}.tmp.{}",
         name.to_string_lossy(),
@@ -48,7 +48,11 @@ pub fn write_text(path: &Path, text: &str) -> io::Result<()> {
 }
 
 /// Writes a CSV file atomically: a header and rows of numbers (full precision).
-pub fn write_csv(path: &Path, header: &[&str], rows: impl IntoIterator<Item = Vec<f64>>) -> io::Result<()> {
+pub fn write_csv(
+    path: &Path,
+    header: &[&str],
+    rows: impl IntoIterator<Item = Vec<f64>>,
+) -> io::Result<()> {
     write_atomic(path, |w| {
         let mut c = csv::Writer::from_writer(w);
         c.write_record(header)?;
@@ -56,7 +60,11 @@ pub fn write_csv(path: &Path, header: &[&str], rows: impl IntoIterator<Item = Ve
             if row.len() != header.len() {
                 return Err(io::Error::new(
                     io::ErrorKind::InvalidData,
-                    format!("CSV row has {} values, header has {}", row.len(), header.len()),
+                    format!(
+                        "CSV row has {} values, header has {}",
+                        row.len(),
+                        header.len()
+                    ),
                 ));
             }
             c.write_record(row.iter().map(|v| format!("{v:e}")))?;
@@ -116,10 +124,194 @@ mod tests {
         let p = d.join("out.csv");
         let r = write_csv(&p, &["a_m", "b_n"], vec![vec![1.0, 2.0], vec![3.0]]);
         assert!(r.is_err());
-        assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0, "no partial file left");
+        assert_eq!(
+            std::fs::read_dir(&d).unwrap().count(),
+            0,
+            "no partial file left"
+        );
         write_csv(&p, &["a_m", "b_n"], vec![vec![1.0, 2.0]]).unwrap();
         let text = std::fs::read_to_string(&p).unwrap();
         assert_eq!(text, "a_m,b_n\n1e0,2e0\n");
+        std::fs::remove_dir_all(d).ok();
+    }
+}
+
+/// VTK cell type of an 8-node hexahedron.
+pub const VTK_HEXAHEDRON: u8 = 12;
+/// VTK cell type of a 2-node line (used to draw springs).
+pub const VTK_LINE: u8 = 3;
+/// VTK cell type of a vertex (used to draw point masses).
+pub const VTK_VERTEX: u8 = 1;
+
+/// A named field on points or cells of a VTU file: `components` values per entity.
+#[derive(Debug, Clone, Copy)]
+pub struct VtuField<'a> {
+    /// Field name shown in ParaView.
+    pub name: &'a str,
+    /// Values per point/cell (1 = scalar, 3 = vector).
+    pub components: usize,
+    /// `components × count` values, entity-major.
+    pub data: &'a [f64],
+}
+
+/// Writes an unstructured grid as an ASCII VTK XML `.vtu` file (ParaView), atomically.
+/// `cells` are `(vtk_cell_type, node indices)`.
+pub fn write_vtu(
+    path: &Path,
+    points: &[[f64; 3]],
+    cells: &[(u8, Vec<usize>)],
+    point_fields: &[VtuField],
+    cell_fields: &[VtuField],
+) -> io::Result<()> {
+    let bad = |m: String| io::Error::new(io::ErrorKind::InvalidInput, m);
+    for f in point_fields {
+        if f.data.len() != f.components * points.len() {
+            return Err(bad(format!(
+                "point field {} has {} values for {} points",
+                f.name,
+                f.data.len(),
+                points.len()
+            )));
+        }
+    }
+    for f in cell_fields {
+        if f.data.len() != f.components * cells.len() {
+            return Err(bad(format!(
+                "cell field {} has {} values for {} cells",
+                f.name,
+                f.data.len(),
+                cells.len()
+            )));
+        }
+    }
+    if let Some((_, c)) = cells
+        .iter()
+        .find(|(_, c)| c.iter().any(|&n| n >= points.len()))
+    {
+        return Err(bad(format!(
+            "cell {c:?} refers to a node beyond {}",
+            points.len()
+        )));
+    }
+    write_atomic(path, |w| {
+        writeln!(w, r#"<?xml version="1.0"?>"#)?;
+        writeln!(
+            w,
+            r#"<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
+        )?;
+        writeln!(w, "<UnstructuredGrid>")?;
+        writeln!(
+            w,
+            r#"<Piece NumberOfPoints="{}" NumberOfCells="{}">"#,
+            points.len(),
+            cells.len()
+        )?;
+        writeln!(w, "<Points>")?;
+        writeln!(
+            w,
+            r#"<DataArray type="Float64" NumberOfComponents="3" format="ascii">"#
+        )?;
+        for p in points {
+            writeln!(w, "{:e} {:e} {:e}", p[0], p[1], p[2])?;
+        }
+        writeln!(w, "</DataArray>\n</Points>")?;
+        writeln!(w, "<Cells>")?;
+        writeln!(
+            w,
+            r#"<DataArray type="Int64" Name="connectivity" format="ascii">"#
+        )?;
+        for (_, c) in cells {
+            let s: Vec<String> = c.iter().map(|n| n.to_string()).collect();
+            writeln!(w, "{}", s.join(" "))?;
+        }
+        writeln!(w, "</DataArray>")?;
+        writeln!(
+            w,
+            r#"<DataArray type="Int64" Name="offsets" format="ascii">"#
+        )?;
+        let mut off = 0usize;
+        for (_, c) in cells {
+            off += c.len();
+            writeln!(w, "{off}")?;
+        }
+        writeln!(w, "</DataArray>")?;
+        writeln!(w, r#"<DataArray type="UInt8" Name="types" format="ascii">"#)?;
+        for (t, _) in cells {
+            writeln!(w, "{t}")?;
+        }
+        writeln!(w, "</DataArray>\n</Cells>")?;
+        for (tag, fields) in [("PointData", point_fields), ("CellData", cell_fields)] {
+            writeln!(w, "<{tag}>")?;
+            for f in fields {
+                writeln!(
+                    w,
+                    r#"<DataArray type="Float64" Name="{}" NumberOfComponents="{}" format="ascii">"#,
+                    f.name, f.components
+                )?;
+                for chunk in f.data.chunks(f.components.max(1)) {
+                    let s: Vec<String> = chunk.iter().map(|v| format!("{v:e}")).collect();
+                    writeln!(w, "{}", s.join(" "))?;
+                }
+                writeln!(w, "</DataArray>")?;
+            }
+            writeln!(w, "</{tag}>")?;
+        }
+        writeln!(w, "</Piece>\n</UnstructuredGrid>\n</VTKFile>")
+    })
+}
+
+#[cfg(test)]
+mod vtu_tests {
+    use super::*;
+
+    #[test]
+    fn vtu_of_one_hexahedron_is_well_formed() {
+        let d = std::env::temp_dir().join(format!("corrugation-vtu-{}", std::process::id()));
+        let p = d.join("cube.vtu");
+        let pts: Vec<[f64; 3]> = (0..8)
+            .map(|i| {
+                [
+                    ((i & 1) ^ ((i >> 1) & 1)) as f64,
+                    ((i >> 1) & 1) as f64,
+                    (i >> 2) as f64,
+                ]
+            })
+            .collect();
+        let part = [0.0];
+        let disp: Vec<f64> = (0..24).map(|i| i as f64).collect();
+        write_vtu(
+            &p,
+            &pts,
+            &[(VTK_HEXAHEDRON, (0..8).collect())],
+            &[VtuField {
+                name: "u",
+                components: 3,
+                data: &disp,
+            }],
+            &[VtuField {
+                name: "part",
+                components: 1,
+                data: &part,
+            }],
+        )
+        .unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.contains(r#"NumberOfPoints="8" NumberOfCells="1""#));
+        assert!(text.contains("0 1 2 3 4 5 6 7\n"));
+        assert!(text.trim_end().ends_with("</VTKFile>"));
+        // A field of the wrong length is an error, not a corrupt file.
+        assert!(write_vtu(
+            &p,
+            &pts,
+            &[],
+            &[VtuField {
+                name: "u",
+                components: 3,
+                data: &part
+            }],
+            &[]
+        )
+        .is_err());
         std::fs::remove_dir_all(d).ok();
     }
 }

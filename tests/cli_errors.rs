@@ -20,7 +20,11 @@ fn assert_clean_error(args: &[&str], must_contain: &[&str]) {
     assert_ne!(code, 0, "{args:?} must fail");
     assert_ne!(code, 101, "{args:?} panicked: {err}");
     assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "one-line error expected: {err}");
+    assert_eq!(
+        err.trim_end().lines().count(),
+        1,
+        "one-line error expected: {err}"
+    );
     for s in must_contain {
         assert!(err.contains(s), "{args:?}: error `{err}` lacks `{s}`");
     }
@@ -36,40 +40,70 @@ fn tmp_file(name: &str, text: &str) -> std::path::PathBuf {
 
 #[test]
 fn missing_file() {
-    assert_clean_error(&["model", "--model", "/nonexistent/track.toml"], &["/nonexistent/track.toml", "cannot read"]);
+    assert_clean_error(
+        &["model", "--model", "/nonexistent/track.toml"],
+        &["/nonexistent/track.toml", "cannot read"],
+    );
 }
 
 #[test]
 fn toml_syntax_error() {
-    let p = tmp_file("syntax.toml", "extends = \"builtin:dutch\"\n[track\nbays = 3\n");
-    assert_clean_error(&["model", "--model", p.to_str().unwrap()], &["syntax.toml", "TOML syntax error", "line 2"]);
+    let p = tmp_file(
+        "syntax.toml",
+        "extends = \"builtin:dutch\"\n[track\nbays = 3\n",
+    );
+    assert_clean_error(
+        &["model", "--model", p.to_str().unwrap()],
+        &["syntax.toml", "TOML syntax error", "line 2"],
+    );
 }
 
 #[test]
 fn unknown_key() {
-    let p = tmp_file("unknown.toml", "extends = \"builtin:dutch\"\n[rail]\nyoungs_modulos = 2e11\n");
-    assert_clean_error(&["model", "--model", p.to_str().unwrap()], &["unknown.toml", "rail.youngs_modulos", "unknown field"]);
+    let p = tmp_file(
+        "unknown.toml",
+        "extends = \"builtin:dutch\"\n[rail]\nyoungs_modulos = 2e11\n",
+    );
+    assert_clean_error(
+        &["model", "--model", p.to_str().unwrap()],
+        &["unknown.toml", "rail.youngs_modulos", "unknown field"],
+    );
 }
 
 #[test]
 fn negative_stiffness() {
-    assert_clean_error(&["model", "--set", "ballast.vertical_stiffness=-45e6"], &["ballast.vertical_stiffness", "-45000000", "allowed"]);
+    assert_clean_error(
+        &["model", "--set", "ballast.vertical_stiffness=-45e6"],
+        &["ballast.vertical_stiffness", "-45000000", "allowed"],
+    );
 }
 
 #[test]
 fn poisson_ratio_at_least_one_half() {
-    assert_clean_error(&["model", "--set", "sleeper.poisson_ratio=0.55"], &["sleeper.poisson_ratio", "0.55"]);
+    assert_clean_error(
+        &["model", "--set", "sleeper.poisson_ratio=0.55"],
+        &["sleeper.poisson_ratio", "0.55"],
+    );
 }
 
 #[test]
 fn unknown_fastening_model() {
-    assert_clean_error(&["model", "--set", "fastening.model=RPM9"], &["fastening.model", "RPM9", "RPM1"]);
+    assert_clean_error(
+        &["model", "--set", "fastening.model=RPM9"],
+        &["fastening.model", "RPM9", "RPM1"],
+    );
 }
 
 #[test]
 fn resolved_model_round_trips_as_a_model_file() {
     // `corrugation model` prints a complete model: saved to a file it loads to the same model.
-    let (code, out, err) = run(&["model", "--set", "fastening.model=RPM1", "--set", "track.bays=12"]);
+    let (code, out, err) = run(&[
+        "model",
+        "--set",
+        "fastening.model=RPM1",
+        "--set",
+        "track.bays=12",
+    ]);
     assert_eq!(code, 0, "{err}");
     let p = tmp_file("resolved.toml", &out);
     let (code, out2, err) = run(&["model", "--model", p.to_str().unwrap()]);
