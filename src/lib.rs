@@ -31,4 +31,5 @@ pub mod io;
 pub mod mesh;
 pub mod model;
 pub mod spectral;
+pub mod structure;
 pub mod units;

@@ -1,0 +1,16 @@
+//! The assembled FE substructures of the wheel–track system.
+//!
+//! - The *track* substructure: rail (UIC54 solid, optionally inclined), half sleepers (solid
+//!   blocks), railpads (a `rows × columns` grid of spring-dampers per fastening, each spread over
+//!   its footprint cell by tributary area), rigid holds of the fastening model (fixed rail-foot
+//!   DOFs), and ballast (spring-dampers from each sleeper's bottom face to the ground, spread by
+//!   area).
+//! - The *wheel* substructure: the wheel and half axle (solid of revolution), the symmetry
+//!   plane of the wheelset (lateral DOF fixed), and the lumped sprung mass on the primary
+//!   suspension.
+//!
+//! Springs are spread by area so that neither a spring nor a rigid hold acts on a single node
+//! of a solid: point supports make the stiffness grow without bound under refinement
+//! (design-notes "Traps").
+
+pub mod layout;
