@@ -8,9 +8,24 @@
 //! |---|---|
 //! | [`hex8`] | 8-node hexahedron with Wilson–Taylor incompatible modes, mass, interpolation |
 //! | [`material`] | isotropic linear elastic material |
+//! | [`spring`] | multipoint spring-dampers, point masses |
+//! | [`assembly`] | DOF map with constraints, parallel sparse K/M/C assembly, energies, reactions |
+//! | [`solve`] | sparse Cholesky static solve |
+//! | [`block`] | structured block mesh for checks and benchmarks |
 
+pub mod assembly;
+pub mod block;
 pub mod hex8;
 pub mod material;
+pub mod solve;
+pub mod spring;
+
+pub use assembly::{
+    apply_full_stiffness, assemble, mass_per_part, reactions, spring_energy,
+    strain_energy_per_part, AssemblyOptions, DofMap, FeMatrices, MassKind, PerPart,
+};
+pub use solve::static_solve;
+pub use spring::{Direction, PointMass, Spring};
 
 use thiserror::Error;
 
@@ -149,3 +164,6 @@ pub(crate) fn check_material(index: usize, m: &material::IsotropicElastic) -> Re
         })
     }
 }
+
+#[cfg(test)]
+mod verification;
