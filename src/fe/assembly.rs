@@ -425,26 +425,8 @@ pub fn assemble(
             .enumerate()
             .for_each(|(t, (ks, ms))| {
                 let (c0, c1) = (bounds[t], bounds[t + 1]);
-                let off = col_ptr[c0];
                 for (b, lf) in bufs.iter().zip(lfs) {
-                    for (q, &col) in lf.iter().enumerate() {
-                        if col == NONE || col < c0 || col >= c1 {
-                            continue;
-                        }
-                        let (s, e) = (col_ptr[col], col_ptr[col + 1]);
-                        let rows = &row_idx[s..e];
-                        for (p, &row) in lf.iter().enumerate() {
-                            if row == NONE {
-                                continue;
-                            }
-                            // The row is in the pattern by construction.
-                            let pos = s + rows.binary_search(&row).unwrap_or(0) - off;
-                            ks[pos] += b.k[(p, q)];
-                            if p % 3 == q % 3 {
-                                ms[pos] += b.m[(p / 3, q / 3)];
-                            }
-                        }
-                    }
+                    scatter_element(b, lf, &col_ptr, &row_idx, c0, c1, ks, ms);
                 }
             });
     }
@@ -482,6 +464,72 @@ pub fn assemble(
         m: SparseColMat::new(symbolic.clone(), mv),
         c: SparseColMat::new(symbolic, cv),
     })
+}
+
+/// Scatters one element's K and M into the value slices `ks`, `ms` of columns `c0..c1`
+/// (whose first value sits at `col_ptr[c0]`). Uses that all free columns of one node share
+/// the same row list and that the free rows of one node are contiguous in it: one binary
+/// search per (row node, column node) pair.
+#[allow(clippy::too_many_arguments)]
+fn scatter_element(
+    b: &ElemBuf,
+    lf: &[usize; 24],
+    col_ptr: &[usize],
+    row_idx: &[usize],
+    c0: usize,
+    c1: usize,
+    ks: &mut [f64],
+    ms: &mut [f64],
+) {
+    let off = col_ptr[c0];
+    // First free row of each local node (NONE if the node is fully constrained).
+    let first: [usize; 8] = std::array::from_fn(|a| {
+        lf[3 * a..3 * a + 3]
+            .iter()
+            .copied()
+            .find(|&r| r != NONE)
+            .unwrap_or(NONE)
+    });
+    for nb in 0..8 {
+        let Some(col_any) = lf[3 * nb..3 * nb + 3].iter().copied().find(|&c| c != NONE) else {
+            continue;
+        };
+        // Columns of a node are consecutive free indices: skip nodes outside the range.
+        if lf[3 * nb..3 * nb + 3]
+            .iter()
+            .all(|&c| c == NONE || c < c0 || c >= c1)
+        {
+            continue;
+        }
+        let rows = &row_idx[col_ptr[col_any]..col_ptr[col_any + 1]];
+        for na in 0..8 {
+            if first[na] == NONE {
+                continue;
+            }
+            // In the pattern by construction.
+            let rel = rows.binary_search(&first[na]).unwrap_or(0);
+            for dj in 0..3 {
+                let col = lf[3 * nb + dj];
+                if col == NONE || col < c0 || col >= c1 {
+                    continue;
+                }
+                let base = col_ptr[col] + rel - off;
+                let q = 3 * nb + dj;
+                let mut k = 0;
+                for di in 0..3 {
+                    if lf[3 * na + di] == NONE {
+                        continue;
+                    }
+                    let p = 3 * na + di;
+                    ks[base + k] += b.k[(p, q)];
+                    if di == dj {
+                        ms[base + k] += b.m[(na, nb)];
+                    }
+                    k += 1;
+                }
+            }
+        }
+    }
 }
 
 /// Splits a CSC value array into the mutable slices of the column ranges `bounds`.

@@ -491,3 +491,25 @@ fn bad_input_is_reported() {
     let r = static_solve(&fm.k, &[1.0; 24]);
     assert!(r.is_err(), "{r:?}");
 }
+
+#[test]
+fn assembly_is_independent_of_thread_count() {
+    // Every entry is summed in element order, so 1 and 3 threads give bit-identical values;
+    // more than one chunk (4096 elements) is exercised.
+    let mut mesh = block_mesh([20, 15, 15], [1.0, 0.5, 0.5], 0, Part::Rail);
+    distort(&mut mesh, 0.003);
+    let dm = DofMap::with_constraints(mesh.nodes.len(), &[0, 1, 2, 5, 7]).unwrap();
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                assemble(&mesh, &[STEEL], &[], &[], &dm, AssemblyOptions::default()).unwrap()
+            })
+    };
+    let (a, b) = (run(1), run(3));
+    assert_eq!(a.k.as_ref().val(), b.k.as_ref().val());
+    assert_eq!(a.m.as_ref().val(), b.m.as_ref().val());
+    assert_eq!(a.k.as_ref().row_idx(), b.k.as_ref().row_idx());
+}
