@@ -10,6 +10,7 @@
 //! | [`material`] | isotropic linear elastic material |
 //! | [`spring`] | multipoint spring-dampers, point masses |
 //! | [`assembly`] | DOF map with constraints, parallel sparse K/M/C assembly, energies, reactions |
+//! | [`interp`] | locating a point in the mesh, interpolating nodal fields there |
 //! | [`mtx`] | Matrix Market output (atomic) and input |
 //! | [`solve`] | sparse Cholesky static solve |
 //! | [`block`] | structured block mesh for checks and benchmarks |
@@ -17,6 +18,7 @@
 pub mod assembly;
 pub mod block;
 pub mod hex8;
+pub mod interp;
 pub mod material;
 pub mod mtx;
 pub mod solve;
