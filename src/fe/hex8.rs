@@ -144,7 +144,7 @@ fn gauss2() -> [[f64; 3]; 8] {
 /// condensed. Fails with [`FeError::NonPositiveJacobian`] if `det J ≤ 0` at a Gauss point or
 /// the centre, and with [`FeError::InvalidMaterial`] for inadmissible constants.
 pub fn stiffness(coords: &[[f64; 3]; 8], mat: &IsotropicElastic) -> Result<Mat24, FeError> {
-    stiffness_impl(coords, mat, true)
+    stiffness_impl(coords, mat, Modes::WilsonTaylor)
 }
 
 /// Element stiffness (N/m) of the *plain* trilinear hexahedron (2×2×2 Gauss, no incompatible
@@ -153,14 +153,28 @@ pub fn stiffness_trilinear(
     coords: &[[f64; 3]; 8],
     mat: &IsotropicElastic,
 ) -> Result<Mat24, FeError> {
-    stiffness_impl(coords, mat, false)
+    stiffness_impl(coords, mat, Modes::None)
+}
+
+/// Which incompatible modes the element carries.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Modes {
+    /// Plain trilinear.
+    None,
+    /// Wilson's original modes, derivatives with the local Jacobian (fails the patch test
+    /// on distorted elements; kept only to show that the test detects it).
+    #[cfg(test)]
+    Wilson,
+    /// Wilson's modes with Taylor's centre-Jacobian modification.
+    WilsonTaylor,
 }
 
 fn stiffness_impl(
     coords: &[[f64; 3]; 8],
     mat: &IsotropicElastic,
-    incompatible: bool,
+    modes: Modes,
 ) -> Result<Mat24, FeError> {
+    let incompatible = modes != Modes::None;
     super::check_material(0, mat)?;
     let lam = mat.lame_lambda();
     let g = mat.shear_modulus();
@@ -187,12 +201,16 @@ fn stiffness_impl(
             }
         }
         if incompatible {
-            let s = det0 / det;
+            let (s, jm) = if modes == Modes::WilsonTaylor {
+                (det0 / det, &j0inv)
+            } else {
+                (1.0, &jinv)
+            };
             for k in 0..3 {
                 // ∂P_k/∂ξ_r = −2 ξ_k δ_rk.
                 let dp = -2.0 * xi[k];
                 for c in 0..3 {
-                    grad[8 + k][c] = s * j0inv[c][k] * dp;
+                    grad[8 + k][c] = s * jm[c][k] * dp;
                 }
             }
         }
@@ -586,6 +604,25 @@ pub(crate) mod tests {
         let exact = 0.5 * eps.dot(&(m.elasticity_matrix() * eps)) * volume(&c).unwrap();
         let got = strain_energy(&c, &m, &u).unwrap();
         assert!((got - exact).abs() / exact < 1e-12, "{got} vs {exact}");
+        // Without Taylor's modification the modes couple to the constant strain on this
+        // distorted element and lower the energy: the check above detects it.
+        let kw = stiffness_impl(&c, &m, Modes::Wilson).unwrap();
+        let wrong = strain_energy_of(&kw, &u);
+        eprintln!(
+            "constant-strain energy: Wilson–Taylor error {:.2e}, Wilson without Taylor {:.2e}",
+            (got - exact) / exact,
+            (wrong - exact) / exact
+        );
+        assert!(
+            (exact - wrong) / exact > 1e-4,
+            "Wilson without Taylor: {wrong} vs {exact}"
+        );
+        // On a parallelepiped both variants coincide.
+        let cube = unit_cube();
+        let d = (stiffness_impl(&cube, &m, Modes::Wilson).unwrap() - stiffness(&cube, &m).unwrap())
+            .abs()
+            .max();
+        assert!(d < 1e-12 * stiffness(&cube, &m).unwrap().abs().max());
     }
 
     #[test]
