@@ -1,0 +1,55 @@
+//! A structured block of hexahedra, for tests, verification and benchmarks.
+//!
+//! The block spans `[0, lx] × [0, ly] × [0, lz]` (m) with `nx × ny × nz` equal elements;
+//! node `(i, j, k)` has index `i + (nx + 1) (j + (ny + 1) k)`. Elements follow the node
+//! order of [`crate::mesh`]. The production meshes (rail, sleepers, wheel) are built in
+//! [`crate::mesh`]; this generator only serves checks against closed forms.
+
+use crate::mesh::{Hex8, Mesh, Part};
+
+/// Node index of grid point `(i, j, k)` in a block with `nx × ny` elements per layer.
+pub fn block_node(nx: usize, ny: usize, i: usize, j: usize, k: usize) -> usize {
+    i + (nx + 1) * (j + (ny + 1) * k)
+}
+
+/// A structured block mesh of `nx × ny × nz` hexahedra of size `lx/nx × ly/ny × lz/nz` (m),
+/// all with material index `material` and part `part`.
+pub fn block_mesh(n: [usize; 3], size_m: [f64; 3], material: usize, part: Part) -> Mesh {
+    let [nx, ny, nz] = n;
+    let mut nodes = Vec::with_capacity((nx + 1) * (ny + 1) * (nz + 1));
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                nodes.push([
+                    size_m[0] * i as f64 / nx as f64,
+                    size_m[1] * j as f64 / ny as f64,
+                    size_m[2] * k as f64 / nz as f64,
+                ]);
+            }
+        }
+    }
+    let mut elements = Vec::with_capacity(nx * ny * nz);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let b =
+                    |di: usize, dj: usize, dk: usize| block_node(nx, ny, i + di, j + dj, k + dk);
+                elements.push(Hex8 {
+                    nodes: [
+                        b(0, 0, 0),
+                        b(1, 0, 0),
+                        b(1, 1, 0),
+                        b(0, 1, 0),
+                        b(0, 0, 1),
+                        b(1, 0, 1),
+                        b(1, 1, 1),
+                        b(0, 1, 1),
+                    ],
+                    material,
+                    part,
+                });
+            }
+        }
+    }
+    Mesh { nodes, elements }
+}
