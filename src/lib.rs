@@ -17,6 +17,7 @@
 //! | [`eigen`] | shift-invert Lanczos, Sturm check, mode classification, modal cache |
 //! | [`contact`] | Hertz, half-space normal contact, Kalker transient tangential contact, frictional work |
 //! | [`spectral`] | zero-phase band-pass, PSD in wavelength/frequency, peaks, deviations, phase |
+//! | [`growth`] | trial corrugation, consistency table (Case 1/2, light/dark green, grey), growth phase |
 //!
 //! Coordinates (global, SI): `x` along the rail (direction of travel), `y` lateral (positive
 //! away from the track centre, towards the field side), `z` vertical up. `z = 0` is the
@@ -26,6 +27,7 @@
 pub mod contact;
 pub mod eigen;
 pub mod fe;
+pub mod growth;
 pub mod mesh;
 pub mod model;
 pub mod spectral;

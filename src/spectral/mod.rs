@@ -118,4 +118,4 @@ pub enum SpectralError {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
