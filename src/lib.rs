@@ -18,6 +18,8 @@
 //! | [`eigen`] | shift-invert Lanczos, Sturm check, mode classification, modal cache |
 //! | [`contact`] | Hertz, half-space normal contact, Kalker transient tangential contact, frictional work |
 //! | [`spectral`] | zero-phase band-pass, PSD in wavelength/frequency, peaks, deviations, phase |
+//! | [`structure`] | the track and wheel substructures built from a model: supports, springs, holds |
+//! | [`growth`] | trial corrugation, consistency table (Case 1/2, light/dark green, grey), growth phase |
 //!
 //! Coordinates (global, SI): `x` along the rail (direction of travel), `y` lateral (positive
 //! away from the track centre, towards the field side), `z` vertical up. `z = 0` is the
@@ -27,6 +29,7 @@
 pub mod contact;
 pub mod eigen;
 pub mod fe;
+pub mod growth;
 pub mod io;
 pub mod mesh;
 pub mod model;
