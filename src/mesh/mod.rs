@@ -13,6 +13,7 @@ use serde::Serialize;
 
 pub mod grading;
 pub mod profile;
+pub mod rail;
 pub mod section;
 
 /// The physical part an element or node belongs to.
