@@ -12,7 +12,7 @@
 //! Numbering: global node of (plane i, section node j) = offset + i · n_section_nodes + j;
 //! element of (interval i, section quad q) = element_offset + i · n_section_quads + q.
 
-use super::section::{invert_bilinear, SectionMesh};
+use super::section::SectionMesh;
 use super::{Hex8, Mesh, MeshError, Part};
 
 /// Map from (plane, section node) to global nodes of an extruded rail, and point location.
