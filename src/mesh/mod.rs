@@ -11,6 +11,11 @@
 
 use serde::Serialize;
 
+pub mod grading;
+pub mod profile;
+pub mod rail;
+pub mod section;
+
 /// The physical part an element or node belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -67,5 +72,148 @@ impl Mesh {
             ..*e
         }));
         offset
+    }
+}
+
+/// Errors of the mesh generators: each variant says which input to change.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum MeshError {
+    /// A parameter is out of its valid range.
+    #[error("mesh parameter `{name}` = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// Parameter name (as in the params struct).
+        name: &'static str,
+        /// The offending value (SI units).
+        value: f64,
+        /// What is required.
+        reason: &'static str,
+    },
+    /// A line of a profile CSV could not be read.
+    #[error("profile CSV line {line}: {reason}")]
+    ProfileParse {
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A required node position lies outside the meshed interval.
+    #[error(
+        "required node position {x} m lies outside [{lo}, {hi}] m: remove it or widen the range"
+    )]
+    BreakpointOutside {
+        /// The position (m).
+        x: f64,
+        /// Lower end of the interval (m).
+        lo: f64,
+        /// Upper end of the interval (m).
+        hi: f64,
+    },
+    /// The grading could not satisfy the neighbour size ratio.
+    #[error("grading did not reach neighbour ratio <= {max_ratio} after {iterations} passes: loosen the ratio or move breakpoints apart")]
+    GradingNotConverged {
+        /// The requested maximum neighbour size ratio.
+        max_ratio: f64,
+        /// Passes made.
+        iterations: usize,
+    },
+    /// The generated mesh has an invalid element (a bug or an extreme parameter set).
+    #[error("generated mesh is invalid: {reason}; try a smaller element size")]
+    InvalidElement {
+        /// What is wrong (element index, Jacobian, ...).
+        reason: String,
+    },
+}
+
+/// Natural coordinates (ξ, η, ζ) of the 8 hexahedron nodes (see the module docs).
+pub const HEX8_NATURAL: [[f64; 3]; 8] = [
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+];
+
+/// Jacobian determinant (m³ per unit natural volume) of the trilinear map of a hexahedron with
+/// corner coordinates `x` (m) at the natural point `p = (ξ, η, ζ)`.
+pub fn hex8_jacobian_det(x: &[[f64; 3]; 8], p: [f64; 3]) -> f64 {
+    let mut j = [[0.0; 3]; 3]; // j[a][b] = d x_a / d ξ_b
+    for (n, nat) in HEX8_NATURAL.iter().enumerate() {
+        let f = [
+            1.0 + nat[0] * p[0],
+            1.0 + nat[1] * p[1],
+            1.0 + nat[2] * p[2],
+        ];
+        let d = [
+            0.125 * nat[0] * f[1] * f[2],
+            0.125 * nat[1] * f[0] * f[2],
+            0.125 * nat[2] * f[0] * f[1],
+        ];
+        for a in 0..3 {
+            for b in 0..3 {
+                j[a][b] += x[n][a] * d[b];
+            }
+        }
+    }
+    j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1])
+        - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
+        + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0])
+}
+
+/// Volume (m³) of a trilinear hexahedron: 2×2×2 Gauss rule, exact because det J is of degree
+/// ≤ 2 in each natural coordinate.
+pub fn hex8_volume(x: &[[f64; 3]; 8]) -> f64 {
+    let g = 1.0 / 3f64.sqrt();
+    let mut v = 0.0;
+    for a in [-g, g] {
+        for b in [-g, g] {
+            for c in [-g, g] {
+                v += hex8_jacobian_det(x, [a, b, c]);
+            }
+        }
+    }
+    v
+}
+
+impl Mesh {
+    /// Corner coordinates (m) of element `e`.
+    pub fn element_coords(&self, e: usize) -> [[f64; 3]; 8] {
+        self.elements[e].nodes.map(|n| self.nodes[n])
+    }
+
+    /// Smallest Jacobian determinant over the 8 corners of element `e` (positive for a valid
+    /// element).
+    pub fn min_corner_jacobian(&self, e: usize) -> f64 {
+        let x = self.element_coords(e);
+        HEX8_NATURAL
+            .iter()
+            .map(|&p| hex8_jacobian_det(&x, p))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Total volume (m³) of the elements of `part`.
+    pub fn part_volume(&self, part: Part) -> f64 {
+        (0..self.elements.len())
+            .filter(|&e| self.elements[e].part == part)
+            .map(|e| hex8_volume(&self.element_coords(e)))
+            .sum()
+    }
+
+    /// Checks that every element has a positive Jacobian at all 8 corners; returns the smallest
+    /// corner Jacobian (m³) over the mesh.
+    pub fn check_jacobians(&self) -> Result<f64, MeshError> {
+        let mut min = f64::INFINITY;
+        for e in 0..self.elements.len() {
+            let j = self.min_corner_jacobian(e);
+            if j.is_nan() || j <= 0.0 {
+                return Err(MeshError::InvalidElement {
+                    reason: format!("element {e} has corner Jacobian {j:e}"),
+                });
+            }
+            min = min.min(j);
+        }
+        Ok(min)
     }
 }

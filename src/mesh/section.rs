@@ -1,0 +1,1069 @@
+//! Block-structured quadrilateral mesh of the full (symmetric) UIC54 cross-section.
+//!
+//! Blocks (right half, mirrored to the left; the centre blocks span both halves):
+//!
+//! | block | boundaries |
+//! |---|---|
+//! | foot arm | foot underside (y_c … 70 mm), foot edge, foot top + fishing face + lower part of the R16 fillet up to M, straight interface M → (y_c, 0) |
+//! | foot centre | foot underside (−y_c … y_c), the two interfaces, the line M_L → M_R |
+//! | web | M_L → M_R, the sides M → (R16) → web face → (R22) → N, the line N_L → N_R |
+//! | head centre | N_L → N_R, straight interfaces N → T, the cap bottom T_L → T_R at z = z_c |
+//! | head arm | lower R22 fillet + head underside N → H → I, head side I → S (z = z_c), cap bottom S → T, interface T → N |
+//! | cap | cap bottom line z = z_c, head sides S → J, running surface J_L → J_R |
+//!
+//! M and N are the points of the R16 / R22 fillets 45° from the web, so every block corner
+//! has a reasonable angle. y_c is the web half thickness, snapped to a required foot node line
+//! within half an element of it. The foot arm and foot centre bottoms are graded 1D
+//! distributions ([`crate::mesh::grading`]) holding the required foot node lines; the foot
+//! centre's count fixes the web's lateral count. The cap is meshed in vertical columns under
+//! the running-surface nodes (graded along the head top: fine near the centre) with layers
+//! graded from the running surface downwards; its bottom line takes the columns' y, so the
+//! head arm and head centre blocks absorb the change of lateral resolution from the web to the
+//! running surface. Interiors of the four-sided blocks are filled by discrete transfinite
+//! interpolation with blended boundary parameters (Thompson, Warsi & Mastin, *Numerical Grid
+//! Generation*, 1985, §8.4; Soni, "Two- and three-dimensional grid generation for internal
+//! flow applications", AIAA 85-1526).
+//!
+//! All nodes on the profile lie on the profile polyline; the section deviates from the
+//! polygon only where a chord between two boundary nodes cuts a curved part (fillets, head
+//! top). Optional inclination: rotation about the foot centre (0, 0) by the inclination angle
+//! (1/40 rail: atan(1/40) = 1.432°), the head tilting towards −y (the track centre).
+//!
+//! Section properties are integrated over the bilinear quads with the 2×2 Gauss rule, exact
+//! for area, first and second moments of bilinear quads (the integrands are of degree ≤ 3 in
+//! each natural coordinate).
+
+use super::grading::{grade, FineZone, GradingSpec};
+use super::profile::{RailProfile, SectionProperties};
+use super::MeshError;
+use std::collections::HashMap;
+
+/// Parameters of the section mesh (SI units).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SectionParams {
+    /// Target element size in the foot, web and head body (m).
+    pub size_m: f64,
+    /// Element size at the running surface (m), laterally and in depth.
+    pub running_surface_size_m: f64,
+    /// Half width of the fine running-surface zone, measured along the head top from the
+    /// head centre (m).
+    pub running_surface_half_width_m: f64,
+    /// Depth below the running surface over which the fine size holds (m).
+    pub running_surface_depth_m: f64,
+    /// Lateral positions (m, in the rail's own upright frame, from the foot centre) that must
+    /// be node lines on the foot underside; they are mirrored (±y) so the mesh stays symmetric.
+    pub foot_node_lines_m: Vec<f64>,
+    /// Rail inclination (rad) about the foot centre, head towards −y; 0 = upright,
+    /// atan(1/40) for the usual 1:40 inclination.
+    pub inclination_rad: f64,
+}
+
+impl Default for SectionParams {
+    fn default() -> Self {
+        SectionParams {
+            size_m: 0.005,
+            running_surface_size_m: 0.0025,
+            running_surface_half_width_m: 0.020,
+            running_surface_depth_m: 0.004,
+            foot_node_lines_m: Vec::new(),
+            inclination_rad: 0.0,
+        }
+    }
+}
+
+/// The meshed cross-section.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SectionMesh {
+    /// Node coordinates (y, z) in m (after the inclination, if any).
+    pub nodes: Vec<[f64; 2]>,
+    /// Quadrilaterals, counter-clockwise in the (y, z) plane.
+    pub quads: Vec<[usize; 4]>,
+    /// Nodes on the foot underside, ordered by their position along the foot.
+    pub foot_underside: Vec<usize>,
+    /// Position of each [`Self::foot_underside`] node along the foot underside from the foot
+    /// centre (m; equals y for an upright rail).
+    pub foot_underside_s_m: Vec<f64>,
+    /// Nodes of the head top (running surface, from one end of the head side round to the
+    /// other), ordered by y.
+    pub running_surface: Vec<usize>,
+    /// The inclination applied (rad).
+    pub inclination_rad: f64,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Polylines
+
+#[derive(Debug, Clone)]
+struct Polyline {
+    pts: Vec<[f64; 2]>,
+    cum: Vec<f64>,
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
+}
+
+fn lerp(a: [f64; 2], b: [f64; 2], t: f64) -> [f64; 2] {
+    [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+}
+
+impl Polyline {
+    fn new(pts: Vec<[f64; 2]>) -> Self {
+        let mut cum = Vec::with_capacity(pts.len());
+        let mut s = 0.0;
+        cum.push(0.0);
+        for w in pts.windows(2) {
+            s += dist(w[0], w[1]);
+            cum.push(s);
+        }
+        Polyline { pts, cum }
+    }
+    fn len(&self) -> f64 {
+        *self.cum.last().expect("non-empty")
+    }
+    fn at(&self, s: f64) -> [f64; 2] {
+        let s = s.clamp(0.0, self.len());
+        let k = match self.cum.iter().position(|&c| c >= s) {
+            Some(0) => return self.pts[0],
+            Some(k) => k,
+            None => return *self.pts.last().expect("non-empty"),
+        };
+        let t = (s - self.cum[k - 1]) / (self.cum[k] - self.cum[k - 1]);
+        lerp(self.pts[k - 1], self.pts[k], t)
+    }
+    fn sub(&self, s0: f64, s1: f64) -> Polyline {
+        let mut pts = vec![self.at(s0)];
+        for (k, &c) in self.cum.iter().enumerate() {
+            if c > s0 && c < s1 {
+                pts.push(self.pts[k]);
+            }
+        }
+        pts.push(self.at(s1));
+        Polyline::new(pts)
+    }
+    fn reversed(&self) -> Polyline {
+        let mut p = self.pts.clone();
+        p.reverse();
+        Polyline::new(p)
+    }
+    fn join(&self, other: &Polyline) -> Polyline {
+        let mut p = self.pts.clone();
+        p.extend_from_slice(&other.pts[1..]);
+        Polyline::new(p)
+    }
+    /// n + 1 points uniformly spaced in arc length.
+    fn uniform(&self, n: usize) -> Vec<[f64; 2]> {
+        let l = self.len();
+        let mut v: Vec<[f64; 2]> = (0..=n).map(|k| self.at(l * k as f64 / n as f64)).collect();
+        v[0] = self.pts[0];
+        v[n] = *self.pts.last().expect("non-empty");
+        v
+    }
+    /// The point with lateral coordinate y of a polyline that is a graph over y.
+    fn at_y(&self, y: f64) -> [f64; 2] {
+        for w in self.pts.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let (lo, hi) = if a[0] <= b[0] {
+                (a[0], b[0])
+            } else {
+                (b[0], a[0])
+            };
+            if y >= lo && y <= hi && hi > lo {
+                return lerp(a, b, (y - a[0]) / (b[0] - a[0]));
+            }
+        }
+        // Outside: nearest end.
+        let (a, b) = (self.pts[0], *self.pts.last().expect("non-empty"));
+        if (y - a[0]).abs() < (y - b[0]).abs() {
+            a
+        } else {
+            b
+        }
+    }
+}
+
+fn straight(a: [f64; 2], b: [f64; 2], n: usize) -> Vec<[f64; 2]> {
+    let mut v: Vec<[f64; 2]> = (0..=n).map(|k| lerp(a, b, k as f64 / n as f64)).collect();
+    v[0] = a;
+    v[n] = b;
+    v
+}
+
+fn mirror(v: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    v.iter().map(|p| [-p[0], p[1]]).collect()
+}
+
+fn arc_fractions(v: &[[f64; 2]]) -> Vec<f64> {
+    let mut c = vec![0.0; v.len()];
+    for k in 1..v.len() {
+        c[k] = c[k - 1] + dist(v[k - 1], v[k]);
+    }
+    let l = c[v.len() - 1];
+    c.iter().map(|x| x / l).collect()
+}
+
+/// A structured block: (n + 1) × (m + 1) points, `pts[j * (n + 1) + i]`, i along the
+/// bottom/top, j along the left/right sides.
+struct Grid {
+    n: usize,
+    m: usize,
+    pts: Vec<[f64; 2]>,
+}
+
+/// Discrete transfinite interpolation from the four boundaries (bottom and top run from the
+/// left side to the right side, left and right from the bottom to the top).
+fn tfi(bottom: &[[f64; 2]], right: &[[f64; 2]], top: &[[f64; 2]], left: &[[f64; 2]]) -> Grid {
+    let n = bottom.len() - 1;
+    let m = left.len() - 1;
+    debug_assert_eq!(top.len(), n + 1);
+    debug_assert_eq!(right.len(), m + 1);
+    let (sb, st, sl, sr) = (
+        arc_fractions(bottom),
+        arc_fractions(top),
+        arc_fractions(left),
+        arc_fractions(right),
+    );
+    let (p00, p10, p01, p11) = (bottom[0], bottom[n], top[0], top[n]);
+    let mut pts = vec![[0.0; 2]; (n + 1) * (m + 1)];
+    for j in 0..=m {
+        for i in 0..=n {
+            let p = if j == 0 {
+                bottom[i]
+            } else if j == m {
+                top[i]
+            } else if i == 0 {
+                left[j]
+            } else if i == n {
+                right[j]
+            } else {
+                let den = 1.0 - (st[i] - sb[i]) * (sr[j] - sl[j]);
+                let xi = (sb[i] + sl[j] * (st[i] - sb[i])) / den;
+                let eta = (sl[j] + sb[i] * (sr[j] - sl[j])) / den;
+                let mut q = [0.0; 2];
+                for d in 0..2 {
+                    q[d] = (1.0 - eta) * bottom[i][d]
+                        + eta * top[i][d]
+                        + (1.0 - xi) * left[j][d]
+                        + xi * right[j][d]
+                        - ((1.0 - xi) * (1.0 - eta) * p00[d]
+                            + xi * (1.0 - eta) * p10[d]
+                            + (1.0 - xi) * eta * p01[d]
+                            + xi * eta * p11[d]);
+                }
+                q
+            };
+            pts[j * (n + 1) + i] = p;
+        }
+    }
+    Grid { n, m, pts }
+}
+
+/// Node and quad accumulator that merges coincident nodes (shared block edges are computed
+/// once and passed to both blocks, so coincident nodes are bit-identical up to the sign of 0).
+#[derive(Default)]
+struct Builder {
+    nodes: Vec<[f64; 2]>,
+    index: HashMap<(i64, i64), usize>,
+    quads: Vec<[usize; 4]>,
+}
+
+impl Builder {
+    fn node(&mut self, p: [f64; 2]) -> usize {
+        let key = ((p[0] * 1e10).round() as i64, (p[1] * 1e10).round() as i64);
+        let next = self.nodes.len();
+        *self.index.entry(key).or_insert_with(|| {
+            self.nodes.push(p);
+            next
+        })
+    }
+    /// Adds a grid; `flip` reverses the orientation (mirrored blocks).
+    fn add(&mut self, g: &Grid, flip: bool) {
+        let ids: Vec<usize> = g.pts.iter().map(|&p| self.node(p)).collect();
+        let w = g.n + 1;
+        for j in 0..g.m {
+            for i in 0..g.n {
+                let (a, b, c, d) = (
+                    ids[j * w + i],
+                    ids[j * w + i + 1],
+                    ids[(j + 1) * w + i + 1],
+                    ids[(j + 1) * w + i],
+                );
+                self.quads
+                    .push(if flip { [a, d, c, b] } else { [a, b, c, d] });
+            }
+        }
+    }
+}
+
+fn invalid(name: &'static str, value: f64, reason: &'static str) -> MeshError {
+    MeshError::InvalidParameter {
+        name,
+        value,
+        reason,
+    }
+}
+
+fn vertex(half: &[[f64; 2]], y_mm: f64, z_mm: f64) -> Result<usize, MeshError> {
+    half.iter()
+        .position(|p| (p[0] - y_mm * 1e-3).abs() < 1e-6 && (p[1] - z_mm * 1e-3).abs() < 1e-6)
+        .ok_or(MeshError::ProfileParse {
+            line: 0,
+            reason: format!("the section mesher needs the UIC54 key point ({y_mm}, {z_mm}) mm"),
+        })
+}
+
+/// Arc fraction of the R16/R22 fillets (both 70° arcs) from the web to the block corner
+/// 45° from the web.
+const FILLET_SPLIT_FROM_WEB: f64 = 45.0 / 70.0;
+
+impl SectionMesh {
+    /// Meshes the embedded UIC54 profile.
+    pub fn uic54(params: &SectionParams) -> Result<Self, MeshError> {
+        Self::build(&RailProfile::uic54()?, params)
+    }
+
+    /// Meshes a UIC54-topology profile (it must contain the UIC54 key points: foot edge,
+    /// fishing-face ends, fillet ends, head corners).
+    pub fn build(profile: &RailProfile, params: &SectionParams) -> Result<Self, MeshError> {
+        let h = params.size_m;
+        let hr = params.running_surface_size_m;
+        if !(h > 0.0 && h <= 0.05) {
+            return Err(invalid("size_m", h, "must be in (0, 0.05] m"));
+        }
+        if !(hr > 0.0 && hr <= h) {
+            return Err(invalid(
+                "running_surface_size_m",
+                hr,
+                "must be in (0, size_m]",
+            ));
+        }
+        let hw = params.running_surface_half_width_m;
+        if !(0.0..0.035).contains(&hw) {
+            return Err(invalid(
+                "running_surface_half_width_m",
+                hw,
+                "must be in [0, 0.035) m",
+            ));
+        }
+        let hd = params.running_surface_depth_m;
+        if !(0.0..0.015).contains(&hd) {
+            return Err(invalid(
+                "running_surface_depth_m",
+                hd,
+                "must be in [0, 0.015) m",
+            ));
+        }
+        let inc = params.inclination_rad;
+        if !(-0.2..0.2).contains(&inc) {
+            return Err(invalid("inclination_rad", inc, "must be |angle| < 0.2 rad"));
+        }
+        let half = &profile.half;
+        let foot_half_w = half[1][0];
+        let i_c = vertex(half, 70.0, 11.0)?;
+        let i_d = vertex(half, 45.46, 13.669)?;
+        let i_e = vertex(half, 18.532, 23.461)?;
+        let i_f = vertex(half, 8.0, 38.498)?;
+        let i_g = vertex(half, 8.0, 97.1)?;
+        let i_h = vertex(half, 22.482, 117.775)?;
+        let i_i = vertex(half, 35.0, 122.327)?;
+        let i_j = vertex(half, 34.942, 146.127)?;
+        let i_k = half.len() - 1;
+        let (pc, pd, pe, pf) = (half[i_c], half[i_d], half[i_e], half[i_f]);
+        let (pi, pj) = (half[i_i], half[i_j]);
+
+        // Required foot node lines (upright frame), mirrored and deduplicated.
+        let mut lines: Vec<f64> = Vec::new();
+        for &y in &params.foot_node_lines_m {
+            if !y.is_finite() || y.abs() > foot_half_w {
+                return Err(MeshError::BreakpointOutside {
+                    x: y,
+                    lo: -foot_half_w,
+                    hi: foot_half_w,
+                });
+            }
+            lines.push(y.abs());
+        }
+        lines.sort_by(f64::total_cmp);
+        lines.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+
+        // y_c: web half thickness, snapped to a required line within h/2.
+        let mut yc = pf[0];
+        if let Some(&y) = lines
+            .iter()
+            .filter(|&&y| y > 0.0 && (y - pf[0]).abs() <= 0.5 * h)
+            .min_by(|a, b| (*a - pf[0]).abs().total_cmp(&(*b - pf[0]).abs()))
+        {
+            yc = y;
+        }
+
+        // Profile pieces.
+        let fil16 = Polyline::new(half[i_e..=i_f].to_vec()); // E → F
+        let s_m = fil16.len() * (1.0 - FILLET_SPLIT_FROM_WEB);
+        let pm = fil16.at(s_m);
+        let fil16_lower = fil16.sub(0.0, s_m); // E → M
+        let fil16_upper = fil16.sub(s_m, fil16.len()); // M → F
+        let fil22 = Polyline::new(half[i_g..=i_h].to_vec()); // G → H
+        let s_n = fil22.len() * FILLET_SPLIT_FROM_WEB;
+        let pn = fil22.at(s_n);
+        let web_side = fil16_upper
+            .join(&Polyline::new(vec![pf, half[i_g]]))
+            .join(&fil22.sub(0.0, s_n)); // M → N
+        let head_under = fil22
+            .sub(s_n, fil22.len())
+            .join(&Polyline::new(half[i_h..=i_i].to_vec())); // N → I
+        let foot_top = Polyline::new(half[i_c..=i_e].to_vec()); // C → D → E (graph over y)
+        let head_top = Polyline::new(half[i_j..=i_k].to_vec()).reversed(); // K → J
+
+        let mut b = Builder::default();
+        let grade_with =
+            |lo: f64, hi: f64, size: f64, bps: Vec<f64>| -> Result<Vec<f64>, MeshError> {
+                let mut spec = GradingSpec::new(lo, hi, size);
+                spec.breakpoints_m = bps;
+                spec.max_ratio = 1.5;
+                grade(&spec)
+            };
+
+        // ---- foot arm (right) ----
+        let mut bps: Vec<f64> = lines
+            .iter()
+            .copied()
+            .filter(|&y| y > yc && y < foot_half_w)
+            .collect();
+        for special in [pe[0], pd[0]] {
+            if bps.iter().all(|&y| (y - special).abs() > 0.3 * h) {
+                bps.push(special);
+            }
+        }
+        let ys = grade_with(yc, foot_half_w, h, bps)?;
+        let arm_bottom: Vec<[f64; 2]> = ys.iter().map(|&y| [y, 0.0]).collect();
+        let arm_top: Vec<[f64; 2]> = ys
+            .iter()
+            .map(|&y| {
+                if y >= pe[0] {
+                    foot_top.at_y(y)
+                } else {
+                    let t = (pe[0] - y) / (pe[0] - yc);
+                    fil16_lower.at(t * fil16_lower.len())
+                }
+            })
+            .collect();
+        let m_a = ((0.5 * (pc[1] + dist([yc, 0.0], pm)) / h).round() as usize).max(2);
+        let arm_left = straight([yc, 0.0], pm, m_a);
+        let arm_right = straight([foot_half_w, 0.0], pc, m_a);
+        let arm = tfi(&arm_bottom, &arm_right, &arm_top, &arm_left);
+        b.add(&arm, false);
+        b.add(
+            &Grid {
+                pts: mirror(&arm.pts),
+                ..arm
+            },
+            true,
+        );
+
+        // ---- foot centre ----
+        let bps: Vec<f64> = lines
+            .iter()
+            .copied()
+            .filter(|&y| y > 0.0 && y < yc)
+            .collect();
+        let yh = grade_with(0.0, yc, h, bps)?;
+        let mut centre_y: Vec<f64> = yh.iter().rev().map(|y| -y).collect();
+        centre_y.extend_from_slice(&yh[1..]);
+        let n_w = centre_y.len() - 1;
+        let centre_bottom: Vec<[f64; 2]> = centre_y.iter().map(|&y| [y, 0.0]).collect();
+        let pm_l = [-pm[0], pm[1]];
+        let web_bottom = straight(pm_l, pm, n_w);
+        b.add(
+            &tfi(&centre_bottom, &arm_left, &web_bottom, &mirror(&arm_left)),
+            false,
+        );
+
+        // ---- web ----
+        let m_w = ((web_side.len() / h).ceil() as usize).max(2);
+        let web_right = web_side.uniform(m_w);
+        let pn_l = [-pn[0], pn[1]];
+        let web_top = straight(pn_l, pn, n_w);
+        b.add(
+            &tfi(&web_bottom, &web_right, &web_top, &mirror(&web_right)),
+            false,
+        );
+
+        // ---- running surface and cap columns ----
+        let mut h_run = hr;
+        let mut h_top = h;
+        let s_top = loop {
+            let mut spec = GradingSpec::new(0.0, head_top.len(), h_top);
+            spec.zones.push(FineZone {
+                start_m: 0.0,
+                end_m: hw,
+                size_m: h_run,
+            });
+            let s = grade(&spec)?;
+            if s.len() > n_w / 2 + 2 {
+                break s;
+            }
+            h_run *= 0.8;
+            h_top *= 0.8;
+        };
+        let n_half = s_top.len() - 1;
+        let zc = pi[1] + 0.6 * (pj[1] - pi[1]);
+        let head_side = Polyline::new(vec![pi, pj]);
+        let ps = head_side.at((zc - pi[1]) / (pj[1] - pi[1]) * head_side.len());
+        // Right-half columns k = 0 (centre) … n_half (head side): top and bottom points.
+        let col_top: Vec<[f64; 2]> = s_top.iter().map(|&s| head_top.at(s)).collect();
+        let mut col_bot: Vec<[f64; 2]> = col_top.iter().map(|p| [p[0], zc]).collect();
+        col_top_fix(&mut col_bot, ps);
+        // Layer fractions from the centre column (depth graded from the running surface).
+        let depth_c = col_top[0][1] - zc;
+        let mut spec = GradingSpec::new(0.0, depth_c, h);
+        spec.zones.push(FineZone {
+            start_m: 0.0,
+            end_m: hd,
+            size_m: hr,
+        });
+        let depths = grade(&spec)?;
+        let m_cap = depths.len() - 1;
+        // Full-width columns from −J to +J.
+        let mut tops: Vec<[f64; 2]> = mirror(&col_top[1..]);
+        tops.reverse();
+        tops.extend_from_slice(&col_top);
+        let mut bots: Vec<[f64; 2]> = mirror(&col_bot[1..]);
+        bots.reverse();
+        bots.extend_from_slice(&col_bot);
+        let ncol = tops.len();
+        let mut cap = Grid {
+            n: ncol - 1,
+            m: m_cap,
+            pts: vec![[0.0; 2]; ncol * (m_cap + 1)],
+        };
+        for j in 0..=m_cap {
+            // j = 0 at the bottom: depth fraction from the top is 1 − …
+            let f = depths[m_cap - j] / depth_c;
+            for k in 0..ncol {
+                cap.pts[j * ncol + k] = if j == 0 {
+                    bots[k]
+                } else if j == m_cap {
+                    tops[k]
+                } else {
+                    lerp(tops[k], bots[k], f)
+                };
+            }
+        }
+        b.add(&cap, false);
+        let running: Vec<usize> = tops.iter().map(|&p| b.node(p)).collect();
+
+        // ---- head centre and head arms ----
+        let i_t = n_w / 2;
+        let pt = col_bot[i_t];
+        let m_h = ((0.5 * (dist(pn, pt) + dist(pi, ps)) / h).round() as usize).max(2);
+        let head_if = straight(pn, pt, m_h); // N → T
+        let centre_top: Vec<[f64; 2]> = bots[n_half - i_t..=n_half + i_t].to_vec();
+        b.add(
+            &tfi(&web_top, &head_if, &centre_top, &mirror(&head_if)),
+            false,
+        );
+        let n_ha = n_half - i_t;
+        let ha_bottom = head_under.uniform(n_ha);
+        let ha_right = straight(pi, ps, m_h);
+        let ha_top: Vec<[f64; 2]> = col_bot[i_t..=n_half].to_vec();
+        let ha = tfi(&ha_bottom, &ha_right, &ha_top, &head_if);
+        b.add(&ha, false);
+        b.add(
+            &Grid {
+                pts: mirror(&ha.pts),
+                ..ha
+            },
+            true,
+        );
+
+        // ---- foot underside ----
+        let mut foot: Vec<(f64, usize)> = b
+            .nodes
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p[1] == 0.0)
+            .map(|(k, p)| (p[0], k))
+            .collect();
+        foot.sort_by(|a, b| a.0.total_cmp(&b.0));
+
+        let (c, s) = (inc.cos(), inc.sin());
+        let nodes: Vec<[f64; 2]> = b
+            .nodes
+            .iter()
+            .map(|p| [p[0] * c - p[1] * s, p[0] * s + p[1] * c])
+            .collect();
+        let mesh = SectionMesh {
+            nodes,
+            quads: b.quads,
+            foot_underside: foot.iter().map(|f| f.1).collect(),
+            foot_underside_s_m: foot.iter().map(|f| f.0).collect(),
+            running_surface: running,
+            inclination_rad: inc,
+        };
+        mesh.check_quads()?;
+        Ok(mesh)
+    }
+
+    /// Checks every quad is strictly convex and counter-clockwise.
+    pub fn check_quads(&self) -> Result<(), MeshError> {
+        for (q, quad) in self.quads.iter().enumerate() {
+            let p = quad.map(|n| self.nodes[n]);
+            for k in 0..4 {
+                let (a, b, c) = (p[k], p[(k + 1) % 4], p[(k + 2) % 4]);
+                let cross = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]);
+                if cross.is_nan() || cross <= 0.0 {
+                    return Err(MeshError::InvalidElement {
+                        reason: format!(
+                            "section quad {q} is not convex/counter-clockwise at its corner {}",
+                            (k + 1) % 4
+                        ),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Section properties by 2×2 Gauss integration over the quads.
+    pub fn properties(&self) -> SectionProperties {
+        let g = 1.0 / 3f64.sqrt();
+        let (mut a, mut sy, mut sz, mut syy, mut szz, mut syz) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for quad in &self.quads {
+            let p = quad.map(|n| self.nodes[n]);
+            for xi in [-g, g] {
+                for eta in [-g, g] {
+                    let (y, z, det) = bilinear(&p, xi, eta);
+                    a += det;
+                    sy += y * det;
+                    sz += z * det;
+                    syy += y * y * det;
+                    szz += z * z * det;
+                    syz += y * z * det;
+                }
+            }
+        }
+        SectionProperties::from_integrals(a, sy, sz, syy, szz, syz)
+    }
+
+    /// Area (m²) of quad `q`.
+    pub fn quad_area(&self, q: usize) -> f64 {
+        let p = self.quads[q].map(|n| self.nodes[n]);
+        0.5 * ((p[2][0] - p[0][0]) * (p[3][1] - p[1][1])
+            - (p[3][0] - p[1][0]) * (p[2][1] - p[0][1]))
+    }
+
+    /// Finds the quad containing the point (y, z) (m) and its natural coordinates (ξ, η) in
+    /// [−1, 1]²; `None` if the point is outside the section (tolerance 1e-9 in ξ, η).
+    pub fn locate(&self, y: f64, z: f64) -> Option<(usize, [f64; 2])> {
+        for (q, quad) in self.quads.iter().enumerate() {
+            let p = quad.map(|n| self.nodes[n]);
+            let (lo_y, hi_y) = p
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), v| {
+                    (l.min(v[0]), u.max(v[0]))
+                });
+            let (lo_z, hi_z) = p
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), v| {
+                    (l.min(v[1]), u.max(v[1]))
+                });
+            let eps = 1e-12;
+            if y < lo_y - eps || y > hi_y + eps || z < lo_z - eps || z > hi_z + eps {
+                continue;
+            }
+            if let Some(nat) = invert_bilinear(&p, y, z) {
+                if nat[0].abs() <= 1.0 + 1e-9 && nat[1].abs() <= 1.0 + 1e-9 {
+                    return Some((q, nat));
+                }
+            }
+        }
+        None
+    }
+}
+
+/// Keeps the outermost column bottom on the head side (S) rather than below J.
+fn col_top_fix(col_bot: &mut [[f64; 2]], ps: [f64; 2]) {
+    if let Some(last) = col_bot.last_mut() {
+        *last = ps;
+    }
+}
+
+/// Position (y, z) and Jacobian determinant of the bilinear quad map at (ξ, η).
+fn bilinear(p: &[[f64; 2]; 4], xi: f64, eta: f64) -> (f64, f64, f64) {
+    const NAT: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+    let (mut y, mut z, mut yx, mut ye, mut zx, mut ze) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for k in 0..4 {
+        let (a, b) = (NAT[k][0], NAT[k][1]);
+        let n = 0.25 * (1.0 + a * xi) * (1.0 + b * eta);
+        let nx = 0.25 * a * (1.0 + b * eta);
+        let ne = 0.25 * b * (1.0 + a * xi);
+        y += n * p[k][0];
+        z += n * p[k][1];
+        yx += nx * p[k][0];
+        ye += ne * p[k][0];
+        zx += nx * p[k][1];
+        ze += ne * p[k][1];
+    }
+    (y, z, yx * ze - ye * zx)
+}
+
+/// Newton inversion of the bilinear quad map; `None` if it does not converge.
+pub(crate) fn invert_bilinear(p: &[[f64; 2]; 4], y: f64, z: f64) -> Option<[f64; 2]> {
+    const NAT: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+    let (mut xi, mut eta) = (0.0f64, 0.0f64);
+    for _ in 0..30 {
+        let (mut fy, mut fz, mut yx, mut ye, mut zx, mut ze) = (-y, -z, 0.0, 0.0, 0.0, 0.0);
+        for k in 0..4 {
+            let (a, b) = (NAT[k][0], NAT[k][1]);
+            let n = 0.25 * (1.0 + a * xi) * (1.0 + b * eta);
+            fy += n * p[k][0];
+            fz += n * p[k][1];
+            yx += 0.25 * a * (1.0 + b * eta) * p[k][0];
+            ye += 0.25 * b * (1.0 + a * xi) * p[k][0];
+            zx += 0.25 * a * (1.0 + b * eta) * p[k][1];
+            ze += 0.25 * b * (1.0 + a * xi) * p[k][1];
+        }
+        let det = yx * ze - ye * zx;
+        if det.abs() < 1e-300 {
+            return None;
+        }
+        let dxi = (ze * fy - ye * fz) / det;
+        let deta = (-zx * fy + yx * fz) / det;
+        xi -= dxi;
+        eta -= deta;
+        if !xi.is_finite() || xi.abs() > 10.0 || eta.abs() > 10.0 {
+            return None;
+        }
+        if dxi.abs() < 1e-13 && deta.abs() < 1e-13 {
+            return Some([xi, eta]);
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const EN_AREA_M2: f64 = 6977e-6;
+    const EN_ZC_M: f64 = 0.0751;
+    const EN_I_VERT_M4: f64 = 2338e-8;
+    const EN_I_LAT_M4: f64 = 419.2e-8;
+
+    fn row_lines() -> Vec<f64> {
+        // Edges of four 20 mm strips centred at ±17.5 and ±52.5 mm.
+        vec![0.0075, 0.0275, 0.0425, 0.0625]
+    }
+
+    #[test]
+    fn default_section_properties_match_en_and_polygon() {
+        let params = SectionParams {
+            foot_node_lines_m: row_lines(),
+            ..Default::default()
+        };
+        let m = SectionMesh::uic54(&params).unwrap();
+        let s = m.properties();
+        let poly = RailProfile::uic54().unwrap().properties();
+        eprintln!(
+            "section: {} nodes, {} quads; A {:.1} mm2 (poly {:.1}, EN 6977), zc {:.2} mm, I {:.1} / {:.1} cm4",
+            m.nodes.len(),
+            m.quads.len(),
+            s.area_m2 * 1e6,
+            poly.area_m2 * 1e6,
+            s.centroid_z_m * 1e3,
+            s.i_vertical_bending_m4 * 1e8,
+            s.i_lateral_bending_m4 * 1e8
+        );
+        assert!((s.area_m2 / EN_AREA_M2 - 1.0).abs() < 0.01);
+        assert!((s.centroid_z_m - EN_ZC_M).abs() < 1e-3);
+        assert!((s.i_vertical_bending_m4 / EN_I_VERT_M4 - 1.0).abs() < 0.03);
+        assert!((s.i_lateral_bending_m4 / EN_I_LAT_M4 - 1.0).abs() < 0.03);
+        assert!(s.centroid_y_m.abs() < 1e-12);
+        // Against the polygon the mesh differs only by chords on the curved boundary.
+        assert!((s.area_m2 / poly.area_m2 - 1.0).abs() < 0.003);
+    }
+
+    /// Writes an SVG picture of a section mesh (for eyeballing).
+    pub(crate) fn svg(m: &SectionMesh) -> String {
+        let sc = 5000.0; // px per m
+        let mut out = String::from(
+            "<svg xmlns='http://www.w3.org/2000/svg' width='900' height='900' viewBox='-450 -850 900 900'>\n",
+        );
+        for q in &m.quads {
+            let pts: Vec<String> = q
+                .iter()
+                .map(|&n| format!("{:.2},{:.2}", m.nodes[n][0] * sc, -m.nodes[n][1] * sc))
+                .collect();
+            out += &format!(
+                "<polygon points='{}' fill='#cde' stroke='black' stroke-width='0.4'/>\n",
+                pts.join(" ")
+            );
+        }
+        for &n in m.running_surface.iter().chain(&m.foot_underside) {
+            out += &format!(
+                "<circle cx='{:.2}' cy='{:.2}' r='1.5' fill='red'/>\n",
+                m.nodes[n][0] * sc,
+                -m.nodes[n][1] * sc
+            );
+        }
+        out + "</svg>\n"
+    }
+
+    /// Picture for eyeballing: `cargo test --lib mesh::section::tests::write_svg -- --ignored`
+    /// writes /tmp/uic54-section.svg.
+    #[test]
+    #[ignore]
+    fn write_svg() {
+        let params = SectionParams {
+            foot_node_lines_m: row_lines(),
+            ..Default::default()
+        };
+        let m = SectionMesh::uic54(&params).unwrap();
+        std::fs::write("/tmp/uic54-section.svg", svg(&m)).unwrap();
+        let mut txt = String::new();
+        for q in &m.quads {
+            for &n in q {
+                txt += &format!("{} {} ", m.nodes[n][0], m.nodes[n][1]);
+            }
+            txt += "\n";
+        }
+        std::fs::write("/tmp/uic54-section.txt", txt).unwrap();
+    }
+
+    /// Boundary edges (used by exactly one quad); panics if an edge is used more than twice
+    /// or twice in the same direction (overlapping or inverted quads).
+    fn boundary_loop_area(m: &SectionMesh) -> (f64, usize) {
+        let mut count: HashMap<(usize, usize), i32> = HashMap::new();
+        for q in &m.quads {
+            for k in 0..4 {
+                *count.entry((q[k], q[(k + 1) % 4])).or_default() += 1;
+            }
+        }
+        let mut next: HashMap<usize, usize> = HashMap::new();
+        for (&(a, b), &c) in &count {
+            assert_eq!(c, 1, "directed edge ({a},{b}) used {c} times");
+            if !count.contains_key(&(b, a)) {
+                assert!(
+                    next.insert(a, b).is_none(),
+                    "node {a} starts two boundary edges"
+                );
+            }
+        }
+        // Walk the loop.
+        let start = *next.keys().next().unwrap();
+        let (mut a, mut n, mut area) = (start, 0, 0.0);
+        loop {
+            let b = next[&a];
+            let (p, q) = (m.nodes[a], m.nodes[b]);
+            area += 0.5 * (p[0] * q[1] - q[0] * p[1]);
+            n += 1;
+            a = b;
+            if a == start {
+                break;
+            }
+        }
+        assert_eq!(n, next.len(), "the boundary is not a single loop");
+        (area, n)
+    }
+
+    #[test]
+    fn mesh_is_conforming_convex_and_tiles_the_section() {
+        for params in [
+            SectionParams::default(),
+            SectionParams {
+                foot_node_lines_m: row_lines(),
+                ..Default::default()
+            },
+            SectionParams {
+                size_m: 0.002,
+                running_surface_size_m: 0.001,
+                foot_node_lines_m: vec![0.0, 0.001, 0.03, -0.069],
+                ..Default::default()
+            },
+            SectionParams {
+                size_m: 0.012,
+                running_surface_size_m: 0.006,
+                inclination_rad: (1.0f64 / 40.0).atan(),
+                ..Default::default()
+            },
+        ] {
+            let m = SectionMesh::uic54(&params).unwrap();
+            m.check_quads().unwrap();
+            let quad_sum: f64 = (0..m.quads.len()).map(|q| m.quad_area(q)).sum();
+            assert!((0..m.quads.len()).all(|q| m.quad_area(q) > 0.0));
+            let (loop_area, _) = boundary_loop_area(&m);
+            // A conforming, non-overlapping tiling: the quads add up to the area in the loop.
+            assert!(
+                (quad_sum / loop_area - 1.0).abs() < 1e-12,
+                "{quad_sum} vs {loop_area}"
+            );
+            // Every boundary node lies on the profile polygon (rotated back).
+            let poly = RailProfile::uic54().unwrap().polygon();
+            let (c, s) = (params.inclination_rad.cos(), params.inclination_rad.sin());
+            for &n in m.running_surface.iter().chain(&m.foot_underside) {
+                let [y, z] = m.nodes[n];
+                let p = [y * c + z * s, -y * s + z * c];
+                let d = (0..poly.len())
+                    .map(|k| seg_dist(p, poly[k], poly[(k + 1) % poly.len()]))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(d < 1e-9, "boundary node {n} is {d} m off the profile");
+            }
+        }
+    }
+
+    fn seg_dist(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+        let (dy, dz) = (b[0] - a[0], b[1] - a[1]);
+        let t = (((p[0] - a[0]) * dy + (p[1] - a[1]) * dz) / (dy * dy + dz * dz)).clamp(0.0, 1.0);
+        dist(p, [a[0] + t * dy, a[1] + t * dz])
+    }
+
+    #[test]
+    fn required_foot_lines_and_running_surface_size() {
+        let params = SectionParams {
+            foot_node_lines_m: row_lines(),
+            ..Default::default()
+        };
+        let m = SectionMesh::uic54(&params).unwrap();
+        for &y in &row_lines() {
+            for y in [y, -y] {
+                assert!(
+                    m.foot_underside_s_m.iter().any(|s| (s - y).abs() < 1e-12),
+                    "foot line {y} missing"
+                );
+            }
+        }
+        // Foot underside: ordered, from −70 to 70 mm, all at z = 0.
+        assert!(m.foot_underside_s_m.windows(2).all(|w| w[1] > w[0]));
+        assert!((m.foot_underside_s_m[0] + 0.070).abs() < 1e-12);
+        assert!(m.foot_underside.iter().all(|&n| m.nodes[n][1] == 0.0));
+        // Running surface ordered by y, from head side to head side, apex a node.
+        let rs = &m.running_surface;
+        assert!(rs.windows(2).all(|w| m.nodes[w[1]][0] > m.nodes[w[0]][0]));
+        assert!(rs.iter().any(|&n| m.nodes[n] == [0.0, 0.159]));
+        // Quads touching the running surface within the fine zone: all edges <= the fine size.
+        let on_top: std::collections::HashSet<usize> = rs.iter().copied().collect();
+        let mut checked = 0;
+        let mut worst: f64 = 0.0;
+        for q in &m.quads {
+            let touching = q.iter().filter(|n| on_top.contains(n)).count();
+            let central = q
+                .iter()
+                .all(|&n| m.nodes[n][0].abs() <= params.running_surface_half_width_m - 0.002);
+            if touching >= 2 && central {
+                checked += 1;
+                for k in 0..4 {
+                    let e = dist(m.nodes[q[k]], m.nodes[q[(k + 1) % 4]]);
+                    worst = worst.max(e);
+                    assert!(
+                        e <= params.running_surface_size_m * (1.0 + 1e-9),
+                        "edge {e}"
+                    );
+                }
+            }
+        }
+        eprintln!(
+            "{checked} running-surface quads, largest edge {:.3} mm",
+            worst * 1e3
+        );
+        assert!(checked >= 14);
+    }
+
+    #[test]
+    fn refinement_converges_to_the_polygon() {
+        // The mesh differs from the polygon by chord cuts on curved edges, O(h²) in area.
+        let poly = RailProfile::uic54().unwrap().properties();
+        let mut errs = Vec::new();
+        for h in [0.008, 0.004, 0.002, 0.001] {
+            let m = SectionMesh::uic54(&SectionParams {
+                size_m: h,
+                running_surface_size_m: h / 2.0,
+                ..Default::default()
+            })
+            .unwrap();
+            let s = m.properties();
+            let e = [
+                (s.area_m2 / poly.area_m2 - 1.0).abs(),
+                (s.i_vertical_bending_m4 / poly.i_vertical_bending_m4 - 1.0).abs(),
+                (s.i_lateral_bending_m4 / poly.i_lateral_bending_m4 - 1.0).abs(),
+                (s.centroid_z_m - poly.centroid_z_m).abs(),
+            ];
+            eprintln!(
+                "h {:.1} mm: {} quads, rel err A {:.2e}, Iv {:.2e}, Il {:.2e}, zc {:.2e} m",
+                h * 1e3,
+                m.quads.len(),
+                e[0],
+                e[1],
+                e[2],
+                e[3]
+            );
+            errs.push(e);
+        }
+        for k in 0..4 {
+            assert!(
+                errs[3][k] < errs[0][k] / 4.0 || errs[3][k] < 1e-6,
+                "quantity {k} did not converge: {errs:?}"
+            );
+        }
+        assert!(errs[3][0] < 2e-4 && errs[3][1] < 2e-4 && errs[3][2] < 2e-4);
+    }
+
+    #[test]
+    fn inclination_rotates_the_properties() {
+        let upright = SectionMesh::uic54(&SectionParams::default())
+            .unwrap()
+            .properties();
+        let th = (1.0f64 / 40.0).atan();
+        let m = SectionMesh::uic54(&SectionParams {
+            inclination_rad: th,
+            ..Default::default()
+        })
+        .unwrap();
+        let s = m.properties();
+        // Rotation about the foot centre: centroid (0, zc) → (−zc sin θ, zc cos θ); second
+        // moments by the tensor transformation of the principal values.
+        let (c, sn) = (th.cos(), th.sin());
+        assert!((s.area_m2 - upright.area_m2).abs() < 1e-15);
+        assert!((s.centroid_y_m + upright.centroid_z_m * sn).abs() < 1e-12);
+        assert!((s.centroid_z_m - upright.centroid_z_m * c).abs() < 1e-12);
+        let (iv, il) = (upright.i_vertical_bending_m4, upright.i_lateral_bending_m4);
+        assert!((s.i_vertical_bending_m4 - (iv * c * c + il * sn * sn)).abs() < 1e-12 * iv);
+        assert!((s.i_lateral_bending_m4 - (il * c * c + iv * sn * sn)).abs() < 1e-12 * iv);
+        assert!((s.i_product_m4.abs() - (iv - il) * c * sn).abs() < 1e-12 * iv);
+        // The head tilts towards −y.
+        let top = m.running_surface[m.running_surface.len() / 2];
+        assert!(m.nodes[top][0] < -0.003);
+    }
+
+    #[test]
+    fn locate_finds_points() {
+        let m = SectionMesh::uic54(&SectionParams::default()).unwrap();
+        for (y, z) in [(0.0, 0.15), (0.05, 0.005), (-0.003, 0.08), (0.03, 0.13)] {
+            let (q, nat) = m.locate(y, z).unwrap();
+            let p = m.quads[q].map(|n| m.nodes[n]);
+            let (yy, zz, _) = bilinear(&p, nat[0], nat[1]);
+            assert!((yy - y).abs() < 1e-12 && (zz - z).abs() < 1e-12);
+        }
+        assert!(m.locate(0.05, 0.1).is_none());
+    }
+
+    #[test]
+    fn bad_params_are_errors() {
+        let bad = |p: SectionParams| SectionMesh::uic54(&p).is_err();
+        assert!(bad(SectionParams {
+            size_m: 0.0,
+            ..Default::default()
+        }));
+        assert!(bad(SectionParams {
+            running_surface_size_m: 0.01,
+            ..Default::default()
+        }));
+        assert!(bad(SectionParams {
+            foot_node_lines_m: vec![0.08],
+            ..Default::default()
+        }));
+        assert!(bad(SectionParams {
+            inclination_rad: f64::NAN,
+            ..Default::default()
+        }));
+    }
+}
