@@ -15,6 +15,7 @@ pub mod grading;
 pub mod profile;
 pub mod rail;
 pub mod section;
+pub mod sleeper;
 
 /// The physical part an element or node belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
