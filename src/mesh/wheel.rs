@@ -94,6 +94,9 @@ pub struct WheelParams {
     /// Half width (m) of the fine zone at the contact, axially, radially (depth) and along the
     /// circumference (arc length).
     pub contact_half_width_m: f64,
+    /// Minimum number of element layers through the web thickness (linear hexahedra need
+    /// several layers to bend well).
+    pub web_layers: usize,
 }
 
 impl Default for WheelParams {
@@ -122,6 +125,7 @@ impl Default for WheelParams {
             circumferential_divisions: 36,
             contact_size_m: 0.015,
             contact_half_width_m: 0.03,
+            web_layers: 3,
         }
     }
 }
@@ -377,6 +381,11 @@ pub fn wheel(p: &WheelParams, material: usize) -> Result<(Mesh, WheelTopology), 
         end_m: cw,
         size_m: hc,
     });
+    spec.zones.push(FineZone {
+        start_m: p.web_y_m[0],
+        end_m: p.web_y_m[1],
+        size_m: (p.web_y_m[1] - p.web_y_m[0]) / p.web_layers.max(1) as f64,
+    });
     let ys = grade(&spec)?;
     let r_bps: Vec<f64> = blocks.iter().flat_map(|b| b.r).collect();
     let mut spec = GradingSpec::new(p.bore_radius_m, p.radius_m, p.radial_size_m);
@@ -534,6 +543,23 @@ mod tests {
         let mass = v * 7800.0;
         assert!(mass > 600.0 && mass < 900.0, "{mass}");
         assert!(m.check_jacobians().unwrap() > 0.0);
+        // Web layers.
+        let web_lines: std::collections::BTreeSet<u64> = t
+            .meridian
+            .iter()
+            .filter(|q| {
+                q[0] >= p.web_y_m[0] - 1e-12
+                    && q[0] <= p.web_y_m[1] + 1e-12
+                    && q[1] > 0.2
+                    && q[1] < 0.3
+            })
+            .map(|q| q[0].to_bits())
+            .collect();
+        assert!(
+            web_lines.len() > p.web_layers,
+            "{} node lines through the web",
+            web_lines.len()
+        );
     }
 
     #[test]
