@@ -645,6 +645,29 @@ impl SectionMesh {
         SectionProperties::from_integrals(a, sy, sz, syy, szz, syz)
     }
 
+    /// Quality of the quads: (smallest interior angle, largest interior angle) in degrees and
+    /// the largest ratio of longest to shortest edge.
+    pub fn quality(&self) -> (f64, f64, f64) {
+        let (mut amin, mut amax, mut ratio) = (180.0f64, 0.0f64, 1.0f64);
+        for quad in &self.quads {
+            let p = quad.map(|n| self.nodes[n]);
+            let (mut emin, mut emax) = (f64::INFINITY, 0.0f64);
+            for k in 0..4 {
+                let (a, b, c) = (p[(k + 3) % 4], p[k], p[(k + 1) % 4]);
+                let u = [a[0] - b[0], a[1] - b[1]];
+                let v = [c[0] - b[0], c[1] - b[1]];
+                let cosang = (u[0] * v[0] + u[1] * v[1]) / (dist(a, b) * dist(b, c));
+                let ang = cosang.clamp(-1.0, 1.0).acos().to_degrees();
+                amin = amin.min(ang);
+                amax = amax.max(ang);
+                emin = emin.min(dist(b, c));
+                emax = emax.max(dist(b, c));
+            }
+            ratio = ratio.max(emax / emin);
+        }
+        (amin, amax, ratio)
+    }
+
     /// Area (m²) of quad `q`.
     pub fn quad_area(&self, q: usize) -> f64 {
         let p = self.quads[q].map(|n| self.nodes[n]);
@@ -978,6 +1001,15 @@ mod tests {
         ] {
             let m = SectionMesh::uic54(&params).unwrap();
             m.check_quads().unwrap();
+            let (amin, amax, ratio) = m.quality();
+            eprintln!(
+                "h {:.1} mm, {} quads: angles {amin:.1}..{amax:.1} deg, edge ratio <= {ratio:.1}",
+                params.size_m * 1e3,
+                m.quads.len()
+            );
+            // The worst angles sit in the cap columns at the gauge corners (head side → R13
+            // arc, a smooth boundary where the columns meet a near-vertical surface).
+            assert!(amin > 8.0 && amax < 172.0 && ratio < 15.0);
             let quad_sum: f64 = (0..m.quads.len()).map(|q| m.quad_area(q)).sum();
             assert!((0..m.quads.len()).all(|q| m.quad_area(q) > 0.0));
             let (loop_area, _) = boundary_loop_area(&m);
