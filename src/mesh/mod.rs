@@ -16,6 +16,7 @@ pub mod profile;
 pub mod rail;
 pub mod section;
 pub mod sleeper;
+pub mod wheel;
 
 /// The physical part an element or node belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]

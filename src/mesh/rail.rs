@@ -12,7 +12,7 @@
 //! Numbering: global node of (plane i, section node j) = offset + i · n_section_nodes + j;
 //! element of (interval i, section quad q) = element_offset + i · n_section_quads + q.
 
-use super::section::SectionMesh;
+use super::section::{SectionLocator, SectionMesh};
 use super::{Hex8, Mesh, MeshError, Part};
 
 /// Map from (plane, section node) to global nodes of an extruded rail, and point location.
@@ -26,6 +26,8 @@ pub struct RailTopology {
     pub node_offset: usize,
     /// Added to every element index.
     pub element_offset: usize,
+    /// Bucket grid over the section for [`Self::locate`].
+    pub locator: SectionLocator,
 }
 
 /// A point located in the rail: its element and natural coordinates (ξ, η, ζ) ∈ [−1, 1]³.
@@ -89,7 +91,7 @@ impl RailTopology {
     }
 
     /// The element containing the point (x, y, z) (m) and its natural coordinates; `None`
-    /// outside the rail. Cost: a scan of the section quads (bounding boxes first).
+    /// outside the rail. Cost: a binary search in x and a bucket search in the section.
     pub fn locate(&self, x: f64, y: f64, z: f64) -> Option<RailPoint> {
         let px = &self.planes_x_m;
         if !(x >= px[0] && x <= px[px.len() - 1]) {
@@ -98,7 +100,7 @@ impl RailTopology {
         // Interval i with px[i] <= x <= px[i+1].
         let i = px.partition_point(|&v| v <= x).clamp(1, px.len() - 1) - 1;
         let zeta = 2.0 * (x - px[i]) / (px[i + 1] - px[i]) - 1.0;
-        let (q, nat) = self.section.locate(y, z)?;
+        let (q, nat) = self.locator.locate(&self.section, y, z)?;
         Some(RailPoint {
             element: self.element(i, q),
             natural: [nat[0], nat[1], zeta],
@@ -165,6 +167,7 @@ pub fn extrude_rail(
         section: section.clone(),
         node_offset: 0,
         element_offset: 0,
+        locator: SectionLocator::new(section),
     };
     Ok((mesh, topo))
 }

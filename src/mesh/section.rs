@@ -645,6 +645,29 @@ impl SectionMesh {
         SectionProperties::from_integrals(a, sy, sz, syy, szz, syz)
     }
 
+    /// Quality of the quads: (smallest interior angle, largest interior angle) in degrees and
+    /// the largest ratio of longest to shortest edge.
+    pub fn quality(&self) -> (f64, f64, f64) {
+        let (mut amin, mut amax, mut ratio) = (180.0f64, 0.0f64, 1.0f64);
+        for quad in &self.quads {
+            let p = quad.map(|n| self.nodes[n]);
+            let (mut emin, mut emax) = (f64::INFINITY, 0.0f64);
+            for k in 0..4 {
+                let (a, b, c) = (p[(k + 3) % 4], p[k], p[(k + 1) % 4]);
+                let u = [a[0] - b[0], a[1] - b[1]];
+                let v = [c[0] - b[0], c[1] - b[1]];
+                let cosang = (u[0] * v[0] + u[1] * v[1]) / (dist(a, b) * dist(b, c));
+                let ang = cosang.clamp(-1.0, 1.0).acos().to_degrees();
+                amin = amin.min(ang);
+                amax = amax.max(ang);
+                emin = emin.min(dist(b, c));
+                emax = emax.max(dist(b, c));
+            }
+            ratio = ratio.max(emax / emin);
+        }
+        (amin, amax, ratio)
+    }
+
     /// Area (m²) of quad `q`.
     pub fn quad_area(&self, q: usize) -> f64 {
         let p = self.quads[q].map(|n| self.nodes[n]);
@@ -671,6 +694,95 @@ impl SectionMesh {
             if y < lo_y - eps || y > hi_y + eps || z < lo_z - eps || z > hi_z + eps {
                 continue;
             }
+            if let Some(nat) = invert_bilinear(&p, y, z) {
+                if nat[0].abs() <= 1.0 + 1e-9 && nat[1].abs() <= 1.0 + 1e-9 {
+                    return Some((q, nat));
+                }
+            }
+        }
+        None
+    }
+}
+
+/// A uniform bucket grid over a section mesh for fast point location: each bucket lists the
+/// quads whose bounding box overlaps it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SectionLocator {
+    lo: [f64; 2],
+    cell: [f64; 2],
+    n: [usize; 2],
+    start: Vec<usize>,
+    items: Vec<usize>,
+}
+
+impl SectionLocator {
+    /// Builds the bucket grid (about one quad per bucket).
+    pub fn new(mesh: &SectionMesh) -> Self {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for p in &mesh.nodes {
+            for d in 0..2 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+        }
+        let side = ((mesh.quads.len() as f64).sqrt().ceil() as usize).max(1);
+        let n = [side, side];
+        let cell = [
+            ((hi[0] - lo[0]) / side as f64).max(1e-12),
+            ((hi[1] - lo[1]) / side as f64).max(1e-12),
+        ];
+        let mut buckets: Vec<Vec<usize>> = vec![Vec::new(); n[0] * n[1]];
+        let idx =
+            |v: f64, d: usize| (((v - lo[d]) / cell[d]).floor().max(0.0) as usize).min(n[d] - 1);
+        for (q, quad) in mesh.quads.iter().enumerate() {
+            let p = quad.map(|k| mesh.nodes[k]);
+            let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for v in &p {
+                for d in 0..2 {
+                    a[d] = a[d].min(v[d]);
+                    b[d] = b[d].max(v[d]);
+                }
+            }
+            for j in idx(a[1], 1)..=idx(b[1], 1) {
+                for i in idx(a[0], 0)..=idx(b[0], 0) {
+                    buckets[j * n[0] + i].push(q);
+                }
+            }
+        }
+        let mut start = Vec::with_capacity(buckets.len() + 1);
+        let mut items = Vec::new();
+        for bk in &buckets {
+            start.push(items.len());
+            items.extend_from_slice(bk);
+        }
+        start.push(items.len());
+        SectionLocator {
+            lo,
+            cell,
+            n,
+            start,
+            items,
+        }
+    }
+
+    /// Same result as [`SectionMesh::locate`], searching only the point's bucket.
+    pub fn locate(&self, mesh: &SectionMesh, y: f64, z: f64) -> Option<(usize, [f64; 2])> {
+        let fi = (y - self.lo[0]) / self.cell[0];
+        let fj = (z - self.lo[1]) / self.cell[1];
+        let tol = 1e-9;
+        if !(fi >= -tol
+            && fj >= -tol
+            && fi <= self.n[0] as f64 + tol
+            && fj <= self.n[1] as f64 + tol)
+        {
+            return None;
+        }
+        let i = (fi.floor().max(0.0) as usize).min(self.n[0] - 1);
+        let j = (fj.floor().max(0.0) as usize).min(self.n[1] - 1);
+        let b = j * self.n[0] + i;
+        for &q in &self.items[self.start[b]..self.start[b + 1]] {
+            let p = mesh.quads[q].map(|k| mesh.nodes[k]);
             if let Some(nat) = invert_bilinear(&p, y, z) {
                 if nat[0].abs() <= 1.0 + 1e-9 && nat[1].abs() <= 1.0 + 1e-9 {
                     return Some((q, nat));
@@ -889,6 +1001,15 @@ mod tests {
         ] {
             let m = SectionMesh::uic54(&params).unwrap();
             m.check_quads().unwrap();
+            let (amin, amax, ratio) = m.quality();
+            eprintln!(
+                "h {:.1} mm, {} quads: angles {amin:.1}..{amax:.1} deg, edge ratio <= {ratio:.1}",
+                params.size_m * 1e3,
+                m.quads.len()
+            );
+            // The worst angles sit in the cap columns at the gauge corners (head side → R13
+            // arc, a smooth boundary where the columns meet a near-vertical surface).
+            assert!(amin > 8.0 && amax < 172.0 && ratio < 15.0);
             let quad_sum: f64 = (0..m.quads.len()).map(|q| m.quad_area(q)).sum();
             assert!((0..m.quads.len()).all(|q| m.quad_area(q) > 0.0));
             let (loop_area, _) = boundary_loop_area(&m);
@@ -1044,6 +1165,32 @@ mod tests {
             assert!((yy - y).abs() < 1e-12 && (zz - z).abs() < 1e-12);
         }
         assert!(m.locate(0.05, 0.1).is_none());
+        // The bucket locator agrees with the brute-force search on a grid of points.
+        let loc = SectionLocator::new(&m);
+        let mut found = 0;
+        for a in 0..60 {
+            for b in 0..60 {
+                let (y, z) = (
+                    -0.075 + 0.15 * a as f64 / 59.0,
+                    -0.001 + 0.162 * b as f64 / 59.0,
+                );
+                let brute = m.locate(y, z);
+                let fast = loc.locate(&m, y, z);
+                assert_eq!(brute.is_some(), fast.is_some(), "({y}, {z})");
+                if let (Some((_, n1)), Some((q2, n2))) = (brute, fast) {
+                    found += 1;
+                    // A point on a shared edge may be found in either quad: compare positions.
+                    let p = m.quads[q2].map(|n| m.nodes[n]);
+                    let (yy, zz, _) = bilinear(&p, n2[0], n2[1]);
+                    assert!(
+                        (yy - y).abs() < 1e-12
+                            && (zz - z).abs() < 1e-12
+                            && n1[0].abs() <= 1.0 + 1e-9
+                    );
+                }
+            }
+        }
+        assert!(found > 500);
     }
 
     #[test]
