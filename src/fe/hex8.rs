@@ -650,6 +650,30 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn box_consistent_mass_is_tensor_product_of_bar_masses() {
+        // Closed form for a rectangular box: the 1D linear-element mass (ρAh/6)[2 1; 1 2] in
+        // each direction, so M_ab = ρV/216 · Π_d (2 if node a and b share coordinate d, else 1).
+        let (lx, ly, lz) = (0.3, 0.2, 0.05);
+        let c: [[f64; 3]; 8] = std::array::from_fn(|a| {
+            [
+                0.5 * lx * (1.0 + NODE_XI[a]),
+                0.5 * ly * (1.0 + NODE_ETA[a]),
+                0.5 * lz * (1.0 + NODE_ZETA[a]),
+            ]
+        });
+        let m = IsotropicElastic::STEEL;
+        let rv = m.density * lx * ly * lz;
+        let ms = consistent_mass_scalar(&c, &m).unwrap();
+        for a in 0..8 {
+            for b in 0..8 {
+                let f = |x: &[f64; 8]| if x[a] == x[b] { 2.0 } else { 1.0 };
+                let exact = rv / 216.0 * f(&NODE_XI) * f(&NODE_ETA) * f(&NODE_ZETA);
+                assert!((ms[(a, b)] - exact).abs() < 1e-13 * rv, "({a},{b})");
+            }
+        }
+    }
+
+    #[test]
     fn newton_recovers_natural_coordinates() {
         let c = distorted();
         for xi in [[0.3, -0.6, 0.9], [-1.0, 1.0, 0.0], [0.99, 0.01, -0.95]] {
