@@ -1,5 +1,6 @@
 //! Command definitions (clap) and dispatch. Each command lives in its own file.
 
+mod mesh_cmd;
 mod model_cmd;
 
 use std::path::PathBuf;
@@ -46,11 +47,14 @@ impl ModelArgs {
 enum Command {
     /// Print the resolved model (after `extends` and `--set`) as TOML.
     Model(model_cmd::ModelCmd),
+    /// Build the 3D FE track model and print its summary (nodes, DOFs, section, masses).
+    Mesh(mesh_cmd::MeshCmd),
 }
 
 /// Runs the parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Model(c) => c.run(),
+        Command::Mesh(c) => c.run(),
     }
 }

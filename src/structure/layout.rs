@@ -9,7 +9,7 @@
 //! `|y − y_r| ≤ w/2` over the footprint length (w = `strip_width`). Held regions have a physical
 //! size, so the held stiffness converges under mesh refinement (design-notes "Traps").
 
-use crate::model::Model;
+use crate::model::{HoldPattern, Model, RigidRegion};
 
 /// Support layout of one model.
 #[derive(Debug, Clone, PartialEq)]
@@ -92,38 +92,49 @@ impl Layout {
         [a, a + pitch]
     }
 
-    /// x-coordinates that must be node planes of the rail mesh: the footprint edges, the
-    /// column cell edges and the column strip edges of every sleeper, sorted, deduplicated.
-    pub fn x_breakpoints(&self) -> Vec<f64> {
+    /// x-coordinates that must be node planes of the rail mesh: the rail ends and the strip
+    /// edges of every rigidly held column of `hold` (x direction or any direction held by
+    /// columns), sorted and deduplicated. Spring cells need no node planes: their tributary
+    /// weights are clipped to the cell exactly.
+    pub fn x_breakpoints(&self, hold: &HoldPattern) -> Vec<f64> {
         let mut v = vec![0.0, self.length];
-        for &xs in &self.sleepers {
-            for c in 0..self.columns {
-                let [a, b] = self.column_cell(xs, c);
-                let xc = self.column_centre(xs, c);
-                v.extend([
-                    a,
-                    b,
-                    xc - 0.5 * self.strip_width,
-                    xc + 0.5 * self.strip_width,
-                ]);
+        for h in [&hold.x, &hold.y, &hold.z] {
+            if h.rigid != RigidRegion::Columns {
+                continue;
+            }
+            for &xs in &self.sleepers {
+                for &c in &h.indices {
+                    let xc = self.column_centre(xs, c);
+                    v.extend([xc - 0.5 * self.strip_width, xc + 0.5 * self.strip_width]);
+                }
+            }
+        }
+        for h in [&hold.x, &hold.y, &hold.z] {
+            if h.rigid == RigidRegion::Rows {
+                // Rows are held over the footprint length: its ends are node planes.
+                for &xs in &self.sleepers {
+                    v.extend([
+                        xs - 0.5 * self.footprint_length,
+                        xs + 0.5 * self.footprint_length,
+                    ]);
+                }
             }
         }
         sort_dedup(v)
     }
 
     /// y-coordinates (rail-section frame, upright) that must be node lines on the foot
-    /// underside: the row cell edges and the row strip edges.
-    pub fn y_foot_lines(&self) -> Vec<f64> {
+    /// underside: the strip edges of every rigidly held row of `hold`.
+    pub fn y_foot_lines(&self, hold: &HoldPattern) -> Vec<f64> {
         let mut v = Vec::new();
-        for r in 0..self.rows {
-            let [a, b] = self.row_cell(r);
-            let yc = self.row_centre(r);
-            v.extend([
-                a,
-                b,
-                yc - 0.5 * self.strip_width,
-                yc + 0.5 * self.strip_width,
-            ]);
+        for h in [&hold.x, &hold.y, &hold.z] {
+            if h.rigid != RigidRegion::Rows {
+                continue;
+            }
+            for &r in &h.indices {
+                let yc = self.row_centre(r);
+                v.extend([yc - 0.5 * self.strip_width, yc + 0.5 * self.strip_width]);
+            }
         }
         sort_dedup(v)
     }
@@ -198,13 +209,22 @@ mod tests {
             let y = l.row_centre(r);
             assert!(a < y - l.strip_width / 2.0 && y + l.strip_width / 2.0 < b);
         }
-        // Default: 4 rows over 140 mm: strip edges at ±7.5, ±27.5, ±42.5, ±62.5 mm plus cell edges.
-        let ys = l.y_foot_lines();
-        for want in [
-            -0.07, -0.0625, -0.0425, -0.035, -0.0275, -0.0075, 0.0, 0.0075, 0.07,
-        ] {
+        // Default: 4 held rows over 140 mm: strip edges at ±7.5, ±27.5, ±42.5, ±62.5 mm.
+        let hold = m.fastening.hold_pattern();
+        let ys = l.y_foot_lines(&hold);
+        let want = [
+            -0.0625, -0.0425, -0.0275, -0.0075, 0.0075, 0.0275, 0.0425, 0.0625,
+        ];
+        assert_eq!(ys.len(), want.len());
+        for (y, w) in ys.iter().zip(want) {
+            assert!((y - w).abs() < 1e-12, "{ys:?}");
+        }
+        // RPM3 holds the middle column: its strip edges (±10 mm about the sleeper axis) and the
+        // footprint ends (rows are held over the footprint) are node planes.
+        let xb = l.x_breakpoints(&hold);
+        for want in [xs - 0.085, xs - 0.01, xs + 0.01, xs + 0.085] {
             assert!(
-                ys.iter().any(|y| (y - want).abs() < 1e-12),
+                xb.iter().any(|x| (x - want).abs() < 1e-12),
                 "missing {want}"
             );
         }

@@ -14,3 +14,20 @@
 //! (design-notes "Traps").
 
 pub mod layout;
+pub mod track;
+
+pub use track::TrackStructure;
+
+/// Errors while building a substructure.
+#[derive(Debug, thiserror::Error)]
+pub enum StructureError {
+    /// Mesh generation failed.
+    #[error(transparent)]
+    Mesh(#[from] crate::mesh::MeshError),
+    /// Element or assembly failure.
+    #[error(transparent)]
+    Fe(#[from] crate::fe::FeError),
+    /// Supports (fastenings, holds, ballast) cannot be placed on the mesh.
+    #[error("supports: {0}")]
+    Support(String),
+}

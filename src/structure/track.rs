@@ -1,0 +1,352 @@
+//! The track substructure: rail, half sleepers, railpads, rigid holds and ballast.
+//!
+//! - **Rail**: the UIC54 section mesh (inclined by `rail.inclination`) extruded through node
+//!   planes graded from `mesh.element_length` down to `mesh.fine_element_length` around the
+//!   solution zone, with node planes at every footprint-cell and held-strip edge.
+//! - **Railpad** (per fastening, method.md §3): a `rows × columns` grid of spring-dampers,
+//!   stiffness `k/(rows·columns)` each. Each grid spring acts on its footprint cell: it is
+//!   spread over the rail-foot underside nodes of the cell in proportion to their tributary
+//!   area (trapezoidal weights), each node tied to the sleeper-top point straight below it
+//!   (bilinear interpolation on the top face). A uniform pad pressure is thus represented
+//!   exactly, and the pad stiffness does not depend on the mesh.
+//! - **Rigid holds**: the fastening model's [`HoldPattern`](crate::model::HoldPattern) fixes
+//!   rail-foot underside DOFs to the ground, region by region (columns and rows are strips of
+//!   physical width; their edges are node lines, so the held set is exact).
+//! - **Ballast**: per half sleeper, stiffness and damping in x, y, z spread over the
+//!   bottom-face nodes by tributary area, to the ground.
+
+use std::time::Instant;
+
+use crate::fe::assembly::{assemble, AssemblyOptions, DofMap, FeMatrices, MassKind};
+use crate::fe::material::IsotropicElastic;
+use crate::fe::spring::Spring;
+use crate::mesh::grading::{grade, FineZone, GradingSpec};
+use crate::mesh::profile::SectionProperties;
+use crate::mesh::rail::{extrude_rail, RailTopology};
+use crate::mesh::section::{SectionMesh, SectionParams};
+use crate::mesh::sleeper::{half_sleeper, SleeperParams, SleeperTopology};
+use crate::mesh::Mesh;
+use crate::model::{HoldPattern, Model, RigidRegion};
+
+use super::layout::{tributary_lengths, Layout, GEOMETRY_TOLERANCE};
+use super::StructureError;
+
+/// Material index of the rail in [`TrackStructure::materials`].
+pub const RAIL_MATERIAL: usize = 0;
+/// Material index of the sleepers.
+pub const SLEEPER_MATERIAL: usize = 1;
+
+/// What a spring represents (for energy shares and output).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SpringKind {
+    /// A railpad spring-damper (rail foot to sleeper).
+    Fastening,
+    /// A ballast spring-damper (sleeper to ground).
+    Ballast,
+}
+
+/// The track substructure, before assembly.
+#[derive(Debug, Clone)]
+pub struct TrackStructure {
+    /// Nodes and hexahedra (rail first, then the sleepers).
+    pub mesh: Mesh,
+    /// Materials: [`RAIL_MATERIAL`], [`SLEEPER_MATERIAL`].
+    pub materials: Vec<IsotropicElastic>,
+    /// Spring-dampers (railpads and ballast).
+    pub springs: Vec<Spring>,
+    /// Kind of each spring.
+    pub spring_kinds: Vec<SpringKind>,
+    /// Free/constrained DOFs (the rigid holds).
+    pub dofmap: DofMap,
+    /// Rail node/element maps.
+    pub rail: RailTopology,
+    /// Sleeper topologies (node indices global).
+    pub sleepers: Vec<SleeperTopology>,
+    /// Support layout.
+    pub layout: Layout,
+    /// Section properties of the (upright) rail section mesh.
+    pub section_properties: SectionProperties,
+    /// Mass matrix kind of the model.
+    pub mass: MassKind,
+}
+
+impl TrackStructure {
+    /// Builds the track substructure of a model.
+    pub fn build(m: &Model) -> Result<TrackStructure, StructureError> {
+        let layout = Layout::new(m);
+        let hold = m.fastening.hold_pattern();
+        let foot_lines: Vec<f64> = layout
+            .y_foot_lines(&hold)
+            .into_iter()
+            .filter(|&y| {
+                y > GEOMETRY_TOLERANCE && y < 0.5 * m.fastening.footprint_width.min(0.14) - 1e-6
+            })
+            .collect();
+        let mut params = SectionParams {
+            size_m: m.mesh.section_size,
+            running_surface_size_m: m.mesh.head_size,
+            foot_node_lines_m: foot_lines,
+            inclination_rad: 0.0,
+            ..SectionParams::default()
+        };
+        let upright = SectionMesh::uic54(&params)?;
+        let section_properties = upright.properties();
+        params.inclination_rad = m.rail.inclination.atan();
+        let section = SectionMesh::uic54(&params)?;
+
+        let [f0, f1] = layout.fine_zone;
+        let planes = grade(&GradingSpec {
+            zones: vec![FineZone {
+                start_m: f0,
+                end_m: f1,
+                size_m: m.mesh.fine_element_length,
+            }],
+            breakpoints_m: layout.x_breakpoints(&hold),
+            ..GradingSpec::new(0.0, layout.length, m.mesh.element_length)
+        })?;
+        let (mut mesh, rail) = extrude_rail(&section, &planes, RAIL_MATERIAL)?;
+
+        let mut sleepers = Vec::with_capacity(layout.sleepers.len());
+        for &xs in &layout.sleepers {
+            let [nx, ny, nz] = m.mesh.sleeper_elements;
+            let half_foot = 0.5 * m.fastening.footprint_width;
+            let (smesh, topo) = half_sleeper(
+                &SleeperParams {
+                    length_m: m.sleeper.length,
+                    width_m: m.sleeper.width,
+                    height_m: m.sleeper.height,
+                    rail_seat_offset_m: m.sleeper.rail_seat,
+                    pad_thickness_m: m.fastening.pad_thickness,
+                    centre_x_m: xs,
+                    n_length: ny,
+                    n_width: nx,
+                    n_height: nz,
+                    y_node_lines_m: vec![-half_foot, half_foot],
+                },
+                SLEEPER_MATERIAL,
+            )?;
+            let offset = mesh.append(&smesh);
+            sleepers.push(topo.shifted(offset));
+        }
+
+        let mut springs = Vec::new();
+        let mut spring_kinds = Vec::new();
+        add_railpads(
+            m,
+            &layout,
+            &mesh,
+            &rail,
+            &sleepers,
+            &mut springs,
+            &mut spring_kinds,
+        )?;
+        add_ballast(m, &sleepers, &mut springs, &mut spring_kinds);
+
+        let held = held_dofs(&hold, &layout, &rail)?;
+        let dofmap = DofMap::with_constraints(mesh.nodes.len(), &held)?;
+        Ok(TrackStructure {
+            mesh,
+            materials: vec![m.rail_material(), m.sleeper_material()],
+            springs,
+            spring_kinds,
+            dofmap,
+            rail,
+            sleepers,
+            layout,
+            section_properties,
+            mass: match m.mesh.mass {
+                crate::model::MassKind::Lumped => MassKind::Lumped,
+                crate::model::MassKind::Consistent => MassKind::Consistent,
+            },
+        })
+    }
+
+    /// Assembles K, M, C over the free DOFs; returns them with the wall time (s).
+    pub fn assemble(&self) -> Result<(FeMatrices, f64), StructureError> {
+        let t = Instant::now();
+        let mats = assemble(
+            &self.mesh,
+            &self.materials,
+            &self.springs,
+            &[],
+            &self.dofmap,
+            AssemblyOptions { mass: self.mass },
+        )?;
+        Ok((mats, t.elapsed().as_secs_f64()))
+    }
+}
+
+/// Bilinear shape functions of a quad face at (ξ, η), node order (−1,−1), (1,−1), (1,1), (−1,1).
+fn quad_shape(xi: f64, eta: f64) -> [f64; 4] {
+    [
+        0.25 * (1.0 - xi) * (1.0 - eta),
+        0.25 * (1.0 + xi) * (1.0 - eta),
+        0.25 * (1.0 + xi) * (1.0 + eta),
+        0.25 * (1.0 - xi) * (1.0 + eta),
+    ]
+}
+
+fn add_railpads(
+    m: &Model,
+    layout: &Layout,
+    mesh: &Mesh,
+    rail: &RailTopology,
+    sleepers: &[SleeperTopology],
+    springs: &mut Vec<Spring>,
+    kinds: &mut Vec<SpringKind>,
+) -> Result<(), StructureError> {
+    let f = &m.fastening;
+    let n_grid = (f.rows * f.columns) as f64;
+    let (k, c) = (f.stiffness(), f.damping());
+    let foot_s = &rail.section.foot_underside_s_m;
+    for (s, &xs) in sleepers.iter().zip(&layout.sleepers) {
+        for col in 0..layout.columns {
+            let [xa, xb] = layout.column_cell(xs, col);
+            let lx = tributary_lengths(&rail.planes_x_m, xa, xb);
+            for row in 0..layout.rows {
+                let [ya, yb] = layout.row_cell(row);
+                let ly = tributary_lengths(foot_s, ya, yb);
+                let cell_area = (xb - xa) * (yb - ya);
+                let covered: f64 = lx.iter().sum::<f64>() * ly.iter().sum::<f64>();
+                if (covered - cell_area).abs() > 1e-9 * cell_area.max(1e-12) + 1e-12 {
+                    return Err(StructureError::Support(format!(
+                        "fastening cell (row {row}, column {col}) at x = {xs} m is not covered by rail-foot nodes (covered {covered:e} of {cell_area:e} m²): the footprint must lie on the rail foot"
+                    )));
+                }
+                for (i, &wx) in lx.iter().enumerate().filter(|(_, &w)| w > 0.0) {
+                    for (j, &wy) in ly.iter().enumerate().filter(|(_, &w)| w > 0.0) {
+                        let share = wx * wy / cell_area;
+                        let node = rail.node(i, rail.section.foot_underside[j]);
+                        let [x, y, _] = mesh.nodes[node];
+                        let (q, [xi, eta]) = s.top_quad_at(x, y).ok_or_else(|| {
+                            StructureError::Support(format!(
+                                "rail-foot node at (x, y) = ({x}, {y}) m is not above sleeper top face: check sleeper.width, sleeper.rail_seat and fastening.footprint_length"
+                            ))
+                        })?;
+                        let face = s.top_face[q].nodes;
+                        let nq = quad_shape(xi, eta);
+                        for d in 0..3 {
+                            if k[d] == 0.0 && c[d] == 0.0 {
+                                continue;
+                            }
+                            let side_b = face
+                                .iter()
+                                .zip(nq)
+                                .filter(|(_, w)| w.abs() > 1e-14)
+                                .map(|(&n, w)| (3 * n + d, w))
+                                .collect();
+                            springs.push(Spring::new(
+                                vec![(3 * node + d, 1.0)],
+                                side_b,
+                                k[d] / n_grid * share,
+                                c[d] / n_grid * share,
+                            ));
+                            kinds.push(SpringKind::Fastening);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn add_ballast(
+    m: &Model,
+    sleepers: &[SleeperTopology],
+    springs: &mut Vec<Spring>,
+    kinds: &mut Vec<SpringKind>,
+) {
+    let (k, c) = (m.ballast.stiffness(), m.ballast.damping());
+    for s in sleepers {
+        let areas = s.bottom_node_areas();
+        let total: f64 = areas.iter().map(|a| a.1).sum();
+        for &(node, a) in &areas {
+            for d in 0..3 {
+                springs.push(Spring::new(
+                    vec![(3 * node + d, 1.0)],
+                    vec![],
+                    k[d] * a / total,
+                    c[d] * a / total,
+                ));
+                kinds.push(SpringKind::Ballast);
+            }
+        }
+    }
+}
+
+/// The rail-foot DOFs fixed by a hold pattern (sorted, unique).
+pub fn held_dofs(
+    p: &HoldPattern,
+    layout: &Layout,
+    rail: &RailTopology,
+) -> Result<Vec<usize>, StructureError> {
+    let tol = 1e-7;
+    let half = 0.5 * layout.strip_width + tol;
+    let foot = &rail.section.foot_underside;
+    let foot_s = &rail.section.foot_underside_s_m;
+    let planes = &rail.planes_x_m;
+    let mut dofs = Vec::new();
+    for (d, hold) in [&p.x, &p.y, &p.z].into_iter().enumerate() {
+        match hold.rigid {
+            RigidRegion::None => {}
+            RigidRegion::Continuous => {
+                for i in 0..planes.len() {
+                    dofs.extend(foot.iter().map(|&j| 3 * rail.node(i, j) + d));
+                }
+            }
+            RigidRegion::Columns => {
+                for &xs in &layout.sleepers {
+                    for &c in &hold.indices {
+                        let xc = layout.column_centre(xs, c);
+                        let before = dofs.len();
+                        for (i, &x) in planes
+                            .iter()
+                            .enumerate()
+                            .filter(|(_, &x)| (x - xc).abs() <= half)
+                        {
+                            let _ = x;
+                            dofs.extend(foot.iter().map(|&j| 3 * rail.node(i, j) + d));
+                        }
+                        if dofs.len() == before {
+                            return Err(StructureError::Support(format!(
+                                "held column {c} at x = {xc} m contains no rail node plane"
+                            )));
+                        }
+                    }
+                }
+            }
+            RigidRegion::Rows => {
+                for &xs in &layout.sleepers {
+                    let (xa, xb) = (
+                        xs - 0.5 * layout.footprint_length - tol,
+                        xs + 0.5 * layout.footprint_length + tol,
+                    );
+                    for &r in &hold.indices {
+                        let yr = layout.row_centre(r);
+                        let before = dofs.len();
+                        for (i, _) in planes
+                            .iter()
+                            .enumerate()
+                            .filter(|(_, &x)| x >= xa && x <= xb)
+                        {
+                            for (k, &j) in foot.iter().enumerate() {
+                                if (foot_s[k] - yr).abs() <= half {
+                                    dofs.push(3 * rail.node(i, j) + d);
+                                }
+                            }
+                        }
+                        if dofs.len() == before {
+                            return Err(StructureError::Support(format!(
+                                "held row {r} at y = {yr} m contains no rail-foot node line"
+                            )));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    dofs.sort_unstable();
+    dofs.dedup();
+    Ok(dofs)
+}
