@@ -111,3 +111,75 @@ fn resolved_model_round_trips_as_a_model_file() {
     assert_eq!(out, out2);
     assert!(out.contains("model = \"RPM1\"") && out.contains("bays = 12"));
 }
+
+#[test]
+fn mesh_command_json_vtu_and_matrix_market() {
+    let dir = std::env::temp_dir().join(format!("corrugation-cli-mesh-{}", std::process::id()));
+    let vtu = dir.join("mesh.vtu");
+    let mtx = dir.join("mtx");
+    let small = [
+        "--set",
+        "track.bays=4",
+        "--set",
+        "run.solution_zone_length=0.5",
+        "--set",
+        "run.solution_zone_offset=0.3",
+        "--set",
+        "mesh.element_length=0.08",
+        "--set",
+        "mesh.fine_element_length=0.08",
+        "--set",
+        "mesh.section_size=0.03",
+        "--set",
+        "mesh.head_size=0.015",
+        "--set",
+        "mesh.wheel_element_size=0.08",
+        "--set",
+        "mesh.wheel_segments=24",
+    ];
+    let mut args = vec![
+        "mesh",
+        "--json",
+        "--vtu",
+        vtu.to_str().unwrap(),
+        "--mtx",
+        mtx.to_str().unwrap(),
+    ];
+    args.extend(small);
+    let (code, out, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("--json prints one JSON object");
+    for key in [
+        "nodes",
+        "elements",
+        "free_dofs",
+        "rail_area_m2",
+        "rail_mass_per_m_kg",
+        "rail_i_vertical_m4",
+        "rail_i_lateral_m4",
+        "mass_by_part_kg",
+        "constrained_dofs",
+    ] {
+        assert!(v.get(key).is_some(), "missing key {key}: {out}");
+    }
+    let free = v["free_dofs"].as_u64().unwrap() as usize;
+    // K.mtx is square over the free DOFs; dofs.csv has one row per free DOF.
+    let k = std::fs::read_to_string(mtx.join("K.mtx")).unwrap();
+    let size_line = k.lines().find(|l| !l.starts_with('%')).unwrap();
+    assert!(
+        size_line.starts_with(&format!("{free} {free} ")),
+        "{size_line}"
+    );
+    let dofs = std::fs::read_to_string(mtx.join("dofs.csv")).unwrap();
+    assert_eq!(dofs.lines().count(), free + 1);
+    for f in ["M.mtx", "wheel_K.mtx", "wheel_M.mtx", "wheel_dofs.csv"] {
+        assert!(mtx.join(f).exists(), "{f}");
+    }
+    let text = std::fs::read_to_string(&vtu).unwrap();
+    assert!(
+        text.contains("<VTKFile")
+            && text.contains("held_xyz")
+            && text.trim_end().ends_with("</VTKFile>")
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

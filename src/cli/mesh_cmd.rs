@@ -12,7 +12,7 @@ use corrugation::fe::mtx;
 use corrugation::io::{write_csv, write_vtu, VtuField, VTK_HEXAHEDRON, VTK_LINE};
 use corrugation::mesh::Part;
 use corrugation::structure::track::SpringKind;
-use corrugation::structure::TrackStructure;
+use corrugation::structure::{TrackStructure, WheelStructure};
 
 use super::ModelArgs;
 
@@ -39,6 +39,9 @@ pub struct MeshSummary {
     pub elements: BTreeMap<String, usize>,
     pub free_dofs: usize,
     pub constrained_dofs: usize,
+    pub wheel_nodes: usize,
+    pub wheel_free_dofs: usize,
+    pub wheel_constrained_dofs: usize,
     pub springs: BTreeMap<String, usize>,
     pub rail_area_m2: f64,
     pub rail_i_vertical_m4: f64,
@@ -60,11 +63,15 @@ impl MeshCmd {
         let m = self.model.load()?;
         let t = Instant::now();
         let track = TrackStructure::build(&m).context("building the track model")?;
+        let wheel = WheelStructure::build(&m).context("building the wheel model")?;
         let build_seconds = t.elapsed().as_secs_f64();
         let (mats, assembly_seconds) = track.assemble().context("assembling the track matrices")?;
+        let (wheel_mats, wheel_seconds) =
+            wheel.assemble().context("assembling the wheel matrices")?;
+        let assembly_seconds = assembly_seconds + wheel_seconds;
         let mass = corrugation::fe::assembly::mass_per_part(&track.mesh, &track.materials)?;
         let mut elements = BTreeMap::new();
-        for e in &track.mesh.elements {
+        for e in track.mesh.elements.iter().chain(&wheel.mesh.elements) {
             *elements.entry(e.part.name().to_string()).or_insert(0) += 1;
         }
         let mut springs = BTreeMap::new();
@@ -79,12 +86,18 @@ impl MeshCmd {
         for p in [Part::Rail, Part::Sleeper] {
             mass_by_part_kg.insert(p.name().to_string(), mass.get(p));
         }
+        mass_by_part_kg.insert(Part::Wheel.name().to_string(), wheel.unsprung_mass);
+        mass_by_part_kg.insert("sprung".to_string(), wheel.sprung_mass);
+        springs.insert("primary_suspension".to_string(), wheel.springs.len());
         let sp = track.section_properties;
         let s = MeshSummary {
             nodes: track.mesh.nodes.len(),
             elements,
             free_dofs: track.dofmap.n_free(),
             constrained_dofs: track.dofmap.n_constrained(),
+            wheel_nodes: wheel.mesh.nodes.len(),
+            wheel_free_dofs: wheel.dofmap.n_free(),
+            wheel_constrained_dofs: wheel.dofmap.n_constrained(),
             springs,
             rail_area_m2: sp.area_m2,
             rail_i_vertical_m4: sp.i_vertical_bending_m4,
@@ -102,9 +115,10 @@ impl MeshCmd {
         };
         if let Some(dir) = &self.mtx {
             write_matrices(&track, &mats, dir)?;
+            write_wheel_matrices(&wheel, &wheel_mats, dir)?;
         }
         if let Some(path) = &self.vtu {
-            write_mesh_vtu(&track, path)?;
+            write_mesh_vtu(&track, &wheel, path)?;
         }
         if self.json {
             println!("{}", serde_json::to_string_pretty(&s)?);
@@ -117,7 +131,7 @@ impl MeshCmd {
 
 fn print_summary(s: &MeshSummary) {
     println!(
-        "track model ({}), {:.2} m long",
+        "wheel-track model ({}), track {:.2} m long",
         s.fastening_model, s.track_length_m
     );
     println!("  nodes                 {}", s.nodes);
@@ -127,8 +141,10 @@ fn print_summary(s: &MeshSummary) {
     for (p, n) in &s.springs {
         println!("  springs ({p:<9})  {n}");
     }
-    println!("  free DOFs             {}", s.free_dofs);
-    println!("  constrained DOFs      {}", s.constrained_dofs);
+    println!("  free DOFs (track)     {}", s.free_dofs);
+    println!("  constrained (track)   {}", s.constrained_dofs);
+    println!("  wheel nodes           {}", s.wheel_nodes);
+    println!("  free DOFs (wheel)     {}", s.wheel_free_dofs);
     println!(
         "  rail node planes      {} x {} section nodes",
         s.rail_node_planes, s.section_nodes
@@ -141,7 +157,7 @@ fn print_summary(s: &MeshSummary) {
     for (p, kg) in &s.mass_by_part_kg {
         println!("  mass ({p:<8})       {kg:.1} kg");
     }
-    println!("  K non-zeros           {}", s.matrix_nonzeros);
+    println!("  K non-zeros (track)   {}", s.matrix_nonzeros);
     println!(
         "  build / assembly      {:.3} s / {:.3} s",
         s.build_seconds, s.assembly_seconds
@@ -172,6 +188,29 @@ fn write_matrices(
     Ok(())
 }
 
+fn write_wheel_matrices(
+    wheel: &WheelStructure,
+    mats: &corrugation::fe::assembly::FeMatrices,
+    dir: &std::path::Path,
+) -> anyhow::Result<()> {
+    mtx::write_symmetric(&dir.join("wheel_K.mtx"), &mats.k)?;
+    mtx::write_symmetric(&dir.join("wheel_M.mtx"), &mats.m)?;
+    mtx::write_symmetric(&dir.join("wheel_C.mtx"), &mats.c)?;
+    let rows = (0..wheel.dofmap.n_free()).map(|f| {
+        let g = wheel.dofmap.global_dof(f);
+        let (n, d) = (g / 3, g % 3);
+        let [x, y, z] = wheel.mesh.nodes[n];
+        let part = if n == wheel.sprung_node { 3.0 } else { 2.0 };
+        vec![f as f64, n as f64, d as f64, x, y, z, part]
+    });
+    write_csv(
+        &dir.join("wheel_dofs.csv"),
+        &["free_dof", "node", "direction", "x_m", "y_m", "z_m", "part"],
+        rows,
+    )?;
+    Ok(())
+}
+
 /// Part code per node: 0 rail, 1 sleeper, 2 wheel (as `Part::ALL`).
 fn node_parts(track: &TrackStructure) -> Vec<f64> {
     let mut p = vec![0.0; track.mesh.nodes.len()];
@@ -184,8 +223,26 @@ fn node_parts(track: &TrackStructure) -> Vec<f64> {
     p
 }
 
-fn write_mesh_vtu(track: &TrackStructure, path: &std::path::Path) -> anyhow::Result<()> {
-    let mesh = &track.mesh;
+fn write_mesh_vtu(
+    track: &TrackStructure,
+    wheel: &WheelStructure,
+    path: &std::path::Path,
+) -> anyhow::Result<()> {
+    // The wheel drawn at its start position, standing on the rail crown.
+    let mut mesh = track.mesh.clone();
+    let z_top = track
+        .rail
+        .running_surface_nodes(0)
+        .iter()
+        .map(|&n| track.mesh.nodes[n][2])
+        .fold(f64::MIN, f64::max);
+    let mut placed = wheel.mesh.clone();
+    for p in &mut placed.nodes {
+        p[0] += track.layout.wheel_start;
+        p[2] += z_top + wheel.params.radius_m;
+    }
+    let offset = mesh.append(&placed);
+    let mesh = &mesh;
     let mut cells: Vec<(u8, Vec<usize>)> = mesh
         .elements
         .iter()
@@ -206,9 +263,18 @@ fn write_mesh_vtu(track: &TrackStructure, path: &std::path::Path) -> anyhow::Res
             });
         }
     }
+    for (s, _) in wheel.springs.iter().zip(0..) {
+        if let (Some(a), Some(b)) = (s.side_a.first(), s.side_b.first()) {
+            cells.push((VTK_LINE, vec![offset + a.0 / 3, offset + b.0 / 3]));
+            part.push(5.0);
+        }
+    }
     let mut held = vec![0.0; 3 * mesh.nodes.len()];
     for d in track.dofmap.constrained_dofs() {
         held[d] = 1.0;
+    }
+    for d in wheel.dofmap.constrained_dofs() {
+        held[3 * offset + d] = 1.0;
     }
     write_vtu(
         path,
@@ -220,7 +286,8 @@ fn write_mesh_vtu(track: &TrackStructure, path: &std::path::Path) -> anyhow::Res
             data: &held,
         }],
         &[VtuField {
-            name: "part (0 rail, 1 sleeper, 2 wheel, 3 pad spring, 4 ballast)",
+            name:
+                "part (0 rail, 1 sleeper, 2 wheel, 3 pad spring, 4 ballast, 5 primary suspension)",
             components: 1,
             data: &part,
         }],

@@ -8,7 +8,7 @@
 //! synced, then renamed over `<file>`.
 
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
 
 use faer::sparse::{SparseColMat, Triplet};
@@ -33,36 +33,31 @@ pub fn write_symmetric(path: &Path, a: &SparseColMat<usize, f64>) -> Result<(), 
             got: a.ncols(),
         });
     }
-    let mut tmp_name = path.as_os_str().to_owned();
-    tmp_name.push(".tmp");
-    let tmp = Path::new(&tmp_name);
     let ar = a.as_ref();
     let n = a.ncols();
-    let nnz_lower: usize = (0..n)
-        .map(|j| ar.row_idx_of_col(j).filter(|&i| i >= j).count())
-        .sum();
-    let write = || -> std::io::Result<()> {
-        let file = File::create(tmp)?;
-        let mut w = BufWriter::with_capacity(1 << 20, file);
+    // K, M and C share one pattern, so lumped M and C hold many explicit zeros: write only
+    // the non-zero entries of the lower triangle.
+    let lower = |j: usize| {
+        ar.row_idx_of_col(j)
+            .zip(ar.val_of_col(j))
+            .filter(move |&(i, v)| i >= j && *v != 0.0)
+    };
+    let nnz_lower: usize = (0..n).map(|j| lower(j).count()).sum();
+    crate::io::write_atomic(path, |w| {
         writeln!(w, "%%MatrixMarket matrix coordinate real symmetric")?;
         writeln!(
             w,
-            "% written by corrugation::fe::mtx (lower triangle, 1-based)"
+            "% written by corrugation::fe::mtx (lower triangle, 1-based, non-zeros)"
         )?;
         writeln!(w, "{n} {n} {nnz_lower}")?;
         for j in 0..n {
-            for (i, v) in ar.row_idx_of_col(j).zip(ar.val_of_col(j)) {
-                if i >= j {
-                    writeln!(w, "{} {} {:.16e}", i + 1, j + 1, v)?;
-                }
+            for (i, v) in lower(j) {
+                writeln!(w, "{} {} {:.16e}", i + 1, j + 1, v)?;
             }
         }
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
         Ok(())
-    };
-    write().map_err(|e| io_err(tmp, e))?;
-    std::fs::rename(tmp, path).map_err(|e| io_err(path, e))
+    })
+    .map_err(|e| io_err(path, e))
 }
 
 /// Reads a Matrix Market `coordinate real` file (`symmetric` or `general`) into full storage

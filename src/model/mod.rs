@@ -444,8 +444,11 @@ pub struct MeshParams {
     pub head_size: f64,
     /// Hexahedra of a sleeper along x, y, z (−).
     pub sleeper_elements: [usize; 3],
-    /// Circumferential divisions of the wheel (−).
+    /// Circumferential divisions of the wheel away from the contact (−).
     pub wheel_segments: usize,
+    /// Largest element size of the wheel, axially and radially (m); half of it at the
+    /// contact zone of the tread.
+    pub wheel_element_size: f64,
     /// Lumped or consistent mass.
     pub mass: MassKind,
 }
@@ -718,6 +721,13 @@ impl Model {
             c.int(&format!("mesh.sleeper_elements[{i}]"), *n, 1, 64)?;
         }
         c.int("mesh.wheel_segments", m.wheel_segments, 12, 720)?;
+        c.range(
+            "mesh.wheel_element_size",
+            m.wheel_element_size,
+            0.005,
+            0.1,
+            "m",
+        )?;
         let run = &self.run;
         c.range("run.speed_kmh", run.speed_kmh, 1.0, 500.0, "km/h")?;
         c.range(

@@ -15,8 +15,10 @@
 
 pub mod layout;
 pub mod track;
+pub mod wheel;
 
 pub use track::TrackStructure;
+pub use wheel::WheelStructure;
 
 /// Errors while building a substructure.
 #[derive(Debug, thiserror::Error)]

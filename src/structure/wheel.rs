@@ -1,0 +1,137 @@
+//! The wheel substructure: wheel and half axle, the wheelset's symmetry plane, and the lumped
+//! sprung mass on the primary suspension.
+//!
+//! - The wheel is a solid of revolution in a wheel frame (origin at the wheel centre in the
+//!   nominal rolling-circle plane, y along the axle towards the field side, z up; the contact
+//!   point of the undeformed wheel is (0, 0, −R)).
+//! - Half wheelset on a symmetric track: the nodes of the axle's symmetry plane are held
+//!   laterally (u_y = 0), which also removes roll and yaw.
+//! - The car body and bogie above the primary suspension are one lumped mass (method.md §3:
+//!   they matter only below tens of Hz) on a node above the journal centre, moving vertically
+//!   only (its x and y are held: the vehicle frame guides it). Its mass is
+//!   `wheel_load / g − unsprung mass`, so that the static load on the rail is `wheel_load`.
+//!   The primary suspension is a vertical spring-damper from that node to the journal
+//!   (bearing-seat) nodes, spread equally over them.
+//!
+//! Rigid-body modes that remain (zero frequency): longitudinal translation, vertical
+//! translation (wheel and sprung mass together) and rotation about the axle. The passage
+//! prescribes or balances them (speed, gravity and contact, driving torque).
+
+use crate::fe::assembly::{assemble, AssemblyOptions, DofMap, FeMatrices, MassKind};
+use crate::fe::material::IsotropicElastic;
+use crate::fe::spring::{PointMass, Spring};
+use crate::mesh::wheel::{wheel, WheelParams, WheelTopology};
+use crate::mesh::{Mesh, Part};
+use crate::model::Model;
+
+use super::StructureError;
+
+/// The wheel substructure, before assembly.
+#[derive(Debug, Clone)]
+pub struct WheelStructure {
+    /// Wheel and axle nodes and hexahedra, plus the sprung-mass node (last node, no element).
+    pub mesh: Mesh,
+    /// Materials (index 0: wheel steel).
+    pub materials: Vec<IsotropicElastic>,
+    /// The primary suspension springs.
+    pub springs: Vec<Spring>,
+    /// The sprung mass.
+    pub point_masses: Vec<PointMass>,
+    /// Free/constrained DOFs.
+    pub dofmap: DofMap,
+    /// Wheel node maps.
+    pub topology: WheelTopology,
+    /// Node index of the sprung mass.
+    pub sprung_node: usize,
+    /// Sprung mass (kg).
+    pub sprung_mass: f64,
+    /// Wheel and half-axle mass (kg).
+    pub unsprung_mass: f64,
+    /// Wheel geometry used.
+    pub params: WheelParams,
+    /// Mass matrix kind.
+    pub mass: MassKind,
+}
+
+impl WheelStructure {
+    /// Builds the wheel substructure of a model.
+    pub fn build(m: &Model) -> Result<WheelStructure, StructureError> {
+        let params = WheelParams {
+            radius_m: m.wheel.radius,
+            conicity: m.wheel.conicity,
+            circumferential_divisions: m.mesh.wheel_segments,
+            axial_size_m: m.mesh.wheel_element_size,
+            radial_size_m: m.mesh.wheel_element_size,
+            contact_size_m: 0.5 * m.mesh.wheel_element_size,
+            ..WheelParams::default()
+        };
+        let (mut mesh, topology) = wheel(&params, 0)?;
+        let materials = vec![m.wheel_material()];
+        let unsprung_mass = crate::fe::assembly::mass_per_part(&mesh, &materials)?.get(Part::Wheel);
+        let sprung_mass = m.vehicle.wheel_load / m.vehicle.gravity - unsprung_mass;
+        if !(sprung_mass > 0.0) {
+            return Err(StructureError::Support(format!(
+                "vehicle.wheel_load = {} N is less than the weight of the wheel and half axle ({:.0} kg): raise vehicle.wheel_load",
+                m.vehicle.wheel_load, unsprung_mass
+            )));
+        }
+        let bearing = topology.bearing_nodes();
+        if bearing.is_empty() {
+            return Err(StructureError::Support(
+                "the wheel mesh has no journal nodes for the primary suspension".into(),
+            ));
+        }
+        let yj = 0.5 * (params.journal_y_m[0] + params.journal_y_m[1]);
+        let sprung_node = mesh.nodes.len();
+        mesh.nodes.push([0.0, yj, 1.0]);
+        let w = 1.0 / bearing.len() as f64;
+        let springs = vec![Spring::new(
+            vec![(3 * sprung_node + 2, 1.0)],
+            bearing.iter().map(|&n| (3 * n + 2, w)).collect(),
+            m.vehicle.primary_stiffness,
+            m.vehicle.primary_damping,
+        )];
+        let mut held: Vec<usize> = topology
+            .symmetry_plane_nodes()
+            .iter()
+            .map(|&n| 3 * n + 1)
+            .collect();
+        held.extend([3 * sprung_node, 3 * sprung_node + 1]);
+        held.sort_unstable();
+        held.dedup();
+        let dofmap = DofMap::with_constraints(mesh.nodes.len(), &held)?;
+        Ok(WheelStructure {
+            mesh,
+            materials,
+            springs,
+            point_masses: vec![PointMass {
+                node: sprung_node,
+                mass: sprung_mass,
+            }],
+            dofmap,
+            topology,
+            sprung_node,
+            sprung_mass,
+            unsprung_mass,
+            params,
+            mass: match m.mesh.mass {
+                crate::model::MassKind::Lumped => MassKind::Lumped,
+                crate::model::MassKind::Consistent => MassKind::Consistent,
+            },
+        })
+    }
+
+    /// Assembles K, M, C over the free DOFs; returns them with the wall time (s).
+    pub fn assemble(&self) -> Result<(FeMatrices, f64), StructureError> {
+        let t = std::time::Instant::now();
+        let mats = assemble(
+            &self.mesh,
+            &self.materials,
+            &self.springs,
+            &self.point_masses,
+            &self.dofmap,
+            AssemblyOptions { mass: self.mass },
+        )?;
+        Ok((mats, t.elapsed().as_secs_f64()))
+    }
+}
