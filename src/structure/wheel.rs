@@ -69,7 +69,7 @@ impl WheelStructure {
         let materials = vec![m.wheel_material()];
         let unsprung_mass = crate::fe::assembly::mass_per_part(&mesh, &materials)?.get(Part::Wheel);
         let sprung_mass = m.vehicle.wheel_load / m.vehicle.gravity - unsprung_mass;
-        if !(sprung_mass > 0.0) {
+        if sprung_mass.is_nan() || sprung_mass <= 0.0 {
             return Err(StructureError::Support(format!(
                 "vehicle.wheel_load = {} N is less than the weight of the wheel and half axle ({:.0} kg): raise vehicle.wheel_load",
                 m.vehicle.wheel_load, unsprung_mass
