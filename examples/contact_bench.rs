@@ -1,0 +1,143 @@
+//! Benchmark of the transient rolling contact step (normal + tangential) on grids that resolve
+//! the reference contact (100 kN, a × b ≈ 7.2 × 5.4 mm), cold and warm started, and a 1 m
+//! passage of ~2,500 steps with a varying normal load and a corrugated rail.
+//!
+//! Run: `cargo run --release --example contact_bench`
+
+use corrugation::contact::{
+    GridSpec, Longitudinal, NormalInput, StepInputs, TransientConfig, TransientRolling,
+    WearAccumulator,
+};
+use std::time::Instant;
+
+fn main() -> anyhow::Result<()> {
+    println!("transient rolling step, reference case (R 0.46 / R300, 100 kN, µ 0.4, traction 0.15, 140 km/h)");
+    println!(
+        "{:>8} {:>8} {:>10} {:>10} {:>12} {:>10} {:>10}",
+        "grid", "dx_mm", "cold_ms", "warm_ms", "warm_T_ms", "N_its", "T_its"
+    );
+    for &(nx, ny) in &[(25usize, 25usize), (32, 26), (51, 51)] {
+        let mut cfg = TransientConfig::reference();
+        cfg.grid = GridSpec { nx, ny, ..cfg.grid };
+        let mut eng = TransientRolling::new(cfg)?;
+        // creepage for traction 0.15 (steady), then time steps at that creepage
+        let st = eng.solve_steady(
+            &StepInputs {
+                normal: NormalInput::Force(100e3),
+                longitudinal: Longitudinal::Force(15e3),
+                lateral_creepage: 0.0,
+                spin_per_m: 0.0,
+                rail_height_m: None,
+            },
+            1e-7,
+            2000,
+        )?;
+        let xi = st.creepage;
+        // cold: fresh engine state, first step from rest
+        let reps = 5;
+        let t0 = Instant::now();
+        for _ in 0..reps {
+            eng.reset();
+            eng.step(&StepInputs::force_creepage(100e3, xi))?;
+        }
+        let cold = t0.elapsed().as_secs_f64() / reps as f64;
+        // warm: steady rolling with a varying load (1 kHz, ±10 %)
+        eng.reset();
+        eng.solve_steady(&StepInputs::force_creepage(100e3, xi), 1e-7, 2000)?;
+        let nsteps = 200;
+        let dt = eng.time_step_s();
+        let (mut nits, mut tits) = (0usize, 0usize);
+        let t0 = Instant::now();
+        for k in 0..nsteps {
+            let n =
+                100e3 * (1.0 + 0.1 * (2.0 * std::f64::consts::PI * 1000.0 * k as f64 * dt).sin());
+            let r = eng.step(&StepInputs::force_creepage(n, xi))?;
+            nits += r.normal_iterations;
+            tits += r.tangential_iterations;
+        }
+        let warm = t0.elapsed().as_secs_f64() / nsteps as f64;
+        // warm with prescribed Fx (creepage solved per step)
+        let t0 = Instant::now();
+        for k in 0..50 {
+            let n =
+                100e3 * (1.0 + 0.1 * (2.0 * std::f64::consts::PI * 1000.0 * k as f64 * dt).sin());
+            eng.step(&StepInputs {
+                normal: NormalInput::Force(n),
+                longitudinal: Longitudinal::Force(15e3),
+                lateral_creepage: 0.0,
+                spin_per_m: 0.0,
+                rail_height_m: None,
+            })?;
+        }
+        let warm_t = t0.elapsed().as_secs_f64() / 50.0;
+        println!(
+            "{:>8} {:>8.3} {:>10.3} {:>10.3} {:>12.3} {:>10.1} {:>10.1}",
+            format!("{nx}x{ny}"),
+            cfg.grid.dx() * 1e3,
+            cold * 1e3,
+            warm * 1e3,
+            warm_t * 1e3,
+            nits as f64 / nsteps as f64,
+            tits as f64 / nsteps as f64
+        );
+    }
+
+    // 1 m passage on the 32 × 26 grid: approach prescribed, corrugated rail (40 mm, 20 µm
+    // peak-to-trough), constant creepage; wear accumulated rail-fixed.
+    let mut cfg = TransientConfig::reference();
+    cfg.grid = GridSpec {
+        nx: 32,
+        ny: 26,
+        half_length_x_m: 1.4 * 7.162e-3,
+        half_length_y_m: 1.4 * 5.387e-3,
+    };
+    let mut eng = TransientRolling::new(cfg)?;
+    let dx = cfg.grid.dx();
+    let st = eng.solve_steady(
+        &StepInputs {
+            normal: NormalInput::Force(100e3),
+            longitudinal: Longitudinal::Force(15e3),
+            lateral_creepage: 0.0,
+            spin_per_m: 0.0,
+            rail_height_m: None,
+        },
+        1e-7,
+        2000,
+    )?;
+    let (xi, delta) = (st.creepage, st.approach_m);
+    let nsteps = (1.0 / dx).round() as usize;
+    let mut wear = WearAccumulator::new(&eng, -0.05, nsteps + 200);
+    let mut rail = vec![0.0; cfg.grid.nx];
+    let xs: Vec<f64> = eng.x_m().to_vec();
+    let t0 = Instant::now();
+    let mut fmin = f64::INFINITY;
+    let mut fmax = 0.0_f64;
+    for k in 0..nsteps {
+        let xc = k as f64 * dx;
+        for (r, x) in rail.iter_mut().zip(&xs) {
+            *r = 10e-6 * (2.0 * std::f64::consts::PI * (xc + x) / 0.04).sin();
+        }
+        let res = eng.step(&StepInputs {
+            normal: NormalInput::Approach(delta),
+            longitudinal: Longitudinal::Creepage(xi),
+            lateral_creepage: 0.0,
+            spin_per_m: 0.0,
+            rail_height_m: Some(&rail),
+        })?;
+        fmin = fmin.min(res.normal_force_n);
+        fmax = fmax.max(res.normal_force_n);
+        wear.add_step(&eng, xc);
+    }
+    let el = t0.elapsed().as_secs_f64();
+    println!(
+        "1 m passage, 32x26 grid (dx {:.3} mm): {} steps in {:.2} s ({:.3} ms/step); F_N {:.1}..{:.1} kN; total frictional work {:.2} J",
+        dx * 1e3,
+        nsteps,
+        el,
+        el * 1e3 / nsteps as f64,
+        fmin / 1e3,
+        fmax / 1e3,
+        wear.total_j()
+    );
+    Ok(())
+}

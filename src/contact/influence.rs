@@ -1,0 +1,394 @@
+//! Influence coefficients of the elastic half-space for uniformly loaded rectangles, and
+//! FFT-accelerated influence products on the contact grid.
+//!
+//! For two quasi-identical bodies the displacement *difference* `u = u_wheel − u_rail` at a
+//! field point due to a uniform load on a source rectangle is (Johnson 1985, eqs. 3.22
+//! Boussinesq and 3.86–3.87 Cerruti, doubled for the two bodies; Love 1929 for the integral):
+//!
+//! ```text
+//! C_zz = 1/(π E*) ∬ 1/r,
+//! C_xx = 1/(π G) ∬ [(1−ν)/r + ν X²/r³],   C_yy = 1/(π G) ∬ [(1−ν)/r + ν Y²/r³],
+//! C_xy = C_yx = ν/(π G) ∬ X Y / r³,
+//! ```
+//! with `X, Y` field minus source coordinates. Antiderivatives (corner sums cancel the
+//! `X ln|X|` parts): `∬1/r → X asinh(Y/|X|) + Y asinh(X/|Y|)`, `∬X²/r³ → Y asinh(X/|Y|)`,
+//! `∬Y²/r³ → X asinh(Y/|X|)`, `∬XY/r³ → −r`.
+//!
+//! The products `Σ_j C(i − j) f_j` are Toeplitz; they are evaluated as cyclic convolutions on a
+//! grid padded to `2nx × 2ny` (exact linear convolution for output rows `0..=nx`, which gives
+//! also the displacement one cell beyond the leading edge needed by transient rolling).
+//! Tangential products pack `τx + i τy` into one complex FFT.
+
+use rustfft::num_complex::Complex64;
+use rustfft::{Fft, FftPlanner};
+use std::f64::consts::PI;
+use std::sync::Arc;
+
+fn asinh_ratio(num: f64, den: f64) -> f64 {
+    if den == 0.0 {
+        0.0
+    } else {
+        (num / den.abs()).asinh()
+    }
+}
+
+/// `∬ 1/r dX dY` over `[x1,x2]×[y1,y2]` (m).
+fn corner_sum(f: impl Fn(f64, f64) -> f64, x1: f64, x2: f64, y1: f64, y2: f64) -> f64 {
+    f(x2, y2) - f(x1, y2) - f(x2, y1) + f(x1, y1)
+}
+
+/// Integrals over a source rectangle of half-sizes `hx, hy` (m) centred at the origin, seen from
+/// field point `(x, y)`: returns `(∬1/r, ∬X²/r³, ∬Y²/r³, ∬XY/r³)` (units m, m, m, m).
+pub fn rectangle_integrals(x: f64, y: f64, hx: f64, hy: f64) -> (f64, f64, f64, f64) {
+    let (x1, x2, y1, y2) = (x - hx, x + hx, y - hy, y + hy);
+    let hxx = |xx: f64, yy: f64| yy * asinh_ratio(xx, yy);
+    let hyy = |xx: f64, yy: f64| xx * asinh_ratio(yy, xx);
+    let i_xx = corner_sum(hxx, x1, x2, y1, y2);
+    let i_yy = corner_sum(hyy, x1, x2, y1, y2);
+    let i_xy = corner_sum(|xx, yy| -(xx * xx + yy * yy).sqrt(), x1, x2, y1, y2);
+    (i_xx + i_yy, i_xx, i_yy, i_xy)
+}
+
+/// Dense influence coefficients (m/Pa) between element centres offset by `(ox, oy)` elements.
+#[derive(Debug, Clone, Copy)]
+pub struct Coefficients {
+    /// Normal: u_z per unit pressure.
+    pub zz: f64,
+    /// u_x per unit τx.
+    pub xx: f64,
+    /// u_y per unit τy.
+    pub yy: f64,
+    /// u_x per unit τy (= u_y per unit τx).
+    pub xy: f64,
+}
+
+/// Influence coefficients for the offset `(x, y)` (m) between field and source centre, element
+/// size `dx × dy` (m), combined modulus `E*` and shear modulus `G` (Pa), Poisson ratio ν.
+pub fn coefficients(
+    x: f64,
+    y: f64,
+    dx: f64,
+    dy: f64,
+    e_star: f64,
+    g: f64,
+    nu: f64,
+) -> Coefficients {
+    let (i1, ixx, iyy, ixy) = rectangle_integrals(x, y, 0.5 * dx, 0.5 * dy);
+    Coefficients {
+        zz: i1 / (PI * e_star),
+        xx: ((1.0 - nu) * i1 + nu * ixx) / (PI * g),
+        yy: ((1.0 - nu) * i1 + nu * iyy) / (PI * g),
+        xy: nu * ixy / (PI * g),
+    }
+}
+
+/// 2D FFT of an `m1 × m2` row-major complex array (rows of length `m2`), with preallocated
+/// transpose buffer and scratch.
+struct Fft2 {
+    m1: usize,
+    m2: usize,
+    row_f: Arc<dyn Fft<f64>>,
+    col_f: Arc<dyn Fft<f64>>,
+    row_i: Arc<dyn Fft<f64>>,
+    col_i: Arc<dyn Fft<f64>>,
+    tbuf: Vec<Complex64>,
+    scratch: Vec<Complex64>,
+}
+
+impl Fft2 {
+    fn new(m1: usize, m2: usize) -> Self {
+        let mut pl = FftPlanner::new();
+        let row_f = pl.plan_fft_forward(m2);
+        let col_f = pl.plan_fft_forward(m1);
+        let row_i = pl.plan_fft_inverse(m2);
+        let col_i = pl.plan_fft_inverse(m1);
+        let ns = [&row_f, &col_f, &row_i, &col_i]
+            .iter()
+            .map(|f| f.get_inplace_scratch_len())
+            .max()
+            .unwrap_or(0);
+        Fft2 {
+            m1,
+            m2,
+            row_f,
+            col_f,
+            row_i,
+            col_i,
+            tbuf: vec![Complex64::new(0.0, 0.0); m1 * m2],
+            scratch: vec![Complex64::new(0.0, 0.0); ns.max(1)],
+        }
+    }
+
+    /// Forward transform of `data` whose rows `nonzero_rows..` are zero. The result is left
+    /// in `self.tbuf` in transposed layout (`m2 × m1`).
+    fn forward_to_t(&mut self, data: &mut [Complex64], nonzero_rows: usize) {
+        let (m1, m2) = (self.m1, self.m2);
+        self.row_f
+            .process_with_scratch(&mut data[..nonzero_rows * m2], &mut self.scratch);
+        for i in 0..m1 {
+            let row = &data[i * m2..(i + 1) * m2];
+            if i < nonzero_rows {
+                for (j, v) in row.iter().enumerate() {
+                    self.tbuf[j * m1 + i] = *v;
+                }
+            } else {
+                for j in 0..m2 {
+                    self.tbuf[j * m1 + i] = Complex64::new(0.0, 0.0);
+                }
+            }
+        }
+        self.col_f
+            .process_with_scratch(&mut self.tbuf, &mut self.scratch);
+    }
+
+    /// Inverse transform of `self.tbuf` (transposed layout); writes rows `0..rows` of `data`.
+    fn inverse_from_t(&mut self, data: &mut [Complex64], rows: usize) {
+        let (m1, m2) = (self.m1, self.m2);
+        self.col_i
+            .process_with_scratch(&mut self.tbuf, &mut self.scratch);
+        for i in 0..rows {
+            for j in 0..m2 {
+                data[i * m2 + j] = self.tbuf[j * m1 + i];
+            }
+        }
+        self.row_i
+            .process_with_scratch(&mut data[..rows * m2], &mut self.scratch);
+    }
+}
+
+/// FFT-based influence products on an `nx × ny` grid (element index `i * ny + j`, `i` along x).
+pub struct Convolver {
+    nx: usize,
+    ny: usize,
+    m1: usize,
+    m2: usize,
+    fft: Fft2,
+    /// Spectra in transposed layout, already divided by `m1 m2`.
+    kzz: Vec<Complex64>,
+    kxx: Vec<Complex64>,
+    kyy: Vec<Complex64>,
+    kxy: Vec<Complex64>,
+    buf: Vec<Complex64>,
+    work: Vec<Complex64>,
+    /// Largest eigenvalue bound of the normal operator (m/Pa).
+    pub lambda_max_n: f64,
+    /// Largest eigenvalue bound of the tangential operator (m/Pa).
+    pub lambda_max_t: f64,
+    /// Self-influence (diagonal) of the normal operator (m/Pa).
+    pub diag_n: f64,
+}
+
+impl Convolver {
+    /// Build the kernels for element size `dx × dy` (m), moduli `E*`, `G` (Pa) and ν.
+    pub fn new(nx: usize, ny: usize, dx: f64, dy: f64, e_star: f64, g: f64, nu: f64) -> Self {
+        let (m1, m2) = (2 * nx, 2 * ny);
+        let mut fft = Fft2::new(m1, m2);
+        let zero = Complex64::new(0.0, 0.0);
+        let mut kz = vec![zero; m1 * m2];
+        let mut kx = vec![zero; m1 * m2];
+        let mut ky = vec![zero; m1 * m2];
+        let mut kc = vec![zero; m1 * m2];
+        let off = |k: usize, n: usize, m: usize| -> f64 {
+            if k <= n {
+                k as f64
+            } else {
+                k as f64 - m as f64
+            }
+        };
+        for a in 0..m1 {
+            let ox = off(a, nx, m1) * dx;
+            for b in 0..m2 {
+                let oy = off(b, ny, m2) * dy;
+                let c = coefficients(ox, oy, dx, dy, e_star, g, nu);
+                let idx = a * m2 + b;
+                kz[idx] = Complex64::new(c.zz, 0.0);
+                kx[idx] = Complex64::new(c.xx, 0.0);
+                ky[idx] = Complex64::new(c.yy, 0.0);
+                kc[idx] = Complex64::new(c.xy, 0.0);
+            }
+        }
+        let diag_n = kz[0].re;
+        let scale = 1.0 / (m1 * m2) as f64;
+        let mut spec = |k: &mut Vec<Complex64>| -> Vec<Complex64> {
+            fft.forward_to_t(k, m1);
+            fft.tbuf.iter().map(|v| v * scale).collect()
+        };
+        let kzz = spec(&mut kz);
+        let kxx = spec(&mut kx);
+        let kyy = spec(&mut ky);
+        let kxy = spec(&mut kc);
+        let mut lambda_max_n = 0.0_f64;
+        let mut lambda_max_t = 0.0_f64;
+        let s = (m1 * m2) as f64;
+        for q in 0..m1 * m2 {
+            lambda_max_n = lambda_max_n.max(kzz[q].norm() * s);
+            // largest eigenvalue (in modulus) of the 2×2 symbol [[xx, xy], [xy, yy]]
+            let (a, d, b) = (kxx[q].re * s, kyy[q].re * s, kxy[q].re * s);
+            let m = 0.5 * (a + d);
+            let r = (0.25 * (a - d) * (a - d) + b * b).sqrt();
+            lambda_max_t = lambda_max_t.max((m + r).abs()).max((m - r).abs());
+        }
+        Convolver {
+            nx,
+            ny,
+            m1,
+            m2,
+            fft,
+            kzz,
+            kxx,
+            kyy,
+            kxy,
+            buf: vec![zero; m1 * m2],
+            work: vec![zero; m1 * m2],
+            lambda_max_n,
+            lambda_max_t,
+            diag_n,
+        }
+    }
+
+    /// Grid size `(nx, ny)`.
+    pub fn dims(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+
+    /// Normal displacement difference `u = C_zz * p` (m) on the grid, `p` in Pa.
+    pub fn normal(&mut self, p: &[f64], u: &mut [f64]) {
+        let (nx, ny, m2) = (self.nx, self.ny, self.m2);
+        self.buf.fill(Complex64::new(0.0, 0.0));
+        for i in 0..nx {
+            for j in 0..ny {
+                self.buf[i * m2 + j] = Complex64::new(p[i * ny + j], 0.0);
+            }
+        }
+        self.fft.forward_to_t(&mut self.buf, nx);
+        for (t, k) in self.fft.tbuf.iter_mut().zip(&self.kzz) {
+            *t *= k;
+        }
+        self.fft.inverse_from_t(&mut self.buf, nx);
+        for i in 0..nx {
+            for j in 0..ny {
+                u[i * ny + j] = self.buf[i * m2 + j].re;
+            }
+        }
+    }
+
+    /// Tangential displacement differences `(ux, uy)` (m) from tractions `(tx, ty)` (Pa),
+    /// evaluated at grid rows shifted by `shift` (0 or 1): `u[i] = (C * τ)(i + shift)`.
+    pub fn tangential(
+        &mut self,
+        tx: &[f64],
+        ty: &[f64],
+        ux: &mut [f64],
+        uy: &mut [f64],
+        shift: usize,
+    ) {
+        debug_assert!(shift <= 1);
+        let (nx, ny, m1, m2) = (self.nx, self.ny, self.m1, self.m2);
+        self.buf.fill(Complex64::new(0.0, 0.0));
+        for i in 0..nx {
+            for j in 0..ny {
+                let e = i * ny + j;
+                self.buf[i * m2 + j] = Complex64::new(tx[e], ty[e]);
+            }
+        }
+        self.fft.forward_to_t(&mut self.buf, nx);
+        // transposed layout: index q = k2 * m1 + k1
+        let z = &self.fft.tbuf;
+        for k2 in 0..m2 {
+            let n2 = (m2 - k2) % m2;
+            for k1 in 0..m1 {
+                let n1 = (m1 - k1) % m1;
+                let q = k2 * m1 + k1;
+                let zk = z[q];
+                let zm = z[n2 * m1 + n1].conj();
+                let xs = (zk + zm) * 0.5;
+                let ys = (zk - zm) * Complex64::new(0.0, -0.5);
+                let ux_s = self.kxx[q] * xs + self.kxy[q] * ys;
+                let uy_s = self.kxy[q] * xs + self.kyy[q] * ys;
+                self.work[q] = ux_s + Complex64::new(0.0, 1.0) * uy_s;
+            }
+        }
+        std::mem::swap(&mut self.fft.tbuf, &mut self.work);
+        self.fft.inverse_from_t(&mut self.buf, nx + shift);
+        for i in 0..nx {
+            for j in 0..ny {
+                let v = self.buf[(i + shift) * m2 + j];
+                ux[i * ny + j] = v.re;
+                uy[i * ny + j] = v.im;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn centre_of_uniform_square_matches_love() {
+        // Love (1929)/Johnson eq. 3.25: centre of a square of side 2c under pressure p:
+        // ∬1/r = 8 c asinh(1) = 4c·2 ln(1+√2).
+        let c = 1e-3;
+        let (i1, ixx, iyy, ixy) = rectangle_integrals(0.0, 0.0, c, c);
+        assert!((i1 - 8.0 * c * (1.0_f64).asinh()).abs() < 1e-15);
+        assert!((ixx - iyy).abs() < 1e-18 && ixy.abs() < 1e-18);
+        // far field: ∬1/r → area / distance
+        let (f1, fxx, _, fxy) = rectangle_integrals(1.0, 0.5, c, c);
+        let r = (1.25_f64).sqrt();
+        let area = 4.0 * c * c;
+        assert!((f1 / (area / r) - 1.0).abs() < 1e-5);
+        assert!((fxx / (area / r.powi(3)) - 1.0).abs() < 1e-5);
+        assert!((fxy / (area * 0.5 / r.powi(3)) - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn fft_products_equal_dense_products() {
+        // Independent check: dense double sum of the closed-form coefficients.
+        let (nx, ny, dx, dy) = (7, 5, 0.3e-3, 0.45e-3);
+        let (es, g, nu) = (115e9, 80e9, 0.3);
+        let mut conv = Convolver::new(nx, ny, dx, dy, es, g, nu);
+        let n = nx * ny;
+        let p: Vec<f64> = (0..n).map(|k| ((k * 7919) % 13) as f64 * 1e6).collect();
+        let q: Vec<f64> = (0..n)
+            .map(|k| ((k * 104729) % 11) as f64 * 1e6 - 5e6)
+            .collect();
+        let mut u = vec![0.0; n];
+        conv.normal(&p, &mut u);
+        let (mut ux, mut uy) = (vec![0.0; n], vec![0.0; n]);
+        for shift in 0..2 {
+            conv.tangential(&p, &q, &mut ux, &mut uy, shift);
+            for i in 0..nx {
+                for j in 0..ny {
+                    let (mut dz, mut dxv, mut dyv) = (0.0, 0.0, 0.0);
+                    for k in 0..nx {
+                        for l in 0..ny {
+                            let ox = (i as f64 + shift as f64 - k as f64) * dx;
+                            let oy = (j as f64 - l as f64) * dy;
+                            let c = coefficients(ox, oy, dx, dy, es, g, nu);
+                            let s = k * ny + l;
+                            dz += c.zz * p[s];
+                            dxv += c.xx * p[s] + c.xy * q[s];
+                            dyv += c.xy * p[s] + c.yy * q[s];
+                        }
+                    }
+                    let e = i * ny + j;
+                    if shift == 0 {
+                        assert!((u[e] - dz).abs() < 1e-12 * dz.abs().max(1e-9));
+                    }
+                    assert!(
+                        (ux[e] - dxv).abs() < 1e-10 * dxv.abs().max(1e-9),
+                        "{} {}",
+                        ux[e],
+                        dxv
+                    );
+                    assert!(
+                        (uy[e] - dyv).abs() < 1e-10 * dyv.abs().max(1e-9),
+                        "{} {}",
+                        uy[e],
+                        dyv
+                    );
+                }
+            }
+        }
+    }
+}

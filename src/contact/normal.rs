@@ -1,0 +1,256 @@
+//! Normal contact on the half-space grid: the Polonsky–Keer (1999) constrained conjugate
+//! gradient method.
+//!
+//! Unknowns: element pressures `p_i ≥ 0` (Pa). Deformed gap `g_i = h_i − δ + (C p)_i ≥ 0`
+//! (m) with `h` the undeformed gap, `δ` the rigid approach, `C` the normal influence
+//! operator ([`super::influence::Convolver::normal`]); complementarity `p_i g_i = 0`.
+//! Either the total load `Σ p_i ΔA = P` is prescribed (δ is then the Lagrange multiplier,
+//! Polonsky & Keer's algorithm, their eqs. 6–13) or the approach δ is prescribed (the same
+//! CG without the load-balance step; a bound-constrained quadratic programme).
+//! Warm start: the pressure passed in is the initial iterate.
+
+use super::influence::Convolver;
+use super::ContactError;
+
+/// What is prescribed in the normal problem.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NormalMode {
+    /// Total normal force (N).
+    Load(f64),
+    /// Rigid approach of the bodies (m), positive = into each other.
+    Approach(f64),
+}
+
+/// Result of a normal solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NormalOutcome {
+    /// Total normal force (N).
+    pub load_n: f64,
+    /// Rigid approach (m).
+    pub approach_m: f64,
+    /// CG iterations used.
+    pub iterations: usize,
+}
+
+/// Scratch of the Polonsky–Keer solver (allocated once).
+pub struct NormalSolver {
+    gap: Vec<f64>,
+    t: Vec<f64>,
+    r: Vec<f64>,
+    /// Relative tolerance on the pressure change `Σ|Δp| / Σ p`.
+    pub tol: f64,
+    /// Maximum number of CG iterations.
+    pub max_iterations: usize,
+}
+
+impl NormalSolver {
+    /// Scratch for `n` elements.
+    pub fn new(n: usize) -> Self {
+        NormalSolver {
+            gap: vec![0.0; n],
+            t: vec![0.0; n],
+            r: vec![0.0; n],
+            tol: 1e-10,
+            max_iterations: 2000,
+        }
+    }
+
+    /// Solve for `p` (Pa, in/out: warm start) given the undeformed gap `h` (m), the element
+    /// area `da` (m²) and the prescribed load or approach. On exit `gap` holds the deformed
+    /// gap including the approach ([`Self::gap`]).
+    pub fn solve(
+        &mut self,
+        conv: &mut Convolver,
+        h: &[f64],
+        da: f64,
+        mode: NormalMode,
+        p: &mut [f64],
+    ) -> Result<NormalOutcome, ContactError> {
+        let n = p.len();
+        // separation / zero-load shortcuts
+        match mode {
+            NormalMode::Load(w) if w <= 0.0 => {
+                p.fill(0.0);
+                let hmin = h.iter().cloned().fold(f64::INFINITY, f64::min);
+                for (g, hv) in self.gap.iter_mut().zip(h) {
+                    *g = hv - hmin;
+                }
+                return Ok(NormalOutcome {
+                    load_n: 0.0,
+                    approach_m: hmin,
+                    iterations: 0,
+                });
+            }
+            NormalMode::Approach(d) if h.iter().all(|&hv| hv - d >= 0.0) => {
+                p.fill(0.0);
+                for (g, hv) in self.gap.iter_mut().zip(h) {
+                    *g = hv - d;
+                }
+                return Ok(NormalOutcome {
+                    load_n: 0.0,
+                    approach_m: d,
+                    iterations: 0,
+                });
+            }
+            _ => {}
+        }
+        // initial iterate
+        let mut total: f64 = p.iter().sum::<f64>() * da;
+        if total <= 0.0 || !total.is_finite() {
+            // start from where the undeformed bodies would overlap (or the lowest point)
+            let hmin = h.iter().cloned().fold(f64::INFINITY, f64::min);
+            let hmax = h.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+            let thr = match mode {
+                NormalMode::Approach(d) => d,
+                NormalMode::Load(_) => hmin + 0.3 * (hmax - hmin) + 1e-15,
+            };
+            for (pi, &hv) in p.iter_mut().zip(h) {
+                *pi = (thr - hv).max(0.0);
+            }
+            total = p.iter().sum::<f64>() * da;
+        }
+        if let NormalMode::Load(w) = mode {
+            let s = w / total;
+            p.iter_mut().for_each(|v| *v *= s);
+        } else {
+            // scale to a plausible magnitude: mean overlap / self-influence
+            let d = match mode {
+                NormalMode::Approach(d) => d,
+                _ => 0.0,
+            };
+            let s = h.iter().map(|hv| (d - hv).max(0.0)).fold(0.0, f64::max)
+                / conv.diag_n.max(1e-300)
+                / p.iter().cloned().fold(0.0, f64::max).max(1e-300);
+            p.iter_mut().for_each(|v| *v *= s * 0.3);
+        }
+        let mut g_old = 1.0;
+        let mut reuse_dir = false;
+        self.t.fill(0.0);
+        let mut delta: f64;
+        let mut last_change = 1.0;
+        for it in 1..=self.max_iterations {
+            conv.normal(p, &mut self.gap);
+            for (g, hv) in self.gap.iter_mut().zip(h) {
+                *g += hv;
+            }
+            // gbar: mean gap over the contact set (load mode) or the approach
+            let (mut sum, mut cnt) = (0.0, 0usize);
+            for (g, pi) in self.gap.iter().zip(p.iter()) {
+                if *pi > 0.0 {
+                    sum += g;
+                    cnt += 1;
+                }
+            }
+            let gbar = match mode {
+                NormalMode::Load(_) => {
+                    if cnt == 0 {
+                        0.0
+                    } else {
+                        sum / cnt as f64
+                    }
+                }
+                NormalMode::Approach(d) => d,
+            };
+            delta = gbar;
+            let mut gg = 0.0;
+            for (g, pi) in self.gap.iter_mut().zip(p.iter()) {
+                *g -= gbar;
+                if *pi > 0.0 {
+                    gg += *g * *g;
+                }
+            }
+            let beta = if reuse_dir { gg / g_old } else { 0.0 };
+            for i in 0..n {
+                self.t[i] = if p[i] > 0.0 {
+                    self.gap[i] + beta * self.t[i]
+                } else {
+                    0.0
+                };
+            }
+            g_old = gg;
+            conv.normal(&self.t, &mut self.r);
+            let rbar = match mode {
+                NormalMode::Load(_) => {
+                    let mut s = 0.0;
+                    for i in 0..n {
+                        if p[i] > 0.0 {
+                            s += self.r[i];
+                        }
+                    }
+                    if cnt == 0 {
+                        0.0
+                    } else {
+                        s / cnt as f64
+                    }
+                }
+                NormalMode::Approach(_) => 0.0,
+            };
+            let (mut num, mut den) = (0.0, 0.0);
+            for i in 0..n {
+                if p[i] > 0.0 {
+                    num += self.gap[i] * self.t[i];
+                    den += (self.r[i] - rbar) * self.t[i];
+                }
+            }
+            let tau = if den > 0.0 {
+                num / den
+            } else {
+                1.0 / conv.diag_n
+            };
+            let mut change = 0.0;
+            let mut any_overlap = false;
+            for i in 0..n {
+                let old = p[i];
+                if old > 0.0 {
+                    p[i] = (old - tau * self.t[i]).max(0.0);
+                } else if self.gap[i] < 0.0 {
+                    p[i] = old - tau * self.gap[i];
+                    any_overlap = true;
+                }
+                change += (p[i] - old).abs();
+            }
+            reuse_dir = !any_overlap;
+            let mut tot = p.iter().sum::<f64>() * da;
+            if let NormalMode::Load(w) = mode {
+                if tot > 0.0 {
+                    let s = w / tot;
+                    for v in p.iter_mut() {
+                        *v *= s;
+                    }
+                    tot = w;
+                }
+            }
+            let scale = p.iter().sum::<f64>().max(1e-300);
+            last_change = change / scale;
+            if change / scale < self.tol && it > 1 {
+                // final gap consistent with p
+                conv.normal(p, &mut self.gap);
+                for (g, hv) in self.gap.iter_mut().zip(h) {
+                    *g += hv - delta;
+                }
+                return Ok(NormalOutcome {
+                    load_n: tot,
+                    approach_m: delta,
+                    iterations: it,
+                });
+            }
+            if tot == 0.0 && matches!(mode, NormalMode::Approach(_)) && !any_overlap {
+                return Ok(NormalOutcome {
+                    load_n: 0.0,
+                    approach_m: delta,
+                    iterations: it,
+                });
+            }
+        }
+        Err(ContactError::NotConverged {
+            solver: "Polonsky–Keer normal CG",
+            iterations: self.max_iterations,
+            residual: last_change,
+        })
+    }
+
+    /// Deformed gap (m) of the last solve, `h − δ + C p`.
+    pub fn gap(&self) -> &[f64] {
+        &self.gap
+    }
+}

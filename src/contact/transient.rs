@@ -1,0 +1,892 @@
+//! Transient (and steady) rolling contact engine, the rail-fixed wear accumulator, and the
+//! normal-load frequency response of the longitudinal force.
+//!
+//! # Discretisation of transient rolling (Kalker 1990 §2.2; CONTACT user guide)
+//! The time step is tied to the grid, `Δt = Δx / V`: in one step the material of both bodies
+//! moves exactly one cell in `−x` through the contact frame. The slip distance of element `i`
+//! during the step is
+//! ```text
+//! S_i = w_i Δx + u_i(t) − u_{i+1}(t − Δt)
+//! ```
+//! with `w = (ξ − φ y, η + φ x)` the rigid creepages, `u(t)` the current displacement
+//! difference, and `u_{i+1}(t − Δt)` the displacement of the previous step at the position the
+//! same material occupied then (one cell downstream, towards the leading edge at `+x`). The
+//! previous displacement there is the exact influence product of the previous traction (the FFT
+//! convolution delivers row `nx`, one cell beyond the grid). The slip velocity is
+//! `s = S / Δt` (m/s). Steady rolling is the fixed point `u(t) = u(t − Δt)`, i.e. the upwind
+//! difference `S_i = w_i Δx + u_i − u_{i+1}`, reached by stepping with constant inputs.
+//!
+//! Normal and tangential problems are decoupled (quasi-identical bodies, see the module root),
+//! so each step solves the normal problem first, then the tangential one with `g = µp`.
+//!
+//! # Frictional work (method.md §4)
+//! Per element and step: power density `P_i = −τ_i · s_i` (W/m², ≥ 0, zero in stick) and work
+//! density `P_i Δt` (J/m²). [`WearAccumulator`] maps element `(i, j)` at contact position `x_c`
+//! to the rail-fixed bin containing `x_c + x_i`.
+
+use super::hertz::{HertzContact, HertzInput};
+use super::influence::Convolver;
+use super::normal::{NormalMode, NormalSolver};
+use super::tangential::TangentialSolver;
+use super::{check_poisson, check_positive, combined_modulus, shear_modulus, ContactError};
+
+/// The computational grid: `nx × ny` elements covering `[−Lx, Lx] × [−Ly, Ly]` (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridSpec {
+    /// Number of elements along x (rolling direction).
+    pub nx: usize,
+    /// Number of elements along y (lateral).
+    pub ny: usize,
+    /// Half-length of the grid along x, `Lx` (m).
+    pub half_length_x_m: f64,
+    /// Half-length of the grid along y, `Ly` (m).
+    pub half_length_y_m: f64,
+}
+
+impl GridSpec {
+    /// Element size along x (m).
+    pub fn dx(&self) -> f64 {
+        2.0 * self.half_length_x_m / self.nx as f64
+    }
+    /// Element size along y (m).
+    pub fn dy(&self) -> f64 {
+        2.0 * self.half_length_y_m / self.ny as f64
+    }
+    /// Element-centre x coordinate of column `i` (m).
+    pub fn x(&self, i: usize) -> f64 {
+        -self.half_length_x_m + (i as f64 + 0.5) * self.dx()
+    }
+    /// Element-centre y coordinate of row `j` (m).
+    pub fn y(&self, j: usize) -> f64 {
+        -self.half_length_y_m + (j as f64 + 0.5) * self.dy()
+    }
+}
+
+/// Configuration of the transient rolling engine (SI).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TransientConfig {
+    /// The grid.
+    pub grid: GridSpec,
+    /// Young's modulus of wheel and rail (Pa).
+    pub youngs_pa: f64,
+    /// Poisson's ratio (−).
+    pub poisson: f64,
+    /// Coulomb friction coefficient µ (−).
+    pub friction: f64,
+    /// Relative radius of curvature along x (m) (the wheel rolling radius on a straight rail).
+    pub radius_x_m: f64,
+    /// Relative radius of curvature along y (m) (`1/Ry = 1/R_crown + 1/R_wheel,lat`).
+    pub radius_y_m: f64,
+    /// Rolling speed V (m/s); the time step is `Δx / V`.
+    pub speed_m_per_s: f64,
+    /// Relative tolerance of the normal CG (pressure change).
+    pub normal_tol: f64,
+    /// Relative tolerance of the tangential solver (traction update / µ p_max).
+    pub tangential_tol: f64,
+}
+
+impl TransientConfig {
+    /// Grid sized around the Hertz patch for `load_n`: `nx × ny` elements covering
+    /// `margin · a` by `margin · b` (use `margin` ≈ 1.15–1.4; larger if the load varies).
+    #[allow(clippy::too_many_arguments)]
+    pub fn around_hertz(
+        radius_x_m: f64,
+        radius_y_m: f64,
+        youngs_pa: f64,
+        poisson: f64,
+        friction: f64,
+        speed_m_per_s: f64,
+        load_n: f64,
+        nx: usize,
+        ny: usize,
+        margin: f64,
+    ) -> Result<Self, ContactError> {
+        check_positive("load_n", load_n)?;
+        let h = HertzContact::solve(&HertzInput {
+            radius_x_m,
+            radius_y_m,
+            youngs_pa,
+            poisson,
+            load_n,
+        })?;
+        Ok(TransientConfig {
+            grid: GridSpec {
+                nx,
+                ny,
+                half_length_x_m: margin * h.a_m,
+                half_length_y_m: margin * h.b_m,
+            },
+            youngs_pa,
+            poisson,
+            friction,
+            radius_x_m,
+            radius_y_m,
+            speed_m_per_s,
+            normal_tol: 1e-9,
+            tangential_tol: 1e-6,
+        })
+    }
+
+    /// The reference case (wheel R 0.46 m flat laterally on the R300 crown, steel, µ 0.4,
+    /// 140 km/h) at 100 kN on a 40 × 32 grid with margin 1.2.
+    pub fn reference() -> Self {
+        Self::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 140.0 / 3.6, 100e3, 40, 32, 1.2)
+            .expect("reference parameters are valid")
+    }
+
+    fn validate(&self) -> Result<(), ContactError> {
+        check_positive("youngs_pa", self.youngs_pa)?;
+        check_poisson(self.poisson)?;
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err(ContactError::InvalidParameter {
+                name: "friction",
+                value: self.friction,
+                reason: "must be finite and ≥ 0",
+            });
+        }
+        check_positive("speed_m_per_s", self.speed_m_per_s)?;
+        check_positive("half_length_x_m", self.grid.half_length_x_m)?;
+        check_positive("half_length_y_m", self.grid.half_length_y_m)?;
+        check_positive("normal_tol", self.normal_tol)?;
+        check_positive("tangential_tol", self.tangential_tol)?;
+        for (name, r) in [
+            ("radius_x_m", self.radius_x_m),
+            ("radius_y_m", self.radius_y_m),
+        ] {
+            if r.is_nan() || r <= 0.0 {
+                return Err(ContactError::InvalidParameter {
+                    name,
+                    value: r,
+                    reason: "must be > 0 (INFINITY = flat)",
+                });
+            }
+        }
+        if self.grid.nx < 2 || self.grid.ny < 1 {
+            return Err(ContactError::InvalidParameter {
+                name: "grid.nx",
+                value: self.grid.nx as f64,
+                reason: "need nx ≥ 2 and ny ≥ 1",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Normal input of a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NormalInput {
+    /// Rigid approach of wheel into rail (m), relative to the nominal rail surface.
+    Approach(f64),
+    /// Normal force (N).
+    Force(f64),
+}
+
+/// Longitudinal input of a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Longitudinal {
+    /// Longitudinal creepage ξ (−), see the sign convention in the module root.
+    Creepage(f64),
+    /// Longitudinal force on the wheel Fx (N); ξ is solved for.
+    Force(f64),
+}
+
+/// Inputs of one time step.
+#[derive(Debug, Clone, Copy)]
+pub struct StepInputs<'a> {
+    /// Normal approach or force.
+    pub normal: NormalInput,
+    /// Longitudinal creepage or force.
+    pub longitudinal: Longitudinal,
+    /// Lateral creepage η (−).
+    pub lateral_creepage: f64,
+    /// Spin φ (1/m).
+    pub spin_per_m: f64,
+    /// Rail surface height under the grid columns (m, positive up = less gap), one value per
+    /// grid column `i` (length `nx`), or `None` for a smooth rail.
+    pub rail_height_m: Option<&'a [f64]>,
+}
+
+impl StepInputs<'_> {
+    /// Smooth rail, normal force `n` (N), longitudinal creepage `xi`.
+    pub fn force_creepage(n: f64, xi: f64) -> StepInputs<'static> {
+        StepInputs {
+            normal: NormalInput::Force(n),
+            longitudinal: Longitudinal::Creepage(xi),
+            lateral_creepage: 0.0,
+            spin_per_m: 0.0,
+            rail_height_m: None,
+        }
+    }
+}
+
+/// Scalar results of one step.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepResult {
+    /// Normal force (N).
+    pub normal_force_n: f64,
+    /// Rigid approach (m).
+    pub approach_m: f64,
+    /// Longitudinal force on the wheel (N).
+    pub fx_n: f64,
+    /// Lateral force on the wheel (N).
+    pub fy_n: f64,
+    /// Spin moment `∫ (x τy − y τx) dA` (N·m).
+    pub mz_nm: f64,
+    /// Longitudinal creepage used (prescribed or solved) (−).
+    pub creepage: f64,
+    /// Number of elements in contact (p > 0).
+    pub contact_elements: usize,
+    /// Number of slipping elements.
+    pub slip_elements: usize,
+    /// Contact area (m²).
+    pub area_m2: f64,
+    /// Total frictional power `−∫ τ·s dA` (W).
+    pub frictional_power_w: f64,
+    /// Normal CG iterations.
+    pub normal_iterations: usize,
+    /// Tangential iterations (summed over creepage iterations in force mode).
+    pub tangential_iterations: usize,
+}
+
+impl StepResult {
+    /// Fraction of the contact area that slips (0 if no contact).
+    pub fn slip_area_fraction(&self) -> f64 {
+        if self.contact_elements == 0 {
+            0.0
+        } else {
+            self.slip_elements as f64 / self.contact_elements as f64
+        }
+    }
+}
+
+/// Element state: outside the contact area.
+pub const STATE_EXTERIOR: u8 = 0;
+/// Element state: adhesion (stick).
+pub const STATE_STICK: u8 = 1;
+/// Element state: slip.
+pub const STATE_SLIP: u8 = 2;
+
+/// The transient rolling engine: all scratch allocated in [`TransientRolling::new`];
+/// [`TransientRolling::step`] allocates nothing and warm-starts from the previous step.
+pub struct TransientRolling {
+    cfg: TransientConfig,
+    nx: usize,
+    ny: usize,
+    dx: f64,
+    da: f64,
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    conv: Convolver,
+    normal: NormalSolver,
+    tang: TangentialSolver,
+    h: Vec<f64>,
+    p: Vec<f64>,
+    g: Vec<f64>,
+    tx: Vec<f64>,
+    ty: Vec<f64>,
+    tx_prev: Vec<f64>,
+    ty_prev: Vec<f64>,
+    upx: Vec<f64>,
+    upy: Vec<f64>,
+    ex: Vec<f64>,
+    ey: Vec<f64>,
+    sx: Vec<f64>,
+    sy: Vec<f64>,
+    power: Vec<f64>,
+    state: Vec<u8>,
+    xi_last: f64,
+    steps: usize,
+    g_mod: f64,
+}
+
+impl TransientRolling {
+    /// Allocate the engine and its influence kernels.
+    pub fn new(cfg: TransientConfig) -> Result<Self, ContactError> {
+        cfg.validate()?;
+        let (nx, ny) = (cfg.grid.nx, cfg.grid.ny);
+        let n = nx * ny;
+        let (dx, dy) = (cfg.grid.dx(), cfg.grid.dy());
+        let es = combined_modulus(cfg.youngs_pa, cfg.poisson);
+        let gm = shear_modulus(cfg.youngs_pa, cfg.poisson);
+        let conv = Convolver::new(nx, ny, dx, dy, es, gm, cfg.poisson);
+        let mut normal = NormalSolver::new(n);
+        normal.tol = cfg.normal_tol;
+        let mut tang = TangentialSolver::new(n);
+        tang.tol = cfg.tangential_tol;
+        Ok(TransientRolling {
+            nx,
+            ny,
+            dx,
+            da: dx * dy,
+            xs: (0..nx).map(|i| cfg.grid.x(i)).collect(),
+            ys: (0..ny).map(|j| cfg.grid.y(j)).collect(),
+            conv,
+            normal,
+            tang,
+            h: vec![0.0; n],
+            p: vec![0.0; n],
+            g: vec![0.0; n],
+            tx: vec![0.0; n],
+            ty: vec![0.0; n],
+            tx_prev: vec![0.0; n],
+            ty_prev: vec![0.0; n],
+            upx: vec![0.0; n],
+            upy: vec![0.0; n],
+            ex: vec![0.0; n],
+            ey: vec![0.0; n],
+            sx: vec![0.0; n],
+            sy: vec![0.0; n],
+            power: vec![0.0; n],
+            state: vec![0; n],
+            xi_last: 0.0,
+            steps: 0,
+            g_mod: gm,
+            cfg,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &TransientConfig {
+        &self.cfg
+    }
+    /// Time step `Δt = Δx / V` (s).
+    pub fn time_step_s(&self) -> f64 {
+        self.dx / self.cfg.speed_m_per_s
+    }
+    /// Element area (m²).
+    pub fn element_area_m2(&self) -> f64 {
+        self.da
+    }
+    /// Element-centre x coordinates (m), length nx.
+    pub fn x_m(&self) -> &[f64] {
+        &self.xs
+    }
+    /// Element-centre y coordinates (m), length ny.
+    pub fn y_m(&self) -> &[f64] {
+        &self.ys
+    }
+    /// Pressure per element (Pa), index `i * ny + j`.
+    pub fn pressure_pa(&self) -> &[f64] {
+        &self.p
+    }
+    /// Tangential traction on the wheel, x component (Pa).
+    pub fn traction_x_pa(&self) -> &[f64] {
+        &self.tx
+    }
+    /// Tangential traction on the wheel, y component (Pa).
+    pub fn traction_y_pa(&self) -> &[f64] {
+        &self.ty
+    }
+    /// Slip velocity of wheel relative to rail, x (m/s).
+    pub fn slip_x_m_per_s(&self) -> &[f64] {
+        &self.sx
+    }
+    /// Slip velocity of wheel relative to rail, y (m/s).
+    pub fn slip_y_m_per_s(&self) -> &[f64] {
+        &self.sy
+    }
+    /// Frictional power density `−τ·s` (W/m²), zero outside slip.
+    pub fn power_density_w_per_m2(&self) -> &[f64] {
+        &self.power
+    }
+    /// Element states ([`STATE_EXTERIOR`], [`STATE_STICK`], [`STATE_SLIP`]).
+    pub fn states(&self) -> &[u8] {
+        &self.state
+    }
+    /// Deformed gap of the last step (m).
+    pub fn gap_m(&self) -> &[f64] {
+        self.normal.gap()
+    }
+    /// Number of steps taken since construction / [`Self::reset`].
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// Forget the traction history (start from rest) while keeping the kernels.
+    pub fn reset(&mut self) {
+        for v in [
+            &mut self.p,
+            &mut self.tx,
+            &mut self.ty,
+            &mut self.tx_prev,
+            &mut self.ty_prev,
+        ] {
+            v.fill(0.0);
+        }
+        self.xi_last = 0.0;
+        self.steps = 0;
+    }
+
+    /// One transient step (no allocation). Forces and fields refer to the end of the step.
+    pub fn step(&mut self, inp: &StepInputs) -> Result<StepResult, ContactError> {
+        let (nx, ny) = (self.nx, self.ny);
+        if let Some(r) = inp.rail_height_m {
+            if r.len() != nx {
+                return Err(ContactError::WrongLength {
+                    name: "rail_height_m",
+                    got: r.len(),
+                    expected: nx,
+                    per: "column (x)",
+                });
+            }
+        }
+        for (name, v) in [
+            ("lateral_creepage", inp.lateral_creepage),
+            ("spin_per_m", inp.spin_per_m),
+        ] {
+            if !v.is_finite() {
+                return Err(ContactError::InvalidParameter {
+                    name,
+                    value: v,
+                    reason: "must be finite",
+                });
+            }
+        }
+        // undeformed gap
+        let (cx, cy) = (0.5 / self.cfg.radius_x_m, 0.5 / self.cfg.radius_y_m);
+        for i in 0..nx {
+            let hx = cx * self.xs[i] * self.xs[i] - inp.rail_height_m.map_or(0.0, |r| r[i]);
+            for j in 0..ny {
+                self.h[i * ny + j] = hx + cy * self.ys[j] * self.ys[j];
+            }
+        }
+        let mode = match inp.normal {
+            NormalInput::Approach(d) if d.is_finite() => NormalMode::Approach(d),
+            NormalInput::Force(f) if f.is_finite() && f >= 0.0 => NormalMode::Load(f),
+            NormalInput::Approach(d) => {
+                return Err(ContactError::InvalidParameter {
+                    name: "approach",
+                    value: d,
+                    reason: "must be finite",
+                })
+            }
+            NormalInput::Force(f) => {
+                return Err(ContactError::InvalidParameter {
+                    name: "normal force",
+                    value: f,
+                    reason: "must be finite and ≥ 0",
+                })
+            }
+        };
+        let nres = self
+            .normal
+            .solve(&mut self.conv, &self.h, self.da, mode, &mut self.p)?;
+        // edge check
+        let mut contact = 0usize;
+        for i in 0..nx {
+            for j in 0..ny {
+                if self.p[i * ny + j] > 0.0 {
+                    contact += 1;
+                    if i == 0 || i == nx - 1 {
+                        return Err(ContactError::PatchAtGridEdge { edge: "x" });
+                    }
+                    if ny > 1 && (j == 0 || j == ny - 1) {
+                        return Err(ContactError::PatchAtGridEdge { edge: "y" });
+                    }
+                }
+            }
+        }
+        let mu = self.cfg.friction;
+        for (g, p) in self.g.iter_mut().zip(&self.p) {
+            *g = mu * p;
+        }
+        // previous displacement at the upstream material positions
+        if self.steps > 0 {
+            self.conv.tangential(
+                &self.tx_prev,
+                &self.ty_prev,
+                &mut self.upx,
+                &mut self.upy,
+                1,
+            );
+        } else {
+            self.upx.fill(0.0);
+            self.upy.fill(0.0);
+        }
+        let (eta, phi) = (inp.lateral_creepage, inp.spin_per_m);
+        let mut tang_its = 0usize;
+        let xi = match inp.longitudinal {
+            Longitudinal::Creepage(xi) => {
+                if !xi.is_finite() {
+                    return Err(ContactError::InvalidParameter {
+                        name: "creepage",
+                        value: xi,
+                        reason: "must be finite",
+                    });
+                }
+                tang_its += self.tangential(xi, eta, phi)?;
+                xi
+            }
+            Longitudinal::Force(fx) => {
+                let limit = mu * nres.load_n;
+                if !fx.is_finite() || fx.abs() >= limit * (1.0 - 1e-9) && fx != 0.0 {
+                    return Err(ContactError::TractionExceedsFriction {
+                        fx_n: fx,
+                        limit_n: limit,
+                    });
+                }
+                if nres.load_n == 0.0 {
+                    self.tangential(0.0, eta, phi)?;
+                    0.0
+                } else {
+                    self.solve_creepage_for_force(fx, limit, contact, eta, phi, &mut tang_its)?
+                }
+            }
+        };
+        self.xi_last = xi;
+        // outputs
+        let v_over_dx = self.cfg.speed_m_per_s / self.dx;
+        let (mut fx, mut fy, mut mz, mut pw) = (0.0, 0.0, 0.0, 0.0);
+        let mut nslip = 0usize;
+        for i in 0..nx {
+            for j in 0..ny {
+                let e = i * ny + j;
+                let (tx, ty) = (self.tx[e], self.ty[e]);
+                fx += tx;
+                fy += ty;
+                mz += self.xs[i] * ty - self.ys[j] * tx;
+                let sx = self.tang.sx[e] * v_over_dx;
+                let sy = self.tang.sy[e] * v_over_dx;
+                let st = if self.p[e] <= 0.0 {
+                    STATE_EXTERIOR
+                } else if tx * tx + ty * ty >= self.g[e] * self.g[e] * (1.0 - 1e-9) {
+                    STATE_SLIP
+                } else {
+                    STATE_STICK
+                };
+                self.state[e] = st;
+                if st == STATE_SLIP {
+                    nslip += 1;
+                    self.sx[e] = sx;
+                    self.sy[e] = sy;
+                    let d = -(tx * sx + ty * sy);
+                    self.power[e] = d.max(0.0);
+                    pw += self.power[e];
+                } else {
+                    self.sx[e] = 0.0;
+                    self.sy[e] = 0.0;
+                    self.power[e] = 0.0;
+                }
+            }
+        }
+        if !(fx.is_finite() && fy.is_finite() && pw.is_finite() && nres.load_n.is_finite()) {
+            return Err(ContactError::NotConverged {
+                solver: "contact step (non-finite result; refine the grid or loosen the load)",
+                iterations: tang_its,
+                residual: 1.0,
+            });
+        }
+        self.tx_prev.copy_from_slice(&self.tx);
+        self.ty_prev.copy_from_slice(&self.ty);
+        self.steps += 1;
+        Ok(StepResult {
+            normal_force_n: nres.load_n,
+            approach_m: nres.approach_m,
+            fx_n: fx * self.da,
+            fy_n: fy * self.da,
+            mz_nm: mz * self.da,
+            creepage: xi,
+            contact_elements: contact,
+            slip_elements: nslip,
+            area_m2: contact as f64 * self.da,
+            frictional_power_w: pw * self.da,
+            normal_iterations: nres.iterations,
+            tangential_iterations: tang_its,
+        })
+    }
+
+    fn tangential(&mut self, xi: f64, eta: f64, phi: f64) -> Result<usize, ContactError> {
+        let ny = self.ny;
+        for i in 0..self.nx {
+            for j in 0..ny {
+                let e = i * ny + j;
+                self.ex[e] = (xi - phi * self.ys[j]) * self.dx - self.upx[e];
+                self.ey[e] = (eta + phi * self.xs[i]) * self.dx - self.upy[e];
+            }
+        }
+        self.tang.solve(
+            &mut self.conv,
+            &self.g,
+            &self.ex,
+            &self.ey,
+            &mut self.tx,
+            &mut self.ty,
+        )
+    }
+
+    fn force_x(&self) -> f64 {
+        self.tx.iter().sum::<f64>() * self.da
+    }
+
+    /// Solve ξ such that Fx(ξ) = target (Fx decreasing in ξ): secant steps safeguarded by a
+    /// bracket (Illinois regula falsi).
+    fn solve_creepage_for_force(
+        &mut self,
+        target: f64,
+        limit: f64,
+        contact: usize,
+        eta: f64,
+        phi: f64,
+        its: &mut usize,
+    ) -> Result<f64, ContactError> {
+        let ftol = 1e-6 * limit;
+        // linear-theory stiffness estimate: Fx ≈ −G c² C11 ξ, c² ≈ area/π, C11 ≈ 4.5
+        let k_est = self.g_mod * (contact as f64 * self.da / std::f64::consts::PI) * 4.5;
+        let mut a = self.xi_last;
+        *its += self.tangential(a, eta, phi)?;
+        let mut fa = self.force_x() - target;
+        if fa.abs() < ftol {
+            return Ok(a);
+        }
+        let mut b = a + fa / k_est;
+        *its += self.tangential(b, eta, phi)?;
+        let mut fb = self.force_x() - target;
+        let mut side = 0i32;
+        for _ in 0..80 {
+            if fb.abs() < ftol {
+                return Ok(b);
+            }
+            let c = if fa * fb < 0.0 {
+                // bracketed: Illinois
+                (a * fb - b * fa) / (fb - fa)
+            } else {
+                let slope = (fb - fa) / (b - a);
+                if slope < -1e-3 * k_est && slope.is_finite() {
+                    b - fb / slope
+                } else {
+                    // flat (saturated) part: step further with the initial stiffness
+                    b + 2.0 * fb / k_est
+                }
+            };
+            *its += self.tangential(c, eta, phi)?;
+            let fc = self.force_x() - target;
+            if fa * fb < 0.0 {
+                if fc * fb < 0.0 {
+                    a = b;
+                    fa = fb;
+                    side = 0;
+                } else {
+                    side += 1;
+                    if side >= 1 {
+                        fa *= 0.5;
+                    }
+                }
+            } else {
+                a = b;
+                fa = fb;
+            }
+            b = c;
+            fb = fc;
+        }
+        Err(ContactError::NotConverged {
+            solver: "creepage for prescribed Fx (secant)",
+            iterations: 80,
+            residual: fb.abs() / limit,
+        })
+    }
+
+    /// Steady rolling: step with constant inputs until the forces change by less than
+    /// `rel_tol · µ N` between steps and the traction field by less than `rel_tol · µ p_max`
+    /// (at most `max_steps` steps). Starts from the current state (warm).
+    pub fn solve_steady(
+        &mut self,
+        inp: &StepInputs,
+        rel_tol: f64,
+        max_steps: usize,
+    ) -> Result<StepResult, ContactError> {
+        let mut last = self.step(inp)?;
+        for _ in 1..max_steps {
+            let r = self.step(inp)?;
+            let scale = r
+                .fx_n
+                .abs()
+                .max(r.fy_n.abs())
+                .max(1e-9 * self.cfg.friction * r.normal_force_n)
+                .max(1e-300);
+            let df = (r.fx_n - last.fx_n)
+                .abs()
+                .max((r.fy_n - last.fy_n).abs())
+                .max((r.creepage - last.creepage).abs() / r.creepage.abs().max(1e-12) * scale);
+            last = r;
+            if df < rel_tol * scale || r.normal_force_n == 0.0 {
+                return Ok(r);
+            }
+        }
+        Err(ContactError::NotConverged {
+            solver: "steady rolling (transient stepping)",
+            iterations: max_steps,
+            residual: 1.0,
+        })
+    }
+}
+
+/// Rail-fixed accumulator of frictional work `W_f(x, y)` (J/m²): bins of width `dx` along the
+/// rail starting at `x_start_m`, and the grid's `ny` lateral rows.
+#[derive(Debug, Clone)]
+pub struct WearAccumulator {
+    x_start_m: f64,
+    dx_m: f64,
+    nbins: usize,
+    ny: usize,
+    dy_m: f64,
+    work: Vec<f64>,
+}
+
+impl WearAccumulator {
+    /// Accumulator over `[x_start_m, x_start_m + nbins·dx)` for an engine's grid (bin width =
+    /// the grid's Δx, so one step moves the contact by one bin).
+    pub fn new(engine: &TransientRolling, x_start_m: f64, nbins: usize) -> Self {
+        WearAccumulator {
+            x_start_m,
+            dx_m: engine.dx,
+            nbins,
+            ny: engine.ny,
+            dy_m: engine.cfg.grid.dy(),
+            work: vec![0.0; nbins * engine.ny],
+        }
+    }
+
+    /// Add the work of the engine's last step (power density × Δt) with the contact centre at
+    /// rail coordinate `contact_x_m` (m). No allocation.
+    pub fn add_step(&mut self, engine: &TransientRolling, contact_x_m: f64) {
+        let dt = engine.time_step_s();
+        let ny = self.ny;
+        for i in 0..engine.nx {
+            let x = contact_x_m + engine.xs[i] - self.x_start_m;
+            let k = (x / self.dx_m).floor();
+            if k < 0.0 || k >= self.nbins as f64 {
+                continue;
+            }
+            let k = k as usize;
+            for j in 0..ny {
+                self.work[k * ny + j] += engine.power[i * ny + j] * dt;
+            }
+        }
+    }
+
+    /// `W_f(x, y)` (J/m²), index `bin * ny + j`.
+    pub fn work_xy(&self) -> &[f64] {
+        &self.work
+    }
+
+    /// Bin centres along the rail (m).
+    pub fn x_m(&self) -> Vec<f64> {
+        (0..self.nbins)
+            .map(|k| self.x_start_m + (k as f64 + 0.5) * self.dx_m)
+            .collect()
+    }
+
+    /// `W_f(x) = Σ_y W_f(x, y) Δy` (J/m) into `out` (length nbins).
+    pub fn work_x(&self, out: &mut [f64]) {
+        for (k, o) in out.iter_mut().enumerate().take(self.nbins) {
+            *o = self.work[k * self.ny..(k + 1) * self.ny]
+                .iter()
+                .sum::<f64>()
+                * self.dy_m;
+        }
+    }
+
+    /// Total frictional work (J).
+    pub fn total_j(&self) -> f64 {
+        self.work.iter().sum::<f64>() * self.dx_m * self.dy_m
+    }
+}
+
+/// One point of the normal-load → longitudinal-force frequency response.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoadResponsePoint {
+    /// Wavelength of the load variation along the rail (m).
+    pub wavelength_m: f64,
+    /// Wavelength over contact length `λ / (2a)` (−).
+    pub wavelength_over_contact_length: f64,
+    /// Frequency `V / λ` (Hz).
+    pub frequency_hz: f64,
+    /// |F̂x| / |dFx/dN|_steady · N̂| (1 = quasi-steady).
+    pub amplitude_ratio: f64,
+    /// Phase lag of Fx behind the quasi-steady response (rad, positive = lags).
+    pub phase_lag_rad: f64,
+}
+
+/// Frequency response of the longitudinal force to a sinusoidal normal load
+/// `N(x) = N0 (1 + ε sin(2π x/λ))` at constant creepage (the creepage that gives
+/// `Fx = traction · N0` in steady rolling), for each wavelength `λ` (m). The quasi-steady
+/// reference is `dFx/dN` from two steady solves at `N0 (1 ± ε)`. The response is the first
+/// Fourier coefficient of Fx over the last two of three periods (the first absorbs the start).
+pub fn load_response_curve(
+    cfg: &TransientConfig,
+    load_n: f64,
+    traction: f64,
+    rel_amplitude: f64,
+    wavelengths_m: &[f64],
+) -> Result<Vec<LoadResponsePoint>, ContactError> {
+    check_positive("load_n", load_n)?;
+    check_positive("rel_amplitude", rel_amplitude)?;
+    let mut eng = TransientRolling::new(*cfg)?;
+    let st = eng.solve_steady(
+        &StepInputs {
+            normal: NormalInput::Force(load_n),
+            longitudinal: Longitudinal::Force(traction * load_n),
+            lateral_creepage: 0.0,
+            spin_per_m: 0.0,
+            rail_height_m: None,
+        },
+        1e-7,
+        20 * cfg.grid.nx,
+    )?;
+    let xi = st.creepage;
+    let mut fs = [0.0; 2];
+    for (k, s) in [1.0, -1.0].iter().enumerate() {
+        eng.reset();
+        let r = eng.solve_steady(
+            &StepInputs::force_creepage(load_n * (1.0 + s * rel_amplitude), xi),
+            1e-8,
+            20 * cfg.grid.nx,
+        )?;
+        fs[k] = r.fx_n;
+    }
+    let dfdn = (fs[0] - fs[1]) / (2.0 * rel_amplitude * load_n);
+    let h = HertzContact::solve(&HertzInput {
+        radius_x_m: cfg.radius_x_m,
+        radius_y_m: cfg.radius_y_m,
+        youngs_pa: cfg.youngs_pa,
+        poisson: cfg.poisson,
+        load_n,
+    })?;
+    let dx = cfg.grid.dx();
+    let mut out = Vec::with_capacity(wavelengths_m.len());
+    for &lam in wavelengths_m {
+        check_positive("wavelength", lam)?;
+        eng.reset();
+        eng.solve_steady(
+            &StepInputs::force_creepage(load_n, xi),
+            1e-8,
+            20 * cfg.grid.nx,
+        )?;
+        let per = (lam / dx).round().max(4.0) as usize;
+        let lam_eff = per as f64 * dx;
+        let (mut re, mut im) = (0.0, 0.0);
+        for k in 0..3 * per {
+            let th = 2.0 * std::f64::consts::PI * (k as f64 + 1.0) / per as f64;
+            let n = load_n * (1.0 + rel_amplitude * th.sin());
+            let r = eng.step(&StepInputs::force_creepage(n, xi))?;
+            if k >= per {
+                re += r.fx_n * th.sin();
+                im += r.fx_n * th.cos();
+            }
+        }
+        // Fx ≈ mean + A sin(θ − lag): re ∝ A cos(lag), im ∝ −A sin(lag)
+        let scale = 2.0 / (2 * per) as f64;
+        let (re, im) = (re * scale, im * scale);
+        let resp = dfdn * rel_amplitude * load_n;
+        // normalise by the quasi-steady response (which is in phase with N)
+        let (cr, ci) = (re / resp, im / resp);
+        out.push(LoadResponsePoint {
+            wavelength_m: lam_eff,
+            wavelength_over_contact_length: lam_eff / (2.0 * h.a_m),
+            frequency_hz: cfg.speed_m_per_s / lam_eff,
+            amplitude_ratio: (cr * cr + ci * ci).sqrt(),
+            phase_lag_rad: (-ci).atan2(cr),
+        });
+    }
+    Ok(out)
+}
