@@ -1,0 +1,1 @@
+//! Modal cache (placeholder, filled below).
