@@ -115,23 +115,24 @@ impl ShiftedSystem {
             col_ptr.push(row_idx.len());
         }
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
-        // `Identity` is passed as an explicit identity permutation: faer's
-        // `SymmetricOrdering::Identity` skips the conversion of the lower triangle to the
-        // upper one that its symbolic analysis expects.
-        let id_fwd: Vec<usize> = (0..n).collect();
-        let id_inv = id_fwd.clone();
-        let ord = match ordering {
-            FillOrdering::Amd => SymmetricOrdering::Amd,
-            FillOrdering::Identity => {
-                SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(&id_fwd, &id_inv, n))
-            }
-        };
-        let symbolic =
-            factorize_symbolic_cholesky(sym, Side::Lower, ord, CholeskySymbolicParams::default())
-                .map_err(|e| EigenError::Factorization {
-                shift_rad2_s2: f64::NAN,
-                reason: format!("symbolic analysis failed: {e:?}"),
-            })?;
+        if ordering == FillOrdering::Auto {
+            // Both analyses are cheap next to one numeric factorisation; keep the sparser.
+            let a = Self::analyse(sym, FillOrdering::Amd, n)?;
+            let b = Self::analyse(sym, FillOrdering::Identity, n)?;
+            let symbolic = if b.len_val() <= a.len_val() { b } else { a };
+            return Ok(Self {
+                n,
+                col_ptr,
+                row_idx,
+                k_map,
+                m_map,
+                k_val: kv.to_vec(),
+                m_val: mv.to_vec(),
+                symbolic,
+                par,
+            });
+        }
+        let symbolic = Self::analyse(sym, ordering, n)?;
         Ok(Self {
             n,
             col_ptr,
@@ -143,6 +144,29 @@ impl ShiftedSystem {
             symbolic,
             par,
         })
+    }
+
+    fn analyse(
+        sym: SymbolicSparseColMatRef<'_, usize>,
+        ordering: FillOrdering,
+        n: usize,
+    ) -> Result<SymbolicCholesky<usize>, EigenError> {
+        // `Identity` is passed as an explicit identity permutation: faer's
+        // `SymmetricOrdering::Identity` skips the conversion of the lower triangle to the
+        // upper one that its symbolic analysis expects.
+        let id_fwd: Vec<usize> = (0..n).collect();
+        let id_inv = id_fwd.clone();
+        let ord = match ordering {
+            FillOrdering::Amd | FillOrdering::Auto => SymmetricOrdering::Amd,
+            FillOrdering::Identity => {
+                SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(&id_fwd, &id_inv, n))
+            }
+        };
+        factorize_symbolic_cholesky(sym, Side::Lower, ord, CholeskySymbolicParams::default())
+            .map_err(|e| EigenError::Factorization {
+                shift_rad2_s2: f64::NAN,
+                reason: format!("symbolic analysis failed: {e:?}"),
+            })
     }
 
     /// Dimension n.

@@ -396,6 +396,30 @@ pub fn solve(
     let mut prev: (usize, usize) = (0, 0);
     let mut cur = first;
     let target = opts.modes_per_slice;
+    if opts.f_min_hz == 0.0 && total > 0 {
+        // If the structure is grounded, the lowest eigenvalue λ₁ can lie far above the
+        // negative shift σ₀; Lanczos at σ₀ would then see a tightly clustered θ = 1/(λ − σ₀)
+        // and converge slowly. A short probe at σ₀ finds λ₁ (a Ritz value ≥ λ₁); if
+        // 0.9 λ₁ ≫ |σ₀| and the Sturm count at 0.9 λ₁ is still 0, the first slice starts there.
+        let probe = {
+            let empty = phi.as_ref().subcols(0, 0);
+            lanczos_slice(
+                &mut ctx,
+                &cur,
+                empty,
+                opts.block_size.min(total),
+                None,
+                opts,
+            )?
+        };
+        let l1 = probe.lambdas.first().copied().unwrap_or(0.0);
+        if 0.9 * l1 > 4.0 * cur.shift.abs() {
+            let f = factorize(&mut ctx, 0.9 * l1, -1.0, lam_max)?;
+            if f.negative_count == 0 {
+                cur = f;
+            }
+        }
+    }
     loop {
         let nu_cur = cur.negative_count;
         if nu_cur >= nu_max {

@@ -401,3 +401,27 @@ fn bad_input_is_an_error_not_a_panic() {
         Err(EigenError::NotSemiDefinite { .. })
     ));
 }
+
+#[test]
+fn grounded_lattice_from_zero_moves_first_shift_up_and_matches_dense() {
+    // Grounded: no eigenvalue near 0, so the first slice starts at 0.9 λ₁ (Sturm count 0
+    // there is proven by the factorisation) instead of the negative shift.
+    let (k, m) = lattice3d(5, 4, 4, 5e7, 3);
+    let dense = dense_eigenvalues(&k, &m);
+    let f_max = lambda_to_hz(0.5 * (dense[119] + dense[120]));
+    let mut o = EigenOptions::new(f_max);
+    o.block_size = 8;
+    o.modes_per_slice = 50;
+    let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+    assert_quality(&sol);
+    let worst = check_against_dense(&sol, &dense, 0.0, f_max);
+    eprintln!(
+        "grounded lattice from 0: {} modes, first slice starts at {:.1} Hz (f1 = {:.1} Hz), worst rel err {worst:e}",
+        sol.frequencies_hz.len(),
+        lambda_to_hz(sol.slices[0].shift_lo_rad2_s2),
+        sol.frequencies_hz[0]
+    );
+    assert_eq!(sol.frequencies_hz.len(), 120);
+    assert!(sol.slices[0].shift_lo_rad2_s2 > 0.5 * sol.eigenvalues_rad2_s2[0]);
+    assert!(worst < 1e-8);
+}
