@@ -214,8 +214,9 @@ fn assert_quality(sol: &EigenSolution) {
         "  max rel residual (elastic) {rmax:.2e}, max backward error {bmax:.2e}, M-orth err {:.2e}",
         sol.m_orthonormality_error
     );
-    assert!(rmax < 1e-8, "max relative residual {rmax:e}");
-    assert!(bmax < 1e-9, "max backward error {bmax:e}");
+    // Default tolerance 1e-8 on the transformed residual → relative residuals ≲ 1e-7.
+    assert!(rmax < 1e-7, "max relative residual {rmax:e}");
+    assert!(bmax < 1e-8, "max backward error {bmax:e}");
     assert!(
         sol.m_orthonormality_error < 1e-8,
         "M-orthonormality error {:e}",
