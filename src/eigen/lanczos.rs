@@ -291,23 +291,6 @@ fn lanczos_slice(
                 below >= need
             }
         };
-        if std::env::var("EIGEN_DEBUG").is_ok() {
-            eprintln!(
-                "  restart {restarts} j={j} prefix {prefix} θmax {theta_abs_max:.2e} next: {}",
-                order
-                    .iter()
-                    .skip(prefix)
-                    .take(6)
-                    .map(|&i| format!(
-                        "{:.1}Hz θ{:.1e} r{:.1e}",
-                        lambda_to_hz(lambda_of(i)),
-                        theta[i],
-                        es.as_ref().col(i).norm_l2() / theta[i].abs()
-                    ))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
         if done {
             let sel: Vec<usize> = order[..prefix].to_vec();
             let s_sel = Mat::<f64>::from_fn(j, prefix, |r, c| s[(r, sel[c])]);
@@ -391,6 +374,13 @@ pub fn solve(
     }
     validate(opts)?;
     let n = k.nrows();
+    if n == 0 {
+        return Err(EigenError::InvalidOption {
+            name: "K, M",
+            value: "0 × 0".into(),
+            reason: "the model has no free DOFs",
+        });
+    }
     let par = if opts.parallel {
         Par::rayon(0)
     } else {
@@ -459,14 +449,6 @@ pub fn solve(
             )?
         };
         let l1 = probe.lambdas.first().copied().unwrap_or(0.0);
-        if std::env::var("EIGEN_DEBUG").is_ok() {
-            eprintln!(
-                "probe: {} pairs, λ1 = {l1:e} ({:.1} Hz), σ0 = {:e}",
-                probe.lambdas.len(),
-                lambda_to_hz(l1),
-                cur.shift
-            );
-        }
         if 0.9 * l1 > 4.0 * cur.shift.abs() {
             let f = factorize(&mut ctx, 0.9 * l1, -1.0, lam_max)?;
             if f.negative_count == 0 {
@@ -549,16 +531,6 @@ pub fn solve(
                 .collect()
         };
         let mut keep = select(&out);
-        if std::env::var("EIGEN_DEBUG").is_ok() {
-            eprintln!(
-                "slice [{:.1}, {:.1}) Hz: need {need}, kept {}, prefix {}, restarts {}",
-                lambda_to_hz(lo),
-                lambda_to_hz(hi),
-                keep.len(),
-                out.lambdas.len(),
-                out.restarts
-            );
-        }
         if keep.len() != need {
             // The Sturm count says the converged prefix skipped an eigenvalue (e.g. a
             // multiplicity larger than the block): iterate again with the count known.

@@ -24,11 +24,22 @@
 //!   `Op = (K − σM)⁻¹ M` is self-adjoint in the M-inner product, with eigenvalues
 //!   `θ = 1/(λ − σ)`; the eigenvalues of the slice are the *largest* θ. A block Krylov basis
 //!   (block size b, every block one multi-right-hand-side solve) is kept M-orthonormal by full
-//!   re-orthogonalisation (two passes of block classical Gram–Schmidt in the M-inner product,
-//!   then a symmetric (Löwdin) orthonormalisation of the block). The Rayleigh quotient
-//!   `H = Vᵀ M Op V` is formed column block by column block; thick restart keeps the best Ritz
-//!   vectors. Modes of the previous slice are deflated (the new basis is kept M-orthogonal to
-//!   them).
+//!   re-orthogonalisation (two or more passes of block classical Gram–Schmidt in the
+//!   M-inner product, each followed by a symmetric (Löwdin) orthonormalisation of the block).
+//!   The Rayleigh quotient `H = Vᵀ M Op V` is formed column block by column block; thick
+//!   restart keeps the best Ritz vectors (and converged ones at the far negative end of θ).
+//!   Modes of the previous slice are deflated (the new basis is kept M-orthogonal to them).
+//!   Every accepted Ritz vector gets one free inverse-iteration step `x' = x + Q(Es)/θ`, which
+//!   removes the amplification of the Lanczos residual by `K − σM` in the true residual.
+//! * **Adaptive boundaries.** A slice is not cut in advance: Lanczos runs at the lower shift
+//!   until `modes_per_slice` Ritz values nearest above it have converged, the next boundary τ
+//!   is put in the widest relative gap of the last third of them, and the Sturm count at τ
+//!   must equal the number found below τ (otherwise the slice is iterated again with the
+//!   count known, and [`EigenError::MissedModes`] names the interval if that fails). The last
+//!   slice ends at `λ_max` with its count known. For a grounded structure (no eigenvalue
+//!   near 0) a short probe finds λ₁ and the first slice starts at 0.9 λ₁ (Sturm count 0
+//!   there is verified). For `f_min > 0` the first Lanczos shift sits 10 % of the slice width
+//!   below λ_min so that an eigenvalue just below λ_min cannot swamp the iteration.
 //! * **Verification.** Every returned pair gets its true relative residual
 //!   `‖Kφ − λMφ‖₂ / (‖Kφ‖₂ + max(|λ|, λ_floor)‖Mφ‖₂)` with `λ_floor = (2π·1 Hz)²` (the floor
 //!   avoids 0/0 for rigid-body modes, but for them this measure is dominated by the round-off
