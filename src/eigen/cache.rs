@@ -1,0 +1,535 @@
+//! On-disk modal cache: a modal basis (frequencies, mode shapes, per-mode residuals and
+//! caller-supplied classification data) stored under a content key.
+//!
+//! Layout of one entry `DIR/<key hex>/`:
+//! * `frequencies_hz.npy` — f64, shape (m,), Hz;
+//! * `modes.npy` — f64, shape (n, m), C order (row = DOF, column = mode; `numpy.load` gives the
+//!   usual n × m array), M-orthonormal mode shapes;
+//! * `meta.json` — [`CacheMeta`]: key, crate version, n, m, f_min/f_max, Sturm count,
+//!   per-mode residuals, blake3 hashes of both .npy files, and the caller's
+//!   `classification` (any `serde_json::Value`).
+//!
+//! **Atomicity.** An entry is written into a fresh temporary directory `DIR/.tmp-<key>-<pid>-<n>`
+//! and renamed to its final name only when every file is complete and flushed (`rename(2)` of
+//! a directory is atomic on POSIX file systems). An interrupted write leaves only a `.tmp-*`
+//! directory that is never read. **Integrity.** On load, the blake3 hash of each .npy file is
+//! checked against `meta.json` and shapes against the metadata, so a truncated or corrupted
+//! entry is reported as [`CacheLookup::Corrupt`] (and can be recomputed and overwritten with
+//! [`ModalCache::store`]), never trusted.
+//!
+//! The key ([`CacheKey`]) is a blake3 hash of labelled parts supplied by the caller (model
+//! parameters, mesh, f_max, …) plus the crate version (`CARGO_PKG_VERSION`), so any change of
+//! input or program version misses the cache.
+
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use faer::Mat;
+use npyz::WriterBuilder;
+use serde::{Deserialize, Serialize};
+
+/// Errors of the modal cache.
+#[derive(Debug, thiserror::Error)]
+pub enum CacheError {
+    /// File-system error (path and operation given).
+    #[error("modal cache: {op} {path}: {source}")]
+    Io {
+        /// what was being done
+        op: &'static str,
+        /// the path
+        path: PathBuf,
+        /// the OS error
+        source: std::io::Error,
+    },
+    /// Inconsistent data handed to `store`.
+    #[error("modal cache: invalid data to store: {0}")]
+    InvalidData(String),
+}
+
+fn io_err<'a>(op: &'static str, path: &'a Path) -> impl FnOnce(std::io::Error) -> CacheError + 'a {
+    move |source| CacheError::Io {
+        op,
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Builder of a cache key: a blake3 hash over labelled parts. Each part is hashed as
+/// `len(label) ‖ label ‖ tag ‖ len(bytes) ‖ bytes`, so parts cannot run into each other.
+/// The crate version is always included.
+#[derive(Clone)]
+pub struct CacheKey {
+    hasher: blake3::Hasher,
+}
+
+impl Default for CacheKey {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl CacheKey {
+    /// New key seeded with the crate name and version.
+    pub fn new() -> Self {
+        let k = Self {
+            hasher: blake3::Hasher::new(),
+        };
+        k.str("crate", env!("CARGO_PKG_NAME"))
+            .str("version", env!("CARGO_PKG_VERSION"))
+    }
+
+    fn part(mut self, label: &str, tag: u8, bytes: &[u8]) -> Self {
+        self.hasher.update(&(label.len() as u64).to_le_bytes());
+        self.hasher.update(label.as_bytes());
+        self.hasher.update(&[tag]);
+        self.hasher.update(&(bytes.len() as u64).to_le_bytes());
+        self.hasher.update(bytes);
+        self
+    }
+
+    /// Adds raw bytes (e.g. a serialised mesh).
+    pub fn bytes(self, label: &str, bytes: &[u8]) -> Self {
+        self.part(label, 0, bytes)
+    }
+
+    /// Adds a string (e.g. the TOML model text).
+    pub fn str(self, label: &str, s: &str) -> Self {
+        self.part(label, 1, s.as_bytes())
+    }
+
+    /// Adds an f64 by its exact bit pattern (e.g. f_max in Hz).
+    pub fn f64(self, label: &str, x: f64) -> Self {
+        self.part(label, 2, &x.to_bits().to_le_bytes())
+    }
+
+    /// Adds a slice of f64 (e.g. nodal coordinates) by exact bit patterns.
+    pub fn f64s(self, label: &str, xs: &[f64]) -> Self {
+        let mut h = blake3::Hasher::new();
+        for x in xs {
+            h.update(&x.to_bits().to_le_bytes());
+        }
+        self.part(label, 3, h.finalize().as_bytes())
+    }
+
+    /// Adds an integer.
+    pub fn u64(self, label: &str, x: u64) -> Self {
+        self.part(label, 4, &x.to_le_bytes())
+    }
+
+    /// The key as 64 hex characters (the entry's directory name).
+    pub fn hex(&self) -> String {
+        self.hasher.finalize().to_hex().to_string()
+    }
+}
+
+/// Metadata stored in `meta.json`.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CacheMeta {
+    /// Cache key (hex).
+    pub key: String,
+    /// Crate version that wrote the entry.
+    pub crate_version: String,
+    /// Number of DOFs n.
+    pub n_dofs: usize,
+    /// Number of modes m.
+    pub n_modes: usize,
+    /// Lower band edge (Hz).
+    pub f_min_hz: f64,
+    /// Upper band edge (Hz).
+    pub f_max_hz: f64,
+    /// Sturm count at f_max.
+    pub sturm_count: usize,
+    /// Per-mode relative residual (see `eigen` module doc).
+    pub relative_residuals: Vec<f64>,
+    /// M-orthonormality error of the basis.
+    pub m_orthonormality_error: f64,
+    /// blake3 of `frequencies_hz.npy` (hex).
+    pub frequencies_blake3: String,
+    /// blake3 of `modes.npy` (hex).
+    pub modes_blake3: String,
+    /// Caller data (mode classification etc.).
+    pub classification: serde_json::Value,
+}
+
+/// A modal basis as stored in / loaded from the cache.
+#[derive(Clone, Debug)]
+pub struct CachedModes {
+    /// Natural frequencies (Hz), ascending.
+    pub frequencies_hz: Vec<f64>,
+    /// Mode shapes n × m.
+    pub modes: Mat<f64>,
+    /// Metadata (includes the caller's classification value).
+    pub meta: CacheMeta,
+}
+
+/// Result of a lookup.
+#[derive(Debug)]
+pub enum CacheLookup {
+    /// Valid entry.
+    Hit(Box<CachedModes>),
+    /// No entry for this key.
+    Miss,
+    /// An entry exists but fails validation (reason given); recompute and store again.
+    Corrupt(String),
+}
+
+/// The cache directory.
+#[derive(Clone, Debug)]
+pub struct ModalCache {
+    dir: PathBuf,
+}
+
+static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// Suggested default cache directory: `$XDG_CACHE_HOME/corrugation`, else
+/// `$HOME/.cache/corrugation`, else `./.corrugation-cache`.
+pub fn default_cache_dir() -> PathBuf {
+    if let Some(x) = std::env::var_os("XDG_CACHE_HOME").filter(|s| !s.is_empty()) {
+        return PathBuf::from(x).join("corrugation");
+    }
+    if let Some(h) = std::env::var_os("HOME").filter(|s| !s.is_empty()) {
+        return PathBuf::from(h).join(".cache").join("corrugation");
+    }
+    PathBuf::from(".corrugation-cache")
+}
+
+fn write_npy_1d(path: &Path, data: &[f64]) -> Result<(), CacheError> {
+    let f = fs::File::create(path).map_err(io_err("create", path))?;
+    let mut bw = std::io::BufWriter::new(f);
+    {
+        let mut w = npyz::WriteOptions::<f64>::new()
+            .default_dtype()
+            .shape(&[data.len() as u64])
+            .writer(&mut bw)
+            .begin_nd()
+            .map_err(io_err("write", path))?;
+        w.extend(data.iter().copied())
+            .map_err(io_err("write", path))?;
+        w.finish().map_err(io_err("write", path))?;
+    }
+    finish_file(path, bw)
+}
+
+/// Streams an n × m matrix as a C-order .npy (row = DOF) without an in-memory copy.
+fn write_npy_2d(path: &Path, m: &Mat<f64>) -> Result<(), CacheError> {
+    let (n, c) = (m.nrows(), m.ncols());
+    let f = fs::File::create(path).map_err(io_err("create", path))?;
+    let mut bw = std::io::BufWriter::with_capacity(1 << 20, f);
+    {
+        let mut w = npyz::WriteOptions::<f64>::new()
+            .default_dtype()
+            .shape(&[n as u64, c as u64])
+            .writer(&mut bw)
+            .begin_nd()
+            .map_err(io_err("write", path))?;
+        for i in 0..n {
+            w.extend((0..c).map(|j| m[(i, j)]))
+                .map_err(io_err("write", path))?;
+        }
+        w.finish().map_err(io_err("write", path))?;
+    }
+    finish_file(path, bw)
+}
+
+fn finish_file(path: &Path, bw: std::io::BufWriter<fs::File>) -> Result<(), CacheError> {
+    let f = bw.into_inner().map_err(|e| CacheError::Io {
+        op: "flush",
+        path: path.to_path_buf(),
+        source: e.into_error(),
+    })?;
+    f.sync_all().map_err(io_err("sync", path))
+}
+
+fn write_file(path: &Path, bytes: &[u8]) -> Result<(), CacheError> {
+    let mut f = fs::File::create(path).map_err(io_err("create", path))?;
+    f.write_all(bytes).map_err(io_err("write", path))?;
+    f.sync_all().map_err(io_err("sync", path))?;
+    Ok(())
+}
+
+fn hash_file(path: &Path) -> Result<(String, Vec<u8>), CacheError> {
+    let bytes = fs::read(path).map_err(io_err("read", path))?;
+    Ok((blake3::hash(&bytes).to_hex().to_string(), bytes))
+}
+
+impl ModalCache {
+    /// A cache rooted at `dir` (created on first store).
+    pub fn new(dir: impl Into<PathBuf>) -> Self {
+        Self { dir: dir.into() }
+    }
+
+    /// Directory of the entry for `key`.
+    pub fn entry_dir(&self, key: &CacheKey) -> PathBuf {
+        self.dir.join(key.hex())
+    }
+
+    /// Stores a modal basis under `key` atomically (temp dir + rename); replaces an existing
+    /// (e.g. corrupt) entry. `meta.key`, `meta.crate_version`, the hashes and the sizes are
+    /// filled in here.
+    pub fn store(
+        &self,
+        key: &CacheKey,
+        frequencies_hz: &[f64],
+        modes: &Mat<f64>,
+        mut meta: CacheMeta,
+    ) -> Result<PathBuf, CacheError> {
+        if modes.ncols() != frequencies_hz.len() {
+            return Err(CacheError::InvalidData(format!(
+                "{} frequencies but {} mode columns",
+                frequencies_hz.len(),
+                modes.ncols()
+            )));
+        }
+        fs::create_dir_all(&self.dir).map_err(io_err("create dir", &self.dir))?;
+        let hex = key.hex();
+        let tmp = self.dir.join(format!(
+            ".tmp-{hex}-{}-{}",
+            std::process::id(),
+            TMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+        ));
+        let _ = fs::remove_dir_all(&tmp);
+        fs::create_dir(&tmp).map_err(io_err("create dir", &tmp))?;
+        let result = (|| {
+            let fp = tmp.join("frequencies_hz.npy");
+            let mp = tmp.join("modes.npy");
+            write_npy_1d(&fp, frequencies_hz)?;
+            write_npy_2d(&mp, modes)?;
+            meta.key = hex.clone();
+            meta.crate_version = env!("CARGO_PKG_VERSION").to_string();
+            meta.n_dofs = modes.nrows();
+            meta.n_modes = modes.ncols();
+            meta.frequencies_blake3 = hash_file(&fp)?.0;
+            meta.modes_blake3 = hash_file(&mp)?.0;
+            let jp = tmp.join("meta.json");
+            let json = serde_json::to_vec_pretty(&meta)
+                .map_err(|e| CacheError::InvalidData(format!("meta.json: {e}")))?;
+            write_file(&jp, &json)?;
+            let final_dir = self.dir.join(&hex);
+            if final_dir.exists() {
+                // Move the old entry aside first (rename onto a non-empty dir fails).
+                let old = self.dir.join(format!(
+                    ".old-{hex}-{}-{}",
+                    std::process::id(),
+                    TMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+                ));
+                fs::rename(&final_dir, &old).map_err(io_err("rename", &final_dir))?;
+                let _ = fs::remove_dir_all(&old);
+            }
+            fs::rename(&tmp, &final_dir).map_err(io_err("rename", &tmp))?;
+            Ok(final_dir)
+        })();
+        if result.is_err() {
+            let _ = fs::remove_dir_all(&tmp);
+        }
+        result
+    }
+
+    /// Looks up `key`; validates hashes, shapes and metadata.
+    pub fn load(&self, key: &CacheKey) -> CacheLookup {
+        let hex = key.hex();
+        let d = self.dir.join(&hex);
+        if !d.is_dir() {
+            return CacheLookup::Miss;
+        }
+        match Self::load_dir(&d, &hex) {
+            Ok(c) => CacheLookup::Hit(Box::new(c)),
+            Err(reason) => CacheLookup::Corrupt(reason),
+        }
+    }
+
+    fn load_dir(d: &Path, hex: &str) -> Result<CachedModes, String> {
+        let meta_bytes = fs::read(d.join("meta.json")).map_err(|e| format!("meta.json: {e}"))?;
+        let meta: CacheMeta =
+            serde_json::from_slice(&meta_bytes).map_err(|e| format!("meta.json: {e}"))?;
+        if meta.key != hex {
+            return Err(format!("meta.json key {} ≠ directory {hex}", meta.key));
+        }
+        let (fh, fbytes) = hash_file(&d.join("frequencies_hz.npy")).map_err(|e| e.to_string())?;
+        if fh != meta.frequencies_blake3 {
+            return Err("frequencies_hz.npy hash mismatch (truncated or corrupted)".into());
+        }
+        let (mh, mbytes) = hash_file(&d.join("modes.npy")).map_err(|e| e.to_string())?;
+        if mh != meta.modes_blake3 {
+            return Err("modes.npy hash mismatch (truncated or corrupted)".into());
+        }
+        let fnpy = npyz::NpyFile::new(&fbytes[..]).map_err(|e| format!("frequencies: {e}"))?;
+        if fnpy.shape() != [meta.n_modes as u64] {
+            return Err(format!("frequencies shape {:?}", fnpy.shape()));
+        }
+        let freqs: Vec<f64> = fnpy.into_vec().map_err(|e| format!("frequencies: {e}"))?;
+        let mnpy = npyz::NpyFile::new(&mbytes[..]).map_err(|e| format!("modes: {e}"))?;
+        if mnpy.shape() != [meta.n_dofs as u64, meta.n_modes as u64]
+            || mnpy.order() != npyz::Order::C
+        {
+            return Err(format!("modes shape {:?}", mnpy.shape()));
+        }
+        let flat: Vec<f64> = mnpy.into_vec().map_err(|e| format!("modes: {e}"))?;
+        let (n, m) = (meta.n_dofs, meta.n_modes);
+        if flat.len() != n * m || freqs.len() != m {
+            return Err("array lengths do not match metadata".into());
+        }
+        let modes = Mat::<f64>::from_fn(n, m, |i, j| flat[i * m + j]);
+        Ok(CachedModes {
+            frequencies_hz: freqs,
+            modes,
+            meta,
+        })
+    }
+}
+
+impl CacheMeta {
+    /// Metadata from a solver result plus the caller's classification value (the hashes,
+    /// key and sizes are filled in by [`ModalCache::store`]).
+    pub fn from_solution(
+        sol: &super::EigenSolution,
+        f_min_hz: f64,
+        f_max_hz: f64,
+        classification: serde_json::Value,
+    ) -> Self {
+        Self {
+            key: String::new(),
+            crate_version: String::new(),
+            n_dofs: sol.modes.nrows(),
+            n_modes: sol.modes.ncols(),
+            f_min_hz,
+            f_max_hz,
+            sturm_count: sol.sturm_count,
+            relative_residuals: sol.relative_residuals.clone(),
+            m_orthonormality_error: sol.m_orthonormality_error,
+            frequencies_blake3: String::new(),
+            modes_blake3: String::new(),
+            classification,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmpdir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!(
+            "corrugation-cache-test-{name}-{}",
+            std::process::id()
+        ));
+        let _ = fs::remove_dir_all(&d);
+        d
+    }
+
+    fn sample() -> (Vec<f64>, Mat<f64>, CacheMeta) {
+        let f = vec![0.0, 12.5, 1.0 / 3.0];
+        let m = Mat::<f64>::from_fn(5, 3, |i, j| (i as f64 + 1.0) * 0.1 - j as f64 / 7.0);
+        let meta = CacheMeta {
+            key: String::new(),
+            crate_version: String::new(),
+            n_dofs: 0,
+            n_modes: 0,
+            f_min_hz: 0.0,
+            f_max_hz: 100.0,
+            sturm_count: 3,
+            relative_residuals: vec![1e-12, 2e-12, 3e-12],
+            m_orthonormality_error: 1e-14,
+            frequencies_blake3: String::new(),
+            modes_blake3: String::new(),
+            classification: serde_json::json!({"kinds": ["rigid", "bending", "compression"]}),
+        };
+        (f, m, meta)
+    }
+
+    #[test]
+    fn round_trip_is_bit_exact() {
+        let dir = tmpdir("rt");
+        let cache = ModalCache::new(&dir);
+        let key = CacheKey::new().str("model", "a").f64("f_max", 100.0);
+        let (f, m, meta) = sample();
+        cache.store(&key, &f, &m, meta.clone()).unwrap();
+        match cache.load(&key) {
+            CacheLookup::Hit(c) => {
+                assert_eq!(c.frequencies_hz, f);
+                assert_eq!(c.modes, m);
+                assert_eq!(c.meta.classification, meta.classification);
+                assert_eq!(c.meta.relative_residuals, meta.relative_residuals);
+                assert_eq!(c.meta.n_dofs, 5);
+            }
+            other => panic!("expected hit, got {other:?}"),
+        }
+        // No temp directories left behind.
+        let leftovers = fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| {
+                e.as_ref()
+                    .unwrap()
+                    .file_name()
+                    .to_string_lossy()
+                    .starts_with('.')
+            })
+            .count();
+        assert_eq!(leftovers, 0);
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn changed_key_misses() {
+        let dir = tmpdir("miss");
+        let cache = ModalCache::new(&dir);
+        let (f, m, meta) = sample();
+        let key = CacheKey::new().str("model", "a").f64("f_max", 100.0);
+        cache.store(&key, &f, &m, meta).unwrap();
+        for other in [
+            CacheKey::new().str("model", "b").f64("f_max", 100.0),
+            CacheKey::new()
+                .str("model", "a")
+                .f64("f_max", 100.000_000_1),
+            // Same bytes, different labelling: must not collide.
+            CacheKey::new().str("mode", "la").f64("f_max", 100.0),
+        ] {
+            assert_ne!(other.hex(), key.hex());
+            assert!(matches!(cache.load(&other), CacheLookup::Miss));
+        }
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn truncated_or_corrupted_entry_is_detected_and_replaced() {
+        let dir = tmpdir("trunc");
+        let cache = ModalCache::new(&dir);
+        let (f, m, meta) = sample();
+        let key = CacheKey::new().str("model", "t");
+        let entry = cache.store(&key, &f, &m, meta.clone()).unwrap();
+        // Truncate modes.npy.
+        let p = entry.join("modes.npy");
+        let bytes = fs::read(&p).unwrap();
+        fs::write(&p, &bytes[..bytes.len() - 8]).unwrap();
+        assert!(matches!(cache.load(&key), CacheLookup::Corrupt(_)));
+        // Recompute-and-store replaces the corrupt entry.
+        cache.store(&key, &f, &m, meta.clone()).unwrap();
+        assert!(matches!(cache.load(&key), CacheLookup::Hit(_)));
+        // Flip one byte of the frequencies (same length).
+        let p = entry.join("frequencies_hz.npy");
+        let mut bytes = fs::read(&p).unwrap();
+        let last = bytes.len() - 1;
+        bytes[last] ^= 0x55;
+        fs::write(&p, &bytes).unwrap();
+        assert!(matches!(cache.load(&key), CacheLookup::Corrupt(_)));
+        // Missing meta.json (e.g. a hand-copied partial entry).
+        cache.store(&key, &f, &m, meta).unwrap();
+        fs::remove_file(entry.join("meta.json")).unwrap();
+        assert!(matches!(cache.load(&key), CacheLookup::Corrupt(_)));
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn interrupted_write_is_invisible() {
+        // A leftover temp dir (simulated crash before rename) is not an entry.
+        let dir = tmpdir("crash");
+        let cache = ModalCache::new(&dir);
+        let key = CacheKey::new().str("model", "c");
+        let tmp = dir.join(format!(".tmp-{}-1-0", key.hex()));
+        fs::create_dir_all(&tmp).unwrap();
+        fs::write(tmp.join("modes.npy"), b"partial").unwrap();
+        assert!(matches!(cache.load(&key), CacheLookup::Miss));
+        let _ = fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,730 @@
+//! Shift-invert block Lanczos with thick restart and spectrum slicing (see the [`super`]
+//! module doc for the method and references).
+//!
+//! Notation: `V` (n × j) is an M-orthonormal basis, `Q` (n × b) the pending block, and
+//! `H` ((j + b) × j) satisfies `Op V = [V Q] H` with `Op = (K − σM)⁻¹M`. The leading j × j part
+//! of `H` is the Rayleigh quotient `VᵀM Op V` (symmetric: `Op` is M-self-adjoint), the last
+//! b rows `E` couple to `Q`, so a Ritz pair `(θ, V s)` has residual
+//! `‖Op V s − θ V s‖_M = ‖E s‖₂` (Wu & Simon 2000, eq. 2.3, block form).
+//!
+//! Because `H` is formed from the *full* projection of every new block (not just the
+//! tridiagonal recurrence coefficients) and `V` is re-orthogonalised twice, the method is a
+//! block Krylov–Rayleigh–Ritz iteration that tolerates the arrow-shaped `H` after a thick
+//! restart without special cases.
+
+use std::time::Instant;
+
+use faer::linalg::matmul::matmul;
+use faer::sparse::SparseColMatRef;
+use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
+
+use super::factor::{ShiftFactor, ShiftedSystem};
+use super::spmm::sym_spmm;
+use super::{
+    hz_to_lambda, lambda_to_hz, EigenError, EigenOptions, EigenSolution, EigenTiming, SliceReport,
+};
+
+/// λ_floor = (2π · 1 Hz)² in the relative-residual denominator (rad²/s²).
+const LAMBDA_FLOOR: f64 = 39.478_417_604_357_43;
+
+/// Deterministic xorshift64* generator for start blocks.
+struct Rng(u64);
+impl Rng {
+    fn next_f64(&mut self) -> f64 {
+        let mut x = self.0;
+        x ^= x >> 12;
+        x ^= x << 25;
+        x ^= x >> 27;
+        self.0 = x;
+        let r = x.wrapping_mul(0x2545_f491_4f6c_dd1d);
+        (r >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+}
+
+fn dense_eig(a: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), EigenError> {
+    let e = a
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| EigenError::Factorization {
+            shift_rad2_s2: f64::NAN,
+            reason: format!("dense symmetric eigensolver of a projected matrix failed: {e:?}"),
+        })?;
+    let s = e.S();
+    let vals: Vec<f64> = (0..a.nrows()).map(|i| s[i]).collect();
+    Ok((vals, e.U().to_owned()))
+}
+
+/// `a · b` into a new matrix with the given parallelism.
+fn mm(a: MatRef<'_, f64>, b: MatRef<'_, f64>, par: Par) -> Mat<f64> {
+    let mut c = Mat::<f64>::zeros(a.nrows(), b.ncols());
+    matmul(c.as_mut(), Accum::Replace, a, b, 1.0, par);
+    c
+}
+
+/// Work context of one solve.
+struct Ctx<'a> {
+    k: SparseColMatRef<'a, usize, f64>,
+    m: SparseColMatRef<'a, usize, f64>,
+    sys: &'a ShiftedSystem,
+    par: Par,
+    timing: EigenTiming,
+    rng: Rng,
+}
+
+impl Ctx<'_> {
+    /// Makes `z` M-orthonormal and M-orthogonal to `locked` and `basis` (both M-orthonormal).
+    /// Returns `(c, r)` with `z_in = locked·(…) + basis·c + z_out·r`; the `locked` part is
+    /// dropped (it only removes round-off: `locked` spans eigenvectors, see module doc).
+    /// Columns that vanish (rank deficiency) are replaced by random directions with a zero row
+    /// in `r`. `mz` is n × b scratch.
+    fn orthonormalize(
+        &mut self,
+        locked: MatRef<'_, f64>,
+        basis: MatRef<'_, f64>,
+        mut z: MatMut<'_, f64>,
+        mut mz: MatMut<'_, f64>,
+    ) -> Result<(Mat<f64>, Mat<f64>), EigenError> {
+        let b = z.ncols();
+        let j = basis.ncols();
+        // Thin products (n × j by j × b): gemm's thread barriers cost more than they gain on
+        // a shared 2-core machine (measured), so these run sequentially.
+        let par = Par::Seq;
+        let _ = self.par;
+        let mut c = Mat::<f64>::zeros(j, b);
+        let mut r_acc = Mat::<f64>::identity(b, b);
+        let mut pass = 0;
+        let mut replaced_last = true;
+        let mut shrink = 0.0f64;
+        // Passes of projection + normalisation: at least two ("twice is enough", Giraud et
+        // al., Numer. Math. 101 (2005) 87–100), more while a column still shrinks by more
+        // than half (Kahan–Parlett criterion) or was replaced by a random vector.
+        while pass < 2 || ((replaced_last || shrink < 0.5) && pass < 6) {
+            pass += 1;
+            replaced_last = false;
+            sym_spmm(self.m, z.as_ref(), mz.as_mut());
+            let before: Vec<f64> = (0..b)
+                .map(|i| z.as_ref().col(i).transpose() * mz.as_ref().col(i))
+                .collect();
+            let s_ref = before
+                .iter()
+                .copied()
+                .fold(0.0f64, f64::max)
+                .max(f64::MIN_POSITIVE);
+            // Project out locked vectors and basis (classical Gram–Schmidt, one pass).
+            if locked.ncols() > 0 {
+                let cl = mm(locked.transpose(), mz.as_ref(), par);
+                matmul(z.as_mut(), Accum::Add, locked, cl.as_ref(), -1.0, par);
+            }
+            if j > 0 {
+                let cv = mm(basis.transpose(), mz.as_ref(), par);
+                matmul(z.as_mut(), Accum::Add, basis, cv.as_ref(), -1.0, par);
+                // c += cv · r_acc
+                matmul(
+                    c.as_mut(),
+                    Accum::Add,
+                    cv.as_ref(),
+                    r_acc.as_ref(),
+                    1.0,
+                    par,
+                );
+            }
+            // Symmetric (Löwdin) orthonormalisation of the block.
+            sym_spmm(self.m, z.as_ref(), mz.as_mut());
+            let mut g = mm(z.as_ref().transpose(), mz.as_ref(), par);
+            let gt = g.transpose().to_owned();
+            g += gt;
+            g *= faer::Scale(0.5);
+            shrink = (0..b)
+                .map(|i| (g[(i, i)] / before[i].max(f64::MIN_POSITIVE)).sqrt())
+                .fold(f64::INFINITY, f64::min);
+            let (lam, u) = dense_eig(g.as_ref())?;
+            let mut scaled = u.clone();
+            let mut r = Mat::<f64>::zeros(b, b);
+            let mut deficient = Vec::new();
+            for i in 0..b {
+                if lam[i] > 1e-20 * s_ref {
+                    let s = lam[i].sqrt();
+                    for row in 0..b {
+                        scaled[(row, i)] = u[(row, i)] / s;
+                        r[(i, row)] = s * u[(row, i)];
+                    }
+                } else {
+                    deficient.push(i);
+                    for row in 0..b {
+                        scaled[(row, i)] = 0.0;
+                    }
+                }
+            }
+            let znew = mm(z.as_ref(), scaled.as_ref(), par);
+            z.copy_from(&znew);
+            for &i in &deficient {
+                for row in 0..z.nrows() {
+                    z[(row, i)] = self.rng.next_f64();
+                }
+                replaced_last = true;
+            }
+            r_acc = mm(r.as_ref(), r_acc.as_ref(), Par::Seq);
+        }
+        Ok((c, r_acc))
+    }
+}
+
+/// Result of one slice.
+struct SliceOut {
+    lambdas: Vec<f64>,
+    vecs: Mat<f64>,
+    restarts: usize,
+    solved: usize,
+}
+
+/// Block Lanczos at shift `fac.shift`, deflating `locked`, until the *converged prefix* (the
+/// Ritz pairs of largest θ, i.e. λ just above σ, that are all converged) holds `want` pairs,
+/// or — when `known = Some((hi, need))` (Sturm count) — until it holds `need` values below
+/// `hi`. Returns the converged prefix, ascending λ.
+fn lanczos_slice(
+    ctx: &mut Ctx<'_>,
+    fac: &ShiftFactor,
+    locked: MatRef<'_, f64>,
+    want: usize,
+    known: Option<(f64, usize)>,
+    opts: &EigenOptions,
+) -> Result<SliceOut, EigenError> {
+    let n = ctx.sys.n();
+    let p = locked.ncols();
+    let sigma = fac.shift;
+    let avail = n.saturating_sub(p);
+    let need = known.map_or(0, |k| k.1);
+    let mut want = want.max(need).max(1);
+    let b = opts.block_size.min(avail.saturating_sub(want) / 2).max(1);
+    let round_up = |x: usize| x.div_ceil(b) * b;
+    let cap = (avail.saturating_sub(b) / b) * b;
+    let m_max = round_up(want + want.max(4 * b)).min(cap);
+    if m_max < want + b {
+        want = m_max.saturating_sub(b);
+    }
+    if want == 0 || want < need {
+        return Err(EigenError::InvalidOption {
+            name: "block_size / modes_per_slice",
+            value: format!("block {b}, {need} modes in slice, {n} DOFs"),
+            reason: "the Krylov subspace does not fit in the problem: lower block_size or modes_per_slice",
+        });
+    }
+    let mut v = Mat::<f64>::zeros(n, m_max);
+    let mut h = Mat::<f64>::zeros(m_max + b, m_max);
+    let mut q = Mat::<f64>::from_fn(n, b, |_, _| ctx.rng.next_f64());
+    let mut z = Mat::<f64>::zeros(n, b);
+    let mut mz = Mat::<f64>::zeros(n, b);
+    let (mut rhs, mut kz) = if opts.refine_solves {
+        (Mat::<f64>::zeros(n, b), Mat::<f64>::zeros(n, b))
+    } else {
+        (Mat::<f64>::zeros(0, 0), Mat::<f64>::zeros(0, 0))
+    };
+    let mut buf = ctx.sys.solve_buffer(b);
+    ctx.orthonormalize(locked, v.as_ref().subcols(0, 0), q.as_mut(), mz.as_mut())?;
+    let mut j = 0usize;
+    let mut restarts = 0usize;
+    let mut solved = 0usize;
+    loop {
+        while j + b <= m_max {
+            v.as_mut().subcols_mut(j, b).copy_from(&q);
+            sym_spmm(ctx.m, q.as_ref(), z.as_mut());
+            let t = Instant::now();
+            if opts.refine_solves {
+                rhs.copy_from(&z);
+            }
+            ctx.sys.solve_in_place(fac, z.as_mut(), &mut buf);
+            ctx.timing.solved_vectors += b;
+            solved += b;
+            if opts.refine_solves {
+                // One step of iterative refinement: z += A⁻¹ (rhs − (K − σM) z).
+                sym_spmm(ctx.k, z.as_ref(), kz.as_mut());
+                sym_spmm(ctx.m, z.as_ref(), mz.as_mut());
+                for c in 0..b {
+                    for r in 0..n {
+                        rhs[(r, c)] -= kz[(r, c)] - sigma * mz[(r, c)];
+                    }
+                }
+                ctx.sys.solve_in_place(fac, rhs.as_mut(), &mut buf);
+                z += &rhs;
+                ctx.timing.solved_vectors += b;
+                solved += b;
+            }
+            ctx.timing.solve_s += t.elapsed().as_secs_f64();
+            let (c, r) = ctx.orthonormalize(
+                locked,
+                v.as_ref().subcols(0, j + b),
+                z.as_mut(),
+                mz.as_mut(),
+            )?;
+            h.as_mut().submatrix_mut(0, j, j + b, b).copy_from(&c);
+            h.as_mut().submatrix_mut(j + b, j, b, b).copy_from(&r);
+            std::mem::swap(&mut q, &mut z);
+            j += b;
+        }
+        // Rayleigh–Ritz on the symmetric part.
+        let hj = h.as_ref().submatrix(0, 0, j, j);
+        let t = Mat::<f64>::from_fn(j, j, |r, c| 0.5 * (hj[(r, c)] + hj[(c, r)]));
+        let (theta, s) = dense_eig(t.as_ref())?;
+        let e = h.as_ref().submatrix(j, 0, b, j);
+        let es = mm(e, s.as_ref(), Par::Seq);
+        // Indices by descending θ (wanted = largest θ = λ just above σ).
+        let order: Vec<usize> = (0..j).rev().collect();
+        // Convergence: ‖Op x − θx‖_M ≤ tol · max(θ, θ_max/100). The floor reflects the
+        // attainable accuracy: solves and re-orthogonalisation err by O(u κ)·‖Op‖ with
+        // ‖Op‖ = θ_max, so Ritz values far from the shift (θ ≪ θ_max) cannot be resolved to
+        // tol relative to their own θ. The true residual of every pair is checked afterwards.
+        let theta_abs_max = theta[0].abs().max(theta[j - 1].abs());
+        let converged = |idx: usize| -> bool {
+            let res = es.as_ref().col(idx).norm_l2();
+            theta[idx] > 0.0 && res <= opts.tolerance * theta[idx].max(1e-2 * theta_abs_max)
+        };
+        let lambda_of = |idx: usize| sigma + 1.0 / theta[idx];
+        let prefix = order.iter().take_while(|&&i| converged(i)).count();
+        let done = match known {
+            None => prefix >= want,
+            Some((hi, need)) => {
+                let below = order[..prefix]
+                    .iter()
+                    .filter(|&&i| lambda_of(i) < hi)
+                    .count();
+                // The Sturm count guarantees there are exactly `need` below hi: no need to wait
+                // for a converged value above hi (that one converges slowly).
+                below >= need
+            }
+        };
+        if done {
+            let sel: Vec<usize> = order[..prefix].to_vec();
+            let s_sel = Mat::<f64>::from_fn(j, prefix, |r, c| s[(r, sel[c])]);
+            let mut vecs = mm(v.as_ref().subcols(0, j), s_sel.as_ref(), ctx.par);
+            // One free inverse-iteration step: x' = Op x / θ = x + Q (E s)/θ (Op V = V T + Q E).
+            // Then K x' − λ M x' = −M r/θ² with r = Op x − θx: the high-frequency content
+            // of r is no longer amplified by K − σM (Ericsson & Ruhe 1980, §3).
+            let es_sel = Mat::<f64>::from_fn(b, prefix, |r, c| es[(r, sel[c])] / theta[sel[c]]);
+            matmul(
+                vecs.as_mut(),
+                Accum::Add,
+                q.as_ref(),
+                es_sel.as_ref(),
+                1.0,
+                ctx.par,
+            );
+            let lambdas = sel.iter().map(|&i| lambda_of(i)).collect();
+            return Ok(SliceOut {
+                lambdas,
+                vecs,
+                restarts,
+                solved,
+            });
+        }
+        if restarts >= opts.max_restarts {
+            let (hi, expected) = known.unwrap_or((lambda_of(order[want.min(j) - 1]), want));
+            return Err(EigenError::MissedModes {
+                lo_hz: lambda_to_hz(sigma),
+                hi_hz: lambda_to_hz(hi),
+                expected,
+                found: prefix,
+                restarts,
+            });
+        }
+        // Thick restart: keep the Ritz vectors with the largest θ, plus those at the other
+        // end (θ < 0: eigenvalues below σ that are not deflated) whose |θ| exceeds the
+        // smallest wanted θ. Purging the latter would let them grow back every cycle and
+        // pollute the wanted ones; keeping them acts as a soft deflation.
+        let kkeep = (want + (m_max - want) / 2).min(j - b);
+        let theta_thr = theta[order[want.min(j) - 1]].max(0.0);
+        let neg: Vec<usize> = (0..j)
+            .take_while(|&i| theta[i] < 0.0 && -theta[i] >= theta_thr)
+            .take((kkeep - want.min(kkeep)) / 2)
+            .collect();
+        let mut sel: Vec<usize> = order[..kkeep - neg.len()].to_vec();
+        sel.extend_from_slice(&neg);
+        let s_sel = Mat::<f64>::from_fn(j, kkeep, |r, c| s[(r, sel[c])]);
+        let vk = mm(v.as_ref().subcols(0, j), s_sel.as_ref(), ctx.par);
+        v.as_mut().subcols_mut(0, kkeep).copy_from(&vk);
+        drop(vk);
+        let ek = Mat::<f64>::from_fn(b, kkeep, |r, c| es[(r, sel[c])]);
+        h.fill(0.0);
+        for (i, &idx) in sel.iter().enumerate() {
+            h[(i, i)] = theta[idx];
+        }
+        h.as_mut().submatrix_mut(kkeep, 0, b, kkeep).copy_from(&ek);
+        j = kkeep;
+        restarts += 1;
+    }
+}
+
+/// Computes all eigenpairs of `K φ = λ M φ` with `f_min ≤ f < f_max` (see module doc).
+///
+/// `k`, `m`: n × n, full symmetric storage (both triangles), K PSD, M PD.
+/// `progress`: optional bar; its length is set to the Sturm count and its position to the
+/// modes found so far.
+pub fn solve(
+    k: SparseColMatRef<'_, usize, f64>,
+    m: SparseColMatRef<'_, usize, f64>,
+    opts: &EigenOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<EigenSolution, EigenError> {
+    let t_total = Instant::now();
+    if k.nrows() != k.ncols() || m.nrows() != m.ncols() || k.nrows() != m.nrows() {
+        return Err(EigenError::DimensionMismatch {
+            k_rows: k.nrows(),
+            k_cols: k.ncols(),
+            m_rows: m.nrows(),
+            m_cols: m.ncols(),
+        });
+    }
+    validate(opts)?;
+    let n = k.nrows();
+    if n == 0 {
+        return Err(EigenError::InvalidOption {
+            name: "K, M",
+            value: "0 × 0".into(),
+            reason: "the model has no free DOFs",
+        });
+    }
+    let par = if opts.parallel {
+        Par::rayon(0)
+    } else {
+        Par::Seq
+    };
+    let t = Instant::now();
+    let sys = ShiftedSystem::new(k, m, opts.ordering, par)?;
+    let mut ctx = Ctx {
+        k,
+        m,
+        sys: &sys,
+        par,
+        timing: EigenTiming {
+            symbolic_s: t.elapsed().as_secs_f64(),
+            factor_entries: sys.factor_len(),
+            ..Default::default()
+        },
+        rng: Rng(opts.seed | 1),
+    };
+    let lam_max = hz_to_lambda(opts.f_max_hz);
+    let top = factorize(&mut ctx, lam_max, 1.0, lam_max)?;
+    let nu_max = top.negative_count;
+    let first = if opts.f_min_hz == 0.0 {
+        let rb = opts
+            .rigid_shift_hz
+            .unwrap_or((opts.f_max_hz / 100.0).max(1.0));
+        let s0 = -hz_to_lambda(rb);
+        let f0 = factorize(&mut ctx, s0, -1.0, lam_max)?;
+        if f0.negative_count != 0 {
+            return Err(EigenError::NotSemiDefinite {
+                shift_rad2_s2: f0.shift,
+                negative_pivots: f0.negative_count,
+            });
+        }
+        f0
+    } else {
+        factorize(&mut ctx, hz_to_lambda(opts.f_min_hz), -1.0, lam_max)?
+    };
+    let nu0 = first.negative_count;
+    let total = nu_max.saturating_sub(nu0);
+    if let Some(pb) = progress {
+        pb.set_length(total as u64);
+        pb.set_position(0);
+    }
+    let mut phi = Mat::<f64>::zeros(n, total);
+    let mut lambdas: Vec<f64> = Vec::with_capacity(total);
+    let mut slices: Vec<SliceReport> = Vec::new();
+    // Column range in phi of the previous non-empty slice (deflated in the next one).
+    let mut prev: (usize, usize) = (0, 0);
+    let mut cur = first;
+    let target = opts.modes_per_slice;
+    if opts.f_min_hz == 0.0 && total > 0 {
+        // If the structure is grounded, the lowest eigenvalue λ₁ can lie far above the
+        // negative shift σ₀; Lanczos at σ₀ would then see a tightly clustered θ = 1/(λ − σ₀)
+        // and converge slowly. A short probe at σ₀ finds λ₁ (a Ritz value ≥ λ₁); if
+        // 0.9 λ₁ ≫ |σ₀| and the Sturm count at 0.9 λ₁ is still 0, the first slice starts there.
+        let probe = {
+            let empty = phi.as_ref().subcols(0, 0);
+            lanczos_slice(
+                &mut ctx,
+                &cur,
+                empty,
+                opts.block_size.min(total),
+                None,
+                opts,
+            )?
+        };
+        let l1 = probe.lambdas.first().copied().unwrap_or(0.0);
+        if 0.9 * l1 > 4.0 * cur.shift.abs() {
+            let f = factorize(&mut ctx, 0.9 * l1, -1.0, lam_max)?;
+            if f.negative_count == 0 {
+                cur = f;
+            }
+        }
+    }
+    loop {
+        let nu_cur = cur.negative_count;
+        if nu_cur >= nu_max {
+            break;
+        }
+        let remaining = nu_max - nu_cur;
+        let lo = cur.shift;
+        let last = remaining <= target + target / 4;
+        let t_slice = Instant::now();
+        // Lanczos shift: σ = lo, except for the first slice of a band with f_min > 0: λ_min
+        // may sit arbitrarily close to an eigenvalue below the band that is not deflated (a
+        // huge |θ| that swamps the wanted ones), so shift to σ_L = λ_min − 0.1·(slice width)
+        // and discard the pairs below λ_min (their number is the exact Sturm difference).
+        let shifted = if opts.f_min_hz > 0.0 && slices.is_empty() {
+            let w = if last {
+                lam_max - lo
+            } else {
+                lam_max * ((nu_cur + target) as f64 / nu_max as f64).powf(2.0 / 3.0) - lo
+            };
+            Some(factorize(
+                &mut ctx,
+                lo - 0.1 * w.max(1e-3 * lam_max),
+                -1.0,
+                lam_max,
+            )?)
+        } else {
+            None
+        };
+        let lf = shifted.as_ref().unwrap_or(&cur);
+        let below_lo = nu_cur - lf.negative_count;
+        let locked_range = if shifted.is_some() { (0, 0) } else { prev };
+        let mut out;
+        let (hi, nu_hi, next) = if last {
+            let need = remaining + below_lo;
+            let want = need + opts.block_size.max(remaining / 5);
+            out = {
+                let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
+                lanczos_slice(&mut ctx, lf, locked, want, Some((top.shift, need)), opts)?
+            };
+            (top.shift, nu_max, None)
+        } else {
+            out = {
+                let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
+                lanczos_slice(&mut ctx, lf, locked, target + below_lo, None, opts)?
+            };
+            // Boundary in the widest relative gap of the last third of the converged prefix
+            // (everything below it has converged; a wide gap keeps K − τM well conditioned).
+            let l: Vec<f64> = out.lambdas.iter().copied().filter(|&x| x >= lo).collect();
+            let tau = if l.len() >= 2 {
+                let k0 = (2 * l.len() / 3).min(l.len() - 2);
+                let kbest = (k0..l.len() - 1)
+                    .max_by(|&a, &b| {
+                        let ga = (l[a + 1] - l[a]) / l[a + 1].abs().max(1e-300);
+                        let gb = (l[b + 1] - l[b]) / l[b + 1].abs().max(1e-300);
+                        ga.total_cmp(&gb)
+                    })
+                    .unwrap_or(k0);
+                0.5 * (l[kbest] + l[kbest + 1])
+            } else {
+                lam_max
+            };
+            if tau >= top.shift {
+                (top.shift, nu_max, None)
+            } else {
+                let f = factorize(&mut ctx, tau, 1.0, lam_max)?;
+                (f.shift, f.negative_count, Some(f))
+            }
+        };
+        let need = nu_hi - nu_cur;
+        let select = |o: &SliceOut| -> Vec<usize> {
+            (0..o.lambdas.len())
+                .filter(|&i| o.lambdas[i] >= lo && o.lambdas[i] < hi)
+                .collect()
+        };
+        let mut keep = select(&out);
+        if keep.len() != need {
+            // The Sturm count says the converged prefix skipped an eigenvalue (e.g. a
+            // multiplicity larger than the block): iterate again with the count known.
+            out = {
+                let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
+                let nl = need + below_lo;
+                lanczos_slice(
+                    &mut ctx,
+                    lf,
+                    locked,
+                    nl + opts.block_size,
+                    Some((hi, nl)),
+                    opts,
+                )?
+            };
+            keep = select(&out);
+            if keep.len() != need {
+                return Err(EigenError::MissedModes {
+                    lo_hz: lambda_to_hz(lo),
+                    hi_hz: lambda_to_hz(hi),
+                    expected: need,
+                    found: keep.len(),
+                    restarts: out.restarts,
+                });
+            }
+        }
+        drop(shifted);
+        let col0 = lambdas.len();
+        for (c, &i) in keep.iter().enumerate() {
+            phi.as_mut().col_mut(col0 + c).copy_from(out.vecs.col(i));
+            lambdas.push(out.lambdas[i]);
+        }
+        if need > 0 {
+            prev = (col0, need);
+        }
+        slices.push(SliceReport {
+            shift_lo_rad2_s2: lo,
+            shift_hi_rad2_s2: hi,
+            sturm_lo: nu_cur,
+            sturm_hi: nu_hi,
+            modes_found: need,
+            restarts: out.restarts,
+            solved_vectors: out.solved,
+            lanczos_s: t_slice.elapsed().as_secs_f64(),
+        });
+        if let Some(pb) = progress {
+            pb.set_position(lambdas.len() as u64);
+        }
+        match next {
+            Some(f) => cur = f,
+            None => break,
+        }
+    }
+    // Sort ascending (slices are ascending already; keep it robust).
+    let mut idx: Vec<usize> = (0..lambdas.len()).collect();
+    idx.sort_by(|&a, &b| lambdas[a].total_cmp(&lambdas[b]));
+    if idx.iter().enumerate().any(|(i, &j)| i != j) {
+        let sorted = Mat::<f64>::from_fn(n, idx.len(), |r, c| phi[(r, idx[c])]);
+        phi = sorted;
+        lambdas = idx.iter().map(|&i| lambdas[i]).collect();
+    }
+    // Verification: true residuals and M-orthonormality.
+    let t = Instant::now();
+    let mut residuals = Vec::with_capacity(total);
+    let mut backward = Vec::with_capacity(total);
+    let (k_norm, m_norm) = (norm_inf(k), norm_inf(m));
+    let chunk = 64usize;
+    let mut kx = Mat::<f64>::zeros(n, chunk.min(total.max(1)));
+    let mut mx = Mat::<f64>::zeros(n, chunk.min(total.max(1)));
+    let mut orth_err = 0.0f64;
+    let full = opts.full_orthogonality_check || (n as f64) * (total as f64).powi(2) <= 2e10;
+    let mut c0 = 0;
+    while c0 < total {
+        let w = chunk.min(total - c0);
+        let x = phi.as_ref().subcols(c0, w);
+        sym_spmm(k, x, kx.as_mut().subcols_mut(0, w));
+        sym_spmm(m, x, mx.as_mut().subcols_mut(0, w));
+        for c in 0..w {
+            let lam = lambdas[c0 + c];
+            let kc = kx.as_ref().col(c);
+            let mc = mx.as_ref().col(c);
+            let mut num = 0.0;
+            for r in 0..n {
+                let d = kc[r] - lam * mc[r];
+                num += d * d;
+            }
+            let num = num.sqrt();
+            let den = kc.norm_l2() + lam.abs().max(LAMBDA_FLOOR) * mc.norm_l2();
+            residuals.push(num / den);
+            let xn = x.col(c).norm_l2();
+            backward.push(num / ((k_norm + lam.abs() * m_norm) * xn));
+        }
+        // Orthonormality against this chunk: all columns (full) or a window of neighbours.
+        let (a0, a1) = if full {
+            (0, total)
+        } else {
+            let span = 2 * target.max(chunk);
+            (c0.saturating_sub(span), (c0 + w + span).min(total))
+        };
+        let g = mm(
+            phi.as_ref().subcols(a0, a1 - a0).transpose(),
+            mx.as_ref().subcols(0, w),
+            ctx.par,
+        );
+        for c in 0..w {
+            for r in 0..(a1 - a0) {
+                let expect = if a0 + r == c0 + c { 1.0 } else { 0.0 };
+                orth_err = orth_err.max((g[(r, c)] - expect).abs());
+            }
+        }
+        c0 += w;
+    }
+    ctx.timing.check_s = t.elapsed().as_secs_f64();
+    ctx.timing.total_s = t_total.elapsed().as_secs_f64();
+    Ok(EigenSolution {
+        frequencies_hz: lambdas.iter().map(|&l| lambda_to_hz(l)).collect(),
+        eigenvalues_rad2_s2: lambdas,
+        modes: phi,
+        relative_residuals: residuals,
+        backward_errors: backward,
+        m_orthonormality_error: orth_err,
+        sturm_count: nu_max,
+        sturm_count_below_min: nu0,
+        slices,
+        timing: ctx.timing,
+    })
+}
+
+/// ‖A‖_∞ = max row sum of |a_ij| (≥ ‖A‖₂ for symmetric A).
+fn norm_inf(a: SparseColMatRef<'_, usize, f64>) -> f64 {
+    (0..a.ncols())
+        .map(|j| a.val_of_col(j).iter().map(|v| v.abs()).sum::<f64>())
+        .fold(0.0, f64::max)
+}
+
+/// Factorises `K − σM`; on a zero pivot moves σ by a small relative amount in `direction`
+/// (±1) and retries (σ hit an eigenvalue of a leading block). `scale` (rad²/s²) sets the size
+/// of the move.
+fn factorize(
+    ctx: &mut Ctx<'_>,
+    shift: f64,
+    direction: f64,
+    scale: f64,
+) -> Result<ShiftFactor, EigenError> {
+    let mut s = shift;
+    for attempt in 0..6 {
+        let t = Instant::now();
+        let f = ctx.sys.factorize(s)?;
+        ctx.timing.factorize_s += t.elapsed().as_secs_f64();
+        ctx.timing.factorizations += 1;
+        if let Some(f) = f {
+            if f.min_rel_pivot > 1e-14 {
+                return Ok(f);
+            }
+        }
+        s = shift + direction * scale * 1e-6 * 10f64.powi(attempt);
+    }
+    Err(EigenError::Factorization {
+        shift_rad2_s2: shift,
+        reason: "zero or tiny pivots in LDLᵀ even after moving the shift; check that M is positive definite and K has no NaN".into(),
+    })
+}
+
+fn validate(o: &EigenOptions) -> Result<(), EigenError> {
+    let bad = |name: &'static str, value: String, reason: &'static str| {
+        Err(EigenError::InvalidOption {
+            name,
+            value,
+            reason,
+        })
+    };
+    if !(o.f_max_hz.is_finite() && o.f_max_hz > 0.0) {
+        return bad("f_max_hz", o.f_max_hz.to_string(), "must be finite and > 0");
+    }
+    if !(o.f_min_hz.is_finite() && o.f_min_hz >= 0.0 && o.f_min_hz < o.f_max_hz) {
+        return bad(
+            "f_min_hz",
+            o.f_min_hz.to_string(),
+            "must satisfy 0 ≤ f_min < f_max",
+        );
+    }
+    if !(o.tolerance > 0.0 && o.tolerance <= 1e-3) {
+        return bad("tolerance", o.tolerance.to_string(), "must be in (0, 1e-3]");
+    }
+    if o.block_size == 0 || o.block_size > 256 {
+        return bad("block_size", o.block_size.to_string(), "must be in 1..=256");
+    }
+    if o.modes_per_slice == 0 {
+        return bad("modes_per_slice", "0".into(), "must be ≥ 1");
+    }
+    if let Some(r) = o.rigid_shift_hz {
+        if !(r.is_finite() && r > 0.0) {
+            return bad("rigid_shift_hz", r.to_string(), "must be finite and > 0");
+        }
+    }
+    Ok(())
+}

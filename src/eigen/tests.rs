@@ -1,0 +1,428 @@
+//! Tests of the eigensolver against closed forms and an independent dense solver.
+//!
+//! Oracles:
+//! * dense generalised eigensolver: `M = L Lᵀ` (faer dense Cholesky), `C = L⁻¹ K L⁻ᵀ`,
+//!   eigenvalues of `C` by faer's dense `self_adjoint_eigen`;
+//! * free-free bar of N linear 2-node elements with consistent mass: the exact discrete
+//!   eigenvalues `λ_k = 6c²/h² · (1 − cos(kπ/N)) / (2 + cos(kπ/N))`, k = 0..N
+//!   (insert `u_j = cos(kπj/N)` into the assembled equations), and the continuum limit
+//!   `f_k = k c / (2L)`;
+//! * square free-free scalar spring lattice (equal springs k, equal masses m):
+//!   `λ_{ij} = (μ_i + μ_j)/m`, `μ_i = 4k sin²(iπ/(2N))`, with exact double eigenvalues
+//!   `λ_{ij} = λ_{ji}`.
+
+use super::*;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::Mat;
+
+type Sp = SparseColMat<usize, f64>;
+
+fn sparse(n: usize, t: &[(usize, usize, f64)]) -> Sp {
+    let trip: Vec<Triplet<usize, usize, f64>> =
+        t.iter().map(|&(i, j, v)| Triplet::new(i, j, v)).collect();
+    SparseColMat::try_new_from_triplets(n, n, &trip).unwrap()
+}
+
+/// Adds a symmetric 2-DOF element block `[a b; b a]` on DOFs (p, q) in full storage.
+fn add2(t: &mut Vec<(usize, usize, f64)>, p: usize, q: usize, diag: f64, off: f64) {
+    t.push((p, p, diag));
+    t.push((q, q, diag));
+    t.push((p, q, off));
+    t.push((q, p, off));
+}
+
+/// Free-free bar: N linear elements, length L (m), E (Pa), ρ (kg/m³), area 1 m².
+fn bar(n_el: usize, l: f64, e: f64, rho: f64) -> (Sp, Sp) {
+    let h = l / n_el as f64;
+    let (mut kt, mut mt) = (Vec::new(), Vec::new());
+    for el in 0..n_el {
+        add2(&mut kt, el, el + 1, e / h, -e / h);
+        add2(&mut mt, el, el + 1, rho * h / 3.0, rho * h / 6.0);
+    }
+    (sparse(n_el + 1, &kt), sparse(n_el + 1, &mt))
+}
+
+fn bar_exact(n_el: usize, l: f64, e: f64, rho: f64) -> Vec<f64> {
+    let h = l / n_el as f64;
+    let c2 = e / rho;
+    (0..=n_el)
+        .map(|k| {
+            let ct = (k as f64 * std::f64::consts::PI / n_el as f64).cos();
+            6.0 * c2 / (h * h) * (1.0 - ct) / (2.0 + ct)
+        })
+        .collect()
+}
+
+/// Deterministic pseudo-random numbers in [0, 1).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// 3D lattice of point masses (3 DOF each) joined by isotropic 3×3 springs `k I` to the 6
+/// axial and 12 face-diagonal neighbours (random k), random nodal masses plus a consistent-
+/// mass-like coupling between axial neighbours (M non-diagonal, positive definite).
+/// `ground`: springs to ground at every node (K SPD); otherwise free (3 rigid translations).
+fn lattice3d(nx: usize, ny: usize, nz: usize, ground: f64, seed: u64) -> (Sp, Sp) {
+    let mut rng = Lcg(seed);
+    let id = |i: usize, j: usize, k: usize| (i * ny + j) * nz + k;
+    let n = nx * ny * nz * 3;
+    let (mut kt, mut mt) = (Vec::new(), Vec::new());
+    let offsets: [(i64, i64, i64); 9] = [
+        (1, 0, 0),
+        (0, 1, 0),
+        (0, 0, 1),
+        (1, 1, 0),
+        (1, -1, 0),
+        (1, 0, 1),
+        (1, 0, -1),
+        (0, 1, 1),
+        (0, 1, -1),
+    ];
+    for i in 0..nx {
+        for j in 0..ny {
+            for k in 0..nz {
+                let a = id(i, j, k);
+                let mass = 1.0 + rng.next();
+                for d in 0..3 {
+                    mt.push((3 * a + d, 3 * a + d, mass));
+                    if ground > 0.0 {
+                        kt.push((3 * a + d, 3 * a + d, ground * (0.5 + rng.next())));
+                    }
+                }
+                for (o, &(di, dj, dk)) in offsets.iter().enumerate() {
+                    let (ii, jj, kk) = (i as i64 + di, j as i64 + dj, k as i64 + dk);
+                    if ii < 0
+                        || jj < 0
+                        || kk < 0
+                        || ii >= nx as i64
+                        || jj >= ny as i64
+                        || kk >= nz as i64
+                    {
+                        continue;
+                    }
+                    let b = id(ii as usize, jj as usize, kk as usize);
+                    let s = 1.0e7 * (0.5 + rng.next());
+                    let mc = if o < 3 { 0.1 } else { 0.0 };
+                    for d in 0..3 {
+                        add2(&mut kt, 3 * a + d, 3 * b + d, s, -s);
+                        if mc > 0.0 {
+                            add2(&mut mt, 3 * a + d, 3 * b + d, mc, mc);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    (sparse(n, &kt), sparse(n, &mt))
+}
+
+/// Square free-free scalar lattice, N × N nodes, equal springs k (N/m), equal masses m (kg).
+fn square_lattice(nn: usize, k: f64, m: f64) -> (Sp, Sp) {
+    let id = |i: usize, j: usize| i * nn + j;
+    let (mut kt, mut mt) = (Vec::new(), Vec::new());
+    for i in 0..nn {
+        for j in 0..nn {
+            mt.push((id(i, j), id(i, j), m));
+            if i + 1 < nn {
+                add2(&mut kt, id(i, j), id(i + 1, j), k, -k);
+            }
+            if j + 1 < nn {
+                add2(&mut kt, id(i, j), id(i, j + 1), k, -k);
+            }
+        }
+    }
+    // Make sure every diagonal entry exists in K.
+    for i in 0..nn * nn {
+        kt.push((i, i, 0.0));
+    }
+    (sparse(nn * nn, &kt), sparse(nn * nn, &mt))
+}
+
+/// Dense oracle: all eigenvalues (ascending) of K φ = λ M φ.
+fn dense_eigenvalues(k: &Sp, m: &Sp) -> Vec<f64> {
+    let kd = k.to_dense();
+    let md = m.to_dense();
+    let l = md.llt(faer::Side::Lower).unwrap().L().to_owned();
+    let n = kd.nrows();
+    let mut x = kd.clone();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        l.as_ref(),
+        x.as_mut(),
+        faer::Par::Seq,
+    );
+    let mut c = x.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        l.as_ref(),
+        c.as_mut(),
+        faer::Par::Seq,
+    );
+    let c = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (c[(i, j)] + c[(j, i)]));
+    c.self_adjoint_eigenvalues(faer::Side::Lower).unwrap()
+}
+
+/// Checks `sol` against the dense oracle: same count below f_max and relative agreement.
+fn check_against_dense(sol: &EigenSolution, dense: &[f64], f_min: f64, f_max: f64) -> f64 {
+    let (lo, hi) = (hz_to_lambda(f_min), hz_to_lambda(f_max));
+    let expect: Vec<f64> = dense
+        .iter()
+        .copied()
+        .filter(|&l| {
+            if f_min == 0.0 {
+                l < hi
+            } else {
+                l >= lo && l < hi
+            }
+        })
+        .collect();
+    assert_eq!(
+        sol.eigenvalues_rad2_s2.len(),
+        expect.len(),
+        "mode count vs dense"
+    );
+    assert_eq!(
+        sol.sturm_count - sol.sturm_count_below_min,
+        expect.len(),
+        "Sturm count"
+    );
+    let mut worst = 0.0f64;
+    for (a, b) in sol.eigenvalues_rad2_s2.iter().zip(&expect) {
+        // Relative to λ; rigid-body modes (λ ≈ 0) relative to λ_max.
+        let err = (a - b).abs() / b.abs().max(1e-6 * hi);
+        worst = worst.max(err);
+    }
+    worst
+}
+
+fn assert_quality(sol: &EigenSolution) {
+    // Relative residual for elastic modes (f > 1 Hz); backward error for all, incl. rigid.
+    let rmax = sol
+        .relative_residuals
+        .iter()
+        .zip(&sol.frequencies_hz)
+        .filter(|(_, &f)| f > 1.0)
+        .map(|(r, _)| *r)
+        .fold(0.0, f64::max);
+    let bmax = sol.backward_errors.iter().cloned().fold(0.0, f64::max);
+    eprintln!(
+        "  max rel residual (elastic) {rmax:.2e}, max backward error {bmax:.2e}, M-orth err {:.2e}",
+        sol.m_orthonormality_error
+    );
+    // Default tolerance 1e-8 on the transformed residual → relative residuals ≲ 1e-7.
+    assert!(rmax < 1e-7, "max relative residual {rmax:e}");
+    assert!(bmax < 1e-8, "max backward error {bmax:e}");
+    assert!(
+        sol.m_orthonormality_error < 1e-8,
+        "M-orthonormality error {:e}",
+        sol.m_orthonormality_error
+    );
+    let found: usize = sol.slices.iter().map(|s| s.modes_found).sum();
+    for s in &sol.slices {
+        assert_eq!(
+            s.modes_found,
+            s.sturm_hi - s.sturm_lo,
+            "per-slice Sturm count"
+        );
+    }
+    assert_eq!(found, sol.sturm_count - sol.sturm_count_below_min);
+}
+
+#[test]
+fn bar_matches_exact_discrete_eigenvalues_with_rigid_mode() {
+    let (e, rho, l, n_el) = (210e9, 7850.0, 10.0, 200);
+    let (k, m) = bar(n_el, l, e, rho);
+    let mut o = EigenOptions::new(5000.0);
+    o.block_size = 4;
+    o.modes_per_slice = 6; // force several slices
+    let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+    assert_quality(&sol);
+    let exact = bar_exact(n_el, l, e, rho);
+    let worst = check_against_dense(&sol, &exact, 0.0, 5000.0);
+    eprintln!(
+        "bar: {} modes, {} slices, worst rel err vs exact discrete {worst:e}, f1 = {} Hz",
+        sol.frequencies_hz.len(),
+        sol.slices.len(),
+        sol.frequencies_hz[1]
+    );
+    assert!(worst < 1e-8, "worst relative eigenvalue error {worst:e}");
+    assert!(
+        sol.frequencies_hz[0] < 1e-3,
+        "rigid-body mode at {} Hz",
+        sol.frequencies_hz[0]
+    );
+    assert!(sol.slices.len() >= 3);
+}
+
+#[test]
+fn bar_converges_to_c_over_2l_harmonics() {
+    // Continuum free-free bar: f_k = k c / (2L). Linear elements with consistent mass
+    // over-estimate by (kπh/L)²/24 relative at leading order, i.e. the error falls as h².
+    let (e, rho, l): (f64, f64, f64) = (210e9, 7850.0, 10.0);
+    let c = (e / rho).sqrt();
+    let mut prev_err = f64::INFINITY;
+    for n_el in [25usize, 50, 100, 200] {
+        let (k, m) = bar(n_el, l, e, rho);
+        let mut o = EigenOptions::new(1500.0);
+        o.block_size = 4;
+        let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+        assert_quality(&sol);
+        let f5 = sol.frequencies_hz[5];
+        let exact = 5.0 * c / (2.0 * l);
+        let err = (f5 - exact) / exact;
+        let h = l / n_el as f64;
+        let predicted = (5.0 * std::f64::consts::PI * h / l).powi(2) / 24.0;
+        eprintln!("bar N={n_el}: f5 = {f5:.4} Hz, c/2L·5 = {exact:.4} Hz, rel err {err:.3e}, predicted {predicted:.3e}");
+        assert!(err > 0.0, "consistent mass over-estimates");
+        assert!((err - predicted).abs() < 0.05 * predicted, "h² error law");
+        assert!(err < prev_err / 3.9);
+        prev_err = err;
+    }
+}
+
+#[test]
+fn free_3d_lattice_matches_dense_solver() {
+    let (k, m) = lattice3d(6, 5, 4, 0.0, 7);
+    let dense = dense_eigenvalues(&k, &m);
+    // Band covering about half the spectrum, several slices.
+    let f_max = lambda_to_hz(dense[dense.len() / 2]) * 1.0001;
+    let mut o = EigenOptions::new(f_max);
+    o.block_size = 6;
+    o.modes_per_slice = 40;
+    let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+    assert_quality(&sol);
+    let worst = check_against_dense(&sol, &dense, 0.0, f_max);
+    eprintln!(
+        "free lattice n={}: {} modes in {} slices, worst rel err {worst:e}, rigid λ = {:e}, {:e}, {:e}",
+        k.nrows(),
+        sol.frequencies_hz.len(),
+        sol.slices.len(),
+        sol.eigenvalues_rad2_s2[0],
+        sol.eigenvalues_rad2_s2[1],
+        sol.eigenvalues_rad2_s2[2]
+    );
+    assert!(worst < 1e-8, "worst relative eigenvalue error {worst:e}");
+    // Three rigid translations.
+    assert!(sol.frequencies_hz[2] < 1e-3 && sol.frequencies_hz[3] > 1.0);
+}
+
+#[test]
+fn grounded_3d_lattice_band_with_f_min_matches_dense_solver() {
+    let (k, m) = lattice3d(5, 5, 5, 2e6, 11);
+    let dense = dense_eigenvalues(&k, &m);
+    let f_min = lambda_to_hz(dense[40]) * 0.9999 + lambda_to_hz(dense[39]) * 0.0001;
+    let f_max = lambda_to_hz(dense[300]) * 0.5 + lambda_to_hz(dense[301]) * 0.5;
+    let mut o = EigenOptions::new(f_max);
+    o.f_min_hz = f_min;
+    o.block_size = 8;
+    o.modes_per_slice = 60;
+    o.ordering = FillOrdering::Identity;
+    let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+    assert_quality(&sol);
+    let worst = check_against_dense(&sol, &dense, f_min, f_max);
+    eprintln!(
+        "grounded lattice n={}: {} modes in [{f_min:.1}, {f_max:.1}) Hz, {} slices, worst rel err {worst:e}",
+        k.nrows(),
+        sol.frequencies_hz.len(),
+        sol.slices.len()
+    );
+    assert_eq!(sol.frequencies_hz.len(), 261);
+    assert!(worst < 1e-8);
+}
+
+#[test]
+fn square_lattice_double_eigenvalues_closed_form_and_sturm() {
+    let (nn, kk, mm) = (20usize, 1.0e6, 2.0);
+    let (k, m) = square_lattice(nn, kk, mm);
+    let mu: Vec<f64> = (0..nn)
+        .map(|i| {
+            4.0 * kk
+                * (i as f64 * std::f64::consts::PI / (2.0 * nn as f64))
+                    .sin()
+                    .powi(2)
+        })
+        .collect();
+    let mut exact: Vec<f64> = Vec::new();
+    for a in &mu {
+        for b in &mu {
+            exact.push((a + b) / mm);
+        }
+    }
+    exact.sort_by(f64::total_cmp);
+    // f_max between two distinct eigenvalues around index 150.
+    let mut idx = 150;
+    while (exact[idx + 1] - exact[idx]) < 1e-6 * exact[idx] {
+        idx += 1;
+    }
+    let f_max = lambda_to_hz(0.5 * (exact[idx] + exact[idx + 1]));
+    let mut o = EigenOptions::new(f_max);
+    o.block_size = 4;
+    o.modes_per_slice = 30;
+    let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+    assert_quality(&sol);
+    let worst = check_against_dense(&sol, &exact, 0.0, f_max);
+    let doubles = exact[..=idx]
+        .windows(2)
+        .filter(|w| (w[1] - w[0]).abs() < 1e-9 * w[1])
+        .count();
+    eprintln!(
+        "square lattice: {} modes ({} coincident pairs), {} slices, Sturm {}, worst rel err {worst:e}",
+        sol.frequencies_hz.len(),
+        doubles,
+        sol.slices.len(),
+        sol.sturm_count
+    );
+    assert!(doubles > 50);
+    assert_eq!(sol.sturm_count, idx + 1);
+    assert!(worst < 1e-8);
+}
+
+#[test]
+fn bad_input_is_an_error_not_a_panic() {
+    let (k, m) = bar(10, 1.0, 1.0, 1.0);
+    let (k2, _) = bar(11, 1.0, 1.0, 1.0);
+    assert!(matches!(
+        solve(k2.as_ref(), m.as_ref(), &EigenOptions::new(1.0), None),
+        Err(EigenError::DimensionMismatch { .. })
+    ));
+    assert!(matches!(
+        solve(k.as_ref(), m.as_ref(), &EigenOptions::new(-1.0), None),
+        Err(EigenError::InvalidOption { .. })
+    ));
+    // Negative mass: K − σ₀M is indefinite at σ₀ < 0.
+    let (k, _) = bar(10, 1.0, 1.0, 1.0);
+    let (_, mneg) = bar(10, 1.0, 1.0, -1.0);
+    assert!(matches!(
+        solve(k.as_ref(), mneg.as_ref(), &EigenOptions::new(1.0), None),
+        Err(EigenError::NotSemiDefinite { .. })
+    ));
+}
+
+#[test]
+fn grounded_lattice_from_zero_moves_first_shift_up_and_matches_dense() {
+    // Grounded: no eigenvalue near 0, so the first slice starts at 0.9 λ₁ (Sturm count 0
+    // there is proven by the factorisation) instead of the negative shift.
+    let (k, m) = lattice3d(5, 4, 4, 5e7, 3);
+    let dense = dense_eigenvalues(&k, &m);
+    let f_max = lambda_to_hz(0.5 * (dense[119] + dense[120]));
+    let mut o = EigenOptions::new(f_max);
+    o.block_size = 8;
+    o.modes_per_slice = 50;
+    let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+    assert_quality(&sol);
+    let worst = check_against_dense(&sol, &dense, 0.0, f_max);
+    eprintln!(
+        "grounded lattice from 0: {} modes, first slice starts at {:.1} Hz (f1 = {:.1} Hz), worst rel err {worst:e}",
+        sol.frequencies_hz.len(),
+        lambda_to_hz(sol.slices[0].shift_lo_rad2_s2),
+        sol.frequencies_hz[0]
+    );
+    assert_eq!(sol.frequencies_hz.len(), 120);
+    assert!(sol.slices[0].shift_lo_rad2_s2 > 0.5 * sol.eigenvalues_rad2_s2[0]);
+    assert!(worst < 1e-8);
+}
