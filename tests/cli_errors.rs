@@ -183,3 +183,8 @@ fn mesh_command_json_vtu_and_matrix_market() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn contact_rejects_a_negative_friction_coefficient_cleanly() {
+    assert_clean_error(&["contact", "--friction", "-0.4"], &["friction"]);
+}

@@ -1,5 +1,6 @@
 //! Command definitions (clap) and dispatch. Each command lives in its own file.
 
+mod contact_cmd;
 mod mesh_cmd;
 mod model_cmd;
 
@@ -49,6 +50,9 @@ enum Command {
     Model(model_cmd::ModelCmd),
     /// Build the 3D FE track model and print its summary (nodes, DOFs, section, masses).
     Mesh(mesh_cmd::MeshCmd),
+    /// Solve the wheel-rail contact (Hertz, half-space grid, Kalker tangential contact).
+    #[command(allow_negative_numbers = true)]
+    Contact(contact_cmd::ContactCmd),
 }
 
 /// Runs the parsed command.
@@ -56,5 +60,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Model(c) => c.run(),
         Command::Mesh(c) => c.run(),
+        Command::Contact(c) => c.run(),
     }
 }

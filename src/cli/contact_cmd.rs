@@ -1,0 +1,88 @@
+//! `corrugation contact`: solve the wheel–rail contact of the model.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+
+use corrugation::contact::report::{solve_case, ContactCase, TangentialLoading};
+
+use super::ModelArgs;
+
+/// Solves the wheel–rail contact (Hertz + half-space grid, Kalker's exact tangential theory)
+/// for the model's wheel, rail crown, steel, load and friction.
+#[derive(Debug, Args)]
+pub struct ContactCmd {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Normal load (N). Default: vehicle.wheel_load.
+    #[arg(long, value_name = "N")]
+    normal_load: Option<f64>,
+    /// Prescribed longitudinal creepage (−; positive = braking).
+    #[arg(long, value_name = "X", conflicts_with = "traction_coefficient")]
+    creepage: Option<f64>,
+    /// Prescribed traction coefficient F_x/N (−; positive = driving). Default:
+    /// contact.traction_coefficient.
+    #[arg(long, value_name = "T")]
+    traction_coefficient: Option<f64>,
+    /// Friction coefficient (−). Default: contact.friction.
+    #[arg(long, value_name = "MU")]
+    friction: Option<f64>,
+    /// 1 = steady rolling; K > 1 = transient rolling from rest over K grid steps.
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    steps: usize,
+    /// Print the result as one JSON object.
+    #[arg(long)]
+    json: bool,
+    /// Write pressure, traction, slip and frictional-power fields (CSV and .npy) into DIR.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+impl ContactCmd {
+    pub fn run(self) -> anyhow::Result<()> {
+        let m = self.model.load()?;
+        let tangential = match (self.creepage, self.traction_coefficient) {
+            (Some(x), _) => TangentialLoading::Creepage(x),
+            (None, Some(t)) => TangentialLoading::TractionCoefficient(t),
+            (None, None) => TangentialLoading::TractionCoefficient(m.contact.traction_coefficient),
+        };
+        let case = ContactCase {
+            wheel_radius_m: m.wheel.radius,
+            crown_radius_m: m.contact.rail_crown_radius,
+            youngs_pa: m.rail.youngs_modulus,
+            poisson: m.rail.poisson_ratio,
+            normal_load_n: self.normal_load.unwrap_or(m.vehicle.wheel_load),
+            friction: self.friction.unwrap_or(m.contact.friction),
+            tangential,
+            speed_m_per_s: m.run.speed(),
+            steps: self.steps,
+            ..ContactCase::default()
+        };
+        let sol = solve_case(&case).context("solving the contact")?;
+        let s = sol.summary();
+        if let Some(dir) = &self.out {
+            sol.write_fields(dir)
+                .with_context(|| format!("writing contact fields to {}", dir.display()))?;
+        }
+        if self.json {
+            println!("{}", serde_json::to_string_pretty(&s)?);
+        } else {
+            println!(
+                "wheel-rail contact: N = {:.1} kN, mu = {}",
+                case.normal_load_n / 1e3,
+                case.friction
+            );
+            println!("  a (along rail)      {:.3} mm", s.a_mm);
+            println!("  b (across)          {:.3} mm", s.b_mm);
+            println!("  p0                  {:.1} MPa", s.p0_mpa);
+            println!("  approach            {:.2} um", s.approach_um);
+            println!("  contact area        {:.2} mm^2", s.area_mm2);
+            println!("  F_x (on the wheel)  {:.1} N", s.fx_n);
+            println!("  F_y                 {:.1} N", s.fy_n);
+            println!("  creepage            {:.6e}", s.creepage);
+            println!("  slip-area fraction  {:.3}", s.slip_area_fraction);
+        }
+        Ok(())
+    }
+}
