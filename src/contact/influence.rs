@@ -176,6 +176,8 @@ pub struct Convolver {
     pub lambda_max_t: f64,
     /// Self-influence (diagonal) of the normal operator (m/Pa).
     pub diag_n: f64,
+    /// Self-influence (diagonal, mean of xx and yy) of the tangential operator (m/Pa).
+    pub diag_t: f64,
 }
 
 impl Convolver {
@@ -208,6 +210,7 @@ impl Convolver {
             }
         }
         let diag_n = kz[0].re;
+        let diag_t = 0.5 * (kx[0].re + ky[0].re);
         let scale = 1.0 / (m1 * m2) as f64;
         let mut spec = |k: &mut Vec<Complex64>| -> Vec<Complex64> {
             fft.forward_to_t(k, m1);
@@ -243,6 +246,7 @@ impl Convolver {
             lambda_max_n,
             lambda_max_t,
             diag_n,
+            diag_t,
         }
     }
 

@@ -58,7 +58,8 @@ impl TangentialSolver {
     /// Active-set conjugate gradients (the tangential analogue of Polonsky & Keer 1999, cf.
     /// Vollebregt's TangCG): CG on the adhesion set, elements that exceed the traction bound
     /// are projected onto it and join the slip set, slip elements take the direction
-    /// `τ = −g S/|S|` and are released to adhesion when `S·τ > 0`; CG restarts whenever the
+    /// the direction of the local trial traction `τ − S/C_ii` (Kalker's element test) and are
+    /// released to adhesion when that trial lies inside the disc; CG restarts whenever the
     /// sets change.
     pub fn solve(
         &mut self,
@@ -88,6 +89,7 @@ impl TangentialSolver {
         let mut rr_old = 0.0;
         let mut restart = true;
         let mut last = f64::INFINITY;
+        let cd = conv.diag_t;
         for it in 1..=self.cg_iterations {
             conv.tangential(tx, ty, &mut self.sx, &mut self.sy, 0);
             let mut changed = false;
@@ -102,17 +104,19 @@ impl TangentialSolver {
                     continue;
                 }
                 if self.slip[i] {
-                    if sx * tx[i] + sy * ty[i] > 0.0 {
+                    // local element problem (Kalker's Gauss–Seidel test): the traction this
+                    // element would take with the others frozen decides stick or slip
+                    let trx = tx[i] - sx / cd;
+                    let try_ = ty[i] - sy / cd;
+                    let tm = (trx * trx + try_ * try_).sqrt();
+                    if tm < g[i] {
                         self.slip[i] = false;
                         changed = true;
                     } else {
-                        let sm = (sx * sx + sy * sy).sqrt();
-                        if sm > 0.0 {
-                            let (nx, ny) = (-g[i] * sx / sm, -g[i] * sy / sm);
-                            diff = diff.max((nx - tx[i]).abs()).max((ny - ty[i]).abs());
-                            tx[i] = nx;
-                            ty[i] = ny;
-                        }
+                        let (nx, ny) = (g[i] * trx / tm, g[i] * try_ / tm);
+                        diff = diff.max((nx - tx[i]).abs()).max((ny - ty[i]).abs());
+                        tx[i] = nx;
+                        ty[i] = ny;
                         continue;
                     }
                 }
@@ -151,7 +155,6 @@ impl TangentialSolver {
                     if ax * ax + ay * ay >= g[i] * g[i] {
                         project(&mut ax, &mut ay, g[i]);
                         self.slip[i] = true;
-                        restart = true;
                     }
                     diff = diff.max((ax - ox).abs()).max((ay - oy).abs());
                     tx[i] = ax;
@@ -161,7 +164,7 @@ impl TangentialSolver {
             }
             restart |= changed;
             last = diff / tmax.max(1e-12 * gmax);
-            if last < self.tol && !restart {
+            if last < self.tol && !changed {
                 conv.tangential(tx, ty, &mut self.sx, &mut self.sy, 0);
                 for i in 0..n {
                     self.sx[i] += ex[i];
