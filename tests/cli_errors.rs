@@ -188,3 +188,38 @@ fn mesh_command_json_vtu_and_matrix_market() {
 fn contact_rejects_a_negative_friction_coefficient_cleanly() {
     assert_clean_error(&["contact", "--friction", "-0.4"], &["friction"]);
 }
+
+#[test]
+fn contact_command_json_keys_and_hertz_geometry() {
+    // Transient rolling from rest over 20 grid steps with a prescribed creepage: the normal
+    // part is the Hertz problem of the model (a = 7.162 mm, b = 5.387 mm, p0 = 1237.6 MPa,
+    // approach 104.1 µm for the reference wheel on the R300 crown, design-notes.md).
+    let (code, out, err) = run(&["contact", "--json", "--creepage", "-0.001", "--steps", "20"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for key in [
+        "a_mm",
+        "b_mm",
+        "p0_mpa",
+        "approach_um",
+        "area_mm2",
+        "fx_n",
+        "fy_n",
+        "creepage",
+        "slip_area_fraction",
+    ] {
+        assert!(v[key].is_number(), "missing {key}: {out}");
+    }
+    let rel = |k: &str, want: f64| (v[k].as_f64().unwrap() - want).abs() / want;
+    assert!(
+        rel("a_mm", 7.162) < 0.02 && rel("b_mm", 5.387) < 0.02,
+        "{out}"
+    );
+    assert!(
+        rel("approach_um", 104.1) < 0.01 && rel("p0_mpa", 1237.6) < 0.02,
+        "{out}"
+    );
+    // Driving creepage (ξ < 0) gives a positive force on the wheel, below µN.
+    let fx = v["fx_n"].as_f64().unwrap();
+    assert!(fx > 0.0 && fx < 0.4 * 100e3, "{out}");
+}
