@@ -105,6 +105,29 @@ pub struct Model {
     pub mesh: MeshParams,
     /// Run parameters of a passage.
     pub run: Run,
+    /// Wear law (method.md §4).
+    pub wear: Wear,
+    /// The full explicit FE path (reference solver of method.md §3).
+    pub explicit: Explicit,
+}
+
+/// Wear law: W_f = k Σ τ·s·Δt (method.md §4).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Wear {
+    /// Wear coefficient k (m³/J or any consistent unit): only relative (differential) wear is
+    /// judged, so k scales the wear and never shapes it.
+    pub coefficient: f64,
+}
+
+/// The full explicit FE path (used to confirm the reduced model's frequency selection).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Explicit {
+    /// Element length along the rail in the solution zone (m); the reference uses 0.8 mm.
+    pub element_length: f64,
+    /// Time step (s); the reference uses 4.67e-8 s, below the Courant limit 0.9 h / c_d.
+    pub time_step: f64,
 }
 
 /// Track layout.
@@ -131,6 +154,9 @@ pub struct Rail {
     pub poisson_ratio: f64,
     /// Density (kg/m³).
     pub density: f64,
+    /// Stiffness-proportional (Rayleigh β) structural damping of the steel (s); 0 in the
+    /// reference, where all damping sits in the discrete dampers.
+    pub structural_damping: f64,
 }
 
 /// Half monoblock sleeper as a solid block.
@@ -533,6 +559,7 @@ impl Model {
             "(tan of cant angle)",
         )?;
         c.elastic("rail", r.youngs_modulus, r.poisson_ratio, r.density)?;
+        c.range("rail.structural_damping", r.structural_damping, 0.0, 1e-3, "s (Rayleigh beta)")?;
         let s = &self.sleeper;
         c.pos("sleeper.length", s.length, 5.0, "m")?;
         c.pos(
@@ -737,6 +764,13 @@ impl Model {
             10.0,
             "m",
         )?;
+        c.pos("wear.coefficient", self.wear.coefficient, 1e6, "(relative scale)")?;
+        c.range("explicit.element_length", self.explicit.element_length, 1e-4, 0.01, "m")?;
+        // Courant: the dilatational wave must not cross an element in one step.
+        let nu = r.poisson_ratio;
+        let c_d = (r.youngs_modulus * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu)) / r.density).sqrt();
+        let dt_max = self.explicit.element_length / c_d;
+        c.pos("explicit.time_step", self.explicit.time_step, dt_max, "s (below the Courant limit h / c_d)")?;
         let room = self.track_length() - run.solution_zone_offset;
         c.pos(
             "run.solution_zone_length",

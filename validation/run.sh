@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Heavy validation runs, kept out of CI (each is minutes on 2 cores). Run from the repo root:
+#   bash validation/run.sh            # everything
+#   bash validation/run.sh contact    # one group: contact | modes | bench
+# Results are printed; compare them with the expectations in validation/README.md.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+group="${1:-all}"
+
+if [[ "$group" == all || "$group" == contact ]]; then
+  echo "== contact: Kalker creep coefficients on a 48x48 grid (within 2 %), Carter on 200 cells"
+  cargo test --release --lib contact::tests -- --ignored --nocapture
+fi
+if [[ "$group" == all || "$group" == modes ]]; then
+  echo "== modes: all track modes below 2 kHz of the default model (Sturm-checked)"
+  cargo run --release --example track_modes_bench -- 2000
+  echo "== modes: RPM1 for comparison"
+  cargo run --release --example track_modes_bench -- 2000 --set fastening.model=RPM1
+fi
+if [[ "$group" == all || "$group" == bench ]]; then
+  echo "== benchmarks"
+  cargo run --release --example assembly_bench
+  cargo run --release --example contact_bench
+  /usr/bin/time -v cargo run --release -- mesh 2>&1 | grep -E "free DOFs|build|Maximum resident|Elapsed"
+fi
