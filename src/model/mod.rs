@@ -559,7 +559,13 @@ impl Model {
             "(tan of cant angle)",
         )?;
         c.elastic("rail", r.youngs_modulus, r.poisson_ratio, r.density)?;
-        c.range("rail.structural_damping", r.structural_damping, 0.0, 1e-3, "s (Rayleigh beta)")?;
+        c.range(
+            "rail.structural_damping",
+            r.structural_damping,
+            0.0,
+            1e-3,
+            "s (Rayleigh beta)",
+        )?;
         let s = &self.sleeper;
         c.pos("sleeper.length", s.length, 5.0, "m")?;
         c.pos(
@@ -601,16 +607,7 @@ impl Model {
             "m (at most one grid cell)",
         )?;
         c.range("fastening.pad_thickness", f.pad_thickness, 0.0, 0.05, "m")?;
-        for (k, v) in [
-            ("vertical_stiffness", f.vertical_stiffness),
-            ("vertical_damping", f.vertical_damping),
-            ("lateral_stiffness", f.lateral_stiffness),
-            ("lateral_damping", f.lateral_damping),
-            ("longitudinal_stiffness", f.longitudinal_stiffness),
-            ("longitudinal_damping", f.longitudinal_damping),
-        ] {
-            c.range(&format!("fastening.{k}"), v, 0.0, 1e12, "(N/m or N s/m)")?;
-        }
+        c.spring_damper("fastening", f.stiffness(), f.damping())?;
         match (f.model, &f.custom) {
             (FasteningModel::Custom, None) => {
                 return Err(ModelError::Key {
@@ -664,16 +661,7 @@ impl Model {
             (_, None) => {}
         }
         let b = &self.ballast;
-        for (k, v) in [
-            ("vertical_stiffness", b.vertical_stiffness),
-            ("vertical_damping", b.vertical_damping),
-            ("lateral_stiffness", b.lateral_stiffness),
-            ("lateral_damping", b.lateral_damping),
-            ("longitudinal_stiffness", b.longitudinal_stiffness),
-            ("longitudinal_damping", b.longitudinal_damping),
-        ] {
-            c.range(&format!("ballast.{k}"), v, 0.0, 1e12, "(N/m or N s/m)")?;
-        }
+        c.spring_damper("ballast", b.stiffness(), b.damping())?;
         // Sleepers float on the ballast: they need a spring in every direction.
         for (k, v) in [
             ("vertical_stiffness", b.vertical_stiffness),
@@ -764,13 +752,30 @@ impl Model {
             10.0,
             "m",
         )?;
-        c.pos("wear.coefficient", self.wear.coefficient, 1e6, "(relative scale)")?;
-        c.range("explicit.element_length", self.explicit.element_length, 1e-4, 0.01, "m")?;
+        c.pos(
+            "wear.coefficient",
+            self.wear.coefficient,
+            1e6,
+            "(relative scale)",
+        )?;
+        c.range(
+            "explicit.element_length",
+            self.explicit.element_length,
+            1e-4,
+            0.01,
+            "m",
+        )?;
         // Courant: the dilatational wave must not cross an element in one step.
         let nu = r.poisson_ratio;
-        let c_d = (r.youngs_modulus * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu)) / r.density).sqrt();
+        let c_d =
+            (r.youngs_modulus * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu)) / r.density).sqrt();
         let dt_max = self.explicit.element_length / c_d;
-        c.pos("explicit.time_step", self.explicit.time_step, dt_max, "s (below the Courant limit h / c_d)")?;
+        c.pos(
+            "explicit.time_step",
+            self.explicit.time_step,
+            dt_max,
+            "s (below the Courant limit h / c_d)",
+        )?;
         let room = self.track_length() - run.solution_zone_offset;
         c.pos(
             "run.solution_zone_length",
@@ -813,6 +818,27 @@ impl Checker<'_> {
         }
         Ok(())
     }
+    /// Stiffness (N/m) and damping (N·s/m) in x, y, z under `prefix`: each 0 to 1e12.
+    fn spring_damper(&mut self, prefix: &str, k: [f64; 3], c: [f64; 3]) -> Result<(), ModelError> {
+        for (d, name) in ["longitudinal", "lateral", "vertical"].iter().enumerate() {
+            self.range(
+                &format!("{prefix}.{name}_stiffness"),
+                k[d],
+                0.0,
+                1e12,
+                "N/m",
+            )?;
+            self.range(
+                &format!("{prefix}.{name}_damping"),
+                c[d],
+                0.0,
+                1e12,
+                "N s/m",
+            )?;
+        }
+        Ok(())
+    }
+
     fn int(&mut self, key: &str, v: usize, lo: usize, hi: usize) -> Result<(), ModelError> {
         if v < lo || v > hi {
             return self.fail(key, v.to_string(), format!("{lo} to {hi}"));

@@ -208,5 +208,8 @@ fn explicit_time_step_above_the_courant_limit_is_rejected() {
     // c_d of steel (E 210 GPa, ν 0.3, ρ 7800) = 6020 m/s: at 0.8 mm the limit is 1.33e-7 s.
     assert!(dutch_with(&["explicit.time_step=1.3e-7"]).is_ok());
     let e = err_text(dutch_with(&["explicit.time_step=1.4e-7"]));
-    assert!(e.contains("explicit.time_step") && e.contains("Courant"), "{e}");
+    assert!(
+        e.contains("explicit.time_step") && e.contains("Courant"),
+        "{e}"
+    );
 }

@@ -20,6 +20,14 @@ pub mod wheel;
 pub use track::TrackStructure;
 pub use wheel::WheelStructure;
 
+/// The FE mass-matrix kind of the model's `mesh.mass`.
+fn mass_kind(k: crate::model::MassKind) -> crate::fe::assembly::MassKind {
+    match k {
+        crate::model::MassKind::Lumped => crate::fe::assembly::MassKind::Lumped,
+        crate::model::MassKind::Consistent => crate::fe::assembly::MassKind::Consistent,
+    }
+}
+
 /// Errors while building a substructure.
 #[derive(Debug, thiserror::Error)]
 pub enum StructureError {

@@ -154,10 +154,7 @@ impl TrackStructure {
             sleepers,
             layout,
             section_properties,
-            mass: match m.mesh.mass {
-                crate::model::MassKind::Lumped => MassKind::Lumped,
-                crate::model::MassKind::Consistent => MassKind::Consistent,
-            },
+            mass: super::mass_kind(m.mesh.mass),
         })
     }
 

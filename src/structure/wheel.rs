@@ -114,10 +114,7 @@ impl WheelStructure {
             sprung_mass,
             unsprung_mass,
             params,
-            mass: match m.mesh.mass {
-                crate::model::MassKind::Lumped => MassKind::Lumped,
-                crate::model::MassKind::Consistent => MassKind::Consistent,
-            },
+            mass: super::mass_kind(m.mesh.mass),
         })
     }
 
