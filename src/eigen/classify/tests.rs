@@ -199,3 +199,125 @@ fn wavelength_on_a_graded_grid() {
     assert!((l - 0.25).abs() < 1e-3, "{l}");
     assert_eq!(wavelength_from_crossings(&x, &vec![0.0; x.len()]), None);
 }
+
+/// Small custom-held track (4 bays, coarse mesh) with the given `fastening.custom` table.
+fn custom_track(custom: &str) -> TrackStructure {
+    let o: Vec<String> = [
+        "track.bays=4",
+        "mesh.element_length=0.05",
+        "mesh.fine_element_length=0.05",
+        "mesh.section_size=0.03",
+        "mesh.head_size=0.015",
+        "fastening.model=\"custom\"",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .chain([format!("fastening.custom={custom}")])
+    .collect();
+    TrackStructure::build(&load_model(&ModelSource::Builtin, &o).unwrap()).unwrap()
+}
+
+fn solve_and_classify(t: &TrackStructure, f_max: f64) -> (Vec<f64>, Vec<TrackModeClass>) {
+    let (mats, _) = t.assemble().unwrap();
+    let sol = crate::eigen::solve(
+        mats.k.as_ref(),
+        mats.m.as_ref(),
+        &crate::eigen::EigenOptions::new(f_max),
+        None,
+    )
+    .unwrap();
+    let c = TrackClassifier::new(t).unwrap();
+    let classes = (0..sol.frequencies_hz.len())
+        .map(|j| {
+            let u: Vec<f64> = (0..sol.modes.nrows()).map(|i| sol.modes[(i, j)]).collect();
+            c.classify(t, &u).unwrap()
+        })
+        .collect();
+    (sol.frequencies_hz, classes)
+}
+
+/// Bar-like rail: the whole foot underside held in y and z, x free (pads have no
+/// longitudinal stiffness): the rail is a free–free bar along x. Its longitudinal modes are at
+/// f_n = n c / (2L), c = √(E/ρ) (1D bar; the 3D section adds a small Love (lateral inertia)
+/// correction, ν² n² π² r_p²/L² ≈ 1e-4 here). Those modes must classify as
+/// longitudinal_compression, the n = 2 one with wavelength L.
+/// Run: `cargo test --release --lib classify::tests::bar_like -- --ignored` (~10 s in dev).
+#[test]
+#[ignore = "eigen solve of a 4-bay rail (~10 s)"]
+fn bar_like_rail_longitudinal_modes_are_compression() {
+    let t = custom_track(
+        "{x={rigid=\"none\",indices=[]},y={rigid=\"continuous\",indices=[]},z={rigid=\"continuous\",indices=[]}}",
+    );
+    let (f, cl) = solve_and_classify(&t, 2400.0);
+    let m = &t.materials[crate::structure::track::RAIL_MATERIAL];
+    let c = (m.youngs_modulus / m.density).sqrt();
+    let l = t.layout.length;
+    for n in [1.0, 2.0] {
+        let f_n = n * c / (2.0 * l);
+        let (j, fj) = f
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| cl[*j].family == TrackFamily::LongitudinalCompression)
+            .map(|(j, &x)| (j, x))
+            .min_by(|a, b| (a.1 - f_n).abs().total_cmp(&(b.1 - f_n).abs()))
+            .expect("a longitudinal_compression mode");
+        eprintln!(
+            "n = {n}: closed form {f_n:.1} Hz, FE {fj:.1} Hz ({:+.3} %), {:?}",
+            100.0 * (fj / f_n - 1.0),
+            cl[j]
+        );
+        assert!(
+            (fj / f_n - 1.0).abs() < 0.02,
+            "n = {n}: {fj} Hz vs {f_n} Hz"
+        );
+        if n == 2.0 {
+            let lam = cl[j].wavelength_m.unwrap();
+            assert!((lam - l).abs() < 0.05 * l, "λ {lam} vs L {l}");
+        }
+    }
+}
+
+/// Rail on rigid point supports every sleeper spacing (z and x held at the middle fastening
+/// column, lateral pads only): the pinned-pinned mode — vertical bending with nodes at the
+/// supports, wavelength 2 × spacing — must be found and flagged. Closed form bound: the
+/// simply supported Euler–Bernoulli span, f = (π/s)² √(EI/ρA) / 2π (≈ 1.31 kHz for UIC54,
+/// s = 0.6 m); shear and rotary inertia lower it (design-notes: about 1.0–1.1 kHz), the
+/// coarse fully integrated hex8 mesh raises it.
+/// Run: `cargo test --release --lib classify::tests::pinned -- --ignored` (~10 s in dev).
+#[test]
+#[ignore = "eigen solve of a 4-bay rail (~10 s)"]
+fn pinned_pinned_mode_on_rigid_point_supports() {
+    let t = custom_track(
+        "{x={rigid=\"columns\",indices=[1]},y={rigid=\"none\",indices=[]},z={rigid=\"columns\",indices=[1]}}",
+    );
+    let (f, cl) = solve_and_classify(&t, 1500.0);
+    let m = &t.materials[crate::structure::track::RAIL_MATERIAL];
+    let sp = t.section_properties;
+    let s = t.layout.sleepers[1] - t.layout.sleepers[0];
+    let k = std::f64::consts::PI / s;
+    let f_euler =
+        k * k * (m.youngs_modulus * sp.i_vertical_bending_m4 / (m.density * sp.area_m2)).sqrt()
+            / (2.0 * std::f64::consts::PI);
+    for (fi, c) in f.iter().zip(&cl) {
+        eprintln!(
+            "{fi:8.1} Hz {:?} λ {:?} pp {}",
+            c.family, c.wavelength_m, c.pinned_pinned
+        );
+    }
+    let pp: Vec<f64> = f
+        .iter()
+        .zip(&cl)
+        .filter(|(_, c)| c.pinned_pinned)
+        .map(|(&x, _)| x)
+        .collect();
+    eprintln!("pinned-pinned modes {pp:?} Hz, Euler span {f_euler:.0} Hz");
+    assert!(!pp.is_empty(), "no pinned-pinned mode below 1.5 kHz");
+    // Measured: one flagged mode at 1298.3 Hz vs 1296.6 Hz (Euler span). Shear and rotary
+    // inertia would lower it ~15 %, but this coarse hex8 mesh (0.05 m, fully integrated, stiff
+    // in bending) and the supports acting on the foot (x held there too) raise it; the band
+    // checks the mode is the first-pass-band top of a 0.6 m span, not a mode of another span.
+    assert!(
+        pp.iter().all(|&x| x > 0.75 * f_euler && x < 1.15 * f_euler),
+        "{pp:?} vs {f_euler}"
+    );
+}
