@@ -321,3 +321,47 @@ fn pinned_pinned_mode_on_rigid_point_supports() {
         "{pp:?} vs {f_euler}"
     );
 }
+
+fn small_wheel() -> WheelStructure {
+    let o: Vec<String> = ["mesh.wheel_segments=16", "mesh.wheel_element_size=0.05"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    WheelStructure::build(&load_model(&ModelSource::Builtin, &o).unwrap()).unwrap()
+}
+
+/// Free vector of `f(x, y, z)` on the wheel nodes (sprung node still).
+fn wheel_field(w: &WheelStructure, f: impl Fn(f64, f64, f64) -> [f64; 3]) -> Vec<f64> {
+    let mut u = vec![0.0; 3 * w.mesh.nodes.len()];
+    for (n, p) in w.mesh.nodes.iter().enumerate() {
+        if n != w.sprung_node {
+            u[3 * n..3 * n + 3].copy_from_slice(&f(p[0], p[1], p[2]));
+        }
+    }
+    w.dofmap.restrict(&u).unwrap()
+}
+
+#[test]
+fn wheel_fields_of_known_shape() {
+    let w = small_wheel();
+    // Rigid translation along x: no strain energy anywhere (conservation: a rigid motion of
+    // a solid stores none; the suspension acts in z only).
+    let r = classify_wheel_mode(&w, &wheel_field(&w, |_, _, _| [1.0, 0.0, 0.0]), 0.0).unwrap();
+    assert_eq!(r.family, WheelFamily::Rigid);
+    assert!(r.rigid);
+    // Umbrella: u_y = (r/R)², axial everywhere, elastic.
+    let rr = w.params.radius_m;
+    let um = wheel_field(&w, |x, _, z| [0.0, (x * x + z * z) / (rr * rr), 0.0]);
+    let r = classify_wheel_mode(&w, &um, 500.0).unwrap();
+    assert_eq!(r.family, WheelFamily::Axial, "{r:?}");
+    assert!(r.energy_wheel > 0.99 && (r.rim_shares[1] - 1.0).abs() < 1e-12);
+    // Uniform radial expansion u = ε (x, 0, z): radial, elastic.
+    let ex = wheel_field(&w, |x, _, z| [1e-3 * x, 0.0, 1e-3 * z]);
+    let r = classify_wheel_mode(&w, &ex, 500.0).unwrap();
+    assert_eq!(r.family, WheelFamily::Radial, "{r:?}");
+    assert!((r.rim_shares[0] - 1.0).abs() < 1e-12);
+    assert!(matches!(
+        classify_wheel_mode(&w, &[1.0], 1.0),
+        Err(ClassifyError::Length { .. })
+    ));
+}
