@@ -93,8 +93,22 @@ fn modes_json_csv_and_cache() {
     assert_eq!(csv_a.lines().count() as u64, count + 1);
     // Energy shares of each row sum to 1 (or are all 0).
     for line in csv_a.lines().skip(1) {
-        let v: Vec<f64> = line.split(',').map(|s| s.parse().unwrap()).collect();
-        let s: f64 = v[7..11].iter().sum();
+        let v: Vec<&str> = line.split(',').collect();
+        let s: f64 = v[7..11].iter().map(|s| s.parse::<f64>().unwrap()).sum();
+        assert!(
+            [
+                "longitudinal_compression",
+                "longitudinal_shear",
+                "vertical_bending",
+                "lateral_bending",
+                "torsion",
+                "sleeper",
+                "local",
+                "other"
+            ]
+            .contains(&v[2]),
+            "{line}"
+        );
         assert!((s - 1.0).abs() < 1e-9 || s == 0.0, "{line}");
     }
 

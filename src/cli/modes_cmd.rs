@@ -2,11 +2,12 @@
 //! classified by shape, cached on disk.
 //!
 //! Outputs in `--out DIR` (default `corrugation-out/modes`):
-//! * `modes.csv` — one row per track mode (see [`TRACK_HEADER`]); `family` is the index in
-//!   `TrackFamily::ALL` (0 longitudinal_compression, 1 longitudinal_shear, 2 vertical_bending,
-//!   3 lateral_bending, 4 torsion, 5 sleeper, 6 local, 7 other), `wavelength_m` is empty-as-0
-//!   (0 = undefined, fewer than two zero crossings), `pinned_pinned` 0/1;
-//! * `wheel_modes.csv` — one row per wheel mode (family 0 rigid, 1 axial, 2 radial, 3 other);
+//! * `modes.csv` — one row per track mode (see [`TRACK_HEADER`]); `family` is the snake_case
+//!   name (longitudinal_compression, longitudinal_shear, vertical_bending, lateral_bending,
+//!   torsion, sleeper, local, other), `wavelength_m` is empty when undefined (fewer than two
+//!   zero crossings), `rail_x_*` and `amp_*` are relative to the RMS rail displacement
+//!   (dimensionless), `energy_*` strain-energy shares, `pinned_pinned` 0/1;
+//! * `wheel_modes.csv` — one row per wheel mode (family rigid, axial, radial, other);
 //! * with `--vtu`: `track_mode_NNNN.vtu` and `wheel_mode_NNNN.vtu` for the first
 //!   `--vtu-modes` (default 50) modes of each substructure, mesh + point field `displacement`
 //!   (mode shape, M-normalised, m/√kg) — ParaView "Warp By Vector".
@@ -26,10 +27,10 @@ use serde::Serialize;
 
 use corrugation::eigen::cache::{default_cache_dir, CacheKey, CacheLookup, CacheMeta, ModalCache};
 use corrugation::eigen::classify::{
-    classify_wheel_mode, TrackClassifier, TrackFamily, TrackModeClass, WheelFamily, WheelModeClass,
+    classify_wheel_mode, TrackClassifier, TrackModeClass, WheelModeClass,
 };
 use corrugation::eigen::{solve, EigenOptions};
-use corrugation::io::{write_csv, write_vtu, VtuField, VTK_HEXAHEDRON};
+use corrugation::io::{write_atomic, write_vtu, VtuField, VTK_HEXAHEDRON};
 use corrugation::mesh::Mesh;
 use corrugation::model::Model;
 use corrugation::structure::{TrackStructure, WheelStructure};
@@ -253,54 +254,50 @@ impl ModesCmd {
 
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("creating {}", self.out.display()))?;
-        let p = self.out.join("modes.csv");
-        write_csv(
-            &p,
+        write_text_csv(
+            &self.out.join("modes.csv"),
             &TRACK_HEADER,
             tb.classes.iter().enumerate().map(|(i, c)| {
                 let mut r = vec![
-                    i as f64,
-                    tb.freqs[i],
-                    c.family.code() as f64,
-                    c.rail_x_head,
-                    c.rail_x_web,
-                    c.rail_x_foot,
-                    c.wavelength_m.unwrap_or(0.0),
-                    c.energy.rail,
-                    c.energy.sleepers,
-                    c.energy.fastening,
-                    c.energy.ballast,
-                    tb.residuals.get(i).copied().unwrap_or(f64::NAN),
+                    i.to_string(),
+                    num(tb.freqs[i]),
+                    c.family.name().to_string(),
+                    num(c.rail_x_head),
+                    num(c.rail_x_web),
+                    num(c.rail_x_foot),
+                    c.wavelength_m.map(num).unwrap_or_default(),
+                    num(c.energy.rail),
+                    num(c.energy.sleepers),
+                    num(c.energy.fastening),
+                    num(c.energy.ballast),
+                    tb.residuals.get(i).copied().map(num).unwrap_or_default(),
                 ];
-                r.extend(c.amplitudes);
+                r.extend(c.amplitudes.map(num));
                 r.extend([
-                    c.sleeper_kinetic_share,
-                    c.section_fit,
-                    c.pinned_pinned as u8 as f64,
+                    num(c.sleeper_kinetic_share),
+                    num(c.section_fit),
+                    (c.pinned_pinned as u8).to_string(),
                 ]);
                 r
             }),
-        )
-        .with_context(|| format!("writing {}", p.display()))?;
-        let p = self.out.join("wheel_modes.csv");
-        write_csv(
-            &p,
+        )?;
+        write_text_csv(
+            &self.out.join("wheel_modes.csv"),
             &WHEEL_HEADER,
             wb.classes.iter().enumerate().map(|(i, c)| {
                 vec![
-                    i as f64,
-                    wb.freqs[i],
-                    c.family.code() as f64,
-                    c.rigid as u8 as f64,
-                    c.energy_wheel,
-                    c.energy_suspension,
-                    c.rim_shares[0],
-                    c.rim_shares[1],
-                    c.rim_shares[2],
+                    i.to_string(),
+                    num(wb.freqs[i]),
+                    c.family.name().to_string(),
+                    (c.rigid as u8).to_string(),
+                    num(c.energy_wheel),
+                    num(c.energy_suspension),
+                    num(c.rim_shares[0]),
+                    num(c.rim_shares[1]),
+                    num(c.rim_shares[2]),
                 ]
             }),
-        )
-        .with_context(|| format!("writing {}", p.display()))?;
+        )?;
         if self.vtu {
             write_mode_vtus(
                 &self.out,
@@ -381,7 +378,27 @@ fn print_summary(s: &ModesSummary, out: &Path) {
         }
     }
     println!("written to {}", out.display());
-    let _ = (TrackFamily::ALL, WheelFamily::ALL);
+}
+
+/// Writes a CSV of text cells atomically (numbers formatted by the caller).
+fn write_text_csv(
+    path: &Path,
+    header: &[&str],
+    rows: impl IntoIterator<Item = Vec<String>>,
+) -> anyhow::Result<()> {
+    write_atomic(path, |w| {
+        let mut c = csv::Writer::from_writer(w);
+        c.write_record(header)?;
+        for r in rows {
+            c.write_record(&r)?;
+        }
+        c.flush()
+    })
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+fn num(x: f64) -> String {
+    format!("{x:e}")
 }
 
 fn write_mode_vtus<C>(

@@ -504,7 +504,6 @@ impl TrackClassifier {
         } else {
             TrackEnergyShares::default()
         };
-        let _ = spring_energy; // (total spring energy = fastening + ballast)
         self.classify_shape(&u, energy)
     }
 
