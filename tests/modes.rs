@@ -17,9 +17,9 @@ const SMALL: [&str; 14] = [
     "--set",
     "mesh.head_size=0.015",
     "--set",
-    "mesh.wheel_segments=16",
+    "mesh.wheel_segments=12",
     "--set",
-    "mesh.wheel_element_size=0.05",
+    "mesh.wheel_element_size=0.1",
 ];
 
 fn modes(dir: &Path, out: &str, extra: &[&str]) -> serde_json::Value {
