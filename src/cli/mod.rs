@@ -3,6 +3,7 @@
 mod contact_cmd;
 mod mesh_cmd;
 mod model_cmd;
+mod modes_cmd;
 
 use std::path::PathBuf;
 
@@ -53,6 +54,8 @@ enum Command {
     /// Solve the wheel-rail contact (Hertz, half-space grid, Kalker tangential contact).
     #[command(allow_negative_numbers = true)]
     Contact(contact_cmd::ContactCmd),
+    /// Eigenmodes of the track and the wheel (classified, cached): modes.csv, wheel_modes.csv.
+    Modes(modes_cmd::ModesCmd),
 }
 
 /// Runs the parsed command.
@@ -61,5 +64,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Model(c) => c.run(),
         Command::Mesh(c) => c.run(),
         Command::Contact(c) => c.run(),
+        Command::Modes(c) => c.run(),
     }
 }

@@ -51,6 +51,7 @@
 //! Units: shifts and eigenvalues in rad²/s², frequencies in Hz, times in s.
 
 pub mod cache;
+pub mod classify;
 pub mod factor;
 pub mod lanczos;
 mod spmm;

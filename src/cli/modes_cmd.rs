@@ -1,0 +1,434 @@
+//! `corrugation modes`: eigenmodes of the track and the wheel substructures (separately),
+//! classified by shape, cached on disk.
+//!
+//! Outputs in `--out DIR` (default `corrugation-out/modes`):
+//! * `modes.csv` — one row per track mode (see [`TRACK_HEADER`]); `family` is the snake_case
+//!   name (longitudinal_compression, longitudinal_shear, vertical_bending, lateral_bending,
+//!   torsion, sleeper, local, other), `wavelength_m` is empty when undefined (fewer than two
+//!   zero crossings), `rail_x_*` and `amp_*` are relative to the RMS rail displacement
+//!   (dimensionless), `energy_*` strain-energy shares, `pinned_pinned` 0/1;
+//! * `wheel_modes.csv` — one row per wheel mode (family rigid, axial, radial, other);
+//! * with `--vtu`: `track_mode_NNNN.vtu` and `wheel_mode_NNNN.vtu` for the first
+//!   `--vtu-modes` (default 50) modes of each substructure, mesh + point field `displacement`
+//!   (mode shape, M-normalised, m/√kg) — ParaView "Warp By Vector".
+//!
+//! Cache: key = blake3 over the resolved model (serde_json), f_max, the substructure name and
+//! the program version ([`CacheKey`]); the classification is stored in the entry's metadata.
+
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+use faer::Mat;
+use serde::Serialize;
+
+use corrugation::eigen::cache::{default_cache_dir, CacheKey, CacheLookup, CacheMeta, ModalCache};
+use corrugation::eigen::classify::{
+    classify_wheel_mode, TrackClassifier, TrackModeClass, WheelModeClass,
+};
+use corrugation::eigen::{solve, EigenOptions};
+use corrugation::io::{write_atomic, write_vtu, VtuField, VTK_HEXAHEDRON};
+use corrugation::mesh::Mesh;
+use corrugation::model::Model;
+use corrugation::structure::{TrackStructure, WheelStructure};
+
+use super::ModelArgs;
+
+/// Columns of `modes.csv`.
+pub const TRACK_HEADER: [&str; 20] = [
+    "index",
+    "frequency_hz",
+    "family",
+    "rail_x_head",
+    "rail_x_web",
+    "rail_x_foot",
+    "wavelength_m",
+    "energy_rail",
+    "energy_sleepers",
+    "energy_fastening",
+    "energy_ballast",
+    "relative_residual",
+    "amp_compression",
+    "amp_shear",
+    "amp_vertical",
+    "amp_lateral",
+    "amp_torsion",
+    "sleeper_kinetic_share",
+    "section_fit",
+    "pinned_pinned",
+];
+
+/// Columns of `wheel_modes.csv`.
+pub const WHEEL_HEADER: [&str; 9] = [
+    "index",
+    "frequency_hz",
+    "family",
+    "rigid",
+    "energy_wheel",
+    "energy_suspension",
+    "rim_radial",
+    "rim_axial",
+    "rim_circumferential",
+];
+
+/// Eigenmodes of the track and the wheel, classified (CSV, optional VTU), cached.
+#[derive(Debug, Args)]
+pub struct ModesCmd {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Upper frequency (Hz): all modes below it.
+    #[arg(long, default_value_t = 5000.0, value_name = "HZ")]
+    fmax: f64,
+    /// Output directory.
+    #[arg(long, default_value = "corrugation-out/modes", value_name = "DIR")]
+    out: PathBuf,
+    /// Write mode shapes as .vtu files (first --vtu-modes modes of each substructure).
+    #[arg(long)]
+    vtu: bool,
+    /// Number of modes written with --vtu.
+    #[arg(long, default_value_t = 50, value_name = "N")]
+    vtu_modes: usize,
+    /// Print a JSON summary.
+    #[arg(long)]
+    json: bool,
+    /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
+    #[arg(long, value_name = "DIR")]
+    cache: Option<PathBuf>,
+}
+
+/// Summary of one substructure.
+#[derive(Debug, Serialize)]
+pub struct SubSummary {
+    pub count: usize,
+    pub fmax_hz: f64,
+    pub sturm_count: usize,
+    pub max_residual: f64,
+    pub seconds: f64,
+    pub cached: bool,
+    pub families: BTreeMap<String, usize>,
+}
+
+/// JSON printed by `modes --json`: the track summary at top level, the wheel under `wheel`.
+#[derive(Debug, Serialize)]
+pub struct ModesSummary {
+    #[serde(flatten)]
+    pub track: SubSummary,
+    pub wheel: SubSummary,
+    pub cache_dir: String,
+}
+
+struct Basis<C> {
+    freqs: Vec<f64>,
+    modes: Mat<f64>,
+    residuals: Vec<f64>,
+    sturm_count: usize,
+    classes: Vec<C>,
+    cached: bool,
+    seconds: f64,
+}
+
+fn progress_bar(msg: &str) -> indicatif::ProgressBar {
+    let pb = if std::io::stderr().is_terminal() {
+        indicatif::ProgressBar::new(0)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    pb.set_message(msg.to_string());
+    pb
+}
+
+fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {
+    (0..modes.nrows()).map(|i| modes[(i, j)]).collect()
+}
+
+/// Loads a basis from the cache or solves, classifies and stores it.
+fn basis<C: Serialize + serde::de::DeserializeOwned>(
+    cache: &ModalCache,
+    key: &CacheKey,
+    name: &str,
+    fmax: f64,
+    mats: impl FnOnce() -> anyhow::Result<corrugation::fe::assembly::FeMatrices>,
+    classify: impl Fn(&[f64], f64) -> anyhow::Result<C>,
+) -> anyhow::Result<Basis<C>> {
+    let t = Instant::now();
+    match cache.load(key) {
+        CacheLookup::Hit(c) => {
+            let classes: Vec<C> = serde_json::from_value(c.meta.classification.clone())
+                .context("cached classification")?;
+            if classes.len() == c.frequencies_hz.len() {
+                return Ok(Basis {
+                    freqs: c.frequencies_hz,
+                    residuals: c.meta.relative_residuals.clone(),
+                    sturm_count: c.meta.sturm_count,
+                    modes: c.modes,
+                    classes,
+                    cached: true,
+                    seconds: t.elapsed().as_secs_f64(),
+                });
+            }
+            eprintln!("modal cache: {name} entry has an incomplete classification; recomputing");
+        }
+        CacheLookup::Corrupt(r) => {
+            eprintln!("modal cache: {name} entry corrupt ({r}); recomputing")
+        }
+        CacheLookup::Miss => {}
+    }
+    let mats = mats()?;
+    let pb = progress_bar(&format!("{name} modes"));
+    let sol = solve(
+        mats.k.as_ref(),
+        mats.m.as_ref(),
+        &EigenOptions::new(fmax),
+        Some(&pb),
+    )
+    .with_context(|| format!("eigenmodes of the {name}"))?;
+    pb.finish_and_clear();
+    let pb = progress_bar(&format!("classifying {name} modes"));
+    pb.set_length(sol.frequencies_hz.len() as u64);
+    let mut classes = Vec::with_capacity(sol.frequencies_hz.len());
+    for (j, &f) in sol.frequencies_hz.iter().enumerate() {
+        classes.push(classify(&column(&sol.modes, j), f)?);
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    let meta = CacheMeta::from_solution(&sol, 0.0, fmax, serde_json::to_value(&classes)?);
+    if let Err(e) = cache.store(key, &sol.frequencies_hz, &sol.modes, meta) {
+        eprintln!("warning: could not store the {name} modes in the cache: {e}");
+    }
+    // serde_json (without its `float_roundtrip` feature) may parse a printed f64 one ulp off.
+    // Use the values exactly as a cache hit will read them back from meta.json (print, then
+    // parse), so that a fresh run and a cached run write identical CSV files.
+    let classes: Vec<C> = serde_json::from_str(&serde_json::to_string(&classes)?)?;
+    let residuals: Vec<f64> =
+        serde_json::from_str(&serde_json::to_string(&sol.relative_residuals)?)?;
+    Ok(Basis {
+        freqs: sol.frequencies_hz,
+        residuals,
+        sturm_count: sol.sturm_count,
+        modes: sol.modes,
+        classes,
+        cached: false,
+        seconds: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// The cache key of one substructure's modal basis.
+pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> anyhow::Result<CacheKey> {
+    Ok(CacheKey::new()
+        .bytes("model", &serde_json::to_vec(m)?)
+        .f64("f_max_hz", fmax_hz)
+        .str("substructure", substructure))
+}
+
+impl ModesCmd {
+    pub fn run(self) -> anyhow::Result<()> {
+        if !(self.fmax.is_finite() && self.fmax > 0.0) {
+            anyhow::bail!("--fmax must be a positive number of Hz (got {})", self.fmax);
+        }
+        let m = self.model.load()?;
+        let cache_dir = self.cache.clone().unwrap_or_else(default_cache_dir);
+        let cache = ModalCache::new(&cache_dir);
+        let track = TrackStructure::build(&m).context("building the track model")?;
+        let wheel = WheelStructure::build(&m).context("building the wheel model")?;
+        let classifier = TrackClassifier::new(&track)?;
+
+        let tb: Basis<TrackModeClass> = basis(
+            &cache,
+            &cache_key(&m, self.fmax, "track")?,
+            "track",
+            self.fmax,
+            || Ok(track.assemble()?.0),
+            |u, _| Ok(classifier.classify(&track, u)?),
+        )?;
+        let wb: Basis<WheelModeClass> = basis(
+            &cache,
+            &cache_key(&m, self.fmax, "wheel")?,
+            "wheel",
+            self.fmax,
+            || Ok(wheel.assemble()?.0),
+            |u, f| Ok(classify_wheel_mode(&wheel, u, f)?),
+        )?;
+
+        std::fs::create_dir_all(&self.out)
+            .with_context(|| format!("creating {}", self.out.display()))?;
+        write_text_csv(
+            &self.out.join("modes.csv"),
+            &TRACK_HEADER,
+            tb.classes.iter().enumerate().map(|(i, c)| {
+                let mut r = vec![
+                    i.to_string(),
+                    num(tb.freqs[i]),
+                    c.family.name().to_string(),
+                    num(c.rail_x_head),
+                    num(c.rail_x_web),
+                    num(c.rail_x_foot),
+                    c.wavelength_m.map(num).unwrap_or_default(),
+                    num(c.energy.rail),
+                    num(c.energy.sleepers),
+                    num(c.energy.fastening),
+                    num(c.energy.ballast),
+                    tb.residuals.get(i).copied().map(num).unwrap_or_default(),
+                ];
+                r.extend(c.amplitudes.map(num));
+                r.extend([
+                    num(c.sleeper_kinetic_share),
+                    num(c.section_fit),
+                    (c.pinned_pinned as u8).to_string(),
+                ]);
+                r
+            }),
+        )?;
+        write_text_csv(
+            &self.out.join("wheel_modes.csv"),
+            &WHEEL_HEADER,
+            wb.classes.iter().enumerate().map(|(i, c)| {
+                vec![
+                    i.to_string(),
+                    num(wb.freqs[i]),
+                    c.family.name().to_string(),
+                    (c.rigid as u8).to_string(),
+                    num(c.energy_wheel),
+                    num(c.energy_suspension),
+                    num(c.rim_shares[0]),
+                    num(c.rim_shares[1]),
+                    num(c.rim_shares[2]),
+                ]
+            }),
+        )?;
+        if self.vtu {
+            write_mode_vtus(
+                &self.out,
+                "track",
+                &track.mesh,
+                &track.dofmap,
+                &tb,
+                self.vtu_modes,
+            )?;
+            write_mode_vtus(
+                &self.out,
+                "wheel",
+                &wheel.mesh,
+                &wheel.dofmap,
+                &wb,
+                self.vtu_modes,
+            )?;
+        }
+
+        let mut tf = BTreeMap::new();
+        for c in &tb.classes {
+            *tf.entry(c.family.name().to_string()).or_insert(0) += 1;
+        }
+        let mut wf = BTreeMap::new();
+        for c in &wb.classes {
+            *wf.entry(c.family.name().to_string()).or_insert(0) += 1;
+        }
+        let sub = |b_count, fam, sturm, res: &[f64], secs, cached| SubSummary {
+            count: b_count,
+            fmax_hz: self.fmax,
+            sturm_count: sturm,
+            max_residual: res.iter().copied().fold(0.0, f64::max),
+            seconds: secs,
+            cached,
+            families: fam,
+        };
+        let s = ModesSummary {
+            track: sub(
+                tb.freqs.len(),
+                tf,
+                tb.sturm_count,
+                &tb.residuals,
+                tb.seconds,
+                tb.cached,
+            ),
+            wheel: sub(
+                wb.freqs.len(),
+                wf,
+                wb.sturm_count,
+                &wb.residuals,
+                wb.seconds,
+                wb.cached,
+            ),
+            cache_dir: cache_dir.display().to_string(),
+        };
+        if self.json {
+            println!("{}", serde_json::to_string_pretty(&s)?);
+        } else {
+            print_summary(&s, &self.out);
+        }
+        Ok(())
+    }
+}
+
+fn print_summary(s: &ModesSummary, out: &Path) {
+    for (name, b) in [("track", &s.track), ("wheel", &s.wheel)] {
+        println!(
+            "{name}: {} modes < {} Hz (Sturm count {}), max residual {:.1e}, {:.2} s{}",
+            b.count,
+            b.fmax_hz,
+            b.sturm_count,
+            b.max_residual,
+            b.seconds,
+            if b.cached { " (cached)" } else { "" }
+        );
+        for (f, n) in &b.families {
+            println!("  {f:<26} {n}");
+        }
+    }
+    println!("written to {}", out.display());
+}
+
+/// Writes a CSV of text cells atomically (numbers formatted by the caller).
+fn write_text_csv(
+    path: &Path,
+    header: &[&str],
+    rows: impl IntoIterator<Item = Vec<String>>,
+) -> anyhow::Result<()> {
+    write_atomic(path, |w| {
+        let mut c = csv::Writer::from_writer(w);
+        c.write_record(header)?;
+        for r in rows {
+            c.write_record(&r)?;
+        }
+        c.flush()
+    })
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+fn num(x: f64) -> String {
+    format!("{x:e}")
+}
+
+fn write_mode_vtus<C>(
+    dir: &Path,
+    name: &str,
+    mesh: &Mesh,
+    dofmap: &corrugation::fe::assembly::DofMap,
+    b: &Basis<C>,
+    limit: usize,
+) -> anyhow::Result<()> {
+    let cells: Vec<(u8, Vec<usize>)> = mesh
+        .elements
+        .iter()
+        .map(|e| (VTK_HEXAHEDRON, e.nodes.to_vec()))
+        .collect();
+    for j in 0..b.freqs.len().min(limit) {
+        let u = dofmap.expand(&column(&b.modes, j))?;
+        let p = dir.join(format!("{name}_mode_{j:04}.vtu"));
+        write_vtu(
+            &p,
+            &mesh.nodes,
+            &cells,
+            &[VtuField {
+                name: "displacement",
+                components: 3,
+                data: &u,
+            }],
+            &[],
+        )
+        .with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(())
+}
