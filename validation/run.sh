@@ -12,6 +12,8 @@ if [[ "$group" == all || "$group" == contact ]]; then
   cargo test --release --lib contact::tests -- --ignored --nocapture
 fi
 if [[ "$group" == all || "$group" == modes ]]; then
+  echo "== modes: bar-like rail longitudinal modes vs n c/2L; pinned-pinned mode on rigid supports"
+  cargo test --release --lib eigen::classify::tests -- --include-ignored --nocapture
   echo "== modes: all track modes below 2 kHz of the default model (Sturm-checked)"
   cargo run --release --example track_modes_bench -- 2000
   echo "== modes: RPM1 for comparison"
