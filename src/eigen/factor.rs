@@ -115,24 +115,18 @@ impl ShiftedSystem {
             col_ptr.push(row_idx.len());
         }
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
-        if ordering == FillOrdering::Auto {
+        let symbolic = if ordering == FillOrdering::Auto {
             // Both analyses are cheap next to one numeric factorisation; keep the sparser.
             let a = Self::analyse(sym, FillOrdering::Amd, n)?;
             let b = Self::analyse(sym, FillOrdering::Identity, n)?;
-            let symbolic = if b.len_val() <= a.len_val() { b } else { a };
-            return Ok(Self {
-                n,
-                col_ptr,
-                row_idx,
-                k_map,
-                m_map,
-                k_val: kv.to_vec(),
-                m_val: mv.to_vec(),
-                symbolic,
-                par,
-            });
-        }
-        let symbolic = Self::analyse(sym, ordering, n)?;
+            if b.len_val() <= a.len_val() {
+                b
+            } else {
+                a
+            }
+        } else {
+            Self::analyse(sym, ordering, n)?
+        };
         Ok(Self {
             n,
             col_ptr,
