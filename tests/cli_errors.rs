@@ -1,19 +1,9 @@
 //! Bad input gets a clear one-line error naming the key, a non-zero exit code and no panic.
 //! These run the real binary.
 
-use std::process::Command;
+mod common;
 
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_corrugation"))
-        .args(args)
-        .output()
-        .expect("binary runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::{run, SMALL_MODEL};
 
 fn assert_clean_error(args: &[&str], must_contain: &[&str]) {
     let (code, _out, err) = run(args);
@@ -117,26 +107,6 @@ fn mesh_command_json_vtu_and_matrix_market() {
     let dir = std::env::temp_dir().join(format!("corrugation-cli-mesh-{}", std::process::id()));
     let vtu = dir.join("mesh.vtu");
     let mtx = dir.join("mtx");
-    let small = [
-        "--set",
-        "track.bays=4",
-        "--set",
-        "run.solution_zone_length=0.5",
-        "--set",
-        "run.solution_zone_offset=0.3",
-        "--set",
-        "mesh.element_length=0.08",
-        "--set",
-        "mesh.fine_element_length=0.08",
-        "--set",
-        "mesh.section_size=0.03",
-        "--set",
-        "mesh.head_size=0.015",
-        "--set",
-        "mesh.wheel_element_size=0.08",
-        "--set",
-        "mesh.wheel_segments=24",
-    ];
     let mut args = vec![
         "mesh",
         "--json",
@@ -145,7 +115,7 @@ fn mesh_command_json_vtu_and_matrix_market() {
         "--mtx",
         mtx.to_str().unwrap(),
     ];
-    args.extend(small);
+    args.extend(SMALL_MODEL);
     let (code, out, err) = run(&args);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).expect("--json prints one JSON object");

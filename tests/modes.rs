@@ -3,42 +3,21 @@
 //! Runs the real binary.
 
 use std::path::Path;
-use std::process::Command;
 
-const SMALL: [&str; 14] = [
-    "--set",
-    "track.bays=4",
-    "--set",
-    "mesh.element_length=0.08",
-    "--set",
-    "mesh.fine_element_length=0.08",
-    "--set",
-    "mesh.section_size=0.03",
-    "--set",
-    "mesh.head_size=0.015",
-    "--set",
-    "mesh.wheel_segments=12",
-    "--set",
-    "mesh.wheel_element_size=0.1",
-];
+mod common;
+
+use common::{run, SMALL_MODEL};
 
 fn modes(dir: &Path, out: &str, extra: &[&str]) -> serde_json::Value {
     let o = dir.join(out);
     let c = dir.join("cache");
     let mut args: Vec<&str> = vec!["modes", "--json", "--fmax", "1000"];
-    args.extend(SMALL);
+    args.extend(SMALL_MODEL);
     args.extend(extra);
     args.extend(["--out", o.to_str().unwrap(), "--cache", c.to_str().unwrap()]);
-    let r = Command::new(env!("CARGO_BIN_EXE_corrugation"))
-        .args(&args)
-        .output()
-        .expect("binary runs");
-    assert!(
-        r.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&r.stderr)
-    );
-    serde_json::from_slice(&r.stdout).expect("JSON on stdout")
+    let (code, out, err) = run(&args);
+    assert_eq!(code, 0, "{args:?}: {err}");
+    serde_json::from_str(&out).expect("JSON on stdout")
 }
 
 #[test]

@@ -1,0 +1,36 @@
+//! Helpers shared by the integration tests that run the real binary.
+#![allow(dead_code)]
+
+use std::process::Command;
+
+/// A small model (4 bays, coarse rail section and wheel) that keeps every part of the physics
+/// and builds in well under a second: `--set` arguments for any command.
+pub const SMALL_MODEL: [&str; 14] = [
+    "--set",
+    "track.bays=4",
+    "--set",
+    "mesh.element_length=0.08",
+    "--set",
+    "mesh.fine_element_length=0.08",
+    "--set",
+    "mesh.section_size=0.03",
+    "--set",
+    "mesh.head_size=0.015",
+    "--set",
+    "mesh.wheel_segments=12",
+    "--set",
+    "mesh.wheel_element_size=0.1",
+];
+
+/// Runs the `corrugation` binary; returns (exit code, stdout, stderr).
+pub fn run(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_corrugation"))
+        .args(args)
+        .output()
+        .expect("binary runs");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
