@@ -18,6 +18,7 @@
 //! | [`eigen`] | shift-invert Lanczos, Sturm check, mode classification, modal cache |
 //! | [`contact`] | Hertz, half-space normal contact, Kalker transient tangential contact, frictional work |
 //! | [`spectral`] | zero-phase band-pass, PSD in wavelength/frequency, peaks, deviations, phase |
+//! | [`dynamics`] | the reduced-order wheel passage: modal synthesis, moving contact, time integration, wear |
 //! | [`structure`] | the track and wheel substructures built from a model: supports, springs, holds |
 //! | [`growth`] | trial corrugation, consistency table (Case 1/2, light/dark green, grey), growth phase |
 //!
@@ -27,6 +28,7 @@
 #![warn(missing_docs)]
 
 pub mod contact;
+pub mod dynamics;
 pub mod eigen;
 pub mod fe;
 pub mod growth;

@@ -1,0 +1,136 @@
+//! The reduced-order wheel passage (method.md §3–4): modal synthesis of the track and the
+//! wheel, the moving frictional rolling contact, time integration, and the frictional work
+//! (wear) along the rail.
+//!
+//! - [`summary`]: what a passage reports to the growth loop, sweeps and studies.
+//! - [`RailProfile`]: a rail-top height profile along the rail (the corrugation).
+//! - [`PassageRunner`]: anything that runs passages at a given speed over a profile — the
+//!   reduced-order engine, or a cheap stand-in in the tests of the later stages.
+
+pub mod summary;
+
+pub use summary::{PassageSummary, WavelengthComponent, WavelengthSpectrum};
+
+use std::path::Path;
+
+/// Errors of the passage. Each variant says what to change.
+#[derive(Debug, thiserror::Error)]
+pub enum DynamicsError {
+    /// A rail profile file could not be read or is malformed.
+    #[error("rail profile {path}: {reason}")]
+    Profile {
+        /// The file.
+        path: String,
+        /// What is wrong and what to change.
+        reason: String,
+    },
+    /// Any other failure of the passage (message says what to change).
+    #[error("{0}")]
+    Other(String),
+}
+
+/// A rail-top height profile along the rail: `height_m[i]` at `x_m[i]`, ascending `x`
+/// (global track coordinate, m). Heights are positive up (a crest reduces the gap to the
+/// wheel). Between samples the height is interpolated linearly; outside it is zero.
+#[derive(Clone, Debug, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct RailProfile {
+    /// Positions along the rail (m), strictly ascending.
+    pub x_m: Vec<f64>,
+    /// Rail-top height (m), positive up.
+    pub height_m: Vec<f64>,
+}
+
+impl RailProfile {
+    /// A profile from samples; checks lengths, finiteness and ascending `x`.
+    pub fn new(x_m: Vec<f64>, height_m: Vec<f64>) -> Result<Self, DynamicsError> {
+        let bad = |reason: String| DynamicsError::Profile {
+            path: "<memory>".into(),
+            reason,
+        };
+        if x_m.len() != height_m.len() {
+            return Err(bad(format!(
+                "{} positions but {} heights",
+                x_m.len(),
+                height_m.len()
+            )));
+        }
+        if x_m.len() < 2 {
+            return Err(bad("need at least two samples".into()));
+        }
+        if let Some(i) = (0..x_m.len()).find(|&i| !x_m[i].is_finite() || !height_m[i].is_finite())
+        {
+            return Err(bad(format!("sample {i} is not a finite number")));
+        }
+        if let Some(i) = (1..x_m.len()).find(|&i| x_m[i] <= x_m[i - 1]) {
+            return Err(bad(format!(
+                "x must be strictly ascending; sample {i} (x = {} m) is not",
+                x_m[i]
+            )));
+        }
+        Ok(Self { x_m, height_m })
+    }
+
+    /// Reads a CSV file with a header line and two columns: `x` in m and the rail-top
+    /// height in µm (the unit users measure corrugation in), converted here to m.
+    pub fn read_csv_um(path: &Path) -> Result<Self, DynamicsError> {
+        let err = |reason: String| DynamicsError::Profile {
+            path: path.display().to_string(),
+            reason,
+        };
+        let mut rdr = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .trim(csv::Trim::All)
+            .comment(Some(b'#'))
+            .from_path(path)
+            .map_err(|e| err(e.to_string()))?;
+        let (mut xs, mut hs) = (Vec::new(), Vec::new());
+        for (line, rec) in rdr.records().enumerate() {
+            let rec = rec.map_err(|e| err(e.to_string()))?;
+            if rec.len() < 2 {
+                return Err(err(format!(
+                    "data row {} has {} column(s); expected `x_m, height_um`",
+                    line + 1,
+                    rec.len()
+                )));
+            }
+            let parse = |s: &str, what: &str| {
+                s.parse::<f64>().map_err(|_| {
+                    err(format!(
+                        "data row {}: {what} `{s}` is not a number",
+                        line + 1
+                    ))
+                })
+            };
+            xs.push(parse(&rec[0], "x (m)")?);
+            hs.push(crate::units::um_to_m(parse(&rec[1], "height (µm)")?));
+        }
+        Self::new(xs, hs).map_err(|e| match e {
+            DynamicsError::Profile { reason, .. } => err(reason),
+            other => other,
+        })
+    }
+
+    /// Height (m) at `x` (m): linear interpolation, zero outside the sampled range.
+    pub fn height_at(&self, x: f64) -> f64 {
+        let n = self.x_m.len();
+        if n < 2 || x < self.x_m[0] || x > self.x_m[n - 1] {
+            return 0.0;
+        }
+        let i = self.x_m.partition_point(|&xi| xi <= x).clamp(1, n - 1);
+        let (x0, x1) = (self.x_m[i - 1], self.x_m[i]);
+        let t = (x - x0) / (x1 - x0);
+        self.height_m[i - 1] * (1.0 - t) + self.height_m[i] * t
+    }
+}
+
+/// Runs passages of one prepared model (modal basis built once) at any speed over any rail
+/// profile. The reduced-order engine implements it; the sweeps and studies take it so that
+/// their logic is tested with cheap stand-ins.
+pub trait PassageRunner: Sync {
+    /// One passage at `speed_kmh` (km/h) over the rail profile (`None` = smooth rail).
+    fn run(
+        &self,
+        speed_kmh: f64,
+        profile: Option<&RailProfile>,
+    ) -> Result<PassageSummary, DynamicsError>;
+}
