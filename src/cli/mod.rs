@@ -4,6 +4,7 @@ mod contact_cmd;
 mod mesh_cmd;
 mod model_cmd;
 mod modes_cmd;
+mod passage_cmd;
 
 use std::path::PathBuf;
 
@@ -56,6 +57,8 @@ enum Command {
     Contact(contact_cmd::ContactCmd),
     /// Eigenmodes of the track and the wheel (classified, cached): modes.csv, wheel_modes.csv.
     Modes(modes_cmd::ModesCmd),
+    /// One reduced-order wheel passage: contact forces, wear along the rail, PSDs, plots.
+    Passage(passage_cmd::PassageCmd),
 }
 
 /// Runs the parsed command.
@@ -65,5 +68,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Mesh(c) => c.run(),
         Command::Contact(c) => c.run(),
         Command::Modes(c) => c.run(),
+        Command::Passage(c) => c.run(),
     }
 }

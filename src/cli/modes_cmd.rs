@@ -16,23 +16,16 @@
 //! the program version ([`CacheKey`]); the classification is stored in the entry's metadata.
 
 use std::collections::BTreeMap;
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use faer::Mat;
 use serde::Serialize;
 
-use corrugation::eigen::cache::{default_cache_dir, CacheKey, CacheLookup, CacheMeta, ModalCache};
-use corrugation::eigen::classify::{
-    classify_wheel_mode, TrackClassifier, TrackModeClass, WheelModeClass,
-};
-use corrugation::eigen::{solve, EigenOptions};
+use corrugation::eigen::basis::{track_basis, wheel_basis, ModalBasis};
+use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::io::{write_atomic, write_vtu, VtuField, VTK_HEXAHEDRON};
 use corrugation::mesh::Mesh;
-use corrugation::model::Model;
 use corrugation::structure::{TrackStructure, WheelStructure};
 
 use super::ModelArgs;
@@ -120,109 +113,6 @@ pub struct ModesSummary {
     pub cache_dir: String,
 }
 
-struct Basis<C> {
-    freqs: Vec<f64>,
-    modes: Mat<f64>,
-    residuals: Vec<f64>,
-    sturm_count: usize,
-    classes: Vec<C>,
-    cached: bool,
-    seconds: f64,
-}
-
-fn progress_bar(msg: &str) -> indicatif::ProgressBar {
-    let pb = if std::io::stderr().is_terminal() {
-        indicatif::ProgressBar::new(0)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    pb.set_message(msg.to_string());
-    pb
-}
-
-fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {
-    (0..modes.nrows()).map(|i| modes[(i, j)]).collect()
-}
-
-/// Loads a basis from the cache or solves, classifies and stores it.
-fn basis<C: Serialize + serde::de::DeserializeOwned>(
-    cache: &ModalCache,
-    key: &CacheKey,
-    name: &str,
-    fmax: f64,
-    mats: impl FnOnce() -> anyhow::Result<corrugation::fe::assembly::FeMatrices>,
-    classify: impl Fn(&[f64], f64) -> anyhow::Result<C>,
-) -> anyhow::Result<Basis<C>> {
-    let t = Instant::now();
-    match cache.load(key) {
-        CacheLookup::Hit(c) => {
-            let classes: Vec<C> = serde_json::from_value(c.meta.classification.clone())
-                .context("cached classification")?;
-            if classes.len() == c.frequencies_hz.len() {
-                return Ok(Basis {
-                    freqs: c.frequencies_hz,
-                    residuals: c.meta.relative_residuals.clone(),
-                    sturm_count: c.meta.sturm_count,
-                    modes: c.modes,
-                    classes,
-                    cached: true,
-                    seconds: t.elapsed().as_secs_f64(),
-                });
-            }
-            eprintln!("modal cache: {name} entry has an incomplete classification; recomputing");
-        }
-        CacheLookup::Corrupt(r) => {
-            eprintln!("modal cache: {name} entry corrupt ({r}); recomputing")
-        }
-        CacheLookup::Miss => {}
-    }
-    let mats = mats()?;
-    let pb = progress_bar(&format!("{name} modes"));
-    let sol = solve(
-        mats.k.as_ref(),
-        mats.m.as_ref(),
-        &EigenOptions::new(fmax),
-        Some(&pb),
-    )
-    .with_context(|| format!("eigenmodes of the {name}"))?;
-    pb.finish_and_clear();
-    let pb = progress_bar(&format!("classifying {name} modes"));
-    pb.set_length(sol.frequencies_hz.len() as u64);
-    let mut classes = Vec::with_capacity(sol.frequencies_hz.len());
-    for (j, &f) in sol.frequencies_hz.iter().enumerate() {
-        classes.push(classify(&column(&sol.modes, j), f)?);
-        pb.inc(1);
-    }
-    pb.finish_and_clear();
-    let meta = CacheMeta::from_solution(&sol, 0.0, fmax, serde_json::to_value(&classes)?);
-    if let Err(e) = cache.store(key, &sol.frequencies_hz, &sol.modes, meta) {
-        eprintln!("warning: could not store the {name} modes in the cache: {e}");
-    }
-    // serde_json (without its `float_roundtrip` feature) may parse a printed f64 one ulp off.
-    // Use the values exactly as a cache hit will read them back from meta.json (print, then
-    // parse), so that a fresh run and a cached run write identical CSV files.
-    let classes: Vec<C> = serde_json::from_str(&serde_json::to_string(&classes)?)?;
-    let residuals: Vec<f64> =
-        serde_json::from_str(&serde_json::to_string(&sol.relative_residuals)?)?;
-    Ok(Basis {
-        freqs: sol.frequencies_hz,
-        residuals,
-        sturm_count: sol.sturm_count,
-        modes: sol.modes,
-        classes,
-        cached: false,
-        seconds: t.elapsed().as_secs_f64(),
-    })
-}
-
-/// The cache key of one substructure's modal basis.
-pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> anyhow::Result<CacheKey> {
-    Ok(CacheKey::new()
-        .bytes("model", &serde_json::to_vec(m)?)
-        .f64("f_max_hz", fmax_hz)
-        .str("substructure", substructure))
-}
-
 impl ModesCmd {
     pub fn run(self) -> anyhow::Result<()> {
         if !(self.fmax.is_finite() && self.fmax > 0.0) {
@@ -233,24 +123,8 @@ impl ModesCmd {
         let cache = ModalCache::new(&cache_dir);
         let track = TrackStructure::build(&m).context("building the track model")?;
         let wheel = WheelStructure::build(&m).context("building the wheel model")?;
-        let classifier = TrackClassifier::new(&track)?;
-
-        let tb: Basis<TrackModeClass> = basis(
-            &cache,
-            &cache_key(&m, self.fmax, "track")?,
-            "track",
-            self.fmax,
-            || Ok(track.assemble()?.0),
-            |u, _| Ok(classifier.classify(&track, u)?),
-        )?;
-        let wb: Basis<WheelModeClass> = basis(
-            &cache,
-            &cache_key(&m, self.fmax, "wheel")?,
-            "wheel",
-            self.fmax,
-            || Ok(wheel.assemble()?.0),
-            |u, f| Ok(classify_wheel_mode(&wheel, u, f)?),
-        )?;
+        let tb = track_basis(&m, &track, &cache, self.fmax)?;
+        let wb = wheel_basis(&m, &wheel, &cache, self.fmax)?;
 
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("creating {}", self.out.display()))?;
@@ -260,7 +134,7 @@ impl ModesCmd {
             tb.classes.iter().enumerate().map(|(i, c)| {
                 let mut r = vec![
                     i.to_string(),
-                    num(tb.freqs[i]),
+                    num(tb.frequencies_hz[i]),
                     c.family.name().to_string(),
                     num(c.rail_x_head),
                     num(c.rail_x_web),
@@ -287,7 +161,7 @@ impl ModesCmd {
             wb.classes.iter().enumerate().map(|(i, c)| {
                 vec![
                     i.to_string(),
-                    num(wb.freqs[i]),
+                    num(wb.frequencies_hz[i]),
                     c.family.name().to_string(),
                     (c.rigid as u8).to_string(),
                     num(c.energy_wheel),
@@ -336,7 +210,7 @@ impl ModesCmd {
         };
         let s = ModesSummary {
             track: sub(
-                tb.freqs.len(),
+                tb.frequencies_hz.len(),
                 tf,
                 tb.sturm_count,
                 &tb.residuals,
@@ -344,7 +218,7 @@ impl ModesCmd {
                 tb.cached,
             ),
             wheel: sub(
-                wb.freqs.len(),
+                wb.frequencies_hz.len(),
                 wf,
                 wb.sturm_count,
                 &wb.residuals,
@@ -406,7 +280,7 @@ fn write_mode_vtus<C>(
     name: &str,
     mesh: &Mesh,
     dofmap: &corrugation::fe::assembly::DofMap,
-    b: &Basis<C>,
+    b: &ModalBasis<C>,
     limit: usize,
 ) -> anyhow::Result<()> {
     let cells: Vec<(u8, Vec<usize>)> = mesh
@@ -414,8 +288,8 @@ fn write_mode_vtus<C>(
         .iter()
         .map(|e| (VTK_HEXAHEDRON, e.nodes.to_vec()))
         .collect();
-    for j in 0..b.freqs.len().min(limit) {
-        let u = dofmap.expand(&column(&b.modes, j))?;
+    for j in 0..b.frequencies_hz.len().min(limit) {
+        let u = dofmap.expand(&b.modes.col(j).iter().copied().collect::<Vec<f64>>())?;
         let p = dir.join(format!("{name}_mode_{j:04}.vtu"));
         write_vtu(
             &p,

@@ -7,6 +7,13 @@
 //! - [`PassageRunner`]: anything that runs passages at a given speed over a profile — the
 //!   reduced-order engine, or a cheap stand-in in the tests of the later stages.
 
+// Numerical kernels index several parallel arrays with one loop index.
+#![allow(clippy::needless_range_loop)]
+
+pub mod analysis;
+pub mod integrator;
+pub mod passage;
+pub mod reduced;
 pub mod summary;
 
 pub use summary::{PassageSummary, WavelengthComponent, WavelengthSpectrum};
@@ -23,6 +30,36 @@ pub enum DynamicsError {
         path: String,
         /// What is wrong and what to change.
         reason: String,
+    },
+    /// The time step is too large for the highest mode kept.
+    #[error("time step {dt_s:.3e} s is unstable for the highest mode ({f_max_hz:.0} Hz): the limit is {dt_limit_s:.3e} s; lower run.fmax or refine the contact grid (contact.grid_nx: the time step is grid dx / speed)")]
+    UnstableTimeStep {
+        /// The time step (s).
+        dt_s: f64,
+        /// The highest natural frequency (Hz).
+        f_max_hz: f64,
+        /// The stable limit (s).
+        dt_limit_s: f64,
+    },
+    /// The contact solver failed at a step.
+    #[error("contact solver at t = {t_s:.6} s (x = {x_m:.4} m): {source}")]
+    Contact {
+        /// Time (s).
+        t_s: f64,
+        /// Contact position along the rail (m).
+        x_m: f64,
+        /// The contact error (says what to change).
+        source: crate::contact::ContactError,
+    },
+    /// The passage diverged (non-finite state).
+    #[error("the passage diverged at t = {t_s:.6} s (x = {x_m:.4} m): {what}; lower contact.grid_nx's time step (raise grid_nx) or run.fmax")]
+    Diverged {
+        /// Time (s).
+        t_s: f64,
+        /// Contact position (m).
+        x_m: f64,
+        /// What became non-finite.
+        what: String,
     },
     /// Any other failure of the passage (message says what to change).
     #[error("{0}")]
@@ -57,8 +94,7 @@ impl RailProfile {
         if x_m.len() < 2 {
             return Err(bad("need at least two samples".into()));
         }
-        if let Some(i) = (0..x_m.len()).find(|&i| !x_m[i].is_finite() || !height_m[i].is_finite())
-        {
+        if let Some(i) = (0..x_m.len()).find(|&i| !x_m[i].is_finite() || !height_m[i].is_finite()) {
             return Err(bad(format!("sample {i} is not a finite number")));
         }
         if let Some(i) = (1..x_m.len()).find(|&i| x_m[i] <= x_m[i - 1]) {

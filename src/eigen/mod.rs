@@ -50,6 +50,7 @@
 //!
 //! Units: shifts and eigenvalues in rad²/s², frequencies in Hz, times in s.
 
+pub mod basis;
 pub mod cache;
 pub mod classify;
 pub mod factor;

@@ -444,6 +444,14 @@ pub struct Contact {
     pub traction_coefficient: f64,
     /// Lateral radius of the rail head crown (m).
     pub rail_crown_radius: f64,
+    /// Contact-patch grid elements along the rolling direction (−). The passage's time step
+    /// is one grid element over the speed, Δt = Δx / V.
+    pub grid_nx: usize,
+    /// Contact-patch grid elements across the rail (−).
+    pub grid_ny: usize,
+    /// Grid half-lengths over the static Hertz semi-axes (−): the grid covers
+    /// `grid_margin · a` by `grid_margin · b`; larger when the normal load varies strongly.
+    pub grid_margin: f64,
 }
 
 /// Mass matrix kind.
@@ -489,6 +497,8 @@ pub struct Run {
     pub solution_zone_offset: f64,
     /// Length of the solution zone (m).
     pub solution_zone_length: f64,
+    /// Highest natural frequency kept in the modal bases of the passage (Hz).
+    pub fmax: f64,
 }
 
 impl Run {
@@ -711,6 +721,9 @@ impl Model {
             10.0,
             "m",
         )?;
+        c.int("contact.grid_nx", k.grid_nx, 8, 256)?;
+        c.int("contact.grid_ny", k.grid_ny, 4, 256)?;
+        c.range("contact.grid_margin", k.grid_margin, 1.05, 3.0, "(-)")?;
         let m = &self.mesh;
         c.pos(
             "mesh.element_length",
@@ -752,6 +765,7 @@ impl Model {
             10.0,
             "m",
         )?;
+        c.range("run.fmax", run.fmax, 100.0, 20000.0, "Hz")?;
         c.pos(
             "wear.coefficient",
             self.wear.coefficient,

@@ -11,7 +11,9 @@
 //!   only (its x and y are held: the vehicle frame guides it). Its mass is
 //!   `wheel_load / g − unsprung mass`, so that the static load on the rail is `wheel_load`.
 //!   The primary suspension is a vertical spring-damper from that node to the journal
-//!   (bearing-seat) nodes, spread equally over them.
+//!   (bearing-seat) nodes, spread over them with [`balanced_journal_weights`]: the node
+//!   angles are graded towards the contact, so equal shares would put the spring's line of
+//!   action off the axle axis and couple bounce with wheel rotation.
 //!
 //! Rigid-body modes that remain (zero frequency): longitudinal translation, vertical
 //! translation (wheel and sprung mass together) and rotation about the axle. The passage
@@ -53,6 +55,41 @@ pub struct WheelStructure {
     pub mass: MassKind,
 }
 
+/// Weights `w_i` of the journal nodes (wheel frame, axle along y through x = z = 0) closest
+/// to equal shares such that `Σ w_i = 1`, `Σ w_i x_i = 0` and `Σ w_i z_i = 0`: a force spread
+/// with them acts on the axle axis (no moment about it), and the weighted mean displacement
+/// is that of the axle centre (no rotation in it). Falls back to equal shares if the
+/// constraints are degenerate (nodes on a line).
+pub fn balanced_journal_weights(mesh: &Mesh, nodes: &[usize]) -> Vec<f64> {
+    let n = nodes.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let w0 = 1.0 / n as f64;
+    // Constraint rows a_k (k = 0: 1, 1: x, 2: z); w = w0 + Aᵀ λ with (A Aᵀ) λ = b − A w0.
+    let rows: Vec<[f64; 3]> = nodes
+        .iter()
+        .map(|&i| [1.0, mesh.nodes[i][0], mesh.nodes[i][2]])
+        .collect();
+    let mut g = nalgebra::Matrix3::<f64>::zeros();
+    let mut r = nalgebra::Vector3::<f64>::new(1.0, 0.0, 0.0);
+    for a in &rows {
+        for p in 0..3 {
+            r[p] -= a[p] * w0;
+            for q in 0..3 {
+                g[(p, q)] += a[p] * a[q];
+            }
+        }
+    }
+    match g.lu().solve(&r) {
+        Some(l) if l.iter().all(|v| v.is_finite()) => rows
+            .iter()
+            .map(|a| w0 + a[0] * l[0] + a[1] * l[1] + a[2] * l[2])
+            .collect(),
+        _ => vec![w0; n],
+    }
+}
+
 impl WheelStructure {
     /// Builds the wheel substructure of a model.
     pub fn build(m: &Model) -> Result<WheelStructure, StructureError> {
@@ -84,10 +121,14 @@ impl WheelStructure {
         let yj = 0.5 * (params.journal_y_m[0] + params.journal_y_m[1]);
         let sprung_node = mesh.nodes.len();
         mesh.nodes.push([0.0, yj, 1.0]);
-        let w = 1.0 / bearing.len() as f64;
+        let w = balanced_journal_weights(&mesh, &bearing);
         let springs = vec![Spring::new(
             vec![(3 * sprung_node + 2, 1.0)],
-            bearing.iter().map(|&n| (3 * n + 2, w)).collect(),
+            bearing
+                .iter()
+                .zip(&w)
+                .map(|(&n, &wn)| (3 * n + 2, wn))
+                .collect(),
             m.vehicle.primary_stiffness,
             m.vehicle.primary_damping,
         )];

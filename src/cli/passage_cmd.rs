@@ -1,0 +1,207 @@
+//! `corrugation passage`: one reduced-order passage of the wheel over the track (issue 5).
+//!
+//! Outputs in `--out DIR` (default `corrugation-out/passage`), all written atomically:
+//! * `forces.csv` — per time step: `t_s, x_m, fn_n, fl_n, flat_n, creepage, approach_m,
+//!   contact_length_m, slip_fraction, frictional_power_w` (forces on the wheel; F_L > 0 forward);
+//! * `wear.csv` — `x_m, wf_j_per_m, wf_band_j_per_m` in the solution zone (W_f integrated
+//!   across the rail head, and its 20–80 mm band-passed part);
+//! * `rail_point.csv` — `t_s, ux_m, uy_m, uz_m` of the rail-top node nearest 0.6 m into the
+//!   solution zone;
+//! * `psd_wear.csv`, `psd_fl.csv`, `psd_fn.csv` — `wavelength_m, frequency_hz, psd` of the
+//!   band-passed signals in the solution zone (one-sided, per unit wavenumber);
+//! * `summary.json` — the `--json` object;
+//! * plots `*.svg` / `*.png` of F_L, F_N and W_f along the rail and their PSDs.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use clap::Args;
+
+use corrugation::dynamics::analysis::{analyse, wear_signal, zone_signal};
+use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
+use corrugation::dynamics::{summary::PassageSummary, RailProfile};
+use corrugation::eigen::basis::progress_bar;
+use corrugation::eigen::cache::{default_cache_dir, ModalCache};
+use corrugation::io::{write_atomic, write_csv};
+
+use super::ModelArgs;
+
+/// One passage of the wheel over the track: contact forces, wear along the rail, PSDs.
+#[derive(Debug, Args)]
+pub struct PassageCmd {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Rail-top profile (CSV with a header: x in m, height in µm), e.g. a corrugation.
+    #[arg(long, value_name = "FILE.csv")]
+    corrugation: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "corrugation-out/passage", value_name = "DIR")]
+    out: PathBuf,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
+    #[arg(long, value_name = "DIR")]
+    cache: Option<PathBuf>,
+}
+
+impl PassageCmd {
+    pub fn run(self) -> anyhow::Result<()> {
+        let m = self.model.load()?;
+        let profile = match &self.corrugation {
+            Some(p) => Some(RailProfile::read_csv_um(p)?),
+            None => None,
+        };
+        let cache = ModalCache::new(self.cache.clone().unwrap_or_else(default_cache_dir));
+        let opts = PassageOptions::default();
+        let prepared =
+            PreparedModel::new(&m, &cache, &opts).context("preparing the modal model")?;
+        let pb = progress_bar("passage");
+        let rec = prepared
+            .engine
+            .passage(m.run.speed(), profile.as_ref(), &opts, Some(&pb))
+            .context("running the passage")?;
+        pb.finish_and_clear();
+        let summary = corrugation::dynamics::analysis::summarise(&rec)?;
+        write_outputs(&self.out, &rec, &summary)?;
+        if self.json {
+            println!("{}", serde_json::to_string_pretty(&summary)?);
+        } else {
+            print_summary(&summary, &rec, &self.out);
+        }
+        Ok(())
+    }
+}
+
+fn write_outputs(
+    out: &Path,
+    rec: &corrugation::dynamics::passage::PassageRecord,
+    s: &PassageSummary,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let h = &rec.histories;
+    write_csv(
+        &out.join("forces.csv"),
+        &[
+            "t_s",
+            "x_m",
+            "fn_n",
+            "fl_n",
+            "flat_n",
+            "creepage",
+            "approach_m",
+            "contact_length_m",
+            "slip_fraction",
+            "frictional_power_w",
+        ],
+        (0..h.t_s.len()).map(|i| {
+            vec![
+                h.t_s[i],
+                h.x_m[i],
+                h.normal_n[i],
+                h.longitudinal_n[i],
+                h.lateral_n[i],
+                h.creepage[i],
+                h.approach_m[i],
+                h.contact_length_m[i],
+                h.slip_fraction[i],
+                h.frictional_power_w[i],
+            ]
+        }),
+    )?;
+    let v = rec.speed_m_per_s;
+    let w = analyse(&wear_signal(rec)?, v)?;
+    write_csv(
+        &out.join("wear.csv"),
+        &["x_m", "wf_j_per_m", "wf_band_j_per_m"],
+        (0..rec.wear_x_m.len())
+            .map(|i| vec![rec.wear_x_m[i], rec.wear_j_per_m[i], w.band.values[i]]),
+    )?;
+    if let Some(rp) = &rec.rail_point {
+        write_csv(
+            &out.join("rail_point.csv"),
+            &["t_s", "ux_m", "uy_m", "uz_m"],
+            rp.displacement_m
+                .iter()
+                .zip(&h.t_s)
+                .map(|(u, &t)| vec![t, u[0], u[1], u[2]]),
+        )?;
+    }
+    let fl = analyse(&zone_signal(rec, &h.longitudinal_n)?, v)?;
+    let fnn = analyse(&zone_signal(rec, &h.normal_n)?, v)?;
+    for (name, a) in [
+        ("psd_wear.csv", &w),
+        ("psd_fl.csv", &fl),
+        ("psd_fn.csv", &fnn),
+    ] {
+        write_csv(
+            &out.join(name),
+            &["wavelength_m", "frequency_hz", "psd"],
+            a.psd
+                .wavenumber_per_m
+                .iter()
+                .zip(&a.psd.psd)
+                .filter(|(k, _)| **k > 0.0)
+                .map(|(k, p)| vec![1.0 / k, v * k, *p]),
+        )?;
+    }
+    let json = serde_json::to_string_pretty(s)?;
+    write_atomic(&out.join("summary.json"), |f| {
+        use std::io::Write;
+        f.write_all(json.as_bytes())
+    })?;
+    Ok(())
+}
+
+fn print_summary(
+    s: &PassageSummary,
+    rec: &corrugation::dynamics::passage::PassageRecord,
+    out: &Path,
+) {
+    println!(
+        "passage at {:.1} km/h: {} steps of {:.3e} s in {:.2} s",
+        s.speed_kmh, s.steps, rec.dt_s, s.seconds
+    );
+    println!(
+        "  mean F_N {:.0} N, mean F_L {:.0} N (F_L/F_N {:.4}); static creepage {:.3e}",
+        s.mean_fn_n,
+        s.mean_fl_n,
+        s.mean_fl_n / s.mean_fn_n,
+        rec.static_creepage
+    );
+    println!(
+        "  band RMS (20-80 mm): F_L {:.1} N, F_N {:.1} N, wear {:.4e} J/m (mean {:.4e} J/m)",
+        s.fl_band_rms_n, s.fn_band_rms_n, s.wear_band_rms, s.wear_mean
+    );
+    for (name, c) in [
+        ("wear", &s.wear_components),
+        ("F_L", &s.fl_components),
+        ("F_N", &s.fn_components),
+    ] {
+        let list: Vec<String> = c
+            .iter()
+            .map(|c| format!("{:.1} mm ({:.0} Hz)", c.wavelength_mm, c.frequency_hz))
+            .collect();
+        println!("  {name} components: {}", list.join(", "));
+    }
+    let e = &rec.energy;
+    println!(
+        "  energy: input {:.3} J + spin {:.3} J + convective {:.3} J = stored {:.3} + dampers {:.3} + friction {:.3} + contact {:.3} (error {:.2} %)",
+        e.external_work_j,
+        e.spin_work_j,
+        e.convective_work_j,
+        e.stored_change_j,
+        e.damper_dissipation_j,
+        e.frictional_work_j,
+        e.contact_energy_change_j,
+        100.0 * e.relative_error()
+    );
+    println!(
+        "  structure: input + contact work {:.3} J = stored + dampers {:.3} J; contact work {:.3} J = -(friction + contact energy) {:.3} J",
+        e.external_work_j + e.contact_work_j,
+        e.stored_change_j + e.damper_dissipation_j,
+        e.contact_work_j,
+        -(e.frictional_work_j + e.contact_energy_change_j)
+    );
+    println!("  outputs in {}", out.display());
+}

@@ -1,0 +1,128 @@
+//! From a passage record to its [`PassageSummary`] (method.md §5): the signals along the rail
+//! in the solution zone (`x = x₀ + V t` maps time to position), zero-phase band-pass
+//! 20–80 mm, one-sided PSD in the wavelength domain (Hann window, ×8 zero padding, see
+//! [`crate::spectral::psd`]), peaks with sub-bin accuracy, `f = V/λ`.
+//!
+//! Record length L = the solution zone (default 1 m): wavenumber resolution 1/L, i.e. at
+//! 40 mm a wavelength resolution λ²/L = 1.6 mm; peaks are interpolated within a bin.
+
+use super::passage::PassageRecord;
+use super::summary::{PassageSummary, WavelengthComponent, WavelengthSpectrum};
+use super::DynamicsError;
+use crate::spectral::{band_pass, find_peaks, BandPass, PeakOptions, Psd, PsdOptions, Signal};
+use crate::units::{m_to_mm, ms_to_kmh};
+
+/// A signal of the record restricted to the solution zone.
+pub fn zone_signal(rec: &PassageRecord, values: &[f64]) -> Result<Signal, DynamicsError> {
+    let [z0, z1] = rec.zone_m;
+    let h = &rec.histories;
+    let i0 = h.x_m.partition_point(|&x| x < z0);
+    let i1 = h.x_m.partition_point(|&x| x <= z1);
+    if i1 <= i0 + 8 {
+        return Err(DynamicsError::Other(
+            "the solution zone holds fewer than 8 steps: lengthen run.solution_zone_length".into(),
+        ));
+    }
+    let dx = rec.speed_m_per_s * rec.dt_s;
+    Signal::new(h.x_m[i0], dx, values[i0..i1].to_vec())
+        .map_err(|e| DynamicsError::Other(e.to_string()))
+}
+
+/// The wear `W_f(x)` of the record as a signal (J/m).
+pub fn wear_signal(rec: &PassageRecord) -> Result<Signal, DynamicsError> {
+    let dx = if rec.wear_x_m.len() > 1 {
+        rec.wear_x_m[1] - rec.wear_x_m[0]
+    } else {
+        rec.speed_m_per_s * rec.dt_s
+    };
+    Signal::new(rec.wear_x_m[0], dx, rec.wear_j_per_m.clone())
+        .map_err(|e| DynamicsError::Other(e.to_string()))
+}
+
+/// Band-passed signal, its PSD, and its peaks.
+pub struct Analysed {
+    /// Mean of the raw signal.
+    pub mean: f64,
+    /// The band-passed signal.
+    pub band: Signal,
+    /// RMS of the band-passed signal.
+    pub band_rms: f64,
+    /// PSD of the band-passed signal.
+    pub psd: Psd,
+    /// Peaks in 20–80 mm, strongest first.
+    pub peaks: Vec<WavelengthComponent>,
+}
+
+/// Analyses one signal along the rail at speed `v` (m/s).
+pub fn analyse(sig: &Signal, v: f64) -> Result<Analysed, DynamicsError> {
+    let e = |e: crate::spectral::SpectralError| DynamicsError::Other(e.to_string());
+    let mean = sig.values.iter().sum::<f64>() / sig.len() as f64;
+    let band = band_pass(sig, &BandPass::default()).map_err(e)?;
+    let band_rms = (band.values.iter().map(|x| x * x).sum::<f64>() / band.len() as f64).sqrt();
+    let psd = Psd::estimate(&band, &PsdOptions::default()).map_err(e)?;
+    let peaks = if band_rms > 0.0 {
+        find_peaks(&psd, &PeakOptions::default(), v)
+            .map_err(e)?
+            .into_iter()
+            .map(|p| WavelengthComponent {
+                wavelength_mm: m_to_mm(p.wavelength_m),
+                frequency_hz: p.frequency_hz,
+                psd: p.psd,
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    Ok(Analysed {
+        mean,
+        band,
+        band_rms,
+        psd,
+        peaks,
+    })
+}
+
+/// The in-band part (20–80 mm) of a PSD as a wavelength spectrum.
+pub fn band_spectrum(psd: &Psd) -> WavelengthSpectrum {
+    let bp = BandPass::default();
+    let mut out = WavelengthSpectrum::default();
+    for (k, &p) in psd.wavenumber_per_m.iter().zip(&psd.psd) {
+        if *k > 0.0 {
+            let l = 1.0 / k;
+            if l >= bp.lambda_min_m && l <= bp.lambda_max_m {
+                out.wavelength_m.push(l);
+                out.psd.push(p);
+            }
+        }
+    }
+    out
+}
+
+/// The summary of a passage record.
+pub fn summarise(rec: &PassageRecord) -> Result<PassageSummary, DynamicsError> {
+    let v = rec.speed_m_per_s;
+    let h = &rec.histories;
+    let fl = analyse(&zone_signal(rec, &h.longitudinal_n)?, v)?;
+    let fnn = analyse(&zone_signal(rec, &h.normal_n)?, v)?;
+    let w = analyse(&wear_signal(rec)?, v)?;
+    let dom = w.peaks.first().cloned();
+    Ok(PassageSummary {
+        speed_kmh: ms_to_kmh(v),
+        mean_fn_n: fnn.mean,
+        mean_fl_n: fl.mean,
+        fl_band_rms_n: fl.band_rms,
+        fn_band_rms_n: fnn.band_rms,
+        wear_band_rms: w.band_rms,
+        wear_mean: w.mean,
+        dominant_wavelength_mm: dom.as_ref().map(|c| c.wavelength_mm),
+        dominant_frequency_hz: dom.as_ref().map(|c| c.frequency_hz),
+        wear_psd: band_spectrum(&w.psd),
+        fl_psd: band_spectrum(&fl.psd),
+        fn_psd: band_spectrum(&fnn.psd),
+        wear_components: w.peaks,
+        fl_components: fl.peaks,
+        fn_components: fnn.peaks,
+        steps: rec.steps,
+        seconds: rec.seconds,
+    })
+}

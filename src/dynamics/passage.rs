@@ -1,0 +1,854 @@
+//! One passage of the wheel over the track (method.md §3–4; issue 5 items 1–4).
+//!
+//! # The coupled problem
+//! Track modes `q_t` and wheel modes `q_w` (see [`super::reduced`]) each obey
+//! `q̈ + C_q q̇ + Ω² q = Φᵀ f`, integrated by [`super::integrator::ModalVerlet`] with the
+//! time step of the contact grid, `Δt = Δx / V` (design-notes.md: material moves one grid
+//! element per step in Kalker's transient theory). At each step:
+//!
+//! 1. both substructures advance their displacements to `t_{n+1}`;
+//! 2. the contact point moves to `x_c = x_0 + V t_{n+1}` on the rail; the rail's
+//!    displacement and (predicted) velocity there, and the wheel's at its tread contact
+//!    point, are interpolated from the modes (frame x, t, n);
+//! 3. the contact inputs: rigid approach `δ = (u_rail − u_wheel)·n` (the rail-top profile
+//!    enters the contact solver's gap, column by column); creepages
+//!    `ξ = (u̇_wheel,x − u̇_rail,x)/V`, `η = (u̇_wheel,t − u̇_rail,t)/V` — the rail's
+//!    longitudinal vibration at the contact enters here — and the spin of the coned wheel on
+//!    the inclined rail `φ = −sin α / R` (1/m);
+//! 4. the transient rolling contact step ([`crate::contact::TransientRolling`]) gives the
+//!    forces on the wheel (F_L = Fx, lateral, F_N) and the frictional power density, which
+//!    is accumulated in rail-fixed bins: `W_f(x) = k Σ τ·s Δt` integrated across the rail
+//!    head (J/m, method.md §4);
+//! 5. the forces act on the wheel and, opposite, on the rail at `x_c`; both substructures
+//!    complete the step.
+//!
+//! # Loads and rigid-body motion of the wheel
+//! Gravity acts on every wheel mass and the sprung mass (total = `vehicle.wheel_load`). The
+//! driving torque is constant, `T = μ_t W R` (traction coefficient μ_t), applied as
+//! tangential forces on the journal nodes; design-notes.md prefers a constant torque to a
+//! feedback controller (it does not itself excite the kHz band). A constant longitudinal
+//! force `−μ_t W` on the journal nodes stands for the train resisting the traction (the
+//! vehicle's inertia keeps the speed). The wheel's three rigid modes (x, z, rotation) are
+//! free: their mean motion is balanced by these loads and the contact.
+//!
+//! # Static start
+//! The contact is first brought to steady rolling at the static load (normal force
+//! `W / cos α`, longitudinal force `μ_t W`), which gives the steady creepage ξ₀ and approach
+//! δ₀; the track and the wheel's elastic modes take their static deflection under these
+//! forces (exact modal static solution), the wheel's rigid modes are placed so that the
+//! approach is δ₀ and turned so that the creepage is ξ₀. Results are read in the solution
+//! zone, from `run.solution_zone_offset` after the start.
+
+use std::time::Instant;
+
+use faer::Mat;
+
+use super::integrator::ModalVerlet;
+use super::reduced::{dot, ContactFrame, ModalSystem, RailContactLine, WheelContact};
+use super::{DynamicsError, RailProfile};
+use crate::contact::WearAccumulator;
+use crate::contact::{Longitudinal, NormalInput, StepInputs, TransientConfig, TransientRolling};
+use crate::model::Model;
+use crate::structure::{TrackStructure, WheelStructure};
+
+/// Frequencies below this are rigid-body modes (Hz).
+pub const RIGID_HZ: f64 = 0.5;
+
+/// What a passage records besides the wear.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PassageOptions {
+    /// Keep the energy balance (one extra dense product per step and substructure).
+    pub energy: bool,
+    /// Distance after the solution-zone start of the rail-top node whose displacement is
+    /// recorded (m); `None` = no rail-point record. Issue 5 asks for 0.6 m.
+    pub rail_point_offset_m: Option<f64>,
+}
+
+impl Default for PassageOptions {
+    fn default() -> Self {
+        Self {
+            energy: true,
+            rail_point_offset_m: Some(0.6),
+        }
+    }
+}
+
+/// Time histories of a passage, one value per step.
+#[derive(Clone, Debug, Default)]
+pub struct Histories {
+    /// Time since the start (s).
+    pub t_s: Vec<f64>,
+    /// Contact centre along the rail (m).
+    pub x_m: Vec<f64>,
+    /// Normal force on the wheel (N).
+    pub normal_n: Vec<f64>,
+    /// Longitudinal force on the wheel, + forward (N).
+    pub longitudinal_n: Vec<f64>,
+    /// Lateral force on the wheel along t (N).
+    pub lateral_n: Vec<f64>,
+    /// Longitudinal creepage ξ (−).
+    pub creepage: Vec<f64>,
+    /// Rigid approach δ (m).
+    pub approach_m: Vec<f64>,
+    /// Contact length along the rail: grid columns with contact × Δx (m).
+    pub contact_length_m: Vec<f64>,
+    /// Slip-area fraction (−).
+    pub slip_fraction: Vec<f64>,
+    /// Frictional power (W).
+    pub frictional_power_w: Vec<f64>,
+}
+
+/// The displacement history of one rail-top node.
+#[derive(Clone, Debug, Default)]
+pub struct RailPointRecord {
+    /// Node position (x, y, z) (m).
+    pub position_m: [f64; 3],
+    /// Displacements (x, y, z) over time (m), one triple per step.
+    pub displacement_m: Vec<[f64; 3]>,
+}
+
+/// The energy balance of a passage (J), all over the dynamic phase.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct EnergyBalance {
+    /// Work of the constant wheel loads: driving torque, gravity, train resistance (J).
+    pub external_work_j: f64,
+    /// Of which the driving torque (J).
+    pub torque_work_j: f64,
+    /// Of which gravity (J).
+    pub gravity_work_j: f64,
+    /// Work of the spin creepage of the coned wheel, `−∫ V φ M_z dt` (J): the spin is
+    /// kinematic (from the nominal rolling), so its frictional dissipation is fed by the
+    /// nominal motion, not by the modal perturbation; it is counted as an input.
+    pub spin_work_j: f64,
+    /// Work of the contact force through the convective change of the rail displacement
+    /// under the moving contact, `∫ V (F_N ∂u_n/∂x + F_t ∂u_t/∂x) dt` (J): the wheel rolling
+    /// over a deflected rail (climbing out of the damped deflection bowl). It is fed by the
+    /// nominal forward motion and counted as an input.
+    pub convective_work_j: f64,
+    /// Change of kinetic + strain energy of both substructures (J).
+    pub stored_change_j: f64,
+    /// Dissipated by the discrete dampers (J).
+    pub damper_dissipation_j: f64,
+    /// Frictional work in the contact (J).
+    pub frictional_work_j: f64,
+    /// Change of the elastic energy of the contact (Hertz estimate 2/5·F_N·δ) (J).
+    pub contact_energy_change_j: f64,
+    /// Work of the contact forces on the two structures (J): = −(friction + contact energy).
+    pub contact_work_j: f64,
+}
+
+impl EnergyBalance {
+    /// `input + spin work − (stored + dampers + friction + contact energy)` over the input
+    /// (−).
+    pub fn relative_error(&self) -> f64 {
+        let out = self.stored_change_j
+            + self.damper_dissipation_j
+            + self.frictional_work_j
+            + self.contact_energy_change_j;
+        let scale = self
+            .external_work_j
+            .abs()
+            .max(self.frictional_work_j.abs() + self.damper_dissipation_j.abs())
+            .max(f64::MIN_POSITIVE);
+        (self.external_work_j + self.spin_work_j + self.convective_work_j - out) / scale
+    }
+}
+
+/// Everything one passage produces.
+#[derive(Clone, Debug)]
+pub struct PassageRecord {
+    /// Speed (m/s).
+    pub speed_m_per_s: f64,
+    /// Time step (s).
+    pub dt_s: f64,
+    /// Wheel start position (m).
+    pub x_start_m: f64,
+    /// Solution zone [start, end] (m).
+    pub zone_m: [f64; 2],
+    /// Time histories.
+    pub histories: Histories,
+    /// Bin centres of the wear along the rail in the solution zone (m).
+    pub wear_x_m: Vec<f64>,
+    /// Frictional work per metre of rail `W_f(x)` (J/m), times the wear coefficient.
+    pub wear_j_per_m: Vec<f64>,
+    /// The rail-point record.
+    pub rail_point: Option<RailPointRecord>,
+    /// Energy balance (zeros unless [`PassageOptions::energy`]).
+    pub energy: EnergyBalance,
+    /// Static state: steady creepage ξ₀ (−) and approach δ₀ (m).
+    pub static_creepage: f64,
+    /// Static approach (m).
+    pub static_approach_m: f64,
+    /// Number of time steps.
+    pub steps: usize,
+    /// Wall time of the dynamic phase (s).
+    pub seconds: f64,
+}
+
+/// The reduced-order engine of one model: modal systems, contact interpolation, loads.
+pub struct PassageEngine {
+    model: Model,
+    frame: ContactFrame,
+    track_sys: ModalSystem,
+    wheel_sys: ModalSystem,
+    rail_line: RailContactLine,
+    wheel_contact: WheelContact,
+    /// Generalised constant wheel loads: gravity, torque, train resistance.
+    wheel_gravity: Vec<f64>,
+    wheel_torque: Vec<f64>,
+    wheel_drawbar: Vec<f64>,
+    /// Columns of the wheel's rigid modes.
+    rigid: Vec<usize>,
+    wheel_radius_m: f64,
+    wheel_load_n: f64,
+    zone_m: [f64; 2],
+    x_start_m: f64,
+    hertz_b_m: f64,
+    /// Rail-top node rows for the rail-point record: (plane, rows 3m in global x, y, z).
+    track_modes_for_point: Option<(usize, [f64; 3], Vec<f64>)>,
+}
+
+fn global_frame() -> ContactFrame {
+    ContactFrame {
+        x: [1.0, 0.0, 0.0],
+        t: [0.0, 1.0, 0.0],
+        n: [0.0, 0.0, 1.0],
+    }
+}
+
+impl PassageEngine {
+    /// Builds the engine from a model, its structures and their modal bases (mass-normalised
+    /// modes over the free DOFs, frequencies in Hz), the assembled damping matrices, and the
+    /// options (the rail-point offset fixes which node is recorded).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        model: &Model,
+        track: &TrackStructure,
+        track_freqs_hz: &[f64],
+        track_modes: &Mat<f64>,
+        track_c: faer::sparse::SparseColMatRef<'_, usize, f64>,
+        wheel: &WheelStructure,
+        wheel_freqs_hz: &[f64],
+        wheel_modes: &Mat<f64>,
+        wheel_mats: &crate::fe::assembly::FeMatrices,
+        opts: &PassageOptions,
+    ) -> Result<Self, DynamicsError> {
+        let frame = ContactFrame::for_inclination(model.rail.inclination);
+        let track_sys = ModalSystem::new(track_freqs_hz, track_modes, track_c, RIGID_HZ)?;
+        if let Some(i) = track_sys.omega2.iter().position(|&w| w == 0.0) {
+            return Err(DynamicsError::Other(format!(
+                "track mode {i} is a rigid-body mode ({:.3} Hz): the track must be supported (ballast stiffness > 0)",
+                track_freqs_hz[i]
+            )));
+        }
+        let wheel_sys =
+            ModalSystem::new(wheel_freqs_hz, wheel_modes, wheel_mats.c.as_ref(), RIGID_HZ)?;
+        let rigid: Vec<usize> = (0..wheel_sys.len())
+            .filter(|&i| wheel_sys.omega2[i] == 0.0)
+            .collect();
+        let hertz = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
+            radius_x_m: model.wheel.radius,
+            radius_y_m: model.contact.rail_crown_radius,
+            youngs_pa: model.rail.youngs_modulus,
+            poisson: model.rail.poisson_ratio,
+            load_n: model.vehicle.wheel_load,
+        })
+        .map_err(|e| DynamicsError::Other(format!("static Hertz contact: {e}")))?;
+        let rail_line = RailContactLine::new(track, track_modes, &frame, hertz.b_m)?;
+        let wheel_contact = WheelContact::new(wheel, wheel_modes, &frame, hertz.b_m)?;
+
+        // Constant wheel loads as full-DOF vectors, projected on the modes.
+        let nw = wheel.dofmap.n_dofs();
+        let mw = wheel_modes.ncols();
+        let project = |full: &[f64]| -> Vec<f64> {
+            let mut g = vec![0.0; mw];
+            for (d, &f) in full.iter().enumerate() {
+                if f == 0.0 {
+                    continue;
+                }
+                if let Some(r) = wheel.dofmap.free_index(d) {
+                    let row = wheel_modes.row(r);
+                    for i in 0..mw {
+                        g[i] += f * row[i];
+                    }
+                }
+            }
+            g
+        };
+        // Gravity: M · (−g e_z) over the free DOFs (mass matrix row sums in z).
+        let g = model.vehicle.gravity;
+        let mut grav_free = vec![0.0; wheel.dofmap.n_free()];
+        {
+            let m = wheel_mats.m.as_ref();
+            let mut ez = vec![0.0; wheel.dofmap.n_free()];
+            for node in 0..wheel.dofmap.n_nodes() {
+                if let Some(r) = wheel.dofmap.free_index(3 * node + 2) {
+                    ez[r] = 1.0;
+                }
+            }
+            let cols = m.symbolic().col_ptr();
+            let rows = m.symbolic().row_idx();
+            let vals = m.val();
+            for j in 0..m.ncols() {
+                for p in cols[j]..cols[j + 1] {
+                    grav_free[rows[p]] -= g * vals[p] * ez[j];
+                }
+            }
+        }
+        let mut wheel_gravity = vec![0.0; mw];
+        for (r, &f) in grav_free.iter().enumerate() {
+            if f != 0.0 {
+                let row = wheel_modes.row(r);
+                for i in 0..mw {
+                    wheel_gravity[i] += f * row[i];
+                }
+            }
+        }
+        let w_load = model.vehicle.wheel_load;
+        let f_l0 = model.contact.traction_coefficient * w_load;
+        let bearing = wheel.topology.bearing_nodes();
+        // Contact radius: the tread contact node's distance from the axle.
+        let cn = wheel.topology.contact_node();
+        let radius = -wheel.mesh.nodes[cn][2];
+        // Torque T = F_L0 · R about +y: forces c (ŷ × r_i) on the journal nodes minus their
+        // resultant, spread with the balanced weights (which has no moment about the axle), so
+        // the load is a pure couple whatever the grading of the node angles.
+        let wj = crate::structure::wheel::balanced_journal_weights(&wheel.mesh, &bearing);
+        let mut torque_full = vec![0.0; nw];
+        let r2: f64 = bearing
+            .iter()
+            .map(|&b| {
+                let p = wheel.mesh.nodes[b];
+                p[0] * p[0] + p[2] * p[2]
+            })
+            .sum();
+        if r2 <= 0.0 {
+            return Err(DynamicsError::Other(
+                "journal nodes on the axle axis: cannot apply the driving torque".into(),
+            ));
+        }
+        let t_y = f_l0 * radius;
+        let (mut sx, mut sz) = (0.0, 0.0);
+        for &b in &bearing {
+            let p = wheel.mesh.nodes[b];
+            torque_full[3 * b] += t_y / r2 * p[2];
+            torque_full[3 * b + 2] += -t_y / r2 * p[0];
+            sx += t_y / r2 * p[2];
+            sz += -t_y / r2 * p[0];
+        }
+        let mut drawbar_full = vec![0.0; nw];
+        for (&b, &w) in bearing.iter().zip(&wj) {
+            torque_full[3 * b] -= w * sx;
+            torque_full[3 * b + 2] -= w * sz;
+            drawbar_full[3 * b] -= f_l0 * w;
+        }
+        let wheel_torque = project(&torque_full);
+        let wheel_drawbar = project(&drawbar_full);
+
+        let layout = &track.layout;
+        let track_modes_for_point = match opts.rail_point_offset_m {
+            None => None,
+            Some(off) => {
+                let x = layout.solution_zone[0] + off;
+                let p = (0..rail_line.planes_x_m.len())
+                    .min_by(|&a, &b| {
+                        (rail_line.planes_x_m[a] - x)
+                            .abs()
+                            .total_cmp(&(rail_line.planes_x_m[b] - x).abs())
+                    })
+                    .unwrap_or(0);
+                // The node of the contact line with the largest weight.
+                let (node, _) = rail_line.nodes[p]
+                    .iter()
+                    .copied()
+                    .max_by(|a, b| a.1.total_cmp(&b.1))
+                    .ok_or_else(|| DynamicsError::Other("empty contact line".into()))?;
+                let mut rows = vec![0.0; 3 * track_modes.ncols()];
+                super::reduced::modal_rows(
+                    &[(node, 1.0)],
+                    &track.dofmap,
+                    track_modes,
+                    &global_frame(),
+                    &mut rows,
+                );
+                Some((node, track.mesh.nodes[node], rows))
+            }
+        };
+        Ok(PassageEngine {
+            model: model.clone(),
+            frame,
+            track_sys,
+            wheel_sys,
+            rail_line,
+            wheel_contact,
+            wheel_gravity,
+            wheel_torque,
+            wheel_drawbar,
+            rigid,
+            wheel_radius_m: radius,
+            wheel_load_n: w_load,
+            zone_m: layout.solution_zone,
+            x_start_m: layout.wheel_start,
+            hertz_b_m: hertz.b_m,
+            track_modes_for_point,
+        })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// Number of track and wheel modes.
+    pub fn mode_counts(&self) -> (usize, usize) {
+        (self.track_sys.len(), self.wheel_sys.len())
+    }
+
+    /// The track's modal system.
+    pub fn track_system(&self) -> &ModalSystem {
+        &self.track_sys
+    }
+
+    /// Hertz semi-axis across the rail at the static load (m).
+    pub fn hertz_b_m(&self) -> f64 {
+        self.hertz_b_m
+    }
+
+    /// The contact configuration of a passage at `speed_m_per_s`.
+    pub fn contact_config(&self, speed_m_per_s: f64) -> Result<TransientConfig, DynamicsError> {
+        let m = &self.model;
+        TransientConfig::around_hertz(
+            m.wheel.radius,
+            m.contact.rail_crown_radius,
+            m.rail.youngs_modulus,
+            m.rail.poisson_ratio,
+            m.contact.friction,
+            speed_m_per_s,
+            self.wheel_load_n,
+            m.contact.grid_nx,
+            m.contact.grid_ny,
+            m.contact.grid_margin,
+        )
+        .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))
+    }
+
+    /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth).
+    pub fn passage(
+        &self,
+        speed_m_per_s: f64,
+        profile: Option<&RailProfile>,
+        opts: &PassageOptions,
+        progress: Option<&indicatif::ProgressBar>,
+    ) -> Result<PassageRecord, DynamicsError> {
+        if !(speed_m_per_s > 0.0 && speed_m_per_s.is_finite()) {
+            return Err(DynamicsError::Other(format!(
+                "speed {speed_m_per_s} m/s must be finite and > 0"
+            )));
+        }
+        let v = speed_m_per_s;
+        let cfg = self.contact_config(v)?;
+        let mut contact = TransientRolling::new(cfg)
+            .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
+        let dt = contact.time_step_s();
+        let dx = v * dt;
+        let mut tr = ModalVerlet::new(&self.track_sys, dt)?;
+        let mut wh = ModalVerlet::new(&self.wheel_sys, dt)?;
+        let (mt, mw) = (tr.len(), wh.len());
+        let frame = self.frame;
+        let cos_a = frame.n[2];
+        let w_load = self.wheel_load_n;
+        let f_l0 = self.model.contact.traction_coefficient * w_load;
+        let f_n0 = w_load / cos_a;
+        let spin = frame.n[1] / self.wheel_radius_m; // −sin α / R
+        let x0 = self.x_start_m;
+        let [z0, z1] = self.zone_m;
+        let half_grid = contact.config().grid.half_length_x_m;
+        let x_end = z1 + half_grid + 2.0 * dx;
+        let n_steps = ((x_end - x0) / dx).ceil() as usize;
+        let nx = contact.config().grid.nx;
+        let xs: Vec<f64> = contact.x_m().to_vec();
+        let mut heights = vec![0.0; nx];
+        let fill_heights = |xc: f64, h: &mut [f64]| {
+            if let Some(p) = profile {
+                for (hi, &xi) in h.iter_mut().zip(&xs) {
+                    *hi = p.height_at(xc + xi);
+                }
+            }
+        };
+
+        // --- Static start: steady rolling at the static load.
+        fill_heights(x0, &mut heights);
+        let mut static_res = None;
+        let mut prev_xi = f64::NAN;
+        for k in 0..(20 * nx) {
+            let r = contact
+                .step(&StepInputs {
+                    normal: NormalInput::Force(f_n0),
+                    longitudinal: Longitudinal::Force(f_l0),
+                    lateral_creepage: 0.0,
+                    spin_per_m: spin,
+                    rail_height_m: profile.map(|_| &heights[..]),
+                })
+                .map_err(|source| DynamicsError::Contact {
+                    t_s: 0.0,
+                    x_m: x0,
+                    source,
+                })?;
+            let done =
+                k > 2 * nx && (r.creepage - prev_xi).abs() <= 1e-6 * r.creepage.abs().max(1e-6);
+            prev_xi = r.creepage;
+            static_res = Some(r);
+            if done {
+                break;
+            }
+        }
+        let st = static_res.expect("at least one step");
+        let (xi0, delta0) = (st.creepage, st.approach_m);
+
+        let mut rr = vec![0.0; 3 * mt];
+        let mut slopes = vec![0.0; 3 * mt];
+        self.rail_line.rows_at(x0, &mut rr)?;
+        let wr = &self.wheel_contact.rows;
+        // Force on the wheel in frame components (x, t, n).
+        let f0 = [f_l0, 0.0, f_n0];
+        let mut ft = vec![0.0; mt];
+        let mut fw = vec![0.0; mw];
+        let mut fw_const = vec![0.0; mw];
+        for i in 0..mw {
+            fw_const[i] = self.wheel_gravity[i] + self.wheel_torque[i] + self.wheel_drawbar[i];
+        }
+        let gen_forces = |f: &[f64; 3], rr: &[f64], ft: &mut [f64], fw: &mut [f64]| {
+            for i in 0..mt {
+                ft[i] = -(f[0] * rr[i] + f[1] * rr[mt + i] + f[2] * rr[2 * mt + i]);
+            }
+            for i in 0..mw {
+                fw[i] = fw_const[i] + f[0] * wr[i] + f[1] * wr[mw + i] + f[2] * wr[2 * mw + i];
+            }
+        };
+        gen_forces(&f0, &rr, &mut ft, &mut fw);
+        let qt0: Vec<f64> = (0..mt).map(|i| ft[i] / self.track_sys.omega2[i]).collect();
+        let mut qw0 = vec![0.0; mw];
+        for i in 0..mw {
+            if self.wheel_sys.omega2[i] > 0.0 {
+                qw0[i] = fw[i] / self.wheel_sys.omega2[i];
+            }
+        }
+        // Rigid placement: observations (contact x, contact n, axle x) of the rigid modes.
+        let nr = self.rigid.len();
+        let obs = |i: usize| -> [f64; 3] { [wr[i], wr[2 * mw + i], self.wheel_contact.axle_x[i]] };
+        let u_rail_n = dot(&rr[2 * mt..], &qt0);
+        let u_wheel_n_el = dot(&wr[2 * mw..], &qw0);
+        let target_n = u_rail_n - delta0 - u_wheel_n_el;
+        let mut vw0 = vec![0.0; mw];
+        if nr > 0 {
+            // Least-norm solutions of O c = b (3 × nr) via the normal equations on the
+            // observation side: c = Oᵀ (O Oᵀ)⁻¹ b, with a tiny Tikhonov term for rank loss.
+            let o: Vec<[f64; 3]> = self.rigid.iter().map(|&i| obs(i)).collect();
+            let mut g = [[0.0; 3]; 3];
+            for oi in &o {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        g[a][b] += oi[a] * oi[b];
+                    }
+                }
+            }
+            let tr_g = g[0][0] + g[1][1] + g[2][2];
+            for (a, row) in g.iter_mut().enumerate() {
+                row[a] += 1e-12 * tr_g;
+            }
+            let solve3 = |b: [f64; 3]| -> [f64; 3] {
+                let m = nalgebra::Matrix3::from_fn(|r, c| g[r][c]);
+                let x = m
+                    .lu()
+                    .solve(&nalgebra::Vector3::new(b[0], b[1], b[2]))
+                    .unwrap_or_else(nalgebra::Vector3::zeros);
+                [x[0], x[1], x[2]]
+            };
+            let y = solve3([0.0, target_n, 0.0]);
+            for (k, &i) in self.rigid.iter().enumerate() {
+                qw0[i] = o[k][0] * y[0] + o[k][1] * y[1] + o[k][2] * y[2];
+            }
+            let y = solve3([xi0 * v, 0.0, 0.0]);
+            for (k, &i) in self.rigid.iter().enumerate() {
+                vw0[i] = o[k][0] * y[0] + o[k][1] * y[1] + o[k][2] * y[2];
+            }
+        }
+        tr.set_state(&qt0, &vec![0.0; mt], &ft);
+        wh.set_state(&qw0, &vw0, &fw);
+
+        // --- Records.
+        let mut h = Histories::default();
+        for vct in [
+            &mut h.t_s,
+            &mut h.x_m,
+            &mut h.normal_n,
+            &mut h.longitudinal_n,
+            &mut h.lateral_n,
+            &mut h.creepage,
+            &mut h.approach_m,
+            &mut h.contact_length_m,
+            &mut h.slip_fraction,
+            &mut h.frictional_power_w,
+        ] {
+            vct.reserve(n_steps);
+        }
+        let mut rail_point =
+            self.track_modes_for_point
+                .as_ref()
+                .map(|(_, pos, _)| RailPointRecord {
+                    position_m: *pos,
+                    displacement_m: Vec::with_capacity(n_steps),
+                });
+        let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
+        let mut wear = WearAccumulator::new(&contact, z0, nbins);
+        let mut eb = EnergyBalance::default();
+        let e_start =
+            tr.kinetic_energy() + tr.strain_energy() + wh.kinetic_energy() + wh.strain_energy();
+        let hertz_energy = |f: f64, d: f64| 0.4 * f * d.max(0.0);
+        let e_contact_start = hertz_energy(st.normal_force_n, st.approach_m);
+        let mut p_damp_prev = if opts.energy {
+            tr.damping_power() + wh.damping_power()
+        } else {
+            0.0
+        };
+        let mut p_contact_prev = {
+            // Contact power at the start: F · (v_w − v_r).
+            let vw_x = dot(&wr[..mw], &wh.v);
+            f_l0 * vw_x
+        };
+        let mut qw_prev = wh.q.clone();
+        let mut last_fn = st.normal_force_n;
+        let mut last_delta = st.approach_m;
+        let t_wall = Instant::now();
+        if let Some(pb) = progress {
+            pb.set_length(n_steps as u64);
+            pb.set_position(0);
+        }
+        for n in 1..=n_steps {
+            let t = n as f64 * dt;
+            let xc = x0 + v * t;
+            tr.advance_displacement();
+            wh.advance_displacement();
+            self.rail_line.rows_at(xc, &mut rr)?;
+            let mut u_r = [0.0; 3];
+            let mut v_r = [0.0; 3];
+            let mut u_w = [0.0; 3];
+            let mut v_w = [0.0; 3];
+            for d in 0..3 {
+                let r = &rr[d * mt..(d + 1) * mt];
+                let mut su = 0.0;
+                let mut sv = 0.0;
+                for i in 0..mt {
+                    su += r[i] * tr.q[i];
+                    sv += r[i] * tr.predicted_velocity(i);
+                }
+                u_r[d] = su;
+                v_r[d] = sv;
+                let r = &wr[d * mw..(d + 1) * mw];
+                let mut su = 0.0;
+                let mut sv = 0.0;
+                for i in 0..mw {
+                    su += r[i] * wh.q[i];
+                    sv += r[i] * wh.predicted_velocity(i);
+                }
+                u_w[d] = su;
+                v_w[d] = sv;
+            }
+            let delta = u_r[2] - u_w[2];
+            let xi = (v_w[0] - v_r[0]) / v;
+            let eta = (v_w[1] - v_r[1]) / v;
+            fill_heights(xc, &mut heights);
+            let r = contact
+                .step(&StepInputs {
+                    normal: NormalInput::Approach(delta),
+                    longitudinal: Longitudinal::Creepage(xi),
+                    lateral_creepage: eta,
+                    spin_per_m: spin,
+                    rail_height_m: profile.map(|_| &heights[..]),
+                })
+                .map_err(|source| DynamicsError::Contact {
+                    t_s: t,
+                    x_m: xc,
+                    source,
+                })?;
+            if xc - half_grid < z1 && xc + half_grid > z0 {
+                wear.add_step(&contact, xc);
+            }
+            let f = [r.fx_n, r.fy_n, r.normal_force_n];
+            gen_forces(&f, &rr, &mut ft, &mut fw);
+            tr.complete(&ft);
+            wh.complete(&fw);
+            if !(tr.q.iter().all(|x| x.is_finite()) && wh.q.iter().all(|x| x.is_finite())) {
+                return Err(DynamicsError::Diverged {
+                    t_s: t,
+                    x_m: xc,
+                    what: "modal coordinates".into(),
+                });
+            }
+            if opts.energy {
+                // Constant wheel loads: exact work g · Δq.
+                for i in 0..mw {
+                    let dq = wh.q[i] - qw_prev[i];
+                    eb.gravity_work_j += self.wheel_gravity[i] * dq;
+                    eb.torque_work_j += self.wheel_torque[i] * dq;
+                    eb.external_work_j += fw_const[i] * dq;
+                }
+                qw_prev.copy_from_slice(&wh.q);
+                let p_damp = tr.damping_power() + wh.damping_power();
+                eb.damper_dissipation_j += 0.5 * dt * (p_damp + p_damp_prev);
+                p_damp_prev = p_damp;
+                // Contact power with the corrected velocities.
+                let mut p_c = 0.0;
+                for d in 0..3 {
+                    let vr = dot(&rr[d * mt..(d + 1) * mt], &tr.v);
+                    let vw = dot(&wr[d * mw..(d + 1) * mw], &wh.v);
+                    p_c += f[d] * (vw - vr);
+                }
+                eb.contact_work_j += 0.5 * dt * (p_c + p_contact_prev);
+                p_contact_prev = p_c;
+                eb.frictional_work_j += r.frictional_power_w * dt;
+                eb.spin_work_j -= v * spin * r.mz_nm * dt;
+                self.rail_line.row_slopes_at(xc, &mut slopes)?;
+                let dun = dot(&slopes[2 * mt..], &tr.q);
+                let dut = dot(&slopes[mt..2 * mt], &tr.q);
+                eb.convective_work_j += v * (f[2] * dun + f[1] * dut) * dt;
+            }
+            last_fn = r.normal_force_n;
+            last_delta = r.approach_m;
+            h.t_s.push(t);
+            h.x_m.push(xc);
+            h.normal_n.push(r.normal_force_n);
+            h.longitudinal_n.push(r.fx_n);
+            h.lateral_n.push(r.fy_n);
+            h.creepage.push(xi);
+            h.approach_m.push(delta);
+            let cols = (0..nx)
+                .filter(|&i| {
+                    (0..contact.config().grid.ny)
+                        .any(|j| contact.pressure_pa()[i * contact.config().grid.ny + j] > 0.0)
+                })
+                .count();
+            h.contact_length_m.push(cols as f64 * dx);
+            h.slip_fraction.push(r.slip_area_fraction());
+            h.frictional_power_w.push(r.frictional_power_w);
+            if let (Some(rec), Some((_, _, rows))) =
+                (rail_point.as_mut(), self.track_modes_for_point.as_ref())
+            {
+                rec.displacement_m.push([
+                    dot(&rows[..mt], &tr.q),
+                    dot(&rows[mt..2 * mt], &tr.q),
+                    dot(&rows[2 * mt..], &tr.q),
+                ]);
+            }
+            if let Some(pb) = progress {
+                if n % 64 == 0 {
+                    pb.set_position(n as u64);
+                }
+            }
+        }
+        if opts.energy {
+            let e_end =
+                tr.kinetic_energy() + tr.strain_energy() + wh.kinetic_energy() + wh.strain_energy();
+            eb.stored_change_j = e_end - e_start;
+            eb.contact_energy_change_j = hertz_energy(last_fn, last_delta) - e_contact_start;
+        }
+        let k = self.model.wear.coefficient;
+        let mut w = vec![0.0; nbins];
+        wear.work_x(&mut w);
+        w.iter_mut().for_each(|x| *x *= k);
+        Ok(PassageRecord {
+            speed_m_per_s: v,
+            dt_s: dt,
+            x_start_m: x0,
+            zone_m: self.zone_m,
+            histories: h,
+            wear_x_m: wear.x_m(),
+            wear_j_per_m: w,
+            rail_point,
+            energy: eb,
+            static_creepage: xi0,
+            static_approach_m: delta0,
+            steps: n_steps,
+            seconds: t_wall.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// The engine of a model with its classified bases, built once and reused for any number of
+/// passages (speeds, rail profiles).
+pub struct PreparedModel {
+    /// The engine.
+    pub engine: PassageEngine,
+    /// Track modes: frequencies (Hz) and classification.
+    pub track_frequencies_hz: Vec<f64>,
+    /// Track mode classes.
+    pub track_classes: Vec<crate::eigen::classify::TrackModeClass>,
+    /// Wheel modes: frequencies (Hz).
+    pub wheel_frequencies_hz: Vec<f64>,
+    /// Seconds spent on the modal bases (0 when both came from the cache… plus loading).
+    pub modal_seconds: f64,
+    /// True when both bases came from the cache.
+    pub cached: bool,
+}
+
+impl PreparedModel {
+    /// Builds the track and wheel, loads or computes their modes below `model.run.fmax`
+    /// (cached in `cache`), assembles the damping, and builds the engine.
+    pub fn new(
+        model: &Model,
+        cache: &crate::eigen::cache::ModalCache,
+        opts: &PassageOptions,
+    ) -> Result<Self, DynamicsError> {
+        use crate::eigen::basis::{track_basis, wheel_basis};
+        let other = |e: &dyn std::fmt::Display| DynamicsError::Other(e.to_string());
+        let track = TrackStructure::build(model).map_err(|e| other(&e))?;
+        let wheel = WheelStructure::build(model).map_err(|e| other(&e))?;
+        let fmax = model.run.fmax;
+        let tb = track_basis(model, &track, cache, fmax).map_err(|e| other(&e))?;
+        let wb = wheel_basis(model, &wheel, cache, fmax).map_err(|e| other(&e))?;
+        let (tm, _) = track.assemble().map_err(|e| other(&e))?;
+        let (wm, _) = wheel.assemble().map_err(|e| other(&e))?;
+        let engine = PassageEngine::new(
+            model,
+            &track,
+            &tb.frequencies_hz,
+            &tb.modes,
+            tm.c.as_ref(),
+            &wheel,
+            &wb.frequencies_hz,
+            &wb.modes,
+            &wm,
+            opts,
+        )?;
+        Ok(PreparedModel {
+            engine,
+            modal_seconds: tb.seconds + wb.seconds,
+            cached: tb.cached && wb.cached,
+            track_frequencies_hz: tb.frequencies_hz,
+            track_classes: tb.classes,
+            wheel_frequencies_hz: wb.frequencies_hz,
+        })
+    }
+
+    /// Frequencies (Hz) of the track's longitudinal-compression modes.
+    pub fn longitudinal_compression_hz(&self) -> Vec<f64> {
+        use crate::eigen::classify::TrackFamily;
+        self.track_frequencies_hz
+            .iter()
+            .zip(&self.track_classes)
+            .filter(|(_, c)| c.family == TrackFamily::LongitudinalCompression)
+            .map(|(&f, _)| f)
+            .collect()
+    }
+
+    /// Frequencies (Hz) of the track's vertical-bending modes.
+    pub fn vertical_bending_hz(&self) -> Vec<f64> {
+        use crate::eigen::classify::TrackFamily;
+        self.track_frequencies_hz
+            .iter()
+            .zip(&self.track_classes)
+            .filter(|(_, c)| c.family == TrackFamily::VerticalBending)
+            .map(|(&f, _)| f)
+            .collect()
+    }
+}

@@ -1,0 +1,448 @@
+//! Modal synthesis of the wheel–track system (method.md §3; issue 5 item 1–2).
+//!
+//! Each substructure (track, wheel with the sprung mass) is reduced to its mass-normalised
+//! modes below f_max: `q̈ + C_q q̇ + Ω² q = Φᵀ f`, with
+//! - `Ω² = diag(ω_i²)` (rad²/s²),
+//! - `C_q = Φᵀ C Φ` the **full** projected damping matrix of the discrete dampers (1/s): the
+//!   railpad and ballast dampers are not proportional, so `C_q` is not diagonal
+//!   (design-notes.md, "Non-proportional damping"),
+//! - `Φᵀ f` the generalised force (N·m/√kg… i.e. N per unit modal coordinate).
+//!
+//! The two substructures are coupled only through the contact force, which acts at the
+//! contact point on the rail running surface (moving) and on the wheel tread (fixed in the
+//! non-rotating wheel frame).
+//!
+//! **Contact frame.** With the rail inclined by α (`rail.inclination` = tan α, head towards
+//! −y) and the wheel cone of the same slope, the contact normal is `n = (0, −sin α, cos α)`
+//! (outward from the rail, pointing at the wheel) and the lateral tangent is
+//! `t = (0, cos α, sin α)`; `x` is the rolling direction. The contact point on the rail is
+//! the running-surface node line that is the support point of the inclined section in
+//! direction `n` (the crown top rotated by α).
+//!
+//! **Interpolation.** The rail displacement "at the contact" is a weighted sum of
+//! running-surface node displacements: across the rail, weights of the Hertz pressure
+//! `p ∝ √(1 − s²/b²)` integrated against the linear shape functions of the surface edges
+//! (a point when b is smaller than the node spacing); along the rail, the hexahedron's linear
+//! shape function between the two node planes around `x_c`. The same weights distribute the
+//! contact force onto the nodes (virtual work: the force and the displacement are
+//! interpolated consistently). Spreading over the patch width keeps the coarse mesh's
+//! local flexibility under a point load out of the model; the contact solver's half-space
+//! supplies the local (Hertzian) compliance (design-notes.md, "Modal truncation and local
+//! contact flexibility").
+
+use faer::sparse::SparseColMatRef;
+use faer::Mat;
+
+use super::DynamicsError;
+use crate::fe::assembly::DofMap;
+use crate::structure::{TrackStructure, WheelStructure};
+
+/// The contact frame (unit vectors in global coordinates).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactFrame {
+    /// Rolling direction (1, 0, 0).
+    pub x: [f64; 3],
+    /// Lateral tangent `(0, cos α, sin α)`.
+    pub t: [f64; 3],
+    /// Normal `(0, −sin α, cos α)`, from the rail towards the wheel.
+    pub n: [f64; 3],
+}
+
+impl ContactFrame {
+    /// The frame for a rail inclination `tan α` (−).
+    pub fn for_inclination(tan_alpha: f64) -> Self {
+        let a = tan_alpha.atan();
+        ContactFrame {
+            x: [1.0, 0.0, 0.0],
+            t: [0.0, a.cos(), a.sin()],
+            n: [0.0, -a.sin(), a.cos()],
+        }
+    }
+
+    fn axes(&self) -> [[f64; 3]; 3] {
+        [self.x, self.t, self.n]
+    }
+}
+
+/// One substructure reduced to its modes.
+#[derive(Clone, Debug)]
+pub struct ModalSystem {
+    /// Squared natural frequencies ω² (rad²/s²); rigid-body modes are set to exactly 0.
+    pub omega2: Vec<f64>,
+    /// Projected damping `Φᵀ C Φ` (1/s), m × m, symmetric.
+    pub damping: Mat<f64>,
+}
+
+impl ModalSystem {
+    /// Reduces a substructure: frequencies (Hz) of mass-normalised `modes` (n × m) and the
+    /// sparse damping matrix `c` (N·s/m, n × n). Frequencies below `rigid_hz` are rigid-body
+    /// modes (ω = 0 exactly).
+    pub fn new(
+        frequencies_hz: &[f64],
+        modes: &Mat<f64>,
+        c: SparseColMatRef<'_, usize, f64>,
+        rigid_hz: f64,
+    ) -> Result<Self, DynamicsError> {
+        let m = frequencies_hz.len();
+        if modes.ncols() != m || modes.nrows() != c.nrows() {
+            return Err(DynamicsError::Other(format!(
+                "modal basis is {}×{} but there are {} frequencies and {} DOFs: the cached modes do not belong to this model; clear the cache entry",
+                modes.nrows(),
+                modes.ncols(),
+                m,
+                c.nrows()
+            )));
+        }
+        let omega2 = frequencies_hz
+            .iter()
+            .map(|&f| {
+                if f < rigid_hz {
+                    0.0
+                } else {
+                    (2.0 * std::f64::consts::PI * f).powi(2)
+                }
+            })
+            .collect();
+        // C Φ (sparse × dense), then Φᵀ (C Φ).
+        let cphi: Mat<f64> = c * modes.as_ref();
+        let mut damping: Mat<f64> = modes.transpose() * cphi.as_ref();
+        // Symmetrise the round-off.
+        for i in 0..m {
+            for j in 0..i {
+                let v = 0.5 * (damping[(i, j)] + damping[(j, i)]);
+                damping[(i, j)] = v;
+                damping[(j, i)] = v;
+            }
+        }
+        Ok(ModalSystem { omega2, damping })
+    }
+
+    /// Number of modes.
+    pub fn len(&self) -> usize {
+        self.omega2.len()
+    }
+
+    /// True when there are no modes.
+    pub fn is_empty(&self) -> bool {
+        self.omega2.is_empty()
+    }
+
+    /// Largest |off-diagonal| / √(c_ii c_jj) of the damping matrix (−): how far from
+    /// proportional (modal) damping the discrete dampers are.
+    pub fn damping_coupling(&self) -> f64 {
+        let m = self.len();
+        let mut worst: f64 = 0.0;
+        for i in 0..m {
+            for j in 0..i {
+                let d = (self.damping[(i, i)] * self.damping[(j, j)]).sqrt();
+                if d > 0.0 {
+                    worst = worst.max(self.damping[(i, j)].abs() / d);
+                }
+            }
+        }
+        worst
+    }
+}
+
+/// Weights of nodes at lateral positions `s` (m, ascending) that interpolate the Hertz
+/// pressure `∝ √(1 − s²/b²)` centred at `s = 0` with linear hat functions. Falls back to
+/// linear interpolation of the point `s = 0` when fewer than two nodes lie within `b`.
+/// The weights sum to 1.
+pub fn lateral_weights(s: &[f64], b: f64) -> Vec<f64> {
+    let n = s.len();
+    let mut w = vec![0.0; n];
+    if n == 0 {
+        return w;
+    }
+    if n == 1 {
+        w[0] = 1.0;
+        return w;
+    }
+    let hat = |j: usize, x: f64| -> f64 {
+        if j > 0 && x >= s[j - 1] && x <= s[j] {
+            (x - s[j - 1]) / (s[j] - s[j - 1])
+        } else if j + 1 < n && x >= s[j] && x <= s[j + 1] {
+            (s[j + 1] - x) / (s[j + 1] - s[j])
+        } else if (j == 0 && x < s[0]) || (j == n - 1 && x > s[n - 1]) {
+            1.0
+        } else {
+            0.0
+        }
+    };
+    let inside = s.iter().filter(|&&v| v.abs() < b).count();
+    if b > 0.0 && inside >= 2 {
+        // Midpoint rule over the ellipse: 400 intervals is far below the mesh's error.
+        let k = 400;
+        let mut total = 0.0;
+        for q in 0..k {
+            let x = -b + (q as f64 + 0.5) * 2.0 * b / k as f64;
+            let p = (1.0 - (x / b).powi(2)).max(0.0).sqrt();
+            total += p;
+            for (j, wj) in w.iter_mut().enumerate() {
+                *wj += p * hat(j, x);
+            }
+        }
+        for wj in &mut w {
+            *wj /= total;
+        }
+    } else {
+        for (j, wj) in w.iter_mut().enumerate() {
+            *wj = hat(j, 0.0);
+        }
+    }
+    w
+}
+
+/// Modal rows of a weighted set of nodes: `rows[d·m + i] = Σ_k w_k n_d · φ_i(node_k)` for the
+/// three axes `d` of the frame (x, t, n). Constrained DOFs contribute zero.
+pub(crate) fn modal_rows(
+    nodes: &[(usize, f64)],
+    dofmap: &DofMap,
+    modes: &Mat<f64>,
+    frame: &ContactFrame,
+    out: &mut [f64],
+) {
+    let m = modes.ncols();
+    out.iter_mut().for_each(|v| *v = 0.0);
+    for (d, axis) in frame.axes().iter().enumerate() {
+        for &(node, w) in nodes {
+            for (c, &a) in axis.iter().enumerate() {
+                if a == 0.0 {
+                    continue;
+                }
+                if let Some(f) = dofmap.free_index(3 * node + c) {
+                    let row = modes.row(f);
+                    for i in 0..m {
+                        out[d * m + i] += w * a * row[i];
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The rail's running-surface contact line: for every node plane the modal rows (x, t, n) of
+/// the weighted contact nodes, and the plane positions.
+#[derive(Clone, Debug)]
+pub struct RailContactLine {
+    /// Node plane positions along the rail (m).
+    pub planes_x_m: Vec<f64>,
+    /// Number of track modes.
+    pub modes: usize,
+    /// Rows per plane, `3·m` values each (x, t, n blocks).
+    rows: Vec<f64>,
+    /// The contact nodes of each plane with their lateral weights (global node indices).
+    pub nodes: Vec<Vec<(usize, f64)>>,
+    /// Height of the contact point above the foot underside (m) (for output).
+    pub contact_point_yz_m: [f64; 2],
+}
+
+impl RailContactLine {
+    /// Builds the line for the track's modes; `half_width_m` is the Hertz semi-axis b across
+    /// the rail (m).
+    pub fn new(
+        track: &TrackStructure,
+        modes: &Mat<f64>,
+        frame: &ContactFrame,
+        half_width_m: f64,
+    ) -> Result<Self, DynamicsError> {
+        let topo = &track.rail;
+        let sec = &topo.section;
+        if sec.running_surface.is_empty() {
+            return Err(DynamicsError::Other(
+                "the rail section has no running-surface nodes".into(),
+            ));
+        }
+        // Support point in direction n.
+        let score = |j: usize| {
+            let [y, z] = sec.nodes[j];
+            frame.n[1] * y + frame.n[2] * z
+        };
+        let jc = *sec
+            .running_surface
+            .iter()
+            .max_by(|&&a, &&b| score(a).total_cmp(&score(b)))
+            .expect("non-empty");
+        let [yc, zc] = sec.nodes[jc];
+        // Lateral coordinate along the tangent t relative to the contact point.
+        let mut lat: Vec<(f64, usize)> = sec
+            .running_surface
+            .iter()
+            .map(|&j| {
+                let [y, z] = sec.nodes[j];
+                (frame.t[1] * (y - yc) + frame.t[2] * (z - zc), j)
+            })
+            .collect();
+        lat.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let s: Vec<f64> = lat.iter().map(|v| v.0).collect();
+        let w = lateral_weights(&s, half_width_m);
+        let m = modes.ncols();
+        let np = topo.n_planes();
+        let mut rows = vec![0.0; np * 3 * m];
+        let mut nodes = Vec::with_capacity(np);
+        for p in 0..np {
+            let set: Vec<(usize, f64)> = lat
+                .iter()
+                .zip(&w)
+                .filter(|(_, &wk)| wk > 0.0)
+                .map(|(&(_, j), &wk)| (topo.node(p, j), wk))
+                .collect();
+            modal_rows(
+                &set,
+                &track.dofmap,
+                modes,
+                frame,
+                &mut rows[p * 3 * m..(p + 1) * 3 * m],
+            );
+            nodes.push(set);
+        }
+        Ok(RailContactLine {
+            planes_x_m: topo.planes_x_m.clone(),
+            modes: m,
+            rows,
+            nodes,
+            contact_point_yz_m: [yc, zc],
+        })
+    }
+
+    /// Interval and linear weight of `x` (m): `(p, s)` with `x = (1−s)·x_p + s·x_{p+1}`;
+    /// `None` off the rail.
+    pub fn locate(&self, x: f64) -> Option<(usize, f64)> {
+        let px = &self.planes_x_m;
+        if !(x >= px[0] && x <= px[px.len() - 1]) {
+            return None;
+        }
+        let p = px.partition_point(|&v| v <= x).clamp(1, px.len() - 1) - 1;
+        Some((p, (x - px[p]) / (px[p + 1] - px[p])))
+    }
+
+    /// The interpolated rows at `x` (m) into `out` (length 3m). No allocation.
+    pub fn rows_at(&self, x: f64, out: &mut [f64]) -> Result<(), DynamicsError> {
+        let (p, s) = self.locate(x).ok_or_else(|| {
+            DynamicsError::Other(format!(
+                "contact point x = {x:.4} m is off the rail [{:.3}, {:.3}] m: lengthen the track (track.bays)",
+                self.planes_x_m[0],
+                self.planes_x_m[self.planes_x_m.len() - 1]
+            ))
+        })?;
+        let k = 3 * self.modes;
+        let a = &self.rows[p * k..(p + 1) * k];
+        let b = &self.rows[(p + 1) * k..(p + 2) * k];
+        for i in 0..k {
+            out[i] = (1.0 - s) * a[i] + s * b[i];
+        }
+        Ok(())
+    }
+}
+
+impl RailContactLine {
+    /// Derivative along x of the interpolated rows at `x` (1/m): `(row_{p+1} − row_p)/Δx_p`
+    /// for the two planes around x, into `out` (length 3m; d/dx of the linear interpolation).
+    pub fn row_slopes_at(&self, x: f64, out: &mut [f64]) -> Result<(), DynamicsError> {
+        let (p, _) = self.locate(x).ok_or_else(|| {
+            DynamicsError::Other(format!("contact point x = {x:.4} m is off the rail"))
+        })?;
+        let k = 3 * self.modes;
+        let h = self.planes_x_m[p + 1] - self.planes_x_m[p];
+        let a = &self.rows[p * k..(p + 1) * k];
+        let b = &self.rows[(p + 1) * k..(p + 2) * k];
+        for i in 0..k {
+            out[i] = (b[i] - a[i]) / h;
+        }
+        Ok(())
+    }
+}
+
+/// The wheel side of the contact: modal rows (x, t, n) of the weighted tread nodes at the
+/// nominal contact point, and of the journal (axle-box) centre in x.
+#[derive(Clone, Debug)]
+pub struct WheelContact {
+    /// Rows of the contact point, `3·m` values (x, t, n blocks).
+    pub rows: Vec<f64>,
+    /// Row of the x displacement of the axle centre (journal nodes with balanced weights,
+    /// see [`crate::structure::wheel::balanced_journal_weights`]) (m values).
+    pub axle_x: Vec<f64>,
+    /// The tread nodes and weights used.
+    pub nodes: Vec<(usize, f64)>,
+}
+
+impl WheelContact {
+    /// Builds the wheel contact rows for the wheel's modes; `half_width_m` as for the rail.
+    pub fn new(
+        wheel: &WheelStructure,
+        modes: &Mat<f64>,
+        frame: &ContactFrame,
+        half_width_m: f64,
+    ) -> Result<Self, DynamicsError> {
+        let topo = &wheel.topology;
+        let k = topo.contact_angle_index();
+        let mut lat: Vec<(f64, usize)> = topo
+            .tread_meridian
+            .iter()
+            .map(|&mi| (topo.meridian[mi][0], topo.node(k, mi)))
+            .collect();
+        lat.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let s: Vec<f64> = lat.iter().map(|v| v.0).collect();
+        let w = lateral_weights(&s, half_width_m);
+        let nodes: Vec<(usize, f64)> = lat
+            .iter()
+            .zip(&w)
+            .filter(|(_, &wk)| wk > 0.0)
+            .map(|(&(_, nd), &wk)| (nd, wk))
+            .collect();
+        let m = modes.ncols();
+        let mut rows = vec![0.0; 3 * m];
+        modal_rows(&nodes, &wheel.dofmap, modes, frame, &mut rows);
+        let bearing = topo.bearing_nodes();
+        if bearing.is_empty() {
+            return Err(DynamicsError::Other(
+                "the wheel has no journal nodes".into(),
+            ));
+        }
+        let wb = crate::structure::wheel::balanced_journal_weights(&wheel.mesh, &bearing);
+        let bset: Vec<(usize, f64)> = bearing.iter().copied().zip(wb).collect();
+        let mut ax = vec![0.0; 3 * m];
+        modal_rows(&bset, &wheel.dofmap, modes, frame, &mut ax);
+        ax.truncate(m);
+        Ok(WheelContact {
+            rows,
+            axle_x: ax,
+            nodes,
+        })
+    }
+}
+
+/// `Σ_i a_i b_i`.
+#[inline]
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lateral_weights_sum_to_one_and_are_symmetric() {
+        let s: Vec<f64> = (-8..=8).map(|i| i as f64 * 0.0025).collect();
+        let w = lateral_weights(&s, 0.0054);
+        let total: f64 = w.iter().sum();
+        assert!((total - 1.0).abs() < 1e-12);
+        for i in 0..s.len() {
+            assert!((w[i] - w[s.len() - 1 - i]).abs() < 1e-12);
+        }
+        // First moment of the weights = first moment of the pressure (0 by symmetry), second
+        // moment of the elliptic pressure is b²/4; the hat interpolation adds h²/6·(share of
+        // nodes) at most.
+        let m2: f64 = w.iter().zip(&s).map(|(w, s)| w * s * s).sum();
+        let b: f64 = 0.0054;
+        assert!(m2 > b * b / 4.0 && m2 < b * b / 4.0 + 0.0025f64.powi(2) / 6.0 + 1e-12);
+    }
+
+    #[test]
+    fn lateral_weights_fall_back_to_point_interpolation() {
+        let s = [-0.03, 0.01, 0.05];
+        let w = lateral_weights(&s, 0.005);
+        assert!((w[0] - 0.25).abs() < 1e-12 && (w[1] - 0.75).abs() < 1e-12 && w[2] == 0.0);
+    }
+}

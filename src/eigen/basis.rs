@@ -1,0 +1,234 @@
+//! A classified modal basis of one substructure, loaded from the modal cache or computed
+//! (shift-invert Lanczos), classified and stored: the one place where "modes are extracted
+//! once and reused" is implemented. Used by `corrugation modes` and by the passage engine.
+//!
+//! The cache key ([`cache_key`]) hashes only what determines the modes: the structural
+//! sections of the model (track, rail, sleeper, fastening, ballast, wheel, vehicle, mesh, and
+//! the solution zone, which places the fine mesh), f_max, the substructure name and the
+//! program version. Speed, contact, wear and explicit settings do not change the modes, so a
+//! speed sweep reuses one entry.
+
+use std::io::IsTerminal;
+use std::time::Instant;
+
+use faer::Mat;
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+
+use super::cache::{CacheKey, CacheLookup, CacheMeta, ModalCache};
+use super::classify::{
+    classify_wheel_mode, ClassifyError, TrackClassifier, TrackModeClass, WheelModeClass,
+};
+use super::{solve, EigenError, EigenOptions};
+use crate::fe::assembly::FeMatrices;
+use crate::model::Model;
+use crate::structure::{StructureError, TrackStructure, WheelStructure};
+
+/// Errors of [`track_basis`] / [`wheel_basis`].
+#[derive(Debug, thiserror::Error)]
+pub enum BasisError {
+    /// The eigensolver failed.
+    #[error("eigenmodes of the {substructure}: {source}")]
+    Eigen {
+        /// "track" or "wheel".
+        substructure: &'static str,
+        /// The solver error (says what to change).
+        source: EigenError,
+    },
+    /// Building or assembling the substructure failed.
+    #[error(transparent)]
+    Structure(#[from] StructureError),
+    /// A mode could not be classified.
+    #[error(transparent)]
+    Classify(#[from] ClassifyError),
+    /// The model could not be serialised for the cache key.
+    #[error("modal cache key: {0}")]
+    Key(String),
+}
+
+/// A modal basis with its classification.
+#[derive(Clone, Debug)]
+pub struct ModalBasis<C> {
+    /// Natural frequencies (Hz), ascending.
+    pub frequencies_hz: Vec<f64>,
+    /// Mass-normalised mode shapes over the free DOFs (n × m; unit m/√kg).
+    pub modes: Mat<f64>,
+    /// Relative residuals ‖Kφ − ω²Mφ‖/‖Kφ‖ per mode.
+    pub residuals: Vec<f64>,
+    /// Eigenvalues below f_max by the Sturm count.
+    pub sturm_count: usize,
+    /// Classification per mode.
+    pub classes: Vec<C>,
+    /// True when loaded from the cache.
+    pub cached: bool,
+    /// Wall time to load or compute (s).
+    pub seconds: f64,
+}
+
+/// Revision of the structural model's physics (how a model becomes K, M, C). Bump it when a
+/// change alters the matrices of an unchanged model file, so that no stale cache entry is
+/// reused (the program version alone does not change between development commits).
+/// 2: journal-node weights of the primary suspension balanced about the axle axis.
+pub const PHYSICS_REVISION: u64 = 2;
+
+/// The cache key of one substructure's modal basis (see the module doc for what it covers).
+pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey, BasisError> {
+    let mut v = serde_json::to_value(m).map_err(|e| BasisError::Key(e.to_string()))?;
+    if let Some(o) = v.as_object_mut() {
+        for k in ["contact", "wear", "explicit"] {
+            o.remove(k);
+        }
+        // The solution zone places the fine mesh (it stays in the key); the speed and the
+        // passage's f_max (keyed separately) do not change the modes.
+        if let Some(run) = o.get_mut("run").and_then(|r| r.as_object_mut()) {
+            run.remove("speed_kmh");
+            run.remove("fmax");
+        }
+    }
+    let bytes = serde_json::to_vec(&v).map_err(|e| BasisError::Key(e.to_string()))?;
+    Ok(CacheKey::new()
+        .u64("physics_revision", PHYSICS_REVISION)
+        .bytes("model", &bytes)
+        .f64("f_max_hz", fmax_hz)
+        .str("substructure", substructure))
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+pub fn progress_bar(msg: &str) -> indicatif::ProgressBar {
+    let pb = if std::io::stderr().is_terminal() {
+        indicatif::ProgressBar::new(0)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    pb.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {msg} [{elapsed_precise}] {wide_bar} {pos}/{len}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    pb.set_message(msg.to_string());
+    pb
+}
+
+fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {
+    (0..modes.nrows()).map(|i| modes[(i, j)]).collect()
+}
+
+/// Loads a basis from the cache or solves, classifies and stores it.
+fn basis<C: Serialize + DeserializeOwned>(
+    cache: &ModalCache,
+    key: &CacheKey,
+    name: &'static str,
+    fmax: f64,
+    mats: impl FnOnce() -> Result<FeMatrices, BasisError>,
+    classify: impl Fn(&[f64], f64) -> Result<C, BasisError>,
+) -> Result<ModalBasis<C>, BasisError> {
+    let t = Instant::now();
+    match cache.load(key) {
+        CacheLookup::Hit(c) => {
+            match serde_json::from_value::<Vec<C>>(c.meta.classification.clone()) {
+                Ok(classes) if classes.len() == c.frequencies_hz.len() => {
+                    return Ok(ModalBasis {
+                        frequencies_hz: c.frequencies_hz,
+                        residuals: c.meta.relative_residuals.clone(),
+                        sturm_count: c.meta.sturm_count,
+                        modes: c.modes,
+                        classes,
+                        cached: true,
+                        seconds: t.elapsed().as_secs_f64(),
+                    });
+                }
+                _ => eprintln!(
+                    "modal cache: {name} entry has an incomplete classification; recomputing"
+                ),
+            }
+        }
+        CacheLookup::Corrupt(r) => {
+            eprintln!("modal cache: {name} entry corrupt ({r}); recomputing")
+        }
+        CacheLookup::Miss => {}
+    }
+    let mats = mats()?;
+    let pb = progress_bar(&format!("{name} modes"));
+    let sol = solve(
+        mats.k.as_ref(),
+        mats.m.as_ref(),
+        &EigenOptions::new(fmax),
+        Some(&pb),
+    )
+    .map_err(|source| BasisError::Eigen {
+        substructure: name,
+        source,
+    })?;
+    pb.finish_and_clear();
+    let pb = progress_bar(&format!("classifying {name} modes"));
+    pb.set_length(sol.frequencies_hz.len() as u64);
+    let mut classes = Vec::with_capacity(sol.frequencies_hz.len());
+    for (j, &f) in sol.frequencies_hz.iter().enumerate() {
+        classes.push(classify(&column(&sol.modes, j), f)?);
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    let value = serde_json::to_value(&classes).map_err(|e| BasisError::Key(e.to_string()))?;
+    let meta = CacheMeta::from_solution(&sol, 0.0, fmax, value.clone());
+    if let Err(e) = cache.store(key, &sol.frequencies_hz, &sol.modes, meta) {
+        eprintln!("warning: could not store the {name} modes in the cache: {e}");
+    }
+    // serde_json (without its `float_roundtrip` feature) may parse a printed f64 one ulp off.
+    // Use the values exactly as a cache hit will read them back from meta.json (print, then
+    // parse), so that a fresh run and a cached run give identical results.
+    let reparse = |v: &serde_json::Value| -> Result<String, BasisError> {
+        serde_json::to_string(v).map_err(|e| BasisError::Key(e.to_string()))
+    };
+    let classes: Vec<C> =
+        serde_json::from_str(&reparse(&value)?).map_err(|e| BasisError::Key(e.to_string()))?;
+    let residuals: Vec<f64> = serde_json::from_str(&reparse(
+        &serde_json::to_value(&sol.relative_residuals)
+            .map_err(|e| BasisError::Key(e.to_string()))?,
+    )?)
+    .map_err(|e| BasisError::Key(e.to_string()))?;
+    Ok(ModalBasis {
+        frequencies_hz: sol.frequencies_hz,
+        residuals,
+        sturm_count: sol.sturm_count,
+        modes: sol.modes,
+        classes,
+        cached: false,
+        seconds: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// The track's classified modes below `fmax_hz` (cached).
+pub fn track_basis(
+    m: &Model,
+    track: &TrackStructure,
+    cache: &ModalCache,
+    fmax_hz: f64,
+) -> Result<ModalBasis<TrackModeClass>, BasisError> {
+    let classifier = TrackClassifier::new(track)?;
+    basis(
+        cache,
+        &cache_key(m, fmax_hz, "track")?,
+        "track",
+        fmax_hz,
+        || Ok(track.assemble()?.0),
+        |u, _| Ok(classifier.classify(track, u)?),
+    )
+}
+
+/// The wheel's classified modes below `fmax_hz` (cached), rigid-body modes included.
+pub fn wheel_basis(
+    m: &Model,
+    wheel: &WheelStructure,
+    cache: &ModalCache,
+    fmax_hz: f64,
+) -> Result<ModalBasis<WheelModeClass>, BasisError> {
+    basis(
+        cache,
+        &cache_key(m, fmax_hz, "wheel")?,
+        "wheel",
+        fmax_hz,
+        || Ok(wheel.assemble()?.0),
+        |u, f| Ok(classify_wheel_mode(wheel, u, f)?),
+    )
+}
