@@ -852,3 +852,20 @@ impl PreparedModel {
             .collect()
     }
 }
+
+impl super::PassageRunner for PreparedModel {
+    fn run(
+        &self,
+        speed_kmh: f64,
+        profile: Option<&RailProfile>,
+    ) -> Result<super::PassageSummary, DynamicsError> {
+        let opts = PassageOptions {
+            energy: false,
+            rail_point_offset_m: None,
+        };
+        let rec = self
+            .engine
+            .passage(crate::units::kmh_to_ms(speed_kmh), profile, &opts, None)?;
+        super::analysis::summarise(&rec)
+    }
+}
