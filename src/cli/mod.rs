@@ -1,6 +1,7 @@
 //! Command definitions (clap) and dispatch. Each command lives in its own file.
 
 mod contact_cmd;
+mod grow_cmd;
 mod mesh_cmd;
 mod model_cmd;
 mod modes_cmd;
@@ -59,6 +60,8 @@ enum Command {
     Modes(modes_cmd::ModesCmd),
     /// One reduced-order wheel passage: contact forces, wear along the rail, PSDs, plots.
     Passage(passage_cmd::PassageCmd),
+    /// Trial-amplitude growth (consistency, phase, limiting amplitude); --rounds for iterative growth.
+    Grow(grow_cmd::GrowCmd),
 }
 
 /// Runs the parsed command.
@@ -69,5 +72,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Contact(c) => c.run(),
         Command::Modes(c) => c.run(),
         Command::Passage(c) => c.run(),
+        Command::Grow(c) => c.run(),
     }
 }

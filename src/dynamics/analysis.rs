@@ -51,6 +51,8 @@ pub struct Analysed {
     pub psd: Psd,
     /// Peaks in 20–80 mm, strongest first.
     pub peaks: Vec<WavelengthComponent>,
+    /// The same peaks as the spectral toolkit returns them (m, Hz).
+    pub raw_peaks: Vec<crate::spectral::Peak>,
 }
 
 /// Analyses one signal along the rail at speed `v` (m/s).
@@ -60,25 +62,26 @@ pub fn analyse(sig: &Signal, v: f64) -> Result<Analysed, DynamicsError> {
     let band = band_pass(sig, &BandPass::default()).map_err(e)?;
     let band_rms = (band.values.iter().map(|x| x * x).sum::<f64>() / band.len() as f64).sqrt();
     let psd = Psd::estimate(&band, &PsdOptions::default()).map_err(e)?;
-    let peaks = if band_rms > 0.0 {
-        find_peaks(&psd, &PeakOptions::default(), v)
-            .map_err(e)?
-            .into_iter()
-            .map(|p| WavelengthComponent {
-                wavelength_mm: m_to_mm(p.wavelength_m),
-                frequency_hz: p.frequency_hz,
-                psd: p.psd,
-            })
-            .collect()
+    let raw_peaks = if band_rms > 0.0 {
+        find_peaks(&psd, &PeakOptions::default(), v).map_err(e)?
     } else {
         Vec::new()
     };
+    let peaks = raw_peaks
+        .iter()
+        .map(|p| WavelengthComponent {
+            wavelength_mm: m_to_mm(p.wavelength_m),
+            frequency_hz: p.frequency_hz,
+            psd: p.psd,
+        })
+        .collect();
     Ok(Analysed {
         mean,
         band,
         band_rms,
         psd,
         peaks,
+        raw_peaks,
     })
 }
 

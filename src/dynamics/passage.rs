@@ -17,8 +17,8 @@
 //!    the inclined rail `φ = −sin α / R` (1/m);
 //! 4. the transient rolling contact step ([`crate::contact::TransientRolling`]) gives the
 //!    forces on the wheel (F_L = Fx, lateral, F_N) and the frictional power density, which
-//!    is accumulated in rail-fixed bins: `W_f(x) = k Σ τ·s Δt` integrated across the rail
-//!    head (J/m, method.md §4);
+//!    is accumulated in rail-fixed bins: `W_f(x) = Σ τ·s Δt` integrated across the rail
+//!    head (J/m, method.md §4 with k = 1: the coefficient scales, it does not shape);
 //! 5. the forces act on the wheel and, opposite, on the rail at `x_c`; both substructures
 //!    complete the step.
 //!
@@ -169,7 +169,9 @@ pub struct PassageRecord {
     pub histories: Histories,
     /// Bin centres of the wear along the rail in the solution zone (m).
     pub wear_x_m: Vec<f64>,
-    /// Frictional work per metre of rail `W_f(x)` (J/m), times the wear coefficient.
+    /// Frictional work per metre of rail `W_f(x) = Σ τ·s Δt` integrated across the rail head
+    /// (J/m). The wear is proportional to it (method.md §4); the wear coefficient
+    /// (`wear.coefficient`, m³/J) converts it to a worn depth only in the iterative growth.
     pub wear_j_per_m: Vec<f64>,
     /// The rail-point record.
     pub rail_point: Option<RailPointRecord>,
@@ -752,10 +754,8 @@ impl PassageEngine {
             eb.stored_change_j = e_end - e_start;
             eb.contact_energy_change_j = hertz_energy(last_fn, last_delta) - e_contact_start;
         }
-        let k = self.model.wear.coefficient;
         let mut w = vec![0.0; nbins];
         wear.work_x(&mut w);
-        w.iter_mut().for_each(|x| *x *= k);
         Ok(PassageRecord {
             speed_m_per_s: v,
             dt_s: dt,

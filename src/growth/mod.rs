@@ -10,6 +10,7 @@
 //! Lengths are metres, frequencies Hz; deviations are dimensionless ratios (0.03 = 3 %).
 
 pub mod consistency;
+pub mod procedure;
 pub mod trial;
 
 pub use consistency::{

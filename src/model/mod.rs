@@ -115,8 +115,10 @@ pub struct Model {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Wear {
-    /// Wear coefficient k (m³/J or any consistent unit): only relative (differential) wear is
-    /// judged, so k scales the wear and never shapes it.
+    /// Wear coefficient k (m³/J): worn volume per joule of frictional work. A single passage
+    /// judges relative (differential) wear, which k scales and never shapes; the iterative
+    /// growth uses it for the worn depth per passage. Default 1e-13 (Archard K ≈ 1e-4, mild
+    /// wear, H ≈ 3 GPa, µ = 0.4: k = K/(µH)).
     pub coefficient: f64,
 }
 
@@ -766,12 +768,7 @@ impl Model {
             "m",
         )?;
         c.range("run.fmax", run.fmax, 100.0, 20000.0, "Hz")?;
-        c.pos(
-            "wear.coefficient",
-            self.wear.coefficient,
-            1e6,
-            "(relative scale)",
-        )?;
+        c.pos("wear.coefficient", self.wear.coefficient, 1e-6, "m^3/J")?;
         c.range(
             "explicit.element_length",
             self.explicit.element_length,
