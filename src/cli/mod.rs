@@ -1,9 +1,14 @@
 //! Command definitions (clap) and dispatch. Each command lives in its own file.
 
 mod contact_cmd;
+pub mod engine;
+mod initiation_cmd;
+mod merge_cmd;
 mod mesh_cmd;
 mod model_cmd;
 mod modes_cmd;
+mod study_cmd;
+mod sweep_cmd;
 
 use std::path::PathBuf;
 
@@ -56,6 +61,15 @@ enum Command {
     Contact(contact_cmd::ContactCmd),
     /// Eigenmodes of the track and the wheel (classified, cached): modes.csv, wheel_modes.csv.
     Modes(modes_cmd::ModesCmd),
+    /// Speed sweep (parallel, resumable, --shard I/N): frequency-selection maps, dominant
+    /// wavelength and frequency vs speed.
+    Sweep(sweep_cmd::SweepCmd),
+    /// Join the output directories of a sharded sweep into the unsharded result.
+    Merge(merge_cmd::MergeCmd),
+    /// Design study from a TOML file: parameters varied over a base model, indicators per case.
+    Study(study_cmd::StudyCmd),
+    /// Initiation table of RPM1–RPM5 (or any models) on the smooth rail.
+    Initiation(initiation_cmd::InitiationCmd),
 }
 
 /// Runs the parsed command.
@@ -65,5 +79,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Mesh(c) => c.run(),
         Command::Contact(c) => c.run(),
         Command::Modes(c) => c.run(),
+        Command::Sweep(c) => c.run(),
+        Command::Merge(c) => c.run(),
+        Command::Study(c) => c.run(),
+        Command::Initiation(c) => c.run(),
     }
 }

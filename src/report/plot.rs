@@ -21,6 +21,7 @@ use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::FontStyle;
 
 use super::ReportError;
@@ -625,7 +626,10 @@ fn heat_on<DB: DrawingBackend>(
                 .draw_series(std::iter::once(Text::new(
                     l.name.clone(),
                     (x, y),
-                    (FONT_FAMILY, 13).into_font().color(&WHITE),
+                    (FONT_FAMILY, 13)
+                        .into_font()
+                        .color(&WHITE)
+                        .pos(Pos::new(HPos::Right, VPos::Bottom)),
                 )))
                 .map_err(es)?;
         }

@@ -42,7 +42,7 @@ pub enum StudiesError {
         reason: String,
     },
     /// Passages that failed (the other speeds were computed and saved; rerun to resume).
-    #[error("{} passage(s) failed (the others are saved; fix and rerun to resume): {}", failures.len(), failures.join("; "))]
+    #[error("{} run(s) failed (the others are saved; fix and rerun to resume): {}", failures.len(), list_failures(failures))]
     Passages {
         /// One message per failed speed or case.
         failures: Vec<String>,
@@ -89,6 +89,15 @@ pub enum StudiesError {
     /// A plot or document could not be written.
     #[error(transparent)]
     Report(#[from] crate::report::ReportError),
+}
+
+/// The first three failures, and how many more.
+fn list_failures(f: &[String]) -> String {
+    let mut s = f.iter().take(3).cloned().collect::<Vec<_>>().join("; ");
+    if f.len() > 3 {
+        s.push_str(&format!("; … and {} more", f.len() - 3));
+    }
+    s
 }
 
 impl StudiesError {
