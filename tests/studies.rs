@@ -140,6 +140,9 @@ impl PassageRunner for ModeLocked {
     }
 }
 
+/// The run key of the stand-in sweeps.
+const KEY: &str = "stand-in";
+
 fn opts() -> MapOptions {
     MapOptions {
         frequency_lines_hz: MODES_HZ.to_vec(),
@@ -216,7 +219,7 @@ fn map_ridges_lie_on_the_mode_lines() {
     let dir = tmpdir("ridges");
     let speeds = parse_speeds("54.8:219:8").unwrap();
     let runner = ModeLocked::default();
-    let out = sweep(&runner, &speeds, &dir, &opts(), false).unwrap();
+    let out = sweep(&runner, &speeds, &dir, &opts(), KEY, false).unwrap();
     let m = &out.maps;
     let (nl, nf) = (m.wavelength_mm.len(), m.frequency_hz.len());
     let df_grid = m.frequency_hz[1] - m.frequency_hz[0];
@@ -325,12 +328,12 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
     let speeds = parse_speeds("60:200:10").unwrap();
     let runner = ModeLocked::default();
     let whole = base.join("whole");
-    sweep(&runner, &speeds, &whole, &opts(), false).unwrap();
+    sweep(&runner, &speeds, &whole, &opts(), KEY, false).unwrap();
     let mut shard_dirs = Vec::new();
     for i in 0..3 {
         let d = base.join(format!("shard{i}"));
         let sel = Shard { index: i, count: 3 }.select(&speeds);
-        sweep(&runner, &sel, &d, &opts(), false).unwrap();
+        sweep(&runner, &sel, &d, &opts(), KEY, false).unwrap();
         shard_dirs.push(d);
     }
     assert_eq!(runner.calls.load(Ordering::SeqCst), 2 * speeds.len());
@@ -366,11 +369,18 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
         frequency_lines_hz: vec![500.0],
         ..MapOptions::default()
     };
-    sweep(&runner, &[70.0], &odd, &other, false).unwrap();
+    sweep(&runner, &[70.0], &odd, &other, KEY, false).unwrap();
     let e = merge(&[shard_dirs[0].clone(), odd], &base.join("x"))
         .unwrap_err()
         .to_string();
     assert!(e.contains("different map options"), "{e}");
+    // ... and so are shards of another model (run key).
+    let foreign = base.join("foreign");
+    sweep(&runner, &[70.0], &foreign, &opts(), "other-model", false).unwrap();
+    let e = merge(&[shard_dirs[0].clone(), foreign], &base.join("y"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("different models"), "{e}");
     std::fs::remove_dir_all(base).ok();
 }
 
@@ -389,7 +399,7 @@ fn interrupted_sweep_resumes_without_recomputing() {
             panic,
             ..Default::default()
         };
-        let e = sweep(&broken, &speeds, &dir, &opts(), false).unwrap_err();
+        let e = sweep(&broken, &speeds, &dir, &opts(), KEY, false).unwrap_err();
         let StudiesError::Passages { failures } = &e else {
             panic!("{e}")
         };
@@ -406,7 +416,7 @@ fn interrupted_sweep_resumes_without_recomputing() {
             .unwrap()
             .map(|e| e.unwrap().file_name().into_string().unwrap())
             .collect();
-        assert_eq!(names.len(), 6, "{names:?}");
+        assert_eq!(names.len(), 7, "6 speeds and run.key: {names:?}");
         for &v in &speeds[..6] {
             let s = read_summary(&speed_file(&dir, v)).unwrap();
             let f = selected_mode_hz(v);
@@ -433,7 +443,7 @@ fn interrupted_sweep_resumes_without_recomputing() {
         "truncated file does not parse"
     );
     let good = ModeLocked::default();
-    let out = sweep(&good, &speeds, &dir, &opts(), false).unwrap();
+    let out = sweep(&good, &speeds, &dir, &opts(), KEY, false).unwrap();
     let mut ran = good.speeds_run.lock().unwrap().clone();
     ran.sort_by(f64::total_cmp);
     let mut expect = vec![speeds[5]];
@@ -445,9 +455,21 @@ fn interrupted_sweep_resumes_without_recomputing() {
     assert_eq!(out.stats.reused.len(), 5);
     assert_eq!(out.stats.computed.len(), 5);
     assert_eq!(out.record.speeds_kmh, speeds);
+    // A rerun for another model into the same directory is refused, nothing is reused.
+    let e = sweep(
+        &ModeLocked::default(),
+        &speeds,
+        &dir,
+        &opts(),
+        "another model",
+        false,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("another model or program version"), "{e}");
     // A third run computes nothing.
     let idle = ModeLocked::default();
-    sweep(&idle, &speeds, &dir, &opts(), false).unwrap();
+    sweep(&idle, &speeds, &dir, &opts(), KEY, false).unwrap();
     assert_eq!(idle.calls.load(Ordering::SeqCst), 0);
     std::fs::remove_dir_all(dir).ok();
 }

@@ -60,7 +60,13 @@ impl SweepCmd {
             frequency_lines_hz: engine::longitudinal_frequencies_hz(&model, cache)?,
             ..MapOptions::default()
         };
-        let out = sweep(runner.as_ref(), &speeds, &self.out, &opts, true)?;
+        // Resume only into a directory of the same model and program version.
+        let run_key = format!(
+            "{} {}",
+            env!("CARGO_PKG_VERSION"),
+            blake3::hash(&serde_json::to_vec(&model)?).to_hex()
+        );
+        let out = sweep(runner.as_ref(), &speeds, &self.out, &opts, &run_key, true)?;
         eprintln!(
             "sweep: {} speed(s), {} computed, {} reused; speed range ratio {:.3}, wavelength range ratio {}; {}",
             speeds.len(),

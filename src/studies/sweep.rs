@@ -8,6 +8,9 @@
 //!   resumes where it stopped. Temp files (`*.tmp.<pid>`) of a killed run never parse as a
 //!   speed file (other name) and are ignored; a truncated or foreign `<stem>.json` does not
 //!   parse (every field is required) and is recomputed.
+//! - `speeds/run.key` — what produced the speed files (a hash of the resolved model and the
+//!   program version, given by the caller): a rerun with another key is refused
+//!   ([`check_run_key`]), so a resume never mixes models; shards must share it to merge.
 //! - `sweep.json` — [`SweepRecord`]: the speeds, dominant wavelength and frequency per speed,
 //!   the range ratios, `seconds`, the map options. `seconds` is the **sum of the passages'
 //!   own wall times** (`PassageSummary::seconds`, read from the speed files), so the file
@@ -205,8 +208,10 @@ pub fn run_passages(
     runner: &dyn PassageRunner,
     speeds_kmh: &[f64],
     dir: &Path,
+    run_key: &str,
     progress: bool,
 ) -> Result<PassageStats, StudiesError> {
+    check_run_key(dir, run_key)?;
     let mut stats = PassageStats::default();
     let mut todo = Vec::new();
     for &v in speeds_kmh {
@@ -216,7 +221,6 @@ pub fn run_passages(
             _ => todo.push(v),
         }
     }
-    std::fs::create_dir_all(dir.join("speeds")).map_err(StudiesError::io(&dir.join("speeds")))?;
     let bar = progress_bar(todo.len() as u64, progress, "passages");
     let results: Vec<Result<f64, String>> = todo
         .par_iter()
@@ -274,16 +278,45 @@ pub(crate) fn progress_bar(n: u64, show: bool, what: &str) -> indicatif::Progres
     bar
 }
 
+/// File (in `DIR/speeds`) naming what produced the speed files: see [`check_run_key`].
+pub const RUN_KEY_FILE: &str = "run.key";
+
+/// Guards resume against mixing models: the first run into `dir` writes `run_key` (e.g. a
+/// hash of the resolved model and the program version) to `dir/speeds/run.key`; a later run
+/// with another key is refused, so speed files of another model are never reused.
+pub fn check_run_key(dir: &Path, run_key: &str) -> Result<(), StudiesError> {
+    let speeds = dir.join("speeds");
+    std::fs::create_dir_all(&speeds).map_err(StudiesError::io(&speeds))?;
+    let p = speeds.join(RUN_KEY_FILE);
+    match std::fs::read_to_string(&p) {
+        Ok(old) if old.trim_end() == run_key => Ok(()),
+        Ok(old) => Err(StudiesError::BadFile {
+            path: p,
+            reason: format!(
+                "this directory holds passages of another model or program version (key {}, \
+                 now {run_key}); use another --out or delete the directory",
+                old.trim_end()
+            ),
+        }),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            crate::io::write_text(&p, &format!("{run_key}\n")).map_err(StudiesError::io(&p))
+        }
+        Err(e) => Err(StudiesError::Io { path: p, source: e }),
+    }
+}
+
 /// Runs the missing passages ([`run_passages`]) and assembles the outputs ([`assemble`]).
+/// `run_key` identifies the model (see [`check_run_key`]).
 pub fn sweep(
     runner: &dyn PassageRunner,
     speeds_kmh: &[f64],
     dir: &Path,
     opts: &MapOptions,
+    run_key: &str,
     progress: bool,
 ) -> Result<SweepOutcome, StudiesError> {
     opts.check()?;
-    let stats = run_passages(runner, speeds_kmh, dir, progress)?;
+    let stats = run_passages(runner, speeds_kmh, dir, run_key, progress)?;
     let (record, maps) = assemble(dir, speeds_kmh, opts)?;
     Ok(SweepOutcome {
         record,
@@ -710,6 +743,36 @@ pub fn read_record(dir: &Path) -> Result<SweepRecord, StudiesError> {
 pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), StudiesError> {
     if dirs.is_empty() {
         return Err(StudiesError::Merge("no shard directories given".into()));
+    }
+    let mut key: Option<(String, &PathBuf)> = None;
+    for d in dirs {
+        let p = d.join("speeds").join(RUN_KEY_FILE);
+        let k = std::fs::read_to_string(&p).map_err(StudiesError::io(&p))?;
+        match &key {
+            None => key = Some((k, d)),
+            Some((k0, first)) if *k0 != k => {
+                return Err(StudiesError::Merge(format!(
+                    "{} and {} hold passages of different models or program versions ({}); \
+                     merge only shards of one sweep",
+                    first.display(),
+                    d.display(),
+                    RUN_KEY_FILE
+                )))
+            }
+            Some(_) => {}
+        }
+    }
+    let (key, _) = key.expect("at least one shard");
+    let kp = out.join("speeds").join(RUN_KEY_FILE);
+    match std::fs::read_to_string(&kp) {
+        Ok(k) if k != key => {
+            return Err(StudiesError::Merge(format!(
+                "{} already holds passages of another model; use an empty --out",
+                out.display()
+            )))
+        }
+        Ok(_) => {}
+        Err(_) => crate::io::write_text(&kp, &key).map_err(StudiesError::io(&kp))?,
     }
     let mut opts: Option<(MapOptions, &PathBuf)> = None;
     let mut files: Vec<(f64, Vec<u8>, PathBuf)> = Vec::new();
