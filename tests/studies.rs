@@ -634,6 +634,11 @@ fn study_runs_every_case_writes_table_and_plots_and_resumes() {
     let o2 = run_study(&study, &factory, Some(&growth), &out, false).unwrap();
     assert_eq!((o2.computed, o2.reused), (0, 6));
     assert_eq!(built.load(Ordering::SeqCst), before);
+    // Other speeds: every case is recomputed, none is taken from the old files.
+    let mut other = study.clone();
+    other.speeds_kmh = Some(vec![120.0]);
+    let o3 = run_study(&other, &factory, Some(&growth), &out, false).unwrap();
+    assert_eq!((o3.computed, o3.reused), (6, 0));
     std::fs::remove_dir_all(dir).ok();
 }
 

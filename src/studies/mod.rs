@@ -63,6 +63,9 @@ pub enum StudiesError {
         /// What is wrong and what to change.
         reason: String,
     },
+    /// An input that cannot be used (message says what to change).
+    #[error("{0}")]
+    Invalid(String),
     /// Shard directories that cannot be merged.
     #[error("merge: {0}")]
     Merge(String),

@@ -38,8 +38,9 @@
 //! name the file and the dotted key (`parameter[1].range.step`).
 //!
 //! # Outputs (in the output directory)
-//! - `cases/<NNNN>.json` — each finished case (its overrides and indicators), written
-//!   atomically; a rerun reuses the cases whose file matches their overrides (resume);
+//! - `cases/<NNNN>.json` — each finished case (its overrides, model hash and indicators),
+//!   written atomically; a rerun reuses the cases whose file matches their overrides, resolved
+//!   model ([`model_hash`]) and speeds (resume), and recomputes the others;
 //! - `study.csv` — one row per case and speed: `case`, the parameter values, the indicators
 //!   ([`super::initiation::indicator_header`]) and the growth hook's columns;
 //! - `study.md`, `study.html` — the criterion, a readable table and the plots;
@@ -467,6 +468,9 @@ pub struct CaseResult {
     /// The case's overrides (the study's `set`, then the case's own), to detect a changed
     /// study on resume.
     pub overrides: Vec<String>,
+    /// blake3 hash of the case's resolved model (serde_json) and the program version: a
+    /// changed base model is never taken for a finished case.
+    pub model_hash: String,
     /// The indicators, one row per speed.
     pub rows: Vec<InitiationRow>,
     /// The growth hook's results (empty without growth).
@@ -482,6 +486,16 @@ pub struct StudyOutcome {
     pub computed: usize,
     /// Cases reused from an earlier run.
     pub reused: usize,
+}
+
+/// blake3 of the resolved model (serde_json) and the program version, hex.
+pub fn model_hash(model: &Model) -> Result<String, StudiesError> {
+    let json =
+        serde_json::to_vec(model).map_err(|e| StudiesError::Invalid(format!("model: {e}")))?;
+    let mut h = blake3::Hasher::new();
+    h.update(env!("CARGO_PKG_VERSION").as_bytes());
+    h.update(&json);
+    Ok(h.finalize().to_hex().to_string())
 }
 
 fn case_file(out: &Path, i: usize) -> PathBuf {
@@ -514,11 +528,24 @@ pub fn run_study(
     let (mut computed, mut reused) = (0, 0);
     for (case, model) in &models {
         let overrides = study.case_overrides(case);
+        let hash = model_hash(model)?;
+        let speeds = study
+            .speeds_kmh
+            .clone()
+            .unwrap_or_else(|| vec![model.run.speed_kmh]);
         let path = case_file(out, case.index);
         let old = std::fs::read_to_string(&path)
             .ok()
             .and_then(|t| serde_json::from_str::<CaseResult>(&t).ok())
-            .filter(|r| r.overrides == overrides && (!study.growth || !r.growth.is_empty()));
+            .filter(|r| {
+                r.overrides == overrides
+                    && r.model_hash == hash
+                    && r.rows
+                        .iter()
+                        .map(|x| x.speed_kmh)
+                        .eq(speeds.iter().copied())
+                    && (!study.growth || !r.growth.is_empty())
+            });
         if let Some(r) = old {
             reused += 1;
             done.push((case.clone(), r));
@@ -527,12 +554,8 @@ pub fn run_study(
         }
         let run = || -> Result<CaseResult, String> {
             let runner = factory(model).map_err(|e| e.to_string())?;
-            let speeds = study
-                .speeds_kmh
-                .clone()
-                .unwrap_or_else(|| vec![model.run.speed_kmh]);
             let mut rows = Vec::new();
-            for v in speeds {
+            for &v in &speeds {
                 let s = runner.run(v, None).map_err(|e| format!("{v} km/h: {e}"))?;
                 rows.push(evaluate(&case.label(), &s, &study.criterion, study.peaks));
             }
@@ -542,6 +565,7 @@ pub fn run_study(
             };
             Ok(CaseResult {
                 overrides: overrides.clone(),
+                model_hash: hash.clone(),
                 rows,
                 growth: g,
             })

@@ -84,7 +84,7 @@ impl Default for MapOptions {
 
 impl MapOptions {
     fn check(&self) -> Result<(), StudiesError> {
-        let bad = |r: &str| StudiesError::Merge(format!("map options: {r}"));
+        let bad = |r: &str| StudiesError::Invalid(format!("map options: {r}"));
         let ok = self.wavelength_min_mm > 0.0
             && self.wavelength_max_mm > self.wavelength_min_mm
             && self.wavelength_max_mm.is_finite();
@@ -374,7 +374,7 @@ pub fn assemble(
     let mut speeds = speeds_kmh.to_vec();
     speeds.sort_by(f64::total_cmp);
     if speeds.is_empty() {
-        return Err(StudiesError::Merge("no speeds to assemble".into()));
+        return Err(StudiesError::Invalid("no speeds to assemble".into()));
     }
     let summaries = speeds
         .iter()
