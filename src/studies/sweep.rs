@@ -643,14 +643,16 @@ fn write_outputs(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), Studi
             dom_l,
         )],
     )?;
-    let mut fs = vec![Series::new(
+    // Mode lines first, so the dominant frequency is drawn on top of them.
+    let mut fs: Vec<Series> = lines_f
+        .iter()
+        .map(|l| Series::new(l.name.clone(), l.x.clone(), l.y.clone()))
+        .collect();
+    fs.push(Series::new(
         "dominant frequency",
         r.speeds_kmh.clone(),
         dom_f,
-    )];
-    for l in &lines_f {
-        fs.push(Series::new(l.name.clone(), l.x.clone(), l.y.clone()));
-    }
+    ));
     line_plot(
         &dir.join("dominant_frequency"),
         "Dominant wear frequency vs speed (lines: longitudinal compression modes)",
