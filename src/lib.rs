@@ -21,6 +21,8 @@
 //! | [`dynamics`] | the reduced-order wheel passage: modal synthesis, moving contact, time integration, wear |
 //! | [`structure`] | the track and wheel substructures built from a model: supports, springs, holds |
 //! | [`growth`] | trial corrugation, consistency table (Case 1/2, light/dark green, grey), growth phase |
+//! | [`studies`] | speed sweeps (shards, resume, frequency-selection maps), initiation tables, design studies |
+//! | [`report`] | SVG/PNG line plots and heat maps, Markdown/HTML documents |
 //!
 //! Coordinates (global, SI): `x` along the rail (direction of travel), `y` lateral (positive
 //! away from the track centre, towards the field side), `z` vertical up. `z = 0` is the
@@ -35,6 +37,8 @@ pub mod growth;
 pub mod io;
 pub mod mesh;
 pub mod model;
+pub mod report;
 pub mod spectral;
 pub mod structure;
+pub mod studies;
 pub mod units;

@@ -1,11 +1,16 @@
 //! Command definitions (clap) and dispatch. Each command lives in its own file.
 
 mod contact_cmd;
+pub mod engine;
 mod grow_cmd;
+mod initiation_cmd;
+mod merge_cmd;
 mod mesh_cmd;
 mod model_cmd;
 mod modes_cmd;
 mod passage_cmd;
+mod study_cmd;
+mod sweep_cmd;
 
 use std::path::PathBuf;
 
@@ -62,6 +67,15 @@ enum Command {
     Passage(passage_cmd::PassageCmd),
     /// Trial-amplitude growth (consistency, phase, limiting amplitude); --rounds for iterative growth.
     Grow(grow_cmd::GrowCmd),
+    /// Speed sweep (parallel, resumable, --shard I/N): frequency-selection maps, dominant
+    /// wavelength and frequency vs speed.
+    Sweep(sweep_cmd::SweepCmd),
+    /// Join the output directories of a sharded sweep into the unsharded result.
+    Merge(merge_cmd::MergeCmd),
+    /// Design study from a TOML file: parameters varied over a base model, indicators per case.
+    Study(study_cmd::StudyCmd),
+    /// Initiation table of RPM1–RPM5 (or any models) on the smooth rail.
+    Initiation(initiation_cmd::InitiationCmd),
 }
 
 /// Runs the parsed command.
@@ -73,5 +87,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Modes(c) => c.run(),
         Command::Passage(c) => c.run(),
         Command::Grow(c) => c.run(),
+        Command::Sweep(c) => c.run(),
+        Command::Merge(c) => c.run(),
+        Command::Study(c) => c.run(),
+        Command::Initiation(c) => c.run(),
     }
 }

@@ -13,6 +13,7 @@
 //!   ([`super::growth_phase`]);
 //! - *consistent growth* = growing phase **and** at least one reference component in
 //!   Case 1 or Case 2.
+//!
 //! The limiting amplitude `(2A_max)_l` is the largest amplitude of the ascending list up to
 //! which every amplitude grows consistently (`None` if the smallest already does not).
 //! Every component's frequency is also compared with the nearest longitudinal-compression

@@ -1,0 +1,74 @@
+//! The one place where the commands `sweep`, `study` and `initiation` get their passage
+//! engine: the reduced-order engine of [`corrugation::dynamics::passage::PreparedModel`]
+//! (modal bases from the cache, built once per model).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use anyhow::Context;
+use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
+use corrugation::dynamics::PassageRunner;
+use corrugation::eigen::cache::{default_cache_dir, ModalCache};
+use corrugation::growth::procedure::{trial_growth, ModeLines};
+use corrugation::model::Model;
+
+fn cache_of(cache: Option<&Path>) -> ModalCache {
+    ModalCache::new(
+        cache
+            .map(Path::to_path_buf)
+            .unwrap_or_else(default_cache_dir),
+    )
+}
+
+/// The prepared reduced-order model (modal bases loaded from or stored in the cache).
+pub fn prepared(model: &Model, cache: Option<&Path>) -> anyhow::Result<PreparedModel> {
+    PreparedModel::new(model, &cache_of(cache), &PassageOptions::default())
+        .context("preparing the modal model")
+}
+
+/// The passage runner of a model: modal basis from the cache in `cache` (default cache
+/// directory when `None`), built once, then any number of passages.
+pub fn runner_for(model: &Model, cache: Option<&Path>) -> anyhow::Result<Box<dyn PassageRunner>> {
+    Ok(Box::new(prepared(model, cache)?))
+}
+
+/// The longitudinal-compression eigenfrequencies of the model's track below the passage's
+/// f_max (Hz), for the lines of the frequency-selection maps.
+pub fn longitudinal_frequencies_hz(
+    model: &Model,
+    cache: Option<&Path>,
+) -> anyhow::Result<Vec<f64>> {
+    Ok(prepared(model, cache)?.longitudinal_compression_hz())
+}
+
+/// The growth loop of one study case (`growth = true` in a study file): the trial-amplitude
+/// procedure at the model's speed with the default amplitudes 10, 40, 80, 160 µm; columns
+/// `limiting_amplitude_um` (0 when no amplitude grows consistently) and
+/// `consistent_amplitudes` (how many of the four grow consistently).
+pub fn study_growth(
+    model: &Model,
+    _runner: &dyn PassageRunner,
+) -> anyhow::Result<BTreeMap<String, f64>> {
+    let p = prepared(model, None)?;
+    let modes = ModeLines {
+        longitudinal_hz: p.longitudinal_compression_hz(),
+        vertical_hz: p.vertical_bending_hz(),
+    };
+    let g = trial_growth(
+        &p.engine,
+        model.run.speed(),
+        &[10.0, 40.0, 80.0, 160.0],
+        &modes,
+        |_| {},
+    )?;
+    let mut out = BTreeMap::new();
+    out.insert(
+        "limiting_amplitude_um".to_string(),
+        g.limiting_amplitude_um.unwrap_or(0.0),
+    );
+    out.insert(
+        "consistent_amplitudes".to_string(),
+        g.amplitudes.iter().filter(|a| a.grows_consistently).count() as f64,
+    );
+    Ok(out)
+}

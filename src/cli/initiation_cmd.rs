@@ -1,0 +1,138 @@
+//! `corrugation initiation`: RPM1–RPM5 (or any list of models) on the smooth rail — band RMS
+//! and PSD peaks of F_L, F_N and the differential wear, and whether each initiates
+//! corrugation ([`corrugation::studies::initiation`] states the criterion).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+
+use corrugation::model::{load_model, ModelSource};
+use corrugation::studies::initiation::{run_initiation, write_initiation, InitiationCriterion};
+
+use super::{engine, ModelArgs};
+
+/// Initiation table of several fastening models (or model files) on the smooth rail.
+#[derive(Debug, Args)]
+pub struct InitiationCmd {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Fastening models compared, each applied to the model as --set fastening.model=NAME.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "RPM1,RPM2,RPM3,RPM4,RPM5",
+        value_name = "NAMES"
+    )]
+    variants: Vec<String>,
+    /// Compare these model files instead of --variants (named by file stem; --set applies to
+    /// each).
+    #[arg(long = "models", num_args = 1.., value_name = "FILE")]
+    models: Vec<PathBuf>,
+    /// Speed (km/h); default: the model's run.speed_kmh.
+    #[arg(long, value_name = "KMH")]
+    speed: Option<f64>,
+    /// Initiation threshold on the wear's band RMS relative to its mean (−).
+    #[arg(long, default_value_t = InitiationCriterion::DEFAULT_MIN_RELATIVE_WEAR, value_name = "RATIO")]
+    min_relative_wear: f64,
+    /// Largest relative deviation of F_L's dominant wavelength from the wear's (−).
+    #[arg(long, default_value_t = InitiationCriterion::DEFAULT_MAX_WAVELENGTH_DEVIATION, value_name = "RATIO")]
+    max_wavelength_deviation: f64,
+    /// PSD peaks per signal in the table.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    peaks: usize,
+    /// Output directory.
+    #[arg(long, default_value = "corrugation-out/initiation", value_name = "DIR")]
+    out: PathBuf,
+    /// Print the table as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
+    #[arg(long, value_name = "DIR")]
+    cache: Option<PathBuf>,
+}
+
+impl InitiationCmd {
+    /// Runs the command.
+    pub fn run(self) -> anyhow::Result<()> {
+        let t0 = Instant::now();
+        let criterion = InitiationCriterion {
+            min_relative_wear: self.min_relative_wear,
+            max_wavelength_deviation: self.max_wavelength_deviation,
+        };
+        for (name, v) in [
+            ("--min-relative-wear", criterion.min_relative_wear),
+            (
+                "--max-wavelength-deviation",
+                criterion.max_wavelength_deviation,
+            ),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                anyhow::bail!("{name} must be a finite number ≥ 0 (got {v})");
+            }
+        }
+        if !(1..=20).contains(&self.peaks) {
+            anyhow::bail!("--peaks must be 1 … 20 (got {})", self.peaks);
+        }
+        // All models first, so a bad name or key stops before any passage.
+        let mut cases = Vec::new();
+        if self.models.is_empty() {
+            for v in &self.variants {
+                let mut set = self.model.set.clone();
+                set.push(format!("fastening.model=\"{}\"", v.trim()));
+                cases.push((
+                    v.trim().to_string(),
+                    load_model(&self.model.source(), &set)?,
+                ));
+            }
+        } else {
+            for f in &self.models {
+                let name = f
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| f.display().to_string());
+                cases.push((
+                    name,
+                    load_model(&ModelSource::File(f.clone()), &self.model.set)?,
+                ));
+            }
+        }
+        let mut rows = Vec::new();
+        for (name, model) in &cases {
+            let speed = self.speed.unwrap_or(model.run.speed_kmh);
+            if !(speed.is_finite() && speed > 0.0) {
+                anyhow::bail!("--speed must be positive km/h (got {speed})");
+            }
+            // One engine at a time: each holds its modal basis.
+            let runner = engine::runner_for(model, self.cache.as_deref())?;
+            rows.extend(run_initiation(
+                &[(name.clone(), runner.as_ref())],
+                speed,
+                &criterion,
+                self.peaks,
+                true,
+            )?);
+        }
+        write_initiation(&self.out, &rows, &criterion, self.peaks)?;
+        for r in &rows {
+            eprintln!(
+                "{:>8}: F_L band RMS {:.1} N, wear band RMS/mean {}, initiates: {} ({})",
+                r.name,
+                r.fl_band_rms_n,
+                r.relative_wear
+                    .map_or("–".into(), |v| format!("{:.3} %", 100.0 * v)),
+                if r.initiates { "yes" } else { "no" },
+                r.reason
+            );
+        }
+        if self.json {
+            let j = serde_json::json!({
+                "criterion": criterion,
+                "rows": rows,
+                "seconds": t0.elapsed().as_secs_f64(),
+            });
+            println!("{}", serde_json::to_string_pretty(&j)?);
+        }
+        Ok(())
+    }
+}

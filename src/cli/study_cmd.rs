@@ -1,0 +1,88 @@
+//! `corrugation study FILE.toml`: a design study (parameters varied over a base model), see
+//! [`corrugation::studies::study`] for the file format and outputs.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+
+use corrugation::dynamics::PassageRunner;
+use corrugation::model::Model;
+use corrugation::studies::study::{run_study, Study};
+use corrugation::studies::BoxError;
+
+use super::engine;
+
+/// Design study: initiation indicators (and optionally growth) for every case of a study file.
+#[derive(Debug, Args)]
+pub struct StudyCmd {
+    /// The study file (TOML).
+    #[arg(value_name = "FILE")]
+    file: PathBuf,
+    /// Output directory (default: corrugation-out/study-<file stem>); a rerun resumes.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Print the cases and their indicators as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
+    #[arg(long, value_name = "DIR")]
+    cache: Option<PathBuf>,
+}
+
+impl StudyCmd {
+    /// Runs the command.
+    pub fn run(self) -> anyhow::Result<()> {
+        let t0 = Instant::now();
+        let study = Study::load(&self.file)?;
+        // Every case's model is checked before any engine work.
+        study.case_models()?;
+        let out = self.out.clone().unwrap_or_else(|| {
+            let stem = self
+                .file
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "study".into());
+            PathBuf::from(format!("corrugation-out/study-{stem}"))
+        });
+        let cache = self.cache.as_deref();
+        let factory = |m: &Model| -> Result<Box<dyn PassageRunner>, BoxError> {
+            engine::runner_for(m, cache).map_err(Into::into)
+        };
+        let growth = |m: &Model, r: &dyn PassageRunner| {
+            engine::study_growth(m, r).map_err(Into::<BoxError>::into)
+        };
+        let o = run_study(&study, &factory, Some(&growth), &out, true)?;
+        eprintln!(
+            "study `{}`: {} case(s), {} computed, {} reused → {}",
+            study.title,
+            o.cases.len(),
+            o.computed,
+            o.reused,
+            out.display()
+        );
+        if self.json {
+            let cases: Vec<serde_json::Value> = o
+                .cases
+                .iter()
+                .map(|(c, r)| {
+                    serde_json::json!({
+                        "case": c.index,
+                        "overrides": c.overrides(),
+                        "rows": r.rows,
+                        "growth": r.growth,
+                    })
+                })
+                .collect();
+            let j = serde_json::json!({
+                "title": study.title,
+                "cases": cases,
+                "computed": o.computed,
+                "reused": o.reused,
+                "seconds": t0.elapsed().as_secs_f64(),
+            });
+            println!("{}", serde_json::to_string_pretty(&j)?);
+        }
+        Ok(())
+    }
+}

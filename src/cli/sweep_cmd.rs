@@ -1,0 +1,90 @@
+//! `corrugation sweep`: passages over a range of speeds (in parallel, resumable, shardable)
+//! and the frequency-selection maps. See [`corrugation::studies::sweep`] for the files.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+
+use corrugation::studies::speeds::{parse_speeds, Shard};
+use corrugation::studies::sweep::{sweep, MapOptions};
+
+use super::{engine, ModelArgs};
+
+/// Speed sweep: frequency-selection maps, dominant wavelength and frequency vs speed.
+#[derive(Debug, Args)]
+pub struct SweepCmd {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Speeds in km/h: START:STOP:STEP (STOP included only when it falls on the grid) or a
+    /// list 60,80,100.
+    #[arg(long, default_value = "54.8:219:2", value_name = "SPEEDS")]
+    speeds: String,
+    /// Run only shard I of N (I = 0 … N−1): every N-th speed starting at the I-th. Join the
+    /// shard directories with `corrugation merge`.
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
+    /// Output directory (a rerun into it resumes: finished speeds are not recomputed).
+    #[arg(long, default_value = "corrugation-out/sweep", value_name = "DIR")]
+    out: PathBuf,
+    /// Print a JSON summary on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
+    #[arg(long, value_name = "DIR")]
+    cache: Option<PathBuf>,
+}
+
+impl SweepCmd {
+    /// Runs the command.
+    pub fn run(self) -> anyhow::Result<()> {
+        let t0 = Instant::now();
+        let all = parse_speeds(&self.speeds)?;
+        let shard = match &self.shard {
+            Some(s) => Shard::parse(s)?,
+            None => Shard::ALL,
+        };
+        let speeds = shard.select(&all);
+        if speeds.is_empty() {
+            anyhow::bail!(
+                "shard {}/{} of {} speed(s) is empty; use fewer shards",
+                shard.index,
+                shard.count,
+                all.len()
+            );
+        }
+        let model = self.model.load()?;
+        let cache = self.cache.as_deref();
+        let runner = engine::runner_for(&model, cache)?;
+        let opts = MapOptions {
+            frequency_lines_hz: engine::longitudinal_frequencies_hz(&model, cache)?,
+            ..MapOptions::default()
+        };
+        // Resume only into a directory of the same model and program version.
+        let run_key = format!(
+            "{} {}",
+            env!("CARGO_PKG_VERSION"),
+            blake3::hash(&serde_json::to_vec(&model)?).to_hex()
+        );
+        let out = sweep(runner.as_ref(), &speeds, &self.out, &opts, &run_key, true)?;
+        eprintln!(
+            "sweep: {} speed(s), {} computed, {} reused; speed range ratio {:.3}, wavelength range ratio {}; {}",
+            speeds.len(),
+            out.stats.computed.len(),
+            out.stats.reused.len(),
+            out.record.speed_range_ratio,
+            out.record
+                .wavelength_range_ratio
+                .map_or("–".into(), |r| format!("{r:.3}")),
+            self.out.display()
+        );
+        if self.json {
+            let mut j = serde_json::to_value(&out.record)?;
+            j["wall_seconds"] = t0.elapsed().as_secs_f64().into();
+            j["computed"] = out.stats.computed.len().into();
+            j["reused"] = out.stats.reused.len().into();
+            println!("{}", serde_json::to_string_pretty(&j)?);
+        }
+        Ok(())
+    }
+}

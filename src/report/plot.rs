@@ -1,0 +1,818 @@
+//! Line plots and heat maps, each written as `stem.svg` and `stem.png`.
+//!
+//! - [`line_plot`] / [`line_plot_log_y`]: one or more [`Series`] of `(x, y)` points. Non-finite
+//!   points (and, on the log axis, `y ≤ 0`) are gaps: the line is broken there, so a `None`
+//!   dominant wavelength written as `NaN` simply leaves a hole. Series of at most
+//!   [`MARKER_LIMIT`] points also get a marker at every point (parameter studies).
+//! - [`heat_map`]: a value `z(x_i, y_j)` on a rectilinear grid (cells centred on the grid
+//!   values, edges half-way between neighbours), linear or logarithmic colour scale (a
+//!   perceptually uniform blue–green–yellow map, `viridis`-like), a colour bar, and
+//!   [`OverlayLine`]s in data coordinates (e.g. the eigenfrequency lines `λ = v / f_i` of a
+//!   frequency-selection map). Cells with no data (non-finite, or `≤ 0` on a log scale) are
+//!   light grey.
+//!
+//! The logarithmic axes are drawn as linear axes of `log10` of the value with tick labels
+//! showing the value itself (`1.0e-3`), which keeps one drawing path for both scales.
+//!
+//! Files are rendered in memory (SVG) or into a temp file (PNG) and renamed into place.
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use plotters::style::FontStyle;
+
+use super::ReportError;
+
+/// The embedded font used for all PNG text (DejaVu Sans, Bitstream Vera licence).
+pub const FONT_TTF: &[u8] = include_bytes!("fonts/DejaVuSans.ttf");
+
+/// Family name under which [`FONT_TTF`] is registered with plotters.
+pub const FONT_FAMILY: &str = "sans-serif";
+
+/// Series of at most this many points get markers.
+pub const MARKER_LIMIT: usize = 60;
+
+/// Size of a line plot (px) in the PNG and the SVG.
+pub const LINE_PLOT_SIZE: (u32, u32) = (900, 600);
+
+/// Size of a heat map (px) in the PNG and the SVG.
+pub const HEAT_MAP_SIZE: (u32, u32) = (1000, 650);
+
+/// One named curve of a line plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend entry.
+    pub name: String,
+    /// Abscissae (plot unit).
+    pub x: Vec<f64>,
+    /// Ordinates (plot unit), one per abscissa.
+    pub y: Vec<f64>,
+}
+
+impl Series {
+    /// A series from a name and points.
+    pub fn new(name: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Self {
+            name: name.into(),
+            x,
+            y,
+        }
+    }
+}
+
+/// A polyline drawn over a heat map, in data coordinates (e.g. `λ = v / f_i`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OverlayLine {
+    /// Label written next to the line and in the legend.
+    pub name: String,
+    /// Abscissae (plot unit).
+    pub x: Vec<f64>,
+    /// Ordinates (plot unit).
+    pub y: Vec<f64>,
+}
+
+impl OverlayLine {
+    /// A horizontal line at `y` from `x0` to `x1`.
+    pub fn horizontal(name: impl Into<String>, y: f64, x0: f64, x1: f64) -> Self {
+        Self {
+            name: name.into(),
+            x: vec![x0, x1],
+            y: vec![y, y],
+        }
+    }
+}
+
+/// A heat map: `z` is row-major over `x` then `y`: `z[i * y.len() + j]` is the value at
+/// `(x[i], y[j])`. `x` and `y` must be strictly ascending.
+#[derive(Clone, Debug)]
+pub struct HeatMap<'a> {
+    /// Plot title.
+    pub title: &'a str,
+    /// Label of the x axis (with unit).
+    pub x_label: &'a str,
+    /// Label of the y axis (with unit).
+    pub y_label: &'a str,
+    /// Label of the colour bar (with unit).
+    pub colour_label: &'a str,
+    /// Grid abscissae, ascending.
+    pub x: &'a [f64],
+    /// Grid ordinates, ascending.
+    pub y: &'a [f64],
+    /// Values, `x.len() * y.len()`, row-major over `x`.
+    pub z: &'a [f64],
+    /// Lines drawn over the map.
+    pub lines: &'a [OverlayLine],
+    /// Logarithmic colour scale (values `≤ 0` are shown as "no data").
+    pub log_colour: bool,
+}
+
+/// The two files of one plot.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PlotFiles {
+    /// `stem.svg`.
+    pub svg: PathBuf,
+    /// `stem.png`.
+    pub png: PathBuf,
+}
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The embedded font is a valid TTF (checked by the tests); ignore the impossible error.
+        let _ = plotters::style::register_font(FONT_FAMILY, FontStyle::Normal, FONT_TTF);
+    });
+}
+
+/// Writes a line plot with a linear y axis to `stem.svg` and `stem.png`.
+pub fn line_plot(
+    stem: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<PlotFiles, ReportError> {
+    let spec = LineSpec {
+        title,
+        x_label,
+        y_label,
+        series,
+        log_y: false,
+    };
+    write_both(stem, LINE_PLOT_SIZE, |root| draw_lines(root, &spec), title)
+}
+
+/// Writes a line plot with a logarithmic y axis (e.g. a PSD) to `stem.svg` and `stem.png`.
+/// Points with `y ≤ 0` are gaps.
+pub fn line_plot_log_y(
+    stem: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<PlotFiles, ReportError> {
+    let spec = LineSpec {
+        title,
+        x_label,
+        y_label,
+        series,
+        log_y: true,
+    };
+    write_both(stem, LINE_PLOT_SIZE, |root| draw_lines(root, &spec), title)
+}
+
+/// Writes a heat map to `stem.svg` and `stem.png`.
+pub fn heat_map(stem: &Path, map: &HeatMap<'_>) -> Result<PlotFiles, ReportError> {
+    check_heat_map(map)?;
+    write_both(
+        stem,
+        HEAT_MAP_SIZE,
+        |root| draw_heat_map(root, map),
+        map.title,
+    )
+}
+
+/// Renders a line plot into an RGB buffer (`w * h * 3` bytes) — for tests of the text
+/// rendering and for callers that embed the pixels elsewhere.
+pub fn render_line_plot_rgb(
+    size: (u32, u32),
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<Vec<u8>, ReportError> {
+    register_font();
+    let spec = LineSpec {
+        title,
+        x_label,
+        y_label,
+        series,
+        log_y: false,
+    };
+    check_series(&spec)?;
+    let mut buf = vec![0u8; size.0 as usize * size.1 as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
+        draw_lines(&root, &spec)
+            .and_then(|_| root.present().map_err(|e| e.to_string()))
+            .map_err(|message| ReportError::Draw {
+                path: PathBuf::from("<memory>"),
+                message,
+            })?;
+    }
+    Ok(buf)
+}
+
+struct LineSpec<'a> {
+    title: &'a str,
+    x_label: &'a str,
+    y_label: &'a str,
+    series: &'a [Series],
+    log_y: bool,
+}
+
+fn with_ext(stem: &Path, ext: &str) -> PathBuf {
+    let mut name = stem.file_name().unwrap_or_default().to_os_string();
+    name.push(".");
+    name.push(ext);
+    stem.with_file_name(name)
+}
+
+/// Draws with `draw` on an SVG string and on a PNG temp file, then renames both into place.
+fn write_both<F>(
+    stem: &Path,
+    size: (u32, u32),
+    draw: F,
+    title: &str,
+) -> Result<PlotFiles, ReportError>
+where
+    F: Fn(&dyn AreaRef) -> Result<(), String>,
+{
+    register_font();
+    let svg = with_ext(stem, "svg");
+    let png = with_ext(stem, "png");
+    if stem.file_name().is_none() {
+        return Err(ReportError::Data {
+            title: title.into(),
+            reason: format!("output stem `{}` has no file name", stem.display()),
+        });
+    }
+    // SVG: in memory, then atomically to disk.
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+        draw(&root)
+            .and_then(|_| root.present().map_err(|e| e.to_string()))
+            .map_err(|message| ReportError::Draw {
+                path: svg.clone(),
+                message,
+            })?;
+    }
+    crate::io::write_text(&svg, &text).map_err(|source| ReportError::Io {
+        path: svg.clone(),
+        source,
+    })?;
+    // PNG: the encoder picks the format from the extension, so the temp name ends in .png.
+    if let Some(d) = png.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d).map_err(|source| ReportError::Io {
+            path: png.clone(),
+            source,
+        })?;
+    }
+    let tmp = with_ext(stem, &format!("tmp{}.png", std::process::id()));
+    let drawn = (|| {
+        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+        draw(&root)?;
+        root.present().map_err(|e| e.to_string())
+    })();
+    if let Err(message) = drawn {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(ReportError::Draw { path: png, message });
+    }
+    std::fs::rename(&tmp, &png).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        ReportError::Io {
+            path: png.clone(),
+            source,
+        }
+    })?;
+    Ok(PlotFiles { svg, png })
+}
+
+/// Object-safe access to the two backends' drawing areas, so each plot is written once.
+trait AreaRef {
+    fn lines(&self, spec: &LineSpec<'_>) -> Result<(), String>;
+    fn heat(&self, map: &HeatMap<'_>) -> Result<(), String>;
+}
+
+impl AreaRef for DrawingArea<SVGBackend<'_>, Shift> {
+    fn lines(&self, spec: &LineSpec<'_>) -> Result<(), String> {
+        lines_on(self, spec)
+    }
+    fn heat(&self, map: &HeatMap<'_>) -> Result<(), String> {
+        heat_on(self, map)
+    }
+}
+
+impl AreaRef for DrawingArea<BitMapBackend<'_>, Shift> {
+    fn lines(&self, spec: &LineSpec<'_>) -> Result<(), String> {
+        lines_on(self, spec)
+    }
+    fn heat(&self, map: &HeatMap<'_>) -> Result<(), String> {
+        heat_on(self, map)
+    }
+}
+
+fn draw_lines(root: &dyn AreaRef, spec: &LineSpec<'_>) -> Result<(), String> {
+    root.lines(spec)
+}
+
+fn draw_heat_map(root: &dyn AreaRef, map: &HeatMap<'_>) -> Result<(), String> {
+    root.heat(map)
+}
+
+fn check_series(spec: &LineSpec<'_>) -> Result<(), ReportError> {
+    for s in spec.series {
+        if s.x.len() != s.y.len() {
+            return Err(ReportError::Data {
+                title: spec.title.into(),
+                reason: format!(
+                    "series `{}` has {} x values but {} y values",
+                    s.name,
+                    s.x.len(),
+                    s.y.len()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+fn check_heat_map(map: &HeatMap<'_>) -> Result<(), ReportError> {
+    let bad = |reason: String| ReportError::Data {
+        title: map.title.into(),
+        reason,
+    };
+    if map.x.is_empty() || map.y.is_empty() {
+        return Err(bad("the grid is empty".into()));
+    }
+    if map.z.len() != map.x.len() * map.y.len() {
+        return Err(bad(format!(
+            "z has {} values, the grid {} × {}",
+            map.z.len(),
+            map.x.len(),
+            map.y.len()
+        )));
+    }
+    for (axis, v) in [("x", map.x), ("y", map.y)] {
+        if v.iter().any(|a| !a.is_finite()) || v.windows(2).any(|w| w[1] <= w[0]) {
+            return Err(bad(format!("{axis} must be finite and strictly ascending")));
+        }
+    }
+    for l in map.lines {
+        if l.x.len() != l.y.len() {
+            return Err(bad(format!(
+                "overlay line `{}`: x and y lengths differ",
+                l.name
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// `(min, max)` of the finite values, padded when degenerate; `None` when there is none.
+fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if lo > hi {
+        return None;
+    }
+    if hi - lo <= 1e-12 * hi.abs().max(lo.abs()).max(1e-300) {
+        let pad = if hi.abs() > 0.0 { 0.05 * hi.abs() } else { 1.0 };
+        return Some((lo - pad, hi + pad));
+    }
+    Some((lo, hi))
+}
+
+fn log_label(v: &f64) -> String {
+    format!("{:.1e}", 10f64.powf(*v))
+}
+
+fn num_label(v: &f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && !(1e-3..1e5).contains(&a) {
+        format!("{v:.2e}")
+    } else {
+        let s = format!("{v:.4}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        if s == "-0" {
+            "0".into()
+        } else {
+            s.into()
+        }
+    }
+}
+
+fn palette(i: usize) -> RGBColor {
+    const P: [RGBColor; 8] = [
+        RGBColor(31, 119, 180),
+        RGBColor(214, 39, 40),
+        RGBColor(44, 160, 44),
+        RGBColor(255, 127, 14),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(23, 190, 207),
+    ];
+    P[i % P.len()]
+}
+
+/// Splits a polyline into runs of drawable points.
+fn runs(points: impl Iterator<Item = Option<(f64, f64)>>) -> Vec<Vec<(f64, f64)>> {
+    let mut out = vec![Vec::new()];
+    for p in points {
+        match p {
+            Some(p) => out.last_mut().expect("non-empty").push(p),
+            None => {
+                if !out.last().expect("non-empty").is_empty() {
+                    out.push(Vec::new());
+                }
+            }
+        }
+    }
+    out.retain(|r| !r.is_empty());
+    out
+}
+
+fn lines_on<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    spec: &LineSpec<'_>,
+) -> Result<(), String> {
+    let es = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(es)?;
+    let ty = |y: f64| {
+        if spec.log_y {
+            if y > 0.0 {
+                Some(y.log10())
+            } else {
+                None
+            }
+        } else {
+            Some(y)
+        }
+    };
+    let point = |x: f64, y: f64| {
+        let y = ty(y)?;
+        (x.is_finite() && y.is_finite()).then_some((x, y))
+    };
+    let all = || {
+        spec.series
+            .iter()
+            .flat_map(|s| s.x.iter().zip(&s.y).filter_map(|(&x, &y)| point(x, y)))
+    };
+    let (x0, x1) = finite_range(all().map(|p| p.0)).unwrap_or((0.0, 1.0));
+    let (y0, y1) = finite_range(all().map(|p| p.1)).unwrap_or((0.0, 1.0));
+    let ypad = 0.04 * (y1 - y0);
+    let mut chart = ChartBuilder::on(root)
+        .caption(spec.title, (FONT_FAMILY, 22))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(85)
+        .build_cartesian_2d(x0..x1, (y0 - ypad)..(y1 + ypad))
+        .map_err(es)?;
+    let ylab: &dyn Fn(&f64) -> String = if spec.log_y { &log_label } else { &num_label };
+    chart
+        .configure_mesh()
+        .x_desc(spec.x_label)
+        .y_desc(spec.y_label)
+        .label_style((FONT_FAMILY, 14))
+        .axis_desc_style((FONT_FAMILY, 16))
+        .x_label_formatter(&num_label)
+        .y_label_formatter(ylab)
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(es)?;
+    let mut any_legend = false;
+    for (i, s) in spec.series.iter().enumerate() {
+        let colour = palette(i);
+        let pts = s.x.iter().zip(&s.y).map(|(&x, &y)| point(x, y));
+        let mut first = true;
+        for run in runs(pts) {
+            let ann = chart
+                .draw_series(LineSeries::new(run.clone(), colour.stroke_width(2)))
+                .map_err(es)?;
+            if first && !s.name.is_empty() {
+                ann.label(s.name.clone()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                });
+                any_legend = true;
+                first = false;
+            }
+            if s.x.len() <= MARKER_LIMIT {
+                chart
+                    .draw_series(run.iter().map(|&p| Circle::new(p, 3, colour.filled())))
+                    .map_err(es)?;
+            }
+        }
+    }
+    if any_legend {
+        chart
+            .configure_series_labels()
+            .label_font((FONT_FAMILY, 14))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(es)?;
+    }
+    Ok(())
+}
+
+/// A viridis-like colour map: `t` in `[0, 1]`.
+pub fn colour_map(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] = [
+        (68.0, 1.0, 84.0),
+        (59.0, 82.0, 139.0),
+        (33.0, 145.0, 140.0),
+        (94.0, 201.0, 98.0),
+        (253.0, 231.0, 37.0),
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let s = t * (STOPS.len() - 1) as f64;
+    let i = (s.floor() as usize).min(STOPS.len() - 2);
+    let f = s - i as f64;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    let mix = |u: f64, v: f64| (u + (v - u) * f).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// Decades shown below the maximum on a log colour scale.
+pub const LOG_DECADES: f64 = 6.0;
+
+/// Cell edges of a rectilinear grid: half-way between neighbours, half a spacing outside.
+fn edges(v: &[f64]) -> Vec<f64> {
+    let n = v.len();
+    if n == 1 {
+        let h = if v[0] != 0.0 { 0.05 * v[0].abs() } else { 0.5 };
+        return vec![v[0] - h, v[0] + h];
+    }
+    let mut e = Vec::with_capacity(n + 1);
+    e.push(v[0] - 0.5 * (v[1] - v[0]));
+    for w in v.windows(2) {
+        e.push(0.5 * (w[0] + w[1]));
+    }
+    e.push(v[n - 1] + 0.5 * (v[n - 1] - v[n - 2]));
+    e
+}
+
+fn heat_on<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    map: &HeatMap<'_>,
+) -> Result<(), String> {
+    let es = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(es)?;
+    let (w, _) = root.dim_in_pixel();
+    let (main, bar) = root.split_horizontally(w.saturating_sub(130));
+    let tz = |z: f64| -> Option<f64> {
+        if map.log_colour {
+            (z > 0.0 && z.is_finite()).then(|| z.log10())
+        } else {
+            z.is_finite().then_some(z)
+        }
+    };
+    let (mut c0, c1) = finite_range(map.z.iter().filter_map(|&z| tz(z))).unwrap_or((0.0, 1.0));
+    if map.log_colour {
+        c0 = c0.max(c1 - LOG_DECADES);
+    }
+    let xe = edges(map.x);
+    let ye = edges(map.y);
+    let mut chart = ChartBuilder::on(&main)
+        .caption(map.title, (FONT_FAMILY, 22))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d(xe[0]..xe[xe.len() - 1], ye[0]..ye[ye.len() - 1])
+        .map_err(es)?;
+    let ny = map.y.len();
+    let nodata = RGBColor(225, 225, 225);
+    chart
+        .draw_series((0..map.x.len()).flat_map(|i| {
+            let (xe, ye) = (&xe, &ye);
+            (0..ny).map(move |j| {
+                let colour = match tz(map.z[i * ny + j]) {
+                    Some(c) => colour_map((c - c0) / (c1 - c0)),
+                    None => nodata,
+                };
+                Rectangle::new([(xe[i], ye[j]), (xe[i + 1], ye[j + 1])], colour.filled())
+            })
+        }))
+        .map_err(es)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc(map.x_label)
+        .y_desc(map.y_label)
+        .label_style((FONT_FAMILY, 14))
+        .axis_desc_style((FONT_FAMILY, 16))
+        .x_label_formatter(&num_label)
+        .y_label_formatter(&num_label)
+        .draw()
+        .map_err(es)?;
+    let (xa, xb, ya, yb) = (xe[0], xe[xe.len() - 1], ye[0], ye[ye.len() - 1]);
+    let inside = |x: f64, y: f64| {
+        x.is_finite() && y.is_finite() && (xa..=xb).contains(&x) && (ya..=yb).contains(&y)
+    };
+    for l in map.lines {
+        let pts =
+            l.x.iter()
+                .zip(&l.y)
+                .map(|(&x, &y)| inside(x, y).then_some((x, y)));
+        let segs = runs(pts);
+        for seg in &segs {
+            chart
+                .draw_series(LineSeries::new(seg.clone(), WHITE.stroke_width(2)))
+                .map_err(es)?;
+        }
+        if let Some(&(x, y)) = segs.last().and_then(|s| s.last()) {
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    l.name.clone(),
+                    (x, y),
+                    (FONT_FAMILY, 13)
+                        .into_font()
+                        .color(&WHITE)
+                        .pos(Pos::new(HPos::Right, VPos::Bottom)),
+                )))
+                .map_err(es)?;
+        }
+    }
+    // Colour bar.
+    let mut cb = ChartBuilder::on(&bar)
+        .margin_top(50)
+        .margin_bottom(65)
+        .margin_right(10)
+        .y_label_area_size(75)
+        .build_cartesian_2d(0.0..1.0, c0..c1)
+        .map_err(es)?;
+    let steps = 100;
+    cb.draw_series((0..steps).map(|k| {
+        let a = c0 + (c1 - c0) * k as f64 / steps as f64;
+        let b = c0 + (c1 - c0) * (k + 1) as f64 / steps as f64;
+        Rectangle::new(
+            [(0.0, a), (1.0, b)],
+            colour_map((k as f64 + 0.5) / steps as f64).filled(),
+        )
+    }))
+    .map_err(es)?;
+    let clab: &dyn Fn(&f64) -> String = if map.log_colour {
+        &log_label
+    } else {
+        &num_label
+    };
+    cb.configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_desc(map.colour_label)
+        .label_style((FONT_FAMILY, 12))
+        .axis_desc_style((FONT_FAMILY, 13))
+        .y_label_formatter(clab)
+        .y_labels(6)
+        .draw()
+        .map_err(es)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmpdir(tag: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("corrugation-plot-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// Width and height from the PNG IHDR chunk (bytes 16..24, big endian).
+    fn png_size(bytes: &[u8]) -> (u32, u32) {
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
+        assert_eq!(&bytes[12..16], b"IHDR");
+        let be = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+        (be(&bytes[16..20]), be(&bytes[20..24]))
+    }
+
+    #[test]
+    fn embedded_font_parses() {
+        assert!(ab_glyph_check(FONT_TTF));
+    }
+
+    fn ab_glyph_check(bytes: &'static [u8]) -> bool {
+        plotters::style::register_font("font-check", FontStyle::Normal, bytes).is_ok()
+    }
+
+    #[test]
+    fn line_plot_writes_svg_and_png_of_the_stated_size() {
+        let d = tmpdir("line");
+        let x: Vec<f64> = (0..200).map(|i| i as f64 * 0.01).collect();
+        let y: Vec<f64> = x.iter().map(|x| (6.0 * x).sin()).collect();
+        let mut y2 = y.iter().map(|v| v * 0.5).collect::<Vec<_>>();
+        y2[50] = f64::NAN; // a gap
+        let files = line_plot(
+            &d.join("sine"),
+            "Sine",
+            "x (m)",
+            "y (-)",
+            &[Series::new("sin", x.clone(), y), Series::new("half", x, y2)],
+        )
+        .unwrap();
+        let svg = std::fs::read_to_string(&files.svg).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("Sine") && svg.contains("x (m)"));
+        let png = std::fs::read(&files.png).unwrap();
+        assert_eq!(png_size(&png), LINE_PLOT_SIZE);
+        assert!(png.len() > 10_000, "PNG has content: {} bytes", png.len());
+        let names: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert_eq!(names.len(), 2, "no temp file left: {names:?}");
+        std::fs::remove_dir_all(d).ok();
+    }
+
+    #[test]
+    fn log_plot_skips_non_positive_values() {
+        let d = tmpdir("log");
+        let x: Vec<f64> = (1..50).map(|i| i as f64).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .map(|x| if *x < 5.0 { 0.0 } else { 1e-6 * x * x })
+            .collect();
+        let f = line_plot_log_y(
+            &d.join("psd"),
+            "PSD",
+            "λ (mm)",
+            "PSD",
+            &[Series::new("a", x, y)],
+        )
+        .unwrap();
+        assert!(std::fs::read_to_string(&f.svg).unwrap().contains("1.0e-"));
+        std::fs::remove_dir_all(d).ok();
+    }
+
+    /// The PNG text is really drawn with the embedded font: the title band of a plot with a
+    /// title has dark pixels, the same band without the title has none.
+    #[test]
+    fn png_text_is_rendered_with_the_embedded_font() {
+        let size = (400, 300);
+        let s = [Series::new("", vec![0.0, 1.0], vec![0.0, 1.0])];
+        let with = render_line_plot_rgb(size, "TITLE TEXT", "x", "y", &s).unwrap();
+        let without = render_line_plot_rgb(size, "", "x", "y", &s).unwrap();
+        let dark_in_title_band = |buf: &[u8]| {
+            (0..30 * size.0 as usize)
+                .filter(|&p| buf[3 * p] < 128 && buf[3 * p + 1] < 128 && buf[3 * p + 2] < 128)
+                .count()
+        };
+        assert!(
+            dark_in_title_band(&with) > 50,
+            "{}",
+            dark_in_title_band(&with)
+        );
+        assert_eq!(dark_in_title_band(&without), 0);
+    }
+
+    #[test]
+    fn heat_map_writes_both_files_and_checks_its_input() {
+        let d = tmpdir("heat");
+        let x: Vec<f64> = (0..20).map(|i| 50.0 + 5.0 * i as f64).collect();
+        let y: Vec<f64> = (0..30).map(|j| 20.0 + 2.0 * j as f64).collect();
+        let z: Vec<f64> = x
+            .iter()
+            .flat_map(|&a| {
+                y.iter()
+                    .map(move |&b| (-(b - a / 3.0).powi(2) / 20.0).exp())
+            })
+            .collect();
+        let lines = [
+            OverlayLine::horizontal("f1", 40.0, 50.0, 145.0),
+            OverlayLine {
+                name: "curve".into(),
+                x: x.clone(),
+                y: x.iter().map(|a| a / 2.0).collect(),
+            },
+        ];
+        let mut map = HeatMap {
+            title: "map",
+            x_label: "v (km/h)",
+            y_label: "λ (mm)",
+            colour_label: "PSD",
+            x: &x,
+            y: &y,
+            z: &z,
+            lines: &lines,
+            log_colour: true,
+        };
+        let f = heat_map(&d.join("map"), &map).unwrap();
+        assert_eq!(png_size(&std::fs::read(&f.png).unwrap()), HEAT_MAP_SIZE);
+        assert!(std::fs::read_to_string(&f.svg).unwrap().contains("curve"));
+        let short = &z[..10];
+        map.z = short;
+        let e = heat_map(&d.join("bad"), &map).unwrap_err().to_string();
+        assert!(e.contains("z has 10 values"), "{e}");
+        assert!(!d.join("bad.png").exists());
+        std::fs::remove_dir_all(d).ok();
+    }
+
+    #[test]
+    fn colour_map_ends_and_edges() {
+        assert_eq!(colour_map(0.0), RGBColor(68, 1, 84));
+        assert_eq!(colour_map(1.0), RGBColor(253, 231, 37));
+        assert_eq!(colour_map(f64::NAN), RGBColor(68, 1, 84));
+        assert_eq!(edges(&[1.0, 2.0, 4.0]), vec![0.5, 1.5, 3.0, 5.0]);
+    }
+}

@@ -1,0 +1,114 @@
+//! Analyses on top of the passage engine, written against the [`PassageRunner`] interface so
+//! that their logic is tested with cheap stand-in runners (issue 6, parts 3–5):
+//!
+//! - [`speeds`]: the speed list of a sweep (`54.8:219:2` or `60,80,100`) and its shards
+//!   (`--shard I/N`).
+//! - [`sweep`]: passages over the speeds in parallel, one JSON file per finished speed
+//!   (atomic, resumable), and the assembly of the frequency-selection maps, the dominant
+//!   wavelength / frequency vs speed and the range ratios (method.md §5, "frequency
+//!   selection"); [`sweep::merge`] joins shard directories into the unsharded result.
+//! - [`initiation`]: the initiation table of several models on the smooth rail (band RMS, PSD
+//!   peaks, a stated initiation criterion; method.md §6).
+//! - [`study`]: design-study files (TOML): a base model, parameters varied as lists, ranges
+//!   or a full grid through the model's `--set` machinery, the initiation indicators per case,
+//!   one table and plots.
+//!
+//! [`PassageRunner`]: crate::dynamics::PassageRunner
+
+pub mod initiation;
+pub mod speeds;
+pub mod study;
+pub mod sweep;
+
+use std::path::PathBuf;
+
+/// Errors of the studies. Each names the input (file, key, speed, case) and what to change.
+#[derive(Debug, thiserror::Error)]
+pub enum StudiesError {
+    /// A speed list or range (`--speeds`) that cannot be used.
+    #[error("--speeds `{spec}`: {reason}")]
+    Speeds {
+        /// The argument as given.
+        spec: String,
+        /// What is wrong and what to change.
+        reason: String,
+    },
+    /// A shard argument (`--shard I/N`) that cannot be used.
+    #[error("--shard `{spec}`: {reason}")]
+    Shard {
+        /// The argument as given.
+        spec: String,
+        /// What is wrong and what to change.
+        reason: String,
+    },
+    /// Passages that failed (the other speeds were computed and saved; rerun to resume).
+    #[error("{} run(s) failed (the others are saved; fix and rerun to resume): {}", failures.len(), list_failures(failures))]
+    Passages {
+        /// One message per failed speed or case.
+        failures: Vec<String>,
+    },
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A result file (sweep.json, a speed file) that is malformed or inconsistent.
+    #[error("{path}: {reason}")]
+    BadFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong and what to change.
+        reason: String,
+    },
+    /// An input that cannot be used (message says what to change).
+    #[error("{0}")]
+    Invalid(String),
+    /// Shard directories that cannot be merged.
+    #[error("merge: {0}")]
+    Merge(String),
+    /// A study file key that is unknown, missing, of the wrong type or out of range.
+    #[error("{file}: key `{key}`: {message}")]
+    StudyKey {
+        /// The study file.
+        file: String,
+        /// The dotted key (`parameter[1].range.step`).
+        key: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A study case whose model cannot be built (bad parameter value or key).
+    #[error("{file}: case {case}: {message}")]
+    StudyCase {
+        /// The study file.
+        file: String,
+        /// The case (its overrides).
+        case: String,
+        /// The model error.
+        message: String,
+    },
+    /// A plot or document could not be written.
+    #[error(transparent)]
+    Report(#[from] crate::report::ReportError),
+}
+
+/// The first three failures, and how many more.
+fn list_failures(f: &[String]) -> String {
+    let mut s = f.iter().take(3).cloned().collect::<Vec<_>>().join("; ");
+    if f.len() > 3 {
+        s.push_str(&format!("; … and {} more", f.len() - 3));
+    }
+    s
+}
+
+impl StudiesError {
+    pub(crate) fn io(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> Self + use<> {
+        let path = path.to_path_buf();
+        move |source| StudiesError::Io { path, source }
+    }
+}
+
+/// Error type of runner factories and hooks given by the caller (the CLI's engine).
+pub type BoxError = Box<dyn std::error::Error + Send + Sync>;

@@ -1,0 +1,223 @@
+//! The speeds of a sweep and their shards.
+//!
+//! **Range** `start:stop:step` (km/h): the grid `v_k = start + k·step`, `k = 0, 1, …, K` with
+//! `K = ⌊(stop − start)/step + 10⁻⁹⌋`. The stop is included when it falls on the grid (within
+//! 10⁻⁹ steps); otherwise the last speed is the last grid point below it — the stop is **not**
+//! appended. So `54.8:219:1` is the 165 speeds 54.8 … 218.8 of issue 5 and `54.8:219:2` the 83
+//! speeds 54.8 … 218.8. Each `v_k` is computed from `k` (no accumulated round-off) and rounded
+//! to 10⁻⁹ km/h, so that `0.1`-steps print as written.
+//!
+//! **List** `60,80,100` (one value is a list of one). Lists are sorted ascending; duplicates
+//! are an error.
+//!
+//! Every speed must be finite, positive and at most [`MAX_SPEED_KMH`]; at most [`MAX_SPEEDS`].
+//!
+//! **Shard** `I/N` (`I = 0 … N−1`): the speeds at positions `I, I+N, I+2N, …` of the sorted
+//! list, so the `N` shards partition the list (every speed in exactly one shard).
+//!
+//! A speed's result file is named by [`speed_file_stem`]: the speed in km/h with six decimals,
+//! zero-padded to four integer digits (`0054.800000`), so names sort like speeds.
+
+use super::StudiesError;
+
+/// Highest accepted speed (km/h).
+pub const MAX_SPEED_KMH: f64 = 1000.0;
+
+/// Most speeds in one sweep.
+pub const MAX_SPEEDS: usize = 100_000;
+
+/// Parses `start:stop:step` or `v1,v2,...` (km/h) into sorted speeds (km/h).
+pub fn parse_speeds(spec: &str) -> Result<Vec<f64>, StudiesError> {
+    let bad = |reason: String| StudiesError::Speeds {
+        spec: spec.to_string(),
+        reason,
+    };
+    let num = |s: &str| {
+        s.trim()
+            .parse::<f64>()
+            .map_err(|_| bad(format!("`{}` is not a number (km/h)", s.trim())))
+    };
+    let mut speeds = if spec.contains(':') {
+        let parts: Vec<&str> = spec.split(':').collect();
+        if parts.len() != 3 {
+            return Err(bad(
+                "a range is start:stop:step in km/h, e.g. 54.8:219:2".into()
+            ));
+        }
+        let (a, b, s) = (num(parts[0])?, num(parts[1])?, num(parts[2])?);
+        if !(a.is_finite() && b.is_finite() && s.is_finite()) {
+            return Err(bad("start, stop and step must be finite".into()));
+        }
+        if s <= 0.0 {
+            return Err(bad(format!("step {s} must be positive")));
+        }
+        if b < a {
+            return Err(bad(format!("stop {b} is below start {a}")));
+        }
+        let k_max = ((b - a) / s + 1e-9).floor();
+        if k_max + 1.0 > MAX_SPEEDS as f64 {
+            return Err(bad(format!(
+                "{} speeds; at most {MAX_SPEEDS}: use a larger step",
+                k_max + 1.0
+            )));
+        }
+        (0..=k_max as usize)
+            .map(|k| ((a + k as f64 * s) * 1e9).round() / 1e9)
+            .collect::<Vec<f64>>()
+    } else {
+        let v = spec
+            .split(',')
+            .map(num)
+            .collect::<Result<Vec<f64>, StudiesError>>()?;
+        if v.len() > MAX_SPEEDS {
+            return Err(bad(format!("{} speeds; at most {MAX_SPEEDS}", v.len())));
+        }
+        v
+    };
+    if let Some(v) = speeds
+        .iter()
+        .find(|v| !v.is_finite() || **v <= 0.0 || **v > MAX_SPEED_KMH)
+    {
+        return Err(bad(format!(
+            "speed {v} km/h outside (0, {MAX_SPEED_KMH}] km/h"
+        )));
+    }
+    speeds.sort_by(f64::total_cmp);
+    if let Some(w) = speeds
+        .windows(2)
+        .find(|w| speed_file_stem(w[0]) == speed_file_stem(w[1]))
+    {
+        return Err(bad(format!(
+            "speed {} km/h is given twice (speeds closer than 1e-6 km/h count as equal)",
+            w[0]
+        )));
+    }
+    Ok(speeds)
+}
+
+/// A shard `index/count` of a sweep.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard's index, `0 … count−1`.
+    pub index: usize,
+    /// Number of shards.
+    pub count: usize,
+}
+
+impl Shard {
+    /// The whole sweep (shard `0/1`).
+    pub const ALL: Shard = Shard { index: 0, count: 1 };
+
+    /// Parses `I/N`.
+    pub fn parse(spec: &str) -> Result<Self, StudiesError> {
+        let bad = |reason: &str| StudiesError::Shard {
+            spec: spec.to_string(),
+            reason: reason.to_string(),
+        };
+        let (i, n) = spec
+            .split_once('/')
+            .ok_or_else(|| bad("expected I/N, e.g. 0/4 (shard I of N, I = 0 … N−1)"))?;
+        let i: usize = i
+            .trim()
+            .parse()
+            .map_err(|_| bad("I must be a whole number ≥ 0"))?;
+        let n: usize = n
+            .trim()
+            .parse()
+            .map_err(|_| bad("N must be a whole number ≥ 1"))?;
+        if n == 0 {
+            return Err(bad("N must be at least 1"));
+        }
+        if i >= n {
+            return Err(bad("I must be below N (shards are numbered 0 … N−1)"));
+        }
+        Ok(Shard { index: i, count: n })
+    }
+
+    /// The speeds of this shard: positions `index, index+count, …` of `speeds`.
+    pub fn select(&self, speeds: &[f64]) -> Vec<f64> {
+        speeds
+            .iter()
+            .skip(self.index)
+            .step_by(self.count.max(1))
+            .copied()
+            .collect()
+    }
+}
+
+/// File stem of a speed's result (`0054.800000` for 54.8 km/h).
+pub fn speed_file_stem(speed_kmh: f64) -> String {
+    format!("{speed_kmh:011.6}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn range_excludes_an_off_grid_stop_and_includes_an_on_grid_one() {
+        let v = parse_speeds("54.8:219:2").unwrap();
+        assert_eq!(v.len(), 83);
+        assert_eq!(v[0], 54.8);
+        assert_eq!(*v.last().unwrap(), 218.8);
+        assert_eq!(parse_speeds("54.8:219:1").unwrap().len(), 165);
+        let v = parse_speeds("60:100:10").unwrap();
+        assert_eq!(v, vec![60.0, 70.0, 80.0, 90.0, 100.0]);
+        // 0.1 steps: no accumulated round-off, the stop on the grid is kept.
+        let v = parse_speeds("1:2:0.1").unwrap();
+        assert_eq!(v.len(), 11);
+        assert_eq!(v[3], 1.3);
+        assert_eq!(v[10], 2.0);
+        assert_eq!(parse_speeds("140:140:5").unwrap(), vec![140.0]);
+    }
+
+    #[test]
+    fn list_is_sorted_and_checked() {
+        assert_eq!(parse_speeds("100, 60,80").unwrap(), vec![60.0, 80.0, 100.0]);
+        assert_eq!(parse_speeds("140").unwrap(), vec![140.0]);
+        for (spec, needle) in [
+            ("60,60", "twice"),
+            ("60,abc", "`abc` is not a number"),
+            ("0,60", "outside"),
+            ("-5", "outside"),
+            ("10:5:1", "below start"),
+            ("10:20:0", "positive"),
+            ("10:20", "start:stop:step"),
+            ("1:1e9:1e-3", "at most"),
+        ] {
+            let e = parse_speeds(spec).unwrap_err().to_string();
+            assert!(e.contains(needle) && e.contains(spec), "{spec}: {e}");
+        }
+    }
+
+    #[test]
+    fn shards_partition_the_speeds() {
+        let v = parse_speeds("54.8:219:2").unwrap();
+        for n in 1..=7 {
+            let mut all: Vec<f64> = (0..n)
+                .flat_map(|i| Shard { index: i, count: n }.select(&v))
+                .collect();
+            assert_eq!(all.len(), v.len(), "n = {n}");
+            all.sort_by(f64::total_cmp);
+            assert_eq!(all, v, "every speed in exactly one of {n} shards");
+        }
+        assert_eq!(Shard::parse("1/3").unwrap().select(&v)[..2], [56.8, 62.8]);
+        assert_eq!(Shard::ALL.select(&v), v);
+        for (spec, needle) in [
+            ("3/3", "below N"),
+            ("0/0", "at least 1"),
+            ("a/2", "I must"),
+            ("1", "I/N"),
+        ] {
+            let e = Shard::parse(spec).unwrap_err().to_string();
+            assert!(e.contains(needle), "{spec}: {e}");
+        }
+    }
+
+    #[test]
+    fn file_stems_sort_like_speeds() {
+        assert_eq!(speed_file_stem(54.8), "0054.800000");
+        assert_eq!(speed_file_stem(218.8), "0218.800000");
+        assert!(speed_file_stem(99.5) < speed_file_stem(100.0));
+    }
+}
