@@ -32,15 +32,6 @@ pub fn runner_for(model: &Model, cache: Option<&Path>) -> anyhow::Result<Box<dyn
     Ok(Box::new(prepared(model, cache)?))
 }
 
-/// The longitudinal-compression eigenfrequencies of the model's track below the passage's
-/// f_max (Hz), for the lines of the frequency-selection maps.
-pub fn longitudinal_frequencies_hz(
-    model: &Model,
-    cache: Option<&Path>,
-) -> anyhow::Result<Vec<f64>> {
-    Ok(prepared(model, cache)?.longitudinal_compression_hz())
-}
-
 /// The growth loop of one study case (`growth = true` in a study file): the trial-amplitude
 /// procedure at the model's speed with the default amplitudes 10, 40, 80, 160 µm; columns
 /// `limiting_amplitude_um` (0 when no amplitude grows consistently) and

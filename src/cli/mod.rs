@@ -9,6 +9,7 @@ mod mesh_cmd;
 mod model_cmd;
 mod modes_cmd;
 mod passage_cmd;
+mod predict_cmd;
 mod study_cmd;
 mod sweep_cmd;
 
@@ -67,6 +68,8 @@ enum Command {
     Passage(passage_cmd::PassageCmd),
     /// Trial-amplitude growth (consistency, phase, limiting amplitude); --rounds for iterative growth.
     Grow(grow_cmd::GrowCmd),
+    /// The main job: modes (cached), smooth passage, trial growth, short speed sweep, report.
+    Predict(predict_cmd::PredictCmd),
     /// Speed sweep (parallel, resumable, --shard I/N): frequency-selection maps, dominant
     /// wavelength and frequency vs speed.
     Sweep(sweep_cmd::SweepCmd),
@@ -87,6 +90,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Modes(c) => c.run(),
         Command::Passage(c) => c.run(),
         Command::Grow(c) => c.run(),
+        Command::Predict(c) => c.run(),
         Command::Sweep(c) => c.run(),
         Command::Merge(c) => c.run(),
         Command::Study(c) => c.run(),

@@ -73,7 +73,7 @@ impl PassageCmd {
     }
 }
 
-fn write_outputs(
+pub fn write_outputs(
     out: &Path,
     rec: &corrugation::dynamics::passage::PassageRecord,
     s: &PassageSummary,
@@ -145,6 +145,7 @@ fn write_outputs(
                 .map(|(k, p)| vec![1.0 / k, v * k, *p]),
         )?;
     }
+    write_plots(out, rec, &w, &fl, &fnn)?;
     let json = serde_json::to_string_pretty(s)?;
     write_atomic(&out.join("summary.json"), |f| {
         use std::io::Write;
@@ -204,4 +205,125 @@ fn print_summary(
         -(e.frictional_work_j + e.contact_energy_change_j)
     );
     println!("  outputs in {}", out.display());
+}
+
+/// Plots of F_L, F_N and W_f along the rail (solution zone) and their band PSDs (SVG + PNG).
+fn write_plots(
+    out: &Path,
+    rec: &corrugation::dynamics::passage::PassageRecord,
+    w: &corrugation::dynamics::analysis::Analysed,
+    fl: &corrugation::dynamics::analysis::Analysed,
+    fnn: &corrugation::dynamics::analysis::Analysed,
+) -> anyhow::Result<()> {
+    use corrugation::report::plot::{line_plot, line_plot_log_y, Series};
+    let h = &rec.histories;
+    let [z0, z1] = rec.zone_m;
+    let idx: Vec<usize> = (0..h.x_m.len())
+        .filter(|&i| h.x_m[i] >= z0 && h.x_m[i] <= z1)
+        .collect();
+    let xs: Vec<f64> = idx.iter().map(|&i| h.x_m[i]).collect();
+    line_plot(
+        &out.join("forces_x"),
+        "Contact forces in the solution zone",
+        "x (m)",
+        "force on the wheel (N)",
+        &[Series::new(
+            "F_L",
+            xs.clone(),
+            idx.iter().map(|&i| h.longitudinal_n[i]).collect(),
+        )],
+    )?;
+    line_plot(
+        &out.join("normal_force_x"),
+        "Normal force in the solution zone",
+        "x (m)",
+        "F_N (N)",
+        &[Series::new(
+            "F_N",
+            xs,
+            idx.iter().map(|&i| h.normal_n[i]).collect(),
+        )],
+    )?;
+    let band_x = |a: &corrugation::dynamics::analysis::Analysed| -> Vec<f64> {
+        (0..a.band.len()).map(|i| a.band.x_m(i)).collect()
+    };
+    line_plot(
+        &out.join("band_x"),
+        "Band-passed (20-80 mm) signals along the rail, normalised by their RMS",
+        "x (m)",
+        "signal / band RMS (-)",
+        &[
+            Series::new(
+                "W_f",
+                band_x(w),
+                w.band
+                    .values
+                    .iter()
+                    .map(|v| v / w.band_rms.max(f64::MIN_POSITIVE))
+                    .collect(),
+            ),
+            Series::new(
+                "F_L",
+                band_x(fl),
+                fl.band
+                    .values
+                    .iter()
+                    .map(|v| v / fl.band_rms.max(f64::MIN_POSITIVE))
+                    .collect(),
+            ),
+            Series::new(
+                "F_N",
+                band_x(fnn),
+                fnn.band
+                    .values
+                    .iter()
+                    .map(|v| v / fnn.band_rms.max(f64::MIN_POSITIVE))
+                    .collect(),
+            ),
+        ],
+    )?;
+    line_plot(
+        &out.join("wear_x"),
+        "Frictional work along the rail",
+        "x (m)",
+        "W_f (J/m)",
+        &[Series::new(
+            "W_f",
+            rec.wear_x_m.clone(),
+            rec.wear_j_per_m.clone(),
+        )],
+    )?;
+    let psd_series = |name: &str, a: &corrugation::dynamics::analysis::Analysed| {
+        let mut x = Vec::new();
+        let mut y = Vec::new();
+        for (k, p) in a.psd.wavenumber_per_m.iter().zip(&a.psd.psd) {
+            if *k > 0.0 {
+                let l = 1000.0 / k;
+                if (15.0..=100.0).contains(&l) {
+                    x.push(l);
+                    y.push(*p);
+                }
+            }
+        }
+        Series::new(name, x, y)
+    };
+    for (stem, title, unit, a) in [
+        (
+            "psd_wear",
+            "PSD of the band-passed wear",
+            "PSD ((J/m)^2 m)",
+            w,
+        ),
+        ("psd_fl", "PSD of the band-passed F_L", "PSD (N^2 m)", fl),
+        ("psd_fn", "PSD of the band-passed F_N", "PSD (N^2 m)", fnn),
+    ] {
+        line_plot_log_y(
+            &out.join(stem),
+            title,
+            "wavelength (mm)",
+            unit,
+            &[psd_series(stem, a)],
+        )?;
+    }
+    Ok(())
 }

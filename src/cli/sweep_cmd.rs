@@ -55,11 +55,13 @@ impl SweepCmd {
         }
         let model = self.model.load()?;
         let cache = self.cache.as_deref();
-        let runner = engine::runner_for(&model, cache)?;
+        // One modal model for both the mode lines and the passages.
+        let prepared = engine::prepared(&model, cache)?;
         let opts = MapOptions {
-            frequency_lines_hz: engine::longitudinal_frequencies_hz(&model, cache)?,
+            frequency_lines_hz: prepared.longitudinal_compression_hz(),
             ..MapOptions::default()
         };
+        let runner: Box<dyn corrugation::dynamics::PassageRunner> = Box::new(prepared);
         // Resume only into a directory of the same model and program version.
         let run_key = format!(
             "{} {}",

@@ -42,7 +42,7 @@ pub enum DynamicsError {
         dt_limit_s: f64,
     },
     /// The contact solver failed at a step.
-    #[error("contact solver at t = {t_s:.6} s (x = {x_m:.4} m): {source}")]
+    #[error("contact solver at t = {t_s:.6} s (x = {x_m:.4} m): {source} (model keys: contact.grid_margin sizes the grid around the static patch, contact.grid_nx/grid_ny its resolution)")]
     Contact {
         /// Time (s).
         t_s: f64,
