@@ -73,3 +73,98 @@ fn passage_holds_the_static_load_and_the_traction_and_balances_energy() {
         .fold(f64::INFINITY, f64::min);
     assert!(min_uz < -1e-5, "rail point min u_z {min_uz}");
 }
+
+/// The small model as `--set` arguments for the CLI (a wider contact grid: trial
+/// corrugations of 160 µm make the patch grow).
+fn small_args() -> Vec<String> {
+    let mut a: Vec<String> = common::SMALL_MODEL.iter().map(|s| s.to_string()).collect();
+    for s in [
+        "track.bays=6",
+        "run.fmax=1500",
+        "run.solution_zone_length=0.4",
+        "contact.grid_nx=16",
+        "contact.grid_ny=12",
+        "contact.grid_margin=1.8",
+    ] {
+        a.push("--set".into());
+        a.push(s.into());
+    }
+    a
+}
+
+fn run_cli(cmd: &[&str], out: &std::path::Path) -> serde_json::Value {
+    let cache = std::env::temp_dir().join("corrugation-test-cache-passage-cli");
+    let mut args: Vec<String> = cmd.iter().map(|s| s.to_string()).collect();
+    args.extend(small_args());
+    args.extend([
+        "--cache".into(),
+        cache.display().to_string(),
+        "--out".into(),
+        out.display().to_string(),
+        "--json".into(),
+    ]);
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (code, stdout, stderr) = common::run(&refs);
+    assert_eq!(code, 0, "{cmd:?} failed: {stderr}");
+    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("{e}: {stdout}"))
+}
+
+/// `passage --json` has the keys of issue 5 and writes its files; `grow --json` and
+/// `predict --json` run end to end on the small model and have the keys of issue 6.
+#[test]
+fn passage_grow_and_predict_commands_write_their_outputs() {
+    let dir = std::env::temp_dir().join(format!("corrugation-test-cli-{}", std::process::id()));
+    let p = run_cli(&["passage"], &dir.join("passage"));
+    for k in [
+        "mean_fn_n",
+        "mean_fl_n",
+        "fl_band_rms_n",
+        "fn_band_rms_n",
+        "wear_band_rms",
+        "wear_components",
+        "dominant_wavelength_mm",
+        "steps",
+        "seconds",
+    ] {
+        assert!(p.get(k).is_some(), "passage --json lacks {k}: {p}");
+    }
+    for f in [
+        "forces.csv",
+        "wear.csv",
+        "rail_point.csv",
+        "psd_wear.csv",
+        "psd_fl.csv",
+        "psd_fn.csv",
+        "forces_x.png",
+        "psd_wear.svg",
+    ] {
+        assert!(dir.join("passage").join(f).is_file(), "missing {f}");
+    }
+    let g = run_cli(&["grow", "--amplitudes-um", "10,80"], &dir.join("grow"));
+    for k in [
+        "amplitudes_um",
+        "limiting_amplitude_um",
+        "phase",
+        "components",
+        "consistency",
+    ] {
+        assert!(g.get(k).is_some(), "grow --json lacks {k}: {g}");
+    }
+    assert_eq!(g["phase"].as_array().unwrap().len(), 2);
+    for ph in g["phase"].as_array().unwrap() {
+        let s = ph.as_str().unwrap();
+        assert!(
+            ["anti-phase", "in-phase", "indeterminate"].contains(&s),
+            "{s}"
+        );
+    }
+    let r = run_cli(
+        &["predict", "--amplitudes-um", "10", "--speeds", "100,140"],
+        &dir.join("predict"),
+    );
+    assert!(r.get("sweep_dominant_wavelength_mm").is_some(), "{r}");
+    assert!(dir.join("predict/report.html").is_file());
+    assert!(dir.join("predict/report.md").is_file());
+    assert!(dir.join("predict/sweep/sweep.json").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
