@@ -37,55 +37,57 @@ struct Setup {
     hertz_compliance_m_per_n: f64,
 }
 
-fn small_model() -> Model {
-    let o: Vec<String> = [
-        "track.bays=6",
-        "mesh.element_length=0.08",
-        "mesh.fine_element_length=0.08",
-        "mesh.section_size=0.03",
-        "mesh.head_size=0.015",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    load_model(&ModelSource::Builtin, &o).unwrap()
+/// The small model of these tests (6 bays, coarse mesh): `--set` overrides.
+const SMALL: [&str; 5] = [
+    "track.bays=6",
+    "mesh.element_length=0.08",
+    "mesh.fine_element_length=0.08",
+    "mesh.section_size=0.03",
+    "mesh.head_size=0.015",
+];
+
+/// Builds the track of the builtin model with `sets` and its modes below `f_solve` (Hz),
+/// cached under Cargo's test tmpdir.
+fn build(sets: &[String], f_solve: f64) -> Setup {
+    let t0 = std::time::Instant::now();
+    let model = load_model(&ModelSource::Builtin, sets).unwrap();
+    let track = TrackStructure::build(&model).unwrap();
+    let (mats, _) = track.assemble().unwrap();
+    let cache = ModalCache::new(
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("moving-load-modes"),
+    );
+    let basis = track_basis(&model, &track, &cache, f_solve).unwrap();
+    let hertz = corrugation::contact::HertzContact::solve(&corrugation::contact::HertzInput {
+        radius_x_m: model.wheel.radius,
+        radius_y_m: model.contact.rail_crown_radius,
+        youngs_pa: model.rail.youngs_modulus,
+        poisson: model.rail.poisson_ratio,
+        load_n: model.vehicle.wheel_load,
+    })
+    .unwrap();
+    eprintln!(
+        "setup: {} free DOFs, {} modes below {f_solve} Hz, {:.1} s",
+        track.dofmap.n_free(),
+        basis.frequencies_hz.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    Setup {
+        frame: ContactFrame::for_inclination(model.rail.inclination),
+        hertz_b_m: hertz.b_m,
+        hertz_compliance_m_per_n: 1.0 / hertz.stiffness_n_per_m,
+        model,
+        track,
+        mats,
+        freqs: basis.frequencies_hz,
+        modes: basis.modes,
+    }
 }
 
 fn setup() -> &'static Setup {
     static S: OnceLock<Setup> = OnceLock::new();
     S.get_or_init(|| {
-        let t0 = std::time::Instant::now();
-        let model = small_model();
-        let track = TrackStructure::build(&model).unwrap();
-        let (mats, _) = track.assemble().unwrap();
-        let cache = ModalCache::new(
-            std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("moving-load-modes"),
-        );
-        let basis = track_basis(&model, &track, &cache, F_SOLVE).unwrap();
-        let hertz = corrugation::contact::HertzContact::solve(&corrugation::contact::HertzInput {
-            radius_x_m: model.wheel.radius,
-            radius_y_m: model.contact.rail_crown_radius,
-            youngs_pa: model.rail.youngs_modulus,
-            poisson: model.rail.poisson_ratio,
-            load_n: model.vehicle.wheel_load,
-        })
-        .unwrap();
-        eprintln!(
-            "setup: {} free DOFs, {} modes below {F_SOLVE} Hz, {:.1} s",
-            track.dofmap.n_free(),
-            basis.frequencies_hz.len(),
-            t0.elapsed().as_secs_f64()
-        );
-        Setup {
-            frame: ContactFrame::for_inclination(model.rail.inclination),
-            hertz_b_m: hertz.b_m,
-            hertz_compliance_m_per_n: 1.0 / hertz.stiffness_n_per_m,
-            model,
-            track,
-            mats,
-            freqs: basis.frequencies_hz,
-            modes: basis.modes,
-        }
+        let sets: Vec<String> = SMALL.iter().map(|s| s.to_string()).collect();
+        build(&sets, F_SOLVE)
     })
 }
 
@@ -333,5 +335,104 @@ fn modal_damping_coupling() {
     assert!(
         full.relative_max_error(d, 0, 2) <= diag.relative_max_error(d, 0, 2) + 1e-3,
         "the full damping should not be worse than the diagonal"
+    );
+}
+
+/// Validation (heavy, ignored): the convergence table of the modal vs direct moving-load
+/// response and of the static deflection with f_max = 1, 2, 3, 5 kHz, Δt = 20 µs over
+/// 0.6 m at 140 km/h. The model is the small one plus the `--set` list in the environment
+/// variable `MOVING_LOAD_SET` (comma-separated `key=value`), e.g.
+/// `MOVING_LOAD_SET="track.bays=8,mesh.section_size=0.02" cargo test --release --test
+/// moving_load -- --ignored --nocapture convergence_table` (see validation/run.sh `moving`).
+#[test]
+#[ignore = "minutes: the 5 kHz eigen solve and 770 direct Newmark steps; run via validation/run.sh moving"]
+fn convergence_table() {
+    let mut sets: Vec<String> = SMALL.iter().map(|s| s.to_string()).collect();
+    if let Ok(extra) = std::env::var("MOVING_LOAD_SET") {
+        sets.extend(
+            extra
+                .split(',')
+                .filter(|s| !s.trim().is_empty())
+                .map(|s| s.trim().to_string()),
+        );
+    }
+    let fmaxes = [1000.0, 2000.0, 3000.0, 5000.0];
+    let s = build(&sets, fmaxes[fmaxes.len() - 1]);
+    let v = 140.0 / 3.6;
+    let dt = 2e-5;
+    let l = s.track.layout.length;
+    let mk = |force_n| MovingLoad {
+        force_n,
+        x_start_m: 0.5 * l - 0.3,
+        speed_m_per_s: v,
+        dt_s: dt,
+        steps: (0.6 / (v * dt)).round() as usize,
+    };
+    let (lv, ll) = (mk(wheel_load_on_rail(&s)), mk(traction_on_rail(&s)));
+    let dv = direct(&s, &lv);
+    let dl = direct(&s, &ll);
+    println!(
+        "model --set {sets:?}; {} free DOFs; direct Newmark {:.1} s per run ({} steps)",
+        s.track.dofmap.n_free(),
+        dv.seconds,
+        lv.steps
+    );
+    println!("| f_max (Hz) | modes | vertical: contact node z | foot centre z | longitudinal: contact node x | foot centre x | static z: contact node | foot centre | foot mean | residual flexibility (m/N) | / Hertz dδ/dF |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut st = StaticDirect::new(&s.mats).unwrap();
+    for fmax in fmaxes {
+        let (phi, sys, line) = reduced(&s, fmax);
+        let pr = probes(&s, &line);
+        let mv = modal_response(&s.track, &phi, &sys, &line, &lv, &pr).unwrap();
+        let ml = modal_response(&s.track, &phi, &sys, &line, &ll, &pr).unwrap();
+        let p = nearest_plane(&line, 0.5 * l);
+        let sp = vec![
+            Probe::contact_node(&line, p).unwrap(),
+            Probe::foot_centre(&s.track, p).unwrap(),
+            Probe::foot_mean(&s.track, p).unwrap(),
+        ];
+        let c = st
+            .compare(
+                &s.track,
+                &phi,
+                &sys,
+                &line,
+                &s.frame,
+                line.planes_x_m[p],
+                wheel_load_on_rail(&s),
+                &sp,
+            )
+            .unwrap();
+        println!(
+            "| {fmax:.0} | {} | {:.2} % | {:.2} % | {:.1} % | {:.1} % | {:+.2} % | {:+.2} % | {:+.2} % | {:.2e} | {:.2} |",
+            sys.len(),
+            100.0 * mv.relative_max_error(&dv, 0, 2),
+            100.0 * mv.relative_max_error(&dv, 1, 2),
+            100.0 * ml.relative_max_error(&dl, 0, 0),
+            100.0 * ml.relative_max_error(&dl, 1, 0),
+            100.0 * c.relative_error(0, 2),
+            100.0 * c.relative_error(1, 2),
+            100.0 * c.relative_error(2, 2),
+            c.residual_flexibility_m_per_n(),
+            c.residual_flexibility_m_per_n() / s.hertz_compliance_m_per_n,
+        );
+    }
+    let (_, sys, _) = reduced(&s, fmaxes[fmaxes.len() - 1]);
+    let full = {
+        let (phi, sys, line) = reduced(&s, fmaxes[fmaxes.len() - 1]);
+        modal_response(&s.track, &phi, &sys, &line, &lv, &probes(&s, &line)).unwrap()
+    };
+    let diag = {
+        let (phi, sys, line) = reduced(&s, fmaxes[fmaxes.len() - 1]);
+        let sys = diagonal_damping(&sys);
+        modal_response(&s.track, &phi, &sys, &line, &lv, &probes(&s, &line)).unwrap()
+    };
+    println!(
+        "damping coupling {:.3}; diagonal vs full damping at the contact node: {:.3} % of max ({:.2} % of the change); vs direct: diagonal {:.2} %, full {:.2} %",
+        sys.damping_coupling(),
+        100.0 * diag.relative_max_error(&full, 0, 2),
+        100.0 * diag.relative_max_change_error(&full, 0, 2),
+        100.0 * diag.relative_max_error(&dv, 0, 2),
+        100.0 * full.relative_max_error(&dv, 0, 2),
     );
 }
