@@ -12,8 +12,8 @@
 use std::sync::OnceLock;
 
 use corrugation::dynamics::moving_load::{
-    diagonal_damping, direct_response, modal_response, nearest_plane, truncate_basis, MovingLoad,
-    Probe, ResponseHistory, StaticDirect,
+    diagonal_damping, direct_response, line_load_vector, modal_response, nearest_plane,
+    truncate_basis, MovingLoad, Probe, ResponseHistory, StaticDirect,
 };
 use corrugation::dynamics::reduced::{ContactFrame, ModalSystem, RailContactLine};
 use corrugation::eigen::basis::track_basis;
@@ -154,6 +154,31 @@ fn modal(s: &Setup, fmax: f64, load: &MovingLoad, diag: bool) -> ResponseHistory
     let (phi, sys, line) = reduced(s, fmax);
     let sys = if diag { diagonal_damping(&sys) } else { sys };
     modal_response(&s.track, &phi, &sys, &line, load, &probes(s, &line)).unwrap()
+}
+
+/// The direct path's load vector and the passage's modal rows describe the same load:
+/// `Φᵀ f(x) = Σ_d F_d rows_d(x)` at points between node planes (identity of the
+/// interpolation and the projection; checked to round-off).
+#[test]
+fn direct_load_vector_projects_onto_the_contact_line_rows() {
+    let s = setup();
+    let (phi, _, line) = reduced(s, 2000.0);
+    let m = phi.ncols();
+    let force = [1.3e4, -2.1e3, -1.0e5];
+    let mut rows = vec![0.0; 3 * m];
+    for x in [0.5 * s.track.layout.length + 0.013, 1.01, 2.377] {
+        let f = line_load_vector(&s.track, &line, &s.frame, x, force).unwrap();
+        line.rows_at(x, &mut rows).unwrap();
+        let mut worst: f64 = 0.0;
+        let mut scale: f64 = 0.0;
+        for i in 0..m {
+            let proj: f64 = (0..f.len()).map(|r| phi[(r, i)] * f[r]).sum();
+            let rowf = force[0] * rows[i] + force[1] * rows[m + i] + force[2] * rows[2 * m + i];
+            worst = worst.max((proj - rowf).abs());
+            scale = scale.max(rowf.abs());
+        }
+        assert!(worst <= 1e-12 * scale, "x = {x}: {worst} vs {scale}");
+    }
 }
 
 /// Moving vertical wheel load (100 kN) at 140 km/h: the vertical rail response (contact
@@ -342,7 +367,7 @@ fn modal_damping_coupling() {
 /// response and of the static deflection with f_max = 1, 2, 3, 5 kHz, Δt = 20 µs over
 /// 0.6 m at 140 km/h. The model is the small one plus the `--set` list in the environment
 /// variable `MOVING_LOAD_SET` (comma-separated `key=value`), e.g.
-/// `MOVING_LOAD_SET="track.bays=8,mesh.section_size=0.02" cargo test --release --test
+/// `MOVING_LOAD_SET="track.bays=8,mesh.section_size=0.02" MOVING_LOAD_FMAX=1000,3000 cargo test --release --test
 /// moving_load -- --ignored --nocapture convergence_table` (see validation/run.sh `moving`).
 #[test]
 #[ignore = "minutes: the 5 kHz eigen solve and 770 direct Newmark steps; run via validation/run.sh moving"]
@@ -356,7 +381,12 @@ fn convergence_table() {
                 .map(|s| s.trim().to_string()),
         );
     }
-    let fmaxes = [1000.0, 2000.0, 3000.0, 5000.0];
+    // `MOVING_LOAD_FMAX` (comma-separated Hz) overrides the f_max list.
+    let fmaxes: Vec<f64> = std::env::var("MOVING_LOAD_FMAX")
+        .ok()
+        .map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .filter(|v: &Vec<f64>| !v.is_empty())
+        .unwrap_or_else(|| vec![1000.0, 2000.0, 3000.0, 5000.0]);
     let s = build(&sets, fmaxes[fmaxes.len() - 1]);
     let v = 140.0 / 3.6;
     let dt = 2e-5;
@@ -380,7 +410,7 @@ fn convergence_table() {
     println!("| f_max (Hz) | modes | vertical: contact node z | foot centre z | longitudinal: contact node x | foot centre x | static z: contact node | foot centre | foot mean | residual flexibility (m/N) | / Hertz dδ/dF |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|");
     let mut st = StaticDirect::new(&s.mats).unwrap();
-    for fmax in fmaxes {
+    for &fmax in &fmaxes {
         let (phi, sys, line) = reduced(&s, fmax);
         let pr = probes(&s, &line);
         let mv = modal_response(&s.track, &phi, &sys, &line, &lv, &pr).unwrap();

@@ -484,6 +484,21 @@ fn add_line_load(
     Ok(())
 }
 
+/// The free-DOF load vector (N) of `force` (N, on the rail, contact-frame components x, t, n)
+/// at `x` (m) on the contact line: what the direct path applies. Its projection `Φᵀ f` equals
+/// `Σ_d F_d rows_d(x)` of [`RailContactLine::rows_at`] (tested).
+pub fn line_load_vector(
+    track: &TrackStructure,
+    line: &RailContactLine,
+    frame: &ContactFrame,
+    x: f64,
+    force: [f64; 3],
+) -> Result<Vec<f64>, MovingLoadError> {
+    let mut f = vec![0.0; track.dofmap.n_free()];
+    add_line_load(track, line, frame, x, force, &mut f)?;
+    Ok(f)
+}
+
 /// Sparse `y = A x` (CSC, full storage), no allocation.
 fn spmv(a: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64]) {
     y.iter_mut().for_each(|v| *v = 0.0);
