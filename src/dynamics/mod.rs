@@ -12,6 +12,7 @@
 
 pub mod analysis;
 pub mod integrator;
+pub mod moving_load;
 pub mod passage;
 pub mod reduced;
 pub mod summary;

@@ -1,0 +1,468 @@
+//! Modal synthesis vs the full FE matrices (issue 5, "How it is shown to be right", first
+//! bullet) on a small track (6 bays, coarse mesh): a moving constant vertical and
+//! longitudinal load through the passage's reduced path vs direct Newmark integration of the
+//! full K, M, C; the static deflection under the wheel load vs a direct sparse solve; and
+//! what the off-diagonal modal damping does.
+//!
+//! The modes are solved once up to `F_SOLVE` (shared by the tests of this binary, and kept in
+//! a modal cache under Cargo's test tmpdir, so only the first run pays the eigen solve:
+//! ≈ 40 s on the 2-core machine; later runs load it) and truncated for lower f_max. The expected numbers come from an independent solver (sparse
+//! LLᵀ of the full matrices, Newmark on all DOFs), not from earlier output of the code.
+
+use std::sync::OnceLock;
+
+use corrugation::dynamics::moving_load::{
+    diagonal_damping, direct_response, line_load_vector, modal_response, nearest_plane,
+    truncate_basis, MovingLoad, Probe, ResponseHistory, StaticDirect,
+};
+use corrugation::dynamics::reduced::{ContactFrame, ModalSystem, RailContactLine};
+use corrugation::eigen::basis::track_basis;
+use corrugation::eigen::cache::ModalCache;
+use corrugation::fe::assembly::FeMatrices;
+use corrugation::model::{load_model, Model, ModelSource};
+use corrugation::structure::TrackStructure;
+use faer::Mat;
+
+/// Highest frequency solved (Hz); lower f_max are truncations.
+const F_SOLVE: f64 = 3000.0;
+
+struct Setup {
+    model: Model,
+    track: TrackStructure,
+    mats: FeMatrices,
+    freqs: Vec<f64>,
+    modes: Mat<f64>,
+    frame: ContactFrame,
+    hertz_b_m: f64,
+    hertz_compliance_m_per_n: f64,
+}
+
+/// The small model of these tests (6 bays, coarse mesh): `--set` overrides.
+const SMALL: [&str; 5] = [
+    "track.bays=6",
+    "mesh.element_length=0.08",
+    "mesh.fine_element_length=0.08",
+    "mesh.section_size=0.03",
+    "mesh.head_size=0.015",
+];
+
+/// Builds the track of the builtin model with `sets` and its modes below `f_solve` (Hz),
+/// cached under Cargo's test tmpdir.
+fn build(sets: &[String], f_solve: f64) -> Setup {
+    let t0 = std::time::Instant::now();
+    let model = load_model(&ModelSource::Builtin, sets).unwrap();
+    let track = TrackStructure::build(&model).unwrap();
+    let (mats, _) = track.assemble().unwrap();
+    let cache = ModalCache::new(
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("moving-load-modes"),
+    );
+    let basis = track_basis(&model, &track, &cache, f_solve).unwrap();
+    let hertz = corrugation::contact::HertzContact::solve(&corrugation::contact::HertzInput {
+        radius_x_m: model.wheel.radius,
+        radius_y_m: model.contact.rail_crown_radius,
+        youngs_pa: model.rail.youngs_modulus,
+        poisson: model.rail.poisson_ratio,
+        load_n: model.vehicle.wheel_load,
+    })
+    .unwrap();
+    eprintln!(
+        "setup: {} free DOFs, {} modes below {f_solve} Hz, {:.1} s",
+        track.dofmap.n_free(),
+        basis.frequencies_hz.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    Setup {
+        frame: ContactFrame::for_inclination(model.rail.inclination),
+        hertz_b_m: hertz.b_m,
+        hertz_compliance_m_per_n: 1.0 / hertz.stiffness_n_per_m,
+        model,
+        track,
+        mats,
+        freqs: basis.frequencies_hz,
+        modes: basis.modes,
+    }
+}
+
+fn setup() -> &'static Setup {
+    static S: OnceLock<Setup> = OnceLock::new();
+    S.get_or_init(|| {
+        let sets: Vec<String> = SMALL.iter().map(|s| s.to_string()).collect();
+        build(&sets, F_SOLVE)
+    })
+}
+
+/// The reduced system of the first modes up to `fmax` (Hz): modes, system, contact line.
+fn reduced(s: &Setup, fmax: f64) -> (Mat<f64>, ModalSystem, RailContactLine) {
+    let (f, phi) = truncate_basis(&s.freqs, &s.modes, fmax);
+    let sys = ModalSystem::new(&f, &phi, s.mats.c.as_ref(), 0.5).unwrap();
+    let line = RailContactLine::new(&s.track, &phi, &s.frame, s.hertz_b_m).unwrap();
+    (phi, sys, line)
+}
+
+/// Load path: 0.3 m centred on the middle of the track (the probe plane), at 140 km/h,
+/// Δt = 40 µs (ω_max Δt = 0.75 at 3 kHz for the Verlet; the direct Newmark costs ≈ 25 ms a
+/// step on the 31 k DOFs, so 190 steps keep each test under 10 s).
+fn moving(s: &Setup, force_n: [f64; 3]) -> MovingLoad {
+    let v = 140.0 / 3.6;
+    let l = s.track.layout.length;
+    let dt = 4e-5;
+    MovingLoad {
+        force_n,
+        x_start_m: 0.5 * l - 0.15,
+        speed_m_per_s: v,
+        dt_s: dt,
+        steps: (0.3 / (v * dt)).round() as usize,
+    }
+}
+
+fn probes(s: &Setup, line: &RailContactLine) -> Vec<Probe> {
+    let p = nearest_plane(line, 0.5 * s.track.layout.length);
+    vec![
+        Probe::contact_node(line, p).unwrap(),
+        Probe::foot_centre(&s.track, p).unwrap(),
+    ]
+}
+
+fn wheel_load_on_rail(s: &Setup) -> [f64; 3] {
+    [0.0, 0.0, -s.model.vehicle.wheel_load / s.frame.n[2]]
+}
+
+fn traction_on_rail(s: &Setup) -> [f64; 3] {
+    [
+        -s.model.contact.traction_coefficient * s.model.vehicle.wheel_load,
+        0.0,
+        0.0,
+    ]
+}
+
+fn direct(s: &Setup, load: &MovingLoad) -> ResponseHistory {
+    // The probes and load nodes do not depend on the basis: any line will do.
+    let (_, _, line) = reduced(s, 1000.0);
+    direct_response(&s.track, &s.mats, &line, &s.frame, load, &probes(s, &line)).unwrap()
+}
+
+/// The direct solution under the moving wheel load, shared by two tests.
+fn direct_vertical() -> &'static ResponseHistory {
+    static D: OnceLock<ResponseHistory> = OnceLock::new();
+    D.get_or_init(|| {
+        let s = setup();
+        direct(s, &moving(s, wheel_load_on_rail(s)))
+    })
+}
+
+fn modal(s: &Setup, fmax: f64, load: &MovingLoad, diag: bool) -> ResponseHistory {
+    let (phi, sys, line) = reduced(s, fmax);
+    let sys = if diag { diagonal_damping(&sys) } else { sys };
+    modal_response(&s.track, &phi, &sys, &line, load, &probes(s, &line)).unwrap()
+}
+
+/// The direct path's load vector and the passage's modal rows describe the same load:
+/// `Φᵀ f(x) = Σ_d F_d rows_d(x)` at points between node planes (identity of the
+/// interpolation and the projection; checked to round-off).
+#[test]
+fn direct_load_vector_projects_onto_the_contact_line_rows() {
+    let s = setup();
+    let (phi, _, line) = reduced(s, 2000.0);
+    let m = phi.ncols();
+    let force = [1.3e4, -2.1e3, -1.0e5];
+    let mut rows = vec![0.0; 3 * m];
+    for x in [0.5 * s.track.layout.length + 0.013, 1.01, 2.377] {
+        let f = line_load_vector(&s.track, &line, &s.frame, x, force).unwrap();
+        line.rows_at(x, &mut rows).unwrap();
+        let mut worst: f64 = 0.0;
+        let mut scale: f64 = 0.0;
+        for i in 0..m {
+            let proj: f64 = (0..f.len()).map(|r| phi[(r, i)] * f[r]).sum();
+            let rowf = force[0] * rows[i] + force[1] * rows[m + i] + force[2] * rows[2 * m + i];
+            worst = worst.max((proj - rowf).abs());
+            scale = scale.max(rowf.abs());
+        }
+        assert!(worst <= 1e-12 * scale, "x = {x}: {worst} vs {scale}");
+    }
+}
+
+/// Moving vertical wheel load (100 kN) at 140 km/h: the vertical rail response (contact
+/// node and foot centre of the plane at mid-track, which the load passes) of the reduced
+/// model converges to the direct Newmark solution of the full K, M, C. Norm: max over time
+/// of |u_modal − u_direct| / max over time |u_direct| (and the same for the change from the
+/// static start, "dyn"). Measured (this set-up): f_max 0.5/1/2/3 kHz → contact node
+/// 13.0/8.0/4.1/3.7 %, foot centre 10.2/5.0/0.9/0.4 % (the same within 0.1 % with Δt 20 µs
+/// over 0.6 m).
+#[test]
+fn moving_vertical_load_modal_matches_direct_newmark() {
+    let s = setup();
+    let load = moving(s, wheel_load_on_rail(s));
+    let d = direct_vertical();
+    let mut errs = Vec::new();
+    for fmax in [500.0, 1000.0, 2000.0, 3000.0] {
+        let m = modal(s, fmax, &load, false);
+        let e = [m.relative_max_error(d, 0, 2), m.relative_max_error(d, 1, 2)];
+        eprintln!(
+            "vertical fmax {fmax}: contact z {:.4} (dyn {:.4}), foot z {:.4} (dyn {:.4}); modal {:.3} s, direct {:.2} s",
+            e[0],
+            m.relative_max_change_error(d, 0, 2),
+            e[1],
+            m.relative_max_change_error(d, 1, 2),
+            m.seconds,
+            d.seconds
+        );
+        errs.push(e);
+    }
+    // Converges with f_max, and at 3 kHz is within a few %: the section (foot) within 1 %,
+    // the contact node within 5 % (its remainder is the local flexibility under the patch,
+    // see the static test).
+    for w in errs.windows(2) {
+        assert!(w[1][0] < w[0][0] && w[1][1] < w[0][1], "{errs:?}");
+    }
+    let last = errs[errs.len() - 1];
+    assert!(last[1] < 0.01 && last[0] < 0.05, "{errs:?}");
+}
+
+/// Moving longitudinal load (the traction force, 15 kN) at 140 km/h: the longitudinal rail
+/// response, same norm. With RPM3 the rail foot is held rigidly in x at the fastening strips,
+/// so the rail's longitudinal flexibility under a head load is local (web/foot shear) and
+/// lies mostly above 3 kHz: the truncated basis misses most of it (see the static
+/// longitudinal numbers of the static test: the modal static x deflection of the contact node
+/// is 63 % short at 3 kHz). Measured: contact node 74/72/69/63 %, foot centre
+/// 273/292/321/72 % at f_max 0.5/1/2/3 kHz. This test records the
+/// finding (the error is large and falls only slowly) rather than claiming agreement.
+#[test]
+fn moving_longitudinal_load_modal_vs_direct_newmark() {
+    let s = setup();
+    let load = moving(s, traction_on_rail(s));
+    let d = direct(s, &load);
+    let mut errs = Vec::new();
+    for fmax in [500.0, 1000.0, 2000.0, 3000.0] {
+        let m = modal(s, fmax, &load, false);
+        let e = m.relative_max_error(&d, 0, 0);
+        eprintln!(
+            "longitudinal fmax {fmax}: contact x {:.4} (dyn {:.4}), foot x {:.4} (dyn {:.4})",
+            e,
+            m.relative_max_change_error(&d, 0, 0),
+            m.relative_max_error(&d, 1, 0),
+            m.relative_max_change_error(&d, 1, 0),
+        );
+        errs.push(e);
+    }
+    // Regression guard on the finding: the contact-node error decreases with f_max but stays
+    // far above a few % at 3 kHz.
+    assert!(errs[3] < errs[0], "{errs:?}");
+    assert!(
+        errs[3] > 0.2,
+        "{errs:?}: now converged? update the report and the assertion"
+    );
+}
+
+/// Static deflection under the wheel load at mid-track: modal `ΦΩ⁻²Φᵀf` vs the direct sparse
+/// solve `K⁻¹f` (independent solver). The observable for which "within 2 %" is meaningful
+/// with a truncated basis is the deflection of the rail *section* under the load (foot
+/// centre / foot mean): it converges (f_max 2 kHz: −0.9 % / −0.7 %; 3 kHz: −0.4 % / −0.1 %).
+/// The contact node (or the weighted contact patch) also carries the local flexibility of
+/// the head under the patch load, which lies above any practical f_max (−3.7 % at 3 kHz).
+/// The residual flexibility `bᵀ(K⁻¹ − ΦΩ⁻²Φᵀ)b` is reported against the linearised Hertz
+/// compliance `dδ/dF` at the wheel load.
+#[test]
+fn static_deflection_modal_matches_direct_solve() {
+    let s = setup();
+    let x = 0.5 * s.track.layout.length;
+    let mut st = StaticDirect::new(&s.mats).unwrap();
+    let mut foot = Vec::new();
+    let mut residual = Vec::new();
+    for fmax in [500.0, 1000.0, 2000.0, 3000.0] {
+        let (phi, sys, line) = reduced(s, fmax);
+        let p = nearest_plane(&line, x);
+        let pr = vec![
+            Probe::contact_node(&line, p).unwrap(),
+            Probe::contact_patch(&line, p).unwrap(),
+            Probe::foot_centre(&s.track, p).unwrap(),
+            Probe::foot_mean(&s.track, p).unwrap(),
+        ];
+        let xp = line.planes_x_m[p];
+        let c = st
+            .compare(
+                &s.track,
+                &phi,
+                &sys,
+                &line,
+                &s.frame,
+                xp,
+                wheel_load_on_rail(s),
+                &pr,
+            )
+            .unwrap();
+        let cl = st
+            .compare(
+                &s.track,
+                &phi,
+                &sys,
+                &line,
+                &s.frame,
+                xp,
+                traction_on_rail(s),
+                &pr,
+            )
+            .unwrap();
+        eprintln!(
+            "static fmax {fmax} ({} modes): z: node {:+.4} patch {:+.4} foot c {:+.4} foot mean {:+.4} (direct foot {:.3e} m); x under F_L: node {:+.4} foot c {:+.4} (direct node {:.3e} m); flex direct {:.3e} modal {:.3e} residual {:.3e} m/N, Hertz {:.3e}",
+            c.modes,
+            c.relative_error(0, 2),
+            c.relative_error(1, 2),
+            c.relative_error(2, 2),
+            c.relative_error(3, 2),
+            c.direct_m[3][2],
+            cl.relative_error(0, 0),
+            cl.relative_error(2, 0),
+            cl.direct_m[0][0],
+            c.contact_flexibility_direct_m_per_n,
+            c.contact_flexibility_modal_m_per_n,
+            c.residual_flexibility_m_per_n(),
+            s.hertz_compliance_m_per_n
+        );
+        // Modal static flexibility never exceeds the full one (Rayleigh–Ritz bound).
+        assert!(c.residual_flexibility_m_per_n() >= -1e-15);
+        foot.push([c.relative_error(2, 2), c.relative_error(3, 2)]);
+        residual.push(c.residual_flexibility_m_per_n());
+    }
+    // Within 2 % from 2 kHz on (the passage runs at 5 kHz by default).
+    for e in &foot[2..] {
+        assert!(e[0].abs() < 0.02 && e[1].abs() < 0.02, "{foot:?}");
+    }
+    // The residual flexibility shrinks with f_max but stays comparable with the Hertz
+    // compliance (measured 3.7e-10 m/N at 3 kHz vs 6.9e-10 m/N).
+    assert!(residual.windows(2).all(|w| w[1] < w[0]), "{residual:?}");
+    let r = residual[residual.len() - 1] / s.hertz_compliance_m_per_n;
+    assert!(r > 0.2 && r < 1.0, "residual / Hertz = {r}");
+}
+
+/// The projected damping `ΦᵀCΦ` is far from diagonal (largest |c_ij|/√(c_ii c_jj) ≈ 0.98),
+/// but dropping its off-diagonal terms changes the moving-load rail response only slightly
+/// (measured: 0.04 % of the maximum, 1.8 % of the change from the static start, at the
+/// contact node; diagonal-vs-direct 3.69 % against full-vs-direct 3.66 %).
+#[test]
+fn modal_damping_coupling() {
+    let s = setup();
+    let (_, sys, _) = reduced(s, F_SOLVE);
+    let coupling = sys.damping_coupling();
+    let load = moving(s, wheel_load_on_rail(s));
+    let full = modal(s, F_SOLVE, &load, false);
+    let diag = modal(s, F_SOLVE, &load, true);
+    let d = direct_vertical();
+    let change = diag.relative_max_error(&full, 0, 2);
+    let change_dyn = diag.relative_max_change_error(&full, 0, 2);
+    eprintln!(
+        "damping coupling {coupling:.3}; diag vs full: contact z {change:.4} (dyn {change_dyn:.4}); diag vs direct {:.4}, full vs direct {:.4}",
+        diag.relative_max_error(d, 0, 2),
+        full.relative_max_error(d, 0, 2),
+    );
+    assert!(coupling > 0.5, "coupling {coupling}");
+    // Regression guard on the finding (small but non-zero effect).
+    assert!(change > 0.0 && change < 0.02, "{change}");
+    assert!(
+        full.relative_max_error(d, 0, 2) <= diag.relative_max_error(d, 0, 2) + 1e-3,
+        "the full damping should not be worse than the diagonal"
+    );
+}
+
+/// Validation (heavy, ignored): the convergence table of the modal vs direct moving-load
+/// response and of the static deflection with f_max = 1, 2, 3, 5 kHz, Δt = 20 µs over
+/// 0.6 m at 140 km/h. The model is the small one plus the `--set` list in the environment
+/// variable `MOVING_LOAD_SET` (comma-separated `key=value`), e.g.
+/// `MOVING_LOAD_SET="track.bays=8,mesh.section_size=0.02" MOVING_LOAD_FMAX=1000,3000 cargo test --release --test
+/// moving_load -- --ignored --nocapture convergence_table` (see validation/run.sh `moving`).
+#[test]
+#[ignore = "minutes: the 5 kHz eigen solve and 770 direct Newmark steps; run via validation/run.sh moving"]
+fn convergence_table() {
+    let mut sets: Vec<String> = SMALL.iter().map(|s| s.to_string()).collect();
+    if let Ok(extra) = std::env::var("MOVING_LOAD_SET") {
+        sets.extend(
+            extra
+                .split(',')
+                .filter(|s| !s.trim().is_empty())
+                .map(|s| s.trim().to_string()),
+        );
+    }
+    // `MOVING_LOAD_FMAX` (comma-separated Hz) overrides the f_max list.
+    let fmaxes: Vec<f64> = std::env::var("MOVING_LOAD_FMAX")
+        .ok()
+        .map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .filter(|v: &Vec<f64>| !v.is_empty())
+        .unwrap_or_else(|| vec![1000.0, 2000.0, 3000.0, 5000.0]);
+    let s = build(&sets, fmaxes[fmaxes.len() - 1]);
+    let v = 140.0 / 3.6;
+    let dt = 2e-5;
+    let l = s.track.layout.length;
+    let mk = |force_n| MovingLoad {
+        force_n,
+        x_start_m: 0.5 * l - 0.3,
+        speed_m_per_s: v,
+        dt_s: dt,
+        steps: (0.6 / (v * dt)).round() as usize,
+    };
+    let (lv, ll) = (mk(wheel_load_on_rail(&s)), mk(traction_on_rail(&s)));
+    let dv = direct(&s, &lv);
+    let dl = direct(&s, &ll);
+    println!(
+        "model --set {sets:?}; {} free DOFs; direct Newmark {:.1} s per run ({} steps)",
+        s.track.dofmap.n_free(),
+        dv.seconds,
+        lv.steps
+    );
+    println!("| f_max (Hz) | modes | vertical: contact node z | foot centre z | longitudinal: contact node x | foot centre x | static z: contact node | foot centre | foot mean | residual flexibility (m/N) | / Hertz dδ/dF |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut st = StaticDirect::new(&s.mats).unwrap();
+    for &fmax in &fmaxes {
+        let (phi, sys, line) = reduced(&s, fmax);
+        let pr = probes(&s, &line);
+        let mv = modal_response(&s.track, &phi, &sys, &line, &lv, &pr).unwrap();
+        let ml = modal_response(&s.track, &phi, &sys, &line, &ll, &pr).unwrap();
+        let p = nearest_plane(&line, 0.5 * l);
+        let sp = vec![
+            Probe::contact_node(&line, p).unwrap(),
+            Probe::foot_centre(&s.track, p).unwrap(),
+            Probe::foot_mean(&s.track, p).unwrap(),
+        ];
+        let c = st
+            .compare(
+                &s.track,
+                &phi,
+                &sys,
+                &line,
+                &s.frame,
+                line.planes_x_m[p],
+                wheel_load_on_rail(&s),
+                &sp,
+            )
+            .unwrap();
+        println!(
+            "| {fmax:.0} | {} | {:.2} % | {:.2} % | {:.1} % | {:.1} % | {:+.2} % | {:+.2} % | {:+.2} % | {:.2e} | {:.2} |",
+            sys.len(),
+            100.0 * mv.relative_max_error(&dv, 0, 2),
+            100.0 * mv.relative_max_error(&dv, 1, 2),
+            100.0 * ml.relative_max_error(&dl, 0, 0),
+            100.0 * ml.relative_max_error(&dl, 1, 0),
+            100.0 * c.relative_error(0, 2),
+            100.0 * c.relative_error(1, 2),
+            100.0 * c.relative_error(2, 2),
+            c.residual_flexibility_m_per_n(),
+            c.residual_flexibility_m_per_n() / s.hertz_compliance_m_per_n,
+        );
+    }
+    let (_, sys, _) = reduced(&s, fmaxes[fmaxes.len() - 1]);
+    let full = {
+        let (phi, sys, line) = reduced(&s, fmaxes[fmaxes.len() - 1]);
+        modal_response(&s.track, &phi, &sys, &line, &lv, &probes(&s, &line)).unwrap()
+    };
+    let diag = {
+        let (phi, sys, line) = reduced(&s, fmaxes[fmaxes.len() - 1]);
+        let sys = diagonal_damping(&sys);
+        modal_response(&s.track, &phi, &sys, &line, &lv, &probes(&s, &line)).unwrap()
+    };
+    println!(
+        "damping coupling {:.3}; diagonal vs full damping at the contact node: {:.3} % of max ({:.2} % of the change); vs direct: diagonal {:.2} %, full {:.2} %",
+        sys.damping_coupling(),
+        100.0 * diag.relative_max_error(&full, 0, 2),
+        100.0 * diag.relative_max_change_error(&full, 0, 2),
+        100.0 * diag.relative_max_error(&dv, 0, 2),
+        100.0 * full.relative_max_error(&dv, 0, 2),
+    );
+}
