@@ -15,9 +15,9 @@
 //! `∬Y²/r³ → X asinh(Y/|X|)`, `∬XY/r³ → −r`.
 //!
 //! The products `Σ_j C(i − j) f_j` are Toeplitz; they are evaluated as cyclic convolutions on a
-//! grid padded to `2nx × 2ny` (exact linear convolution for output rows `0..=nx`, which gives
-//! also the displacement one cell beyond the leading edge needed by transient rolling).
-//! Tangential products pack `τx + i τy` into one complex FFT.
+//! grid padded to at least `(2nx + 1) × 2ny` (fast FFT lengths; exact linear convolution for
+//! output rows `0..=nx`, which gives also the displacement one cell beyond the leading edge
+//! needed by transient rolling). Tangential products pack `τx + i τy` into one complex FFT.
 
 use rustfft::num_complex::Complex64;
 use rustfft::{Fft, FftPlanner};
@@ -156,18 +156,42 @@ impl Fft2 {
     }
 }
 
+/// Smallest `m ≥ n` whose prime factors are 2, 3 and 5 (fast FFT lengths).
+pub fn next_fast_len(n: usize) -> usize {
+    let mut m = n.max(1);
+    loop {
+        let mut r = m;
+        for p in [2, 3, 5] {
+            while r % p == 0 {
+                r /= p;
+            }
+        }
+        if r == 1 {
+            return m;
+        }
+        m += 1;
+    }
+}
+
 /// FFT-based influence products on an `nx × ny` grid (element index `i * ny + j`, `i` along x).
+///
+/// The padded FFT grid is `m1 × m2` with `m1 ≥ 2nx + 1`, `m2 ≥ 2ny` of fast lengths
+/// ([`next_fast_len`]): every offset that occurs (rows `−(nx−1)..=nx`, columns
+/// `−(ny−1)..=ny−1`) lies strictly below half the period, so the periodic kernels are exactly
+/// even (zz, xx, yy) or odd–odd (xy) and all four kernel spectra are **real**. Hence a real
+/// kernel product of a complex field acts on real and imaginary parts separately (two real
+/// fields per complex FFT), and the tangential product of `Z = FFT(τx + iτy)` is
+/// `W(k) = A(k) Z(k) + B(k) conj Z(−k)` with `A = (K̂xx + K̂yy)/2`, `B = (K̂xx − K̂yy)/2 + i K̂xy`.
 pub struct Convolver {
     nx: usize,
     ny: usize,
     m1: usize,
     m2: usize,
     fft: Fft2,
-    /// Spectra in transposed layout, already divided by `m1 m2`.
-    kzz: Vec<Complex64>,
-    kxx: Vec<Complex64>,
-    kyy: Vec<Complex64>,
-    kxy: Vec<Complex64>,
+    /// Real spectra in transposed layout, already divided by `m1 m2`.
+    kzz: Vec<f64>,
+    ka: Vec<f64>,
+    kb: Vec<Complex64>,
     buf: Vec<Complex64>,
     work: Vec<Complex64>,
     /// Largest eigenvalue bound of the normal operator (m/Pa).
@@ -178,55 +202,69 @@ pub struct Convolver {
     pub diag_n: f64,
     /// Self-influence (diagonal, mean of xx and yy) of the tangential operator (m/Pa).
     pub diag_t: f64,
+    /// Self-influence `C_xx(0)` of the tangential operator (m/Pa).
+    pub diag_xx: f64,
+    /// Self-influence `C_yy(0)` of the tangential operator (m/Pa).
+    pub diag_yy: f64,
 }
 
 impl Convolver {
     /// Build the kernels for element size `dx × dy` (m), moduli `E*`, `G` (Pa) and ν.
     pub fn new(nx: usize, ny: usize, dx: f64, dy: f64, e_star: f64, g: f64, nu: f64) -> Self {
-        let (m1, m2) = (2 * nx, 2 * ny);
+        let (m1, m2) = (next_fast_len(2 * nx + 1), next_fast_len(2 * ny));
         let mut fft = Fft2::new(m1, m2);
         let zero = Complex64::new(0.0, 0.0);
         let mut kz = vec![zero; m1 * m2];
         let mut kx = vec![zero; m1 * m2];
         let mut ky = vec![zero; m1 * m2];
         let mut kc = vec![zero; m1 * m2];
-        let off = |k: usize, n: usize, m: usize| -> f64 {
-            if k <= n {
-                k as f64
+        // periodic offset; the Nyquist entry (k = m/2, never used) gets offset 0 of the
+        // odd kernel so that the periodic kernel keeps its exact parity
+        let off = |k: usize, m: usize| -> (f64, bool) {
+            if 2 * k < m {
+                (k as f64, false)
+            } else if 2 * k == m {
+                (k as f64, true)
             } else {
-                k as f64 - m as f64
+                (k as f64 - m as f64, false)
             }
         };
         for a in 0..m1 {
-            let ox = off(a, nx, m1) * dx;
+            let (ox, nyq_x) = off(a, m1);
             for b in 0..m2 {
-                let oy = off(b, ny, m2) * dy;
-                let c = coefficients(ox, oy, dx, dy, e_star, g, nu);
+                let (oy, nyq_y) = off(b, m2);
+                let c = coefficients(ox * dx, oy * dy, dx, dy, e_star, g, nu);
                 let idx = a * m2 + b;
                 kz[idx] = Complex64::new(c.zz, 0.0);
                 kx[idx] = Complex64::new(c.xx, 0.0);
                 ky[idx] = Complex64::new(c.yy, 0.0);
-                kc[idx] = Complex64::new(c.xy, 0.0);
+                let xy = if nyq_x || nyq_y { 0.0 } else { c.xy };
+                kc[idx] = Complex64::new(xy, 0.0);
             }
         }
         let diag_n = kz[0].re;
-        let diag_t = 0.5 * (kx[0].re + ky[0].re);
+        let (diag_xx, diag_yy) = (kx[0].re, ky[0].re);
+        let diag_t = 0.5 * (diag_xx + diag_yy);
         let scale = 1.0 / (m1 * m2) as f64;
-        let mut spec = |k: &mut Vec<Complex64>| -> Vec<Complex64> {
+        let mut spec = |k: &mut Vec<Complex64>| -> Vec<f64> {
             fft.forward_to_t(k, m1);
-            fft.tbuf.iter().map(|v| v * scale).collect()
+            fft.tbuf.iter().map(|v| v.re * scale).collect()
         };
         let kzz = spec(&mut kz);
         let kxx = spec(&mut kx);
         let kyy = spec(&mut ky);
         let kxy = spec(&mut kc);
+        let ka: Vec<f64> = kxx.iter().zip(&kyy).map(|(a, b)| 0.5 * (a + b)).collect();
+        let kb: Vec<Complex64> = (0..m1 * m2)
+            .map(|q| Complex64::new(0.5 * (kxx[q] - kyy[q]), kxy[q]))
+            .collect();
         let mut lambda_max_n = 0.0_f64;
         let mut lambda_max_t = 0.0_f64;
         let s = (m1 * m2) as f64;
         for q in 0..m1 * m2 {
-            lambda_max_n = lambda_max_n.max(kzz[q].norm() * s);
+            lambda_max_n = lambda_max_n.max(kzz[q].abs() * s);
             // largest eigenvalue (in modulus) of the 2×2 symbol [[xx, xy], [xy, yy]]
-            let (a, d, b) = (kxx[q].re * s, kyy[q].re * s, kxy[q].re * s);
+            let (a, d, b) = (kxx[q] * s, kyy[q] * s, kxy[q] * s);
             let m = 0.5 * (a + d);
             let r = (0.25 * (a - d) * (a - d) + b * b).sqrt();
             lambda_max_t = lambda_max_t.max((m + r).abs()).max((m - r).abs());
@@ -238,15 +276,16 @@ impl Convolver {
             m2,
             fft,
             kzz,
-            kxx,
-            kyy,
-            kxy,
+            ka,
+            kb,
             buf: vec![zero; m1 * m2],
             work: vec![zero; m1 * m2],
             lambda_max_n,
             lambda_max_t,
             diag_n,
             diag_t,
+            diag_xx,
+            diag_yy,
         }
     }
 
@@ -255,25 +294,60 @@ impl Convolver {
         (self.nx, self.ny)
     }
 
+    /// Padded FFT grid `(m1, m2)`.
+    pub fn fft_dims(&self) -> (usize, usize) {
+        (self.m1, self.m2)
+    }
+
     /// Normal displacement difference `u = C_zz * p` (m) on the grid, `p` in Pa.
     pub fn normal(&mut self, p: &[f64], u: &mut [f64]) {
         let (nx, ny, m2) = (self.nx, self.ny, self.m2);
-        self.buf.fill(Complex64::new(0.0, 0.0));
+        let zero = Complex64::new(0.0, 0.0);
         for i in 0..nx {
+            let row = &mut self.buf[i * m2..(i + 1) * m2];
             for j in 0..ny {
-                self.buf[i * m2 + j] = Complex64::new(p[i * ny + j], 0.0);
+                row[j] = Complex64::new(p[i * ny + j], 0.0);
             }
+            row[ny..].fill(zero);
         }
-        self.fft.forward_to_t(&mut self.buf, nx);
-        for (t, k) in self.fft.tbuf.iter_mut().zip(&self.kzz) {
-            *t *= k;
-        }
-        self.fft.inverse_from_t(&mut self.buf, nx);
+        self.normal_core();
         for i in 0..nx {
             for j in 0..ny {
                 u[i * ny + j] = self.buf[i * m2 + j].re;
             }
         }
+    }
+
+    /// Two normal products in one complex FFT pair (the kernel spectrum is real):
+    /// `ua = C_zz * a`, `ub = C_zz * b` (m), `a, b` in Pa.
+    pub fn normal_pair(&mut self, a: &[f64], b: &[f64], ua: &mut [f64], ub: &mut [f64]) {
+        let (nx, ny, m2) = (self.nx, self.ny, self.m2);
+        let zero = Complex64::new(0.0, 0.0);
+        for i in 0..nx {
+            let row = &mut self.buf[i * m2..(i + 1) * m2];
+            for j in 0..ny {
+                let e = i * ny + j;
+                row[j] = Complex64::new(a[e], b[e]);
+            }
+            row[ny..].fill(zero);
+        }
+        self.normal_core();
+        for i in 0..nx {
+            for j in 0..ny {
+                let v = self.buf[i * m2 + j];
+                ua[i * ny + j] = v.re;
+                ub[i * ny + j] = v.im;
+            }
+        }
+    }
+
+    fn normal_core(&mut self) {
+        let nx = self.nx;
+        self.fft.forward_to_t(&mut self.buf, nx);
+        for (t, k) in self.fft.tbuf.iter_mut().zip(&self.kzz) {
+            *t *= *k;
+        }
+        self.fft.inverse_from_t(&mut self.buf, nx);
     }
 
     /// Tangential displacement differences `(ux, uy)` (m) from tractions `(tx, ty)` (Pa),
@@ -287,33 +361,8 @@ impl Convolver {
         shift: usize,
     ) {
         debug_assert!(shift <= 1);
-        let (nx, ny, m1, m2) = (self.nx, self.ny, self.m1, self.m2);
-        self.buf.fill(Complex64::new(0.0, 0.0));
-        for i in 0..nx {
-            for j in 0..ny {
-                let e = i * ny + j;
-                self.buf[i * m2 + j] = Complex64::new(tx[e], ty[e]);
-            }
-        }
-        self.fft.forward_to_t(&mut self.buf, nx);
-        // transposed layout: index q = k2 * m1 + k1
-        let z = &self.fft.tbuf;
-        for k2 in 0..m2 {
-            let n2 = (m2 - k2) % m2;
-            for k1 in 0..m1 {
-                let n1 = (m1 - k1) % m1;
-                let q = k2 * m1 + k1;
-                let zk = z[q];
-                let zm = z[n2 * m1 + n1].conj();
-                let xs = (zk + zm) * 0.5;
-                let ys = (zk - zm) * Complex64::new(0.0, -0.5);
-                let ux_s = self.kxx[q] * xs + self.kxy[q] * ys;
-                let uy_s = self.kxy[q] * xs + self.kyy[q] * ys;
-                self.work[q] = ux_s + Complex64::new(0.0, 1.0) * uy_s;
-            }
-        }
-        std::mem::swap(&mut self.fft.tbuf, &mut self.work);
-        self.fft.inverse_from_t(&mut self.buf, nx + shift);
+        let (nx, ny, m2) = (self.nx, self.ny, self.m2);
+        self.tangential_core(tx, ty, nx + shift);
         for i in 0..nx {
             for j in 0..ny {
                 let v = self.buf[(i + shift) * m2 + j];
@@ -321,6 +370,51 @@ impl Convolver {
                 uy[i * ny + j] = v.im;
             }
         }
+    }
+
+    /// Tangential displacement differences on the extended rows `0..=nx` (row `nx` lies one
+    /// cell beyond the leading edge): `ux, uy` have length `(nx + 1) · ny`.
+    pub fn tangential_ext(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64]) {
+        let (nx, ny, m2) = (self.nx, self.ny, self.m2);
+        debug_assert!(ux.len() >= (nx + 1) * ny && uy.len() >= (nx + 1) * ny);
+        self.tangential_core(tx, ty, nx + 1);
+        for i in 0..=nx {
+            for j in 0..ny {
+                let v = self.buf[i * m2 + j];
+                ux[i * ny + j] = v.re;
+                uy[i * ny + j] = v.im;
+            }
+        }
+    }
+
+    fn tangential_core(&mut self, tx: &[f64], ty: &[f64], rows: usize) {
+        let (nx, ny, m1, m2) = (self.nx, self.ny, self.m1, self.m2);
+        let zero = Complex64::new(0.0, 0.0);
+        for i in 0..nx {
+            let row = &mut self.buf[i * m2..(i + 1) * m2];
+            for j in 0..ny {
+                let e = i * ny + j;
+                row[j] = Complex64::new(tx[e], ty[e]);
+            }
+            row[ny..].fill(zero);
+        }
+        self.fft.forward_to_t(&mut self.buf, nx);
+        // transposed layout: index q = k2 * m1 + k1; W = A Z + B conj Z(−k)
+        let z = &self.fft.tbuf;
+        for k2 in 0..m2 {
+            let n2 = (m2 - k2) % m2;
+            let row = &z[k2 * m1..(k2 + 1) * m1];
+            let mrow = &z[n2 * m1..(n2 + 1) * m1];
+            let a = &self.ka[k2 * m1..(k2 + 1) * m1];
+            let b = &self.kb[k2 * m1..(k2 + 1) * m1];
+            let w = &mut self.work[k2 * m1..(k2 + 1) * m1];
+            w[0] = row[0] * a[0] + b[0] * mrow[0].conj();
+            for k1 in 1..m1 {
+                w[k1] = row[k1] * a[k1] + b[k1] * mrow[m1 - k1].conj();
+            }
+        }
+        std::mem::swap(&mut self.fft.tbuf, &mut self.work);
+        self.fft.inverse_from_t(&mut self.buf, rows);
     }
 }
 

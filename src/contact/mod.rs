@@ -15,8 +15,9 @@
 //!   constrained conjugate-gradient method, see [`normal`].
 //! * Tangential problem: Coulomb friction with coefficient µ, per element
 //!   |τ| ≤ µp; stick (|τ| < µp) ⇒ slip s = 0; slip ⇒ τ = −µp s/|s|. Each time step is a
-//!   convex programme solved by an accelerated projected gradient (FISTA with restart),
-//!   see [`tangential`]. Steady rolling is the fixed point of the transient map.
+//!   convex programme solved by an active-set method with inner conjugate gradients and
+//!   Kalker's element test (FISTA as fallback), see [`tangential`]. Steady rolling is the
+//!   fixed point of the transient map.
 //!
 //! # Sign conventions (defined once, here)
 //! * Contact frame: `x` along the rail in the direction of travel, `y` lateral, origin at the

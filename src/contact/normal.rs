@@ -37,6 +37,11 @@ pub struct NormalSolver {
     gap: Vec<f64>,
     t: Vec<f64>,
     r: Vec<f64>,
+    up: Vec<f64>,
+    last_h: Vec<f64>,
+    last: Option<(NormalMode, NormalOutcome)>,
+    /// Influence products (FFT pairs) used by the last solve.
+    pub products: usize,
     /// Relative tolerance on the pressure change `Σ|Δp| / Σ p`.
     pub tol: f64,
     /// Maximum number of CG iterations.
@@ -50,14 +55,29 @@ impl NormalSolver {
             gap: vec![0.0; n],
             t: vec![0.0; n],
             r: vec![0.0; n],
+            up: vec![0.0; n],
+            last_h: vec![0.0; n],
+            last: None,
+            products: 0,
             tol: 1e-10,
             max_iterations: 2000,
         }
     }
 
+    /// Forget the last solution (call when `p` was changed outside [`Self::solve`]).
+    pub fn invalidate(&mut self) {
+        self.last = None;
+    }
+
     /// Solve for `p` (Pa, in/out: warm start) given the undeformed gap `h` (m), the element
     /// area `da` (m²) and the prescribed load or approach. On exit `gap` holds the deformed
     /// gap including the approach ([`Self::gap`]).
+    ///
+    /// If `h` and `mode` equal those of the previous solve (and `p` is its result, see
+    /// [`Self::invalidate`]) the previous solution is returned without any product. Inside the
+    /// CG the displacement `C p` is carried by the recurrence `C p ← C p − τ C t` while the
+    /// contact set does not change (one FFT product per iteration), and recomputed exactly
+    /// when it does.
     pub fn solve(
         &mut self,
         conv: &mut Convolver,
@@ -66,7 +86,32 @@ impl NormalSolver {
         mode: NormalMode,
         p: &mut [f64],
     ) -> Result<NormalOutcome, ContactError> {
+        if let Some((m, out)) = self.last {
+            if m == mode && self.last_h[..] == h[..] {
+                self.products = 0;
+                return Ok(NormalOutcome {
+                    iterations: 0,
+                    ..out
+                });
+            }
+        }
+        self.last = None;
+        let out = self.solve_inner(conv, h, da, mode, p)?;
+        self.last_h.copy_from_slice(h);
+        self.last = Some((mode, out));
+        Ok(out)
+    }
+
+    fn solve_inner(
+        &mut self,
+        conv: &mut Convolver,
+        h: &[f64],
+        da: f64,
+        mode: NormalMode,
+        p: &mut [f64],
+    ) -> Result<NormalOutcome, ContactError> {
         let n = p.len();
+        self.products = 0;
         // separation / zero-load shortcuts
         match mode {
             NormalMode::Load(w) if w <= 0.0 => {
@@ -128,10 +173,11 @@ impl NormalSolver {
         self.t.fill(0.0);
         let mut delta: f64;
         let mut last_change = 1.0;
+        conv.normal(p, &mut self.up);
+        self.products += 1;
         for it in 1..=self.max_iterations {
-            conv.normal(p, &mut self.gap);
-            for (g, hv) in self.gap.iter_mut().zip(h) {
-                *g += hv;
+            for ((g, hv), u) in self.gap.iter_mut().zip(h).zip(&self.up) {
+                *g = hv + u;
             }
             // gbar: mean gap over the contact set (load mode) or the approach
             let (mut sum, mut cnt) = (0.0, 0usize);
@@ -169,6 +215,7 @@ impl NormalSolver {
             }
             g_old = gg;
             conv.normal(&self.t, &mut self.r);
+            self.products += 1;
             let rbar = match mode {
                 NormalMode::Load(_) => {
                     let mut s = 0.0;
@@ -199,10 +246,15 @@ impl NormalSolver {
             };
             let mut change = 0.0;
             let mut any_overlap = false;
+            let mut clipped = false;
             for i in 0..n {
                 let old = p[i];
                 if old > 0.0 {
-                    p[i] = (old - tau * self.t[i]).max(0.0);
+                    let v = old - tau * self.t[i];
+                    if v < 0.0 {
+                        clipped = true;
+                    }
+                    p[i] = v.max(0.0);
                 } else if self.gap[i] < 0.0 {
                     p[i] = old - tau * self.gap[i];
                     any_overlap = true;
@@ -211,22 +263,30 @@ impl NormalSolver {
             }
             reuse_dir = !any_overlap;
             let mut tot = p.iter().sum::<f64>() * da;
+            let mut s_load = 1.0;
             if let NormalMode::Load(w) = mode {
                 if tot > 0.0 {
-                    let s = w / tot;
+                    s_load = w / tot;
                     for v in p.iter_mut() {
-                        *v *= s;
+                        *v *= s_load;
                     }
                     tot = w;
+                }
+            }
+            if clipped || any_overlap {
+                conv.normal(p, &mut self.up);
+                self.products += 1;
+            } else {
+                for (u, r) in self.up.iter_mut().zip(&self.r) {
+                    *u = s_load * (*u - tau * r);
                 }
             }
             let scale = p.iter().sum::<f64>().max(1e-300);
             last_change = change / scale;
             if change / scale < self.tol && it > 1 {
-                // final gap consistent with p
-                conv.normal(p, &mut self.gap);
-                for (g, hv) in self.gap.iter_mut().zip(h) {
-                    *g += hv - delta;
+                // final gap consistent with p (C p from the recurrence)
+                for ((g, hv), u) in self.gap.iter_mut().zip(h).zip(&self.up) {
+                    *g = u + hv - delta;
                 }
                 return Ok(NormalOutcome {
                     load_n: tot,

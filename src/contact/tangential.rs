@@ -23,44 +23,119 @@ pub struct TangentialSolver {
     qx: Vec<f64>,
     qy: Vec<f64>,
     slip: Vec<bool>,
+    px: Vec<f64>,
+    py: Vec<f64>,
+    /// `false` = experimental variant: slip elements rotate along their circle inside the CG
+    /// (small turns) instead of by the element test; it oscillates on large slip areas, so
+    /// the default is `true` (directions by the element test only).
+    pub norot: bool,
     /// Slip distance S_x of the last solve (m).
     pub sx: Vec<f64>,
     /// Slip distance S_y of the last solve (m).
     pub sy: Vec<f64>,
-    /// Relative stopping tolerance on the traction update, relative to max |τ|.
+    /// `(C τ)_x` of the final traction on the extended rows `0..=nx` (m), see
+    /// [`Convolver::tangential_ext`]; rows `1..=nx` are the upstream displacements of the next
+    /// transient step.
+    pub ux_ext: Vec<f64>,
+    /// `(C τ)_y` of the final traction on the extended rows `0..=nx` (m).
+    pub uy_ext: Vec<f64>,
+    /// Relative stopping tolerance: stick slip distances below `tol · max(g) · C_ii` (i.e. a
+    /// traction error of about `tol · µ p_max`), slip directions converged to `tol`.
     pub tol: f64,
-    /// Maximum iterations (of each of the two methods).
+    /// Maximum iterations of the FISTA fallback.
     pub max_iterations: usize,
-    /// Iterations of the active-set CG before falling back to FISTA.
+    /// Maximum influence products of the active-set method before falling back to FISTA.
     pub cg_iterations: usize,
+    /// Influence products (FFT pairs) used by the last solve.
+    pub products: usize,
 }
 
 impl TangentialSolver {
-    /// Scratch for `n` elements.
-    pub fn new(n: usize) -> Self {
+    /// Scratch for `n` elements on a grid with `nx` rows along x (`n = nx · ny`).
+    pub fn new(n: usize, nx: usize) -> Self {
+        let ext = n + n.checked_div(nx).unwrap_or(0);
         TangentialSolver {
             dx_: vec![0.0; n],
             dy_: vec![0.0; n],
             qx: vec![0.0; n],
             qy: vec![0.0; n],
             slip: vec![false; n],
+            px: vec![0.0; n],
+            py: vec![0.0; n],
+            norot: true,
             sx: vec![0.0; n],
             sy: vec![0.0; n],
+            ux_ext: vec![0.0; ext],
+            uy_ext: vec![0.0; ext],
             tol: 1e-7,
             max_iterations: 20000,
             cg_iterations: 400,
+            products: 0,
         }
     }
 
-    /// Solve for `(tx, ty)` (Pa, in/out: warm start). Returns the number of iterations. On exit
-    /// `self.sx, self.sy` hold the slip distances `S = Cτ + e` (m).
+    /// `S = C τ + e` exactly (one FFT pair), with the extended displacement rows kept.
+    fn exact(&mut self, conv: &mut Convolver, ex: &[f64], ey: &[f64], tx: &[f64], ty: &[f64]) {
+        conv.tangential_ext(tx, ty, &mut self.ux_ext, &mut self.uy_ext);
+        let n = ex.len();
+        for i in 0..n {
+            self.sx[i] = self.ux_ext[i] + ex[i];
+            self.sy[i] = self.uy_ext[i] + ey[i];
+        }
+        self.products += 1;
+    }
+
+    /// Projected residual `r = −P S`. With `into_d` it is written to the search direction
+    /// `(dx_, dy_)`, otherwise to `(qx, qy)`. Returns `(r·r, max |r|)`.
+    fn residual(&mut self, g: &[f64], into_d: bool) -> (f64, f64) {
+        let mut rr = 0.0;
+        let mut rmax = 0.0_f64;
+        for i in 0..g.len() {
+            let (rx, ry) = if g[i] <= 0.0 {
+                (0.0, 0.0)
+            } else if self.slip[i] {
+                if self.norot {
+                    (0.0, 0.0)
+                } else {
+                    let c = -(self.sx[i] * self.px[i] + self.sy[i] * self.py[i]);
+                    (c * self.px[i], c * self.py[i])
+                }
+            } else {
+                (-self.sx[i], -self.sy[i])
+            };
+            rr += rx * rx + ry * ry;
+            rmax = rmax.max(rx.abs()).max(ry.abs());
+            if into_d {
+                self.dx_[i] = rx;
+                self.dy_[i] = ry;
+            } else {
+                self.qx[i] = rx;
+                self.qy[i] = ry;
+            }
+        }
+        (rr, rmax)
+    }
+
+    /// Solve for `(tx, ty)` (Pa, in/out: warm start). Returns the number of influence
+    /// products (FFT pairs) used. On exit `self.sx, self.sy` hold the slip distances
+    /// `S = Cτ + e` (m) and `ux_ext, uy_ext` the displacements `Cτ` on rows `0..=nx`.
     ///
-    /// Active-set conjugate gradients (the tangential analogue of Polonsky & Keer 1999, cf.
-    /// Vollebregt's TangCG): CG on the adhesion set, elements that exceed the traction bound
-    /// are projected onto it and join the slip set, slip elements take the direction
-    /// the direction of the local trial traction `τ − S/C_ii` (Kalker's element test) and are
-    /// released to adhesion when that trial lies inside the disc; CG restarts whenever the
-    /// sets change.
+    /// Active-set method with inner conjugate gradients (the tangential analogue of Polonsky
+    /// & Keer 1999, cf. Vollebregt's TangCG), organised so that it cannot cycle inside a CG
+    /// sequence:
+    /// 1. *Element test* of the slip elements (Kalker): the trial traction `τ − S/C_ii`
+    ///    inside the disc ⇒ release to adhesion; outside ⇒ `τ = g · trial/|trial|` (the
+    ///    direction opposite to the slip; a Jacobi-type update, followed by an exact product).
+    /// 2. *Inner CG* on the adhesion set with the slip tractions frozen (`S = 0` there). The
+    ///    residual is carried by the recurrence: one FFT product per iteration. An adhesion
+    ///    element whose traction leaves the disc is projected onto it and joins the slip set;
+    ///    the CG then stops and the outer loop restarts from an exact residual.
+    ///    (With `norot = false`, slip elements also carry the tangential component of their
+    ///    circle in the CG; experimental, it oscillates on large slip areas.)
+    ///
+    /// The outer loop ends when the adhesion residual is below tolerance, no element changes
+    /// state and the slip directions are converged. If it has not ended after
+    /// `cg_iterations` products, the monotone accelerated projected gradient (FISTA) finishes.
     pub fn solve(
         &mut self,
         conv: &mut Convolver,
@@ -71,12 +146,15 @@ impl TangentialSolver {
         ty: &mut [f64],
     ) -> Result<usize, ContactError> {
         let n = g.len();
+        self.products = 0;
         let gmax = g.iter().cloned().fold(0.0, f64::max);
         if gmax <= 0.0 {
             tx.fill(0.0);
             ty.fill(0.0);
             self.sx.copy_from_slice(ex);
             self.sy.copy_from_slice(ey);
+            self.ux_ext.fill(0.0);
+            self.uy_ext.fill(0.0);
             return Ok(0);
         }
         for i in 0..n {
@@ -84,99 +162,125 @@ impl TangentialSolver {
             self.slip[i] =
                 g[i] > 0.0 && tx[i] * tx[i] + ty[i] * ty[i] >= g[i] * g[i] * (1.0 - 1e-12);
         }
-        self.dx_.fill(0.0);
-        self.dy_.fill(0.0);
-        let mut rr_old = 0.0;
-        let mut restart = true;
-        let mut last = f64::INFINITY;
-        let cd = conv.diag_t;
-        for it in 1..=self.cg_iterations {
-            conv.tangential(tx, ty, &mut self.sx, &mut self.sy, 0);
+        let (cdx, cdy) = (conv.diag_xx, conv.diag_yy);
+        let s_tol = self.tol * gmax * conv.diag_t;
+        self.exact(conv, ex, ey, tx, ty);
+        let mut exact_now = true;
+        while self.products < self.cg_iterations {
+            // 1. element test of the slip elements: release to adhesion, tangent directions
             let mut changed = false;
-            let mut diff = 0.0_f64;
-            let mut tmax = 0.0_f64;
-            let mut rr = 0.0;
+            let mut dmax = 0.0_f64;
             for i in 0..n {
-                let (sx, sy) = (self.sx[i] + ex[i], self.sy[i] + ey[i]);
-                self.sx[i] = sx;
-                self.sy[i] = sy;
-                if g[i] <= 0.0 {
+                if !self.slip[i] {
                     continue;
                 }
-                if self.slip[i] {
-                    // local element problem (Kalker's Gauss–Seidel test): the traction this
-                    // element would take with the others frozen decides stick or slip
-                    let trx = tx[i] - sx / cd;
-                    let try_ = ty[i] - sy / cd;
+                let trx = tx[i] - self.sx[i] / cdx;
+                let try_ = ty[i] - self.sy[i] / cdy;
+                if trx * trx + try_ * try_ < g[i] * g[i] {
+                    self.slip[i] = false;
+                    changed = true;
+                } else {
                     let tm = (trx * trx + try_ * try_).sqrt();
-                    if tm < g[i] {
-                        self.slip[i] = false;
-                        changed = true;
+                    let (nx, ny) = (g[i] * trx / tm, g[i] * try_ / tm);
+                    let d = (nx - tx[i]).abs().max((ny - ty[i]).abs());
+                    // large turns by the element test, small ones by the CG rotation
+                    let thr = if self.norot {
+                        0.1 * self.tol * gmax
                     } else {
-                        let (nx, ny) = (g[i] * trx / tm, g[i] * try_ / tm);
-                        diff = diff.max((nx - tx[i]).abs()).max((ny - ty[i]).abs());
+                        0.05 * g[i]
+                    };
+                    if d > thr {
+                        dmax = dmax.max(d);
                         tx[i] = nx;
                         ty[i] = ny;
-                        continue;
                     }
-                }
-                rr += sx * sx + sy * sy;
-            }
-            let beta = if restart || changed || rr_old == 0.0 {
-                0.0
-            } else {
-                rr / rr_old
-            };
-            rr_old = rr;
-            for i in 0..n {
-                if g[i] > 0.0 && !self.slip[i] {
-                    self.dx_[i] = self.sx[i] + beta * self.dx_[i];
-                    self.dy_[i] = self.sy[i] + beta * self.dy_[i];
-                } else {
-                    self.dx_[i] = 0.0;
-                    self.dy_[i] = 0.0;
+                    let m = (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
+                    self.px[i] = -ty[i] / m;
+                    self.py[i] = tx[i] / m;
                 }
             }
-            conv.tangential(&self.dx_, &self.dy_, &mut self.qx, &mut self.qy, 0);
-            let (mut num, mut den) = (0.0, 0.0);
-            for i in 0..n {
-                if g[i] > 0.0 && !self.slip[i] {
-                    num += self.sx[i] * self.dx_[i] + self.sy[i] * self.dy_[i];
+            if dmax > 0.0 {
+                self.exact(conv, ex, ey, tx, ty);
+                exact_now = true;
+            }
+            // 2. projected residual r = −P S (adhesion: both components; slip: the component
+            //    along the circle's tangent, which rotates τ towards −S)
+            let (mut rr, rmax) = self.residual(g, true);
+            if rmax <= s_tol && !changed && (dmax <= self.tol * gmax || !self.norot) {
+                if exact_now {
+                    return Ok(self.products);
+                }
+                // confirm with an exact residual (the recurrence drifts)
+                self.exact(conv, ex, ey, tx, ty);
+                exact_now = true;
+                continue;
+            }
+            // 3. inner CG on adhesion (2 dof) + slip (1 dof) elements
+            while self.products < self.cg_iterations {
+                conv.tangential(&self.dx_, &self.dy_, &mut self.qx, &mut self.qy, 0);
+                self.products += 1;
+                exact_now = false;
+                let mut den = 0.0;
+                for i in 0..n {
                     den += self.qx[i] * self.dx_[i] + self.qy[i] * self.dy_[i];
                 }
-            }
-            let alpha = if den > 0.0 { num / den } else { 0.0 };
-            restart = false;
-            for i in 0..n {
-                if g[i] > 0.0 && !self.slip[i] {
-                    let (ox, oy) = (tx[i], ty[i]);
-                    let mut ax = ox - alpha * self.dx_[i];
-                    let mut ay = oy - alpha * self.dy_[i];
-                    if ax * ax + ay * ay >= g[i] * g[i] {
+                if den <= 0.0 || rr == 0.0 {
+                    break;
+                }
+                let alpha = rr / den;
+                let mut violated = false;
+                for i in 0..n {
+                    self.sx[i] += alpha * self.qx[i];
+                    self.sy[i] += alpha * self.qy[i];
+                    if g[i] <= 0.0 {
+                        continue;
+                    }
+                    let mut ax = tx[i] + alpha * self.dx_[i];
+                    let mut ay = ty[i] + alpha * self.dy_[i];
+                    if self.slip[i] {
+                        // rotation along the tangent; back onto the circle after the CG
+                    } else if ax * ax + ay * ay > g[i] * g[i] {
                         project(&mut ax, &mut ay, g[i]);
                         self.slip[i] = true;
+                        violated = true;
                     }
-                    diff = diff.max((ax - ox).abs()).max((ay - oy).abs());
                     tx[i] = ax;
                     ty[i] = ay;
                 }
-                tmax = tmax.max(tx[i].abs()).max(ty[i].abs());
-            }
-            restart |= changed;
-            last = diff / tmax.max(1e-12 * gmax);
-            if last < self.tol && !changed {
-                conv.tangential(tx, ty, &mut self.sx, &mut self.sy, 0);
-                for i in 0..n {
-                    self.sx[i] += ex[i];
-                    self.sy[i] += ey[i];
+                if violated {
+                    self.exact(conv, ex, ey, tx, ty);
+                    exact_now = true;
+                    break;
                 }
-                return Ok(it);
+                let (rr_new, rmax) = self.residual(g, false);
+                if rmax <= 0.5 * s_tol {
+                    if !self.norot {
+                        // radial correction of the rotated slip tractions, exact residual
+                        for i in 0..n {
+                            if self.slip[i] && g[i] > 0.0 {
+                                let s = g[i] / (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
+                                tx[i] *= s;
+                                ty[i] *= s;
+                            }
+                        }
+                        self.exact(conv, ex, ey, tx, ty);
+                        exact_now = true;
+                    }
+                    break;
+                }
+                let beta = rr_new / rr;
+                rr = rr_new;
+                for i in 0..n {
+                    self.dx_[i] = self.qx[i] + beta * self.dx_[i];
+                    self.dy_[i] = self.qy[i] + beta * self.dy_[i];
+                }
             }
         }
-        let _ = last;
         // active sets cycled: fall back to the (slower, monotone) accelerated projected gradient
         let its = self.solve_fista(conv, g, ex, ey, tx, ty)?;
-        Ok(self.cg_iterations + its)
+        self.exact(conv, ex, ey, tx, ty);
+        self.products += its;
+        Ok(self.products)
     }
 
     /// FISTA (Beck & Teboulle 2009) with gradient restart (O'Donoghue & Candès 2015): the

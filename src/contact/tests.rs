@@ -189,10 +189,14 @@ fn saturation_and_separation() {
 
 #[test]
 fn frictional_power_matches_global_power_balance() {
-    // Conservation law of steady rolling: −∫τ·s dA = −V ξ Fx. The first-order upwind rolling
-    // discretisation dissipates (V/Δx) τᵀ(C − C_shift)τ numerically, so the local sum is low;
-    // the discrepancy must shrink under refinement (measured numbers printed, see report).
-    let mut errs = Vec::new();
+    // Conservation law of steady rolling: −∫τ·s dA = −V ξ Fx. The step pairs the slip distance
+    // of each material path x_{i+1} → x_i with the trapezoidal mean of the tractions at its
+    // ends (τ_i now, τ_{i+1} one step ago), including the path on which the material leaves the
+    // contact; by the symmetry of the influence operator this balance is then exact up to the
+    // solver tolerance. Measured rel. error: −2.4e-6 (16×12), −3.9e-7 (32×24), +6e-8 (48×36).
+    // The former pairing with the end-of-step traction alone (backward Euler along the path)
+    // lost (V/Δx) τᵀ(C − C̄)τ, C̄ the one-cell-shifted operator: −41.5 %, −24.2 %, −16.5 %
+    // on the same grids (first order in Δx; ≈ Δx µp0 / (G a ξ)).
     for (nx, ny) in [(16usize, 12usize), (32, 24)] {
         let cfg =
             TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, nx, ny, 1.2)
@@ -200,15 +204,21 @@ fn frictional_power_matches_global_power_balance() {
         let mut eng = TransientRolling::new(cfg).unwrap();
         let xi = -1.0e-3;
         let st = eng
-            .solve_steady(&StepInputs::force_creepage(100e3, xi), 1e-8, 3000)
+            .solve_steady(&StepInputs::force_creepage(100e3, xi), 1e-9, 3000)
             .unwrap();
         let pw_global = -cfg.speed_m_per_s * xi * st.fx_n;
         let rel = st.frictional_power_w / pw_global - 1.0;
-        println!("{nx}x{ny}: Fx {:.1} N, slip fraction {:.3}, power {:.1} W vs global {:.1} W ({:+.2} %)", st.fx_n, st.slip_area_fraction(), st.frictional_power_w, pw_global, 100.0 * rel);
-        errs.push(rel);
+        println!(
+            "{nx}x{ny}: Fx {:.1} N, slip fraction {:.3}, power {:.3} W vs global {:.3} W ({:+.2e})",
+            st.fx_n,
+            st.slip_area_fraction(),
+            st.frictional_power_w,
+            pw_global,
+            rel
+        );
+        assert!(rel.abs() < 2e-5, "{rel}");
+        assert!(st.slip_area_fraction() > 0.1);
     }
-    assert!(errs[1].abs() < errs[0].abs());
-    assert!(errs[1].abs() < 0.35);
 }
 
 #[test]
