@@ -29,12 +29,36 @@ fn report_classes(track: &TrackStructure, sol: &EigenSolution) -> anyhow::Result
         let k = c.classify(track, &col)?;
         *counts.entry(k.family.name()).or_insert(0usize) += 1;
         let rail = k.rail_family.unwrap_or(k.family);
+        if k.family == TrackFamily::VerticalBending && (600.0..1800.0).contains(&f) {
+            // Pinned-pinned candidates: RMS of the section deflection w at the sleeper
+            // centres over its RMS along the rail (0 = nodes exactly at the sleepers).
+            let sm = c.section_motion(&track.dofmap.expand(&col)?)?;
+            let xs: Vec<f64> = sm.iter().map(|s| s.x_m).collect();
+            let w: Vec<f64> = sm.iter().map(|s| s.w).collect();
+            let at = |x: f64| {
+                let i = xs.partition_point(|&v| v < x).clamp(1, xs.len() - 1);
+                let t = (x - xs[i - 1]) / (xs[i] - xs[i - 1]);
+                w[i - 1] + t * (w[i] - w[i - 1])
+            };
+            let sl = &track.layout.sleepers;
+            let r_s = (sl.iter().map(|&x| at(x).powi(2)).sum::<f64>() / sl.len() as f64).sqrt();
+            let r_all = (w.iter().map(|v| v * v).sum::<f64>() / w.len() as f64).sqrt();
+            lines.push(format!(
+                "KEY VB f_hz {f:.1} wavelength_m {} node_ratio {:.2} pinned_pinned {}",
+                k.wavelength_m.map_or("-".into(), |l| format!("{l:.3}")),
+                r_s / r_all,
+                k.pinned_pinned
+            ));
+        }
         let tag = if k.pinned_pinned {
             Some("pinned_pinned")
         } else if k.family == TrackFamily::LongitudinalCompression {
             Some("LC")
         } else if rail == TrackFamily::LongitudinalCompression {
             Some("LC_rail_of_sleeper_mode")
+        } else if k.family == TrackFamily::VerticalBending && k.amplitudes[0] >= 0.5 {
+            // Coupled: vertical bending wins narrowly over a large section-mean u_x.
+            Some("VB_with_LC")
         } else if k.family == TrackFamily::LongitudinalShear {
             Some("LS")
         } else {

@@ -34,6 +34,11 @@
 //! web breathing, foot flapping), or the largest amplitude holds less than
 //! [`OTHER_DOMINANCE`] of the sum of squares (`other`: strongly coupled).
 //!
+//! Because the sleeper test comes first, a `sleeper` mode says nothing about the rail; its
+//! `rail_family` field holds the family the rail's own motion gets from the remaining rules
+//! (so a rail longitudinal-compression motion carried along by moving sleepers can be found;
+//! whether it matters is told by the sleeper kinetic share and the rail's energy share).
+//!
 //! The *wavelength* (m) of the dominant quantity along x is found from its zero crossings
 //! (linear interpolation between planes; the planes may be graded):
 //! `λ = 2 (x_last − x_first)/(n − 1)` for n ≥ 2 crossings; for fewer crossings it is not

@@ -28,7 +28,8 @@
 //!   M-inner product, each followed by a symmetric (Löwdin) orthonormalisation of the block).
 //!   The Rayleigh quotient `H = Vᵀ M Op V` is formed column block by column block; thick
 //!   restart keeps the best Ritz vectors (and converged ones at the far negative end of θ).
-//!   Modes of the previous slice are deflated (the new basis is kept M-orthogonal to them).
+//!   Modes of the previous slice are deflated (the new basis is kept M-orthogonal to them;
+//!   being eigenvectors of `Op`, they need one projection per block, not one per pass).
 //!   Every accepted Ritz vector gets one free inverse-iteration step `x' = x + Q(Es)/θ`, which
 //!   removes the amplification of the Lanczos residual by `K − σM` in the true residual.
 //! * **Adaptive boundaries.** A slice is not cut in advance: Lanczos runs at the lower shift
