@@ -210,6 +210,10 @@ fn main() {
                     lambda_to_hz(*sol.eigenvalues_rad2_s2.last().unwrap()),
                     vm_hwm_mb()
                 );
+                println!(
+                    "   orthogonalisation {:.1} s, Rayleigh-Ritz {:.1} s, restarts/extraction {:.1} s",
+                    tm.orthogonalize_s, tm.rayleigh_ritz_s, tm.restart_s
+                );
                 for s in &sol.slices {
                     println!(
                         "   slice [{:.1}, {:.1}) Hz: {} modes, {} restarts, {} vectors, {:.1} s",

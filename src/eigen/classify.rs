@@ -34,6 +34,11 @@
 //! web breathing, foot flapping), or the largest amplitude holds less than
 //! [`OTHER_DOMINANCE`] of the sum of squares (`other`: strongly coupled).
 //!
+//! Because the sleeper test comes first, a `sleeper` mode says nothing about the rail; its
+//! `rail_family` field holds the family the rail's own motion gets from the remaining rules
+//! (so a rail longitudinal-compression motion carried along by moving sleepers can be found;
+//! whether it matters is told by the sleeper kinetic share and the rail's energy share).
+//!
 //! The *wavelength* (m) of the dominant quantity along x is found from its zero crossings
 //! (linear interpolation between planes; the planes may be graded):
 //! `λ = 2 (x_last − x_first)/(n − 1)` for n ≥ 2 crossings; for fewer crossings it is not
@@ -226,6 +231,12 @@ pub struct TrackModeClass {
     pub section_fit: f64,
     /// Pinned-pinned-like vertical bending.
     pub pinned_pinned: bool,
+    /// Family of the rail's own motion: the same rules without the sleeper test. It equals
+    /// `family` unless the sleeper override applied; for a `sleeper` mode it tells what the
+    /// rail does meanwhile (e.g. a longitudinal-compression rail motion carried along by
+    /// moving sleepers). `None` only in caches written before this field existed.
+    #[serde(default)]
+    pub rail_family: Option<TrackFamily>,
 }
 
 /// Precomputed data to classify the modes of one [`TrackStructure`].
@@ -585,9 +596,7 @@ impl TrackClassifier {
                 .enumerate()
                 .fold((0, -1.0), |b, (i, &a)| if a > b.1 { (i, a) } else { b });
         let sumsq: f64 = amplitudes.iter().map(|a| a * a).sum();
-        let family = if sleeper_kinetic_share > SLEEPER_KINETIC_SHARE {
-            TrackFamily::Sleeper
-        } else if section_fit < LOCAL_FIT_MIN {
+        let rail_family = if section_fit < LOCAL_FIT_MIN {
             TrackFamily::Local
         } else if sumsq <= 0.0 || amax * amax < OTHER_DOMINANCE * sumsq {
             TrackFamily::Other
@@ -599,6 +608,11 @@ impl TrackClassifier {
                 TrackFamily::LateralBending,
                 TrackFamily::Torsion,
             ][imax]
+        };
+        let family = if sleeper_kinetic_share > SLEEPER_KINETIC_SHARE {
+            TrackFamily::Sleeper
+        } else {
+            rail_family
         };
         let wavelength_m = wavelength_from_crossings(x, &series[imax]);
         let pinned_pinned = family == TrackFamily::VerticalBending
@@ -628,6 +642,7 @@ impl TrackClassifier {
             sleeper_kinetic_share,
             section_fit,
             pinned_pinned,
+            rail_family: Some(rail_family),
         })
     }
 }

@@ -28,7 +28,8 @@
 //!   M-inner product, each followed by a symmetric (Löwdin) orthonormalisation of the block).
 //!   The Rayleigh quotient `H = Vᵀ M Op V` is formed column block by column block; thick
 //!   restart keeps the best Ritz vectors (and converged ones at the far negative end of θ).
-//!   Modes of the previous slice are deflated (the new basis is kept M-orthogonal to them).
+//!   Modes of the previous slice are deflated (the new basis is kept M-orthogonal to them;
+//!   being eigenvectors of `Op`, they need one projection per block, not one per pass).
 //!   Every accepted Ritz vector gets one free inverse-iteration step `x' = x + Q(Es)/θ`, which
 //!   removes the amplification of the Lanczos residual by `K − σM` in the true residual.
 //! * **Adaptive boundaries.** A slice is not cut in advance: Lanczos runs at the lower shift
@@ -91,10 +92,16 @@ pub struct EigenOptions {
     /// ≈ 1e-11·θ_max on the rail-like benchmark). Eigenvalues are far more accurate than
     /// tol (error ∝ tol²).
     pub tolerance: f64,
-    /// Block size b of the block Lanczos method (right-hand sides per solve). Default 16.
+    /// Block size b of the block Lanczos method (right-hand sides per solve). Default 8
+    /// (measured on the 126,800-DOF track to 2 kHz: 8 needs ~20 % fewer solved vectors than
+    /// 16 and less dense work; 32 needs ~40 % more).
     pub block_size: usize,
     /// Maximum thick restarts per slice before giving up. Default 30.
     pub max_restarts: usize,
+    /// Fraction of the unwanted part of the Krylov subspace kept (as Ritz vectors) at a thick
+    /// restart, in [0, 0.9]. Default 0.3. Larger keeps more approximate information, smaller
+    /// leaves room for a longer Krylov sequence per cycle.
+    pub restart_keep: f64,
     /// Target number of modes per slice; the slice boundaries are placed (with Sturm counts)
     /// so that each slice holds about this many. Default 100.
     pub modes_per_slice: usize,
@@ -124,8 +131,9 @@ impl EigenOptions {
             f_max_hz,
             f_min_hz: 0.0,
             tolerance: 1e-8,
-            block_size: 16,
+            block_size: 8,
             max_restarts: 30,
+            restart_keep: 0.3,
             modes_per_slice: 100,
             rigid_shift_hz: None,
             ordering: FillOrdering::Auto,
@@ -175,6 +183,16 @@ pub struct EigenTiming {
     pub solved_vectors: usize,
     /// Time for the true residuals and the orthonormality check (s).
     pub check_s: f64,
+    /// Time in the block M-orthonormalisation (projections, Gram matrices) (s).
+    pub orthogonalize_s: f64,
+    /// Time in the Rayleigh–Ritz steps (dense eigen of the projected matrix) (s).
+    pub rayleigh_ritz_s: f64,
+    /// Time forming the restart bases and the returned Ritz vectors (s).
+    pub restart_s: f64,
+    /// Blocks M-orthonormalised (one per block solve, plus start blocks).
+    pub orthogonalized_blocks: usize,
+    /// Classical Gram–Schmidt passes over all those blocks (≥ 2 per block).
+    pub orthogonalization_passes: usize,
     /// Stored entries of the LDLᵀ factor.
     pub factor_entries: usize,
 }

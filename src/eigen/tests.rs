@@ -426,3 +426,40 @@ fn grounded_lattice_from_zero_moves_first_shift_up_and_matches_dense() {
     assert!(sol.slices[0].shift_lo_rad2_s2 > 0.5 * sol.eigenvalues_rad2_s2[0]);
     assert!(worst < 1e-8);
 }
+
+/// `sym_spmm` (4 columns per sweep, parallel row chunks) against the dense product, for a
+/// column count that is not a multiple of 4 and for a non-contiguous (strided) input.
+#[test]
+fn sym_spmm_matches_dense_product() {
+    // 3 × 20 × 6 × 6 = 2160 DOFs: two row chunks of the parallel product.
+    let (k, _) = lattice3d(20, 6, 6, 1.0, 7);
+    let n = k.nrows();
+    let kd = k.to_dense();
+    let x = Mat::<f64>::from_fn(n, 7, |i, j| ((i * 31 + j * 17) % 97) as f64 / 97.0 - 0.5);
+    let mut y = Mat::<f64>::zeros(n, 7);
+    super::spmm::sym_spmm(k.as_ref(), x.as_ref(), y.as_mut());
+    let yd = &kd * &x;
+    let scale = yd.norm_max();
+    assert!((&y - &yd).norm_max() <= 1e-13 * scale, "contiguous input");
+    // Strided input: the rows of a transposed matrix.
+    let xt = x.transpose().to_owned();
+    let mut y2 = Mat::<f64>::zeros(n, 7);
+    super::spmm::sym_spmm(k.as_ref(), xt.as_ref().transpose(), y2.as_mut());
+    assert!((&y2 - &yd).norm_max() <= 1e-13 * scale, "strided input");
+}
+
+/// The row-split tall products (2 threads) against the sequential gemm.
+#[test]
+fn row_split_tall_products_match_sequential_gemm() {
+    let n = 40_000; // above 2 × MIN_ROWS_PER_THREAD, so the split is used
+    let v = Mat::<f64>::from_fn(n, 37, |i, j| (((i * 13 + j * 7) % 101) as f64).sin());
+    let z = Mat::<f64>::from_fn(n, 5, |i, j| (((i * 3 + j * 11) % 89) as f64).cos());
+    let par = faer::Par::rayon(2);
+    let c = super::spmm::tall_t_mul(v.as_ref(), z.as_ref(), par);
+    let cd = v.transpose() * &z;
+    assert!((&c - &cd).norm_max() <= 1e-12 * cd.norm_max());
+    let mut z2 = z.clone();
+    super::spmm::tall_mul_add(z2.as_mut(), v.as_ref(), c.as_ref(), -0.5, par);
+    let zd = &z - faer::Scale(0.5) * (&v * &c);
+    assert!((&z2 - &zd).norm_max() <= 1e-12 * zd.norm_max());
+}

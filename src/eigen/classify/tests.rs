@@ -365,3 +365,36 @@ fn wheel_fields_of_known_shape() {
         Err(ClassifyError::Length { .. })
     ));
 }
+
+/// A sleeper-dominated mode (sleepers carry most of the kinetic energy) during which the rail
+/// moves as a bar along x: `family` is `sleeper` (the override), and `rail_family` reports
+/// the rail's longitudinal compression, so such modes are not lost to the LC count.
+#[test]
+fn sleeper_mode_keeps_the_rail_family() {
+    let t = small_track();
+    let c = TrackClassifier::new(&t).unwrap();
+    let n_rail = t.rail.n_planes() * t.rail.n_section_nodes();
+    let l = t.rail.planes_x_m[t.rail.n_planes() - 1];
+    // Rail: u_x = 0.1 sin(2π x / l) (in phase over the section); sleepers: u_x = 1.
+    let mut u = rail_field(&t, |x, _, _| {
+        [0.1 * (2.0 * std::f64::consts::PI * x / l).sin(), 0.0, 0.0]
+    });
+    for s in n_rail..t.mesh.nodes.len() {
+        u[3 * s] = 1.0;
+    }
+    let r = c.classify_shape(&u, Default::default()).unwrap();
+    assert!(r.sleeper_kinetic_share > SLEEPER_KINETIC_SHARE, "{r:?}");
+    assert_eq!(r.family, TrackFamily::Sleeper);
+    assert_eq!(
+        r.rail_family,
+        Some(TrackFamily::LongitudinalCompression),
+        "{r:?}"
+    );
+    // Without the sleepers moving the same rail field is LC itself.
+    for s in n_rail..t.mesh.nodes.len() {
+        u[3 * s] = 0.0;
+    }
+    let r = c.classify_shape(&u, Default::default()).unwrap();
+    assert_eq!(r.family, TrackFamily::LongitudinalCompression);
+    assert_eq!(r.rail_family, Some(r.family));
+}
