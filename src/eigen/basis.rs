@@ -121,7 +121,7 @@ fn basis<C: Serialize + DeserializeOwned>(
     name: &'static str,
     fmax: f64,
     mats: impl FnOnce() -> Result<FeMatrices, BasisError>,
-    classify: impl Fn(&[f64], f64) -> Result<C, BasisError>,
+    classify: impl Fn(&[&[f64]], &[f64]) -> Result<Vec<C>, BasisError>,
 ) -> Result<ModalBasis<C>, BasisError> {
     let t = Instant::now();
     match cache.load(key) {
@@ -163,10 +163,17 @@ fn basis<C: Serialize + DeserializeOwned>(
     pb.finish_and_clear();
     let pb = progress_bar(&format!("classifying {name} modes"));
     pb.set_length(sol.frequencies_hz.len() as u64);
-    let mut classes = Vec::with_capacity(sol.frequencies_hz.len());
-    for (j, &f) in sol.frequencies_hz.iter().enumerate() {
-        classes.push(classify(&column(&sol.modes, j), f)?);
-        pb.inc(1);
+    // In chunks: one pass over the elements per chunk (element stiffnesses are rebuilt per
+    // pass), bounded memory for the expanded mode shapes.
+    const CHUNK: usize = 64;
+    let nm = sol.frequencies_hz.len();
+    let mut classes = Vec::with_capacity(nm);
+    for c0 in (0..nm).step_by(CHUNK) {
+        let c1 = (c0 + CHUNK).min(nm);
+        let cols: Vec<Vec<f64>> = (c0..c1).map(|j| column(&sol.modes, j)).collect();
+        let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+        classes.extend(classify(&refs, &sol.frequencies_hz[c0..c1])?);
+        pb.inc((c1 - c0) as u64);
     }
     pb.finish_and_clear();
     let value = serde_json::to_value(&classes).map_err(|e| BasisError::Key(e.to_string()))?;
@@ -212,7 +219,7 @@ pub fn track_basis(
         "track",
         fmax_hz,
         || Ok(track.assemble()?.0),
-        |u, _| Ok(classifier.classify(track, u)?),
+        |u, _| Ok(classifier.classify_many(track, u)?),
     )
 }
 
@@ -229,6 +236,11 @@ pub fn wheel_basis(
         "wheel",
         fmax_hz,
         || Ok(wheel.assemble()?.0),
-        |u, f| Ok(classify_wheel_mode(wheel, u, f)?),
+        |u, f| {
+            u.iter()
+                .zip(f)
+                .map(|(u, &f)| Ok(classify_wheel_mode(wheel, u, f)?))
+                .collect()
+        },
     )
 }

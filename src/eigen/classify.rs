@@ -63,7 +63,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::fe::assembly::{spring_energy, strain_energy_per_part};
+use crate::fe::assembly::{spring_energy, strain_energy_per_part, strain_energy_per_part_many};
 use crate::fe::hex8;
 use crate::mesh::Part;
 use crate::structure::track::SpringKind;
@@ -487,35 +487,53 @@ impl TrackClassifier {
         track: &TrackStructure,
         u_free: &[f64],
     ) -> Result<TrackModeClass, ClassifyError> {
+        Ok(self.classify_many(track, &[u_free])?.remove(0))
+    }
+
+    /// [`Self::classify`] of several modes at once (one pass over the elements for the
+    /// strain energies of all of them).
+    pub fn classify_many(
+        &self,
+        track: &TrackStructure,
+        u_free: &[&[f64]],
+    ) -> Result<Vec<TrackModeClass>, ClassifyError> {
         let n_free = track.dofmap.n_free();
-        if u_free.len() != n_free {
-            return Err(ClassifyError::Length {
-                expected: n_free,
-                got: u_free.len(),
-            });
-        }
-        let u = track.dofmap.expand(u_free)?;
-        let e = strain_energy_per_part(&track.mesh, &track.materials, &u)?;
-        let (mut ef, mut eb) = (0.0, 0.0);
-        for (s, k) in track.springs.iter().zip(&track.spring_kinds) {
-            match k {
-                SpringKind::Fastening => ef += s.energy(&u),
-                SpringKind::Ballast => eb += s.energy(&u),
+        let mut full = Vec::with_capacity(u_free.len());
+        for u in u_free {
+            if u.len() != n_free {
+                return Err(ClassifyError::Length {
+                    expected: n_free,
+                    got: u.len(),
+                });
             }
+            full.push(track.dofmap.expand(u)?);
         }
-        let parts = [e.get(Part::Rail), e.get(Part::Sleeper), ef, eb];
-        let tot: f64 = parts.iter().sum();
-        let energy = if tot > 0.0 {
-            TrackEnergyShares {
-                rail: parts[0] / tot,
-                sleepers: parts[1] / tot,
-                fastening: parts[2] / tot,
-                ballast: parts[3] / tot,
+        let refs: Vec<&[f64]> = full.iter().map(|u| u.as_slice()).collect();
+        let energies = strain_energy_per_part_many(&track.mesh, &track.materials, &refs)?;
+        let mut out = Vec::with_capacity(full.len());
+        for (u, e) in full.iter().zip(&energies) {
+            let (mut ef, mut eb) = (0.0, 0.0);
+            for (s, k) in track.springs.iter().zip(&track.spring_kinds) {
+                match k {
+                    SpringKind::Fastening => ef += s.energy(u),
+                    SpringKind::Ballast => eb += s.energy(u),
+                }
             }
-        } else {
-            TrackEnergyShares::default()
-        };
-        self.classify_shape(&u, energy)
+            let parts = [e.get(Part::Rail), e.get(Part::Sleeper), ef, eb];
+            let tot: f64 = parts.iter().sum();
+            let energy = if tot > 0.0 {
+                TrackEnergyShares {
+                    rail: parts[0] / tot,
+                    sleepers: parts[1] / tot,
+                    fastening: parts[2] / tot,
+                    ballast: parts[3] / tot,
+                }
+            } else {
+                TrackEnergyShares::default()
+            };
+            out.push(self.classify_shape(u, energy)?);
+        }
+        Ok(out)
     }
 
     /// Classifies by shape only, from a full displacement vector, with given energy shares

@@ -568,27 +568,54 @@ pub fn strain_energy_per_part(
     materials: &[IsotropicElastic],
     u_full: &[f64],
 ) -> Result<PerPart, FeError> {
+    Ok(strain_energy_per_part_many(mesh, materials, &[u_full])?[0])
+}
+
+/// [`strain_energy_per_part`] of several displacement vectors at once: each element
+/// stiffness is built once and applied to every vector (classifying hundreds of modes costs
+/// one pass over the elements instead of one per mode).
+pub fn strain_energy_per_part_many(
+    mesh: &Mesh,
+    materials: &[IsotropicElastic],
+    u_full: &[&[f64]],
+) -> Result<Vec<PerPart>, FeError> {
     validate(mesh, materials, &[])?;
-    check_len("displacement vector", 3 * mesh.nodes.len(), u_full.len())?;
+    for u in u_full {
+        check_len("displacement vector", 3 * mesh.nodes.len(), u.len())?;
+    }
+    let nv = u_full.len();
     mesh.elements
         .par_iter()
         .enumerate()
-        .map(|(e, el)| -> Result<PerPart, FeError> {
-            let k = hex8::stiffness(&coords_of(mesh, &el.nodes), &materials[el.material])
-                .map_err(|x| tag_element(e, x))?;
-            let mut ue = [0.0; 24];
-            for a in 0..8 {
-                for d in 0..3 {
-                    ue[3 * a + d] = u_full[3 * el.nodes[a] + d];
+        .try_fold(
+            || vec![PerPart::default(); nv],
+            |mut acc, (e, el)| -> Result<Vec<PerPart>, FeError> {
+                let k = hex8::stiffness(&coords_of(mesh, &el.nodes), &materials[el.material])
+                    .map_err(|x| tag_element(e, x))?;
+                let part = part_index(el.part);
+                let mut ue = [0.0; 24];
+                for (a, u) in acc.iter_mut().zip(u_full) {
+                    for n in 0..8 {
+                        for d in 0..3 {
+                            ue[3 * n + d] = u[3 * el.nodes[n] + d];
+                        }
+                    }
+                    a.0[part] += hex8::strain_energy_of(&k, &ue);
                 }
-            }
-            let mut p = PerPart::default();
-            p.0[part_index(el.part)] = hex8::strain_energy_of(&k, &ue);
-            Ok(p)
-        })
-        .try_reduce(PerPart::default, |a, b| {
-            Ok(PerPart([a.0[0] + b.0[0], a.0[1] + b.0[1], a.0[2] + b.0[2]]))
-        })
+                Ok(acc)
+            },
+        )
+        .try_reduce(
+            || vec![PerPart::default(); nv],
+            |mut a, b| {
+                for (x, y) in a.iter_mut().zip(&b) {
+                    for p in 0..3 {
+                        x.0[p] += y.0[p];
+                    }
+                }
+                Ok(a)
+            },
+        )
 }
 
 /// Total spring strain energy `Σ ½ k r²` (J) for a full displacement vector (m).

@@ -26,7 +26,8 @@ pub mod spring;
 
 pub use assembly::{
     apply_full_stiffness, assemble, mass_per_part, reactions, spring_energy,
-    strain_energy_per_part, AssemblyOptions, DofMap, FeMatrices, MassKind, PerPart,
+    strain_energy_per_part, strain_energy_per_part_many, AssemblyOptions, DofMap, FeMatrices,
+    MassKind, PerPart,
 };
 pub use solve::static_solve;
 pub use spring::{Direction, PointMass, Spring};

@@ -452,6 +452,20 @@ fn strain_energy_per_part_sums_to_quadratic_form() {
     let sum = pp.total() + es;
     assert!((sum - quad).abs() < 1e-12 * quad, "{sum} vs {quad}");
     assert!(pp.get(Part::Rail) > 0.0 && pp.get(Part::Sleeper) > 0.0);
+    // The batched evaluation (one pass over the elements for several vectors) gives each
+    // vector's quadratic form: u, 2u (4x the energy) and a second random vector.
+    let u2: Vec<f64> = u.iter().map(|x| 2.0 * x).collect();
+    let w: Vec<f64> = (0..dm.n_dofs()).map(|_| 1e-4 * rng(&mut s)).collect();
+    let wv = Mat::<f64>::from_fn(w.len(), 1, |i, _| w[i]);
+    let quad_w = 0.5 * (wv.transpose() * &k * &wv)[(0, 0)];
+    let many = strain_energy_per_part_many(&mesh, &mats, &[&u, &u2, &w]).unwrap();
+    assert!((many[0].total() - pp.total()).abs() < 1e-12 * pp.total());
+    assert!((many[1].total() - 4.0 * pp.total()).abs() < 1e-12 * pp.total());
+    let sum_w = many[2].total() + spring_energy(&springs, &w);
+    assert!(
+        (sum_w - quad_w).abs() < 1e-12 * quad_w,
+        "{sum_w} vs {quad_w}"
+    );
     // apply_full_stiffness equals the assembled K (all DOFs free here).
     let ku = apply_full_stiffness(&mesh, &mats, &springs, &u).unwrap();
     let kd = &k * &uv;
