@@ -36,11 +36,21 @@ pub fn runner_for(model: &Model, cache: Option<&Path>) -> anyhow::Result<Box<dyn
 /// procedure at the model's speed with the default amplitudes 10, 40, 80, 160 µm; columns
 /// `limiting_amplitude_um` (0 when no amplitude grows consistently) and
 /// `consistent_amplitudes` (how many of the four grow consistently).
+/// The runner's loaded modal bases are reused when it is a [`PreparedModel`]; otherwise the
+/// model is prepared from the cache in `cache` (default cache directory when `None`).
 pub fn study_growth(
     model: &Model,
-    _runner: &dyn PassageRunner,
+    runner: &dyn PassageRunner,
+    cache: Option<&Path>,
 ) -> anyhow::Result<BTreeMap<String, f64>> {
-    let p = prepared(model, None)?;
+    let owned;
+    let p = match runner.prepared() {
+        Some(p) => p,
+        None => {
+            owned = prepared(model, cache)?;
+            &owned
+        }
+    };
     let modes = ModeLines {
         longitudinal_hz: p.longitudinal_compression_hz(),
         vertical_hz: p.vertical_bending_hz(),

@@ -50,7 +50,7 @@ impl StudyCmd {
             engine::runner_for(m, cache).map_err(Into::into)
         };
         let growth = |m: &Model, r: &dyn PassageRunner| {
-            engine::study_growth(m, r).map_err(Into::<BoxError>::into)
+            engine::study_growth(m, r, cache).map_err(Into::<BoxError>::into)
         };
         let o = run_study(&study, &factory, Some(&growth), &out, true)?;
         eprintln!(

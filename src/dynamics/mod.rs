@@ -170,4 +170,10 @@ pub trait PassageRunner: Sync {
         speed_kmh: f64,
         profile: Option<&RailProfile>,
     ) -> Result<PassageSummary, DynamicsError>;
+
+    /// The prepared reduced-order model behind this runner, if it is one (lets the growth
+    /// procedure reuse the loaded modal bases instead of loading them again).
+    fn prepared(&self) -> Option<&passage::PreparedModel> {
+        None
+    }
 }

@@ -854,6 +854,10 @@ impl PreparedModel {
 }
 
 impl super::PassageRunner for PreparedModel {
+    fn prepared(&self) -> Option<&PreparedModel> {
+        Some(self)
+    }
+
     fn run(
         &self,
         speed_kmh: f64,
