@@ -6,7 +6,9 @@
 //!   name (longitudinal_compression, longitudinal_shear, vertical_bending, lateral_bending,
 //!   torsion, sleeper, local, other), `wavelength_m` is empty when undefined (fewer than two
 //!   zero crossings), `rail_x_*` and `amp_*` are relative to the RMS rail displacement
-//!   (dimensionless), `energy_*` strain-energy shares, `pinned_pinned` 0/1;
+//!   (dimensionless), `energy_*` strain-energy shares, `pinned_pinned` 0/1, `rail_family`
+//!   the family of the rail's own motion (differs from `family` for `sleeper` modes, whose
+//!   rail may e.g. carry a longitudinal-compression motion along with the sleepers);
 //! * `wheel_modes.csv` — one row per wheel mode (family rigid, axial, radial, other);
 //! * with `--vtu`: `track_mode_NNNN.vtu` and `wheel_mode_NNNN.vtu` for the first
 //!   `--vtu-modes` (default 50) modes of each substructure, mesh + point field `displacement`
@@ -31,7 +33,7 @@ use corrugation::structure::{TrackStructure, WheelStructure};
 use super::ModelArgs;
 
 /// Columns of `modes.csv`.
-pub const TRACK_HEADER: [&str; 20] = [
+pub const TRACK_HEADER: [&str; 21] = [
     "index",
     "frequency_hz",
     "family",
@@ -52,6 +54,7 @@ pub const TRACK_HEADER: [&str; 20] = [
     "sleeper_kinetic_share",
     "section_fit",
     "pinned_pinned",
+    "rail_family",
 ];
 
 /// Columns of `wheel_modes.csv`.
@@ -151,6 +154,7 @@ impl ModesCmd {
                     num(c.sleeper_kinetic_share),
                     num(c.section_fit),
                     (c.pinned_pinned as u8).to_string(),
+                    c.rail_family.unwrap_or(c.family).name().to_string(),
                 ]);
                 r
             }),
