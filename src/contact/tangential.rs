@@ -23,6 +23,20 @@
 use super::influence::Convolver;
 use super::ContactError;
 
+/// How the slip directions are found (see [`TangentialSolver::solve`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TangentialAlgorithm {
+    /// Slip elements turn (small turns) inside the inner CG along the tangent of their circle,
+    /// with the curvature term `|S_i|/g_i` of the circle in the CG operator: a Newton step on
+    /// the manifold of the slip directions (quadratic convergence of the directions).
+    #[default]
+    Newton,
+    /// The former method: slip directions only by Kalker's element test (a Jacobi-type
+    /// fixed-point iteration, one exact product per sweep; slow, and it can stall and fall
+    /// back to FISTA). Kept to compare.
+    ElementTest,
+}
+
 /// Scratch for the tangential solver (allocated once).
 pub struct TangentialSolver {
     dx_: Vec<f64>,
@@ -32,10 +46,11 @@ pub struct TangentialSolver {
     slip: Vec<bool>,
     px: Vec<f64>,
     py: Vec<f64>,
-    /// `false` = experimental variant: slip elements rotate along their circle inside the CG
-    /// (small turns) instead of by the element test; it oscillates on large slip areas, so
-    /// the default is `true` (directions by the element test only).
-    pub norot: bool,
+    rx: Vec<f64>,
+    ry: Vec<f64>,
+    kap: Vec<f64>,
+    /// The algorithm for the slip directions.
+    pub algorithm: TangentialAlgorithm,
     /// Slip distance S_x of the last solve (m).
     pub sx: Vec<f64>,
     /// Slip distance S_y of the last solve (m).
@@ -74,7 +89,10 @@ impl TangentialSolver {
             slip: vec![false; n],
             px: vec![0.0; n],
             py: vec![0.0; n],
-            norot: true,
+            rx: vec![0.0; n],
+            ry: vec![0.0; n],
+            kap: vec![0.0; n],
+            algorithm: TangentialAlgorithm::Newton,
             sx: vec![0.0; n],
             sy: vec![0.0; n],
             ux_ext: vec![0.0; ext],
@@ -116,16 +134,28 @@ impl TangentialSolver {
         self.products += 1;
     }
 
+    /// Slip tractions back onto their circles `|τ_i| = g_i` (after turns along the tangent).
+    fn to_circles(&self, g: &[f64], tx: &mut [f64], ty: &mut [f64]) {
+        for i in 0..g.len() {
+            if self.slip[i] && g[i] > 0.0 {
+                let s = g[i] / (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
+                tx[i] *= s;
+                ty[i] *= s;
+            }
+        }
+    }
+
     /// Projected residual `r = −P S`. With `into_d` it is written to the search direction
     /// `(dx_, dy_)`, otherwise to `(qx, qy)`. Returns `(r·r, max |r|)`.
     fn residual(&mut self, g: &[f64], into_d: bool) -> (f64, f64) {
+        let norot = self.algorithm == TangentialAlgorithm::ElementTest;
         let mut rr = 0.0;
         let mut rmax = 0.0_f64;
         for i in 0..g.len() {
             let (rx, ry) = if g[i] <= 0.0 {
                 (0.0, 0.0)
             } else if self.slip[i] {
-                if self.norot {
+                if norot {
                     (0.0, 0.0)
                 } else {
                     let c = -(self.sx[i] * self.px[i] + self.sy[i] * self.py[i]);
@@ -161,8 +191,15 @@ impl TangentialSolver {
     ///    residual is carried by the recurrence: one FFT product per iteration. An adhesion
     ///    element whose traction leaves the disc is projected onto it and joins the slip set;
     ///    the CG then stops and the outer loop restarts from an exact residual.
-    ///    (With `norot = false`, slip elements also carry the tangential component of their
-    ///    circle in the CG; experimental, it oscillates on large slip areas.)
+    ///    With [`TangentialAlgorithm::Newton`] (default) the slip elements also carry one
+    ///    degree of freedom each, the turn along the tangent `t_i` of their circle: the CG
+    ///    minimises the second-order model of the energy on the set {adhesion τ, slip
+    ///    directions}, whose Hessian is `P C P + diag(|S_i|/g_i)` on the slip elements (`P`
+    ///    the projection on the tangents; the diagonal is the curvature of the circle times
+    ///    the radial slip, without which the CG overshoots along the tangent lines). After the
+    ///    (inexact, relative residual 0.05) Newton step the slip tractions return to their
+    ///    circles and an exact product restarts the outer loop; turns larger than `0.05 g_i`
+    ///    are made by the element test.
     ///
     /// The outer loop ends when the adhesion residual is below tolerance, no element changes
     /// state and the slip directions are converged. If it has not ended after
@@ -193,6 +230,7 @@ impl TangentialSolver {
             self.slip[i] =
                 g[i] > 0.0 && tx[i] * tx[i] + ty[i] * ty[i] >= g[i] * g[i] * (1.0 - 1e-12);
         }
+        let norot = self.algorithm == TangentialAlgorithm::ElementTest;
         let (cdx, cdy) = (conv.diag_xx, conv.diag_yy);
         let s_tol = self.tol * gmax * conv.diag_t;
         self.exact(conv, ex, ey, tx, ty);
@@ -215,7 +253,7 @@ impl TangentialSolver {
                     let (nx, ny) = (g[i] * trx / tm, g[i] * try_ / tm);
                     let d = (nx - tx[i]).abs().max((ny - ty[i]).abs());
                     // large turns by the element test, small ones by the CG rotation
-                    let thr = if self.norot {
+                    let thr = if norot {
                         0.1 * self.tol * gmax
                     } else {
                         0.05 * g[i]
@@ -237,7 +275,7 @@ impl TangentialSolver {
             // 2. projected residual r = −P S (adhesion: both components; slip: the component
             //    along the circle's tangent, which rotates τ towards −S)
             let (mut rr, rmax) = self.residual(g, true);
-            if rmax <= s_tol && !changed && (dmax <= self.tol * gmax || !self.norot) {
+            if rmax <= s_tol && !changed && (dmax <= self.tol * gmax || !norot) {
                 if exact_now {
                     return Ok(self.products);
                 }
@@ -246,7 +284,25 @@ impl TangentialSolver {
                 exact_now = true;
                 continue;
             }
-            // 3. inner CG on adhesion (2 dof) + slip (1 dof) elements
+            // 3. inner CG on adhesion (2 dof) + slip (1 dof) elements: the model residual
+            //    (rx, ry) and the curvature κ_i = |S_i|/g_i of the slip elements
+            self.rx.copy_from_slice(&self.dx_);
+            self.ry.copy_from_slice(&self.dy_);
+            if !norot {
+                for i in 0..n {
+                    self.kap[i] = if self.slip[i] && g[i] > 0.0 {
+                        let m = (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
+                        (-(self.sx[i] * tx[i] + self.sy[i] * ty[i]) / m).max(0.0) / g[i]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+            let stop = if norot {
+                0.5 * s_tol
+            } else {
+                (0.05 * rmax).max(0.5 * s_tol)
+            };
             while self.products < self.cg_iterations {
                 conv.tangential(&self.dx_, &self.dy_, &mut self.qx, &mut self.qy, 0);
                 let (cux, cuy) = self.uniform(&self.dx_, &self.dy_);
@@ -258,9 +314,12 @@ impl TangentialSolver {
                 }
                 self.products += 1;
                 exact_now = false;
+                // model product w = C d on adhesion, P C d + κ d on slip (d ∥ tangent there)
                 let mut den = 0.0;
                 for i in 0..n {
-                    den += self.qx[i] * self.dx_[i] + self.qy[i] * self.dy_[i];
+                    den += self.qx[i] * self.dx_[i]
+                        + self.qy[i] * self.dy_[i]
+                        + self.kap[i] * (self.dx_[i] * self.dx_[i] + self.dy_[i] * self.dy_[i]);
                 }
                 if den <= 0.0 || rr == 0.0 {
                     break;
@@ -286,24 +345,41 @@ impl TangentialSolver {
                     ty[i] = ay;
                 }
                 if violated {
+                    if !norot {
+                        self.to_circles(g, tx, ty);
+                    }
                     self.exact(conv, ex, ey, tx, ty);
                     exact_now = true;
                     break;
                 }
-                let (rr_new, rmax) = self.residual(g, false);
-                if rmax <= 0.5 * s_tol {
-                    if !self.norot {
-                        // radial correction of the rotated slip tractions, exact residual
-                        for i in 0..n {
-                            if self.slip[i] && g[i] > 0.0 {
-                                let s = g[i] / (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
-                                tx[i] *= s;
-                                ty[i] *= s;
-                            }
-                        }
-                        self.exact(conv, ex, ey, tx, ty);
-                        exact_now = true;
+                let (rr_new, rmax) = if norot {
+                    self.residual(g, false)
+                } else {
+                    let (mut rr, mut rmax) = (0.0, 0.0_f64);
+                    for i in 0..n {
+                        let (wx, wy) = if g[i] <= 0.0 {
+                            (0.0, 0.0)
+                        } else if self.slip[i] {
+                            let c = self.qx[i] * self.px[i] + self.qy[i] * self.py[i];
+                            (
+                                c * self.px[i] + self.kap[i] * self.dx_[i],
+                                c * self.py[i] + self.kap[i] * self.dy_[i],
+                            )
+                        } else {
+                            (self.qx[i], self.qy[i])
+                        };
+                        let (rx, ry) = (self.rx[i] - alpha * wx, self.ry[i] - alpha * wy);
+                        self.rx[i] = rx;
+                        self.ry[i] = ry;
+                        // qx, qy: the new residual (the product is no longer needed)
+                        self.qx[i] = rx;
+                        self.qy[i] = ry;
+                        rr += rx * rx + ry * ry;
+                        rmax = rmax.max(rx.abs()).max(ry.abs());
                     }
+                    (rr, rmax)
+                };
+                if rmax <= stop {
                     break;
                 }
                 let beta = rr_new / rr;
@@ -312,6 +388,12 @@ impl TangentialSolver {
                     self.dx_[i] = self.qx[i] + beta * self.dx_[i];
                     self.dy_[i] = self.qy[i] + beta * self.dy_[i];
                 }
+            }
+            if !norot && !exact_now {
+                // radial correction of the turned slip tractions, exact residual
+                self.to_circles(g, tx, ty);
+                self.exact(conv, ex, ey, tx, ty);
+                exact_now = true;
             }
         }
         // active sets cycled: fall back to the (slower, monotone) accelerated projected gradient

@@ -54,7 +54,7 @@
 use super::hertz::{HertzContact, HertzInput};
 use super::influence::Convolver;
 use super::normal::{NormalMode, NormalSolver};
-use super::tangential::TangentialSolver;
+use super::tangential::{TangentialAlgorithm, TangentialSolver};
 use super::{check_poisson, check_positive, combined_modulus, shear_modulus, ContactError};
 
 /// The computational grid: `nx × ny` elements covering `[−Lx, Lx] × [−Ly, Ly]` (m).
@@ -402,6 +402,12 @@ impl TransientRolling {
         self.tang.uniform_x_m_per_pa = c_m_per_n[0] * self.da;
         self.tang.uniform_y_m_per_pa = c_m_per_n[1] * self.da;
         Ok(())
+    }
+
+    /// Choose the tangential algorithm (default [`TangentialAlgorithm::Newton`]; the former
+    /// [`TangentialAlgorithm::ElementTest`] is kept to compare).
+    pub fn set_tangential_algorithm(&mut self, algorithm: TangentialAlgorithm) {
+        self.tang.algorithm = algorithm;
     }
 
     /// The series compliance `(c_x, c_y, c_z)` (m/N) set by [`Self::set_series_compliance`].
