@@ -161,7 +161,7 @@ fn main() -> anyhow::Result<()> {
     let t0 = Instant::now();
     let mut fmin = f64::INFINITY;
     let mut fmax = 0.0_f64;
-    let (mut np, mut tp) = (0usize, 0usize);
+    let (mut np, mut tp, mut ni) = (0usize, 0usize, 0usize);
     for k in 0..nsteps {
         let xc = k as f64 * dx;
         for (r, x) in rail.iter_mut().zip(&xs) {
@@ -175,6 +175,7 @@ fn main() -> anyhow::Result<()> {
             rail_height_m: Some(&rail),
         })?;
         np += res.influence_products - res.tangential_iterations;
+        ni += res.normal_iterations;
         tp += res.tangential_iterations;
         fmin = fmin.min(res.normal_force_n);
         fmax = fmax.max(res.normal_force_n);
@@ -183,11 +184,12 @@ fn main() -> anyhow::Result<()> {
     }
     let el = t0.elapsed().as_secs_f64();
     println!(
-        "passage sequence, 44x32 grid (dx {:.3} mm): {} steps in {:.2} s ({:.3} ms/step, {:.1} normal + {:.1} tangential FFT pairs/step); F_N {:.1}..{:.1} kN; total frictional work {:.3} J",
+        "passage sequence, 44x32 grid (dx {:.3} mm): {} steps in {:.2} s ({:.3} ms/step, {:.1} normal CG its, {:.1} normal + {:.1} tangential FFT pairs/step); F_N {:.1}..{:.1} kN; total frictional work {:.3} J",
         dx * 1e3,
         nsteps,
         el,
         el * 1e3 / nsteps as f64,
+        ni as f64 / nsteps as f64,
         np as f64 / nsteps as f64,
         tp as f64 / nsteps as f64,
         fmin / 1e3,

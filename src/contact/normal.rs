@@ -172,7 +172,8 @@ impl NormalSolver {
         }
         // initial iterate
         let mut total: f64 = p.iter().sum::<f64>() * da;
-        if total <= 0.0 || !total.is_finite() {
+        let cold = total <= 0.0 || !total.is_finite();
+        if cold {
             // start from where the undeformed bodies would overlap (or the lowest point)
             let hmin = h.iter().cloned().fold(f64::INFINITY, f64::min);
             let hmax = h.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
@@ -188,8 +189,9 @@ impl NormalSolver {
         if let NormalMode::Load(w) = mode {
             let s = w / total;
             p.iter_mut().for_each(|v| *v *= s);
-        } else {
-            // scale to a plausible magnitude: mean overlap / self-influence
+        } else if cold {
+            // scale to a plausible magnitude: mean overlap / self-influence (a warm start,
+            // the previous pressure, is kept as it is)
             let d = match mode {
                 NormalMode::Approach(d) => d,
                 _ => 0.0,
