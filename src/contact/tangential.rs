@@ -197,7 +197,7 @@ impl TangentialSolver {
     ///    directions}, whose Hessian is `P C P + diag(|S_i|/g_i)` on the slip elements (`P`
     ///    the projection on the tangents; the diagonal is the curvature of the circle times
     ///    the radial slip, without which the CG overshoots along the tangent lines). After the
-    ///    (inexact, relative residual 0.05) Newton step the slip tractions return to their
+    ///    (inexact, relative residual 0.01) Newton step the slip tractions return to their
     ///    circles and an exact product restarts the outer loop; turns larger than `0.05 g_i`
     ///    are made by the element test.
     ///
@@ -301,7 +301,7 @@ impl TangentialSolver {
             let stop = if norot {
                 0.5 * s_tol
             } else {
-                (0.05 * rmax).max(0.5 * s_tol)
+                (0.01 * rmax).max(0.5 * s_tol)
             };
             while self.products < self.cg_iterations {
                 conv.tangential(&self.dx_, &self.dy_, &mut self.qx, &mut self.qy, 0);

@@ -619,3 +619,71 @@ fn series_compliance_rejects_invalid_values() {
     eng.set_series_compliance([1e-9, 2e-9, 3e-9]).unwrap();
     assert_eq!(eng.series_compliance(), [1e-9, 2e-9, 3e-9]);
 }
+
+#[test]
+fn newton_tangential_solver_matches_element_test_solver() {
+    // Independent solver: the former active-set method (slip directions by Kalker's element
+    // test only) on the same transient sequence, with varying load, corrugated rail, lateral
+    // creepage and spin (slip directions far from the rolling direction).
+    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 20, 16, 1.3)
+        .unwrap();
+    let dx = cfg.grid.dx();
+    let mut runs = Vec::new();
+    // the third run, Newton at a 1000× tighter tolerance, is the reference
+    for (alg, tol) in [
+        (TangentialAlgorithm::Newton, cfg.tangential_tol),
+        (TangentialAlgorithm::ElementTest, cfg.tangential_tol),
+        (TangentialAlgorithm::Newton, 1e-3 * cfg.tangential_tol),
+    ] {
+        let mut eng = TransientRolling::new(TransientConfig {
+            tangential_tol: tol,
+            ..cfg
+        })
+        .unwrap();
+        eng.set_tangential_algorithm(alg);
+        let xs = eng.x_m().to_vec();
+        let mut rail = vec![0.0; xs.len()];
+        let mut out = Vec::new();
+        let mut prods = 0usize;
+        for k in 0..60 {
+            let xc = k as f64 * dx;
+            for (r, x) in rail.iter_mut().zip(&xs) {
+                *r = 5e-6 * (2.0 * PI * (xc + x) / 0.03).sin();
+            }
+            let r = eng
+                .step(&StepInputs {
+                    normal: NormalInput::Force(100e3 * (1.0 + 0.1 * (0.4 * k as f64).sin())),
+                    longitudinal: Longitudinal::Creepage(-1.5e-3),
+                    lateral_creepage: 0.8e-3,
+                    spin_per_m: 0.3,
+                    rail_height_m: Some(&rail),
+                })
+                .unwrap();
+            prods += r.tangential_iterations;
+            out.push((r.fx_n, r.fy_n, r.frictional_power_w));
+        }
+        runs.push((out, prods));
+    }
+    // max |ΔFx|, |ΔFy| / µN and relative power difference between runs a and b
+    let diff = |a: usize, b: usize| -> (f64, f64) {
+        let (mut f, mut p) = (0.0_f64, 0.0_f64);
+        for (x, y) in runs[a].0.iter().zip(&runs[b].0) {
+            f = f.max((x.0 - y.0).abs().max((x.1 - y.1).abs()) / (0.4 * 100e3));
+            p = p.max((x.2 - y.2).abs() / y.2.abs().max(1.0));
+        }
+        (f, p)
+    };
+    let (newton, element, between) = (diff(0, 2), diff(1, 2), diff(0, 1));
+    println!(
+        "tangential FFT pairs: Newton {}, element test {} (reference {}); vs reference \
+         (force/µN, power rel.): Newton {newton:?}, element test {element:?}; \
+         between {between:?}",
+        runs[0].1, runs[1].1, runs[2].1
+    );
+    // measured vs the reference: Newton (3.0e-8 µN, power 2.9e-6), element test (1.1e-5 µN,
+    // power 1.0e-4): at equal tolerance the Newton directions are the more accurate ones
+    assert!(newton.0 < 1e-6 && newton.1 < 1e-5, "{newton:?}");
+    assert!(newton.0 <= element.0, "{newton:?} {element:?}");
+    assert!(between.0 < 1e-4 && between.1 < 1e-3, "{between:?}");
+    assert!(runs[0].1 * 5 < runs[1].1);
+}

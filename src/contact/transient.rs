@@ -315,6 +315,9 @@ pub struct TransientRolling {
     tx: Vec<f64>,
     ty: Vec<f64>,
     tx_prev: Vec<f64>,
+    /// Traction two steps back (Pa), for the extrapolated warm start.
+    tx_pp: Vec<f64>,
+    ty_pp: Vec<f64>,
     ty_prev: Vec<f64>,
     upx: Vec<f64>,
     upy: Vec<f64>,
@@ -361,6 +364,8 @@ impl TransientRolling {
             tx: vec![0.0; n],
             ty: vec![0.0; n],
             tx_prev: vec![0.0; n],
+            tx_pp: vec![0.0; n],
+            ty_pp: vec![0.0; n],
             ty_prev: vec![0.0; n],
             upx: vec![0.0; n],
             upy: vec![0.0; n],
@@ -480,6 +485,8 @@ impl TransientRolling {
             &mut self.tx,
             &mut self.ty,
             &mut self.tx_prev,
+            &mut self.tx_pp,
+            &mut self.ty_pp,
             &mut self.ty_prev,
         ] {
             v.fill(0.0);
@@ -572,6 +579,26 @@ impl TransientRolling {
             self.upx.fill(0.0);
             self.upy.fill(0.0);
         }
+        // warm start: the traction extrapolated linearly in time from the last two steps
+        // (the solver projects it onto the new traction bound) where it changed by more than
+        // the solver tolerance; elsewhere the last traction (so that steady rolling stays an
+        // exact fixed point of the step)
+        if self.steps >= 2 {
+            let thr = self.cfg.tangential_tol * self.g.iter().cloned().fold(0.0, f64::max);
+            for e in 0..nx * ny {
+                let (dx, dy) = (
+                    self.tx_prev[e] - self.tx_pp[e],
+                    self.ty_prev[e] - self.ty_pp[e],
+                );
+                if dx.abs().max(dy.abs()) > thr {
+                    self.tx[e] = self.tx_prev[e] + dx;
+                    self.ty[e] = self.ty_prev[e] + dy;
+                } else {
+                    self.tx[e] = self.tx_prev[e];
+                    self.ty[e] = self.ty_prev[e];
+                }
+            }
+        }
         let (eta, phi) = (inp.lateral_creepage, inp.spin_per_m);
         let mut tang_its = 0usize;
         let xi = match inp.longitudinal {
@@ -661,6 +688,8 @@ impl TransientRolling {
                 residual: 1.0,
             });
         }
+        std::mem::swap(&mut self.tx_pp, &mut self.tx_prev);
+        std::mem::swap(&mut self.ty_pp, &mut self.ty_prev);
         self.tx_prev.copy_from_slice(&self.tx);
         self.ty_prev.copy_from_slice(&self.ty);
         self.steps += 1;
