@@ -550,24 +550,16 @@ fn series_compliance_transient_rise_matches_series_spring_model() {
     let xi = -1e-4;
     let dx = cfg.grid.dx();
     let nsteps = 40;
-    let f0: Vec<f64> = (0..nsteps)
-        .map(|_| {
-            eng.step(&StepInputs::force_creepage(100e3, xi))
-                .unwrap()
-                .fx_n
-        })
-        .collect();
+    let rise = |eng: &mut TransientRolling| -> Vec<f64> {
+        let inp = StepInputs::force_creepage(100e3, xi);
+        (0..nsteps).map(|_| eng.step(&inp).unwrap().fx_n).collect()
+    };
+    let f0 = rise(&mut eng);
     let k_t = -f0[0] / (xi * dx);
     let cx = 1.0 / k_t; // the series spring as stiff as the patch: a clear slow-down
     eng.reset();
     eng.set_series_compliance([cx, 0.0, 0.0]).unwrap();
-    let fc: Vec<f64> = (0..nsteps)
-        .map(|_| {
-            eng.step(&StepInputs::force_creepage(100e3, xi))
-                .unwrap()
-                .fx_n
-        })
-        .collect();
+    let fc = rise(&mut eng);
     let r: Vec<f64> = (0..nsteps)
         .map(|k| (f0[k] - if k > 0 { f0[k - 1] } else { 0.0 }) / xi)
         .collect();
