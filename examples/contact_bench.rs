@@ -2,7 +2,8 @@
 //! the reference contact (100 kN, a × b ≈ 7.2 × 5.4 mm), cold and warm started, and a
 //! 0.25 m passage (of the ~2,500 steps per metre) with a varying normal load and a corrugated rail.
 //!
-//! Run: `cargo run --release --example contact_bench`
+//! Run: `cargo run --release --example contact_bench [passage_steps]` (default 2,500 steps
+//! of the passage sequence on the 44 × 32 grid of the passage).
 
 use corrugation::contact::{
     GridSpec, Longitudinal, NormalInput, StepInputs, TransientConfig, TransientRolling,
@@ -26,18 +27,19 @@ fn roll(
 fn main() -> anyhow::Result<()> {
     println!("transient rolling step, reference case (R 0.46 / R300, 100 kN, µ 0.4, traction 0.15, 140 km/h)");
     println!(
-        "{:>8} {:>8} {:>10} {:>10} {:>12} {:>10} {:>10} {:>10} {:>10}",
+        "{:>8} {:>8} {:>10} {:>10} {:>12} {:>10} {:>10} {:>10} {:>10} {:>10}",
         "grid",
         "dx_mm",
         "cold_ms",
         "warm_ms",
         "warm_T_ms",
         "N_its",
+        "N_prods",
         "T_prods",
         "all_prods",
         "fft_us"
     );
-    for &(nx, ny) in &[(25usize, 25usize), (32, 26), (51, 51)] {
+    for &(nx, ny) in &[(25usize, 25usize), (32, 26), (44, 32), (51, 51)] {
         let mut cfg = TransientConfig::reference();
         cfg.grid = GridSpec { nx, ny, ..cfg.grid };
         let mut eng = TransientRolling::new(cfg)?;
@@ -107,25 +109,33 @@ fn main() -> anyhow::Result<()> {
             t0.elapsed().as_secs_f64() / 200.0 * 1e6
         };
         println!(
-            "{:>8} {:>8.3} {:>10.3} {:>10.3} {:>12.3} {:>10.1} {:>10.1} {:>10.1} {:>10.1}",
+            "{:>8} {:>8.3} {:>10.3} {:>10.3} {:>12.3} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {:>10.1}",
             format!("{nx}x{ny}"),
             cfg.grid.dx() * 1e3,
             cold * 1e3,
             warm * 1e3,
             warm_t * 1e3,
             nits as f64 / nsteps as f64,
+            (prods - tits) as f64 / nsteps as f64,
             tits as f64 / nsteps as f64,
             prods as f64 / nsteps as f64,
             conv_us
         );
     }
 
-    // 1 m passage on the 32 × 26 grid: approach prescribed, corrugated rail (40 mm, 20 µm
-    // peak-to-trough), constant creepage; wear accumulated rail-fixed.
+    // Passage sequence on the passage's default 44 × 32 grid: approach prescribed, corrugated
+    // rail (40 mm, 20 µm peak-to-trough), constant creepage; wear accumulated rail-fixed. The
+    // forces of every step are written to `target/contact_bench_forces.csv` (to compare
+    // solvers).
+    let passage_steps: usize = std::env::args()
+        .nth(1)
+        .map(|a| a.parse())
+        .transpose()?
+        .unwrap_or(2500);
     let mut cfg = TransientConfig::reference();
     cfg.grid = GridSpec {
-        nx: 32,
-        ny: 26,
+        nx: 44,
+        ny: 32,
         half_length_x_m: 1.4 * 7.162e-3,
         half_length_y_m: 1.4 * 5.387e-3,
     };
@@ -143,14 +153,15 @@ fn main() -> anyhow::Result<()> {
         2 * cfg.grid.nx,
     )?;
     let (xi, delta) = (st.creepage, st.approach_m);
-    // 0.25 m of the 1 m passage (ms/step is what matters; ×4 for the full metre)
-    let nsteps = (0.25 / dx).round() as usize;
+    let nsteps = passage_steps;
     let mut wear = WearAccumulator::new(&eng, -0.05, nsteps + 200);
     let mut rail = vec![0.0; cfg.grid.nx];
     let xs: Vec<f64> = eng.x_m().to_vec();
+    let mut forces = Vec::with_capacity(nsteps);
     let t0 = Instant::now();
     let mut fmin = f64::INFINITY;
     let mut fmax = 0.0_f64;
+    let (mut np, mut tp, mut ni) = (0usize, 0usize, 0usize);
     for k in 0..nsteps {
         let xc = k as f64 * dx;
         for (r, x) in rail.iter_mut().zip(&xs) {
@@ -163,20 +174,32 @@ fn main() -> anyhow::Result<()> {
             spin_per_m: 0.0,
             rail_height_m: Some(&rail),
         })?;
+        np += res.influence_products - res.tangential_iterations;
+        ni += res.normal_iterations;
+        tp += res.tangential_iterations;
         fmin = fmin.min(res.normal_force_n);
         fmax = fmax.max(res.normal_force_n);
+        forces.push((res.normal_force_n, res.fx_n, res.frictional_power_w));
         wear.add_step(&eng, xc);
     }
     let el = t0.elapsed().as_secs_f64();
     println!(
-        "0.25 m passage, 32x26 grid (dx {:.3} mm): {} steps in {:.2} s ({:.3} ms/step); F_N {:.1}..{:.1} kN; total frictional work {:.2} J",
+        "passage sequence, 44x32 grid (dx {:.3} mm): {} steps in {:.2} s ({:.3} ms/step, {:.1} normal CG its, {:.1} normal + {:.1} tangential FFT pairs/step); F_N {:.1}..{:.1} kN; total frictional work {:.3} J",
         dx * 1e3,
         nsteps,
         el,
         el * 1e3 / nsteps as f64,
+        ni as f64 / nsteps as f64,
+        np as f64 / nsteps as f64,
+        tp as f64 / nsteps as f64,
         fmin / 1e3,
         fmax / 1e3,
         wear.total_j()
     );
+    let mut csv = String::from("step,fn_n,fx_n,power_w\n");
+    for (k, (f, fx, p)) in forces.iter().enumerate() {
+        csv.push_str(&format!("{k},{f:.9e},{fx:.9e},{p:.9e}\n"));
+    }
+    std::fs::write("target/contact_bench_forces.csv", csv)?;
     Ok(())
 }

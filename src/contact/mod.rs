@@ -15,8 +15,9 @@
 //!   constrained conjugate-gradient method, see [`normal`].
 //! * Tangential problem: Coulomb friction with coefficient µ, per element
 //!   |τ| ≤ µp; stick (|τ| < µp) ⇒ slip s = 0; slip ⇒ τ = −µp s/|s|. Each time step is a
-//!   convex programme solved by an active-set method with inner conjugate gradients and
-//!   Kalker's element test (FISTA as fallback), see [`tangential`]. Steady rolling is the
+//!   convex programme solved by an active-set method whose inner conjugate gradients also
+//!   turn the slip directions (a Newton step on the circles), with Kalker's element test for
+//!   state changes (FISTA as fallback), see [`tangential`]. Steady rolling is the
 //!   fixed point of the transient map.
 //!
 //! # Sign conventions (defined once, here)
@@ -60,6 +61,7 @@ pub mod transient;
 
 pub use hertz::{HertzContact, HertzInput};
 pub use report::{solve_case, ContactCase, ContactSolution, ContactSummary, TangentialLoading};
+pub use tangential::TangentialAlgorithm;
 pub use transient::{
     load_response_curve, GridSpec, LoadResponsePoint, Longitudinal, NormalInput, StepInputs,
     StepResult, TransientConfig, TransientRolling, WearAccumulator,

@@ -12,9 +12,30 @@
 //! `min ½ τᵀCτ + eᵀτ  s.t. |τ_i| ≤ g_i` (C symmetric positive definite; Kalker 1990 §2.4:
 //! the transient problem is a minimum principle). Its gradient is the slip `S`. It is solved by
 //! an active-set conjugate-gradient method with FFT influence products (see [`TangentialSolver::solve`]).
+//!
+//! Series compliance: with the uniform compliances `c_x, c_y` (m/N) of the rail surface under
+//! the patch the slip gains `c_x F_x(t)` (and `c_y F_y(t)`), `F_x = ΔA Σ τx`, the end-of-step
+//! force (implicit); the caller puts the known `−c_x F_x(t − Δt)` into the shift `e`. The operator
+//! becomes `C + diag(c_x, c_y) ΔA 1 1ᵀ` (m/Pa), a rank-one term per component that keeps it
+//! symmetric positive definite, so the problem stays the same convex programme
+//! ([`TangentialSolver::uniform_x_m_per_pa`]).
 
 use super::influence::Convolver;
 use super::ContactError;
+
+/// How the slip directions are found (see [`TangentialSolver::solve`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TangentialAlgorithm {
+    /// Slip elements turn (small turns) inside the inner CG along the tangent of their circle,
+    /// with the curvature term `|S_i|/g_i` of the circle in the CG operator: a Newton step on
+    /// the manifold of the slip directions (quadratic convergence of the directions).
+    #[default]
+    Newton,
+    /// The former method: slip directions only by Kalker's element test (a Jacobi-type
+    /// fixed-point iteration, one exact product per sweep; slow, and it can stall and fall
+    /// back to FISTA). Kept to compare.
+    ElementTest,
+}
 
 /// Scratch for the tangential solver (allocated once).
 pub struct TangentialSolver {
@@ -25,10 +46,11 @@ pub struct TangentialSolver {
     slip: Vec<bool>,
     px: Vec<f64>,
     py: Vec<f64>,
-    /// `false` = experimental variant: slip elements rotate along their circle inside the CG
-    /// (small turns) instead of by the element test; it oscillates on large slip areas, so
-    /// the default is `true` (directions by the element test only).
-    pub norot: bool,
+    rx: Vec<f64>,
+    ry: Vec<f64>,
+    kap: Vec<f64>,
+    /// The algorithm for the slip directions.
+    pub algorithm: TangentialAlgorithm,
     /// Slip distance S_x of the last solve (m).
     pub sx: Vec<f64>,
     /// Slip distance S_y of the last solve (m).
@@ -48,6 +70,11 @@ pub struct TangentialSolver {
     pub cg_iterations: usize,
     /// Influence products (FFT pairs) used by the last solve.
     pub products: usize,
+    /// `c_x ΔA` (m/Pa, ≥ 0): uniform x displacement per unit traction summed over the grid
+    /// (series compliance times element area, module doc); 0 = none.
+    pub uniform_x_m_per_pa: f64,
+    /// `c_y ΔA` (m/Pa, ≥ 0), as [`Self::uniform_x_m_per_pa`] for y.
+    pub uniform_y_m_per_pa: f64,
 }
 
 impl TangentialSolver {
@@ -62,7 +89,10 @@ impl TangentialSolver {
             slip: vec![false; n],
             px: vec![0.0; n],
             py: vec![0.0; n],
-            norot: true,
+            rx: vec![0.0; n],
+            ry: vec![0.0; n],
+            kap: vec![0.0; n],
+            algorithm: TangentialAlgorithm::Newton,
             sx: vec![0.0; n],
             sy: vec![0.0; n],
             ux_ext: vec![0.0; ext],
@@ -71,30 +101,61 @@ impl TangentialSolver {
             max_iterations: 20000,
             cg_iterations: 400,
             products: 0,
+            uniform_x_m_per_pa: 0.0,
+            uniform_y_m_per_pa: 0.0,
         }
     }
 
-    /// `S = C τ + e` exactly (one FFT pair), with the extended displacement rows kept.
+    /// Uniform displacements `(c_x ΔA Σ fx, c_y ΔA Σ fy)` (m) of the series compliance.
+    fn uniform(&self, fx: &[f64], fy: &[f64]) -> (f64, f64) {
+        let ux = if self.uniform_x_m_per_pa != 0.0 {
+            self.uniform_x_m_per_pa * fx.iter().sum::<f64>()
+        } else {
+            0.0
+        };
+        let uy = if self.uniform_y_m_per_pa != 0.0 {
+            self.uniform_y_m_per_pa * fy.iter().sum::<f64>()
+        } else {
+            0.0
+        };
+        (ux, uy)
+    }
+
+    /// `S = C τ + c ΔA Σ τ + e` exactly (one FFT pair), with the extended displacement rows
+    /// (of `C τ` alone) kept.
     fn exact(&mut self, conv: &mut Convolver, ex: &[f64], ey: &[f64], tx: &[f64], ty: &[f64]) {
         conv.tangential_ext(tx, ty, &mut self.ux_ext, &mut self.uy_ext);
+        let (cux, cuy) = self.uniform(tx, ty);
         let n = ex.len();
         for i in 0..n {
-            self.sx[i] = self.ux_ext[i] + ex[i];
-            self.sy[i] = self.uy_ext[i] + ey[i];
+            self.sx[i] = self.ux_ext[i] + ex[i] + cux;
+            self.sy[i] = self.uy_ext[i] + ey[i] + cuy;
         }
         self.products += 1;
+    }
+
+    /// Slip tractions back onto their circles `|τ_i| = g_i` (after turns along the tangent).
+    fn to_circles(&self, g: &[f64], tx: &mut [f64], ty: &mut [f64]) {
+        for i in 0..g.len() {
+            if self.slip[i] && g[i] > 0.0 {
+                let s = g[i] / (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
+                tx[i] *= s;
+                ty[i] *= s;
+            }
+        }
     }
 
     /// Projected residual `r = −P S`. With `into_d` it is written to the search direction
     /// `(dx_, dy_)`, otherwise to `(qx, qy)`. Returns `(r·r, max |r|)`.
     fn residual(&mut self, g: &[f64], into_d: bool) -> (f64, f64) {
+        let norot = self.algorithm == TangentialAlgorithm::ElementTest;
         let mut rr = 0.0;
         let mut rmax = 0.0_f64;
         for i in 0..g.len() {
             let (rx, ry) = if g[i] <= 0.0 {
                 (0.0, 0.0)
             } else if self.slip[i] {
-                if self.norot {
+                if norot {
                     (0.0, 0.0)
                 } else {
                     let c = -(self.sx[i] * self.px[i] + self.sy[i] * self.py[i]);
@@ -130,8 +191,15 @@ impl TangentialSolver {
     ///    residual is carried by the recurrence: one FFT product per iteration. An adhesion
     ///    element whose traction leaves the disc is projected onto it and joins the slip set;
     ///    the CG then stops and the outer loop restarts from an exact residual.
-    ///    (With `norot = false`, slip elements also carry the tangential component of their
-    ///    circle in the CG; experimental, it oscillates on large slip areas.)
+    ///    With [`TangentialAlgorithm::Newton`] (default) the slip elements also carry one
+    ///    degree of freedom each, the turn along the tangent `t_i` of their circle: the CG
+    ///    minimises the second-order model of the energy on the set {adhesion τ, slip
+    ///    directions}, whose Hessian is `P C P + diag(|S_i|/g_i)` on the slip elements (`P`
+    ///    the projection on the tangents; the diagonal is the curvature of the circle times
+    ///    the radial slip, without which the CG overshoots along the tangent lines). After the
+    ///    (inexact, relative residual 0.01) Newton step the slip tractions return to their
+    ///    circles and an exact product restarts the outer loop; turns larger than `0.05 g_i`
+    ///    are made by the element test.
     ///
     /// The outer loop ends when the adhesion residual is below tolerance, no element changes
     /// state and the slip directions are converged. If it has not ended after
@@ -162,6 +230,7 @@ impl TangentialSolver {
             self.slip[i] =
                 g[i] > 0.0 && tx[i] * tx[i] + ty[i] * ty[i] >= g[i] * g[i] * (1.0 - 1e-12);
         }
+        let norot = self.algorithm == TangentialAlgorithm::ElementTest;
         let (cdx, cdy) = (conv.diag_xx, conv.diag_yy);
         let s_tol = self.tol * gmax * conv.diag_t;
         self.exact(conv, ex, ey, tx, ty);
@@ -184,7 +253,7 @@ impl TangentialSolver {
                     let (nx, ny) = (g[i] * trx / tm, g[i] * try_ / tm);
                     let d = (nx - tx[i]).abs().max((ny - ty[i]).abs());
                     // large turns by the element test, small ones by the CG rotation
-                    let thr = if self.norot {
+                    let thr = if norot {
                         0.1 * self.tol * gmax
                     } else {
                         0.05 * g[i]
@@ -206,7 +275,7 @@ impl TangentialSolver {
             // 2. projected residual r = −P S (adhesion: both components; slip: the component
             //    along the circle's tangent, which rotates τ towards −S)
             let (mut rr, rmax) = self.residual(g, true);
-            if rmax <= s_tol && !changed && (dmax <= self.tol * gmax || !self.norot) {
+            if rmax <= s_tol && !changed && (dmax <= self.tol * gmax || !norot) {
                 if exact_now {
                     return Ok(self.products);
                 }
@@ -215,14 +284,42 @@ impl TangentialSolver {
                 exact_now = true;
                 continue;
             }
-            // 3. inner CG on adhesion (2 dof) + slip (1 dof) elements
+            // 3. inner CG on adhesion (2 dof) + slip (1 dof) elements: the model residual
+            //    (rx, ry) and the curvature κ_i = |S_i|/g_i of the slip elements
+            self.rx.copy_from_slice(&self.dx_);
+            self.ry.copy_from_slice(&self.dy_);
+            if !norot {
+                for i in 0..n {
+                    self.kap[i] = if self.slip[i] && g[i] > 0.0 {
+                        let m = (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
+                        (-(self.sx[i] * tx[i] + self.sy[i] * ty[i]) / m).max(0.0) / g[i]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+            let stop = if norot {
+                0.5 * s_tol
+            } else {
+                (0.01 * rmax).max(0.5 * s_tol)
+            };
             while self.products < self.cg_iterations {
                 conv.tangential(&self.dx_, &self.dy_, &mut self.qx, &mut self.qy, 0);
+                let (cux, cuy) = self.uniform(&self.dx_, &self.dy_);
+                if cux != 0.0 || cuy != 0.0 {
+                    for i in 0..n {
+                        self.qx[i] += cux;
+                        self.qy[i] += cuy;
+                    }
+                }
                 self.products += 1;
                 exact_now = false;
+                // model product w = C d on adhesion, P C d + κ d on slip (d ∥ tangent there)
                 let mut den = 0.0;
                 for i in 0..n {
-                    den += self.qx[i] * self.dx_[i] + self.qy[i] * self.dy_[i];
+                    den += self.qx[i] * self.dx_[i]
+                        + self.qy[i] * self.dy_[i]
+                        + self.kap[i] * (self.dx_[i] * self.dx_[i] + self.dy_[i] * self.dy_[i]);
                 }
                 if den <= 0.0 || rr == 0.0 {
                     break;
@@ -248,24 +345,41 @@ impl TangentialSolver {
                     ty[i] = ay;
                 }
                 if violated {
+                    if !norot {
+                        self.to_circles(g, tx, ty);
+                    }
                     self.exact(conv, ex, ey, tx, ty);
                     exact_now = true;
                     break;
                 }
-                let (rr_new, rmax) = self.residual(g, false);
-                if rmax <= 0.5 * s_tol {
-                    if !self.norot {
-                        // radial correction of the rotated slip tractions, exact residual
-                        for i in 0..n {
-                            if self.slip[i] && g[i] > 0.0 {
-                                let s = g[i] / (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
-                                tx[i] *= s;
-                                ty[i] *= s;
-                            }
-                        }
-                        self.exact(conv, ex, ey, tx, ty);
-                        exact_now = true;
+                let (rr_new, rmax) = if norot {
+                    self.residual(g, false)
+                } else {
+                    let (mut rr, mut rmax) = (0.0, 0.0_f64);
+                    for i in 0..n {
+                        let (wx, wy) = if g[i] <= 0.0 {
+                            (0.0, 0.0)
+                        } else if self.slip[i] {
+                            let c = self.qx[i] * self.px[i] + self.qy[i] * self.py[i];
+                            (
+                                c * self.px[i] + self.kap[i] * self.dx_[i],
+                                c * self.py[i] + self.kap[i] * self.dy_[i],
+                            )
+                        } else {
+                            (self.qx[i], self.qy[i])
+                        };
+                        let (rx, ry) = (self.rx[i] - alpha * wx, self.ry[i] - alpha * wy);
+                        self.rx[i] = rx;
+                        self.ry[i] = ry;
+                        // qx, qy: the new residual (the product is no longer needed)
+                        self.qx[i] = rx;
+                        self.qy[i] = ry;
+                        rr += rx * rx + ry * ry;
+                        rmax = rmax.max(rx.abs()).max(ry.abs());
                     }
+                    (rr, rmax)
+                };
+                if rmax <= stop {
                     break;
                 }
                 let beta = rr_new / rr;
@@ -274,6 +388,12 @@ impl TangentialSolver {
                     self.dx_[i] = self.qx[i] + beta * self.dx_[i];
                     self.dy_[i] = self.qy[i] + beta * self.dy_[i];
                 }
+            }
+            if !norot && !exact_now {
+                // radial correction of the turned slip tractions, exact residual
+                self.to_circles(g, tx, ty);
+                self.exact(conv, ex, ey, tx, ty);
+                exact_now = true;
             }
         }
         // active sets cycled: fall back to the (slower, monotone) accelerated projected gradient
@@ -296,7 +416,9 @@ impl TangentialSolver {
     ) -> Result<usize, ContactError> {
         let n = g.len();
         let gmax = g.iter().cloned().fold(0.0, f64::max);
-        let step = 1.0 / conv.lambda_max_t;
+        // the rank-one terms add at most c ΔA n to the largest eigenvalue
+        let c_max = self.uniform_x_m_per_pa.max(self.uniform_y_m_per_pa);
+        let step = 1.0 / (conv.lambda_max_t + c_max * n as f64);
         // reuse the CG scratch: (dx_, dy_) = extrapolated point y, (qx, qy) = new iterate
         self.dx_.copy_from_slice(tx);
         self.dy_.copy_from_slice(ty);
@@ -304,12 +426,13 @@ impl TangentialSolver {
         let mut last = f64::INFINITY;
         for it in 1..=self.max_iterations {
             conv.tangential(&self.dx_, &self.dy_, &mut self.sx, &mut self.sy, 0);
+            let (cux, cuy) = self.uniform(&self.dx_, &self.dy_);
             let mut restart_dot = 0.0;
             let mut diff = 0.0_f64;
             let mut tmax = 0.0_f64;
             for i in 0..n {
-                let gx = self.sx[i] + ex[i];
-                let gy = self.sy[i] + ey[i];
+                let gx = self.sx[i] + ex[i] + cux;
+                let gy = self.sy[i] + ey[i] + cuy;
                 let mut ax = self.dx_[i] - step * gx;
                 let mut ay = self.dy_[i] - step * gy;
                 project(&mut ax, &mut ay, g[i]);
@@ -338,9 +461,10 @@ impl TangentialSolver {
             last = diff / tmax.max(1e-12 * gmax);
             if last < 1e-2 * self.tol {
                 conv.tangential(tx, ty, &mut self.sx, &mut self.sy, 0);
+                let (cux, cuy) = self.uniform(tx, ty);
                 for i in 0..n {
-                    self.sx[i] += ex[i];
-                    self.sy[i] += ey[i];
+                    self.sx[i] += ex[i] + cux;
+                    self.sy[i] += ey[i] + cuy;
                 }
                 return Ok(it);
             }

@@ -35,11 +35,26 @@
 //! along the path) loses `(V/Δx) τᵀ(C − C̄)τ ≥ 0` (`C̄` the one-cell shifted operator), a
 //! first-order error of relative size ≈ `Δx µ p0 / (G a ξ)`: 24 % on 32 × 24. [`WearAccumulator`] maps element `(i, j)` at contact position `x_c`
 //! to the rail-fixed bin containing `x_c + x_i`.
+//!
+//! # Series compliance ([`TransientRolling::set_series_compliance`])
+//! The residual (static) flexibility of truncated track modes at the contact point enters as
+//! a uniform extra displacement `c_d F_d` (m) of the rail surface under the whole patch along
+//! each axis `d`, with `F_d` the end-of-step force (implicit). Normal: the effective approach is
+//! `δ − c_z F_N` (rank-one term in the normal operator, [`super::normal`]). Tangential: the slip
+//! gains `c_x (F_x(t) − F_x(t − Δt))` (and y), `c` the value of the current step; the implicit
+//! part is a rank-one term of the operator, the explicit part goes into the shift
+//! ([`super::tangential`]). In steady rolling `F(t) = F(t − Δt)`: the forces and the frictional
+//! work are unchanged. In transient rolling the uniform slip is part of the true slip of every
+//! element, so the local work stays exact; the patch-integrated power then contains, besides
+//! `−V (ξ Fx + η Fy + φ Mz)`, the exchange with the series spring: with the path-mean traction
+//! `Σ τ̄ ΔA ≈ ½ (F(t) + F(t − Δt))`, its share `−c_x ½ (F(t) + F(t−Δt)) (F(t) − F(t−Δt)) / Δt`
+//! is minus the rate of change of the spring energy `½ c_x F_x²` (counted only where the
+//! elements slip; it telescopes to zero over a closed force cycle).
 
 use super::hertz::{HertzContact, HertzInput};
 use super::influence::Convolver;
 use super::normal::{NormalMode, NormalSolver};
-use super::tangential::TangentialSolver;
+use super::tangential::{TangentialAlgorithm, TangentialSolver};
 use super::{check_poisson, check_positive, combined_modulus, shear_modulus, ContactError};
 
 /// The computational grid: `nx × ny` elements covering `[−Lx, Lx] × [−Ly, Ly]` (m).
@@ -300,6 +315,9 @@ pub struct TransientRolling {
     tx: Vec<f64>,
     ty: Vec<f64>,
     tx_prev: Vec<f64>,
+    /// Traction two steps back (Pa), for the extrapolated warm start.
+    tx_pp: Vec<f64>,
+    ty_pp: Vec<f64>,
     ty_prev: Vec<f64>,
     upx: Vec<f64>,
     upy: Vec<f64>,
@@ -312,6 +330,8 @@ pub struct TransientRolling {
     xi_last: f64,
     steps: usize,
     g_mod: f64,
+    /// Series compliances `(c_x, c_y, c_z)` (m/N).
+    series_c: [f64; 3],
 }
 
 impl TransientRolling {
@@ -344,6 +364,8 @@ impl TransientRolling {
             tx: vec![0.0; n],
             ty: vec![0.0; n],
             tx_prev: vec![0.0; n],
+            tx_pp: vec![0.0; n],
+            ty_pp: vec![0.0; n],
             ty_prev: vec![0.0; n],
             upx: vec![0.0; n],
             upy: vec![0.0; n],
@@ -356,8 +378,46 @@ impl TransientRolling {
             xi_last: 0.0,
             steps: 0,
             g_mod: gm,
+            series_c: [0.0; 3],
             cfg,
         })
+    }
+
+    /// Set the uniform series compliance `c = (c_x, c_y, c_z)` (m/N; contact frame: x rolling,
+    /// y lateral, z normal; each finite and ≥ 0; default 0) of the rail surface under the patch:
+    /// the residual static flexibility of truncated track modes at the contact point (module
+    /// doc, "Series compliance"). It acts from the next [`Self::step`] on; cheap enough to call
+    /// every step (no allocation, no product).
+    pub fn set_series_compliance(&mut self, c_m_per_n: [f64; 3]) -> Result<(), ContactError> {
+        for (name, v) in [
+            ("series_compliance_x_m_per_n", c_m_per_n[0]),
+            ("series_compliance_y_m_per_n", c_m_per_n[1]),
+            ("series_compliance_z_m_per_n", c_m_per_n[2]),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(ContactError::InvalidParameter {
+                    name,
+                    value: v,
+                    reason: "must be finite and ≥ 0 (m/N)",
+                });
+            }
+        }
+        self.series_c = c_m_per_n;
+        self.normal.series_compliance_m_per_n = c_m_per_n[2];
+        self.tang.uniform_x_m_per_pa = c_m_per_n[0] * self.da;
+        self.tang.uniform_y_m_per_pa = c_m_per_n[1] * self.da;
+        Ok(())
+    }
+
+    /// Choose the tangential algorithm (default [`TangentialAlgorithm::Newton`]; the former
+    /// [`TangentialAlgorithm::ElementTest`] is kept to compare).
+    pub fn set_tangential_algorithm(&mut self, algorithm: TangentialAlgorithm) {
+        self.tang.algorithm = algorithm;
+    }
+
+    /// The series compliance `(c_x, c_y, c_z)` (m/N) set by [`Self::set_series_compliance`].
+    pub fn series_compliance(&self) -> [f64; 3] {
+        self.series_c
     }
 
     /// The configuration.
@@ -425,6 +485,8 @@ impl TransientRolling {
             &mut self.tx,
             &mut self.ty,
             &mut self.tx_prev,
+            &mut self.tx_pp,
+            &mut self.ty_pp,
             &mut self.ty_prev,
         ] {
             v.fill(0.0);
@@ -517,6 +579,26 @@ impl TransientRolling {
             self.upx.fill(0.0);
             self.upy.fill(0.0);
         }
+        // warm start: the traction extrapolated linearly in time from the last two steps
+        // (the solver projects it onto the new traction bound) where it changed by more than
+        // the solver tolerance; elsewhere the last traction (so that steady rolling stays an
+        // exact fixed point of the step)
+        if self.steps >= 2 {
+            let thr = self.cfg.tangential_tol * self.g.iter().cloned().fold(0.0, f64::max);
+            for e in 0..nx * ny {
+                let (dx, dy) = (
+                    self.tx_prev[e] - self.tx_pp[e],
+                    self.ty_prev[e] - self.ty_pp[e],
+                );
+                if dx.abs().max(dy.abs()) > thr {
+                    self.tx[e] = self.tx_prev[e] + dx;
+                    self.ty[e] = self.ty_prev[e] + dy;
+                } else {
+                    self.tx[e] = self.tx_prev[e];
+                    self.ty[e] = self.ty_prev[e];
+                }
+            }
+        }
         let (eta, phi) = (inp.lateral_creepage, inp.spin_per_m);
         let mut tang_its = 0usize;
         let xi = match inp.longitudinal {
@@ -606,6 +688,8 @@ impl TransientRolling {
                 residual: 1.0,
             });
         }
+        std::mem::swap(&mut self.tx_pp, &mut self.tx_prev);
+        std::mem::swap(&mut self.ty_pp, &mut self.ty_prev);
         self.tx_prev.copy_from_slice(&self.tx);
         self.ty_prev.copy_from_slice(&self.ty);
         self.steps += 1;
@@ -628,11 +712,21 @@ impl TransientRolling {
 
     fn tangential(&mut self, xi: f64, eta: f64, phi: f64) -> Result<usize, ContactError> {
         let ny = self.ny;
+        // uniform displacement of the series compliance at the start of the step,
+        // −c F(t − Δt) (zero from rest: tx_prev is zero after a reset)
+        let (ucx, ucy) = if self.steps > 0 {
+            (
+                self.series_c[0] * self.tx_prev.iter().sum::<f64>() * self.da,
+                self.series_c[1] * self.ty_prev.iter().sum::<f64>() * self.da,
+            )
+        } else {
+            (0.0, 0.0)
+        };
         for i in 0..self.nx {
             for j in 0..ny {
                 let e = i * ny + j;
-                self.ex[e] = (xi - phi * self.ys[j]) * self.dx - self.upx[e];
-                self.ey[e] = (eta + phi * self.xs[i]) * self.dx - self.upy[e];
+                self.ex[e] = (xi - phi * self.ys[j]) * self.dx - self.upx[e] - ucx;
+                self.ey[e] = (eta + phi * self.xs[i]) * self.dx - self.upy[e] - ucy;
             }
         }
         self.tang.solve(
