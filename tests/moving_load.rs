@@ -466,3 +466,90 @@ fn convergence_table() {
         100.0 * full.relative_max_error(&dv, 0, 2),
     );
 }
+
+/// The residual (static) flexibility of the contact line, `R_d = b_dᵀ K⁻¹ b_d − Σ r_d²/ω²`
+/// (one LLᵀ of K, all planes around mid-track in blocks): printed with the full FE and
+/// modal parts for x, t, n at f_max 0.5/1/2/3 kHz, against the half-space compliances
+/// (Hertz `dδ/dF`, Mindlin's no-slip tangential compliance), and the FE flexibility of the
+/// same load spread over wider strips across the head (the local part shrinks with the
+/// spread; the structural part does not). Checked: R ≥ 0 and falls with f_max, and the
+/// normal value at the mid plane equals [`StaticDirect`]'s independent single-RHS solve.
+#[test]
+fn residual_flexibility_of_the_contact_line() {
+    use corrugation::dynamics::residual::{
+        lateral_spread_flexibility, ResidualFlexibility, StiffnessFactor,
+    };
+    let s = setup();
+    let x = 0.5 * s.track.layout.length;
+    let factor = StiffnessFactor::new(s.mats.k.as_ref()).unwrap();
+    let mut st = StaticDirect::new(&s.mats).unwrap();
+    let nu = s.model.rail.poisson_ratio;
+    let c_n = s.hertz_compliance_m_per_n;
+    // Mindlin: no-slip tangential stiffness of two equal bodies 4Ga/(2−ν) vs the normal
+    // tangent stiffness Ea/(1−ν²): ratio 2(1−ν)/(2−ν) (circular patch of the same radius).
+    let c_x = c_n * (2.0 - nu) / (2.0 * (1.0 - nu));
+    eprintln!("half-space: Hertz dδ/dF {c_n:.3e} m/N, tangential (no slip) {c_x:.3e} m/N");
+    let mut prev = [f64::INFINITY; 3];
+    for fmax in [500.0, 1000.0, 2000.0, 3000.0] {
+        let (phi, sys, line) = reduced(s, fmax);
+        let r = ResidualFlexibility::compute(
+            &s.track,
+            &factor,
+            &line,
+            &s.frame,
+            &sys.omega2,
+            x - 0.2,
+            x + 0.2,
+        )
+        .unwrap();
+        let [g, md, res] = r.means();
+        let ex = r.interpolation_excess();
+        eprintln!(
+            "fmax {fmax} ({} modes): G x/t/n {:.3e} {:.3e} {:.3e}; modal {:.3e} {:.3e} {:.3e}; R {:.3e} {:.3e} {:.3e} m/N; R/G x {:.2} n {:.2}; linear-interp excess x {:.3} t {:.3} n {:.3}",
+            sys.len(),
+            g[0], g[1], g[2], md[0], md[1], md[2], res[0], res[1], res[2],
+            res[0] / g[0], res[2] / g[2], ex[0], ex[1], ex[2]
+        );
+        for d in 0..3 {
+            assert!(
+                res[d] >= 0.0 && res[d] < prev[d],
+                "fmax {fmax} d {d}: {res:?} {prev:?}"
+            );
+        }
+        prev = res;
+        // Independent check: StaticDirect at the mid plane.
+        let p = nearest_plane(&line, x);
+        let xp = line.planes_x_m[p];
+        let c = st
+            .compare(
+                &s.track,
+                &phi,
+                &sys,
+                &line,
+                &s.frame,
+                xp,
+                [0.0, 0.0, 1.0],
+                &[],
+            )
+            .unwrap();
+        let rn = r.at(xp).unwrap()[2];
+        assert!(
+            (rn - c.residual_flexibility_m_per_n()).abs()
+                <= 1e-6 * c.contact_flexibility_direct_m_per_n,
+            "{rn} vs {}",
+            c.residual_flexibility_m_per_n()
+        );
+    }
+    let p = nearest_plane(&reduced(s, 500.0).2, x);
+    for scale in [1.0, 2.0, 3.0, 5.0] {
+        let b = scale * s.hertz_b_m.max(0.0054);
+        let g = lateral_spread_flexibility(&s.track, &factor, &s.frame, b, p).unwrap();
+        eprintln!(
+            "lateral spread b = {:.1} mm: G x {:.3e} t {:.3e} n {:.3e} m/N",
+            1e3 * b,
+            g[0],
+            g[1],
+            g[2]
+        );
+    }
+}

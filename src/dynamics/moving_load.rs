@@ -60,7 +60,7 @@ use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Mat, Par, Side, Spec};
 
 use super::integrator::ModalVerlet;
-use super::reduced::{modal_rows, ContactFrame, ModalSystem, RailContactLine};
+use super::reduced::{add_nodes_load, modal_rows, ContactFrame, ModalSystem, RailContactLine};
 use super::DynamicsError;
 use crate::fe::assembly::FeMatrices;
 use crate::structure::TrackStructure;
@@ -464,21 +464,9 @@ fn add_line_load(
         start_m: px[0],
         end_m: px[px.len() - 1],
     })?;
-    let axes = [frame.x, frame.t, frame.n];
     for (plane, np) in [(p, 1.0 - s), (p + 1, s)] {
-        if np == 0.0 {
-            continue;
-        }
-        for &(node, w) in &line.nodes[plane] {
-            for c in 0..3 {
-                let g: f64 = (0..3).map(|d| force[d] * axes[d][c]).sum();
-                if g == 0.0 {
-                    continue;
-                }
-                if let Some(i) = track.dofmap.free_index(3 * node + c) {
-                    f[i] += np * w * g;
-                }
-            }
+        if np != 0.0 {
+            add_nodes_load(&line.nodes[plane], &track.dofmap, frame, np, force, f);
         }
     }
     Ok(())
