@@ -132,7 +132,7 @@ impl StiffnessFactor {
 
 /// Index range of the node planes that a contact travelling over `[x_lo, x_hi]` (m) uses:
 /// the planes around both ends included.
-fn plane_range(
+pub(crate) fn plane_range(
     line: &RailContactLine,
     x_lo: f64,
     x_hi: f64,
@@ -149,22 +149,20 @@ fn plane_range(
     Ok((p0, p1 + 1))
 }
 
-/// `G_d(p)` for the planes `p0..=p1` and the cross terms `b_{p,d}ᵀ K⁻¹ b_{p+1,d}`, for the
-/// contact nodes and weights of `line` (the line's modes are not used).
-fn static_flexibility(
+/// Solves `K u = b_{p,d}` for the unit contact loads of the planes `p0..=p1` of `line` and
+/// the three frame directions, in blocks of right-hand sides, and hands each solution to
+/// `visit(p − p0, d, u)` with `u(i)` the free DOF `i` of the solution.
+pub(crate) fn for_each_plane_solution(
     track: &TrackStructure,
     factor: &StiffnessFactor,
     line: &RailContactLine,
     frame: &ContactFrame,
     p0: usize,
     p1: usize,
-) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
-    let axes = [frame.x, frame.t, frame.n];
-    let np = p1 - p0 + 1;
-    let total = 3 * np;
+    visit: &mut dyn FnMut(usize, usize, &dyn Fn(usize) -> f64),
+) {
+    let total = 3 * (p1 - p0 + 1);
     let n = factor.n();
-    let mut g = vec![[0.0; 3]; np];
-    let mut cross = vec![[0.0; 3]; np.saturating_sub(1)];
     let mut rhs = Mat::<f64>::zeros(n, BLOCK.min(total));
     let mut b = vec![0.0; n];
     let mut start = 0;
@@ -190,14 +188,32 @@ fn static_flexibility(
         factor.solve_in_place(rhs.as_mut().subcols_mut(0, k));
         for j in 0..k {
             let (i, d) = ((start + j) / 3, (start + j) % 3);
-            let u = |r: usize| rhs[(r, j)];
-            g[i][d] = nodes_dot(&line.nodes[p0 + i], &track.dofmap, axes[d], u);
-            if i + 1 < np {
-                cross[i][d] = nodes_dot(&line.nodes[p0 + i + 1], &track.dofmap, axes[d], u);
-            }
+            visit(i, d, &|r: usize| rhs[(r, j)]);
         }
         start += k;
     }
+}
+
+/// `G_d(p)` for the planes `p0..=p1` and the cross terms `b_{p,d}ᵀ K⁻¹ b_{p+1,d}`, for the
+/// contact nodes and weights of `line` (the line's modes are not used).
+fn static_flexibility(
+    track: &TrackStructure,
+    factor: &StiffnessFactor,
+    line: &RailContactLine,
+    frame: &ContactFrame,
+    p0: usize,
+    p1: usize,
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let axes = [frame.x, frame.t, frame.n];
+    let np = p1 - p0 + 1;
+    let mut g = vec![[0.0; 3]; np];
+    let mut cross = vec![[0.0; 3]; np.saturating_sub(1)];
+    for_each_plane_solution(track, factor, line, frame, p0, p1, &mut |i, d, u| {
+        g[i][d] = nodes_dot(&line.nodes[p0 + i], &track.dofmap, axes[d], u);
+        if i + 1 < np {
+            cross[i][d] = nodes_dot(&line.nodes[p0 + i + 1], &track.dofmap, axes[d], u);
+        }
+    });
     (g, cross)
 }
 
