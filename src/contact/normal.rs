@@ -8,6 +8,14 @@
 //! Polonsky & Keer's algorithm, their eqs. 6–13) or the approach δ is prescribed (the same
 //! CG without the load-balance step; a bound-constrained quadratic programme).
 //! Warm start: the pressure passed in is the initial iterate.
+//!
+//! Series compliance ([`NormalSolver::series_compliance_m_per_n`], `c_z`, m/N): the rail
+//! surface under the whole patch moves by the extra uniform displacement `c_z F_N`,
+//! `F_N = Σ p_j ΔA`, so `g_i = h_i − δ + (C p)_i + c_z ΔA Σ_j p_j`. With the approach prescribed
+//! this is the influence operator plus the rank-one term `c_z ΔA 1 1ᵀ` (m/Pa; in force
+//! unknowns `f = p ΔA` it reads `c_z 1 1ᵀ`), still symmetric positive definite, so the same CG
+//! solves it in one pass. With the load prescribed the term is a uniform gap shift absorbed
+//! by the Lagrange multiplier: only the reported approach changes, by `+c_z F_N`.
 
 use super::influence::Convolver;
 use super::ContactError;
@@ -39,7 +47,10 @@ pub struct NormalSolver {
     r: Vec<f64>,
     up: Vec<f64>,
     last_h: Vec<f64>,
-    last: Option<(NormalMode, NormalOutcome)>,
+    last: Option<(NormalMode, f64, NormalOutcome)>,
+    /// Uniform series compliance `c_z` (m/N, ≥ 0) of the rail surface under the patch (module
+    /// doc); 0 = none.
+    pub series_compliance_m_per_n: f64,
     /// Influence products (FFT pairs) used by the last solve.
     pub products: usize,
     /// Relative tolerance on the pressure change `Σ|Δp| / Σ p`.
@@ -58,6 +69,7 @@ impl NormalSolver {
             up: vec![0.0; n],
             last_h: vec![0.0; n],
             last: None,
+            series_compliance_m_per_n: 0.0,
             products: 0,
             tol: 1e-10,
             max_iterations: 2000,
@@ -86,8 +98,9 @@ impl NormalSolver {
         mode: NormalMode,
         p: &mut [f64],
     ) -> Result<NormalOutcome, ContactError> {
-        if let Some((m, out)) = self.last {
-            if m == mode && self.last_h[..] == h[..] {
+        let c = self.series_compliance_m_per_n;
+        if let Some((m, lc, out)) = self.last {
+            if m == mode && lc == c && self.last_h[..] == h[..] {
                 self.products = 0;
                 return Ok(NormalOutcome {
                     iterations: 0,
@@ -96,10 +109,24 @@ impl NormalSolver {
             }
         }
         self.last = None;
-        let out = self.solve_inner(conv, h, da, mode, p)?;
+        let mut out = self.solve_inner(conv, h, da, mode, p)?;
+        if let NormalMode::Load(_) = mode {
+            // the uniform displacement c_z F_N only shifts the Lagrange multiplier
+            out.approach_m += c * out.load_n;
+        }
         self.last_h.copy_from_slice(h);
-        self.last = Some((mode, out));
+        self.last = Some((mode, c, out));
         Ok(out)
+    }
+
+    /// `out = (C + c ΔA 1 1ᵀ) x` (m) for `x` in Pa: the influence product plus the uniform
+    /// displacement of the series compliance (`c_da = c_z ΔA`, m/Pa; 0 in load mode).
+    fn product(conv: &mut Convolver, c_da: f64, x: &[f64], out: &mut [f64]) {
+        conv.normal(x, out);
+        if c_da != 0.0 {
+            let u = c_da * x.iter().sum::<f64>();
+            out.iter_mut().for_each(|v| *v += u);
+        }
     }
 
     fn solve_inner(
@@ -112,6 +139,10 @@ impl NormalSolver {
     ) -> Result<NormalOutcome, ContactError> {
         let n = p.len();
         self.products = 0;
+        let c_da = match mode {
+            NormalMode::Approach(_) => self.series_compliance_m_per_n * da,
+            NormalMode::Load(_) => 0.0,
+        };
         // separation / zero-load shortcuts
         match mode {
             NormalMode::Load(w) if w <= 0.0 => {
@@ -173,7 +204,7 @@ impl NormalSolver {
         self.t.fill(0.0);
         let mut delta: f64;
         let mut last_change = 1.0;
-        conv.normal(p, &mut self.up);
+        Self::product(conv, c_da, p, &mut self.up);
         self.products += 1;
         for it in 1..=self.max_iterations {
             for ((g, hv), u) in self.gap.iter_mut().zip(h).zip(&self.up) {
@@ -214,7 +245,7 @@ impl NormalSolver {
                 };
             }
             g_old = gg;
-            conv.normal(&self.t, &mut self.r);
+            Self::product(conv, c_da, &self.t, &mut self.r);
             self.products += 1;
             let rbar = match mode {
                 NormalMode::Load(_) => {
@@ -274,7 +305,7 @@ impl NormalSolver {
                 }
             }
             if clipped || any_overlap {
-                conv.normal(p, &mut self.up);
+                Self::product(conv, c_da, p, &mut self.up);
                 self.products += 1;
             } else {
                 for (u, r) in self.up.iter_mut().zip(&self.r) {

@@ -12,6 +12,13 @@
 //! `min ½ τᵀCτ + eᵀτ  s.t. |τ_i| ≤ g_i` (C symmetric positive definite; Kalker 1990 §2.4:
 //! the transient problem is a minimum principle). Its gradient is the slip `S`. It is solved by
 //! an active-set conjugate-gradient method with FFT influence products (see [`TangentialSolver::solve`]).
+//!
+//! Series compliance: with the uniform compliances `c_x, c_y` (m/N) of the rail surface under
+//! the patch the slip gains `c_x F_x(t)` (and `c_y F_y(t)`), `F_x = ΔA Σ τx`, the end-of-step
+//! force (implicit); the caller puts the known `−c_x F_x(t − Δt)` into the shift `e`. The operator
+//! becomes `C + diag(c_x, c_y) ΔA 1 1ᵀ` (m/Pa), a rank-one term per component that keeps it
+//! symmetric positive definite, so the problem stays the same convex programme
+//! ([`TangentialSolver::uniform_x_m_per_pa`]).
 
 use super::influence::Convolver;
 use super::ContactError;
@@ -48,6 +55,11 @@ pub struct TangentialSolver {
     pub cg_iterations: usize,
     /// Influence products (FFT pairs) used by the last solve.
     pub products: usize,
+    /// `c_x ΔA` (m/Pa, ≥ 0): uniform x displacement per unit traction summed over the grid
+    /// (series compliance times element area, module doc); 0 = none.
+    pub uniform_x_m_per_pa: f64,
+    /// `c_y ΔA` (m/Pa, ≥ 0), as [`Self::uniform_x_m_per_pa`] for y.
+    pub uniform_y_m_per_pa: f64,
 }
 
 impl TangentialSolver {
@@ -71,16 +83,35 @@ impl TangentialSolver {
             max_iterations: 20000,
             cg_iterations: 400,
             products: 0,
+            uniform_x_m_per_pa: 0.0,
+            uniform_y_m_per_pa: 0.0,
         }
     }
 
-    /// `S = C τ + e` exactly (one FFT pair), with the extended displacement rows kept.
+    /// Uniform displacements `(c_x ΔA Σ fx, c_y ΔA Σ fy)` (m) of the series compliance.
+    fn uniform(&self, fx: &[f64], fy: &[f64]) -> (f64, f64) {
+        let ux = if self.uniform_x_m_per_pa != 0.0 {
+            self.uniform_x_m_per_pa * fx.iter().sum::<f64>()
+        } else {
+            0.0
+        };
+        let uy = if self.uniform_y_m_per_pa != 0.0 {
+            self.uniform_y_m_per_pa * fy.iter().sum::<f64>()
+        } else {
+            0.0
+        };
+        (ux, uy)
+    }
+
+    /// `S = C τ + c ΔA Σ τ + e` exactly (one FFT pair), with the extended displacement rows
+    /// (of `C τ` alone) kept.
     fn exact(&mut self, conv: &mut Convolver, ex: &[f64], ey: &[f64], tx: &[f64], ty: &[f64]) {
         conv.tangential_ext(tx, ty, &mut self.ux_ext, &mut self.uy_ext);
+        let (cux, cuy) = self.uniform(tx, ty);
         let n = ex.len();
         for i in 0..n {
-            self.sx[i] = self.ux_ext[i] + ex[i];
-            self.sy[i] = self.uy_ext[i] + ey[i];
+            self.sx[i] = self.ux_ext[i] + ex[i] + cux;
+            self.sy[i] = self.uy_ext[i] + ey[i] + cuy;
         }
         self.products += 1;
     }
@@ -218,6 +249,13 @@ impl TangentialSolver {
             // 3. inner CG on adhesion (2 dof) + slip (1 dof) elements
             while self.products < self.cg_iterations {
                 conv.tangential(&self.dx_, &self.dy_, &mut self.qx, &mut self.qy, 0);
+                let (cux, cuy) = self.uniform(&self.dx_, &self.dy_);
+                if cux != 0.0 || cuy != 0.0 {
+                    for i in 0..n {
+                        self.qx[i] += cux;
+                        self.qy[i] += cuy;
+                    }
+                }
                 self.products += 1;
                 exact_now = false;
                 let mut den = 0.0;
@@ -296,7 +334,9 @@ impl TangentialSolver {
     ) -> Result<usize, ContactError> {
         let n = g.len();
         let gmax = g.iter().cloned().fold(0.0, f64::max);
-        let step = 1.0 / conv.lambda_max_t;
+        // the rank-one terms add at most c ΔA n to the largest eigenvalue
+        let c_max = self.uniform_x_m_per_pa.max(self.uniform_y_m_per_pa);
+        let step = 1.0 / (conv.lambda_max_t + c_max * n as f64);
         // reuse the CG scratch: (dx_, dy_) = extrapolated point y, (qx, qy) = new iterate
         self.dx_.copy_from_slice(tx);
         self.dy_.copy_from_slice(ty);
@@ -304,12 +344,13 @@ impl TangentialSolver {
         let mut last = f64::INFINITY;
         for it in 1..=self.max_iterations {
             conv.tangential(&self.dx_, &self.dy_, &mut self.sx, &mut self.sy, 0);
+            let (cux, cuy) = self.uniform(&self.dx_, &self.dy_);
             let mut restart_dot = 0.0;
             let mut diff = 0.0_f64;
             let mut tmax = 0.0_f64;
             for i in 0..n {
-                let gx = self.sx[i] + ex[i];
-                let gy = self.sy[i] + ey[i];
+                let gx = self.sx[i] + ex[i] + cux;
+                let gy = self.sy[i] + ey[i] + cuy;
                 let mut ax = self.dx_[i] - step * gx;
                 let mut ay = self.dy_[i] - step * gy;
                 project(&mut ax, &mut ay, g[i]);
@@ -338,9 +379,10 @@ impl TangentialSolver {
             last = diff / tmax.max(1e-12 * gmax);
             if last < 1e-2 * self.tol {
                 conv.tangential(tx, ty, &mut self.sx, &mut self.sy, 0);
+                let (cux, cuy) = self.uniform(tx, ty);
                 for i in 0..n {
-                    self.sx[i] += ex[i];
-                    self.sy[i] += ey[i];
+                    self.sx[i] += ex[i] + cux;
+                    self.sy[i] += ey[i] + cuy;
                 }
                 return Ok(it);
             }

@@ -469,3 +469,153 @@ fn carter(nx: usize, xi_frac: f64) -> (f64, f64, f64, f64) {
         res.frictional_power_w,
     )
 }
+
+// ---------------------------------------------------------------------------------------------
+// Series compliance (TransientRolling::set_series_compliance)
+
+#[test]
+fn series_compliance_normal_matches_hertz_in_series() {
+    // Closed form: sphere on plane (circular Hertz, R_e = 0.3 m), a spring c_z in series:
+    // δ = δ_H(F) + c_z F, δ_H(F) = (9 F² / (16 E*² R_e))^(1/3). Prescribe δ for F = 100 kN.
+    let (re, e, nu, load) = (0.3, 210e9, 0.3, 100e3);
+    let es = combined_modulus(e, nu);
+    let delta_h = (9.0 * load * load / (16.0 * es * es * re)).cbrt();
+    let cz = 0.5e-9; // m/N: c_z F = 50 µm, comparable to δ_H
+    let cfg = TransientConfig::around_hertz(re, re, e, nu, 0.4, 38.9, load, 40, 40, 1.2).unwrap();
+    let mut eng = TransientRolling::new(cfg).unwrap();
+    eng.set_series_compliance([0.0, 0.0, cz]).unwrap();
+    let mut inp = StepInputs::force_creepage(load, 0.0);
+    inp.normal = NormalInput::Approach(delta_h + cz * load);
+    let r = eng.step(&inp).unwrap();
+    println!(
+        "δ_H {:.3} µm + c F {:.3} µm → F {:.1} N ({:+.3e}), {} CG its",
+        delta_h * 1e6,
+        cz * load * 1e6,
+        r.normal_force_n,
+        r.normal_force_n / load - 1.0,
+        r.normal_iterations
+    );
+    assert!((r.normal_force_n / load - 1.0).abs() < 0.01);
+    // exact consistency with the grid's own compliance: the same force prescribed without c_z
+    // needs the approach δ − c_z F (to solver tolerance), and with c_z (force mode) reports δ.
+    let f = r.normal_force_n;
+    let delta = delta_h + cz * load;
+    eng.set_series_compliance([0.0; 3]).unwrap();
+    let r0 = eng.step(&StepInputs::force_creepage(f, 0.0)).unwrap();
+    assert!(
+        (r0.approach_m - (delta - cz * f)).abs() < 1e-6 * delta,
+        "{r0:?}"
+    );
+    eng.set_series_compliance([0.0, 0.0, cz]).unwrap();
+    let r1 = eng.step(&StepInputs::force_creepage(f, 0.0)).unwrap();
+    assert!((r1.approach_m - delta).abs() < 1e-6 * delta, "{r1:?}");
+}
+
+#[test]
+fn series_compliance_leaves_steady_rolling_unchanged() {
+    // Steady state: F(t) = F(t − Δt), the uniform slip term vanishes.
+    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 16, 12, 1.2)
+        .unwrap();
+    let mut eng = TransientRolling::new(cfg).unwrap();
+    let mut inp = StepInputs::force_creepage(100e3, -1e-3);
+    inp.lateral_creepage = 0.5e-3;
+    let s0 = eng.solve_steady(&inp, 1e-10, 3000).unwrap();
+    eng.reset();
+    eng.set_series_compliance([2e-9, 1e-9, 0.0]).unwrap();
+    let s1 = eng.solve_steady(&inp, 1e-10, 3000).unwrap();
+    println!("steady: {s0:?}\nwith c: {s1:?}");
+    let scale = 0.4 * 100e3;
+    assert!((s1.fx_n - s0.fx_n).abs() < 1e-6 * scale);
+    assert!((s1.fy_n - s0.fy_n).abs() < 1e-6 * scale);
+    assert!((s1.frictional_power_w / s0.frictional_power_w - 1.0).abs() < 1e-5);
+}
+
+#[test]
+fn series_compliance_transient_rise_matches_series_spring_model() {
+    // Linear limit (µ = 1000: full adhesion, constant patch, so the step map is linear and
+    // time-invariant). From rest, constant creepage ξ: the c_x = 0 run gives the response
+    // F0(n) (n steps). Its increments R_k = (F0(k+1) − F0(k))/ξ are the impulse response of
+    // the patch to the creepage of one step; R_0 = −k_t Δx with k_t the tangential stiffness
+    // of the patch for a uniform shift (the first step from rest is a pure shift ξΔx). In
+    // series with the compliance c_x the patch sees the effective creepage
+    // ξ_eff(m) = ξ + c_x (F(m) − F(m−1)) / Δx, so
+    //   F(n) = Σ_k R_k ξ_eff(n − k),
+    // solved step by step for the implicit F(n) (the spring k_t in series with 1/c_x).
+    let mut cfg =
+        TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 1e3, 38.9, 100e3, 20, 16, 1.2)
+            .unwrap();
+    // the tolerance is relative to µ p_max: tight, since µ = 1000
+    cfg.tangential_tol = 1e-11;
+    let mut eng = TransientRolling::new(cfg).unwrap();
+    let xi = -1e-4;
+    let dx = cfg.grid.dx();
+    let nsteps = 40;
+    let f0: Vec<f64> = (0..nsteps)
+        .map(|_| {
+            eng.step(&StepInputs::force_creepage(100e3, xi))
+                .unwrap()
+                .fx_n
+        })
+        .collect();
+    let k_t = -f0[0] / (xi * dx);
+    let cx = 1.0 / k_t; // the series spring as stiff as the patch: a clear slow-down
+    eng.reset();
+    eng.set_series_compliance([cx, 0.0, 0.0]).unwrap();
+    let fc: Vec<f64> = (0..nsteps)
+        .map(|_| {
+            eng.step(&StepInputs::force_creepage(100e3, xi))
+                .unwrap()
+                .fx_n
+        })
+        .collect();
+    let r: Vec<f64> = (0..nsteps)
+        .map(|k| (f0[k] - if k > 0 { f0[k - 1] } else { 0.0 }) / xi)
+        .collect();
+    let mut model = vec![0.0; nsteps];
+    let mut w_eff = vec![0.0; nsteps];
+    for n in 0..nsteps {
+        let fprev = if n > 0 { model[n - 1] } else { 0.0 };
+        // F(n) = R_0 (ξ + c (F(n) − F(n−1))/Δx) + Σ_{k≥1} R_k ξ_eff(n−k)
+        let hist: f64 = (1..=n).map(|k| r[k] * w_eff[n - k]).sum();
+        let a = r[0] * cx / dx;
+        model[n] = (r[0] * (xi - cx * fprev / dx) + hist) / (1.0 - a);
+        w_eff[n] = xi + cx * (model[n] - fprev) / dx;
+    }
+    let fss = f0[nsteps - 1];
+    let mut worst = 0.0_f64;
+    for n in 0..nsteps {
+        worst = worst.max((fc[n] - model[n]).abs() / fss.abs());
+        if n < 10 {
+            println!(
+                "step {n}: F0 {:.2} N, F(c) {:.2} N, model {:.2} N",
+                f0[n], fc[n], model[n]
+            );
+        }
+    }
+    println!("k_t = {k_t:.4e} N/m, c_x = {cx:.3e} m/N; max |F − model| / F_ss = {worst:.2e}");
+    // the rise is slower with the series spring
+    assert!(fc[0].abs() < 0.6 * f0[0].abs() && fc[5].abs() < f0[5].abs());
+    // measured 2.2e-8 (the map is exactly linear; a few % would allow a scalar approximation)
+    assert!(worst < 1e-5, "{worst}");
+}
+
+#[test]
+fn series_compliance_rejects_invalid_values() {
+    let cfg =
+        TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 8, 6, 1.2).unwrap();
+    let mut eng = TransientRolling::new(cfg).unwrap();
+    for bad in [
+        [-1e-9, 0.0, 0.0],
+        [0.0, f64::NAN, 0.0],
+        [0.0, 0.0, f64::INFINITY],
+        [0.0, 0.0, -0.0 - 1e-30],
+    ] {
+        assert!(matches!(
+            eng.set_series_compliance(bad),
+            Err(ContactError::InvalidParameter { .. })
+        ));
+    }
+    assert_eq!(eng.series_compliance(), [0.0; 3]);
+    eng.set_series_compliance([1e-9, 2e-9, 3e-9]).unwrap();
+    assert_eq!(eng.series_compliance(), [1e-9, 2e-9, 3e-9]);
+}

@@ -35,6 +35,21 @@
 //! along the path) loses `(V/Δx) τᵀ(C − C̄)τ ≥ 0` (`C̄` the one-cell shifted operator), a
 //! first-order error of relative size ≈ `Δx µ p0 / (G a ξ)`: 24 % on 32 × 24. [`WearAccumulator`] maps element `(i, j)` at contact position `x_c`
 //! to the rail-fixed bin containing `x_c + x_i`.
+//!
+//! # Series compliance ([`TransientRolling::set_series_compliance`])
+//! The residual (static) flexibility of truncated track modes at the contact point enters as
+//! a uniform extra displacement `c_d F_d` (m) of the rail surface under the whole patch along
+//! each axis `d`, with `F_d` the end-of-step force (implicit). Normal: the effective approach is
+//! `δ − c_z F_N` (rank-one term in the normal operator, [`super::normal`]). Tangential: the slip
+//! gains `c_x (F_x(t) − F_x(t − Δt))` (and y), `c` the value of the current step; the implicit
+//! part is a rank-one term of the operator, the explicit part goes into the shift
+//! ([`super::tangential`]). In steady rolling `F(t) = F(t − Δt)`: the forces and the frictional
+//! work are unchanged. In transient rolling the uniform slip is part of the true slip of every
+//! element, so the local work stays exact; the patch-integrated power then contains, besides
+//! `−V (ξ Fx + η Fy + φ Mz)`, the exchange with the series spring: with the path-mean traction
+//! `Σ τ̄ ΔA ≈ ½ (F(t) + F(t − Δt))`, its share `−c_x ½ (F(t) + F(t−Δt)) (F(t) − F(t−Δt)) / Δt`
+//! is minus the rate of change of the spring energy `½ c_x F_x²` (counted only where the
+//! elements slip; it telescopes to zero over a closed force cycle).
 
 use super::hertz::{HertzContact, HertzInput};
 use super::influence::Convolver;
@@ -312,6 +327,8 @@ pub struct TransientRolling {
     xi_last: f64,
     steps: usize,
     g_mod: f64,
+    /// Series compliances `(c_x, c_y, c_z)` (m/N).
+    series_c: [f64; 3],
 }
 
 impl TransientRolling {
@@ -356,8 +373,40 @@ impl TransientRolling {
             xi_last: 0.0,
             steps: 0,
             g_mod: gm,
+            series_c: [0.0; 3],
             cfg,
         })
+    }
+
+    /// Set the uniform series compliance `c = (c_x, c_y, c_z)` (m/N; contact frame: x rolling,
+    /// y lateral, z normal; each finite and ≥ 0; default 0) of the rail surface under the patch:
+    /// the residual static flexibility of truncated track modes at the contact point (module
+    /// doc, "Series compliance"). It acts from the next [`Self::step`] on; cheap enough to call
+    /// every step (no allocation, no product).
+    pub fn set_series_compliance(&mut self, c_m_per_n: [f64; 3]) -> Result<(), ContactError> {
+        for (name, v) in [
+            ("series_compliance_x_m_per_n", c_m_per_n[0]),
+            ("series_compliance_y_m_per_n", c_m_per_n[1]),
+            ("series_compliance_z_m_per_n", c_m_per_n[2]),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(ContactError::InvalidParameter {
+                    name,
+                    value: v,
+                    reason: "must be finite and ≥ 0 (m/N)",
+                });
+            }
+        }
+        self.series_c = c_m_per_n;
+        self.normal.series_compliance_m_per_n = c_m_per_n[2];
+        self.tang.uniform_x_m_per_pa = c_m_per_n[0] * self.da;
+        self.tang.uniform_y_m_per_pa = c_m_per_n[1] * self.da;
+        Ok(())
+    }
+
+    /// The series compliance `(c_x, c_y, c_z)` (m/N) set by [`Self::set_series_compliance`].
+    pub fn series_compliance(&self) -> [f64; 3] {
+        self.series_c
     }
 
     /// The configuration.
@@ -628,11 +677,21 @@ impl TransientRolling {
 
     fn tangential(&mut self, xi: f64, eta: f64, phi: f64) -> Result<usize, ContactError> {
         let ny = self.ny;
+        // uniform displacement of the series compliance at the start of the step,
+        // −c F(t − Δt) (zero from rest: tx_prev is zero after a reset)
+        let (ucx, ucy) = if self.steps > 0 {
+            (
+                self.series_c[0] * self.tx_prev.iter().sum::<f64>() * self.da,
+                self.series_c[1] * self.ty_prev.iter().sum::<f64>() * self.da,
+            )
+        } else {
+            (0.0, 0.0)
+        };
         for i in 0..self.nx {
             for j in 0..ny {
                 let e = i * ny + j;
-                self.ex[e] = (xi - phi * self.ys[j]) * self.dx - self.upx[e];
-                self.ey[e] = (eta + phi * self.xs[i]) * self.dx - self.upy[e];
+                self.ex[e] = (xi - phi * self.ys[j]) * self.dx - self.upx[e] - ucx;
+                self.ey[e] = (eta + phi * self.xs[i]) * self.dx - self.upy[e] - ucy;
             }
         }
         self.tang.solve(
