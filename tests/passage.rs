@@ -183,7 +183,10 @@ fn passage_grow_and_predict_commands_write_their_outputs() {
 /// traction within 1 % and its energy balances within 1 % (the residual spring's energy
 /// `∫ c F dF` counted); the numbers with and without are printed (F_L / F_N band RMS,
 /// dominant wear wavelength) and the correction is checked to be in use (a non-zero spring
-/// energy exchange, a softer contact: larger static approach).
+/// energy exchange, a softer contact: larger static approach). Measured (this small model,
+/// 1.5 kHz): structural residual x 4.5e-10, t 1.2e-9, n 4.6e-10 m/N; F_L band RMS 66.5 →
+/// 53.3 N, F_N 487.0 → 486.5 N, dominant wear wavelength 74.2 → 71.3 mm, static approach
+/// 1.04e-4 → 1.40e-4 m, energy error 0.065 % → 0.060 %.
 #[test]
 fn residual_flexibility_passage_balances_energy() {
     let mut m = small_model();

@@ -24,23 +24,39 @@
 //! (the hexahedron's shape function), so its load at `x_c` is
 //! `b(x_c) = (1−s) b_p + s b_{p+1}`. The flexibility of *that* load is the quadratic form
 //! `(1−s)² G_pp + 2s(1−s) G_{p,p+1} + s² G_{p+1,p+1}` ([`ResidualFlexibility::consistent_at`]):
-//! it dips between planes because a load shared by two planes indents the coarse mesh
-//! less — a mesh artefact that would modulate the contact stiffness at the element-passing
-//! frequency. The passage uses the **linear** interpolation of the plane values
-//! ([`ResidualFlexibility::at`]), which is smooth along a uniform mesh; it exceeds the
-//! consistent form by `s(1−s)(R_pp + R_{p+1,p+1} − 2R_{p,p+1})`, at most a quarter of that
-//! bracket at mid-element ([`ResidualFlexibility::interpolation_excess`] reports the largest
-//! relative excess; measured on the test track: see tests/moving_load.rs).
+//! it dips between planes because a load shared by two planes indents the mesh less. The
+//! linear interpolation of the plane values ([`ResidualFlexibility::at`]) exceeds it by
+//! `s(1−s)(R_pp + R_{p+1,p+1} − 2R_{p,p+1})`; measured at mid-element
+//! ([`ResidualFlexibility::interpolation_excess`]): +94 % in x, +90 % in n on the default
+//! model at 5 kHz (20 mm elements), +134 % / +96 % on the test track at 3 kHz (80 mm) —
+//! the plane value is dominated by local indentation under a load concentrated on one node
+//! plane, and the consistent form would modulate the contact stiffness at the
+//! element-passing wavelength (20 mm on the default mesh: inside the 20–80 mm band).
 //!
 //! # Local contact flexibility (design-notes.md, "do not count it twice")
-//! `G` of a Hertz-sized load on a coarse mesh contains some local indentation of the head
-//! that the contact's half-space already supplies. [`lateral_spread_flexibility`] measures
-//! how `G` changes when the same load is spread over a wider strip across the head: the part
-//! that does not change with the spread is structural (bending, web and foot shear), the
-//! part that does is local. The passage applies the correction only in the directions
-//! chosen in [`crate::dynamics::passage`] (see its `residual_flexibility` doc and the
-//! numbers there).
-
+//! `G` of a Hertz-sized load on the mesh contains local indentation of the head that the
+//! contact's half-space already supplies (Hertz `dδ/dF` = 6.9e-10 m/N at 100 kN; Mindlin's
+//! no-slip tangential compliance ≈ 8.4e-10 m/N). Measured ([`lateral_spread_flexibility`],
+//! tests/moving_load.rs `residual_flexibility_report`, default model, 126 800 DOFs, 2 kHz,
+//! m/N): G_x 1.22e-9 (modal 2.8e-10), G_n 9.86e-9 (modal 9.07e-9). Spreading the same load
+//! across the head over 2×, 3×, 5× the Hertz semi-width lowers G_x to 8.1e-10, 7.4e-10,
+//! 6.6e-10 and G_n to 9.52e-9, 9.47e-9, 9.41e-9: about half of the plane residual in x and
+//! n is local. The residual of the load spread over one element (the mid-element value,
+//! [`ResidualFlexibility::mid_element`]) at 1/2/3/5 kHz: x 6.1/5.6/4.7/4.2e-10, n
+//! 8.0/4.9/4.1/3.5e-10, t 1.9e-9/9.4/6.4/4.3e-10; on the test track at 3 kHz it agrees with
+//! the laterally spread estimate (x 2.7e-10 both, n 2.2e-10 both), on the default mesh the
+//! lateral spread gives about 30 % less (x 3.8e-10, n 3.5e-10 at 2 kHz), so it may still
+//! hold some local part.
+//!
+//! **Decision.** The passage corrects **x, t and n** with the structural (mid-element)
+//! residual interpolated between element midpoints ([`ResidualFlexibility::structural_at`]):
+//! in x it is 2× the modal flexibility itself (the truncated basis makes the rail head far
+//! too stiff longitudinally: web and foot shear above f_max with the foot held at the RPM3
+//! strips), in n it is 5 % of the rail's flexibility but 50–70 % of the Hertz compliance at
+//! 2–5 kHz, and neither depends on the lateral spread of the load — so it is structural and
+//! is not in the half-space. The plane value is not used (local indentation counted twice,
+//! and mesh-dependent). The x and n choice changes a passage (default model, 2 kHz,
+//! 140 km/h): see the report in the branch's note / tests/passage.rs.
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::SparseColMatRef;
@@ -149,6 +165,9 @@ pub(crate) fn plane_range(
     Ok((p0, p1 + 1))
 }
 
+/// Receives `(plane offset, direction, u)` with `u(i)` the free DOF `i` of a solution.
+pub(crate) type PlaneVisitor<'a> = dyn FnMut(usize, usize, &dyn Fn(usize) -> f64) + 'a;
+
 /// Solves `K u = b_{p,d}` for the unit contact loads of the planes `p0..=p1` of `line` and
 /// the three frame directions, in blocks of right-hand sides, and hands each solution to
 /// `visit(p − p0, d, u)` with `u(i)` the free DOF `i` of the solution.
@@ -159,7 +178,7 @@ pub(crate) fn for_each_plane_solution(
     frame: &ContactFrame,
     p0: usize,
     p1: usize,
-    visit: &mut dyn FnMut(usize, usize, &dyn Fn(usize) -> f64),
+    visit: &mut PlaneVisitor<'_>,
 ) {
     let total = 3 * (p1 - p0 + 1);
     let n = factor.n();
@@ -238,7 +257,7 @@ impl ResidualFlexibility {
                 omega2.len()
             )));
         }
-        if let Some(i) = omega2.iter().position(|&w| !(w > 0.0)) {
+        if let Some(i) = omega2.iter().position(|&w| w.is_nan() || w <= 0.0) {
             return Err(DynamicsError::Other(format!(
                 "residual flexibility: track mode {i} has ω² = {} ≤ 0: the track must be supported (ballast stiffness > 0)",
                 omega2[i]
@@ -298,7 +317,10 @@ impl ResidualFlexibility {
             || self.static_m_per_n.len() != np
             || self.modal_m_per_n.len() != np
             || self.cross_residual_m_per_n.len() != np - 1
-            || self.planes_x_m.windows(2).any(|w| !(w[1] > w[0]))
+            || self
+                .planes_x_m
+                .windows(2)
+                .any(|w| w[1].is_nan() || w[1] <= w[0])
         {
             return Err(DynamicsError::Other(
                 "residual flexibility: inconsistent plane data (clear the modal cache entry)"
