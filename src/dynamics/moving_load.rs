@@ -336,6 +336,19 @@ const GLOBAL: ContactFrame = ContactFrame {
     n: [0.0, 0.0, 1.0],
 };
 
+/// Modal rows (global x, y, z blocks of m values) of each probe.
+fn probe_rows(track: &TrackStructure, modes: &Mat<f64>, probes: &[Probe]) -> Vec<Vec<f64>> {
+    let m = modes.ncols();
+    probes
+        .iter()
+        .map(|p| {
+            let mut r = vec![0.0; 3 * m];
+            modal_rows(&p.nodes, &track.dofmap, modes, &GLOBAL, &mut r);
+            r
+        })
+        .collect()
+}
+
 /// The first modes of a basis (frequencies ascending) up to `f_max_hz` (Hz): frequencies
 /// and the corresponding columns. Truncating a basis solved to a higher f_max gives the
 /// basis of the lower f_max (up to the order of degenerate pairs at the cut).
@@ -405,14 +418,7 @@ pub fn modal_response_corrected(
             sys.omega2[i]
         )));
     }
-    let prow: Vec<Vec<f64>> = probes
-        .iter()
-        .map(|p| {
-            let mut r = vec![0.0; 3 * m];
-            modal_rows(&p.nodes, &track.dofmap, modes, &GLOBAL, &mut r);
-            r
-        })
-        .collect();
+    let prow = probe_rows(track, modes, probes);
     let mut it = ModalVerlet::new(sys, load.dt_s)?;
     let mut rows = vec![0.0; 3 * m];
     let mut f = vec![0.0; m];
@@ -525,14 +531,7 @@ impl ProbeCorrection {
             },
         );
         // Modal part.
-        let prow: Vec<Vec<f64>> = probes
-            .iter()
-            .map(|p| {
-                let mut r = vec![0.0; 3 * m];
-                modal_rows(&p.nodes, &track.dofmap, modes, &GLOBAL, &mut r);
-                r
-            })
-            .collect();
+        let prow = probe_rows(track, modes, probes);
         let mut rows = vec![0.0; 3 * m];
         for i in 0..np {
             line.rows_at(line.planes_x_m[p0 + i], &mut rows)?;
