@@ -12,10 +12,12 @@
 use std::sync::OnceLock;
 
 use corrugation::dynamics::moving_load::{
-    diagonal_damping, direct_response, line_load_vector, modal_response, nearest_plane,
-    truncate_basis, MovingLoad, Probe, ResponseHistory, StaticDirect,
+    diagonal_damping, direct_response, line_load_vector, modal_response, modal_response_corrected,
+    nearest_plane, truncate_basis, MovingLoad, Probe, ProbeCorrection, ResponseHistory,
+    StaticDirect,
 };
 use corrugation::dynamics::reduced::{ContactFrame, ModalSystem, RailContactLine};
+use corrugation::dynamics::residual::StiffnessFactor;
 use corrugation::eigen::basis::track_basis;
 use corrugation::eigen::cache::ModalCache;
 use corrugation::fe::assembly::FeMatrices;
@@ -150,6 +152,22 @@ fn direct_vertical() -> &'static ResponseHistory {
     })
 }
 
+/// The track stiffness factorised once (for the static corrections).
+fn factor() -> &'static StiffnessFactor {
+    static F: OnceLock<StiffnessFactor> = OnceLock::new();
+    F.get_or_init(|| StiffnessFactor::new(setup().mats.k.as_ref()).unwrap())
+}
+
+/// The modal response with the static correction of the truncated modes at the probes,
+/// `u = Φ q + T(x_c) F`.
+fn modal_corrected(s: &Setup, fmax: f64, load: &MovingLoad) -> ResponseHistory {
+    let (phi, sys, line) = reduced(s, fmax);
+    let pr = probes(s, &line);
+    let corr =
+        ProbeCorrection::new(&s.track, factor(), &phi, &sys, &line, &s.frame, load, &pr).unwrap();
+    modal_response_corrected(&s.track, &phi, &sys, &line, load, &pr, Some(&corr)).unwrap()
+}
+
 fn modal(s: &Setup, fmax: f64, load: &MovingLoad, diag: bool) -> ResponseHistory {
     let (phi, sys, line) = reduced(s, fmax);
     let sys = if diag { diagonal_damping(&sys) } else { sys };
@@ -187,7 +205,8 @@ fn direct_load_vector_projects_onto_the_contact_line_rows() {
 /// of |u_modal − u_direct| / max over time |u_direct| (and the same for the change from the
 /// static start, "dyn"). Measured (this set-up): f_max 0.5/1/2/3 kHz → contact node
 /// 13.0/8.0/4.1/3.7 %, foot centre 10.2/5.0/0.9/0.4 % (the same within 0.1 % with Δt 20 µs
-/// over 0.6 m).
+/// over 0.6 m); with the static correction of the truncated modes ([`ProbeCorrection`])
+/// 0.11/0.07/0.03/0.02 % and 0.11/0.07/0.02/0.01 % (asserted: never worse).
 #[test]
 fn moving_vertical_load_modal_matches_direct_newmark() {
     let s = setup();
@@ -197,15 +216,21 @@ fn moving_vertical_load_modal_matches_direct_newmark() {
     for fmax in [500.0, 1000.0, 2000.0, 3000.0] {
         let m = modal(s, fmax, &load, false);
         let e = [m.relative_max_error(d, 0, 2), m.relative_max_error(d, 1, 2)];
+        let c = modal_corrected(s, fmax, &load);
+        let ec = [c.relative_max_error(d, 0, 2), c.relative_max_error(d, 1, 2)];
         eprintln!(
-            "vertical fmax {fmax}: contact z {:.4} (dyn {:.4}), foot z {:.4} (dyn {:.4}); modal {:.3} s, direct {:.2} s",
+            "vertical fmax {fmax}: contact z {:.4} (dyn {:.4}), foot z {:.4} (dyn {:.4}); static correction: contact z {:.4}, foot z {:.4}; modal {:.3} s, direct {:.2} s",
             e[0],
             m.relative_max_change_error(d, 0, 2),
             e[1],
             m.relative_max_change_error(d, 1, 2),
+            ec[0],
+            ec[1],
             m.seconds,
             d.seconds
         );
+        // The static correction does not make the vertical worse.
+        assert!(ec[0] <= e[0] + 1e-3 && ec[1] <= e[1] + 1e-3, "{e:?} {ec:?}");
         errs.push(e);
     }
     // Converges with f_max, and at 3 kHz is within a few %: the section (foot) within 1 %,
@@ -221,36 +246,48 @@ fn moving_vertical_load_modal_matches_direct_newmark() {
 /// Moving longitudinal load (the traction force, 15 kN) at 140 km/h: the longitudinal rail
 /// response, same norm. With RPM3 the rail foot is held rigidly in x at the fastening strips,
 /// so the rail's longitudinal flexibility under a head load is local (web/foot shear) and
-/// lies mostly above 3 kHz: the truncated basis misses most of it (see the static
-/// longitudinal numbers of the static test: the modal static x deflection of the contact node
-/// is 63 % short at 3 kHz). Measured: contact node 74/72/69/63 %, foot centre
-/// 273/292/321/72 % at f_max 0.5/1/2/3 kHz. This test records the
-/// finding (the error is large and falls only slowly) rather than claiming agreement.
+/// lies mostly above 3 kHz: the truncated basis alone misses most of it (measured: contact
+/// node 74/72/69/63 %, foot centre 273/292/321/72 % at f_max 0.5/1/2/3 kHz). With the
+/// static correction of the truncated modes, `u = Φq + T(x_c) F` (residual flexibility,
+/// [`ProbeCorrection`]), the error drops to 0.35/0.34/0.34/0.34 % at the contact node and
+/// 5.1/4.5/4.5/4.8 % at the foot centre (whose x motion is 15× smaller); asserted below.
 #[test]
 fn moving_longitudinal_load_modal_vs_direct_newmark() {
     let s = setup();
     let load = moving(s, traction_on_rail(s));
     let d = direct(s, &load);
     let mut errs = Vec::new();
+    let mut corrected = Vec::new();
     for fmax in [500.0, 1000.0, 2000.0, 3000.0] {
         let m = modal(s, fmax, &load, false);
         let e = m.relative_max_error(&d, 0, 0);
+        let c = modal_corrected(s, fmax, &load);
+        let ec = [
+            c.relative_max_error(&d, 0, 0),
+            c.relative_max_error(&d, 1, 0),
+        ];
         eprintln!(
-            "longitudinal fmax {fmax}: contact x {:.4} (dyn {:.4}), foot x {:.4} (dyn {:.4})",
+            "longitudinal fmax {fmax}: contact x {:.4} (dyn {:.4}), foot x {:.4} (dyn {:.4}); static correction: contact x {:.4} (dyn {:.4}), foot x {:.4} (dyn {:.4})",
             e,
             m.relative_max_change_error(&d, 0, 0),
             m.relative_max_error(&d, 1, 0),
             m.relative_max_change_error(&d, 1, 0),
+            ec[0],
+            c.relative_max_change_error(&d, 0, 0),
+            ec[1],
+            c.relative_max_change_error(&d, 1, 0),
         );
         errs.push(e);
+        corrected.push(ec);
     }
-    // Regression guard on the finding: the contact-node error decreases with f_max but stays
-    // far above a few % at 3 kHz.
-    assert!(errs[3] < errs[0], "{errs:?}");
-    assert!(
-        errs[3] > 0.2,
-        "{errs:?}: now converged? update the report and the assertion"
-    );
+    // The modal path alone: the contact-node error decreases with f_max but stays far above a
+    // few % at 3 kHz (the finding that motivates the correction).
+    assert!(errs[3] < errs[0] && errs[3] > 0.2, "{errs:?}");
+    // With the static correction: within 1 % at the contact node, 6 % at the foot, at any
+    // f_max.
+    for c in &corrected {
+        assert!(c[0] < 0.01 && c[1] < 0.06, "{corrected:?}");
+    }
 }
 
 /// Static deflection under the wheel load at mid-track: modal `ΦΩ⁻²Φᵀf` vs the direct sparse
@@ -465,4 +502,191 @@ fn convergence_table() {
         100.0 * diag.relative_max_error(&dv, 0, 2),
         100.0 * full.relative_max_error(&dv, 0, 2),
     );
+}
+
+/// The residual (static) flexibility of the contact line, `R_d = b_dᵀ K⁻¹ b_d − Σ r_d²/ω²`
+/// (one LLᵀ of K, all planes around mid-track in blocks): printed with the full FE and
+/// modal parts for x, t, n at f_max 0.5/1/2/3 kHz, against the half-space compliances
+/// (Hertz `dδ/dF`, Mindlin's no-slip tangential compliance), and the FE flexibility of the
+/// same load spread over wider strips across the head (the local part shrinks with the
+/// spread; the structural part does not). Measured (m/N): G x/t/n 1.02e-9/1.97e-8/1.01e-8;
+/// plane residual at 0.5/1/2/3 kHz x 7.8/7.6/7.2/6.4e-10, n 12.4/8.1/5.1/4.3e-10 (Hertz
+/// 6.9e-10, tangential 8.4e-10); lateral spread to 27 mm: G x 6.5e-10, n 9.87e-9.
+/// Checked: R ≥ 0 and falls with f_max, and the
+/// normal value at the mid plane equals [`StaticDirect`]'s independent single-RHS solve.
+#[test]
+fn residual_flexibility_of_the_contact_line() {
+    use corrugation::dynamics::residual::{lateral_spread_flexibility, ResidualFlexibility};
+    let s = setup();
+    let x = 0.5 * s.track.layout.length;
+    let factor = StiffnessFactor::new(s.mats.k.as_ref()).unwrap();
+    let mut st = StaticDirect::new(&s.mats).unwrap();
+    let nu = s.model.rail.poisson_ratio;
+    let c_n = s.hertz_compliance_m_per_n;
+    // Mindlin: no-slip tangential stiffness of two equal bodies 4Ga/(2−ν) vs the normal
+    // tangent stiffness Ea/(1−ν²): ratio 2(1−ν)/(2−ν) (circular patch of the same radius).
+    let c_x = c_n * (2.0 - nu) / (2.0 * (1.0 - nu));
+    eprintln!("half-space: Hertz dδ/dF {c_n:.3e} m/N, tangential (no slip) {c_x:.3e} m/N");
+    let mut prev = [f64::INFINITY; 3];
+    for fmax in [500.0, 1000.0, 2000.0, 3000.0] {
+        let (phi, sys, line) = reduced(s, fmax);
+        let r = ResidualFlexibility::compute(
+            &s.track,
+            &factor,
+            &line,
+            &s.frame,
+            &sys.omega2,
+            x - 0.2,
+            x + 0.2,
+        )
+        .unwrap();
+        let [g, md, res] = r.means();
+        let ex = r.interpolation_excess();
+        eprintln!(
+            "fmax {fmax} ({} modes): G x/t/n {:.3e} {:.3e} {:.3e}; modal {:.3e} {:.3e} {:.3e}; R {:.3e} {:.3e} {:.3e} m/N; R/G x {:.2} n {:.2}; linear-interp excess x {:.3} t {:.3} n {:.3}",
+            sys.len(),
+            g[0], g[1], g[2], md[0], md[1], md[2], res[0], res[1], res[2],
+            res[0] / g[0], res[2] / g[2], ex[0], ex[1], ex[2]
+        );
+        for d in 0..3 {
+            assert!(
+                res[d] >= 0.0 && res[d] < prev[d],
+                "fmax {fmax} d {d}: {res:?} {prev:?}"
+            );
+        }
+        prev = res;
+        // Independent check: StaticDirect at the mid plane.
+        let p = nearest_plane(&line, x);
+        let xp = line.planes_x_m[p];
+        let c = st
+            .compare(
+                &s.track,
+                &phi,
+                &sys,
+                &line,
+                &s.frame,
+                xp,
+                [0.0, 0.0, 1.0],
+                &[],
+            )
+            .unwrap();
+        let rn = r.at(xp).unwrap()[2];
+        assert!(
+            (rn - c.residual_flexibility_m_per_n()).abs()
+                <= 1e-6 * c.contact_flexibility_direct_m_per_n,
+            "{rn} vs {}",
+            c.residual_flexibility_m_per_n()
+        );
+    }
+    let p = nearest_plane(&reduced(s, 500.0).2, x);
+    for scale in [1.0, 2.0, 3.0, 5.0] {
+        let b = scale * s.hertz_b_m.max(0.0054);
+        let g = lateral_spread_flexibility(&s.track, &factor, &s.frame, b, p).unwrap();
+        eprintln!(
+            "lateral spread b = {:.1} mm: G x {:.3e} t {:.3e} n {:.3e} m/N",
+            1e3 * b,
+            g[0],
+            g[1],
+            g[2]
+        );
+    }
+}
+
+/// Report (heavy, ignored): the residual flexibility of the contact line on a full model —
+/// the builtin default plus `RESIDUAL_SET` (comma-separated `key=value`), with the track
+/// basis solved (or loaded from `RESIDUAL_CACHE`, default the user cache) up to the largest
+/// of `RESIDUAL_FMAX` (comma-separated Hz, default 1000,2000,3000,5000) and truncated for
+/// the others: the FE, modal, plane and structural (mid-element) residual in x, t, n over
+/// the solution zone, the half-space compliances, and the lateral-spread test at the zone
+/// centre. E.g. `RESIDUAL_CACHE=/tmp/cc-default cargo test --release --test moving_load --
+/// --ignored --nocapture residual_flexibility_report`.
+#[test]
+#[ignore = "minutes on the default model (one LLᵀ of K and the basis)"]
+fn residual_flexibility_report() {
+    use corrugation::dynamics::residual::{lateral_spread_flexibility, ResidualFlexibility};
+    let sets: Vec<String> = std::env::var("RESIDUAL_SET")
+        .ok()
+        .map(|v| {
+            v.split(',')
+                .filter(|s| !s.trim().is_empty())
+                .map(|s| s.trim().to_string())
+                .collect()
+        })
+        .unwrap_or_default();
+    let fmaxes: Vec<f64> = std::env::var("RESIDUAL_FMAX")
+        .ok()
+        .map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .filter(|v: &Vec<f64>| !v.is_empty())
+        .unwrap_or_else(|| vec![1000.0, 2000.0, 3000.0, 5000.0]);
+    let cache = std::env::var("RESIDUAL_CACHE")
+        .map(ModalCache::new)
+        .unwrap_or_else(|_| ModalCache::new(corrugation::eigen::cache::default_cache_dir()));
+    let model = load_model(&ModelSource::Builtin, &sets).unwrap();
+    let track = TrackStructure::build(&model).unwrap();
+    let (mats, _) = track.assemble().unwrap();
+    let t0 = std::time::Instant::now();
+    let basis = track_basis(&model, &track, &cache, fmaxes[fmaxes.len() - 1]).unwrap();
+    eprintln!(
+        "{} free DOFs, {} modes (basis {:.1} s)",
+        track.dofmap.n_free(),
+        basis.frequencies_hz.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    let hertz = corrugation::contact::HertzContact::solve(&corrugation::contact::HertzInput {
+        radius_x_m: model.wheel.radius,
+        radius_y_m: model.contact.rail_crown_radius,
+        youngs_pa: model.rail.youngs_modulus,
+        poisson: model.rail.poisson_ratio,
+        load_n: model.vehicle.wheel_load,
+    })
+    .unwrap();
+    let frame = ContactFrame::for_inclination(model.rail.inclination);
+    let c_n = 1.0 / hertz.stiffness_n_per_m;
+    let nu = model.rail.poisson_ratio;
+    println!(
+        "half-space: Hertz dδ/dF {c_n:.3e} m/N, tangential no-slip {:.3e} m/N (a {:.2} mm, b {:.2} mm)",
+        c_n * (2.0 - nu) / (2.0 * (1.0 - nu)),
+        1e3 * hertz.a_m,
+        1e3 * hertz.b_m
+    );
+    let t1 = std::time::Instant::now();
+    let factor = StiffnessFactor::new(mats.k.as_ref()).unwrap();
+    println!("LLᵀ of K: {:.1} s", t1.elapsed().as_secs_f64());
+    let [z0, z1] = track.layout.solution_zone;
+    println!("| f_max (Hz) | modes | G x | t | n | modal x | t | n | R plane x | t | n | R structural x | t | n | linear excess x / n |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for &fmax in &fmaxes {
+        let (f, phi) = truncate_basis(&basis.frequencies_hz, &basis.modes, fmax);
+        let sys = ModalSystem::new(&f, &phi, mats.c.as_ref(), 0.5).unwrap();
+        let line = RailContactLine::new(&track, &phi, &frame, hertz.b_m).unwrap();
+        let t2 = std::time::Instant::now();
+        let r = ResidualFlexibility::compute(&track, &factor, &line, &frame, &sys.omega2, z0, z1)
+            .unwrap();
+        let [g, md, res] = r.means();
+        let st = r.mean_structural();
+        let ex = r.interpolation_excess();
+        println!(
+            "| {fmax:.0} | {} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.2} / {:.2} |",
+            sys.len(), g[0], g[1], g[2], md[0], md[1], md[2], res[0], res[1], res[2], st[0], st[1], st[2], ex[0], ex[2]
+        );
+        eprintln!(
+            "  ({} planes, {:.1} s)",
+            r.planes_x_m.len(),
+            t2.elapsed().as_secs_f64()
+        );
+    }
+    let empty = Mat::<f64>::zeros(track.dofmap.n_free(), 0);
+    let line = RailContactLine::new(&track, &empty, &frame, hertz.b_m).unwrap();
+    let p = nearest_plane(&line, 0.5 * (z0 + z1));
+    for scale in [1.0, 2.0, 3.0, 5.0] {
+        let b = scale * hertz.b_m;
+        let g = lateral_spread_flexibility(&track, &factor, &frame, b, p).unwrap();
+        println!(
+            "lateral spread b = {:.1} mm: G x {:.3e} t {:.3e} n {:.3e} m/N",
+            1e3 * b,
+            g[0],
+            g[1],
+            g[2]
+        );
+    }
 }

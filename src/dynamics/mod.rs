@@ -15,6 +15,7 @@ pub mod integrator;
 pub mod moving_load;
 pub mod passage;
 pub mod reduced;
+pub mod residual;
 pub mod summary;
 
 pub use summary::{PassageSummary, WavelengthComponent, WavelengthSpectrum};

@@ -60,7 +60,7 @@ use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Mat, Par, Side, Spec};
 
 use super::integrator::ModalVerlet;
-use super::reduced::{modal_rows, ContactFrame, ModalSystem, RailContactLine};
+use super::reduced::{add_nodes_load, modal_rows, ContactFrame, ModalSystem, RailContactLine};
 use super::DynamicsError;
 use crate::fe::assembly::FeMatrices;
 use crate::structure::TrackStructure;
@@ -336,6 +336,19 @@ const GLOBAL: ContactFrame = ContactFrame {
     n: [0.0, 0.0, 1.0],
 };
 
+/// Modal rows (global x, y, z blocks of m values) of each probe.
+fn probe_rows(track: &TrackStructure, modes: &Mat<f64>, probes: &[Probe]) -> Vec<Vec<f64>> {
+    let m = modes.ncols();
+    probes
+        .iter()
+        .map(|p| {
+            let mut r = vec![0.0; 3 * m];
+            modal_rows(&p.nodes, &track.dofmap, modes, &GLOBAL, &mut r);
+            r
+        })
+        .collect()
+}
+
 /// The first modes of a basis (frequencies ascending) up to `f_max_hz` (Hz): frequencies
 /// and the corresponding columns. Truncating a basis solved to a higher f_max gives the
 /// basis of the lower f_max (up to the order of degenerate pairs at the cut).
@@ -376,6 +389,20 @@ pub fn modal_response(
     load: &MovingLoad,
     probes: &[Probe],
 ) -> Result<ResponseHistory, MovingLoadError> {
+    modal_response_corrected(track, modes, sys, line, load, probes, None)
+}
+
+/// [`modal_response`] with the static correction of the truncated modes at the probes,
+/// `u = Φ q + T(x_c) F` ([`ProbeCorrection`], built for the same probes), when given.
+pub fn modal_response_corrected(
+    track: &TrackStructure,
+    modes: &Mat<f64>,
+    sys: &ModalSystem,
+    line: &RailContactLine,
+    load: &MovingLoad,
+    probes: &[Probe],
+    correction: Option<&ProbeCorrection>,
+) -> Result<ResponseHistory, MovingLoadError> {
     load.check(line)?;
     let m = sys.len();
     if modes.ncols() != m || line.modes != m {
@@ -391,14 +418,7 @@ pub fn modal_response(
             sys.omega2[i]
         )));
     }
-    let prow: Vec<Vec<f64>> = probes
-        .iter()
-        .map(|p| {
-            let mut r = vec![0.0; 3 * m];
-            modal_rows(&p.nodes, &track.dofmap, modes, &GLOBAL, &mut r);
-            r
-        })
-        .collect();
+    let prow = probe_rows(track, modes, probes);
     let mut it = ModalVerlet::new(sys, load.dt_s)?;
     let mut rows = vec![0.0; 3 * m];
     let mut f = vec![0.0; m];
@@ -422,6 +442,9 @@ pub fn modal_response(
             let mut u = [0.0; 3];
             for (c, uc) in u.iter_mut().enumerate() {
                 *uc = super::reduced::dot(&r[c * m..(c + 1) * m], q);
+            }
+            if let Some(corr) = correction {
+                corr.add(line, load.x_at(n), load.force_n, p, &mut u);
             }
             h.displacement_m[p].push(u);
         }
@@ -447,6 +470,108 @@ pub fn modal_response(
     Ok(h)
 }
 
+/// Static correction of the probes for the truncated modes (the residual flexibility of
+/// [`super::residual`], extended from the contact point to any probe): for every plane `p`
+/// of the load's path and direction `d` of the frame, the probe's residual displacement
+/// under the unit contact load `b_{p,d}`,
+/// `T_{P,p,d} = e_Pᵀ K⁻¹ b_{p,d} − (e_Pᵀ Φ) Ω⁻² (Φᵀ b_{p,d})` (m/N, global x, y, z).
+/// The corrected response is `u_P = e_Pᵀ Φ q + Σ_d F_d T_{P,d}(x_c)`, with `T` interpolated
+/// by the load's own shape functions (exact static response of the interpolated load).
+#[derive(Clone, Debug)]
+pub struct ProbeCorrection {
+    first_plane: usize,
+    /// `transfer[i][probe][d]` = (x, y, z) residual displacement (m/N).
+    transfer: Vec<Vec<[[f64; 3]; 3]>>,
+}
+
+impl ProbeCorrection {
+    /// Computes the transfers of the planes the load of `load` travels over, with `K`
+    /// factorised in `factor`, the kept `modes` of `sys` and the contact line built from
+    /// them.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        track: &TrackStructure,
+        factor: &super::residual::StiffnessFactor,
+        modes: &Mat<f64>,
+        sys: &ModalSystem,
+        line: &RailContactLine,
+        frame: &ContactFrame,
+        load: &MovingLoad,
+        probes: &[Probe],
+    ) -> Result<Self, MovingLoadError> {
+        load.check(line)?;
+        let m = sys.len();
+        if modes.ncols() != m || line.modes != m || sys.omega2.iter().any(|&w| w <= 0.0) {
+            return Err(MovingLoadError::Input(
+                "the modes, the modal system (all ω² > 0) and the contact line must come from one basis of a supported track".into(),
+            ));
+        }
+        let (a, b) = (load.x_at(0), load.x_at(load.steps));
+        let (p0, p1) = super::residual::plane_range(line, a.min(b), a.max(b))?;
+        let np = p1 - p0 + 1;
+        let mut transfer = vec![vec![[[0.0; 3]; 3]; probes.len()]; np];
+        // Static part: e_Pᵀ K⁻¹ b.
+        super::residual::for_each_plane_solution(
+            track,
+            factor,
+            line,
+            frame,
+            p0,
+            p1,
+            &mut |i, d, u| {
+                for (k, pr) in probes.iter().enumerate() {
+                    for &(node, w) in &pr.nodes {
+                        for c in 0..3 {
+                            if let Some(f) = track.dofmap.free_index(3 * node + c) {
+                                transfer[i][k][d][c] += w * u(f);
+                            }
+                        }
+                    }
+                }
+            },
+        );
+        // Modal part.
+        let prow = probe_rows(track, modes, probes);
+        let mut rows = vec![0.0; 3 * m];
+        for i in 0..np {
+            line.rows_at(line.planes_x_m[p0 + i], &mut rows)?;
+            for (k, pr) in prow.iter().enumerate() {
+                for d in 0..3 {
+                    for c in 0..3 {
+                        let modal: f64 = (0..m)
+                            .map(|j| pr[c * m + j] * rows[d * m + j] / sys.omega2[j])
+                            .sum();
+                        transfer[i][k][d][c] -= modal;
+                    }
+                }
+            }
+        }
+        Ok(ProbeCorrection {
+            first_plane: p0,
+            transfer,
+        })
+    }
+
+    /// Adds the correction of probe `k` for `force` (N, frame) at `x` (m) into `u` (m).
+    fn add(&self, line: &RailContactLine, x: f64, force: [f64; 3], k: usize, u: &mut [f64; 3]) {
+        let Some((p, s)) = line.locate(x) else {
+            return;
+        };
+        for (plane, w) in [(p, 1.0 - s), (p + 1, s)] {
+            if w == 0.0 || plane < self.first_plane {
+                continue;
+            }
+            if let Some(t) = self.transfer.get(plane - self.first_plane) {
+                for d in 0..3 {
+                    for c in 0..3 {
+                        u[c] += w * force[d] * t[k][d][c];
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Adds the free-DOF load vector of `force` (N, on the rail, components along the frame
 /// axes x, t, n) at `x` (m) on the contact line into `f` (length n_free): the contact-line
 /// weights across the rail times the linear shape functions of the two planes around `x`.
@@ -464,21 +589,9 @@ fn add_line_load(
         start_m: px[0],
         end_m: px[px.len() - 1],
     })?;
-    let axes = [frame.x, frame.t, frame.n];
     for (plane, np) in [(p, 1.0 - s), (p + 1, s)] {
-        if np == 0.0 {
-            continue;
-        }
-        for &(node, w) in &line.nodes[plane] {
-            for c in 0..3 {
-                let g: f64 = (0..3).map(|d| force[d] * axes[d][c]).sum();
-                if g == 0.0 {
-                    continue;
-                }
-                if let Some(i) = track.dofmap.free_index(3 * node + c) {
-                    f[i] += np * w * g;
-                }
-            }
+        if np != 0.0 {
+            add_nodes_load(&line.nodes[plane], &track.dofmap, frame, np, force, f);
         }
     }
     Ok(())

@@ -45,6 +45,7 @@ use faer::Mat;
 
 use super::integrator::ModalVerlet;
 use super::reduced::{dot, ContactFrame, ModalSystem, RailContactLine, WheelContact};
+use super::residual::ResidualFlexibility;
 use super::{DynamicsError, RailProfile};
 use crate::contact::WearAccumulator;
 use crate::contact::{Longitudinal, NormalInput, StepInputs, TransientConfig, TransientRolling};
@@ -131,20 +132,28 @@ pub struct EnergyBalance {
     pub damper_dissipation_j: f64,
     /// Frictional work in the contact (J).
     pub frictional_work_j: f64,
-    /// Change of the elastic energy of the contact (Hertz estimate 2/5·F_N·δ) (J).
+    /// Change of the elastic energy of the contact (Hertz estimate 2/5·F_N·δ_H, δ_H the
+    /// approach less the residual spring's share) (J).
     pub contact_energy_change_j: f64,
+    /// Work of the contact forces on the residual (static-correction) spring in series with
+    /// the contact (J): `∫ c F dF` along x and t (the contact solver moves the rail surface
+    /// by `c ΔF`), `∫ F d(c F)` along n (stored `½ c F²` plus `½ ∫ F² dc` of rolling over a
+    /// flexibility that varies along the rail).
+    pub residual_spring_energy_change_j: f64,
     /// Work of the contact forces on the two structures (J): = −(friction + contact energy).
     pub contact_work_j: f64,
 }
 
 impl EnergyBalance {
-    /// `input + spin work − (stored + dampers + friction + contact energy)` over the input
+    /// `input + spin work − (stored + dampers + friction + contact and residual-spring
+    /// energy)` over the input
     /// (−).
     pub fn relative_error(&self) -> f64 {
         let out = self.stored_change_j
             + self.damper_dissipation_j
             + self.frictional_work_j
-            + self.contact_energy_change_j;
+            + self.contact_energy_change_j
+            + self.residual_spring_energy_change_j;
         let scale = self
             .external_work_j
             .abs()
@@ -208,6 +217,9 @@ pub struct PassageEngine {
     hertz_b_m: f64,
     /// Rail-top node rows for the rail-point record: (plane, rows 3m in global x, y, z).
     track_modes_for_point: Option<(usize, [f64; 3], Vec<f64>)>,
+    /// Residual flexibility of the truncated track modes at the contact (static correction),
+    /// `None` = modal flexibility only.
+    residual: Option<ResidualFlexibility>,
 }
 
 fn global_frame() -> ContactFrame {
@@ -393,6 +405,7 @@ impl PassageEngine {
             x_start_m: layout.wheel_start,
             hertz_b_m: hertz.b_m,
             track_modes_for_point,
+            residual: None,
         })
     }
 
@@ -409,6 +422,62 @@ impl PassageEngine {
     /// The track's modal system.
     pub fn track_system(&self) -> &ModalSystem {
         &self.track_sys
+    }
+
+    /// The rail's contact line (modal rows of the contact nodes).
+    pub fn rail_line(&self) -> &RailContactLine {
+        &self.rail_line
+    }
+
+    /// The contact frame.
+    pub fn frame(&self) -> &ContactFrame {
+        &self.frame
+    }
+
+    /// The part of the rail the contact travels over in a passage, `[x_start, x_end]` (m),
+    /// with room for the contact grid.
+    pub fn travel_m(&self) -> [f64; 2] {
+        let px = &self.rail_line.planes_x_m;
+        let end = (self.zone_m[1] + 0.1).min(px[px.len() - 1]);
+        [self.x_start_m.max(px[0]), end]
+    }
+
+    /// Sets (or clears) the residual flexibility of the truncated track modes: when set, its
+    /// structural part ([`ResidualFlexibility::structural_at`], x, t, n) acts as a series
+    /// compliance of the contact at every step. It must cover [`Self::travel_m`] and belong
+    /// to this engine's track modes.
+    pub fn set_residual_flexibility(
+        &mut self,
+        r: Option<ResidualFlexibility>,
+    ) -> Result<(), DynamicsError> {
+        if let Some(r) = &r {
+            let [a, b] = self.travel_m();
+            if r.modes != self.track_sys.len() || !r.covers(a, b) {
+                return Err(DynamicsError::Other(format!(
+                    "residual flexibility of {} modes over [{:.3}, {:.3}] m does not fit the engine ({} track modes, travel [{a:.3}, {b:.3}] m): recompute it",
+                    r.modes,
+                    r.planes_x_m[0],
+                    r.planes_x_m[r.planes_x_m.len() - 1],
+                    self.track_sys.len()
+                )));
+            }
+        }
+        self.residual = r;
+        Ok(())
+    }
+
+    /// The residual flexibility in use, if any.
+    pub fn residual_flexibility(&self) -> Option<&ResidualFlexibility> {
+        self.residual.as_ref()
+    }
+
+    /// Series compliance of the contact at `x` (m): `[c_x, c_y, c_z]` (m/N) in the contact
+    /// solver's axes (rolling, lateral tangent t, normal n), zero without a residual.
+    fn series_compliance_at(&self, x: f64) -> Result<[f64; 3], DynamicsError> {
+        match &self.residual {
+            Some(r) => r.structural_at(x),
+            None => Ok([0.0; 3]),
+        }
     }
 
     /// Hertz semi-axis across the rail at the static load (m).
@@ -478,7 +547,20 @@ impl PassageEngine {
             }
         };
 
+        let set_compliance =
+            |contact: &mut TransientRolling, x: f64| -> Result<[f64; 3], DynamicsError> {
+                let c = self.series_compliance_at(x)?;
+                contact
+                    .set_series_compliance(c)
+                    .map_err(|source| DynamicsError::Contact {
+                        t_s: 0.0,
+                        x_m: x,
+                        source,
+                    })?;
+                Ok(c)
+            };
         // --- Static start: steady rolling at the static load.
+        let mut series_c = set_compliance(&mut contact, x0)?;
         fill_heights(x0, &mut heights);
         let mut static_res = None;
         let mut prev_xi = f64::NAN;
@@ -606,8 +688,11 @@ impl PassageEngine {
         let mut eb = EnergyBalance::default();
         let e_start =
             tr.kinetic_energy() + tr.strain_energy() + wh.kinetic_energy() + wh.strain_energy();
-        let hertz_energy = |f: f64, d: f64| 0.4 * f * d.max(0.0);
-        let e_contact_start = hertz_energy(st.normal_force_n, st.approach_m);
+        // Elastic energy of the half-space (Hertz estimate) on the approach without the
+        // residual spring's share c_z F_N.
+        let hertz_energy = |f: f64, d: f64, cz: f64| 0.4 * f * (d - cz * f).max(0.0);
+        let e_contact_start = hertz_energy(st.normal_force_n, st.approach_m, series_c[2]);
+        let mut f_prev = [st.fx_n, st.fy_n, st.normal_force_n];
         let mut p_damp_prev = if opts.energy {
             tr.damping_power() + wh.damping_power()
         } else {
@@ -657,6 +742,7 @@ impl PassageEngine {
                 v_w[d] = sv;
             }
             let delta = u_r[2] - u_w[2];
+            let c_new = set_compliance(&mut contact, xc)?;
             let xi = (v_w[0] - v_r[0]) / v;
             let eta = (v_w[1] - v_r[1]) / v;
             fill_heights(xc, &mut heights);
@@ -677,6 +763,21 @@ impl PassageEngine {
                 wear.add_step(&contact, xc);
             }
             let f = [r.fx_n, r.fy_n, r.normal_force_n];
+            if opts.energy {
+                // Work of the contact forces on the residual spring (trapezoidal). Tangential:
+                // the contact solver moves the rail surface by c (F_n − F_{n−1}) with the
+                // step's c, work ½ c (F_n² − F_{n−1}²). Normal: the spring's compression is
+                // c F with the current c (absolute), work F̄ (c_n F_n − c_{n−1} F_{n−1}),
+                // which includes ½ F² dc of rolling over a varying flexibility.
+                for d in 0..2 {
+                    eb.residual_spring_energy_change_j +=
+                        0.5 * c_new[d] * (f[d] * f[d] - f_prev[d] * f_prev[d]);
+                }
+                eb.residual_spring_energy_change_j +=
+                    0.5 * (f[2] + f_prev[2]) * (c_new[2] * f[2] - series_c[2] * f_prev[2]);
+            }
+            f_prev = f;
+            series_c = c_new;
             gen_forces(&f, &rr, &mut ft, &mut fw);
             tr.complete(&ft);
             wh.complete(&fw);
@@ -752,7 +853,8 @@ impl PassageEngine {
             let e_end =
                 tr.kinetic_energy() + tr.strain_energy() + wh.kinetic_energy() + wh.strain_energy();
             eb.stored_change_j = e_end - e_start;
-            eb.contact_energy_change_j = hertz_energy(last_fn, last_delta) - e_contact_start;
+            eb.contact_energy_change_j =
+                hertz_energy(last_fn, last_delta, series_c[2]) - e_contact_start;
         }
         let mut w = vec![0.0; nbins];
         wear.work_x(&mut w);
@@ -808,7 +910,7 @@ impl PreparedModel {
         let wb = wheel_basis(model, &wheel, cache, fmax).map_err(|e| other(&e))?;
         let (tm, _) = track.assemble().map_err(|e| other(&e))?;
         let (wm, _) = wheel.assemble().map_err(|e| other(&e))?;
-        let engine = PassageEngine::new(
+        let mut engine = PassageEngine::new(
             model,
             &track,
             &tb.frequencies_hz,
@@ -820,6 +922,22 @@ impl PreparedModel {
             &wm,
             opts,
         )?;
+        if model.run.residual_flexibility {
+            let key =
+                crate::eigen::basis::cache_key(model, fmax, "track").map_err(|e| other(&e))?;
+            let (r, _) = super::residual::cached_residual(
+                cache,
+                &key,
+                &track,
+                tm.k.as_ref(),
+                &engine.rail_line,
+                &engine.frame,
+                &engine.track_sys.omega2,
+                engine.hertz_b_m,
+                engine.travel_m(),
+            )?;
+            engine.set_residual_flexibility(Some(r))?;
+        }
         Ok(PreparedModel {
             engine,
             modal_seconds: tb.seconds + wb.seconds,

@@ -221,6 +221,31 @@ pub(crate) fn modal_rows(
     }
 }
 
+/// Adds `weight · Σ_k w_k (Σ_d force_d · axis_d)` on the nodes `(node, w_k)` into the free-DOF
+/// load vector `f` (constrained DOFs dropped): a contact-frame force (N) spread like the
+/// contact load of one node plane.
+pub(crate) fn add_nodes_load(
+    nodes: &[(usize, f64)],
+    dofmap: &DofMap,
+    frame: &ContactFrame,
+    weight: f64,
+    force: [f64; 3],
+    f: &mut [f64],
+) {
+    let axes = frame.axes();
+    for &(node, w) in nodes {
+        for c in 0..3 {
+            let g: f64 = (0..3).map(|d| force[d] * axes[d][c]).sum();
+            if g == 0.0 {
+                continue;
+            }
+            if let Some(i) = dofmap.free_index(3 * node + c) {
+                f[i] += weight * w * g;
+            }
+        }
+    }
+}
+
 /// The rail's running-surface contact line: for every node plane the modal rows (x, t, n) of
 /// the weighted contact nodes, and the plane positions.
 #[derive(Clone, Debug)]

@@ -79,10 +79,12 @@ pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey
             o.remove(k);
         }
         // The solution zone places the fine mesh (it stays in the key); the speed and the
-        // passage's f_max (keyed separately) do not change the modes.
+        // passage's f_max (keyed separately) and the residual-flexibility switch do not change
+        // the modes.
         if let Some(run) = o.get_mut("run").and_then(|r| r.as_object_mut()) {
             run.remove("speed_kmh");
             run.remove("fmax");
+            run.remove("residual_flexibility");
         }
     }
     let bytes = serde_json::to_vec(&v).map_err(|e| BasisError::Key(e.to_string()))?;

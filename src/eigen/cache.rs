@@ -326,6 +326,43 @@ impl ModalCache {
         result
     }
 
+    /// Stores an auxiliary file `name` (derived data of the basis, e.g. the residual
+    /// flexibility) inside the existing entry of `key`, atomically (temp file + rename).
+    /// Fails when the entry does not exist: derived data lives and dies with its modes.
+    pub fn store_aux(&self, key: &CacheKey, name: &str, bytes: &[u8]) -> Result<(), CacheError> {
+        if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') {
+            return Err(CacheError::InvalidData(format!(
+                "auxiliary file name `{name}` must be a plain file name"
+            )));
+        }
+        let d = self.entry_dir(key);
+        if !d.is_dir() {
+            return Err(CacheError::InvalidData(format!(
+                "no cache entry {} to store `{name}` in",
+                d.display()
+            )));
+        }
+        let tmp = d.join(format!(
+            ".tmp-{name}-{}-{}",
+            std::process::id(),
+            TMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+        ));
+        let result = write_file(&tmp, bytes).and_then(|_| {
+            let fin = d.join(name);
+            fs::rename(&tmp, &fin).map_err(io_err("rename", &tmp))
+        });
+        if result.is_err() {
+            let _ = fs::remove_file(&tmp);
+        }
+        result
+    }
+
+    /// The auxiliary file `name` of the entry of `key`, if present (the caller validates
+    /// its content).
+    pub fn load_aux(&self, key: &CacheKey, name: &str) -> Option<Vec<u8>> {
+        fs::read(self.entry_dir(key).join(name)).ok()
+    }
+
     /// Looks up `key`; validates hashes, shapes and metadata.
     pub fn load(&self, key: &CacheKey) -> CacheLookup {
         let hex = key.hex();

@@ -501,6 +501,15 @@ pub struct Run {
     pub solution_zone_length: f64,
     /// Highest natural frequency kept in the modal bases of the passage (Hz).
     pub fmax: f64,
+    /// Static correction of the truncated track modes at the contact: the structural
+    /// residual flexibility of the rail ([`crate::dynamics::residual`]) in series with the
+    /// contact (default true; `false` = modal flexibility only).
+    #[serde(default = "default_true")]
+    pub residual_flexibility: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 impl Run {

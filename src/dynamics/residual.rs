@@ -1,0 +1,570 @@
+//! Residual (static) flexibility of the rail at the moving contact (issue 5 item 1: "a
+//! static (residual-flexibility) correction for truncated modes at the contact").
+//!
+//! # What it is
+//! For a unit force in direction `d` of the contact frame (x rolling, t lateral tangent,
+//! n normal) spread over the contact nodes of node plane `p` with the **same** lateral
+//! weights as the passage's modal rows ([`RailContactLine`]), the load vector is `b_{p,d}`
+//! (free DOFs). Its static flexibility splits into the part the kept modes carry and the
+//! truncated remainder (Craig & Kurdila, *Fundamentals of Structural Dynamics*, 2006, §14.4):
+//!
+//! ```text
+//! G_d(p)  = b_{p,d}ᵀ K⁻¹ b_{p,d}                       full FE (sparse LLᵀ of K, once)
+//! M_d(p)  = Σ_k r_{d,k}(x_p)² / ω_k²                   modal (kept modes, r = Φᵀ b)
+//! R_d(p)  = G_d(p) − M_d(p) ≥ 0                        residual flexibility (m/N)
+//! ```
+//!
+//! `R ≥ 0` by the Rayleigh–Ritz bound. The modes above f_max respond quasi-statically to
+//! the contact force (their frequencies are far above the excitation), so the rail
+//! displacement at the contact is `u_d = r_d · q + R_d F_d`: the truncated modes act as a
+//! massless spring in series with the contact (the "static correction").
+//!
+//! # Between node planes
+//! The passage interpolates the modal rows linearly between the two planes around `x_c`
+//! (the hexahedron's shape function), so its load at `x_c` is
+//! `b(x_c) = (1−s) b_p + s b_{p+1}`. The flexibility of *that* load is the quadratic form
+//! `(1−s)² G_pp + 2s(1−s) G_{p,p+1} + s² G_{p+1,p+1}` ([`ResidualFlexibility::consistent_at`]):
+//! it dips between planes because a load shared by two planes indents the mesh less. The
+//! linear interpolation of the plane values ([`ResidualFlexibility::at`]) exceeds it by
+//! `s(1−s)(R_pp + R_{p+1,p+1} − 2R_{p,p+1})`; measured at mid-element
+//! ([`ResidualFlexibility::interpolation_excess`]): +94 % in x, +90 % in n on the default
+//! model at 5 kHz (20 mm elements), +134 % / +96 % on the test track at 3 kHz (80 mm) —
+//! the plane value is dominated by local indentation under a load concentrated on one node
+//! plane, and the consistent form would modulate the contact stiffness at the
+//! element-passing wavelength (20 mm on the default mesh: inside the 20–80 mm band).
+//!
+//! # Local contact flexibility (design-notes.md, "do not count it twice")
+//! `G` of a Hertz-sized load on the mesh contains local indentation of the head that the
+//! contact's half-space already supplies (Hertz `dδ/dF` = 6.9e-10 m/N at 100 kN; Mindlin's
+//! no-slip tangential compliance ≈ 8.4e-10 m/N). Measured ([`lateral_spread_flexibility`],
+//! tests/moving_load.rs `residual_flexibility_report`, default model, 126 800 DOFs, 2 kHz,
+//! m/N): G_x 1.22e-9 (modal 2.8e-10), G_n 9.86e-9 (modal 9.07e-9). Spreading the same load
+//! across the head over 2×, 3×, 5× the Hertz semi-width lowers G_x to 8.1e-10, 7.4e-10,
+//! 6.6e-10 and G_n to 9.52e-9, 9.47e-9, 9.41e-9: about half of the plane residual in x and
+//! n is local. The residual of the load spread over one element (the mid-element value,
+//! [`ResidualFlexibility::mid_element`]) at 1/2/3/5 kHz: x 6.1/5.6/4.7/4.2e-10, n
+//! 8.0/4.9/4.1/3.5e-10, t 1.9e-9/9.4/6.4/4.3e-10; on the test track at 3 kHz it agrees with
+//! the laterally spread estimate (x 2.7e-10 both, n 2.2e-10 both), on the default mesh the
+//! lateral spread gives about 30 % less (x 3.8e-10, n 3.5e-10 at 2 kHz), so it may still
+//! hold some local part.
+//!
+//! **Decision.** The passage corrects **x, t and n** with the structural (mid-element)
+//! residual interpolated between element midpoints ([`ResidualFlexibility::structural_at`]):
+//! in x it is 2× the modal flexibility itself (the truncated basis makes the rail head far
+//! too stiff longitudinally: web and foot shear above f_max with the foot held at the RPM3
+//! strips), in n it is 5 % of the rail's flexibility but 50–70 % of the Hertz compliance at
+//! 2–5 kHz, and neither depends on the lateral spread of the load — so it is structural and
+//! is not in the half-space. The plane value is not used (local indentation counted twice,
+//! and mesh-dependent). It changes a passage: default model, `run.fmax = 2000`, 140 km/h,
+//! smooth rail (2 shared cores): F_L band RMS 15.6 → 11.1 N, F_N band RMS 77.1 → 73.6 N,
+//! wear band RMS 0.0304 → 0.0225, dominant wear wavelength 27.6 → 36.4 mm (the ≈ 1.4 kHz
+//! F_L component weakens, the ≈ 1.07 kHz one stays); mean F_N and F_L unchanged within
+//! 0.05 %. The small model of tests/passage.rs: F_L band RMS 66.5 → 53.3 N, energy balance
+//! 0.060 % with the residual spring counted.
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::SparseColMatRef;
+use faer::{Mat, Side};
+use serde::{Deserialize, Serialize};
+
+use super::reduced::{ContactFrame, RailContactLine};
+use super::DynamicsError;
+use crate::fe::assembly::DofMap;
+use crate::structure::TrackStructure;
+
+/// Right-hand sides solved together (memory n × BLOCK × 8 bytes).
+const BLOCK: usize = 24;
+
+/// Revision of the cached residual-flexibility format / method; part of the cache name.
+pub const RESIDUAL_REVISION: u64 = 1;
+
+/// Residual flexibility along the contact line, per node plane, for the three contact-frame
+/// directions `[x, t, n]` (m/N).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ResidualFlexibility {
+    /// Index of the first plane covered in the contact line (−).
+    pub first_plane: usize,
+    /// Positions of the covered planes (m), ascending.
+    pub planes_x_m: Vec<f64>,
+    /// Full static FE flexibility `b_dᵀ K⁻¹ b_d` per plane, `[x, t, n]` (m/N).
+    pub static_m_per_n: Vec<[f64; 3]>,
+    /// Modal part `Σ r_d² / ω²` per plane (m/N).
+    pub modal_m_per_n: Vec<[f64; 3]>,
+    /// Residual cross flexibility between plane `i` and `i+1`,
+    /// `b_{i,d}ᵀ K⁻¹ b_{i+1,d} − Σ r_{i,d} r_{i+1,d} / ω²` (m/N), one fewer than planes.
+    pub cross_residual_m_per_n: Vec<[f64; 3]>,
+    /// Number of kept modes (−).
+    pub modes: usize,
+}
+
+/// `Σ_k w_k a · u(node_k)`: the weighted displacement of a node set along the unit vector `a`
+/// from a free-DOF vector `u` (constrained DOFs are zero).
+fn nodes_dot(
+    nodes: &[(usize, f64)],
+    dofmap: &DofMap,
+    a: [f64; 3],
+    u: impl Fn(usize) -> f64,
+) -> f64 {
+    let mut s = 0.0;
+    for &(node, w) in nodes {
+        for (c, &ac) in a.iter().enumerate() {
+            if ac != 0.0 {
+                if let Some(i) = dofmap.free_index(3 * node + c) {
+                    s += w * ac * u(i);
+                }
+            }
+        }
+    }
+    s
+}
+
+/// The sparse Cholesky factor of the track stiffness `K` (N/m, free DOFs), for block solves.
+pub struct StiffnessFactor {
+    llt: Llt<usize, f64>,
+    n: usize,
+}
+
+impl StiffnessFactor {
+    /// Factorises `K` once (fill-reducing ordering chosen by faer).
+    pub fn new(k: SparseColMatRef<'_, usize, f64>) -> Result<Self, DynamicsError> {
+        let err = |what: &str, e: String| {
+            DynamicsError::Other(format!(
+                "residual flexibility: sparse LLᵀ of the track stiffness ({what}) failed: {e}; the track must be supported (ballast stiffness > 0)"
+            ))
+        };
+        let symbolic = SymbolicLlt::try_new(k.symbolic(), Side::Lower)
+            .map_err(|e| err("symbolic", format!("{e:?}")))?;
+        let llt = Llt::try_new_with_symbolic(symbolic, k, Side::Lower)
+            .map_err(|e| err("numeric", format!("{e:?}")))?;
+        Ok(StiffnessFactor { llt, n: k.nrows() })
+    }
+
+    /// Overwrites the columns of `rhs` (n × k) with `K⁻¹ rhs`.
+    pub fn solve_in_place(&self, rhs: faer::MatMut<'_, f64>) {
+        self.llt.solve_in_place(rhs);
+    }
+
+    /// Number of rows (free DOFs).
+    pub fn n(&self) -> usize {
+        self.n
+    }
+}
+
+/// Index range of the node planes that a contact travelling over `[x_lo, x_hi]` (m) uses:
+/// the planes around both ends included.
+pub(crate) fn plane_range(
+    line: &RailContactLine,
+    x_lo: f64,
+    x_hi: f64,
+) -> Result<(usize, usize), DynamicsError> {
+    let off = |x: f64| {
+        DynamicsError::Other(format!(
+            "residual flexibility: x = {x:.4} m is off the rail [{:.3}, {:.3}] m: lengthen the track (track.bays)",
+            line.planes_x_m[0],
+            line.planes_x_m[line.planes_x_m.len() - 1]
+        ))
+    };
+    let (p0, _) = line.locate(x_lo).ok_or_else(|| off(x_lo))?;
+    let (p1, _) = line.locate(x_hi).ok_or_else(|| off(x_hi))?;
+    Ok((p0, p1 + 1))
+}
+
+/// Receives `(plane offset, direction, u)` with `u(i)` the free DOF `i` of a solution.
+pub(crate) type PlaneVisitor<'a> = dyn FnMut(usize, usize, &dyn Fn(usize) -> f64) + 'a;
+
+/// Solves `K u = b_{p,d}` for the unit contact loads of the planes `p0..=p1` of `line` and
+/// the three frame directions, in blocks of right-hand sides, and hands each solution to
+/// `visit(p − p0, d, u)` with `u(i)` the free DOF `i` of the solution.
+pub(crate) fn for_each_plane_solution(
+    track: &TrackStructure,
+    factor: &StiffnessFactor,
+    line: &RailContactLine,
+    frame: &ContactFrame,
+    p0: usize,
+    p1: usize,
+    visit: &mut PlaneVisitor<'_>,
+) {
+    let total = 3 * (p1 - p0 + 1);
+    let n = factor.n();
+    let mut rhs = Mat::<f64>::zeros(n, BLOCK.min(total));
+    let mut b = vec![0.0; n];
+    let mut start = 0;
+    while start < total {
+        let k = BLOCK.min(total - start);
+        for j in 0..k {
+            let (i, d) = ((start + j) / 3, (start + j) % 3);
+            let mut force = [0.0; 3];
+            force[d] = 1.0;
+            b.iter_mut().for_each(|v| *v = 0.0);
+            super::reduced::add_nodes_load(
+                &line.nodes[p0 + i],
+                &track.dofmap,
+                frame,
+                1.0,
+                force,
+                &mut b,
+            );
+            for (r, &v) in b.iter().enumerate() {
+                rhs[(r, j)] = v;
+            }
+        }
+        factor.solve_in_place(rhs.as_mut().subcols_mut(0, k));
+        for j in 0..k {
+            let (i, d) = ((start + j) / 3, (start + j) % 3);
+            visit(i, d, &|r: usize| rhs[(r, j)]);
+        }
+        start += k;
+    }
+}
+
+/// `G_d(p)` for the planes `p0..=p1` and the cross terms `b_{p,d}ᵀ K⁻¹ b_{p+1,d}`, for the
+/// contact nodes and weights of `line` (the line's modes are not used).
+fn static_flexibility(
+    track: &TrackStructure,
+    factor: &StiffnessFactor,
+    line: &RailContactLine,
+    frame: &ContactFrame,
+    p0: usize,
+    p1: usize,
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let axes = [frame.x, frame.t, frame.n];
+    let np = p1 - p0 + 1;
+    let mut g = vec![[0.0; 3]; np];
+    let mut cross = vec![[0.0; 3]; np.saturating_sub(1)];
+    for_each_plane_solution(track, factor, line, frame, p0, p1, &mut |i, d, u| {
+        g[i][d] = nodes_dot(&line.nodes[p0 + i], &track.dofmap, axes[d], u);
+        if i + 1 < np {
+            cross[i][d] = nodes_dot(&line.nodes[p0 + i + 1], &track.dofmap, axes[d], u);
+        }
+    });
+    (g, cross)
+}
+
+impl ResidualFlexibility {
+    /// Computes the residual flexibility of the planes a contact travelling over
+    /// `[x_lo, x_hi]` (m) uses: `line` built from the kept modes with squared frequencies
+    /// `omega2` (rad²/s², all > 0: the track is supported), `factor` the factorised `K`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn compute(
+        track: &TrackStructure,
+        factor: &StiffnessFactor,
+        line: &RailContactLine,
+        frame: &ContactFrame,
+        omega2: &[f64],
+        x_lo: f64,
+        x_hi: f64,
+    ) -> Result<Self, DynamicsError> {
+        let m = line.modes;
+        if omega2.len() != m {
+            return Err(DynamicsError::Other(format!(
+                "residual flexibility: {} frequencies for a contact line of {m} modes: build both from the same basis",
+                omega2.len()
+            )));
+        }
+        if let Some(i) = omega2.iter().position(|&w| w.is_nan() || w <= 0.0) {
+            return Err(DynamicsError::Other(format!(
+                "residual flexibility: track mode {i} has ω² = {} ≤ 0: the track must be supported (ballast stiffness > 0)",
+                omega2[i]
+            )));
+        }
+        if factor.n() != track.dofmap.n_free() {
+            return Err(DynamicsError::Other(format!(
+                "residual flexibility: K has {} rows but the track {} free DOFs",
+                factor.n(),
+                track.dofmap.n_free()
+            )));
+        }
+        let (p0, p1) = plane_range(line, x_lo.min(x_hi), x_lo.max(x_hi))?;
+        let (g, gc) = static_flexibility(track, factor, line, frame, p0, p1);
+        let np = p1 - p0 + 1;
+        let mut rows: Vec<Vec<f64>> = Vec::with_capacity(np);
+        for p in p0..=p1 {
+            let mut r = vec![0.0; 3 * m];
+            line.rows_at(line.planes_x_m[p], &mut r)?;
+            rows.push(r);
+        }
+        let modal_of = |a: &[f64], b: &[f64], d: usize| -> f64 {
+            (0..m)
+                .map(|k| a[d * m + k] * b[d * m + k] / omega2[k])
+                .sum()
+        };
+        let modal: Vec<[f64; 3]> = rows
+            .iter()
+            .map(|r| [modal_of(r, r, 0), modal_of(r, r, 1), modal_of(r, r, 2)])
+            .collect();
+        let cross: Vec<[f64; 3]> = (0..np.saturating_sub(1))
+            .map(|i| {
+                let (a, b) = (&rows[i], &rows[i + 1]);
+                [
+                    gc[i][0] - modal_of(a, b, 0),
+                    gc[i][1] - modal_of(a, b, 1),
+                    gc[i][2] - modal_of(a, b, 2),
+                ]
+            })
+            .collect();
+        let out = ResidualFlexibility {
+            first_plane: p0,
+            planes_x_m: line.planes_x_m[p0..=p1].to_vec(),
+            static_m_per_n: g,
+            modal_m_per_n: modal,
+            cross_residual_m_per_n: cross,
+            modes: m,
+        };
+        out.check()?;
+        Ok(out)
+    }
+
+    /// Consistency and the Rayleigh–Ritz bound `R ≥ 0` (to round-off: 1e-9 of G).
+    fn check(&self) -> Result<(), DynamicsError> {
+        let np = self.planes_x_m.len();
+        if np < 2
+            || self.static_m_per_n.len() != np
+            || self.modal_m_per_n.len() != np
+            || self.cross_residual_m_per_n.len() != np - 1
+            || self
+                .planes_x_m
+                .windows(2)
+                .any(|w| w[1].is_nan() || w[1] <= w[0])
+        {
+            return Err(DynamicsError::Other(
+                "residual flexibility: inconsistent plane data (clear the modal cache entry)"
+                    .into(),
+            ));
+        }
+        for (p, (g, md)) in self
+            .static_m_per_n
+            .iter()
+            .zip(&self.modal_m_per_n)
+            .enumerate()
+        {
+            for d in 0..3 {
+                if !(g[d].is_finite() && md[d].is_finite()) || g[d] - md[d] < -1e-9 * g[d].abs() {
+                    return Err(DynamicsError::Other(format!(
+                        "residual flexibility at plane x = {:.4} m, direction {d}: FE {:.4e} m/N < modal {:.4e} m/N: the modes do not belong to this stiffness (clear the modal cache entry)",
+                        self.planes_x_m[p], g[d], md[d]
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Residual flexibility `R_d = G_d − M_d` of covered plane `i` (m/N), clamped at 0.
+    pub fn residual(&self, i: usize) -> [f64; 3] {
+        let (g, m) = (self.static_m_per_n[i], self.modal_m_per_n[i]);
+        [
+            (g[0] - m[0]).max(0.0),
+            (g[1] - m[1]).max(0.0),
+            (g[2] - m[2]).max(0.0),
+        ]
+    }
+
+    fn locate(&self, x: f64) -> Option<(usize, f64)> {
+        let px = &self.planes_x_m;
+        if !(x >= px[0] && x <= px[px.len() - 1]) {
+            return None;
+        }
+        let p = px.partition_point(|&v| v <= x).clamp(1, px.len() - 1) - 1;
+        Some((p, (x - px[p]) / (px[p + 1] - px[p])))
+    }
+
+    fn off(&self, x: f64) -> DynamicsError {
+        DynamicsError::Other(format!(
+            "residual flexibility: x = {x:.4} m is outside the covered part of the rail [{:.3}, {:.3}] m (computed for the passage's travel; recompute for this range)",
+            self.planes_x_m[0],
+            self.planes_x_m[self.planes_x_m.len() - 1]
+        ))
+    }
+
+    /// True when `[x_lo, x_hi]` (m) lies in the covered planes.
+    pub fn covers(&self, x_lo: f64, x_hi: f64) -> bool {
+        self.locate(x_lo).is_some() && self.locate(x_hi).is_some()
+    }
+
+    /// `R(x)` (m/N, `[x, t, n]`): linear interpolation of the plane values (what the passage
+    /// uses; see the module doc). No allocation.
+    pub fn at(&self, x: f64) -> Result<[f64; 3], DynamicsError> {
+        let (p, s) = self.locate(x).ok_or_else(|| self.off(x))?;
+        let (a, b) = (self.residual(p), self.residual(p + 1));
+        Ok([0, 1, 2].map(|d| (1.0 - s) * a[d] + s * b[d]))
+    }
+
+    /// `R(x)` of the load the passage applies at `x` (both planes' shape functions):
+    /// `(1−s)² R_pp + 2s(1−s) R_{p,p+1} + s² R_{p+1,p+1}` (m/N).
+    pub fn consistent_at(&self, x: f64) -> Result<[f64; 3], DynamicsError> {
+        let (p, s) = self.locate(x).ok_or_else(|| self.off(x))?;
+        let (a, b, c) = (
+            self.residual(p),
+            self.residual(p + 1),
+            self.cross_residual_m_per_n[p],
+        );
+        Ok([0, 1, 2].map(|d| {
+            ((1.0 - s).powi(2) * a[d] + 2.0 * s * (1.0 - s) * c[d] + s * s * b[d]).max(0.0)
+        }))
+    }
+
+    /// Residual of the load shared equally by the two planes of interval `i` (the
+    /// consistent form at mid-element), `¼(R_ii + R_{i+1,i+1} + 2R_{i,i+1})` (m/N).
+    pub fn mid_element(&self, i: usize) -> [f64; 3] {
+        let (a, b, c) = (
+            self.residual(i),
+            self.residual(i + 1),
+            self.cross_residual_m_per_n[i],
+        );
+        [0, 1, 2].map(|d| (0.25 * (a[d] + b[d] + 2.0 * c[d])).max(0.0))
+    }
+
+    /// The **structural** residual flexibility at `x` (m/N, `[x, t, n]`): the mid-element
+    /// values [`Self::mid_element`] interpolated linearly between element midpoints
+    /// (constant beyond the first and last midpoint). A load spread over one element length
+    /// indents the mesh least; on the test track its residual agrees with that of a load
+    /// spread across the head's width (the part that does not depend on the spread), so it
+    /// excludes the local indentation that the contact's half-space supplies. Smooth along a
+    /// uniform mesh (no modulation at the element-passing wavelength). No allocation.
+    pub fn structural_at(&self, x: f64) -> Result<[f64; 3], DynamicsError> {
+        let (p, s) = self.locate(x).ok_or_else(|| self.off(x))?;
+        let ni = self.cross_residual_m_per_n.len();
+        // Interval midpoints around x: i (x ≥ mid_p) or i−1.
+        let (i0, t) = if s >= 0.5 {
+            if p + 1 >= ni {
+                return Ok(self.mid_element(p));
+            }
+            let (m0, m1) = (self.mid_x(p), self.mid_x(p + 1));
+            (p, (x - m0) / (m1 - m0))
+        } else {
+            if p == 0 {
+                return Ok(self.mid_element(0));
+            }
+            let (m0, m1) = (self.mid_x(p - 1), self.mid_x(p));
+            (p - 1, (x - m0) / (m1 - m0))
+        };
+        let (a, b) = (self.mid_element(i0), self.mid_element(i0 + 1));
+        Ok([0, 1, 2].map(|d| (1.0 - t) * a[d] + t * b[d]))
+    }
+
+    fn mid_x(&self, i: usize) -> f64 {
+        0.5 * (self.planes_x_m[i] + self.planes_x_m[i + 1])
+    }
+
+    /// Largest relative excess of the linear interpolation over the consistent form,
+    /// `(at − consistent)/consistent` at mid-element, per direction (−).
+    pub fn interpolation_excess(&self) -> [f64; 3] {
+        let mut worst = [0.0f64; 3];
+        for w in self.planes_x_m.windows(2) {
+            let x = 0.5 * (w[0] + w[1]);
+            if let (Ok(l), Ok(c)) = (self.at(x), self.consistent_at(x)) {
+                for d in 0..3 {
+                    if c[d] > 0.0 {
+                        worst[d] = worst[d].max(l[d] / c[d] - 1.0);
+                    }
+                }
+            }
+        }
+        worst
+    }
+
+    /// Mean over the covered intervals of the structural (mid-element) residual (m/N).
+    pub fn mean_structural(&self) -> [f64; 3] {
+        let ni = self.cross_residual_m_per_n.len();
+        let mut out = [0.0; 3];
+        for i in 0..ni {
+            let r = self.mid_element(i);
+            for d in 0..3 {
+                out[d] += r[d] / ni as f64;
+            }
+        }
+        out
+    }
+
+    /// Mean over the covered planes of `(G, modal, R)` per direction (m/N), for reports.
+    pub fn means(&self) -> [[f64; 3]; 3] {
+        let np = self.planes_x_m.len() as f64;
+        let mut out = [[0.0; 3]; 3];
+        for i in 0..self.planes_x_m.len() {
+            let r = self.residual(i);
+            for d in 0..3 {
+                out[0][d] += self.static_m_per_n[i][d] / np;
+                out[1][d] += self.modal_m_per_n[i][d] / np;
+                out[2][d] += r[d] / np;
+            }
+        }
+        out
+    }
+}
+
+/// The static FE flexibility `b_dᵀ K⁻¹ b_d` (m/N, `[x, t, n]`) of plane `plane` for the
+/// contact load spread across the head with the Hertz-like weights of semi-width
+/// `half_width_m` (m) — for measuring how much of `G` is local indentation (it shrinks as
+/// the load spreads) and how much structural (it does not).
+pub fn lateral_spread_flexibility(
+    track: &TrackStructure,
+    factor: &StiffnessFactor,
+    frame: &ContactFrame,
+    half_width_m: f64,
+    plane: usize,
+) -> Result<[f64; 3], DynamicsError> {
+    // The line's modal rows are not needed: an empty basis.
+    let empty = Mat::<f64>::zeros(track.dofmap.n_free(), 0);
+    let line = RailContactLine::new(track, &empty, frame, half_width_m)?;
+    if plane + 1 >= line.planes_x_m.len() {
+        return Err(DynamicsError::Other(format!(
+            "plane {plane} out of range ({} planes)",
+            line.planes_x_m.len()
+        )));
+    }
+    let (g, _) = static_flexibility(track, factor, &line, frame, plane, plane + 1);
+    Ok(g[0])
+}
+
+/// Loads the residual flexibility of the track basis under `key` from the modal cache, or
+/// computes it (factorising `K` once) and stores it there, next to the modes. `tag` names
+/// what else determines it (the lateral weights' semi-width and the covered range).
+#[allow(clippy::too_many_arguments)]
+pub fn cached_residual(
+    cache: &crate::eigen::cache::ModalCache,
+    key: &crate::eigen::cache::CacheKey,
+    track: &TrackStructure,
+    k: SparseColMatRef<'_, usize, f64>,
+    line: &RailContactLine,
+    frame: &ContactFrame,
+    omega2: &[f64],
+    half_width_m: f64,
+    x_range_m: [f64; 2],
+) -> Result<(ResidualFlexibility, bool), DynamicsError> {
+    let name = format!(
+        "residual-r{RESIDUAL_REVISION}-b{:016x}-n{}.json",
+        half_width_m.to_bits(),
+        frame.n[1].to_bits()
+    );
+    if let Some(bytes) = cache.load_aux(key, &name) {
+        if let Ok(r) = serde_json::from_slice::<ResidualFlexibility>(&bytes) {
+            if r.modes == line.modes
+                && r.check().is_ok()
+                && r.covers(x_range_m[0], x_range_m[1])
+                && r.first_plane + r.planes_x_m.len() <= line.planes_x_m.len()
+            {
+                return Ok((r, true));
+            }
+        }
+    }
+    let factor = StiffnessFactor::new(k)?;
+    let r = ResidualFlexibility::compute(
+        track,
+        &factor,
+        line,
+        frame,
+        omega2,
+        x_range_m[0],
+        x_range_m[1],
+    )?;
+    let bytes = serde_json::to_vec(&r)
+        .map_err(|e| DynamicsError::Other(format!("residual flexibility: {e}")))?;
+    if let Err(e) = cache.store_aux(key, &name, &bytes) {
+        eprintln!("warning: could not cache the residual flexibility: {e}");
+    }
+    // Use the values exactly as a cache hit reads them back (serde_json may parse one ulp
+    // off), so a fresh and a cached run give identical results.
+    let r = serde_json::from_slice(&bytes)
+        .map_err(|e| DynamicsError::Other(format!("residual flexibility: {e}")))?;
+    Ok((r, false))
+}
