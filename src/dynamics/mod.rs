@@ -80,6 +80,21 @@ pub struct RailProfile {
 }
 
 impl RailProfile {
+    /// Peak-to-trough height of the profile (m): max − min of the tabulated heights.
+    pub fn peak_to_trough_m(&self) -> f64 {
+        let (lo, hi) = self
+            .height_m
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
+        if hi >= lo {
+            hi - lo
+        } else {
+            0.0
+        }
+    }
+
     /// A profile from samples; checks lengths, finiteness and ascending `x`.
     pub fn new(x_m: Vec<f64>, height_m: Vec<f64>) -> Result<Self, DynamicsError> {
         let bad = |reason: String| DynamicsError::Profile {

@@ -48,7 +48,10 @@ use super::reduced::{dot, ContactFrame, ModalSystem, RailContactLine, WheelConta
 use super::residual::ResidualFlexibility;
 use super::{DynamicsError, RailProfile};
 use crate::contact::WearAccumulator;
-use crate::contact::{Longitudinal, NormalInput, StepInputs, TransientConfig, TransientRolling};
+use crate::contact::{
+    GridSpec, HertzContact, HertzInput, Longitudinal, NormalInput, StepInputs, TransientConfig,
+    TransientRolling,
+};
 use crate::model::Model;
 use crate::structure::{TrackStructure, WheelStructure};
 
@@ -517,7 +520,19 @@ impl PassageEngine {
             )));
         }
         let v = speed_m_per_s;
-        let cfg = self.contact_config(v)?;
+        let mut cfg = self.contact_config(v)?;
+        if let Some(p) = profile {
+            let h = HertzContact::solve(&HertzInput {
+                radius_x_m: cfg.radius_x_m,
+                radius_y_m: cfg.radius_y_m,
+                youngs_pa: cfg.youngs_pa,
+                poisson: cfg.poisson,
+                load_n: self.wheel_load_n,
+            })
+            .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
+            let ptp = p.peak_to_trough_m();
+            cfg.grid = grid_for_profile(cfg.grid, cfg.radius_x_m, h.approach_m, ptp);
+        }
         let mut contact = TransientRolling::new(cfg)
             .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
         let dt = contact.time_step_s();
@@ -989,5 +1004,58 @@ impl super::PassageRunner for PreparedModel {
             .engine
             .passage(crate::units::kmh_to_ms(speed_kmh), profile, &opts, None)?;
         super::analysis::summarise(&rec)
+    }
+}
+
+/// The contact grid for a passage over a rail profile of peak-to-trough `ptp_m` (m): the
+/// model's grid (`contact.grid_margin` × the Hertz semi-axes) covers the static patch on a
+/// smooth rail, but over a corrugation the crests ahead of and behind the patch can touch.
+/// The undeformed gap `x²/(2R_x) − (rail height)` can close within the static approach
+/// `δ_H` only where `x²/(2R_x) ≤ δ_H + ptp`, so the grid is lengthened along x to
+/// `L_x ≥ √(2 R_x (δ_H + ptp))` with the **same element size** (hence the same time step
+/// `Δt = Δx/V`, so passages over different trial amplitudes stay comparable). Never shrinks
+/// the grid; the lateral extent is unchanged (the profile varies along x only).
+pub fn grid_for_profile(grid: GridSpec, radius_x_m: f64, approach_m: f64, ptp_m: f64) -> GridSpec {
+    let need = (2.0 * radius_x_m * (approach_m + ptp_m.max(0.0))).sqrt();
+    if !(need.is_finite() && need > grid.half_length_x_m) {
+        return grid;
+    }
+    let dx = grid.dx();
+    let nx = ((2.0 * need / dx).ceil() as usize).max(grid.nx);
+    GridSpec {
+        nx,
+        half_length_x_m: 0.5 * nx as f64 * dx,
+        ..grid
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The reference contact (R 0.46 m on the R300 crown, 100 kN: a = 7.162 mm, δ_H = 104.1
+    /// µm) on the default grid (44 elements, margin 1.4): closed-form half-length
+    /// √(2 R (δ_H + ptp)), element size kept.
+    #[test]
+    fn grid_grows_with_the_corrugation_depth_at_fixed_element_size() {
+        let (r, a, delta) = (0.46, 7.162e-3, 104.1e-6);
+        let g = GridSpec {
+            nx: 44,
+            ny: 32,
+            half_length_x_m: 1.4 * a,
+            half_length_y_m: 1.4 * 5.387e-3,
+        };
+        // smooth rail: √(2Rδ) = 9.79 mm < 10.03 mm → unchanged
+        assert_eq!(grid_for_profile(g, r, delta, 0.0), g);
+        for (ptp, nx) in [(10e-6, 45), (160e-6, 69)] {
+            let w = grid_for_profile(g, r, delta, ptp);
+            let need = (2.0 * r * (delta + ptp)).sqrt();
+            assert_eq!(w.nx, nx, "ptp {ptp}");
+            assert!(w.half_length_x_m >= need && w.half_length_x_m < need + w.dx());
+            assert!((w.dx() - g.dx()).abs() < 1e-15);
+            assert_eq!((w.ny, w.half_length_y_m), (g.ny, g.half_length_y_m));
+        }
+        // never shrinks, bad input leaves the grid alone
+        assert_eq!(grid_for_profile(g, r, f64::NAN, 1e-4), g);
     }
 }

@@ -453,6 +453,8 @@ pub struct Contact {
     pub grid_ny: usize,
     /// Grid half-lengths over the static Hertz semi-axes (−): the grid covers
     /// `grid_margin · a` by `grid_margin · b`; larger when the normal load varies strongly.
+    /// Over a corrugated rail the passage lengthens it along x at the same element size
+    /// (`dynamics::passage::grid_for_profile`).
     pub grid_margin: f64,
 }
 
