@@ -223,6 +223,8 @@ pub struct PassageEngine {
     /// Residual flexibility of the truncated track modes at the contact (static correction),
     /// `None` = modal flexibility only.
     residual: Option<ResidualFlexibility>,
+    /// The constant series compliance applied (m/N), from `residual`.
+    residual_mean: Option<[f64; 3]>,
 }
 
 fn global_frame() -> ContactFrame {
@@ -409,6 +411,7 @@ impl PassageEngine {
             hertz_b_m: hertz.b_m,
             track_modes_for_point,
             residual: None,
+            residual_mean: None,
         })
     }
 
@@ -465,6 +468,7 @@ impl PassageEngine {
                 )));
             }
         }
+        self.residual_mean = r.as_ref().map(|r| r.mean_structural_weighted());
         self.residual = r;
         Ok(())
     }
@@ -475,11 +479,17 @@ impl PassageEngine {
     }
 
     /// Series compliance of the contact at `x` (m): `[c_x, c_y, c_z]` (m/N) in the contact
-    /// solver's axes (rolling, lateral tangent t, normal n), zero without a residual.
+    /// solver's axes (rolling, lateral tangent t, normal n), zero without a residual. The
+    /// length-weighted mean of the structural residual along the travel, the same at every
+    /// `x` ([`ResidualFlexibility::mean_structural_weighted`] says why); `x` must lie in the
+    /// covered range.
     fn series_compliance_at(&self, x: f64) -> Result<[f64; 3], DynamicsError> {
-        match &self.residual {
-            Some(r) => r.structural_at(x),
-            None => Ok([0.0; 3]),
+        match (&self.residual, self.residual_mean) {
+            (Some(r), Some(c)) => {
+                r.structural_at(x)?;
+                Ok(c)
+            }
+            _ => Ok([0.0; 3]),
         }
     }
 
