@@ -663,7 +663,7 @@ fn residual_flexibility_report() {
         let r = ResidualFlexibility::compute(&track, &factor, &line, &frame, &sys.omega2, z0, z1)
             .unwrap();
         let [g, md, res] = r.means();
-        let st = r.mean_structural();
+        let st = r.mean_structural_weighted();
         let ex = r.interpolation_excess();
         println!(
             "| {fmax:.0} | {} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.2} / {:.2} |",

@@ -49,8 +49,7 @@ use super::residual::ResidualFlexibility;
 use super::{DynamicsError, RailProfile};
 use crate::contact::WearAccumulator;
 use crate::contact::{
-    GridSpec, HertzContact, HertzInput, Longitudinal, NormalInput, StepInputs, TransientConfig,
-    TransientRolling,
+    GridSpec, Longitudinal, NormalInput, StepInputs, TransientConfig, TransientRolling,
 };
 use crate::model::Model;
 use crate::structure::{TrackStructure, WheelStructure};
@@ -138,10 +137,9 @@ pub struct EnergyBalance {
     /// Change of the elastic energy of the contact (Hertz estimate 2/5·F_N·δ_H, δ_H the
     /// approach less the residual spring's share) (J).
     pub contact_energy_change_j: f64,
-    /// Work of the contact forces on the residual (static-correction) spring in series with
-    /// the contact (J): `∫ c F dF` along x and t (the contact solver moves the rail surface
-    /// by `c ΔF`), `∫ F d(c F)` along n (stored `½ c F²` plus `½ ∫ F² dc` of rolling over a
-    /// flexibility that varies along the rail).
+    /// Change of the energy `½ c F²` of the residual (static-correction) spring in series
+    /// with the contact, summed over x, t, n (J); `c` is constant along the rail (see
+    /// [`PassageEngine::series_compliance`]).
     pub residual_spring_energy_change_j: f64,
     /// Work of the contact forces on the two structures (J): = −(friction + contact energy).
     pub contact_work_j: f64,
@@ -220,11 +218,13 @@ pub struct PassageEngine {
     hertz_b_m: f64,
     /// Rail-top node rows for the rail-point record: (plane, rows 3m in global x, y, z).
     track_modes_for_point: Option<(usize, [f64; 3], Vec<f64>)>,
+    /// Static Hertz approach at the wheel load (m).
+    hertz_approach_m: f64,
     /// Residual flexibility of the truncated track modes at the contact (static correction),
     /// `None` = modal flexibility only.
     residual: Option<ResidualFlexibility>,
-    /// The constant series compliance applied (m/N), from `residual`.
-    residual_mean: Option<[f64; 3]>,
+    /// The constant series compliance applied, `[c_x, c_t, c_n]` (m/N), from `residual`.
+    series_compliance: [f64; 3],
 }
 
 fn global_frame() -> ContactFrame {
@@ -409,9 +409,10 @@ impl PassageEngine {
             zone_m: layout.solution_zone,
             x_start_m: layout.wheel_start,
             hertz_b_m: hertz.b_m,
+            hertz_approach_m: hertz.approach_m,
             track_modes_for_point,
             residual: None,
-            residual_mean: None,
+            series_compliance: [0.0; 3],
         })
     }
 
@@ -448,10 +449,10 @@ impl PassageEngine {
         [self.x_start_m.max(px[0]), end]
     }
 
-    /// Sets (or clears) the residual flexibility of the truncated track modes: when set, its
-    /// structural part ([`ResidualFlexibility::structural_at`], x, t, n) acts as a series
-    /// compliance of the contact at every step. It must cover [`Self::travel_m`] and belong
-    /// to this engine's track modes.
+    /// Sets (or clears) the residual flexibility of the truncated track modes: when set, the
+    /// length-weighted mean of its structural part along the travel
+    /// ([`ResidualFlexibility::mean_structural_weighted`], x, t, n) is the contact's series
+    /// compliance. It must cover [`Self::travel_m`] and belong to this engine's track modes.
     pub fn set_residual_flexibility(
         &mut self,
         r: Option<ResidualFlexibility>,
@@ -468,7 +469,9 @@ impl PassageEngine {
                 )));
             }
         }
-        self.residual_mean = r.as_ref().map(|r| r.mean_structural_weighted());
+        self.series_compliance = r
+            .as_ref()
+            .map_or([0.0; 3], |r| r.mean_structural_weighted());
         self.residual = r;
         Ok(())
     }
@@ -478,19 +481,12 @@ impl PassageEngine {
         self.residual.as_ref()
     }
 
-    /// Series compliance of the contact at `x` (m): `[c_x, c_y, c_z]` (m/N) in the contact
-    /// solver's axes (rolling, lateral tangent t, normal n), zero without a residual. The
-    /// length-weighted mean of the structural residual along the travel, the same at every
-    /// `x` ([`ResidualFlexibility::mean_structural_weighted`] says why); `x` must lie in the
-    /// covered range.
-    fn series_compliance_at(&self, x: f64) -> Result<[f64; 3], DynamicsError> {
-        match (&self.residual, self.residual_mean) {
-            (Some(r), Some(c)) => {
-                r.structural_at(x)?;
-                Ok(c)
-            }
-            _ => Ok([0.0; 3]),
-        }
+    /// Series compliance of the contact `[c_x, c_y, c_z]` (m/N) in the contact solver's axes
+    /// (rolling, lateral tangent t, normal n), zero without a residual: the length-weighted
+    /// mean of the structural residual along the travel, the same at every position
+    /// ([`ResidualFlexibility::mean_structural_weighted`] says why).
+    pub fn series_compliance(&self) -> [f64; 3] {
+        self.series_compliance
     }
 
     /// Hertz semi-axis across the rail at the static load (m).
@@ -532,16 +528,12 @@ impl PassageEngine {
         let v = speed_m_per_s;
         let mut cfg = self.contact_config(v)?;
         if let Some(p) = profile {
-            let h = HertzContact::solve(&HertzInput {
-                radius_x_m: cfg.radius_x_m,
-                radius_y_m: cfg.radius_y_m,
-                youngs_pa: cfg.youngs_pa,
-                poisson: cfg.poisson,
-                load_n: self.wheel_load_n,
-            })
-            .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
-            let ptp = p.peak_to_trough_m();
-            cfg.grid = grid_for_profile(cfg.grid, cfg.radius_x_m, h.approach_m, ptp);
+            cfg.grid = grid_for_profile(
+                cfg.grid,
+                cfg.radius_x_m,
+                self.hertz_approach_m,
+                p.peak_to_trough_m(),
+            );
         }
         let mut contact = TransientRolling::new(cfg)
             .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
@@ -572,20 +564,15 @@ impl PassageEngine {
             }
         };
 
-        let set_compliance =
-            |contact: &mut TransientRolling, x: f64| -> Result<[f64; 3], DynamicsError> {
-                let c = self.series_compliance_at(x)?;
-                contact
-                    .set_series_compliance(c)
-                    .map_err(|source| DynamicsError::Contact {
-                        t_s: 0.0,
-                        x_m: x,
-                        source,
-                    })?;
-                Ok(c)
-            };
+        let series_c = self.series_compliance;
+        contact
+            .set_series_compliance(series_c)
+            .map_err(|source| DynamicsError::Contact {
+                t_s: 0.0,
+                x_m: x0,
+                source,
+            })?;
         // --- Static start: steady rolling at the static load.
-        let mut series_c = set_compliance(&mut contact, x0)?;
         fill_heights(x0, &mut heights);
         let mut static_res = None;
         let mut prev_xi = f64::NAN;
@@ -717,7 +704,8 @@ impl PassageEngine {
         // residual spring's share c_z F_N.
         let hertz_energy = |f: f64, d: f64, cz: f64| 0.4 * f * (d - cz * f).max(0.0);
         let e_contact_start = hertz_energy(st.normal_force_n, st.approach_m, series_c[2]);
-        let mut f_prev = [st.fx_n, st.fy_n, st.normal_force_n];
+        let f_start = [st.fx_n, st.fy_n, st.normal_force_n];
+        let mut f_end = f_start;
         let mut p_damp_prev = if opts.energy {
             tr.damping_power() + wh.damping_power()
         } else {
@@ -729,7 +717,6 @@ impl PassageEngine {
             f_l0 * vw_x
         };
         let mut qw_prev = wh.q.clone();
-        let mut last_fn = st.normal_force_n;
         let mut last_delta = st.approach_m;
         let t_wall = Instant::now();
         if let Some(pb) = progress {
@@ -767,7 +754,6 @@ impl PassageEngine {
                 v_w[d] = sv;
             }
             let delta = u_r[2] - u_w[2];
-            let c_new = set_compliance(&mut contact, xc)?;
             let xi = (v_w[0] - v_r[0]) / v;
             let eta = (v_w[1] - v_r[1]) / v;
             fill_heights(xc, &mut heights);
@@ -788,21 +774,7 @@ impl PassageEngine {
                 wear.add_step(&contact, xc);
             }
             let f = [r.fx_n, r.fy_n, r.normal_force_n];
-            if opts.energy {
-                // Work of the contact forces on the residual spring (trapezoidal). Tangential:
-                // the contact solver moves the rail surface by c (F_n − F_{n−1}) with the
-                // step's c, work ½ c (F_n² − F_{n−1}²). Normal: the spring's compression is
-                // c F with the current c (absolute), work F̄ (c_n F_n − c_{n−1} F_{n−1}),
-                // which includes ½ F² dc of rolling over a varying flexibility.
-                for d in 0..2 {
-                    eb.residual_spring_energy_change_j +=
-                        0.5 * c_new[d] * (f[d] * f[d] - f_prev[d] * f_prev[d]);
-                }
-                eb.residual_spring_energy_change_j +=
-                    0.5 * (f[2] + f_prev[2]) * (c_new[2] * f[2] - series_c[2] * f_prev[2]);
-            }
-            f_prev = f;
-            series_c = c_new;
+            f_end = f;
             gen_forces(&f, &rr, &mut ft, &mut fw);
             tr.complete(&ft);
             wh.complete(&fw);
@@ -841,7 +813,6 @@ impl PassageEngine {
                 let dut = dot(&slopes[mt..2 * mt], &tr.q);
                 eb.convective_work_j += v * (f[2] * dun + f[1] * dut) * dt;
             }
-            last_fn = r.normal_force_n;
             last_delta = r.approach_m;
             h.t_s.push(t);
             h.x_m.push(xc);
@@ -879,7 +850,10 @@ impl PassageEngine {
                 tr.kinetic_energy() + tr.strain_energy() + wh.kinetic_energy() + wh.strain_energy();
             eb.stored_change_j = e_end - e_start;
             eb.contact_energy_change_j =
-                hertz_energy(last_fn, last_delta, series_c[2]) - e_contact_start;
+                hertz_energy(f_end[2], last_delta, series_c[2]) - e_contact_start;
+            eb.residual_spring_energy_change_j = (0..3)
+                .map(|d| 0.5 * series_c[d] * (f_end[d] * f_end[d] - f_start[d] * f_start[d]))
+                .sum();
         }
         let mut w = vec![0.0; nbins];
         wear.work_x(&mut w);

@@ -49,18 +49,19 @@
 //! hold some local part.
 //!
 //! **Decision.** The passage corrects **x, t and n** with the structural (mid-element)
-//! residual interpolated between element midpoints ([`ResidualFlexibility::structural_at`]):
-//! in x it is 2× the modal flexibility itself (the truncated basis makes the rail head far
-//! too stiff longitudinally: web and foot shear above f_max with the foot held at the RPM3
-//! strips), in n it is 5 % of the rail's flexibility but 50–70 % of the Hertz compliance at
-//! 2–5 kHz, and neither depends on the lateral spread of the load — so it is structural and
-//! is not in the half-space. The plane value is not used (local indentation counted twice,
-//! and mesh-dependent). It changes a passage: default model, `run.fmax = 2000`, 140 km/h,
-//! smooth rail (2 shared cores): F_L band RMS 15.6 → 11.1 N, F_N band RMS 77.1 → 73.6 N,
-//! wear band RMS 0.0304 → 0.0225, dominant wear wavelength 27.6 → 36.4 mm (the ≈ 1.4 kHz
-//! F_L component weakens, the ≈ 1.07 kHz one stays); mean F_N and F_L unchanged within
-//! 0.05 %. The small model of tests/passage.rs: F_L band RMS 66.5 → 53.3 N, energy balance
-//! 0.060 % with the residual spring counted.
+//! residual ([`ResidualFlexibility::mid_element`]), as one constant per direction: its
+//! length-weighted mean along the travel ([`ResidualFlexibility::mean_structural_weighted`];
+//! why constant is said there). In x it is 2× the modal flexibility itself (the truncated
+//! basis makes the rail head far too stiff longitudinally: web and foot shear above f_max
+//! with the foot held at the RPM3 strips), in n it is 5 % of the rail's flexibility but
+//! 50–70 % of the Hertz compliance at 2–5 kHz, and neither depends on the lateral spread of
+//! the load — so it is structural and is not in the half-space. The plane value is not used
+//! (local indentation counted twice, and mesh-dependent). Effect on a passage (default
+//! model, `run.fmax = 2000`, 140 km/h, smooth rail, 2 cores): F_L band RMS 15.6 N without the
+//! correction, 8.8 N with it; F_N band RMS 77.1 → 37.7 N; dominant wear wavelength 27.6 →
+//! 36.5 mm (the ≈ 1.4 kHz F_L component weakens, the ≈ 1.07 kHz one stays); mean F_N and
+//! F_L unchanged within 0.05 %. Energy balance of the small model of tests/passage.rs with
+//! the residual spring counted: within 0.1 %.
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::SparseColMatRef;
@@ -414,38 +415,6 @@ impl ResidualFlexibility {
         [0, 1, 2].map(|d| (0.25 * (a[d] + b[d] + 2.0 * c[d])).max(0.0))
     }
 
-    /// The **structural** residual flexibility at `x` (m/N, `[x, t, n]`): the mid-element
-    /// values [`Self::mid_element`] interpolated linearly between element midpoints
-    /// (constant beyond the first and last midpoint). A load spread over one element length
-    /// indents the mesh least; on the test track its residual agrees with that of a load
-    /// spread across the head's width (the part that does not depend on the spread), so it
-    /// excludes the local indentation that the contact's half-space supplies. Smooth along a
-    /// uniform mesh (no modulation at the element-passing wavelength). No allocation.
-    pub fn structural_at(&self, x: f64) -> Result<[f64; 3], DynamicsError> {
-        let (p, s) = self.locate(x).ok_or_else(|| self.off(x))?;
-        let ni = self.cross_residual_m_per_n.len();
-        // Interval midpoints around x: i (x ≥ mid_p) or i−1.
-        let (i0, t) = if s >= 0.5 {
-            if p + 1 >= ni {
-                return Ok(self.mid_element(p));
-            }
-            let (m0, m1) = (self.mid_x(p), self.mid_x(p + 1));
-            (p, (x - m0) / (m1 - m0))
-        } else {
-            if p == 0 {
-                return Ok(self.mid_element(0));
-            }
-            let (m0, m1) = (self.mid_x(p - 1), self.mid_x(p));
-            (p - 1, (x - m0) / (m1 - m0))
-        };
-        let (a, b) = (self.mid_element(i0), self.mid_element(i0 + 1));
-        Ok([0, 1, 2].map(|d| (1.0 - t) * a[d] + t * b[d]))
-    }
-
-    fn mid_x(&self, i: usize) -> f64 {
-        0.5 * (self.planes_x_m[i] + self.planes_x_m[i + 1])
-    }
-
     /// Largest relative excess of the linear interpolation over the consistent form,
     /// `(at − consistent)/consistent` at mid-element, per direction (−).
     pub fn interpolation_excess(&self) -> [f64; 3] {
@@ -461,19 +430,6 @@ impl ResidualFlexibility {
             }
         }
         worst
-    }
-
-    /// Mean over the covered intervals of the structural (mid-element) residual (m/N).
-    pub fn mean_structural(&self) -> [f64; 3] {
-        let ni = self.cross_residual_m_per_n.len();
-        let mut out = [0.0; 3];
-        for i in 0..ni {
-            let r = self.mid_element(i);
-            for d in 0..3 {
-                out[d] += r[d] / ni as f64;
-            }
-        }
-        out
     }
 
     /// Length-weighted mean of the structural (mid-element) residual over the covered
