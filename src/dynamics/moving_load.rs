@@ -270,6 +270,11 @@ pub struct ResponseHistory {
     pub x_m: Vec<f64>,
     /// `displacement_m[probe][step]` = (x, y, z) (m).
     pub displacement_m: Vec<Vec<[f64; 3]>>,
+    /// `load_point_m[step]`: displacement of the contact line *at the load*, along the
+    /// contact-frame axes (x, t, n) (m) — `b_d(x_c)ᵀ u` with `b_d(x_c)` the load vector of a
+    /// unit force in direction d at the load position (modal: `rows_d(x_c) · q`). This is
+    /// the rail displacement the passage's contact sees (before any series compliance).
+    pub load_point_m: Vec<[f64; 3]>,
     /// Wall time of the time stepping (s).
     pub seconds: f64,
 }
@@ -280,6 +285,7 @@ impl ResponseHistory {
             t_s: Vec::with_capacity(steps + 1),
             x_m: Vec::with_capacity(steps + 1),
             displacement_m: (0..probes).map(|_| Vec::with_capacity(steps + 1)).collect(),
+            load_point_m: Vec::with_capacity(steps + 1),
             seconds: 0.0,
         }
     }
@@ -435,9 +441,11 @@ pub fn modal_response_corrected(
     let q0: Vec<f64> = (0..m).map(|i| f[i] / sys.omega2[i]).collect();
     it.set_state(&q0, &vec![0.0; m], &f);
     let mut h = ResponseHistory::new(probes.len(), load.steps);
-    let record = |h: &mut ResponseHistory, q: &[f64], n: usize| {
+    let record = |h: &mut ResponseHistory, q: &[f64], rows: &[f64], n: usize| {
         h.t_s.push(n as f64 * load.dt_s);
         h.x_m.push(load.x_at(n));
+        h.load_point_m
+            .push([0, 1, 2].map(|d| super::reduced::dot(&rows[d * m..(d + 1) * m], q)));
         for (p, r) in prow.iter().enumerate() {
             let mut u = [0.0; 3];
             for (c, uc) in u.iter_mut().enumerate() {
@@ -449,7 +457,7 @@ pub fn modal_response_corrected(
             h.displacement_m[p].push(u);
         }
     };
-    record(&mut h, &it.q, 0);
+    record(&mut h, &it.q, &rows, 0);
     let t = std::time::Instant::now();
     for n in 1..=load.steps {
         it.advance_displacement();
@@ -464,7 +472,7 @@ pub fn modal_response_corrected(
             }
             .into());
         }
-        record(&mut h, &it.q, n);
+        record(&mut h, &it.q, &rows, n);
     }
     h.seconds = t.elapsed().as_secs_f64();
     Ok(h)
@@ -751,14 +759,29 @@ pub fn direct_response(
     let mut u_new = vec![0.0; n];
 
     let mut h = ResponseHistory::new(probes.len(), load.steps);
-    let record = |h: &mut ResponseHistory, u: &[f64], step: usize| {
+    let axes = [frame.x, frame.t, frame.n];
+    let record = |h: &mut ResponseHistory, u: &[f64], step: usize| -> Result<(), MovingLoadError> {
         h.t_s.push(step as f64 * dt);
-        h.x_m.push(load.x_at(step));
+        let x = load.x_at(step);
+        h.x_m.push(x);
+        // b_d(x)ᵀu with b(x) = (1−s) b_p + s b_{p+1} (the line's interpolation).
+        let (p, s) = line.locate(x).ok_or(MovingLoadError::OffRail {
+            x_m: x,
+            start_m: line.planes_x_m[0],
+            end_m: line.planes_x_m[line.planes_x_m.len() - 1],
+        })?;
+        h.load_point_m.push([0, 1, 2].map(|d| {
+            let at = |q: usize| {
+                super::residual::nodes_dot(&line.nodes[q], &track.dofmap, axes[d], |i| u[i])
+            };
+            (1.0 - s) * at(p) + s * at(p + 1)
+        }));
         for (p, pr) in probes.iter().enumerate() {
             h.displacement_m[p].push(pr.displacement_of(track, u));
         }
+        Ok(())
     };
-    record(&mut h, &u, 0);
+    record(&mut h, &u, 0)?;
     let t = std::time::Instant::now();
     for step in 1..=load.steps {
         // rhs = f_{n+1} + M (a0 u + a2 v + a) + C (a1 u + v)
@@ -787,7 +810,7 @@ pub fn direct_response(
         if !u.iter().all(|x| x.is_finite()) {
             return Err(MovingLoadError::Diverged { step });
         }
-        record(&mut h, &u, step);
+        record(&mut h, &u, step)?;
     }
     h.seconds = t.elapsed().as_secs_f64();
     Ok(h)

@@ -100,7 +100,7 @@ pub struct ResidualFlexibility {
 
 /// `Σ_k w_k a · u(node_k)`: the weighted displacement of a node set along the unit vector `a`
 /// from a free-DOF vector `u` (constrained DOFs are zero).
-fn nodes_dot(
+pub(crate) fn nodes_dot(
     nodes: &[(usize, f64)],
     dofmap: &DofMap,
     a: [f64; 3],
