@@ -31,7 +31,8 @@
 //! model at 5 kHz (20 mm elements), +134 % / +96 % on the test track at 3 kHz (80 mm) —
 //! the plane value is dominated by local indentation under a load concentrated on one node
 //! plane, and the consistent form would modulate the contact stiffness at the
-//! element-passing wavelength (20 mm on the default mesh: inside the 20–80 mm band).
+//! element-passing wavelength (20 mm on the former default mesh, inside the 20–80 mm band;
+//! the default zone mesh is now 10 mm).
 //!
 //! # Local contact flexibility (design-notes.md, "do not count it twice")
 //! `G` of a Hertz-sized load on the mesh contains local indentation of the head that the
