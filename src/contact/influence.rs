@@ -121,11 +121,17 @@ impl Fft2 {
     }
 
     /// Forward transform of `data` whose rows `nonzero_rows..` are zero. The result is left
-    /// in `self.tbuf` in transposed layout (`m2 × m1`).
+    /// in `self.tbuf` in transposed layout (`m2 × m1`). All-zero rows are not transformed.
     fn forward_to_t(&mut self, data: &mut [Complex64], nonzero_rows: usize) {
         let (m1, m2) = (self.m1, self.m2);
-        self.row_f
-            .process_with_scratch(&mut data[..nonzero_rows * m2], &mut self.scratch);
+        let zero = Complex64::new(0.0, 0.0);
+        for i in 0..nonzero_rows {
+            let row = &mut data[i * m2..(i + 1) * m2];
+            // the transform of a zero row is zero (rows outside the contact)
+            if row.iter().any(|v| *v != zero) {
+                self.row_f.process_with_scratch(row, &mut self.scratch);
+            }
+        }
         for i in 0..m1 {
             let row = &data[i * m2..(i + 1) * m2];
             if i < nonzero_rows {
