@@ -148,18 +148,18 @@ impl Fft2 {
             .process_with_scratch(&mut self.tbuf, &mut self.scratch);
     }
 
-    /// Inverse transform of `self.tbuf` (transposed layout); writes rows `0..rows` of `data`.
-    fn inverse_from_t(&mut self, data: &mut [Complex64], rows: usize) {
+    /// Inverse transform of `self.tbuf` (transposed layout); writes rows `r0..r1` of `data`.
+    fn inverse_from_t(&mut self, data: &mut [Complex64], r0: usize, r1: usize) {
         let (m1, m2) = (self.m1, self.m2);
         self.col_i
             .process_with_scratch(&mut self.tbuf, &mut self.scratch);
-        for i in 0..rows {
+        for i in r0..r1 {
             for j in 0..m2 {
                 data[i * m2 + j] = self.tbuf[j * m1 + i];
             }
         }
         self.row_i
-            .process_with_scratch(&mut data[..rows * m2], &mut self.scratch);
+            .process_with_scratch(&mut data[r0 * m2..r1 * m2], &mut self.scratch);
     }
 }
 
@@ -460,7 +460,7 @@ impl Convolver {
         for (t, k) in self.fft.tbuf.iter_mut().zip(&self.kzz) {
             *t *= *k;
         }
-        self.fft.inverse_from_t(&mut self.buf, nx);
+        self.fft.inverse_from_t(&mut self.buf, 0, nx);
     }
 
     /// Tangential displacement differences `(ux, uy)` (m) from tractions `(tx, ty)` (Pa),
@@ -475,7 +475,7 @@ impl Convolver {
     ) {
         debug_assert!(shift <= 1);
         let (nx, ny, m2) = (self.nx, self.ny, self.m2);
-        self.tangential_core(tx, ty, nx + shift);
+        self.tangential_core(tx, ty, shift, nx + shift);
         for i in 0..nx {
             for j in 0..ny {
                 let v = self.buf[(i + shift) * m2 + j];
@@ -490,7 +490,7 @@ impl Convolver {
     pub fn tangential_ext(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64]) {
         let (nx, ny, m2) = (self.nx, self.ny, self.m2);
         debug_assert!(ux.len() >= (nx + 1) * ny && uy.len() >= (nx + 1) * ny);
-        self.tangential_core(tx, ty, nx + 1);
+        self.tangential_core(tx, ty, 0, nx + 1);
         for i in 0..=nx {
             for j in 0..ny {
                 let v = self.buf[i * m2 + j];
@@ -500,7 +500,33 @@ impl Convolver {
         }
     }
 
-    fn tangential_core(&mut self, tx: &[f64], ty: &[f64], rows: usize) {
+    /// Tangential displacement differences `(ux, uy)` (m) from tractions `(tx, ty)` (Pa) on
+    /// the grid rows `r0..r1` only (`r1 ≤ nx`; the other rows of `ux, uy` are left as they
+    /// are): the inverse row transforms of the other rows are skipped.
+    pub fn tangential_rows(
+        &mut self,
+        tx: &[f64],
+        ty: &[f64],
+        ux: &mut [f64],
+        uy: &mut [f64],
+        r0: usize,
+        r1: usize,
+    ) {
+        let (ny, m2) = (self.ny, self.m2);
+        let r1 = r1.min(self.nx);
+        let r0 = r0.min(r1);
+        self.tangential_core(tx, ty, r0, r1);
+        for i in r0..r1 {
+            for j in 0..ny {
+                let v = self.buf[i * m2 + j];
+                ux[i * ny + j] = v.re;
+                uy[i * ny + j] = v.im;
+            }
+        }
+    }
+
+    /// Forward transform, kernel product, inverse on the padded rows `r0..r1`.
+    fn tangential_core(&mut self, tx: &[f64], ty: &[f64], r0: usize, r1: usize) {
         let (nx, ny, m1, m2) = (self.nx, self.ny, self.m1, self.m2);
         let zero = Complex64::new(0.0, 0.0);
         for i in 0..nx {
@@ -527,7 +553,7 @@ impl Convolver {
             }
         }
         std::mem::swap(&mut self.fft.tbuf, &mut self.work);
-        self.fft.inverse_from_t(&mut self.buf, rows);
+        self.fft.inverse_from_t(&mut self.buf, r0, r1);
     }
 }
 
