@@ -2,8 +2,10 @@
 //! the reference contact (100 kN, a × b ≈ 7.2 × 5.4 mm), cold and warm started, and a
 //! 0.25 m passage (of the ~2,500 steps per metre) with a varying normal load and a corrugated rail.
 //!
-//! Run: `cargo run --release --example contact_bench [passage_steps]` (default 2,500 steps
-//! of the passage sequence on the 44 × 32 grid of the passage).
+//! Run: `cargo run --release --example contact_bench [passage_steps [normal_tol
+//! [tangential_tol [forces.csv]]]]` (default 2,500 steps of the passage sequence on the 44 × 32
+//! grid of the passage, the solver tolerances of [`TransientConfig::around_hertz`], forces
+//! written to `target/contact_bench_forces.csv`).
 
 use corrugation::contact::{
     GridSpec, Longitudinal, NormalInput, StepInputs, TransientConfig, TransientRolling,
@@ -24,14 +26,51 @@ fn roll(
     Ok(r)
 }
 
+/// CPU time of this process (user + system, s) from `/proc/self/stat` (Linux, 100 Hz clock
+/// ticks; `NaN` elsewhere): the machine is shared, so wall time alone says little.
+fn cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
+    };
+    // fields after the command name (which is in parentheses): utime and stime are 14 and 15
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let f: Vec<f64> = rest
+        .split_whitespace()
+        .skip(11)
+        .take(2)
+        .filter_map(|v| v.parse().ok())
+        .collect();
+    if f.len() == 2 {
+        (f[0] + f[1]) / 100.0
+    } else {
+        f64::NAN
+    }
+}
+
+/// Command-line argument `k` parsed, if given.
+fn arg<T: std::str::FromStr>(k: usize) -> anyhow::Result<Option<T>>
+where
+    T::Err: std::error::Error + Send + Sync + 'static,
+{
+    Ok(std::env::args().nth(k).map(|a| a.parse()).transpose()?)
+}
+
 fn main() -> anyhow::Result<()> {
+    let passage_steps: usize = arg(1)?.unwrap_or(2500);
+    let defaults = TransientConfig::reference();
+    let normal_tol = arg(2)?.unwrap_or(defaults.normal_tol);
+    let tangential_tol = arg(3)?.unwrap_or(defaults.tangential_tol);
+    let out = std::env::args()
+        .nth(4)
+        .unwrap_or_else(|| "target/contact_bench_forces.csv".into());
     println!("transient rolling step, reference case (R 0.46 / R300, 100 kN, µ 0.4, traction 0.15, 140 km/h)");
     println!(
-        "{:>8} {:>8} {:>10} {:>10} {:>12} {:>10} {:>10} {:>10} {:>10} {:>10}",
+        "{:>8} {:>8} {:>10} {:>10} {:>11} {:>12} {:>10} {:>10} {:>10} {:>10} {:>10}",
         "grid",
         "dx_mm",
         "cold_ms",
         "warm_ms",
+        "warm_cpu_ms",
         "warm_T_ms",
         "N_its",
         "N_prods",
@@ -42,6 +81,8 @@ fn main() -> anyhow::Result<()> {
     for &(nx, ny) in &[(25usize, 25usize), (32, 26), (44, 32), (51, 51)] {
         let mut cfg = TransientConfig::reference();
         cfg.grid = GridSpec { nx, ny, ..cfg.grid };
+        cfg.normal_tol = normal_tol;
+        cfg.tangential_tol = tangential_tol;
         let mut eng = TransientRolling::new(cfg)?;
         // creepage for traction 0.15 (steady), then time steps at that creepage
         let st = roll(
@@ -67,10 +108,11 @@ fn main() -> anyhow::Result<()> {
         // warm: steady rolling with a varying load (1 kHz, ±10 %)
         eng.reset();
         roll(&mut eng, &StepInputs::force_creepage(100e3, xi), 2 * nx)?;
-        let nsteps = 50;
+        let nsteps = 200;
         let dt = eng.time_step_s();
         let (mut nits, mut tits, mut prods) = (0usize, 0usize, 0usize);
         let t0 = Instant::now();
+        let c0 = cpu_seconds();
         for k in 0..nsteps {
             let n =
                 100e3 * (1.0 + 0.1 * (2.0 * std::f64::consts::PI * 1000.0 * k as f64 * dt).sin());
@@ -80,6 +122,7 @@ fn main() -> anyhow::Result<()> {
             prods += r.influence_products;
         }
         let warm = t0.elapsed().as_secs_f64() / nsteps as f64;
+        let warm_cpu = (cpu_seconds() - c0) / nsteps as f64;
         // warm with prescribed Fx (creepage solved per step)
         let t0 = Instant::now();
         for k in 0..10 {
@@ -109,11 +152,12 @@ fn main() -> anyhow::Result<()> {
             t0.elapsed().as_secs_f64() / 200.0 * 1e6
         };
         println!(
-            "{:>8} {:>8.3} {:>10.3} {:>10.3} {:>12.3} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {:>10.1}",
+            "{:>8} {:>8.3} {:>10.3} {:>10.3} {:>11.3} {:>12.3} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {:>10.1}",
             format!("{nx}x{ny}"),
             cfg.grid.dx() * 1e3,
             cold * 1e3,
             warm * 1e3,
+            warm_cpu * 1e3,
             warm_t * 1e3,
             nits as f64 / nsteps as f64,
             (prods - tits) as f64 / nsteps as f64,
@@ -127,12 +171,9 @@ fn main() -> anyhow::Result<()> {
     // rail (40 mm, 20 µm peak-to-trough), constant creepage; wear accumulated rail-fixed. The
     // forces of every step are written to `target/contact_bench_forces.csv` (to compare
     // solvers).
-    let passage_steps: usize = std::env::args()
-        .nth(1)
-        .map(|a| a.parse())
-        .transpose()?
-        .unwrap_or(2500);
     let mut cfg = TransientConfig::reference();
+    cfg.normal_tol = normal_tol;
+    cfg.tangential_tol = tangential_tol;
     cfg.grid = GridSpec {
         nx: 44,
         ny: 32,
@@ -159,6 +200,7 @@ fn main() -> anyhow::Result<()> {
     let xs: Vec<f64> = eng.x_m().to_vec();
     let mut forces = Vec::with_capacity(nsteps);
     let t0 = Instant::now();
+    let c0 = cpu_seconds();
     let mut fmin = f64::INFINITY;
     let mut fmax = 0.0_f64;
     let (mut np, mut tp, mut ni) = (0usize, 0usize, 0usize);
@@ -183,12 +225,16 @@ fn main() -> anyhow::Result<()> {
         wear.add_step(&eng, xc);
     }
     let el = t0.elapsed().as_secs_f64();
+    let cpu = cpu_seconds() - c0;
     println!(
-        "passage sequence, 44x32 grid (dx {:.3} mm): {} steps in {:.2} s ({:.3} ms/step, {:.1} normal CG its, {:.1} normal + {:.1} tangential FFT pairs/step); F_N {:.1}..{:.1} kN; total frictional work {:.3} J",
+        "passage sequence, 44x32 grid (dx {:.3} mm, tol N {:.0e} T {:.0e}): {} steps in {:.2} s wall, {:.2} s CPU ({:.3} ms/step CPU, {:.1} normal CG its, {:.1} normal + {:.1} tangential FFT pairs/step); F_N {:.1}..{:.1} kN; total frictional work {:.3} J",
         dx * 1e3,
+        cfg.normal_tol,
+        cfg.tangential_tol,
         nsteps,
         el,
-        el * 1e3 / nsteps as f64,
+        cpu,
+        cpu * 1e3 / nsteps as f64,
         ni as f64 / nsteps as f64,
         np as f64 / nsteps as f64,
         tp as f64 / nsteps as f64,
@@ -200,6 +246,6 @@ fn main() -> anyhow::Result<()> {
     for (k, (f, fx, p)) in forces.iter().enumerate() {
         csv.push_str(&format!("{k},{f:.9e},{fx:.9e},{p:.9e}\n"));
     }
-    std::fs::write("target/contact_bench_forces.csv", csv)?;
+    std::fs::write(&out, csv)?;
     Ok(())
 }

@@ -49,6 +49,10 @@ pub struct TangentialSolver {
     rx: Vec<f64>,
     ry: Vec<f64>,
     kap: Vec<f64>,
+    /// Elements `lo..hi` hold every element with a positive traction bound (the contact);
+    /// the CG loops run over them only.
+    lo: usize,
+    hi: usize,
     /// The algorithm for the slip directions.
     pub algorithm: TangentialAlgorithm,
     /// Slip distance S_x of the last solve (m).
@@ -92,6 +96,8 @@ impl TangentialSolver {
             rx: vec![0.0; n],
             ry: vec![0.0; n],
             kap: vec![0.0; n],
+            lo: 0,
+            hi: n,
             algorithm: TangentialAlgorithm::Newton,
             sx: vec![0.0; n],
             sy: vec![0.0; n],
@@ -136,7 +142,7 @@ impl TangentialSolver {
 
     /// Slip tractions back onto their circles `|τ_i| = g_i` (after turns along the tangent).
     fn to_circles(&self, g: &[f64], tx: &mut [f64], ty: &mut [f64]) {
-        for i in 0..g.len() {
+        for i in self.lo..self.hi {
             if self.slip[i] && g[i] > 0.0 {
                 let s = g[i] / (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
                 tx[i] *= s;
@@ -151,7 +157,7 @@ impl TangentialSolver {
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
         let mut rr = 0.0;
         let mut rmax = 0.0_f64;
-        for i in 0..g.len() {
+        for i in self.lo..self.hi {
             let (rx, ry) = if g[i] <= 0.0 {
                 (0.0, 0.0)
             } else if self.slip[i] {
@@ -230,6 +236,18 @@ impl TangentialSolver {
             self.slip[i] =
                 g[i] > 0.0 && tx[i] * tx[i] + ty[i] * ty[i] >= g[i] * g[i] * (1.0 - 1e-12);
         }
+        // the range of the contact: outside it g = 0, so τ, the residual and the search
+        // direction are zero, and the CG needs neither its slip nor its displacement (every
+        // solve ends with an exact product over the whole grid)
+        let lo = g.iter().position(|&v| v > 0.0).unwrap_or(0);
+        let hi = g.iter().rposition(|&v| v > 0.0).map_or(lo, |k| k + 1);
+        (self.lo, self.hi) = (lo, hi);
+        let ny = conv.dims().1;
+        let (row0, row1) = (lo / ny, hi.div_ceil(ny));
+        for v in [&mut self.dx_, &mut self.dy_] {
+            v[..lo].fill(0.0);
+            v[hi..].fill(0.0);
+        }
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
         let (cdx, cdy) = (conv.diag_xx, conv.diag_yy);
         let s_tol = self.tol * gmax * conv.diag_t;
@@ -239,7 +257,7 @@ impl TangentialSolver {
             // 1. element test of the slip elements: release to adhesion, tangent directions
             let mut changed = false;
             let mut dmax = 0.0_f64;
-            for i in 0..n {
+            for i in lo..hi {
                 if !self.slip[i] {
                     continue;
                 }
@@ -289,7 +307,7 @@ impl TangentialSolver {
             self.rx.copy_from_slice(&self.dx_);
             self.ry.copy_from_slice(&self.dy_);
             if !norot {
-                for i in 0..n {
+                for i in lo..hi {
                     self.kap[i] = if self.slip[i] && g[i] > 0.0 {
                         let m = (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
                         (-(self.sx[i] * tx[i] + self.sy[i] * ty[i]) / m).max(0.0) / g[i]
@@ -304,10 +322,10 @@ impl TangentialSolver {
                 (0.01 * rmax).max(0.5 * s_tol)
             };
             while self.products < self.cg_iterations {
-                conv.tangential(&self.dx_, &self.dy_, &mut self.qx, &mut self.qy, 0);
+                conv.tangential_rows(&self.dx_, &self.dy_, &mut self.qx, &mut self.qy, row0, row1);
                 let (cux, cuy) = self.uniform(&self.dx_, &self.dy_);
                 if cux != 0.0 || cuy != 0.0 {
-                    for i in 0..n {
+                    for i in lo..hi {
                         self.qx[i] += cux;
                         self.qy[i] += cuy;
                     }
@@ -316,7 +334,7 @@ impl TangentialSolver {
                 exact_now = false;
                 // model product w = C d on adhesion, P C d + κ d on slip (d ∥ tangent there)
                 let mut den = 0.0;
-                for i in 0..n {
+                for i in lo..hi {
                     den += self.qx[i] * self.dx_[i]
                         + self.qy[i] * self.dy_[i]
                         + self.kap[i] * (self.dx_[i] * self.dx_[i] + self.dy_[i] * self.dy_[i]);
@@ -326,7 +344,7 @@ impl TangentialSolver {
                 }
                 let alpha = rr / den;
                 let mut violated = false;
-                for i in 0..n {
+                for i in lo..hi {
                     self.sx[i] += alpha * self.qx[i];
                     self.sy[i] += alpha * self.qy[i];
                     if g[i] <= 0.0 {
@@ -356,7 +374,7 @@ impl TangentialSolver {
                     self.residual(g, false)
                 } else {
                     let (mut rr, mut rmax) = (0.0, 0.0_f64);
-                    for i in 0..n {
+                    for i in lo..hi {
                         let (wx, wy) = if g[i] <= 0.0 {
                             (0.0, 0.0)
                         } else if self.slip[i] {
@@ -384,7 +402,7 @@ impl TangentialSolver {
                 }
                 let beta = rr_new / rr;
                 rr = rr_new;
-                for i in 0..n {
+                for i in lo..hi {
                     self.dx_[i] = self.qx[i] + beta * self.dx_[i];
                     self.dy_[i] = self.qy[i] + beta * self.dy_[i];
                 }
