@@ -19,7 +19,7 @@ use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 
 use super::factor::{ShiftFactor, ShiftedSystem};
-use super::spmm::{sym_spmm, tall_mul_add, tall_t_mul};
+use super::spmm::{sym_spmm, tall_mul_add, tall_right_mul_in_place, tall_t_mul};
 use super::{
     hz_to_lambda, lambda_to_hz, EigenError, EigenOptions, EigenSolution, EigenTiming, SliceReport,
 };
@@ -71,22 +71,37 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
-    /// Makes `z` M-orthonormal and M-orthogonal to `locked` and `basis` (both M-orthonormal).
-    /// Returns `(c, r)` with `z_in = locked·(…) + basis·c + z_out·r`; the `locked` part is
-    /// dropped (it only removes round-off: `locked` spans eigenvectors, see module doc).
-    /// Columns that vanish (rank deficiency) are replaced by random directions with a zero row
-    /// in `r`. `mz` is n × b scratch.
+    /// Makes `z` M-orthonormal and M-orthogonal to `locked` and `basis` (both M-orthonormal),
+    /// given `m_locked = M·locked` and `m_basis = M·basis`. Returns `(c, r)` with
+    /// `z_in = locked·(…) + basis·c + z_out·r`; the `locked` part is dropped (it only removes
+    /// round-off: `locked` spans eigenvectors, see module doc). Columns that vanish (rank
+    /// deficiency) are replaced by random directions with a zero row in `r`. On return `mz`
+    /// holds `M·z_out` (used by the caller as the next block's `M q`).
+    ///
+    /// Every pass computes `M z` afresh (one sparse product), then carries it through the
+    /// projection (`M z −= M V c`) and the Löwdin transformation (`M z ← M z · S`) with dense
+    /// products, instead of a second sparse product per pass. The carried product is exact
+    /// up to round-off of the size of the projection's own cancellation, which the next
+    /// pass (with a fresh `M z`) removes; the last pass changes `z` by `O(u)` only.
+    #[allow(clippy::too_many_arguments)]
     fn orthonormalize(
         &mut self,
         locked: MatRef<'_, f64>,
+        m_locked: MatRef<'_, f64>,
         basis: MatRef<'_, f64>,
+        m_basis: MatRef<'_, f64>,
         mut z: MatMut<'_, f64>,
         mut mz: MatMut<'_, f64>,
+        scratch: &mut Mat<f64>,
     ) -> Result<(Mat<f64>, Mat<f64>), EigenError> {
         let b = z.ncols();
         let j = basis.ncols();
+        let n = z.nrows();
         // Tall-skinny products, split over row ranges (see `spmm`).
         let par = self.par;
+        if scratch.nrows() != n || scratch.ncols() != b {
+            *scratch = Mat::<f64>::zeros(n, b);
+        }
         let mut c = Mat::<f64>::zeros(j, b);
         let mut r_acc = Mat::<f64>::identity(b, b);
         let mut pass = 0;
@@ -102,7 +117,9 @@ impl Ctx<'_> {
             // replacement, which is not orthogonal to them).
             let project_locked = locked.ncols() > 0 && (pass == 1 || replaced_last);
             replaced_last = false;
+            let t = Instant::now();
             sym_spmm(self.m, z.as_ref(), mz.as_mut());
+            self.timing.orthogonalize_spmm_s += t.elapsed().as_secs_f64();
             let before: Vec<f64> = (0..b)
                 .map(|i| z.as_ref().col(i).transpose() * mz.as_ref().col(i))
                 .collect();
@@ -115,10 +132,12 @@ impl Ctx<'_> {
             if project_locked {
                 let cl = tall_t_mul(locked, mz.as_ref(), par);
                 tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
+                tall_mul_add(mz.as_mut(), m_locked, cl.as_ref(), -1.0, par);
             }
             if j > 0 {
                 let cv = tall_t_mul(basis, mz.as_ref(), par);
                 tall_mul_add(z.as_mut(), basis, cv.as_ref(), -1.0, par);
+                tall_mul_add(mz.as_mut(), m_basis, cv.as_ref(), -1.0, par);
                 // c += cv · r_acc
                 matmul(
                     c.as_mut(),
@@ -130,13 +149,12 @@ impl Ctx<'_> {
                 );
             }
             // Symmetric (Löwdin) orthonormalisation of the block.
-            sym_spmm(self.m, z.as_ref(), mz.as_mut());
             let mut g = tall_t_mul(z.as_ref(), mz.as_ref(), par);
             let gt = g.transpose().to_owned();
             g += gt;
             g *= faer::Scale(0.5);
             shrink = (0..b)
-                .map(|i| (g[(i, i)] / before[i].max(f64::MIN_POSITIVE)).sqrt())
+                .map(|i| (g[(i, i)].max(0.0) / before[i].max(f64::MIN_POSITIVE)).sqrt())
                 .fold(f64::INFINITY, f64::min);
             let (lam, u) = dense_eig(g.as_ref())?;
             let mut scaled = u.clone();
@@ -156,16 +174,23 @@ impl Ctx<'_> {
                     }
                 }
             }
-            let mut znew = Mat::<f64>::zeros(z.nrows(), b);
-            tall_mul_add(znew.as_mut(), z.as_ref(), scaled.as_ref(), 1.0, par);
-            z.copy_from(&znew);
+            // z ← z·S and M z ← M z·S.
+            for mut x in [z.as_mut(), mz.as_mut()] {
+                scratch.fill(0.0);
+                tall_mul_add(scratch.as_mut(), x.as_ref(), scaled.as_ref(), 1.0, par);
+                x.copy_from(&*scratch);
+            }
             for &i in &deficient {
-                for row in 0..z.nrows() {
+                for row in 0..n {
                     z[(row, i)] = self.rng.next_f64();
                 }
                 replaced_last = true;
             }
             r_acc = mm(r.as_ref(), r_acc.as_ref(), Par::Seq);
+        }
+        if replaced_last {
+            // Random columns of the last pass: their carried M z is not valid.
+            sym_spmm(self.m, z.as_ref(), mz.as_mut());
         }
         self.timing.orthogonalization_passes += pass;
         self.timing.orthogonalized_blocks += 1;
@@ -214,6 +239,15 @@ fn lanczos_slice(
         });
     }
     let mut v = Mat::<f64>::zeros(n, m_max);
+    // M·V, kept alongside V so that the Gram–Schmidt passes need one sparse product each.
+    let mut mv = Mat::<f64>::zeros(n, m_max);
+    let mut m_locked = Mat::<f64>::zeros(n, p);
+    if p > 0 {
+        let t = Instant::now();
+        sym_spmm(ctx.m, locked, m_locked.as_mut());
+        ctx.timing.orthogonalize_spmm_s += t.elapsed().as_secs_f64();
+    }
+    let mut scratch = Mat::<f64>::zeros(n, b);
     let mut h = Mat::<f64>::zeros(m_max + b, m_max);
     let mut q = Mat::<f64>::from_fn(n, b, |_, _| ctx.rng.next_f64());
     let mut z = Mat::<f64>::zeros(n, b);
@@ -224,14 +258,25 @@ fn lanczos_slice(
         (Mat::<f64>::zeros(0, 0), Mat::<f64>::zeros(0, 0))
     };
     let mut buf = ctx.sys.solve_buffer(b);
-    ctx.orthonormalize(locked, v.as_ref().subcols(0, 0), q.as_mut(), mz.as_mut())?;
+    // mq = M q throughout (returned by every orthonormalisation).
+    let mut mq = Mat::<f64>::zeros(n, b);
+    ctx.orthonormalize(
+        locked,
+        m_locked.as_ref(),
+        v.as_ref().subcols(0, 0),
+        mv.as_ref().subcols(0, 0),
+        q.as_mut(),
+        mq.as_mut(),
+        &mut scratch,
+    )?;
     let mut j = 0usize;
     let mut restarts = 0usize;
     let mut solved = 0usize;
     loop {
         while j + b <= m_max {
             v.as_mut().subcols_mut(j, b).copy_from(&q);
-            sym_spmm(ctx.m, q.as_ref(), z.as_mut());
+            mv.as_mut().subcols_mut(j, b).copy_from(&mq);
+            z.copy_from(&mq);
             let t = Instant::now();
             if opts.refine_solves {
                 rhs.copy_from(&z);
@@ -257,14 +302,18 @@ fn lanczos_slice(
             let t = Instant::now();
             let (c, r) = ctx.orthonormalize(
                 locked,
+                m_locked.as_ref(),
                 v.as_ref().subcols(0, j + b),
+                mv.as_ref().subcols(0, j + b),
                 z.as_mut(),
                 mz.as_mut(),
+                &mut scratch,
             )?;
             ctx.timing.orthogonalize_s += t.elapsed().as_secs_f64();
             h.as_mut().submatrix_mut(0, j, j + b, b).copy_from(&c);
             h.as_mut().submatrix_mut(j + b, j, b, b).copy_from(&r);
             std::mem::swap(&mut q, &mut z);
+            std::mem::swap(&mut mq, &mut mz);
             j += b;
         }
         // Rayleigh–Ritz on the symmetric part.
@@ -354,9 +403,8 @@ fn lanczos_slice(
         let mut sel: Vec<usize> = order[..kkeep - neg.len()].to_vec();
         sel.extend_from_slice(&neg);
         let s_sel = Mat::<f64>::from_fn(j, kkeep, |r, c| s[(r, sel[c])]);
-        let vk = mm(v.as_ref().subcols(0, j), s_sel.as_ref(), ctx.par);
-        v.as_mut().subcols_mut(0, kkeep).copy_from(&vk);
-        drop(vk);
+        tall_right_mul_in_place(v.as_mut(), s_sel.as_ref(), ctx.par);
+        tall_right_mul_in_place(mv.as_mut(), s_sel.as_ref(), ctx.par);
         let ek = Mat::<f64>::from_fn(b, kkeep, |r, c| es[(r, sel[c])]);
         h.fill(0.0);
         for (i, &idx) in sel.iter().enumerate() {
@@ -637,12 +685,14 @@ pub fn solve(
             let xn = x.col(c).norm_l2();
             backward.push(num / ((k_norm + lam.abs() * m_norm) * xn));
         }
-        // Orthonormality against this chunk: all columns (full) or a window of neighbours.
+        // Orthonormality against this chunk: all columns (full) or a window of neighbours;
+        // ΦᵀMΦ is symmetric, so only the columns up to the chunk's last are needed (every
+        // pair is met once, by the chunk of its later column).
         let (a0, a1) = if full {
-            (0, total)
+            (0, c0 + w)
         } else {
             let span = 2 * target.max(chunk);
-            (c0.saturating_sub(span), (c0 + w + span).min(total))
+            (c0.saturating_sub(span), c0 + w)
         };
         let g = mm(
             phi.as_ref().subcols(a0, a1 - a0).transpose(),

@@ -185,6 +185,9 @@ pub struct EigenTiming {
     pub check_s: f64,
     /// Time in the block M-orthonormalisation (projections, Gram matrices) (s).
     pub orthogonalize_s: f64,
+    /// Part of `orthogonalize_s` spent in the sparse products `M z` (s).
+    #[serde(default)]
+    pub orthogonalize_spmm_s: f64,
     /// Time in the Rayleigh–Ritz steps (dense eigen of the projected matrix) (s).
     pub rayleigh_ritz_s: f64,
     /// Time forming the restart bases and the returned Ritz vectors (s).
