@@ -3,7 +3,7 @@
 //!
 //! Because the matrix is stored with both triangles, column i of the CSC arrays is also row i,
 //! so `y[i, c] = Σ_k a_k x[row_k, c]` over column i is a gather dot product that needs no
-//! atomics and parallelises over i. Up to [`COLS`] columns of `x` are handled in one sweep
+//! atomics and parallelises over i. Up to [`COLS`] (8, one Lanczos block) columns of `x` are handled in one sweep
 //! over the matrix, so the (memory-bound) matrix is read once per group instead of once per
 //! column.
 //!
@@ -19,7 +19,7 @@ use faer::{Accum, Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
 /// Columns of `x` handled in one sweep of the sparse matrix.
-const COLS: usize = 4;
+const COLS: usize = 8;
 
 /// Rows per parallel task of the sparse product.
 const ROW_CHUNK: usize = 2048;
