@@ -76,13 +76,16 @@ impl Ctx<'_> {
     /// `z_in = locked·(…) + basis·c + z_out·r`; the `locked` part is dropped (it only removes
     /// round-off: `locked` spans eigenvectors, see module doc). Columns that vanish (rank
     /// deficiency) are replaced by random directions with a zero row in `r`. On return `mz`
-    /// holds `M·z_out` (used by the caller as the next block's `M q`).
+    /// holds `M·z_out` (the caller keeps it as the next block's `M q` and column of `M V`).
     ///
-    /// Every pass computes `M z` afresh (one sparse product), then carries it through the
-    /// projection (`M z −= M V c`) and the Löwdin transformation (`M z ← M z · S`) with dense
-    /// products, instead of a second sparse product per pass. The carried product is exact
-    /// up to round-off of the size of the projection's own cancellation, which the next
-    /// pass (with a fresh `M z`) removes; the last pass changes `z` by `O(u)` only.
+    /// One round is two passes of block classical Gram–Schmidt ("twice is enough", Giraud et
+    /// al., Numer. Math. 101 (2005) 87–100) with the coefficients `(M V)ᵀ z` formed from the
+    /// stored `M V`, so the passes need no sparse product; then one sparse product `M z`, the
+    /// Gram matrix `zᵀ M z` and the symmetric (Löwdin) orthonormalisation `z ← z G^{-1/2}`,
+    /// whose `M z ← M z G^{-1/2}` is carried along. Another round follows while a column
+    /// still shrank by more than half in the second pass (Kahan–Parlett criterion), the
+    /// block's Gram matrix is ill-conditioned (κ(G) > 10⁴: the Löwdin step then leaves an
+    /// orthogonality error ≈ u·κ(G)), or a column was replaced by a random vector.
     #[allow(clippy::too_many_arguments)]
     fn orthonormalize(
         &mut self,
@@ -104,57 +107,70 @@ impl Ctx<'_> {
         }
         let mut c = Mat::<f64>::zeros(j, b);
         let mut r_acc = Mat::<f64>::identity(b, b);
-        let mut pass = 0;
-        let mut replaced_last = true;
-        let mut shrink = 0.0f64;
-        // Passes of projection + normalisation: at least two ("twice is enough", Giraud et
-        // al., Numer. Math. 101 (2005) 87–100), more while a column still shrinks by more
-        // than half (Kahan–Parlett criterion) or was replaced by a random vector.
-        while pass < 2 || ((replaced_last || shrink < 0.5) && pass < 6) {
-            pass += 1;
-            // The locked vectors are eigenvectors: Op keeps a block M-orthogonal to them up to
-            // round-off, so one projection per block suffices (again after a random
-            // replacement, which is not orthogonal to them).
-            let project_locked = locked.ncols() > 0 && (pass == 1 || replaced_last);
+        let mut passes = 0;
+        let mut rounds = 0;
+        let mut replaced_last = false;
+        let mut again = true;
+        while again && rounds < 4 {
+            rounds += 1;
+            // ‖projected part‖²_M per column over the round, and in its last pass.
+            let mut removed = vec![0.0f64; b];
+            let mut removed_last = vec![0.0f64; b];
+            for pass in 0..2 {
+                passes += 1;
+                removed_last.fill(0.0);
+                // The locked vectors are eigenvectors: Op keeps a block M-orthogonal to them
+                // up to round-off, so one projection per block suffices (again after a random
+                // replacement, which is not orthogonal to them).
+                if locked.ncols() > 0 && ((rounds == 1 && pass == 0) || replaced_last) {
+                    let cl = tall_t_mul(m_locked, z.as_ref(), par);
+                    tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
+                    for i in 0..b {
+                        let s2 = cl.col(i).squared_norm_l2();
+                        removed[i] += s2;
+                        removed_last[i] += s2;
+                    }
+                }
+                if j > 0 {
+                    let cv = tall_t_mul(m_basis, z.as_ref(), par);
+                    tall_mul_add(z.as_mut(), basis, cv.as_ref(), -1.0, par);
+                    for i in 0..b {
+                        let s2 = cv.col(i).squared_norm_l2();
+                        removed[i] += s2;
+                        removed_last[i] += s2;
+                    }
+                    // c += cv · r_acc
+                    matmul(
+                        c.as_mut(),
+                        Accum::Add,
+                        cv.as_ref(),
+                        r_acc.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                }
+            }
             replaced_last = false;
             let t = Instant::now();
             sym_spmm(self.m, z.as_ref(), mz.as_mut());
             self.timing.orthogonalize_spmm_s += t.elapsed().as_secs_f64();
-            let before: Vec<f64> = (0..b)
-                .map(|i| z.as_ref().col(i).transpose() * mz.as_ref().col(i))
-                .collect();
-            let s_ref = before
-                .iter()
-                .copied()
-                .fold(0.0f64, f64::max)
-                .max(f64::MIN_POSITIVE);
-            // Project out locked vectors and basis (classical Gram–Schmidt, one pass).
-            if project_locked {
-                let cl = tall_t_mul(locked, mz.as_ref(), par);
-                tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
-                tall_mul_add(mz.as_mut(), m_locked, cl.as_ref(), -1.0, par);
-            }
-            if j > 0 {
-                let cv = tall_t_mul(basis, mz.as_ref(), par);
-                tall_mul_add(z.as_mut(), basis, cv.as_ref(), -1.0, par);
-                tall_mul_add(mz.as_mut(), m_basis, cv.as_ref(), -1.0, par);
-                // c += cv · r_acc
-                matmul(
-                    c.as_mut(),
-                    Accum::Add,
-                    cv.as_ref(),
-                    r_acc.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-            }
             // Symmetric (Löwdin) orthonormalisation of the block.
             let mut g = tall_t_mul(z.as_ref(), mz.as_ref(), par);
             let gt = g.transpose().to_owned();
             g += gt;
             g *= faer::Scale(0.5);
-            shrink = (0..b)
-                .map(|i| (g[(i, i)].max(0.0) / before[i].max(f64::MIN_POSITIVE)).sqrt())
+            // ‖z‖²_M before the round ≈ what was removed + what is left (Pythagoras).
+            let before: Vec<f64> = (0..b).map(|i| removed[i] + g[(i, i)].max(0.0)).collect();
+            let s_ref = before
+                .iter()
+                .copied()
+                .fold(0.0f64, f64::max)
+                .max(f64::MIN_POSITIVE);
+            let shrink_last = (0..b)
+                .map(|i| {
+                    let left = g[(i, i)].max(0.0);
+                    (left / (left + removed_last[i]).max(f64::MIN_POSITIVE)).sqrt()
+                })
                 .fold(f64::INFINITY, f64::min);
             let (lam, u) = dense_eig(g.as_ref())?;
             let mut scaled = u.clone();
@@ -174,6 +190,7 @@ impl Ctx<'_> {
                     }
                 }
             }
+            let kappa = lam[b - 1] / lam[0].max(f64::MIN_POSITIVE);
             // z ← z·S and M z ← M z·S.
             for mut x in [z.as_mut(), mz.as_mut()] {
                 scratch.fill(0.0);
@@ -187,12 +204,13 @@ impl Ctx<'_> {
                 replaced_last = true;
             }
             r_acc = mm(r.as_ref(), r_acc.as_ref(), Par::Seq);
+            again = replaced_last || shrink_last < 0.5 || kappa > 1e4;
         }
         if replaced_last {
-            // Random columns of the last pass: their carried M z is not valid.
+            // Random columns of the last round (only after 4 rounds): M z is not carried.
             sym_spmm(self.m, z.as_ref(), mz.as_mut());
         }
-        self.timing.orthogonalization_passes += pass;
+        self.timing.orthogonalization_passes += passes;
         self.timing.orthogonalized_blocks += 1;
         Ok((c, r_acc))
     }
