@@ -53,6 +53,15 @@ fn dense_eig(a: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), EigenError> {
     Ok((vals, e.U().to_owned()))
 }
 
+/// Adds the squared 2-norm of every column of `coef` to `total[i]` and `last[i]`.
+fn add_squared_col_norms(coef: MatRef<'_, f64>, total: &mut [f64], last: &mut [f64]) {
+    for (i, (t, l)) in total.iter_mut().zip(last.iter_mut()).enumerate() {
+        let s2 = coef.col(i).squared_norm_l2();
+        *t += s2;
+        *l += s2;
+    }
+}
+
 /// `a · b` into a new matrix with the given parallelism.
 fn mm(a: MatRef<'_, f64>, b: MatRef<'_, f64>, par: Par) -> Mat<f64> {
     let mut c = Mat::<f64>::zeros(a.nrows(), b.ncols());
@@ -125,20 +134,12 @@ impl Ctx<'_> {
                 if locked.ncols() > 0 && ((rounds == 1 && pass == 0) || replaced_last) {
                     let cl = tall_t_mul(m_locked, z.as_ref(), par);
                     tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
-                    for i in 0..b {
-                        let s2 = cl.col(i).squared_norm_l2();
-                        removed[i] += s2;
-                        removed_last[i] += s2;
-                    }
+                    add_squared_col_norms(cl.as_ref(), &mut removed, &mut removed_last);
                 }
                 if j > 0 {
                     let cv = tall_t_mul(m_basis, z.as_ref(), par);
                     tall_mul_add(z.as_mut(), basis, cv.as_ref(), -1.0, par);
-                    for i in 0..b {
-                        let s2 = cv.col(i).squared_norm_l2();
-                        removed[i] += s2;
-                        removed_last[i] += s2;
-                    }
+                    add_squared_col_norms(cv.as_ref(), &mut removed, &mut removed_last);
                     // c += cv · r_acc
                     matmul(
                         c.as_mut(),
@@ -257,7 +258,7 @@ fn lanczos_slice(
         });
     }
     let mut v = Mat::<f64>::zeros(n, m_max);
-    // M·V, kept alongside V so that the Gram–Schmidt passes need one sparse product each.
+    // M·V, kept alongside V so that the Gram–Schmidt passes need no sparse product.
     let mut mv = Mat::<f64>::zeros(n, m_max);
     let mut m_locked = Mat::<f64>::zeros(n, p);
     if p > 0 {

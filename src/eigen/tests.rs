@@ -468,5 +468,8 @@ fn row_split_tall_products_match_sequential_gemm() {
     let mut v2 = v.clone();
     super::spmm::tall_right_mul_in_place(v2.as_mut(), s.as_ref(), par);
     assert!((v2.as_ref().subcols(0, 20) - &vs).norm_max() <= 1e-12 * vs.norm_max());
-    assert!(v2.as_ref().subcols(20, 17) == v.as_ref().subcols(20, 17), "tail untouched");
+    assert!(
+        v2.as_ref().subcols(20, 17) == v.as_ref().subcols(20, 17),
+        "tail untouched"
+    );
 }
