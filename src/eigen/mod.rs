@@ -106,7 +106,10 @@ pub struct EigenOptions {
     /// leaves room for a longer Krylov sequence per cycle.
     pub restart_keep: f64,
     /// Target number of modes per slice; the slice boundaries are placed (with Sturm counts)
-    /// so that each slice holds about this many. Default 100.
+    /// so that each slice holds about this many. Default 100 (measured on the 126,800-DOF
+    /// track: 150 solves 38 % fewer vectors to 2 kHz, but to 5 kHz one slice then needed 27
+    /// restarts and the whole solve 40 % more CPU time; 250 to 2 kHz is one slice, no faster
+    /// than 150 and 3.6 GB instead of 2.3 GB).
     pub modes_per_slice: usize,
     /// Magnitude (Hz) of the negative shift used for the lowest slice when `f_min_hz == 0`:
     /// σ₀ = −(2π f)². `None` → max(1 Hz, f_max / 100).
