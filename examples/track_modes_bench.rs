@@ -216,8 +216,13 @@ fn main() -> anyhow::Result<()> {
         tm.total_s, tm.symbolic_s, tm.factorizations, tm.factorize_s, tm.solved_vectors, tm.solve_s, tm.check_s, tm.factor_entries
     );
     println!(
-        "   orthogonalisation {:.1} s, Rayleigh-Ritz {:.1} s, restarts/extraction {:.1} s",
-        tm.orthogonalize_s, tm.rayleigh_ritz_s, tm.restart_s
+        "   orthogonalisation {:.1} s ({} blocks, {} passes, M products {:.1} s), Rayleigh-Ritz {:.1} s, restarts/extraction {:.1} s",
+        tm.orthogonalize_s,
+        tm.orthogonalized_blocks,
+        tm.orthogonalization_passes,
+        tm.orthogonalize_spmm_s,
+        tm.rayleigh_ritz_s,
+        tm.restart_s
     );
     for s in &sol.slices {
         println!(

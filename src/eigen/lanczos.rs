@@ -19,7 +19,7 @@ use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 
 use super::factor::{ShiftFactor, ShiftedSystem};
-use super::spmm::{sym_spmm, tall_mul_add, tall_t_mul};
+use super::spmm::{sym_spmm, tall_mul_add, tall_right_mul_in_place, tall_t_mul};
 use super::{
     hz_to_lambda, lambda_to_hz, EigenError, EigenOptions, EigenSolution, EigenTiming, SliceReport,
 };
@@ -53,6 +53,15 @@ fn dense_eig(a: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), EigenError> {
     Ok((vals, e.U().to_owned()))
 }
 
+/// Adds the squared 2-norm of every column of `coef` to `total[i]` and `last[i]`.
+fn add_squared_col_norms(coef: MatRef<'_, f64>, total: &mut [f64], last: &mut [f64]) {
+    for (i, (t, l)) in total.iter_mut().zip(last.iter_mut()).enumerate() {
+        let s2 = coef.col(i).squared_norm_l2();
+        *t += s2;
+        *l += s2;
+    }
+}
+
 /// `a · b` into a new matrix with the given parallelism.
 fn mm(a: MatRef<'_, f64>, b: MatRef<'_, f64>, par: Par) -> Mat<f64> {
     let mut c = Mat::<f64>::zeros(a.nrows(), b.ncols());
@@ -71,72 +80,98 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
-    /// Makes `z` M-orthonormal and M-orthogonal to `locked` and `basis` (both M-orthonormal).
-    /// Returns `(c, r)` with `z_in = locked·(…) + basis·c + z_out·r`; the `locked` part is
-    /// dropped (it only removes round-off: `locked` spans eigenvectors, see module doc).
-    /// Columns that vanish (rank deficiency) are replaced by random directions with a zero row
-    /// in `r`. `mz` is n × b scratch.
+    /// Makes `z` M-orthonormal and M-orthogonal to `locked` and `basis` (both M-orthonormal),
+    /// given `m_locked = M·locked` and `m_basis = M·basis`. Returns `(c, r)` with
+    /// `z_in = locked·(…) + basis·c + z_out·r`; the `locked` part is dropped (it only removes
+    /// round-off: `locked` spans eigenvectors, see module doc). Columns that vanish (rank
+    /// deficiency) are replaced by random directions with a zero row in `r`. On return `mz`
+    /// holds `M·z_out` (the caller keeps it as the next block's `M q` and column of `M V`).
+    ///
+    /// One round is two passes of block classical Gram–Schmidt ("twice is enough", Giraud et
+    /// al., Numer. Math. 101 (2005) 87–100) with the coefficients `(M V)ᵀ z` formed from the
+    /// stored `M V`, so the passes need no sparse product; then one sparse product `M z`, the
+    /// Gram matrix `zᵀ M z` and the symmetric (Löwdin) orthonormalisation `z ← z G^{-1/2}`,
+    /// whose `M z ← M z G^{-1/2}` is carried along. Another round follows while a column
+    /// still shrank by more than half in the second pass (Kahan–Parlett criterion), the
+    /// block's Gram matrix is ill-conditioned (κ(G) > 10⁴: the Löwdin step then leaves an
+    /// orthogonality error ≈ u·κ(G)), or a column was replaced by a random vector.
+    #[allow(clippy::too_many_arguments)]
     fn orthonormalize(
         &mut self,
         locked: MatRef<'_, f64>,
+        m_locked: MatRef<'_, f64>,
         basis: MatRef<'_, f64>,
+        m_basis: MatRef<'_, f64>,
         mut z: MatMut<'_, f64>,
         mut mz: MatMut<'_, f64>,
+        scratch: &mut Mat<f64>,
     ) -> Result<(Mat<f64>, Mat<f64>), EigenError> {
         let b = z.ncols();
         let j = basis.ncols();
+        let n = z.nrows();
         // Tall-skinny products, split over row ranges (see `spmm`).
         let par = self.par;
+        if scratch.nrows() != n || scratch.ncols() != b {
+            *scratch = Mat::<f64>::zeros(n, b);
+        }
         let mut c = Mat::<f64>::zeros(j, b);
         let mut r_acc = Mat::<f64>::identity(b, b);
-        let mut pass = 0;
-        let mut replaced_last = true;
-        let mut shrink = 0.0f64;
-        // Passes of projection + normalisation: at least two ("twice is enough", Giraud et
-        // al., Numer. Math. 101 (2005) 87–100), more while a column still shrinks by more
-        // than half (Kahan–Parlett criterion) or was replaced by a random vector.
-        while pass < 2 || ((replaced_last || shrink < 0.5) && pass < 6) {
-            pass += 1;
-            // The locked vectors are eigenvectors: Op keeps a block M-orthogonal to them up to
-            // round-off, so one projection per block suffices (again after a random
-            // replacement, which is not orthogonal to them).
-            let project_locked = locked.ncols() > 0 && (pass == 1 || replaced_last);
+        let mut passes = 0;
+        let mut rounds = 0;
+        let mut replaced_last = false;
+        let mut again = true;
+        while again && rounds < 4 {
+            rounds += 1;
+            // ‖projected part‖²_M per column over the round, and in its last pass.
+            let mut removed = vec![0.0f64; b];
+            let mut removed_last = vec![0.0f64; b];
+            for pass in 0..2 {
+                passes += 1;
+                removed_last.fill(0.0);
+                // The locked vectors are eigenvectors: Op keeps a block M-orthogonal to them
+                // up to round-off, so one projection per block suffices (again after a random
+                // replacement, which is not orthogonal to them).
+                if locked.ncols() > 0 && ((rounds == 1 && pass == 0) || replaced_last) {
+                    let cl = tall_t_mul(m_locked, z.as_ref(), par);
+                    tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
+                    add_squared_col_norms(cl.as_ref(), &mut removed, &mut removed_last);
+                }
+                if j > 0 {
+                    let cv = tall_t_mul(m_basis, z.as_ref(), par);
+                    tall_mul_add(z.as_mut(), basis, cv.as_ref(), -1.0, par);
+                    add_squared_col_norms(cv.as_ref(), &mut removed, &mut removed_last);
+                    // c += cv · r_acc
+                    matmul(
+                        c.as_mut(),
+                        Accum::Add,
+                        cv.as_ref(),
+                        r_acc.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                }
+            }
             replaced_last = false;
+            let t = Instant::now();
             sym_spmm(self.m, z.as_ref(), mz.as_mut());
-            let before: Vec<f64> = (0..b)
-                .map(|i| z.as_ref().col(i).transpose() * mz.as_ref().col(i))
-                .collect();
+            self.timing.orthogonalize_spmm_s += t.elapsed().as_secs_f64();
+            // Symmetric (Löwdin) orthonormalisation of the block.
+            let mut g = tall_t_mul(z.as_ref(), mz.as_ref(), par);
+            let gt = g.transpose().to_owned();
+            g += gt;
+            g *= faer::Scale(0.5);
+            // ‖z‖²_M before the round ≈ what was removed + what is left (Pythagoras).
+            let before: Vec<f64> = (0..b).map(|i| removed[i] + g[(i, i)].max(0.0)).collect();
             let s_ref = before
                 .iter()
                 .copied()
                 .fold(0.0f64, f64::max)
                 .max(f64::MIN_POSITIVE);
-            // Project out locked vectors and basis (classical Gram–Schmidt, one pass).
-            if project_locked {
-                let cl = tall_t_mul(locked, mz.as_ref(), par);
-                tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
-            }
-            if j > 0 {
-                let cv = tall_t_mul(basis, mz.as_ref(), par);
-                tall_mul_add(z.as_mut(), basis, cv.as_ref(), -1.0, par);
-                // c += cv · r_acc
-                matmul(
-                    c.as_mut(),
-                    Accum::Add,
-                    cv.as_ref(),
-                    r_acc.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-            }
-            // Symmetric (Löwdin) orthonormalisation of the block.
-            sym_spmm(self.m, z.as_ref(), mz.as_mut());
-            let mut g = tall_t_mul(z.as_ref(), mz.as_ref(), par);
-            let gt = g.transpose().to_owned();
-            g += gt;
-            g *= faer::Scale(0.5);
-            shrink = (0..b)
-                .map(|i| (g[(i, i)] / before[i].max(f64::MIN_POSITIVE)).sqrt())
+            let shrink_last = (0..b)
+                .map(|i| {
+                    let left = g[(i, i)].max(0.0);
+                    (left / (left + removed_last[i]).max(f64::MIN_POSITIVE)).sqrt()
+                })
                 .fold(f64::INFINITY, f64::min);
             let (lam, u) = dense_eig(g.as_ref())?;
             let mut scaled = u.clone();
@@ -156,18 +191,27 @@ impl Ctx<'_> {
                     }
                 }
             }
-            let mut znew = Mat::<f64>::zeros(z.nrows(), b);
-            tall_mul_add(znew.as_mut(), z.as_ref(), scaled.as_ref(), 1.0, par);
-            z.copy_from(&znew);
+            let kappa = lam[b - 1] / lam[0].max(f64::MIN_POSITIVE);
+            // z ← z·S and M z ← M z·S.
+            for mut x in [z.as_mut(), mz.as_mut()] {
+                scratch.fill(0.0);
+                tall_mul_add(scratch.as_mut(), x.as_ref(), scaled.as_ref(), 1.0, par);
+                x.copy_from(&*scratch);
+            }
             for &i in &deficient {
-                for row in 0..z.nrows() {
+                for row in 0..n {
                     z[(row, i)] = self.rng.next_f64();
                 }
                 replaced_last = true;
             }
             r_acc = mm(r.as_ref(), r_acc.as_ref(), Par::Seq);
+            again = replaced_last || shrink_last < 0.5 || kappa > 1e4;
         }
-        self.timing.orthogonalization_passes += pass;
+        if replaced_last {
+            // Random columns of the last round (only after 4 rounds): M z is not carried.
+            sym_spmm(self.m, z.as_ref(), mz.as_mut());
+        }
+        self.timing.orthogonalization_passes += passes;
         self.timing.orthogonalized_blocks += 1;
         Ok((c, r_acc))
     }
@@ -214,6 +258,15 @@ fn lanczos_slice(
         });
     }
     let mut v = Mat::<f64>::zeros(n, m_max);
+    // M·V, kept alongside V so that the Gram–Schmidt passes need no sparse product.
+    let mut mv = Mat::<f64>::zeros(n, m_max);
+    let mut m_locked = Mat::<f64>::zeros(n, p);
+    if p > 0 {
+        let t = Instant::now();
+        sym_spmm(ctx.m, locked, m_locked.as_mut());
+        ctx.timing.orthogonalize_spmm_s += t.elapsed().as_secs_f64();
+    }
+    let mut scratch = Mat::<f64>::zeros(n, b);
     let mut h = Mat::<f64>::zeros(m_max + b, m_max);
     let mut q = Mat::<f64>::from_fn(n, b, |_, _| ctx.rng.next_f64());
     let mut z = Mat::<f64>::zeros(n, b);
@@ -224,14 +277,25 @@ fn lanczos_slice(
         (Mat::<f64>::zeros(0, 0), Mat::<f64>::zeros(0, 0))
     };
     let mut buf = ctx.sys.solve_buffer(b);
-    ctx.orthonormalize(locked, v.as_ref().subcols(0, 0), q.as_mut(), mz.as_mut())?;
+    // mq = M q throughout (returned by every orthonormalisation).
+    let mut mq = Mat::<f64>::zeros(n, b);
+    ctx.orthonormalize(
+        locked,
+        m_locked.as_ref(),
+        v.as_ref().subcols(0, 0),
+        mv.as_ref().subcols(0, 0),
+        q.as_mut(),
+        mq.as_mut(),
+        &mut scratch,
+    )?;
     let mut j = 0usize;
     let mut restarts = 0usize;
     let mut solved = 0usize;
     loop {
         while j + b <= m_max {
             v.as_mut().subcols_mut(j, b).copy_from(&q);
-            sym_spmm(ctx.m, q.as_ref(), z.as_mut());
+            mv.as_mut().subcols_mut(j, b).copy_from(&mq);
+            z.copy_from(&mq);
             let t = Instant::now();
             if opts.refine_solves {
                 rhs.copy_from(&z);
@@ -257,14 +321,18 @@ fn lanczos_slice(
             let t = Instant::now();
             let (c, r) = ctx.orthonormalize(
                 locked,
+                m_locked.as_ref(),
                 v.as_ref().subcols(0, j + b),
+                mv.as_ref().subcols(0, j + b),
                 z.as_mut(),
                 mz.as_mut(),
+                &mut scratch,
             )?;
             ctx.timing.orthogonalize_s += t.elapsed().as_secs_f64();
             h.as_mut().submatrix_mut(0, j, j + b, b).copy_from(&c);
             h.as_mut().submatrix_mut(j + b, j, b, b).copy_from(&r);
             std::mem::swap(&mut q, &mut z);
+            std::mem::swap(&mut mq, &mut mz);
             j += b;
         }
         // Rayleigh–Ritz on the symmetric part.
@@ -354,9 +422,8 @@ fn lanczos_slice(
         let mut sel: Vec<usize> = order[..kkeep - neg.len()].to_vec();
         sel.extend_from_slice(&neg);
         let s_sel = Mat::<f64>::from_fn(j, kkeep, |r, c| s[(r, sel[c])]);
-        let vk = mm(v.as_ref().subcols(0, j), s_sel.as_ref(), ctx.par);
-        v.as_mut().subcols_mut(0, kkeep).copy_from(&vk);
-        drop(vk);
+        tall_right_mul_in_place(v.as_mut(), s_sel.as_ref(), ctx.par);
+        tall_right_mul_in_place(mv.as_mut(), s_sel.as_ref(), ctx.par);
         let ek = Mat::<f64>::from_fn(b, kkeep, |r, c| es[(r, sel[c])]);
         h.fill(0.0);
         for (i, &idx) in sel.iter().enumerate() {
@@ -637,12 +704,14 @@ pub fn solve(
             let xn = x.col(c).norm_l2();
             backward.push(num / ((k_norm + lam.abs() * m_norm) * xn));
         }
-        // Orthonormality against this chunk: all columns (full) or a window of neighbours.
+        // Orthonormality against this chunk: all columns (full) or a window of neighbours;
+        // ΦᵀMΦ is symmetric, so only the columns up to the chunk's last are needed (every
+        // pair is met once, by the chunk of its later column).
         let (a0, a1) = if full {
-            (0, total)
+            (0, c0 + w)
         } else {
             let span = 2 * target.max(chunk);
-            (c0.saturating_sub(span), (c0 + w + span).min(total))
+            (c0.saturating_sub(span), c0 + w)
         };
         let g = mm(
             phi.as_ref().subcols(a0, a1 - a0).transpose(),

@@ -3,7 +3,7 @@
 //!
 //! Because the matrix is stored with both triangles, column i of the CSC arrays is also row i,
 //! so `y[i, c] = Σ_k a_k x[row_k, c]` over column i is a gather dot product that needs no
-//! atomics and parallelises over i. Up to [`COLS`] columns of `x` are handled in one sweep
+//! atomics and parallelises over i. Up to [`COLS`] (8, one Lanczos block) columns of `x` are handled in one sweep
 //! over the matrix, so the (memory-bound) matrix is read once per group instead of once per
 //! column.
 //!
@@ -19,7 +19,7 @@ use faer::{Accum, Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
 /// Columns of `x` handled in one sweep of the sparse matrix.
-const COLS: usize = 4;
+const COLS: usize = 8;
 
 /// Rows per parallel task of the sparse product.
 const ROW_CHUNK: usize = 2048;
@@ -188,4 +188,35 @@ pub fn tall_mul_add(
     views.into_par_iter().for_each(|(zv, r0, len)| {
         matmul(zv, Accum::Add, v.subrows(r0, len), c, alpha, Par::Seq);
     });
+}
+
+/// `v[:, 0..k] = v[:, 0..j] · s` in place for tall `v` (n × ≥j) and `s` (j × k, k ≤ j), one
+/// row block at a time (parallel over row blocks), so no n × k temporary is allocated.
+pub fn tall_right_mul_in_place(mut v: MatMut<'_, f64>, s: MatRef<'_, f64>, par: Par) {
+    let (j, k) = (s.nrows(), s.ncols());
+    debug_assert!(k <= j && j <= v.ncols());
+    if j == 0 || k == 0 {
+        return;
+    }
+    /// Rows per block: the j-wide input rows and the k-wide product of a block stay in cache.
+    const ROWS: usize = 256;
+    let n = v.nrows();
+    let mut blocks: Vec<MatMut<'_, f64>> = Vec::with_capacity(n.div_ceil(ROWS));
+    let mut rest = v.as_mut().subcols_mut(0, j);
+    while rest.nrows() > 0 {
+        let len = ROWS.min(rest.nrows());
+        let (head, tail) = rest.split_at_row_mut(len);
+        blocks.push(head);
+        rest = tail;
+    }
+    let work = |blk: MatMut<'_, f64>| {
+        let mut tmp = Mat::<f64>::zeros(blk.nrows(), k);
+        matmul(tmp.as_mut(), Accum::Replace, blk.as_ref(), s, 1.0, Par::Seq);
+        blk.subcols_mut(0, k).copy_from(&tmp);
+    };
+    if row_threads(n, par) == 1 {
+        blocks.into_iter().for_each(work);
+    } else {
+        blocks.into_par_iter().for_each(work);
+    }
 }

@@ -427,23 +427,23 @@ fn grounded_lattice_from_zero_moves_first_shift_up_and_matches_dense() {
     assert!(worst < 1e-8);
 }
 
-/// `sym_spmm` (4 columns per sweep, parallel row chunks) against the dense product, for a
-/// column count that is not a multiple of 4 and for a non-contiguous (strided) input.
+/// `sym_spmm` (8 columns per sweep, parallel row chunks) against the dense product, for a
+/// column count that is not a multiple of 8 and for a non-contiguous (strided) input.
 #[test]
 fn sym_spmm_matches_dense_product() {
     // 3 × 20 × 6 × 6 = 2160 DOFs: two row chunks of the parallel product.
     let (k, _) = lattice3d(20, 6, 6, 1.0, 7);
     let n = k.nrows();
     let kd = k.to_dense();
-    let x = Mat::<f64>::from_fn(n, 7, |i, j| ((i * 31 + j * 17) % 97) as f64 / 97.0 - 0.5);
-    let mut y = Mat::<f64>::zeros(n, 7);
+    let x = Mat::<f64>::from_fn(n, 11, |i, j| ((i * 31 + j * 17) % 97) as f64 / 97.0 - 0.5);
+    let mut y = Mat::<f64>::zeros(n, 11);
     super::spmm::sym_spmm(k.as_ref(), x.as_ref(), y.as_mut());
     let yd = &kd * &x;
     let scale = yd.norm_max();
     assert!((&y - &yd).norm_max() <= 1e-13 * scale, "contiguous input");
     // Strided input: the rows of a transposed matrix.
     let xt = x.transpose().to_owned();
-    let mut y2 = Mat::<f64>::zeros(n, 7);
+    let mut y2 = Mat::<f64>::zeros(n, 11);
     super::spmm::sym_spmm(k.as_ref(), xt.as_ref().transpose(), y2.as_mut());
     assert!((&y2 - &yd).norm_max() <= 1e-13 * scale, "strided input");
 }
@@ -462,4 +462,14 @@ fn row_split_tall_products_match_sequential_gemm() {
     super::spmm::tall_mul_add(z2.as_mut(), v.as_ref(), c.as_ref(), -0.5, par);
     let zd = &z - faer::Scale(0.5) * (&v * &c);
     assert!((&z2 - &zd).norm_max() <= 1e-12 * zd.norm_max());
+    // In-place V[:, 0..k] = V[:, 0..j] S (thick restart), k < j, against the plain product.
+    let s = Mat::<f64>::from_fn(37, 20, |i, j| (((i * 5 + j * 3) % 23) as f64).sin());
+    let vs = &v * &s;
+    let mut v2 = v.clone();
+    super::spmm::tall_right_mul_in_place(v2.as_mut(), s.as_ref(), par);
+    assert!((v2.as_ref().subcols(0, 20) - &vs).norm_max() <= 1e-12 * vs.norm_max());
+    assert!(
+        v2.as_ref().subcols(20, 17) == v.as_ref().subcols(20, 17),
+        "tail untouched"
+    );
 }
