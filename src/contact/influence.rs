@@ -431,38 +431,6 @@ impl Convolver {
         rf.inverse(u, nx, ny);
     }
 
-    /// Two normal products in one complex FFT pair (the kernel spectrum is real):
-    /// `ua = C_zz * a`, `ub = C_zz * b` (m), `a, b` in Pa.
-    pub fn normal_pair(&mut self, a: &[f64], b: &[f64], ua: &mut [f64], ub: &mut [f64]) {
-        let (nx, ny, m2) = (self.nx, self.ny, self.m2);
-        let zero = Complex64::new(0.0, 0.0);
-        for i in 0..nx {
-            let row = &mut self.buf[i * m2..(i + 1) * m2];
-            for j in 0..ny {
-                let e = i * ny + j;
-                row[j] = Complex64::new(a[e], b[e]);
-            }
-            row[ny..].fill(zero);
-        }
-        self.normal_core();
-        for i in 0..nx {
-            for j in 0..ny {
-                let v = self.buf[i * m2 + j];
-                ua[i * ny + j] = v.re;
-                ub[i * ny + j] = v.im;
-            }
-        }
-    }
-
-    fn normal_core(&mut self) {
-        let nx = self.nx;
-        self.fft.forward_to_t(&mut self.buf, nx);
-        for (t, k) in self.fft.tbuf.iter_mut().zip(&self.kzz) {
-            *t *= *k;
-        }
-        self.fft.inverse_from_t(&mut self.buf, 0, nx);
-    }
-
     /// Tangential displacement differences `(ux, uy)` (m) from tractions `(tx, ty)` (Pa),
     /// evaluated at grid rows shifted by `shift` (0 or 1): `u[i] = (C * τ)(i + shift)`.
     pub fn tangential(
@@ -648,7 +616,7 @@ mod tests {
     }
 
     #[test]
-    fn real_normal_product_equals_dense_sum_and_complex_path() {
+    fn real_normal_product_equals_dense_sum() {
         // r2c normal product: odd (m2 = 15 for ny = 7) and even padded lengths, fields with
         // all-zero rows (skipped in the forward pass) and zero columns
         for &(nx, ny) in &[(4usize, 7usize), (6, 5), (9, 8)] {
@@ -677,14 +645,8 @@ mod tests {
                     d[e]
                 );
             }
-            // the complex path (two real fields per complex FFT) agrees
-            let zero = vec![0.0; n];
-            let (mut ua, mut ub) = (vec![0.0; n], vec![0.0; n]);
-            conv.normal_pair(&p, &zero, &mut ua, &mut ub);
-            for e in 0..n {
-                assert!((u[e] - ua[e]).abs() <= 1e-13 * umax && ub[e].abs() <= 1e-13 * umax);
-            }
             // an all-zero field gives exactly zero
+            let zero = vec![0.0; n];
             conv.normal(&zero, &mut u);
             assert!(u.iter().all(|&v| v == 0.0));
         }

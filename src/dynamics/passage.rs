@@ -553,7 +553,7 @@ impl PassageEngine {
         let half_grid = contact.config().grid.half_length_x_m;
         let x_end = z1 + half_grid + 2.0 * dx;
         let n_steps = ((x_end - x0) / dx).ceil() as usize;
-        let nx = contact.config().grid.nx;
+        let (nx, ny) = (contact.config().grid.nx, contact.config().grid.ny);
         let xs: Vec<f64> = contact.x_m().to_vec();
         let mut heights = vec![0.0; nx];
         let fill_heights = |xc: f64, h: &mut [f64]| {
@@ -821,11 +821,11 @@ impl PassageEngine {
             h.lateral_n.push(r.fy_n);
             h.creepage.push(xi);
             h.approach_m.push(delta);
-            let cols = (0..nx)
-                .filter(|&i| {
-                    (0..contact.config().grid.ny)
-                        .any(|j| contact.pressure_pa()[i * contact.config().grid.ny + j] > 0.0)
-                })
+            // grid rows along x with any pressure: the contact length
+            let cols = contact
+                .pressure_pa()
+                .chunks_exact(ny)
+                .filter(|row| row.iter().any(|&p| p > 0.0))
                 .count();
             h.contact_length_m.push(cols as f64 * dx);
             h.slip_fraction.push(r.slip_area_fraction());
