@@ -243,3 +243,80 @@ fn residual_flexibility_passage_balances_energy() {
     let (d_approach, cf) = (out[1].0 - out[0].0, out[1].2);
     assert!(cf > 0.0 && (d_approach - cf).abs() < 0.01 * cf, "{out:?}");
 }
+
+/// `receptance --json` runs on the small model, writes its files, and its curves behave as a
+/// receptance must: finite and positive, the rail's normal receptance at the lowest
+/// frequency is stiffness-controlled (phase within 0.1 rad of 0), and the wheel lines of
+/// the sweep maps (`wheel_contact_modes_hz`) are wheel eigenfrequencies that include the
+/// mode of largest contact participation in each direction.
+#[test]
+fn receptance_command_and_wheel_lines() {
+    let dir = std::env::temp_dir().join(format!("corrugation-test-rec-{}", std::process::id()));
+    let r = run_cli(
+        &[
+            "receptance",
+            "--from-hz",
+            "5",
+            "--to-hz",
+            "1500",
+            "--step-hz",
+            "5",
+        ],
+        &dir,
+    );
+    for k in [
+        "rail",
+        "wheel_longitudinal",
+        "wheel_normal",
+        "wheel_modes",
+        "hertz_compliance_m_per_n",
+        "seconds",
+    ] {
+        assert!(r.get(k).is_some(), "receptance --json lacks {k}: {r}");
+    }
+    assert_eq!(
+        r["rail"].as_array().unwrap().len(),
+        2,
+        "mid-span and sleeper"
+    );
+    for f in [
+        "receptance.csv",
+        "receptance.json",
+        "receptance_rail.png",
+        "receptance_wheel.svg",
+        "force_per_roughness.png",
+    ] {
+        assert!(dir.join(f).is_file(), "missing {f}");
+    }
+    let text = std::fs::read_to_string(dir.join("receptance.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 300);
+    assert!(rows.iter().flatten().all(|v| v.is_finite()));
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (a, ph) = (col("rail_mid_n_m_per_n"), col("rail_mid_n_phase_rad"));
+    assert!(rows.iter().all(|r| r[a] > 0.0));
+    assert!(rows[0][ph].abs() < 0.1, "phase at 5 Hz {}", rows[0][ph]);
+    let _ = std::fs::remove_dir_all(&dir);
+
+    let m = small_model();
+    let p = PreparedModel::new(&m, &cache(), &PassageOptions::default()).expect("modal model");
+    let part = p.engine.wheel_contact_participation();
+    let lines = p.wheel_contact_modes_hz(0.03);
+    assert!(!lines.is_empty());
+    assert!(lines.windows(2).all(|w| w[1] > w[0]));
+    for d in 0..2 {
+        let (i, _) = part
+            .iter()
+            .max_by(|a, b| a.1[d].total_cmp(&b.1[d]))
+            .unwrap();
+        let f = p.wheel_frequencies_hz[*i];
+        assert!(
+            lines.iter().any(|&g| (g - f).abs() <= 0.005 * f),
+            "direction {d}: {f} Hz not in {lines:?}"
+        );
+    }
+}

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Heavy validation runs, kept out of CI (each is minutes on 2 cores). Run from the repo root:
 #   bash validation/run.sh            # everything
-#   bash validation/run.sh contact    # one group: contact | modes | moving | bench
+#   bash validation/run.sh contact    # one group: contact | modes | moving | selection | bench
 # Results are printed; compare them with the expectations in validation/README.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,6 +25,21 @@ if [[ "$group" == all || "$group" == moving ]]; then
   # f_max list: 5 kHz fails on this coarse track (the eigensolver misses modes in 3.4-5 kHz).
   MOVING_LOAD_FMAX="${MOVING_LOAD_FMAX:-500,1000,2000,3000}" \
     cargo test --release --test moving_load -- --ignored --nocapture convergence_table
+fi
+if [[ "$group" == all || "$group" == selection ]]; then
+  echo "== selection: which modes set the frequency selection? (validation/frequency_selection.md)"
+  echo "   default track, f_max 2 kHz: wheel steel density 7800 vs 9000 kg/m^3; a wheel mode moves"
+  echo "   by sqrt(7800/9000) = 0.931, a track mode not at all"
+  bin=target/release/corrugation
+  cargo build --release
+  out="${SELECTION_OUT:-validation/out/selection}"
+  for rho in 7800 9000; do
+    $bin sweep --set run.fmax=2000 --set wheel.density=$rho --speeds 110:219:12 \
+      --out "$out/rho$rho" --json > "$out-rho$rho.json"
+    python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(sys.argv[2], [round(f) for f in d['dominant_frequency_hz']])" \
+      "$out-rho$rho.json" "rho $rho: dominant Hz"
+  done
+  $bin receptance --set run.fmax=2000 --to-hz 2000 --out "$out/receptance"
 fi
 if [[ "$group" == all || "$group" == bench ]]; then
   echo "== benchmarks"

@@ -10,6 +10,7 @@ mod model_cmd;
 mod modes_cmd;
 mod passage_cmd;
 mod predict_cmd;
+mod receptance_cmd;
 mod study_cmd;
 mod sweep_cmd;
 
@@ -66,6 +67,9 @@ enum Command {
     Modes(modes_cmd::ModesCmd),
     /// One reduced-order wheel passage: contact forces, wear along the rail, PSDs, plots.
     Passage(passage_cmd::PassageCmd),
+    /// Receptances of the rail and the wheel at the contact and the contact force per unit
+    /// roughness, with their peaks (which resonances a sweep can lock on).
+    Receptance(receptance_cmd::ReceptanceCmd),
     /// Trial-amplitude growth (consistency, phase, limiting amplitude); --rounds for iterative growth.
     Grow(grow_cmd::GrowCmd),
     /// The main job: modes (cached), smooth passage, trial growth, short speed sweep, report.
@@ -89,6 +93,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Contact(c) => c.run(),
         Command::Modes(c) => c.run(),
         Command::Passage(c) => c.run(),
+        Command::Receptance(c) => c.run(),
         Command::Grow(c) => c.run(),
         Command::Predict(c) => c.run(),
         Command::Sweep(c) => c.run(),

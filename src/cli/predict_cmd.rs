@@ -152,6 +152,7 @@ impl PredictCmd {
         );
         let map = MapOptions {
             frequency_lines_hz: lines.longitudinal_hz.clone(),
+            wheel_lines_hz: prepared.wheel_contact_modes_hz(super::sweep_cmd::WHEEL_LINE_SHARE),
             ..MapOptions::default()
         };
         let sw = sweep(&prepared, &speeds, &sdir, &map, &run_key, true)?;

@@ -35,6 +35,9 @@ pub struct SweepCmd {
     cache: Option<PathBuf>,
 }
 
+/// Wheel modes drawn on the maps: contact participation ≥ this share of the largest (−).
+pub const WHEEL_LINE_SHARE: f64 = 0.03;
+
 impl SweepCmd {
     /// Runs the command.
     pub fn run(self) -> anyhow::Result<()> {
@@ -59,6 +62,7 @@ impl SweepCmd {
         let prepared = engine::prepared(&model, cache)?;
         let opts = MapOptions {
             frequency_lines_hz: prepared.longitudinal_compression_hz(),
+            wheel_lines_hz: prepared.wheel_contact_modes_hz(WHEEL_LINE_SHARE),
             ..MapOptions::default()
         };
         let runner: Box<dyn corrugation::dynamics::PassageRunner> = Box::new(prepared);

@@ -14,6 +14,7 @@ pub mod analysis;
 pub mod integrator;
 pub mod moving_load;
 pub mod passage;
+pub mod receptance;
 pub mod reduced;
 pub mod residual;
 pub mod summary;

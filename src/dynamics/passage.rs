@@ -489,6 +489,80 @@ impl PassageEngine {
         self.series_compliance
     }
 
+    /// Receptances of the reduced model at the contact (see [`super::receptance`]): the rail
+    /// at `positions_m` (m along the rail; the contact line's rows, the constant residual
+    /// compliance of the truncated modes added), the wheel at its contact point, and the
+    /// linearised Hertz compliance, at `frequencies_hz` (Hz).
+    pub fn contact_receptance(
+        &self,
+        positions_m: &[f64],
+        frequencies_hz: &[f64],
+    ) -> Result<super::receptance::ContactReceptance, DynamicsError> {
+        use super::receptance::modal_receptance;
+        use faer::c64;
+        let to3 = |h: &faer::Mat<c64>, add: [f64; 3]| {
+            let mut o = [[c64::new(0.0, 0.0); 3]; 3];
+            for a in 0..3 {
+                for b in 0..3 {
+                    o[a][b] = h[(a, b)];
+                }
+                o[a][a] += c64::new(add[a], 0.0);
+            }
+            o
+        };
+        let m = self.track_sys.len();
+        let mut rows = vec![0.0; 3 * m];
+        let mut rail = Vec::with_capacity(positions_m.len());
+        for &x in positions_m {
+            self.rail_line.rows_at(x, &mut rows)?;
+            let r: Vec<&[f64]> = rows.chunks_exact(m).collect();
+            let h = modal_receptance(&self.track_sys, &r, frequencies_hz)?;
+            rail.push(h.iter().map(|h| to3(h, self.series_compliance)).collect());
+        }
+        let mw = self.wheel_sys.len();
+        let wr: Vec<&[f64]> = self.wheel_contact.rows.chunks_exact(mw).collect();
+        let wheel = modal_receptance(&self.wheel_sys, &wr, frequencies_hz)?
+            .iter()
+            .map(|h| to3(h, [0.0; 3]))
+            .collect();
+        Ok(super::receptance::ContactReceptance {
+            frequencies_hz: frequencies_hz.to_vec(),
+            positions_m: positions_m.to_vec(),
+            rail,
+            wheel,
+            // δ = c N^{2/3} ⇒ dδ/dN = 2δ / (3N).
+            hertz_compliance_m_per_n: 2.0 * self.hertz_approach_m / (3.0 * self.wheel_load_n),
+        })
+    }
+
+    /// The elastic wheel modes as the contact sees them: for every wheel mode with ω > 0,
+    /// `(index, [r_x², r_n²])`, the squared mass-normalised modal displacements at the wheel's
+    /// contact point in the rolling (x) and normal (n) directions (1/kg): the residue of
+    /// the mode's pole in the wheel's point receptance `H = Σ r² / (ω_i² − ω² + …)`.
+    pub fn wheel_contact_participation(&self) -> Vec<(usize, [f64; 2])> {
+        let m = self.wheel_sys.len();
+        let r = &self.wheel_contact.rows;
+        (0..m)
+            .filter(|&i| self.wheel_sys.omega2[i] > 0.0)
+            .map(|i| (i, [r[i] * r[i], r[2 * m + i] * r[2 * m + i]]))
+            .collect()
+    }
+
+    /// The mid-span and the sleeper position nearest the centre of the solution zone (m): the
+    /// two positions where the rail's support differs most.
+    pub fn midspan_and_sleeper_m(&self) -> [f64; 2] {
+        let layout = crate::structure::layout::Layout::new(&self.model);
+        let c = 0.5 * (self.zone_m[0] + self.zone_m[1]);
+        let nearest = |xs: &mut dyn Iterator<Item = f64>| {
+            xs.min_by(|a, b| (a - c).abs().total_cmp(&(b - c).abs()))
+                .unwrap_or(c)
+        };
+        let sl = &layout.sleepers;
+        let sleeper = nearest(&mut sl.iter().copied());
+        let mid = nearest(&mut sl.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+        [mid, sleeper]
+    }
+
     /// Hertz semi-axis across the rail at the static load (m).
     pub fn hertz_b_m(&self) -> f64 {
         self.hertz_b_m
@@ -956,6 +1030,29 @@ impl PreparedModel {
             .filter(|(_, c)| c.family == TrackFamily::LongitudinalCompression)
             .map(|(&f, _)| f)
             .collect()
+    }
+
+    /// Frequencies (Hz) of the wheel modes the contact sees strongly: elastic wheel modes
+    /// whose squared mass-normalised displacement at the wheel's contact point, in the rolling
+    /// (x) or the normal (n) direction, is at least `share` (−, e.g. 0.1) of the largest one
+    /// in that direction ([`PassageEngine::wheel_contact_participation`]). These are the poles
+    /// of the wheel's contact receptance with the largest residues. Modes within 0.5 % of
+    /// the previous one kept (the pairs of an axisymmetric wheel) give one frequency.
+    pub fn wheel_contact_modes_hz(&self, share: f64) -> Vec<f64> {
+        let p = self.engine.wheel_contact_participation();
+        let max = |d: usize| p.iter().map(|(_, r)| r[d]).fold(0.0, f64::max);
+        let (mx, mn) = (max(0), max(1));
+        let mut out: Vec<f64> = Vec::new();
+        for &(i, r) in &p {
+            if (mx > 0.0 && r[0] >= share * mx) || (mn > 0.0 && r[1] >= share * mn) {
+                let f = self.wheel_frequencies_hz[i];
+                // A pair of modes (sine and cosine about the contact) is one line.
+                if out.last().is_none_or(|&g| f > g * 1.005) {
+                    out.push(f);
+                }
+            }
+        }
+        out
     }
 
     /// Frequencies (Hz) of the track's vertical-bending modes.

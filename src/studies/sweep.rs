@@ -65,8 +65,13 @@ pub struct MapOptions {
     pub wavelength_points: usize,
     /// Points of the frequency grid (uniform in frequency).
     pub frequency_points: usize,
-    /// Longitudinal-compression eigenfrequencies drawn on the maps (Hz).
+    /// Longitudinal-compression eigenfrequencies drawn on the maps (Hz), labelled `LC`.
     pub frequency_lines_hz: Vec<f64>,
+    /// Wheel eigenfrequencies with a large modal displacement at the contact point drawn
+    /// on the maps (Hz), labelled `wheel` (see
+    /// [`crate::dynamics::passage::PreparedModel::wheel_contact_modes_hz`]).
+    #[serde(default)]
+    pub wheel_lines_hz: Vec<f64>,
 }
 
 impl Default for MapOptions {
@@ -78,6 +83,7 @@ impl Default for MapOptions {
             wavelength_points: 241,
             frequency_points: 401,
             frequency_lines_hz: Vec::new(),
+            wheel_lines_hz: Vec::new(),
         }
     }
 }
@@ -97,6 +103,7 @@ impl MapOptions {
         if self
             .frequency_lines_hz
             .iter()
+            .chain(&self.wheel_lines_hz)
             .any(|f| !f.is_finite() || *f <= 0.0)
         {
             return Err(bad("eigenfrequency lines must be positive and finite"));
@@ -549,12 +556,22 @@ fn write_outputs(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), Studi
         (v0 * 0.95, v0 * 1.05)
     };
     let curve_v = linspace(vlo, vhi, 200);
-    let lines_lambda: Vec<OverlayLine> = r
+    let labelled: Vec<(String, f64)> = r
         .map
         .frequency_lines_hz
         .iter()
-        .map(|&f| OverlayLine {
-            name: format!("{f:.0} Hz"),
+        .map(|&f| (format!("LC {f:.0} Hz"), f))
+        .chain(
+            r.map
+                .wheel_lines_hz
+                .iter()
+                .map(|&f| (format!("wheel {f:.0} Hz"), f)),
+        )
+        .collect();
+    let lines_lambda: Vec<OverlayLine> = labelled
+        .iter()
+        .map(|(name, f)| OverlayLine {
+            name: name.clone(),
             x: curve_v.clone(),
             y: curve_v
                 .iter()
@@ -562,11 +579,9 @@ fn write_outputs(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), Studi
                 .collect(),
         })
         .collect();
-    let lines_f: Vec<OverlayLine> = r
-        .map
-        .frequency_lines_hz
+    let lines_f: Vec<OverlayLine> = labelled
         .iter()
-        .map(|&f| OverlayLine::horizontal(format!("{f:.0} Hz"), f, vlo, vhi))
+        .map(|(name, f)| OverlayLine::horizontal(name.clone(), *f, vlo, vhi))
         .collect();
     // A single speed has no x extent: the map is still drawn, one column wide.
     for (stem, title, ylab, y, z, lines, unit) in [
@@ -688,7 +703,21 @@ fn write_report(dir: &Path, r: &SweepRecord) -> Result<(), StudiesError> {
             .map(|f| format!("{f:.1}"))
             .collect();
         d.paragraph(format!(
-            "Longitudinal-compression eigenfrequencies drawn on the maps (Hz): {}.",
+            "Longitudinal-compression eigenfrequencies drawn on the maps (Hz, `LC`): {}.",
+            f.join(", ")
+        ));
+    }
+    if !r.map.wheel_lines_hz.is_empty() {
+        let f: Vec<String> = r
+            .map
+            .wheel_lines_hz
+            .iter()
+            .map(|f| format!("{f:.1}"))
+            .collect();
+        d.paragraph(format!(
+            "Wheel eigenfrequencies with a large modal displacement at the contact point drawn \
+             on the maps (Hz, `wheel`): {}. On the default track these, not the rail's \
+             longitudinal-compression modes, set the frequency selection (validation/README.md).",
             f.join(", ")
         ));
     }
