@@ -193,3 +193,12 @@ fn contact_command_json_keys_and_hertz_geometry() {
     let fx = v["fx_n"].as_f64().unwrap();
     assert!(fx > 0.0 && fx < 0.4 * 100e3, "{out}");
 }
+
+/// A steel damping value is rejected (it is not modelled), not silently ignored.
+#[test]
+fn nonzero_rail_structural_damping_is_rejected() {
+    let (code, _, err) = common::run(&["model", "--set", "rail.structural_damping=1e-6"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("rail.structural_damping"), "{err}");
+    assert!(err.contains("not modelled"), "{err}");
+}

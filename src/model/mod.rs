@@ -157,7 +157,8 @@ pub struct Rail {
     /// Density (kg/m³).
     pub density: f64,
     /// Stiffness-proportional (Rayleigh β) structural damping of the steel (s); 0 in the
-    /// reference, where all damping sits in the discrete dampers.
+    /// reference, where all damping sits in the discrete dampers. Only 0 is accepted: steel
+    /// damping is not modelled yet (a non-zero value is an error, not silently ignored).
     pub structural_damping: f64,
 }
 
@@ -582,12 +583,14 @@ impl Model {
             "(tan of cant angle)",
         )?;
         c.elastic("rail", r.youngs_modulus, r.poisson_ratio, r.density)?;
+        // Only 0 is supported: the reduced model (and the explicit path) has no steel damping
+        // yet, and a value that is accepted but ignored would mislead. The range says so.
         c.range(
             "rail.structural_damping",
             r.structural_damping,
             0.0,
-            1e-3,
-            "s (Rayleigh beta)",
+            0.0,
+            "s (Rayleigh beta; steel damping is not modelled yet: all damping sits in the discrete dampers, as in the reference)",
         )?;
         let s = &self.sleeper;
         c.pos("sleeper.length", s.length, 5.0, "m")?;
