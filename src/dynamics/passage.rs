@@ -260,8 +260,9 @@ impl PassageEngine {
                 track_freqs_hz[i]
             )));
         }
-        let wheel_sys =
+        let mut wheel_sys =
             ModalSystem::new(wheel_freqs_hz, wheel_modes, wheel_mats.c.as_ref(), RIGID_HZ)?;
+        wheel_sys.add_modal_damping(model.wheel.damping_ratio);
         let rigid: Vec<usize> = (0..wheel_sys.len())
             .filter(|&i| wheel_sys.omega2[i] == 0.0)
             .collect();

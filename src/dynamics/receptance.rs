@@ -283,6 +283,31 @@ mod tests {
         );
     }
 
+    /// `add_modal_damping(ζ)` gives each elastic mode the resonance peak of a damped
+    /// oscillator, `|H(ω_n)| = r² / (2 ζ ω_n²)` (closed form), and leaves rigid modes alone.
+    #[test]
+    fn modal_damping_ratio_gives_the_closed_form_peak() {
+        let wn = 2.0 * std::f64::consts::PI * 1060.0;
+        let mut sys = ModalSystem {
+            omega2: vec![0.0, wn * wn],
+            damping: Mat::zeros(2, 2),
+        };
+        sys.add_modal_damping(1e-3);
+        assert_eq!(sys.damping[(0, 0)], 0.0);
+        let r = [0.0, 0.025];
+        let h = modal_receptance(&sys, &[&r], &[1060.0]).unwrap();
+        let exact = 0.025f64.powi(2) / (2.0 * 1e-3 * wn * wn);
+        let got = h[0][(0, 0)];
+        assert!(
+            (got.norm() - exact).abs() <= 1e-12 * exact,
+            "{got} vs {exact}"
+        );
+        assert!(
+            (got.arg() + std::f64::consts::FRAC_PI_2).abs() < 1e-12,
+            "phase −90°"
+        );
+    }
+
     #[test]
     fn peaks_are_refined_to_the_parabola_vertex() {
         let x: Vec<f64> = (0..101).map(|i| i as f64 * 10.0).collect();

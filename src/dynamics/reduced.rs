@@ -115,6 +115,20 @@ impl ModalSystem {
         Ok(ModalSystem { omega2, damping })
     }
 
+    /// Adds modal damping of ratio `zeta` (−) to every mode with ω > 0: `C_ii += 2 ζ ω_i`
+    /// (1/s). Rigid-body modes are left alone.
+    pub fn add_modal_damping(&mut self, zeta: f64) {
+        if zeta == 0.0 {
+            return;
+        }
+        for i in 0..self.len() {
+            let w2 = self.omega2[i];
+            if w2 > 0.0 {
+                self.damping[(i, i)] += 2.0 * zeta * w2.sqrt();
+            }
+        }
+    }
+
     /// Number of modes.
     pub fn len(&self) -> usize {
         self.omega2.len()

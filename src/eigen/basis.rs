@@ -86,6 +86,10 @@ pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey
             run.remove("fmax");
             run.remove("residual_flexibility");
         }
+        // The wheel's modal damping ratio is added after the modes are found.
+        if let Some(w) = o.get_mut("wheel").and_then(|r| r.as_object_mut()) {
+            w.remove("damping_ratio");
+        }
     }
     let bytes = serde_json::to_vec(&v).map_err(|e| BasisError::Key(e.to_string()))?;
     Ok(CacheKey::new()
