@@ -16,7 +16,10 @@
 //!   from the structural state at that instant (the contact needs `q_{n+1}` and a velocity,
 //!   for which the predictor `v_n + Δt a_n` is used — second-order consistent);
 //! - with the full (non-diagonal) `C_q` the only matrix operation per step is one dense
-//!   product with `(I + ½Δt C_q)⁻¹`, factorised and inverted once.
+//!   product with `(I + ½Δt C_q)⁻¹`, factorised and inverted once. The damper force
+//!   `C_q v_{n+1}` comes with it: the implicit equation says
+//!   `½Δt C_q v_{n+1} = rhs − v_{n+1}`, so the dissipated power `v·C_q v` of the energy
+//!   balance needs no second product ([`ModalVerlet::damping_power`]).
 //!
 //! Stability: undamped modes need `Δt ω_max < 2`; the constructor refuses `Δt ω_max ≥ 1.9`
 //! with an error saying to lower f_max or refine the contact grid (Δt = Δx / V). The
@@ -51,6 +54,9 @@ pub struct ModalVerlet {
     v_old: Vec<f64>,
     rhs: Col<f64>,
     tmp: Col<f64>,
+    /// The damper force `C_q v` (1/s · modal velocity) of the current velocity: an explicit
+    /// product after [`Self::set_state`], `(2/Δt)(rhs − v)` after [`Self::complete`].
+    cv: Vec<f64>,
 }
 
 impl ModalVerlet {
@@ -94,6 +100,7 @@ impl ModalVerlet {
             v_old: vec![0.0; m],
             rhs: Col::zeros(m),
             tmp: Col::zeros(m),
+            cv: vec![0.0; m],
         })
     }
 
@@ -129,6 +136,7 @@ impl ModalVerlet {
             faer::Par::Seq,
         );
         for i in 0..m {
+            self.cv[i] = self.rhs[i];
             self.a[i] = f[i] - self.rhs[i] - self.omega2[i] * q[i];
         }
     }
@@ -168,6 +176,8 @@ impl ModalVerlet {
         for i in 0..m {
             self.v[i] = self.tmp[i];
             self.a[i] = 2.0 / dt * (self.v[i] - self.v_old[i]) - self.a[i];
+            // (I + ½Δt C) v = rhs  ⇒  C v = (2/Δt)(rhs − v)
+            self.cv[i] = 2.0 / dt * (self.rhs[i] - self.v[i]);
         }
     }
 
@@ -186,22 +196,16 @@ impl ModalVerlet {
             .sum::<f64>()
     }
 
-    /// Power dissipated by the dampers at the current velocity, q̇ᵀ C q̇ (W). Costs one
-    /// dense product: call it only when recording the energy balance.
-    pub fn damping_power(&mut self) -> f64 {
-        let m = self.len();
-        for i in 0..m {
-            self.tmp[i] = self.v[i];
-        }
-        faer::linalg::matmul::matmul(
-            self.rhs.as_mut(),
-            faer::Accum::Replace,
-            self.c.as_ref(),
-            self.tmp.as_ref(),
-            1.0,
-            faer::Par::Seq,
-        );
-        (0..m).map(|i| self.v[i] * self.rhs[i]).sum()
+    /// Power dissipated by the dampers at the current velocity, q̇ᵀ C q̇ (W). No product: the
+    /// damper force `C q̇` is a by-product of [`Self::complete`] (module doc) or of
+    /// [`Self::set_state`].
+    pub fn damping_power(&self) -> f64 {
+        self.v.iter().zip(&self.cv).map(|(v, c)| v * c).sum()
+    }
+
+    /// The damper force `C q̇` of the current velocity (module doc: from the implicit solve).
+    pub fn damper_force(&self) -> &[f64] {
+        &self.cv
     }
 }
 
@@ -275,6 +279,58 @@ mod tests {
             it.complete(&[1.0]);
         }
         assert!((it.q[0] * w * w - 1.0).abs() < 1e-9);
+    }
+
+    /// The damper force `C v = (2/Δt)(rhs − v)` taken from the implicit solve equals the
+    /// explicit product of the damping matrix with the velocity (a full, non-proportional
+    /// `C` with the spread of the track's modal damping), and so does the power `vᵀC v`.
+    #[test]
+    fn free_damper_force_equals_the_explicit_product() {
+        let m = 40;
+        let dt = 1.6e-5;
+        // C = Bᵀ B + diag: positive definite, entries from 0.1 to ~300 1/s, not proportional
+        let mut b = Mat::<f64>::zeros(12, m);
+        for r in 0..12 {
+            for c in 0..m {
+                b[(r, c)] = (((r * 31 + c * 17) % 23) as f64 - 11.0) * 0.6;
+            }
+        }
+        let mut c = b.transpose() * &b;
+        for i in 0..m {
+            c[(i, i)] += 0.1 + i as f64;
+        }
+        let omega2 = (0..m)
+            .map(|i| (2.0 * PI * (50.0 + 120.0 * i as f64)).powi(2))
+            .collect();
+        let sys = ModalSystem {
+            omega2,
+            damping: c.clone(),
+        };
+        let mut it = ModalVerlet::new(&sys, dt).unwrap();
+        let q0: Vec<f64> = (0..m).map(|i| 1e-6 * ((i % 7) as f64 - 3.0)).collect();
+        let v0: Vec<f64> = (0..m).map(|i| 1e-3 * ((i % 5) as f64 - 2.0)).collect();
+        let f: Vec<f64> = (0..m).map(|i| ((i % 3) as f64 - 1.0) * 10.0).collect();
+        it.set_state(&q0, &v0, &f);
+        for step in 0..50 {
+            it.advance_displacement();
+            it.complete(&f);
+            if step % 10 != 9 {
+                continue;
+            }
+            let exact: Vec<f64> = (0..m)
+                .map(|i| (0..m).map(|j| c[(i, j)] * it.v[j]).sum())
+                .collect();
+            let scale = exact.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
+            for (i, (x, e)) in it.damper_force().iter().zip(&exact).enumerate() {
+                assert!((x - e).abs() <= 1e-12 * scale, "mode {i}: {x} vs {e}");
+            }
+            let p_exact: f64 = it.v.iter().zip(&exact).map(|(v, c)| v * c).sum();
+            let p = it.damping_power();
+            assert!(
+                (p - p_exact).abs() <= 1e-12 * p_exact.abs(),
+                "{p} vs {p_exact}"
+            );
+        }
     }
 
     #[test]

@@ -60,7 +60,8 @@ pub const RIGID_HZ: f64 = 0.5;
 /// What a passage records besides the wear.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PassageOptions {
-    /// Keep the energy balance (one extra dense product per step and substructure).
+    /// Keep the energy balance (O(modes) per step: the damper power comes with the
+    /// integrator's implicit solve).
     pub energy: bool,
     /// Distance after the solution-zone start of the rail-top node whose displacement is
     /// recorded (m); `None` = no rail-point record. Issue 5 asks for 0.6 m.
