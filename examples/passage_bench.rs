@@ -69,12 +69,15 @@ fn main() -> anyhow::Result<()> {
             let rec = prepared.engine.passage(v, None, &opts, None)?;
             let (w, c) = (w0.elapsed().as_secs_f64(), cpu_seconds() - c0);
             println!(
-                "{name}: {} steps, passage {:.3} s (loop {:.3} s, {:.3} ms/step), CPU {:.2} s",
+                "{name}: {} steps, passage {:.3} s (loop {:.3} s, {:.3} ms/step), CPU {:.2} s; \
+                 static creepage {:.9e}, approach {:.9e} m",
                 rec.steps,
                 w,
                 rec.seconds,
                 1e3 * rec.seconds / rec.steps as f64,
-                c
+                c,
+                rec.static_creepage,
+                rec.static_approach_m
             );
             if let (Some(path), true) = (csv, opts.energy) {
                 let h = &rec.histories;
