@@ -49,12 +49,18 @@ pub struct TangentialSolver {
     rx: Vec<f64>,
     ry: Vec<f64>,
     kap: Vec<f64>,
+    /// Inverse diagonal of the inner CG's model Hessian (Jacobi preconditioner), x and y.
+    mix: Vec<f64>,
+    miy: Vec<f64>,
     /// Elements `lo..hi` hold every element with a positive traction bound (the contact);
     /// the CG loops run over them only.
     lo: usize,
     hi: usize,
     /// The algorithm for the slip directions.
     pub algorithm: TangentialAlgorithm,
+    /// Jacobi-precondition the inner CG of [`TangentialAlgorithm::Newton`] (default `true`;
+    /// see [`Self::solve`]).
+    pub jacobi: bool,
     /// Slip distance S_x of the last solve (m).
     pub sx: Vec<f64>,
     /// Slip distance S_y of the last solve (m).
@@ -96,9 +102,12 @@ impl TangentialSolver {
             rx: vec![0.0; n],
             ry: vec![0.0; n],
             kap: vec![0.0; n],
+            mix: vec![0.0; n],
+            miy: vec![0.0; n],
             lo: 0,
             hi: n,
             algorithm: TangentialAlgorithm::Newton,
+            jacobi: true,
             sx: vec![0.0; n],
             sy: vec![0.0; n],
             ux_ext: vec![0.0; ext],
@@ -205,7 +214,20 @@ impl TangentialSolver {
     ///    the radial slip, without which the CG overshoots along the tangent lines). After the
     ///    (inexact, relative residual 0.01) Newton step the slip tractions return to their
     ///    circles and an exact product restarts the outer loop; turns larger than `0.05 g_i`
-    ///    are made by the element test.
+    ///    are made by the element test. Once the element test changes nothing (no release,
+    ///    no turn: the active set and the directions are settled, as in most steps of a
+    ///    passage from the warm start), the CG runs to the final tolerance in one sequence
+    ///    instead of restarting at every 100× reduction (each restart throws the Krylov
+    ///    space away).
+    ///
+    ///    *Jacobi preconditioner* ([`Self::jacobi`], Newton only): the model Hessian's diagonal
+    ///    is the self-influence `C_xx(0)`, `C_yy(0)` (+ the series term `c ΔA`) on adhesion
+    ///    elements, but `t_iᵀ C_ii t_i + κ_i` on the slip elements, and the curvature
+    ///    `κ_i = |S_i|/g_i` spreads over orders of magnitude (large where the slip is large
+    ///    and the bound `µ p` small, at the trailing edge). Scaling by the inverse diagonal
+    ///    removes that spread: on the passage of the default model it halves the influence
+    ///    products per step (34 → 18, issue 5). It leaves a slip element's search direction
+    ///    along its tangent (a scalar per element), so the CG stays on the same model.
     ///
     /// The outer loop ends when the adhesion residual is below tolerance, no element changes
     /// state and the slip directions are converged. If it has not ended after
@@ -316,7 +338,28 @@ impl TangentialSolver {
                     };
                 }
             }
-            let stop = if norot {
+            let jacobi = self.jacobi && !norot;
+            if jacobi {
+                // inverse diagonal of the model Hessian; z = M⁻¹ r is the search direction
+                let (hx, hy) = (cdx + self.uniform_x_m_per_pa, cdy + self.uniform_y_m_per_pa);
+                rr = 0.0;
+                for i in lo..hi {
+                    let (mx, my) = if self.slip[i] {
+                        let (px, py) = (self.px[i], self.py[i]);
+                        let d = 1.0 / (px * px * hx + py * py * hy + self.kap[i]);
+                        (d, d)
+                    } else {
+                        (1.0 / hx, 1.0 / hy)
+                    };
+                    self.mix[i] = mx;
+                    self.miy[i] = my;
+                    self.dx_[i] *= mx;
+                    self.dy_[i] *= my;
+                    rr += self.rx[i] * self.dx_[i] + self.ry[i] * self.dy_[i];
+                }
+            }
+            // settled active set and directions: one CG sequence to the tolerance
+            let stop = if norot || (!changed && dmax == 0.0) {
                 0.5 * s_tol
             } else {
                 (0.01 * rmax).max(0.5 * s_tol)
@@ -389,10 +432,16 @@ impl TangentialSolver {
                         let (rx, ry) = (self.rx[i] - alpha * wx, self.ry[i] - alpha * wy);
                         self.rx[i] = rx;
                         self.ry[i] = ry;
-                        // qx, qy: the new residual (the product is no longer needed)
-                        self.qx[i] = rx;
-                        self.qy[i] = ry;
-                        rr += rx * rx + ry * ry;
+                        // qx, qy: the new (preconditioned) residual (the product is no
+                        // longer needed)
+                        let (zx, zy) = if jacobi {
+                            (rx * self.mix[i], ry * self.miy[i])
+                        } else {
+                            (rx, ry)
+                        };
+                        self.qx[i] = zx;
+                        self.qy[i] = zy;
+                        rr += rx * zx + ry * zy;
                         rmax = rmax.max(rx.abs()).max(ry.abs());
                     }
                     (rr, rmax)

@@ -679,3 +679,73 @@ fn newton_tangential_solver_matches_element_test_solver() {
     assert!(between.0 < 1e-4 && between.1 < 1e-3, "{between:?}");
     assert!(runs[0].1 * 5 < runs[1].1);
 }
+
+#[test]
+fn jacobi_preconditioned_tangential_solver_matches_the_plain_one() {
+    // The same transient sequence (varying load, corrugated rail, lateral creepage, spin) with
+    // the inner CG preconditioned and plain, and the reference: the plain CG at a 1000×
+    // tighter tolerance. The preconditioner changes the path, not the solution.
+    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 24, 18, 1.4)
+        .unwrap();
+    let dx = cfg.grid.dx();
+    let mut runs = Vec::new();
+    for (jacobi, tol) in [
+        (true, cfg.tangential_tol),
+        (false, cfg.tangential_tol),
+        (false, 1e-3 * cfg.tangential_tol),
+    ] {
+        let mut eng = TransientRolling::new(TransientConfig {
+            tangential_tol: tol,
+            ..cfg
+        })
+        .unwrap();
+        eng.set_tangential_jacobi(jacobi);
+        let xs = eng.x_m().to_vec();
+        let mut rail = vec![0.0; xs.len()];
+        let mut out = Vec::new();
+        let mut prods = 0usize;
+        for k in 0..80 {
+            let xc = k as f64 * dx;
+            for (r, x) in rail.iter_mut().zip(&xs) {
+                *r = 5e-6 * (2.0 * PI * (xc + x) / 0.03).sin();
+            }
+            let r = eng
+                .step(&StepInputs {
+                    normal: NormalInput::Force(100e3 * (1.0 + 0.1 * (0.4 * k as f64).sin())),
+                    longitudinal: Longitudinal::Creepage(-1.5e-3 + 2e-4 * (0.3 * k as f64).sin()),
+                    lateral_creepage: 0.8e-3,
+                    spin_per_m: 0.3,
+                    rail_height_m: Some(&rail),
+                })
+                .unwrap();
+            // from step 20 on: the warm-started regime of a passage
+            if k >= 20 {
+                prods += r.tangential_iterations;
+            }
+            out.push((r.fx_n, r.fy_n, r.frictional_power_w));
+        }
+        runs.push((out, prods));
+    }
+    let diff = |a: usize, b: usize| -> (f64, f64) {
+        let (mut f, mut p) = (0.0_f64, 0.0_f64);
+        for (x, y) in runs[a].0.iter().zip(&runs[b].0) {
+            f = f.max((x.0 - y.0).abs().max((x.1 - y.1).abs()) / (0.4 * 100e3));
+            p = p.max((x.2 - y.2).abs() / y.2.abs().max(1.0));
+        }
+        (f, p)
+    };
+    let (pre, plain) = (diff(0, 2), diff(1, 2));
+    println!(
+        "tangential FFT pairs (steps 20..80): Jacobi {}, plain {} (reference {}); vs reference \
+         (force/µN, power rel.): Jacobi {pre:?}, plain {plain:?}",
+        runs[0].1, runs[1].1, runs[2].1
+    );
+    assert!(pre.0 < 1e-6 && pre.1 < 1e-5, "{pre:?}");
+    assert!(plain.0 < 1e-6 && plain.1 < 1e-5, "{plain:?}");
+    assert!(
+        runs[0].1 * 4 < runs[1].1 * 3,
+        "{} vs {}",
+        runs[0].1,
+        runs[1].1
+    );
+}

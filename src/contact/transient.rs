@@ -417,6 +417,12 @@ impl TransientRolling {
         self.tang.algorithm = algorithm;
     }
 
+    /// Switch the Jacobi preconditioner of the tangential solver's inner CG (default on; see
+    /// [`TangentialSolver::solve`]); off only to compare.
+    pub fn set_tangential_jacobi(&mut self, on: bool) {
+        self.tang.jacobi = on;
+    }
+
     /// The series compliance `(c_x, c_y, c_z)` (m/N) set by [`Self::set_series_compliance`].
     pub fn series_compliance(&self) -> [f64; 3] {
         self.series_c
