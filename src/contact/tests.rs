@@ -633,38 +633,9 @@ fn newton_tangential_solver_matches_element_test_solver() {
         })
         .unwrap();
         eng.set_tangential_algorithm(alg);
-        let xs = eng.x_m().to_vec();
-        let mut rail = vec![0.0; xs.len()];
-        let mut out = Vec::new();
-        let mut prods = 0usize;
-        for k in 0..60 {
-            let xc = k as f64 * dx;
-            for (r, x) in rail.iter_mut().zip(&xs) {
-                *r = 5e-6 * (2.0 * PI * (xc + x) / 0.03).sin();
-            }
-            let r = eng
-                .step(&StepInputs {
-                    normal: NormalInput::Force(100e3 * (1.0 + 0.1 * (0.4 * k as f64).sin())),
-                    longitudinal: Longitudinal::Creepage(-1.5e-3),
-                    lateral_creepage: 0.8e-3,
-                    spin_per_m: 0.3,
-                    rail_height_m: Some(&rail),
-                })
-                .unwrap();
-            prods += r.tangential_iterations;
-            out.push((r.fx_n, r.fy_n, r.frictional_power_w));
-        }
-        runs.push((out, prods));
+        runs.push(transient_sequence(&mut eng, dx, 60, 0, |_| -1.5e-3));
     }
-    // max |ΔFx|, |ΔFy| / µN and relative power difference between runs a and b
-    let diff = |a: usize, b: usize| -> (f64, f64) {
-        let (mut f, mut p) = (0.0_f64, 0.0_f64);
-        for (x, y) in runs[a].0.iter().zip(&runs[b].0) {
-            f = f.max((x.0 - y.0).abs().max((x.1 - y.1).abs()) / (0.4 * 100e3));
-            p = p.max((x.2 - y.2).abs() / y.2.abs().max(1.0));
-        }
-        (f, p)
-    };
+    let diff = |a: usize, b: usize| force_power_difference(&runs[a].0, &runs[b].0);
     let (newton, element, between) = (diff(0, 2), diff(1, 2), diff(0, 1));
     println!(
         "tangential FFT pairs: Newton {}, element test {} (reference {}); vs reference \
@@ -700,40 +671,12 @@ fn jacobi_preconditioned_tangential_solver_matches_the_plain_one() {
         })
         .unwrap();
         eng.set_tangential_jacobi(jacobi);
-        let xs = eng.x_m().to_vec();
-        let mut rail = vec![0.0; xs.len()];
-        let mut out = Vec::new();
-        let mut prods = 0usize;
-        for k in 0..80 {
-            let xc = k as f64 * dx;
-            for (r, x) in rail.iter_mut().zip(&xs) {
-                *r = 5e-6 * (2.0 * PI * (xc + x) / 0.03).sin();
-            }
-            let r = eng
-                .step(&StepInputs {
-                    normal: NormalInput::Force(100e3 * (1.0 + 0.1 * (0.4 * k as f64).sin())),
-                    longitudinal: Longitudinal::Creepage(-1.5e-3 + 2e-4 * (0.3 * k as f64).sin()),
-                    lateral_creepage: 0.8e-3,
-                    spin_per_m: 0.3,
-                    rail_height_m: Some(&rail),
-                })
-                .unwrap();
-            // from step 20 on: the warm-started regime of a passage
-            if k >= 20 {
-                prods += r.tangential_iterations;
-            }
-            out.push((r.fx_n, r.fy_n, r.frictional_power_w));
-        }
-        runs.push((out, prods));
+        // products counted from step 20 on: the warm-started regime of a passage
+        runs.push(transient_sequence(&mut eng, dx, 80, 20, |k| {
+            -1.5e-3 + 2e-4 * (0.3 * k as f64).sin()
+        }));
     }
-    let diff = |a: usize, b: usize| -> (f64, f64) {
-        let (mut f, mut p) = (0.0_f64, 0.0_f64);
-        for (x, y) in runs[a].0.iter().zip(&runs[b].0) {
-            f = f.max((x.0 - y.0).abs().max((x.1 - y.1).abs()) / (0.4 * 100e3));
-            p = p.max((x.2 - y.2).abs() / y.2.abs().max(1.0));
-        }
-        (f, p)
-    };
+    let diff = |a: usize, b: usize| force_power_difference(&runs[a].0, &runs[b].0);
     let (pre, plain) = (diff(0, 2), diff(1, 2));
     println!(
         "tangential FFT pairs (steps 20..80): Jacobi {}, plain {} (reference {}); vs reference \
@@ -748,4 +691,52 @@ fn jacobi_preconditioned_tangential_solver_matches_the_plain_one() {
         runs[0].1,
         runs[1].1
     );
+}
+
+/// Drives `eng` through `steps` transient steps of the tangential-solver comparisons: normal
+/// load 100 kN ± 10 %, a 30 mm rail corrugation of 5 µm, longitudinal creepage `creep(k)`,
+/// lateral creepage 0.8e-3 and spin 0.3 1/m. Returns `(F_x, F_y, frictional power)` per step
+/// and the tangential influence products of the steps from `count_from` on.
+fn transient_sequence(
+    eng: &mut TransientRolling,
+    dx: f64,
+    steps: usize,
+    count_from: usize,
+    creep: impl Fn(usize) -> f64,
+) -> (Vec<(f64, f64, f64)>, usize) {
+    let xs = eng.x_m().to_vec();
+    let mut rail = vec![0.0; xs.len()];
+    let mut out = Vec::new();
+    let mut prods = 0usize;
+    for k in 0..steps {
+        let xc = k as f64 * dx;
+        for (r, x) in rail.iter_mut().zip(&xs) {
+            *r = 5e-6 * (2.0 * PI * (xc + x) / 0.03).sin();
+        }
+        let r = eng
+            .step(&StepInputs {
+                normal: NormalInput::Force(100e3 * (1.0 + 0.1 * (0.4 * k as f64).sin())),
+                longitudinal: Longitudinal::Creepage(creep(k)),
+                lateral_creepage: 0.8e-3,
+                spin_per_m: 0.3,
+                rail_height_m: Some(&rail),
+            })
+            .unwrap();
+        if k >= count_from {
+            prods += r.tangential_iterations;
+        }
+        out.push((r.fx_n, r.fy_n, r.frictional_power_w));
+    }
+    (out, prods)
+}
+
+/// max |ΔF_x|, |ΔF_y| / µN (µN = 0.4 · 100 kN) and the max relative difference of the
+/// frictional power between two runs of [`transient_sequence`].
+fn force_power_difference(a: &[(f64, f64, f64)], b: &[(f64, f64, f64)]) -> (f64, f64) {
+    let (mut f, mut p) = (0.0_f64, 0.0_f64);
+    for (x, y) in a.iter().zip(b) {
+        f = f.max((x.0 - y.0).abs().max((x.1 - y.1).abs()) / (0.4 * 100e3));
+        p = p.max((x.2 - y.2).abs() / y.2.abs().max(1.0));
+    }
+    (f, p)
 }
