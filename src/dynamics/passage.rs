@@ -522,15 +522,26 @@ impl PassageEngine {
             }
             o
         };
+        // All positions' rows in one solve: one factorisation per frequency.
         let m = self.track_sys.len();
-        let mut rows = vec![0.0; 3 * m];
-        let mut rail = Vec::with_capacity(positions_m.len());
-        for &x in positions_m {
-            self.rail_line.rows_at(x, &mut rows)?;
-            let r: Vec<&[f64]> = rows.chunks_exact(m).collect();
-            let h = modal_receptance(&self.track_sys, &r, frequencies_hz)?;
-            rail.push(h.iter().map(|h| to3(h, self.series_compliance)).collect());
+        let np = positions_m.len();
+        let mut rows = vec![0.0; 3 * m * np];
+        for (p, &x) in positions_m.iter().enumerate() {
+            self.rail_line
+                .rows_at(x, &mut rows[3 * m * p..3 * m * (p + 1)])?;
         }
+        let r: Vec<&[f64]> = rows.chunks_exact(m).collect();
+        let h = modal_receptance(&self.track_sys, &r, frequencies_hz)?;
+        let rail = (0..np)
+            .map(|p| {
+                h.iter()
+                    .map(|h| {
+                        let block = h.submatrix(3 * p, 3 * p, 3, 3).to_owned();
+                        to3(&block, self.series_compliance)
+                    })
+                    .collect()
+            })
+            .collect();
         let mw = self.wheel_sys.len();
         let wr: Vec<&[f64]> = self.wheel_contact.rows.chunks_exact(mw).collect();
         let wheel = modal_receptance(&self.wheel_sys, &wr, frequencies_hz)?
