@@ -27,6 +27,15 @@ fn small_model() -> corrugation::model::Model {
     load_model(&ModelSource::Builtin, &sets).expect("valid model")
 }
 
+/// One passage of `m` over the smooth rail with the default options.
+fn smooth_passage(m: &corrugation::model::Model) -> corrugation::dynamics::passage::PassageRecord {
+    let opts = PassageOptions::default();
+    let p = PreparedModel::new(m, &cache(), &opts).expect("modal model");
+    p.engine
+        .passage(m.run.speed(), None, &opts, None)
+        .expect("passage runs")
+}
+
 fn cache() -> ModalCache {
     ModalCache::new(std::env::temp_dir().join("corrugation-test-cache-passage"))
 }
@@ -40,12 +49,7 @@ fn cache() -> ModalCache {
 #[test]
 fn passage_holds_the_static_load_and_the_traction_and_balances_energy() {
     let m = small_model();
-    let opts = PassageOptions::default();
-    let p = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
-    let rec = p
-        .engine
-        .passage(m.run.speed(), None, &opts, None)
-        .expect("passage runs");
+    let rec = smooth_passage(&m);
     let s = corrugation::dynamics::analysis::summarise(&rec).unwrap();
     let w = m.vehicle.wheel_load;
     let cos_a = m.rail.inclination.atan().cos();
@@ -325,19 +329,15 @@ fn receptance_command_and_wheel_lines() {
 /// differential wear follows F_L, not F_N — the band-passed wear correlates more strongly
 /// with the band-passed F_L than with F_N along the solution zone (measured 0.85 vs 0.40),
 /// and the strongest wear component is one of F_L's components within the PSD's wavelength
-/// resolution λ²/L of this short (0.4 m) zone (measured 3.9 %, resolution 18 %). (The RPM ranking of the same check
-/// does not hold on the default track: validation/frequency_selection.md.)
+/// resolution λ²/L of this short (0.4 m) zone (measured 3.9 %, resolution 18 %). (The RPM
+/// ranking of the same check does not hold on the default track:
+/// validation/frequency_selection.md.)
 #[test]
 fn smooth_rail_wear_follows_the_longitudinal_force() {
     use corrugation::dynamics::analysis::{analyse, wear_signal, zone_signal};
     use corrugation::spectral::{correlation_coefficient, resample_linear, Signal};
     let m = small_model();
-    let opts = PassageOptions::default();
-    let p = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
-    let rec = p
-        .engine
-        .passage(m.run.speed(), None, &opts, None)
-        .expect("passage runs");
+    let rec = smooth_passage(&m);
     let s = corrugation::dynamics::analysis::summarise(&rec).unwrap();
     let v = rec.speed_m_per_s;
     let h = &rec.histories;
