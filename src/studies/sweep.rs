@@ -716,8 +716,9 @@ fn write_report(dir: &Path, r: &SweepRecord) -> Result<(), StudiesError> {
             .collect();
         d.paragraph(format!(
             "Wheel eigenfrequencies with a large modal displacement at the contact point drawn \
-             on the maps (Hz, `wheel`): {}. On the default track these, not the rail's \
-             longitudinal-compression modes, set the frequency selection (validation/README.md).",
+             on the maps (Hz, `wheel`): {}. On the default Dutch track the ridges fall on \
+             these, not on the rail's longitudinal-compression modes \
+             (validation/frequency_selection.md in the source tree).",
             f.join(", ")
         ));
     }
