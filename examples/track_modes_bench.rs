@@ -92,7 +92,11 @@ fn report_classes(track: &TrackStructure, sol: &EigenSolution) -> anyhow::Result
 fn probe(k: &SparseColMat<usize, f64>, m: &SparseColMat<usize, f64>, f_max: f64) {
     let n = k.nrows();
     for par in [Par::Seq, Par::rayon(0)] {
-        for ord in [FillOrdering::Amd, FillOrdering::Identity] {
+        for ord in [
+            FillOrdering::Amd,
+            FillOrdering::Identity,
+            FillOrdering::Metis,
+        ] {
             let t = Instant::now();
             let sys = ShiftedSystem::new(k.as_ref(), m.as_ref(), ord, par).unwrap();
             let ts = t.elapsed().as_secs_f64();
@@ -191,6 +195,12 @@ fn main() -> anyhow::Result<()> {
     }
     if let Some(m) = env("EIGEN_MPS") {
         opts.modes_per_slice = m as usize;
+    }
+    if let Some(r) = env("EIGEN_RATIO") {
+        opts.subspace_ratio = r;
+    }
+    if let Some(t) = env("EIGEN_TOL") {
+        opts.tolerance = t;
     }
     if let Some(k) = env("EIGEN_KEEP") {
         opts.restart_keep = k;

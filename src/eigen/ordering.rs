@@ -1,0 +1,141 @@
+//! Nested-dissection fill-reducing ordering (METIS `METIS_NodeND`) for the sparse LDLᵀ of
+//! `K − σM`.
+//!
+//! George's nested dissection (SIAM J. Numer. Anal. 10 (1973) 345–363) in the multilevel form
+//! of Karypis & Kumar (SIAM J. Sci. Comput. 20 (1998) 359–392): recursively remove a small
+//! vertex separator of the matrix graph and number it last. On the slender rail the
+//! separators are rail cross-sections and sleepers, and the factor of the default track holds
+//! 17 % fewer entries than with AMD (figures in [`super::factor`]).
+//!
+//! METIS (Apache-2.0) is compiled from the sources vendored in the `metis-sys` crate (C, built
+//! with `cc`; no system library needed). METIS compresses vertices with identical closed
+//! adjacency (the three DOFs of one node) before ordering, so the DOF graph is passed as it is.
+//!
+//! This is the crate's only `unsafe` block: one FFI call with buffers whose lengths are
+//! checked here. Calls are serialised (METIS keeps its random generator in process-wide
+//! state).
+
+/// Nested-dissection ordering of the symmetric pattern given by its lower triangle in CSC
+/// (`col_ptr`, `row_idx`, rows ≥ column; the diagonal may be present).
+///
+/// Returns `(fwd, inv)` with `fwd[new] = old` (elimination order) and `inv[old] = new`, the
+/// convention of faer's `PermRef::new_checked(fwd, inv, n)`. Errors (as text) when the graph
+/// is too large for METIS' 32-bit indices or METIS reports a failure.
+pub fn nested_dissection(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Result<(Vec<usize>, Vec<usize>), String> {
+    if n == 0 {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    if col_ptr.len() != n + 1 || *col_ptr.last().unwrap_or(&0) != row_idx.len() {
+        return Err("pattern arrays are inconsistent".into());
+    }
+    // Full adjacency without the diagonal (CSR of a symmetric graph: both directions).
+    let mut deg = vec![0usize; n];
+    for j in 0..n {
+        for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
+            if i != j {
+                deg[i] += 1;
+                deg[j] += 1;
+            }
+        }
+    }
+    let total: usize = deg.iter().sum();
+    if total >= i32::MAX as usize || n >= i32::MAX as usize {
+        return Err(format!(
+            "graph with {n} vertices and {total} adjacency entries exceeds METIS' 32-bit indices"
+        ));
+    }
+    let mut xadj = vec![0i32; n + 1];
+    for v in 0..n {
+        xadj[v + 1] = xadj[v] + deg[v] as i32;
+    }
+    let mut fill: Vec<usize> = xadj[..n].iter().map(|&x| x as usize).collect();
+    let mut adjncy = vec![0i32; total];
+    for j in 0..n {
+        for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
+            if i != j {
+                adjncy[fill[i]] = j as i32;
+                fill[i] += 1;
+                adjncy[fill[j]] = i as i32;
+                fill[j] += 1;
+            }
+        }
+    }
+    // METIS seeds and draws from a process-wide random generator: calls from concurrent
+    // threads would interleave its state (different orderings for the same graph), so they
+    // are serialised; each call re-seeds it, which makes the ordering reproducible.
+    static METIS_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _guard = METIS_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let mut nvtxs = n as i32;
+    let mut perm = vec![0i32; n];
+    let mut iperm = vec![0i32; n];
+    // SAFETY: METIS_NodeND reads `nvtxs`, `xadj` (n + 1 entries) and `adjncy` (xadj[n]
+    // entries, all in 0..n, built above) and writes n entries into `perm` and `iperm`; vwgt
+    // and options are null (unit weights, default options). The buffers outlive the call.
+    let status = unsafe {
+        metis_sys::METIS_NodeND(
+            &mut nvtxs,
+            xadj.as_mut_ptr(),
+            adjncy.as_mut_ptr(),
+            std::ptr::null_mut(),
+            std::ptr::null_mut(),
+            perm.as_mut_ptr(),
+            iperm.as_mut_ptr(),
+        )
+    };
+    if status != metis_sys::rstatus_et_METIS_OK {
+        return Err(format!("METIS_NodeND returned status {status}"));
+    }
+    // METIS: row i of the permuted matrix is row perm[i] of the original (perm[new] = old),
+    // iperm[old] = new.
+    let fwd: Vec<usize> = perm.iter().map(|&p| p as usize).collect();
+    let inv: Vec<usize> = iperm.iter().map(|&p| p as usize).collect();
+    let ok = fwd.iter().all(|&p| p < n) && (0..n).all(|i| inv[fwd[i]] == i);
+    if !ok {
+        return Err("METIS returned an invalid permutation".into());
+    }
+    Ok((fwd, inv))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Lower-triangle CSC of the 5-point Laplacian pattern on an nx × ny grid.
+    fn grid(nx: usize, ny: usize) -> (usize, Vec<usize>, Vec<usize>) {
+        let n = nx * ny;
+        let mut cp = vec![0usize];
+        let mut ri = Vec::new();
+        for j in 0..n {
+            let (x, y) = (j % nx, j / nx);
+            ri.push(j);
+            if x + 1 < nx {
+                ri.push(j + 1);
+            }
+            if y + 1 < ny {
+                ri.push(j + nx);
+            }
+            cp.push(ri.len());
+        }
+        (n, cp, ri)
+    }
+
+    #[test]
+    fn nested_dissection_is_a_valid_permutation() {
+        let (n, cp, ri) = grid(30, 20);
+        let (fwd, inv) = nested_dissection(n, &cp, &ri).unwrap();
+        let mut seen = vec![false; n];
+        for &p in &fwd {
+            assert!(!seen[p]);
+            seen[p] = true;
+        }
+        for (old, &new) in inv.iter().enumerate() {
+            assert_eq!(fwd[new], old);
+        }
+        assert!(nested_dissection(0, &[0], &[]).unwrap().0.is_empty());
+        assert!(nested_dissection(3, &[0, 1], &[0]).is_err());
+    }
+}
