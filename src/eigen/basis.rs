@@ -132,13 +132,13 @@ fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {
 }
 
 /// Loads a basis from the cache or solves, classifies and stores it.
-fn basis<C: Serialize + DeserializeOwned>(
+fn basis<C: Serialize + DeserializeOwned + Send>(
     cache: &ModalCache,
     key: &CacheKey,
     name: &'static str,
     fmax: f64,
     mats: impl FnOnce() -> Result<FeMatrices, BasisError>,
-    classify: impl Fn(&[&[f64]], &[f64]) -> Result<Vec<C>, BasisError>,
+    classify: impl Fn(&[&[f64]], &[f64]) -> Result<Vec<C>, BasisError> + Sync,
 ) -> Result<ModalBasis<C>, BasisError> {
     let t = Instant::now();
     match cache.load(key) {
@@ -181,17 +181,27 @@ fn basis<C: Serialize + DeserializeOwned>(
     let pb = progress_bar(&format!("classifying {name} modes"));
     pb.set_length(sol.frequencies_hz.len() as u64);
     // In chunks: one pass over the elements per chunk (element stiffnesses are rebuilt per
-    // pass), bounded memory for the expanded mode shapes.
+    // pass), bounded memory for the expanded mode shapes; chunks in parallel (rayon keeps
+    // their order).
     const CHUNK: usize = 64;
     let nm = sol.frequencies_hz.len();
-    let mut classes = Vec::with_capacity(nm);
-    for c0 in (0..nm).step_by(CHUNK) {
-        let c1 = (c0 + CHUNK).min(nm);
-        let cols: Vec<Vec<f64>> = (c0..c1).map(|j| column(&sol.modes, j)).collect();
-        let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-        classes.extend(classify(&refs, &sol.frequencies_hz[c0..c1])?);
-        pb.inc((c1 - c0) as u64);
-    }
+    let per_chunk: Vec<Vec<C>> = {
+        use rayon::prelude::*;
+        (0..nm)
+            .step_by(CHUNK)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|c0| {
+                let c1 = (c0 + CHUNK).min(nm);
+                let cols: Vec<Vec<f64>> = (c0..c1).map(|j| column(&sol.modes, j)).collect();
+                let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+                let out = classify(&refs, &sol.frequencies_hz[c0..c1]);
+                pb.inc((c1 - c0) as u64);
+                out
+            })
+            .collect::<Result<_, _>>()?
+    };
+    let classes: Vec<C> = per_chunk.into_iter().flatten().collect();
     pb.finish_and_clear();
     let value = serde_json::to_value(&classes).map_err(|e| BasisError::Key(e.to_string()))?;
     let meta = CacheMeta::from_solution(&sol, 0.0, fmax, value.clone());
