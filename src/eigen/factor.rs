@@ -287,6 +287,7 @@ impl ShiftedSystem {
         let groups = self.column_groups(ncols);
         let width = ncols.div_ceil(groups.max(1)).max(1);
         SolveWorkspace {
+            ncols,
             bufs: (0..groups.max(1))
                 .map(|_| {
                     MemBuffer::new(
@@ -321,6 +322,9 @@ impl ShiftedSystem {
         mut rhs: MatMut<'_, f64>,
         ws: &mut SolveWorkspace,
     ) {
+        if rhs.ncols() > ws.ncols {
+            *ws = self.solve_buffer(rhs.ncols());
+        }
         let l = LdltRef::new(&self.symbolic, &f.values);
         let groups = self.column_groups(rhs.ncols()).min(ws.bufs.len());
         if groups <= 1 {
@@ -349,5 +353,7 @@ impl ShiftedSystem {
 /// Scratch memory of [`ShiftedSystem::solve_in_place`]: one buffer per concurrently solved
 /// column group.
 pub struct SolveWorkspace {
+    /// Right-hand sides it was sized for (a wider block gets a new workspace).
+    ncols: usize,
     bufs: Vec<MemBuffer>,
 }
