@@ -556,7 +556,9 @@ pub fn solve(
     // previous slice): their vectors sit in phi right after the committed columns, their λ in
     // `carried`. They are eigenpairs of the next slice already, so it deflates them (with all
     // modes found so far) and needs that many fewer new ones; discarding them would make the
-    // next slice converge them again.
+    // next slice converge them again. Measured on the default track to 5 kHz with all earlier
+    // slices deflated: 3064 solved vectors with carrying, 3120 without (−2 %, within the
+    // run-to-run spread of the wall time).
     let mut carried: Vec<f64> = Vec::new();
     loop {
         let nu_cur = cur.negative_count;
