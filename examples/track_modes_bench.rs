@@ -188,7 +188,8 @@ fn main() -> anyhow::Result<()> {
     }
     let mut opts = EigenOptions::new(f_max);
     // Option overrides for tuning runs: EIGEN_BLOCK, EIGEN_MPS (modes per slice),
-    // EIGEN_KEEP (restart_keep), EIGEN_SEQ=1 (no threads), EIGEN_FMIN (Hz).
+    // EIGEN_KEEP (restart_keep), EIGEN_RATIO (subspace_ratio), EIGEN_TOL (tolerance),
+    // EIGEN_SEQ=1 (no threads), EIGEN_FMIN (Hz).
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok());
     if let Some(b) = env("EIGEN_BLOCK") {
         opts.block_size = b as usize;

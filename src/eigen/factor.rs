@@ -304,7 +304,7 @@ impl ShiftedSystem {
     /// column. faer's supernodal triangular solves parallelise inside the dense supernode
     /// blocks only, which a block of 8 right-hand sides does not fill; independent column
     /// groups, each solved sequentially, keep every core busy (measured on the default
-    /// track: see `solve_in_place`).
+    /// track: see the module doc).
     fn column_groups(&self, ncols: usize) -> usize {
         match self.par {
             Par::Seq => 1,
