@@ -115,10 +115,20 @@ pub struct EigenOptions {
     /// leaves room for a longer Krylov sequence per cycle.
     pub restart_keep: f64,
     /// Target number of modes per slice; the slice boundaries are placed (with Sturm counts)
-    /// so that each slice holds about this many. Default 100 (measured on the 126,800-DOF
-    /// track: 150 solves 38 % fewer vectors to 2 kHz, but to 5 kHz one slice then needed 27
-    /// restarts and the whole solve 40 % more CPU time; 250 to 2 kHz is one slice, no faster
-    /// than 150 and 3.6 GB instead of 2.3 GB).
+    /// so that each slice holds about this many. Default 125. The solved-vector count
+    /// depends erratically on where the boundaries land; measured 2026-11-25 on the default
+    /// track (152,358 DOFs, all earlier slices deflated, idle 2-core machine):
+    ///
+    /// | modes/slice | RPM3 to 5 kHz | RPM3 to 2 kHz | RPM1 to 5 kHz |
+    /// |---|---|---|---|
+    /// | 75 | 3128 vectors, 120 s | | |
+    /// | 100 | 3064, 122 s | 1224, 42 s | 3080, 183 s |
+    /// | 110 | 3224, 128 s | | |
+    /// | **125** | 2672, 108–113 s | 952, 36 s | 2816, 174 s |
+    /// | 140 | 2792, 112 s | | |
+    ///
+    /// (Before all earlier slices were deflated, on a 126,800-DOF track, 150 needed 27
+    /// restarts in one slice to 5 kHz.)
     pub modes_per_slice: usize,
     /// Largest Krylov subspace of a slice, as a multiple of the modes wanted in it (at least
     /// wanted + 4 blocks), in [1.5, 10]. Default 2.5. Measured on the default track to
@@ -157,7 +167,7 @@ impl EigenOptions {
             block_size: 8,
             max_restarts: 30,
             restart_keep: 0.3,
-            modes_per_slice: 100,
+            modes_per_slice: 125,
             subspace_ratio: 2.5,
             rigid_shift_hz: None,
             ordering: FillOrdering::Auto,
