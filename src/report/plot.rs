@@ -72,18 +72,26 @@ pub struct OverlayLine {
     pub x: Vec<f64>,
     /// Ordinates (plot unit).
     pub y: Vec<f64>,
+    /// Drawn dashed and thinner (1 px instead of 2 px): a secondary family of lines (e.g. the
+    /// wheel's modes beside the track's longitudinal-compression modes).
+    pub dashed: bool,
 }
 
 impl OverlayLine {
-    /// A horizontal line at `y` from `x0` to `x1`.
+    /// A solid horizontal line at `y` from `x0` to `x1`.
     pub fn horizontal(name: impl Into<String>, y: f64, x0: f64, x1: f64) -> Self {
         Self {
             name: name.into(),
             x: vec![x0, x1],
             y: vec![y, y],
+            dashed: false,
         }
     }
 }
+
+/// Smallest vertical distance (px) between two line labels drawn at the same end of the
+/// plot; a label closer than this to one already drawn is left out (its line is still drawn).
+const LABEL_MIN_GAP_PX: i32 = 15;
 
 /// A heat map: `z` is row-major over `x` then `y`: `z[i * y.len() + j]` is the value at
 /// `(x[i], y[j])`. `x` and `y` must be strictly ascending.
@@ -610,18 +618,44 @@ fn heat_on<DB: DrawingBackend>(
     let inside = |x: f64, y: f64| {
         x.is_finite() && y.is_finite() && (xa..=xb).contains(&x) && (ya..=yb).contains(&y)
     };
-    for l in map.lines {
+    // Pixel anchors of the labels drawn so far (solid lines first: their labels win).
+    let mut labels: Vec<(i32, i32)> = Vec::new();
+    let ordered = map
+        .lines
+        .iter()
+        .filter(|l| !l.dashed)
+        .chain(map.lines.iter().filter(|l| l.dashed));
+    for l in ordered {
         let pts =
             l.x.iter()
                 .zip(&l.y)
                 .map(|(&x, &y)| inside(x, y).then_some((x, y)));
         let segs = runs(pts);
         for seg in &segs {
-            chart
-                .draw_series(LineSeries::new(seg.clone(), WHITE.stroke_width(2)))
-                .map_err(es)?;
+            if l.dashed {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        seg.clone(),
+                        6,
+                        5,
+                        WHITE.mix(0.85).stroke_width(1),
+                    ))
+                    .map_err(es)?;
+            } else {
+                chart
+                    .draw_series(LineSeries::new(seg.clone(), WHITE.stroke_width(2)))
+                    .map_err(es)?;
+            }
         }
         if let Some(&(x, y)) = segs.last().and_then(|s| s.last()) {
+            let (px, py) = chart.backend_coord(&(x, y));
+            if labels
+                .iter()
+                .any(|&(qx, qy)| (qx - px).abs() < 80 && (qy - py).abs() < LABEL_MIN_GAP_PX)
+            {
+                continue;
+            }
+            labels.push((px, py));
             chart
                 .draw_series(std::iter::once(Text::new(
                     l.name.clone(),
@@ -784,6 +818,7 @@ mod tests {
                 name: "curve".into(),
                 x: x.clone(),
                 y: x.iter().map(|a| a / 2.0).collect(),
+                dashed: true,
             },
         ];
         let mut map = HeatMap {
@@ -805,6 +840,54 @@ mod tests {
         let e = heat_map(&d.join("bad"), &map).unwrap_err().to_string();
         assert!(e.contains("z has 10 values"), "{e}");
         assert!(!d.join("bad.png").exists());
+        std::fs::remove_dir_all(d).ok();
+    }
+
+    #[test]
+    fn crowded_line_labels_are_thinned_and_dashed_lines_are_broken() {
+        // Three horizontal lines: a solid one and a dashed one 0.5 units apart (about 4 px on
+        // the 58-unit axis: their labels would overlap) and a dashed one far away.
+        let d = tmpdir("heat_labels");
+        let x: Vec<f64> = (0..20).map(|i| 50.0 + 5.0 * i as f64).collect();
+        let y: Vec<f64> = (0..30).map(|j| 20.0 + 2.0 * j as f64).collect();
+        let z = vec![1.0; x.len() * y.len()];
+        let mut near = OverlayLine::horizontal("wheel_near", 40.5, 50.0, 145.0);
+        near.dashed = true;
+        let mut far = OverlayLine::horizontal("wheel_far", 70.0, 50.0, 145.0);
+        far.dashed = true;
+        // The dashed line comes first in the list: the solid line's label must still win.
+        let lines = [
+            near,
+            OverlayLine::horizontal("LC_line", 40.0, 50.0, 145.0),
+            far,
+        ];
+        let map = HeatMap {
+            title: "labels",
+            x_label: "v (km/h)",
+            y_label: "f (Hz)",
+            colour_label: "PSD",
+            x: &x,
+            y: &y,
+            z: &z,
+            lines: &lines,
+            log_colour: false,
+        };
+        let f = heat_map(&d.join("map"), &map).unwrap();
+        let svg = std::fs::read_to_string(&f.svg).unwrap();
+        assert!(svg.contains("LC_line"));
+        assert!(svg.contains("wheel_far"));
+        assert!(!svg.contains("wheel_near"), "crowded label not left out");
+        // A solid horizontal line is one polyline; a dashed one is many short ones (white
+        // stroke, 1 px).
+        let dashes = svg
+            .split("<polyline")
+            .skip(1)
+            .filter(|rest| {
+                let tag = &rest[..rest.find("/>").unwrap_or(rest.len())];
+                tag.contains("#FFFFFF") && tag.contains("stroke-width=\"1\"")
+            })
+            .count();
+        assert!(dashes >= 2 * 10, "dashed lines drawn as {dashes} segments");
         std::fs::remove_dir_all(d).ok();
     }
 

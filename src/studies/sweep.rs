@@ -556,32 +556,37 @@ fn write_outputs(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), Studi
         (v0 * 0.95, v0 * 1.05)
     };
     let curve_v = linspace(vlo, vhi, 200);
-    let labelled: Vec<(String, f64)> = r
+    // The track's LC lines solid, the wheel's dashed (at 5 kHz there are ~30 wheel lines).
+    let labelled: Vec<(String, f64, bool)> = r
         .map
         .frequency_lines_hz
         .iter()
-        .map(|&f| (format!("LC {f:.0} Hz"), f))
+        .map(|&f| (format!("LC {f:.0} Hz"), f, false))
         .chain(
             r.map
                 .wheel_lines_hz
                 .iter()
-                .map(|&f| (format!("wheel {f:.0} Hz"), f)),
+                .map(|&f| (format!("wheel {f:.0} Hz"), f, true)),
         )
         .collect();
     let lines_lambda: Vec<OverlayLine> = labelled
         .iter()
-        .map(|(name, f)| OverlayLine {
+        .map(|(name, f, dashed)| OverlayLine {
             name: name.clone(),
             x: curve_v.clone(),
             y: curve_v
                 .iter()
                 .map(|&v| crate::units::kmh_to_ms(v) / f * 1e3)
                 .collect(),
+            dashed: *dashed,
         })
         .collect();
     let lines_f: Vec<OverlayLine> = labelled
         .iter()
-        .map(|(name, f)| OverlayLine::horizontal(name.clone(), *f, vlo, vhi))
+        .map(|(name, f, dashed)| OverlayLine {
+            dashed: *dashed,
+            ..OverlayLine::horizontal(name.clone(), *f, vlo, vhi)
+        })
         .collect();
     // A single speed has no x extent: the map is still drawn, one column wide.
     for (stem, title, ylab, y, z, lines, unit) in [
