@@ -93,6 +93,10 @@ impl OverlayLine {
 /// plot; a label closer than this to one already drawn is left out (its line is still drawn).
 const LABEL_MIN_GAP_PX: i32 = 15;
 
+/// Horizontal distance (px) within which two label anchors count as "at the same end" (about
+/// the width of a label such as `wheel 1043 Hz`).
+const LABEL_SAME_END_PX: i32 = 80;
+
 /// A heat map: `z` is row-major over `x` then `y`: `z[i * y.len() + j]` is the value at
 /// `(x[i], y[j])`. `x` and `y` must be strictly ascending.
 #[derive(Clone, Debug)]
@@ -649,10 +653,9 @@ fn heat_on<DB: DrawingBackend>(
         }
         if let Some(&(x, y)) = segs.last().and_then(|s| s.last()) {
             let (px, py) = chart.backend_coord(&(x, y));
-            if labels
-                .iter()
-                .any(|&(qx, qy)| (qx - px).abs() < 80 && (qy - py).abs() < LABEL_MIN_GAP_PX)
-            {
+            if labels.iter().any(|&(qx, qy)| {
+                (qx - px).abs() < LABEL_SAME_END_PX && (qy - py).abs() < LABEL_MIN_GAP_PX
+            }) {
                 continue;
             }
             labels.push((px, py));
