@@ -69,7 +69,7 @@ use serde::{Deserialize, Serialize};
 
 use super::reduced::{ContactFrame, RailContactLine};
 use super::DynamicsError;
-use crate::eigen::factor::{ShiftFactor, ShiftedSystem};
+use crate::eigen::factor::{ShiftFactor, ShiftedSystem, SolveWorkspace};
 use crate::eigen::FillOrdering;
 use crate::fe::assembly::DofMap;
 use crate::structure::TrackStructure;
@@ -156,10 +156,16 @@ impl StiffnessFactor {
         Ok(StiffnessFactor { sys, factor })
     }
 
-    /// Overwrites the columns of `rhs` (n × k) with `K⁻¹ rhs`.
-    pub fn solve_in_place(&self, rhs: faer::MatMut<'_, f64>) {
-        let mut ws = self.sys.solve_buffer(rhs.ncols());
-        self.sys.solve_in_place(&self.factor, rhs, &mut ws);
+    /// Workspace for [`Self::solve_in_place`] with up to `ncols` right-hand sides (allocate
+    /// once, reuse for every block).
+    pub fn workspace(&self, ncols: usize) -> SolveWorkspace {
+        self.sys.solve_buffer(ncols)
+    }
+
+    /// Overwrites the columns of `rhs` (n × k) with `K⁻¹ rhs`, using `ws` (replaced by a
+    /// larger one if it was sized for fewer than k columns).
+    pub fn solve_in_place(&self, rhs: faer::MatMut<'_, f64>, ws: &mut SolveWorkspace) {
+        self.sys.solve_in_place(&self.factor, rhs, ws);
     }
 
     /// Number of rows (free DOFs).
@@ -206,6 +212,7 @@ pub(crate) fn for_each_plane_solution(
     let n = factor.n();
     let mut rhs = Mat::<f64>::zeros(n, BLOCK.min(total));
     let mut b = vec![0.0; n];
+    let mut ws = factor.workspace(BLOCK.min(total));
     let mut start = 0;
     while start < total {
         let k = BLOCK.min(total - start);
@@ -226,7 +233,7 @@ pub(crate) fn for_each_plane_solution(
                 rhs[(r, j)] = v;
             }
         }
-        factor.solve_in_place(rhs.as_mut().subcols_mut(0, k));
+        factor.solve_in_place(rhs.as_mut().subcols_mut(0, k), &mut ws);
         for j in 0..k {
             let (i, d) = ((start + j) / 3, (start + j) % 3);
             visit(i, d, &|r: usize| rhs[(r, j)]);
