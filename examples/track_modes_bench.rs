@@ -189,7 +189,7 @@ fn main() -> anyhow::Result<()> {
     let mut opts = EigenOptions::new(f_max);
     // Option overrides for tuning runs: EIGEN_BLOCK, EIGEN_MPS (modes per slice),
     // EIGEN_KEEP (restart_keep), EIGEN_RATIO (subspace_ratio), EIGEN_TOL (tolerance),
-    // EIGEN_SEQ=1 (no threads), EIGEN_FMIN (Hz).
+    // EIGEN_SEQ=1 (no threads), EIGEN_FMIN (Hz), EIGEN_BANDS (concurrent bands).
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok());
     if let Some(b) = env("EIGEN_BLOCK") {
         opts.block_size = b as usize;
@@ -209,6 +209,9 @@ fn main() -> anyhow::Result<()> {
     if let Some(f) = env("EIGEN_FMIN") {
         opts.f_min_hz = f;
     }
+    if let Some(b) = env("EIGEN_BANDS") {
+        opts.concurrent_bands = Some(b as usize);
+    }
     if env("EIGEN_SEQ") == Some(1.0) {
         opts.parallel = false;
     }
@@ -223,8 +226,8 @@ fn main() -> anyhow::Result<()> {
     );
     let tm = &sol.timing;
     println!(
-        "eigen total {:.1} s: symbolic {:.1} s, {} factorisations {:.1} s, {} solved vectors {:.1} s, checks {:.1} s, factor entries {}",
-        tm.total_s, tm.symbolic_s, tm.factorizations, tm.factorize_s, tm.solved_vectors, tm.solve_s, tm.check_s, tm.factor_entries
+        "eigen total {:.1} s ({} bands; phase times summed over bands): symbolic {:.1} s, {} factorisations {:.1} s, {} solved vectors {:.1} s, checks {:.1} s, factor entries {}",
+        tm.total_s, tm.bands, tm.symbolic_s, tm.factorizations, tm.factorize_s, tm.solved_vectors, tm.solve_s, tm.check_s, tm.factor_entries
     );
     println!(
         "   orthogonalisation {:.1} s ({} blocks, {} passes, M products {:.1} s), Rayleigh-Ritz {:.1} s, restarts/extraction {:.1} s",

@@ -182,6 +182,12 @@ impl ShiftedSystem {
             })
     }
 
+    /// Sets the parallelism of the numeric factorisations and the solves (the column groups
+    /// of [`Self::solve_in_place`] follow it).
+    pub fn set_par(&mut self, par: Par) {
+        self.par = par;
+    }
+
     /// Dimension n.
     pub fn n(&self) -> usize {
         self.n

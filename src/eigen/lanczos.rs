@@ -233,12 +233,18 @@ struct SliceOut {
 /// Ritz pairs of largest θ, i.e. λ just above σ, that are all converged) holds `want` pairs,
 /// or — when `known = Some((hi, need))` (Sturm count) — until it holds `need` values below
 /// `hi`. Returns the converged prefix, ascending λ.
+///
+/// `two_sided = Some(lo)`: the wanted pairs lie on both sides of σ, in `[lo, hi)` with σ
+/// about midway (the first slice of a band whose lower neighbours are not deflated). The
+/// prefix is then ordered by |θ| (nearest λ to σ first) and `known` must be given.
+#[allow(clippy::too_many_arguments)]
 fn lanczos_slice(
     ctx: &mut Ctx<'_>,
     fac: &ShiftFactor,
     locked: MatRef<'_, f64>,
     want: usize,
     known: Option<(f64, usize)>,
+    two_sided: Option<f64>,
     opts: &EigenOptions,
 ) -> Result<SliceOut, EigenError> {
     let n = ctx.sys.n();
@@ -348,8 +354,12 @@ fn lanczos_slice(
         let e = h.as_ref().submatrix(j, 0, b, j);
         let es = mm(e, s.as_ref(), Par::Seq);
         ctx.timing.rayleigh_ritz_s += t_rr.elapsed().as_secs_f64();
-        // Indices by descending θ (wanted = largest θ = λ just above σ).
-        let order: Vec<usize> = (0..j).rev().collect();
+        // Indices by descending θ (wanted = largest θ = λ just above σ), or by descending |θ|
+        // for a two-sided slice.
+        let mut order: Vec<usize> = (0..j).rev().collect();
+        if two_sided.is_some() {
+            order.sort_by(|&a, &b| theta[b].abs().total_cmp(&theta[a].abs()));
+        }
         // Convergence: ‖Op x − θx‖_M ≤ tol · max(θ, θ_max/100). The floor reflects the
         // attainable accuracy: solves and re-orthogonalisation err by O(u κ)·‖Op‖ with
         // ‖Op‖ = θ_max, so Ritz values far from the shift (θ ≪ θ_max) cannot be resolved to
@@ -357,16 +367,18 @@ fn lanczos_slice(
         let theta_abs_max = theta[0].abs().max(theta[j - 1].abs());
         let converged = |idx: usize| -> bool {
             let res = es.as_ref().col(idx).norm_l2();
-            theta[idx] > 0.0 && res <= opts.tolerance * theta[idx].max(1e-2 * theta_abs_max)
+            (theta[idx] > 0.0 || two_sided.is_some())
+                && res <= opts.tolerance * theta[idx].abs().max(1e-2 * theta_abs_max)
         };
         let lambda_of = |idx: usize| sigma + 1.0 / theta[idx];
         let prefix = order.iter().take_while(|&&i| converged(i)).count();
         let done = match known {
             None => prefix >= want,
             Some((hi, need)) => {
+                let lo = two_sided.unwrap_or(f64::NEG_INFINITY);
                 let below = order[..prefix]
                     .iter()
-                    .filter(|&&i| lambda_of(i) < hi)
+                    .filter(|&&i| lambda_of(i) < hi && lambda_of(i) >= lo)
                     .count();
                 // The Sturm count guarantees there are exactly `need` below hi: no need to wait
                 // for a converged value above hi (that one converges slowly).
@@ -375,7 +387,9 @@ fn lanczos_slice(
         };
         if done {
             let t_x = Instant::now();
-            let sel: Vec<usize> = order[..prefix].to_vec();
+            let mut sel: Vec<usize> = order[..prefix].to_vec();
+            // Ascending λ (for a one-sided slice the prefix is in that order already).
+            sel.sort_by(|&a, &b| lambda_of(a).total_cmp(&lambda_of(b)));
             let s_sel = Mat::<f64>::from_fn(j, prefix, |r, c| s[(r, sel[c])]);
             let mut vecs = mm(v.as_ref().subcols(0, j), s_sel.as_ref(), ctx.par);
             // One free inverse-iteration step: x' = Op x / θ = x + Q (E s)/θ (Op V = V T + Q E).
@@ -393,7 +407,7 @@ fn lanczos_slice(
             let lambdas = sel.iter().map(|&i| lambda_of(i)).collect();
             let strict = sel
                 .iter()
-                .map(|&i| es.as_ref().col(i).norm_l2() <= opts.tolerance * theta[i])
+                .map(|&i| es.as_ref().col(i).norm_l2() <= opts.tolerance * theta[i].abs())
                 .collect();
             ctx.timing.restart_s += t_x.elapsed().as_secs_f64();
             return Ok(SliceOut {
@@ -425,8 +439,9 @@ fn lanczos_slice(
         let extra = ((m_max - want) as f64 * opts.restart_keep) as usize;
         let kkeep = (want + extra).min(j - b);
         let theta_thr = theta[order[want.min(j) - 1]].max(0.0);
+        // (A two-sided slice keeps both ends through its |θ| order already.)
         let neg: Vec<usize> = (0..j)
-            .take_while(|&i| theta[i] < 0.0 && -theta[i] >= theta_thr)
+            .take_while(|&i| two_sided.is_none() && theta[i] < 0.0 && -theta[i] >= theta_thr)
             .take((kkeep - want.min(kkeep)) / 2)
             .collect();
         let mut sel: Vec<usize> = order[..kkeep - neg.len()].to_vec();
@@ -502,36 +517,302 @@ pub fn solve(
         rng: Rng(opts.seed | 1),
     };
     let lam_max = hz_to_lambda(opts.f_max_hz);
-    let top = factorize(&mut ctx, lam_max, 1.0, lam_max)?;
-    let nu_max = top.negative_count;
-    let first = if opts.f_min_hz == 0.0 {
+    // The factorisations at the band's ends are independent: with `parallel` they run
+    // side by side.
+    let s_first = if opts.f_min_hz == 0.0 {
         let rb = opts
             .rigid_shift_hz
             .unwrap_or((opts.f_max_hz / 100.0).max(1.0));
-        let s0 = -hz_to_lambda(rb);
-        let f0 = factorize(&mut ctx, s0, -1.0, lam_max)?;
-        if f0.negative_count != 0 {
-            return Err(EigenError::NotSemiDefinite {
-                shift_rad2_s2: f0.shift,
-                negative_pivots: f0.negative_count,
-            });
-        }
-        f0
+        -hz_to_lambda(rb)
     } else {
-        factorize(&mut ctx, hz_to_lambda(opts.f_min_hz), -1.0, lam_max)?
+        hz_to_lambda(opts.f_min_hz)
     };
+    let end_factor = |shift: f64, direction: f64| {
+        let mut c = Ctx {
+            k,
+            m,
+            sys: &sys,
+            par,
+            timing: EigenTiming::default(),
+            rng: Rng(1),
+        };
+        factorize(&mut c, shift, direction, lam_max).map(|f| (f, c.timing))
+    };
+    let (top, first) = if opts.parallel {
+        rayon::join(|| end_factor(lam_max, 1.0), || end_factor(s_first, -1.0))
+    } else {
+        (end_factor(lam_max, 1.0), end_factor(s_first, -1.0))
+    };
+    let ((top, t_top), (first, t_first)) = (top?, first?);
+    ctx.timing.absorb(&t_top);
+    ctx.timing.absorb(&t_first);
+    let nu_max = top.negative_count;
+    if opts.f_min_hz == 0.0 && first.negative_count != 0 {
+        return Err(EigenError::NotSemiDefinite {
+            shift_rad2_s2: first.shift,
+            negative_pivots: first.negative_count,
+        });
+    }
     let nu0 = first.negative_count;
+    let first_shift = first.shift;
     let total = nu_max.saturating_sub(nu0);
     if let Some(pb) = progress {
         pb.set_length(total as u64);
         pb.set_position(0);
     }
+    let from_zero = opts.f_min_hz == 0.0;
+    let top_bound = (top.shift, nu_max);
+    drop(top);
+    let wanted_bands = match opts.concurrent_bands {
+        Some(b) => b,
+        // Small models: one band (faster, and exactly M-orthogonal across all slices).
+        None if opts.parallel && n >= AUTO_BANDS_MIN_DOFS => {
+            rayon::current_num_threads().min(total / opts.modes_per_slice)
+        }
+        None => 1,
+    };
+    // Band bounds: (factorisation at the lower bound, starts at 0 Hz, (upper shift, count)).
+    let mut jobs: Vec<(ShiftFactor, bool, (f64, usize))> = Vec::new();
+    let mut band_bounds: Vec<f64> = Vec::new();
+    if wanted_bands >= 2 && total >= 2 {
+        let splits = choose_splits(&mut ctx, &first, top_bound, wanted_bands, lam_max)?;
+        let mut lower = first;
+        let mut lower_from_zero = from_zero;
+        for s in splits {
+            let bound = (s.shift, s.negative_count);
+            band_bounds.push(s.shift);
+            jobs.push((lower, lower_from_zero, bound));
+            lower = s;
+            lower_from_zero = false;
+        }
+        jobs.push((lower, lower_from_zero, top_bound));
+    } else {
+        jobs.push((first, from_zero, top_bound));
+    }
+    let mut timing = std::mem::take(&mut ctx.timing);
+    let bands = jobs.len();
+    timing.bands = bands;
+    let mut sys = sys;
+    if bands > 1 {
+        // One thread per band: the bands' solves then each read their own factor once per
+        // block instead of once per column group (see module doc).
+        sys.set_par(Par::Seq);
+    }
+    let sys = &sys;
+    let band_par = if bands > 1 { Par::Seq } else { par };
+    let run = |i: usize, (first, from_zero, top): (ShiftFactor, bool, (f64, usize))| {
+        let mut ctx = Ctx {
+            k,
+            m,
+            sys,
+            par: band_par,
+            timing: EigenTiming::default(),
+            // Band 0 keeps the seed of the single-band solver (reproducible results).
+            rng: Rng((opts.seed ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)) | 1),
+        };
+        run_band(&mut ctx, first, from_zero, top, lam_max, opts, progress)
+            .map(|out| (out, ctx.timing))
+    };
+    let outs: Vec<Result<(BandOut, EigenTiming), EigenError>> = if bands > 1 && opts.parallel {
+        use rayon::prelude::*;
+        jobs.into_par_iter()
+            .enumerate()
+            .map(|(i, job)| run(i, job))
+            .collect()
+    } else {
+        jobs.into_iter()
+            .enumerate()
+            .map(|(i, job)| run(i, job))
+            .collect()
+    };
+    let mut lambdas: Vec<f64> = Vec::with_capacity(total);
+    let mut slices: Vec<SliceReport> = Vec::new();
+    let mut phi = if bands == 1 {
+        Mat::<f64>::zeros(0, 0)
+    } else {
+        Mat::<f64>::zeros(n, total)
+    };
+    for out in outs {
+        let (band, t) = out?;
+        timing.absorb(&t);
+        if bands == 1 {
+            phi = band.phi;
+        } else {
+            let c0 = lambdas.len();
+            phi.as_mut()
+                .subcols_mut(c0, band.lambdas.len())
+                .copy_from(band.phi.as_ref());
+        }
+        lambdas.extend_from_slice(&band.lambdas);
+        slices.extend(band.slices);
+    }
+    if lambdas.len() != total {
+        return Err(EigenError::MissedModes {
+            lo_hz: lambda_to_hz(first_shift.max(0.0)),
+            hi_hz: opts.f_max_hz,
+            expected: total,
+            found: lambdas.len(),
+            restarts: 0,
+        });
+    }
+    // Sort ascending (slices and bands are ascending already; keep it robust).
+    let mut idx: Vec<usize> = (0..lambdas.len()).collect();
+    idx.sort_by(|&a, &b| lambdas[a].total_cmp(&lambdas[b]));
+    if idx.iter().enumerate().any(|(i, &j)| i != j) {
+        let sorted = Mat::<f64>::from_fn(n, idx.len(), |r, c| phi[(r, idx[c])]);
+        phi = sorted;
+        lambdas = idx.iter().map(|&i| lambdas[i]).collect();
+    }
+    // Across a band bound the modes were found without deflating each other: their mutual
+    // M-orthogonality is only ≈ residual / gap. A Rayleigh–Ritz step on the modes near each
+    // bound restores it (and cannot make them worse: the Ritz vectors of a subspace are its
+    // best approximations).
+    let t_rr = Instant::now();
+    for &b in &band_bounds {
+        let mid = lambdas.partition_point(|&l| l < b);
+        let lo = lambdas
+            .partition_point(|&l| l < b - BOUND_WINDOW * b.abs())
+            .max(mid.saturating_sub(BOUND_WINDOW_MAX));
+        let hi = lambdas
+            .partition_point(|&l| l < b + BOUND_WINDOW * b.abs())
+            .min(mid + BOUND_WINDOW_MAX);
+        if hi > lo + 1 {
+            rayleigh_ritz_window(
+                k,
+                m,
+                phi.as_mut().subcols_mut(lo, hi - lo),
+                &mut lambdas[lo..hi],
+                par,
+            )?;
+        }
+    }
+    timing.restart_s += t_rr.elapsed().as_secs_f64();
+    let target = opts.modes_per_slice;
+    // Verification: true residuals and M-orthonormality.
+    let t = Instant::now();
+    let (k_norm, m_norm) = (norm_inf(k), norm_inf(m));
+    let chunk = 64usize;
+    let full = opts.full_orthogonality_check || (n as f64) * (total as f64).powi(2) <= 2e10;
+    // One chunk of columns: (relative residuals, backward errors, orthonormality error).
+    // The chunks are independent; with `parallel` they run on all threads (the sparse
+    // products inside are sequential), each with its own K x and M x buffers.
+    let check_chunk = |(kx, mx): &mut (Mat<f64>, Mat<f64>), c0: usize| {
+        let w = chunk.min(total - c0);
+        let x = phi.as_ref().subcols(c0, w);
+        sym_spmm(k, x, kx.as_mut().subcols_mut(0, w));
+        sym_spmm(m, x, mx.as_mut().subcols_mut(0, w));
+        let mut res = Vec::with_capacity(w);
+        let mut back = Vec::with_capacity(w);
+        for c in 0..w {
+            let lam = lambdas[c0 + c];
+            let kc = kx.as_ref().col(c);
+            let mc = mx.as_ref().col(c);
+            let mut num = 0.0;
+            for r in 0..n {
+                let d = kc[r] - lam * mc[r];
+                num += d * d;
+            }
+            let num = num.sqrt();
+            let den = kc.norm_l2() + lam.abs().max(LAMBDA_FLOOR) * mc.norm_l2();
+            res.push(num / den);
+            let xn = x.col(c).norm_l2();
+            back.push(num / ((k_norm + lam.abs() * m_norm) * xn));
+        }
+        // Orthonormality against this chunk: all columns (full) or a window of neighbours;
+        // ΦᵀMΦ is symmetric, so only the columns up to the chunk's last are needed (every
+        // pair is met once, by the chunk of its later column).
+        let (a0, a1) = if full {
+            (0, c0 + w)
+        } else {
+            let span = 2 * target.max(chunk);
+            (c0.saturating_sub(span), c0 + w)
+        };
+        let g = mm(
+            phi.as_ref().subcols(a0, a1 - a0).transpose(),
+            mx.as_ref().subcols(0, w),
+            Par::Seq,
+        );
+        let mut orth = 0.0f64;
+        for c in 0..w {
+            for r in 0..(a1 - a0) {
+                let expect = if a0 + r == c0 + c { 1.0 } else { 0.0 };
+                orth = orth.max((g[(r, c)] - expect).abs());
+            }
+        }
+        (res, back, orth)
+    };
+    let width = chunk.min(total.max(1));
+    let bufs = || (Mat::<f64>::zeros(n, width), Mat::<f64>::zeros(n, width));
+    let starts: Vec<usize> = (0..total).step_by(chunk).collect();
+    let parts: Vec<(Vec<f64>, Vec<f64>, f64)> = if opts.parallel {
+        use rayon::prelude::*;
+        starts
+            .par_iter()
+            .map_init(bufs, |b, &c0| check_chunk(b, c0))
+            .collect()
+    } else {
+        let mut b = bufs();
+        starts.iter().map(|&c0| check_chunk(&mut b, c0)).collect()
+    };
+    let mut residuals = Vec::with_capacity(total);
+    let mut backward = Vec::with_capacity(total);
+    let mut orth_err = 0.0f64;
+    for (r, bw, o) in parts {
+        residuals.extend(r);
+        backward.extend(bw);
+        orth_err = orth_err.max(o);
+    }
+    timing.check_s = t.elapsed().as_secs_f64();
+    timing.total_s = t_total.elapsed().as_secs_f64();
+    Ok(EigenSolution {
+        frequencies_hz: lambdas.iter().map(|&l| lambda_to_hz(l)).collect(),
+        eigenvalues_rad2_s2: lambdas,
+        modes: phi,
+        relative_residuals: residuals,
+        backward_errors: backward,
+        m_orthonormality_error: orth_err,
+        sturm_count: nu_max,
+        sturm_count_below_min: nu0,
+        slices,
+        timing,
+    })
+}
+
+/// Eigenpairs of one band `[lower bound of first, top)`, found slice by slice.
+struct BandOut {
+    /// Eigenvalues (rad²/s²) in the order of `phi`'s columns.
+    lambdas: Vec<f64>,
+    /// Eigenvectors, n × (Sturm count of the band).
+    phi: Mat<f64>,
+    /// The band's slices, ascending.
+    slices: Vec<SliceReport>,
+}
+
+/// Spectrum slicing over one band: from the factorisation `first` at the band's lower bound
+/// (`from_zero`: the negative rigid-body shift σ₀ of a band that starts at 0 Hz, with the
+/// grounded-structure probe; otherwise a bound λ_lo > 0, below which the first Lanczos shift
+/// sits, see [`solve`]) up to `top = (shift, Sturm count)`. `lam_max` (rad²/s²) scales the
+/// small moves of a shift that hits a zero pivot.
+#[allow(clippy::too_many_arguments)]
+fn run_band(
+    ctx: &mut Ctx<'_>,
+    first: ShiftFactor,
+    from_zero: bool,
+    top: (f64, usize),
+    lam_max: f64,
+    opts: &EigenOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<BandOut, EigenError> {
+    let n = ctx.sys.n();
+    let (top_shift, nu_max) = top;
+    let nu0 = first.negative_count;
+    let total = nu_max.saturating_sub(nu0);
+    let mut reported = 0usize;
     let mut phi = Mat::<f64>::zeros(n, total);
     let mut lambdas: Vec<f64> = Vec::with_capacity(total);
     let mut slices: Vec<SliceReport> = Vec::new();
     let mut cur = first;
-    let target = opts.modes_per_slice;
-    if opts.f_min_hz == 0.0 && total > 0 {
+    if from_zero && total > 0 {
         // If the structure is grounded, the lowest eigenvalue λ₁ can lie far above the
         // negative shift σ₀; Lanczos at σ₀ would then see a tightly clustered θ = 1/(λ − σ₀)
         // and converge slowly. A short probe at σ₀ finds λ₁ (a Ritz value ≥ λ₁); if
@@ -542,11 +823,11 @@ pub fn solve(
             // (θ_Ritz ≤ θ₁), and the Sturm count at 0.9·l1 decides whether the shift moves.
             let mut popts = opts.clone();
             popts.tolerance = 1e-4;
-            lanczos_slice(&mut ctx, &cur, empty, 1, None, &popts)?
+            lanczos_slice(ctx, &cur, empty, 1, None, None, &popts)?
         };
         let l1 = probe.lambdas.first().copied().unwrap_or(0.0);
         if 0.9 * l1 > 4.0 * cur.shift.abs() {
-            let f = factorize(&mut ctx, 0.9 * l1, -1.0, lam_max)?;
+            let f = factorize(ctx, 0.9 * l1, -1.0, lam_max)?;
             if f.negative_count == 0 {
                 cur = f;
             }
@@ -560,6 +841,10 @@ pub fn solve(
     // slices deflated: 3064 solved vectors with carrying, 3120 without (−2 %, within the
     // run-to-run spread of the wall time).
     let mut carried: Vec<f64> = Vec::new();
+    // Lower bound of a band above 0 Hz: the modes below it are never deflated here.
+    let band_lo = (!from_zero).then_some(cur.shift);
+    // Eigenvalues per rad²/s² in the previous slice.
+    let mut last_density: Option<f64> = None;
     loop {
         let nu_cur = cur.negative_count;
         if nu_cur >= nu_max {
@@ -567,29 +852,18 @@ pub fn solve(
         }
         let remaining = nu_max - nu_cur;
         let lo = cur.shift;
+        let target = opts.modes_per_slice;
         let last = remaining <= target + target / 4;
         let t_slice = Instant::now();
-        // Lanczos shift: σ = lo, except for the first slice of a band with f_min > 0: λ_min
-        // may sit arbitrarily close to an eigenvalue below the band that is not deflated (a
-        // huge |θ| that swamps the wanted ones), so shift to σ_L = λ_min − 0.1·(slice width)
-        // and discard the pairs below λ_min (their number is the exact Sturm difference).
-        let shifted = if opts.f_min_hz > 0.0 && slices.is_empty() {
-            let w = if last {
-                lam_max - lo
-            } else {
-                lam_max * ((nu_cur + target) as f64 / nu_max as f64).powf(2.0 / 3.0) - lo
-            };
-            Some(factorize(
-                &mut ctx,
-                lo - 0.1 * w.max(1e-3 * lam_max),
-                -1.0,
-                lam_max,
-            )?)
-        } else {
-            None
-        };
-        let lf = shifted.as_ref().unwrap_or(&cur);
-        let below_lo = nu_cur - lf.negative_count;
+        // The first slice of a band above 0 Hz cannot deflate the modes below its bound lo
+        // (another band's, or below f_min): with the shift at lo they would converge at the
+        // negative end of θ as unwanted pairs, about as many as the slice wants and denser
+        // in λ (default track to 2 kHz in two bands: 872 solved vectors for the upper band's
+        // first 93 modes, against ~3 per mode otherwise). So that slice is two-sided: it
+        // wants every eigenvalue in [lo, hi) (Sturm count known) with the Lanczos shift at
+        // the midpoint, where the undeflated ones below lo are farther from the shift than
+        // every wanted one.
+        let two_sided = !from_zero && slices.is_empty();
         let col0 = lambdas.len();
         let nc = carried.len();
         // Deflated: every mode found so far and the carried pairs (contiguous in phi). The
@@ -598,33 +872,110 @@ pub fn solve(
         // unwanted Ritz values (default track to 5 kHz, subspace ratio 3: deflating only the
         // previous slice solved 3592 vectors, deflating all 2880, and the M-orthonormality
         // error of the whole basis fell from 1.3e-8 to 2.5e-14).
-        let locked_range = if shifted.is_some() {
-            (0, 0)
-        } else {
-            (0, col0 + nc)
+        let locked_range = (0, col0 + nc);
+        let mut mid: Option<ShiftFactor> = None;
+        // In a band above 0 Hz a slice whose width exceeds CAP_RATIO × its distance from the
+        // band's lower bound would meet the undeflated modes below that bound at the far end
+        // of θ. Such a slice ends at the cap instead, with the Sturm count known there
+        // (default track to 5 kHz in two bands: the upper band's second slice, as wide as
+        // that distance, needed 4 restarts and 5.8 solved vectors per mode).
+        let capped = match (band_lo, last_density) {
+            (Some(b), Some(rho)) if !two_sided => {
+                let cap = lo + CAP_RATIO * (lo - b);
+                if cap < top_shift && rho * (cap - lo) <= (target + target / 4) as f64 {
+                    let f = factorize(ctx, cap, 1.0, lam_max)?;
+                    (f.negative_count > nu_cur && f.negative_count < nu_max && f.shift < top_shift)
+                        .then_some(f)
+                } else {
+                    None
+                }
+            }
+            _ => None,
         };
         let mut out;
-        let (hi, nu_hi, next) = if last {
-            let need = remaining + below_lo;
+        let (hi, nu_hi, next) = if let Some(f) = capped {
+            let carried_below = carried.iter().filter(|&&x| x < f.shift).count();
+            let need_new = (f.negative_count - nu_cur).saturating_sub(carried_below);
+            let want = need_new + opts.block_size.max(need_new / 5);
+            out = {
+                let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
+                lanczos_slice(
+                    ctx,
+                    &cur,
+                    locked,
+                    want,
+                    Some((f.shift, need_new)),
+                    None,
+                    opts,
+                )?
+            };
+            (f.shift, f.negative_count, Some(f))
+        } else if two_sided {
+            // Width of about `target` modes (count model ν ∝ λ^{3/2} up to the band top),
+            // corrected once if the Sturm count says it holds far more.
+            let mut w = if last {
+                top_shift - lo
+            } else {
+                (top_shift * ((nu_cur + target) as f64 / nu_max as f64).powf(2.0 / 3.0) - lo)
+                    .max(1e-3 * top_shift)
+            };
+            let mut bound = None;
+            for _ in 0..2 {
+                if lo + w >= top_shift {
+                    bound = None;
+                    break;
+                }
+                let f = factorize(ctx, lo + w, 1.0, lam_max)?;
+                let count = f.negative_count - nu_cur;
+                let too_many = count > target + target / 2;
+                bound = Some(f);
+                if !too_many {
+                    break;
+                }
+                w *= target as f64 / count as f64;
+            }
+            let (hi, nu_hi, next) = match bound {
+                Some(f) if f.negative_count < nu_max && f.shift < top_shift => {
+                    (f.shift, f.negative_count, Some(f))
+                }
+                _ => (top_shift, nu_max, None),
+            };
+            let need = nu_hi - nu_cur;
+            let m = factorize(ctx, 0.5 * (lo + hi), 1.0, lam_max)?;
+            let want = need + opts.block_size.max(need / 5);
+            out = lanczos_slice(
+                ctx,
+                &m,
+                phi.as_ref().subcols(0, 0),
+                want,
+                Some((hi, need)),
+                Some(lo),
+                opts,
+            )?;
+            mid = Some(m);
+            (hi, nu_hi, next)
+        } else if last {
+            let need = remaining;
             let need_new = need.saturating_sub(nc);
             let want = need_new + opts.block_size.max(remaining / 5);
             out = {
                 let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
                 lanczos_slice(
-                    &mut ctx,
-                    lf,
+                    ctx,
+                    &cur,
                     locked,
                     want,
-                    Some((top.shift, need_new)),
+                    Some((top_shift, need_new)),
+                    None,
                     opts,
                 )?
             };
-            (top.shift, nu_max, None)
+            (top_shift, nu_max, None)
         } else {
-            let want = (target + below_lo).saturating_sub(nc).max(target / 2);
+            let want = target.saturating_sub(nc).max(target / 2);
             out = {
                 let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
-                lanczos_slice(&mut ctx, lf, locked, want, None, opts)?
+                lanczos_slice(ctx, &cur, locked, want, None, None, opts)?
             };
             // Boundary in the widest relative gap of the last third of the converged λ
             // (carried and new; everything below it has converged; a wide gap keeps K − τM
@@ -643,12 +994,12 @@ pub fn solve(
                     .unwrap_or(k0);
                 0.5 * (l[kbest] + l[kbest + 1])
             } else {
-                lam_max
+                top_shift
             };
-            if tau >= top.shift {
-                (top.shift, nu_max, None)
+            if tau >= top_shift {
+                (top_shift, nu_max, None)
             } else {
-                let f = factorize(&mut ctx, tau, 1.0, lam_max)?;
+                let f = factorize(ctx, tau, 1.0, lam_max)?;
                 (f.shift, f.negative_count, Some(f))
             }
         };
@@ -665,13 +1016,16 @@ pub fn solve(
             // multiplicity larger than the block): iterate again with the count known.
             out = {
                 let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
-                let nl = need.saturating_sub(carried_in) + below_lo;
+                let nl = need.saturating_sub(carried_in);
+                let lf = mid.as_ref().unwrap_or(&cur);
+                let wide = if two_sided { 2 * nl } else { nl };
                 lanczos_slice(
-                    &mut ctx,
+                    ctx,
                     lf,
                     locked,
-                    nl + opts.block_size,
+                    wide + opts.block_size,
                     Some((hi, nl)),
+                    two_sided.then_some(lo),
                     opts,
                 )?
             };
@@ -686,7 +1040,7 @@ pub fn solve(
                 });
             }
         }
-        drop(shifted);
+        drop(mid);
         // Layout from col0: the slice's modes (carried ones below hi, then the new ones), then
         // the pairs carried on (carried ones at or above hi, then new converged ones between
         // hi and λ_max, as many as fit).
@@ -711,7 +1065,7 @@ pub fn solve(
             // Carried: the strictly converged pairs above hi, up to the first that is not
             // (the next slice must find every eigenvalue above the carried ones itself).
             for (i, &x) in out.lambdas.iter().enumerate() {
-                if x >= hi && x < top.shift {
+                if x >= hi && x < top_shift {
                     if !out.strict[i] {
                         break;
                     }
@@ -732,6 +1086,7 @@ pub fn solve(
             carried.push(x);
             c += 1;
         }
+        last_density = Some((nu_hi - nu_cur) as f64 / (hi - lo).max(f64::MIN_POSITIVE));
         slices.push(SliceReport {
             shift_lo_rad2_s2: lo,
             shift_hi_rad2_s2: hi,
@@ -744,88 +1099,136 @@ pub fn solve(
             lanczos_s: t_slice.elapsed().as_secs_f64(),
         });
         if let Some(pb) = progress {
-            pb.set_position(lambdas.len() as u64);
+            pb.inc((lambdas.len() - reported) as u64);
+            reported = lambdas.len();
         }
         match next {
             Some(f) => cur = f,
             None => break,
         }
     }
-    // Sort ascending (slices are ascending already; keep it robust).
-    let mut idx: Vec<usize> = (0..lambdas.len()).collect();
-    idx.sort_by(|&a, &b| lambdas[a].total_cmp(&lambdas[b]));
-    if idx.iter().enumerate().any(|(i, &j)| i != j) {
-        let sorted = Mat::<f64>::from_fn(n, idx.len(), |r, c| phi[(r, idx[c])]);
-        phi = sorted;
-        lambdas = idx.iter().map(|&i| lambdas[i]).collect();
-    }
-    // Verification: true residuals and M-orthonormality.
-    let t = Instant::now();
-    let mut residuals = Vec::with_capacity(total);
-    let mut backward = Vec::with_capacity(total);
-    let (k_norm, m_norm) = (norm_inf(k), norm_inf(m));
-    let chunk = 64usize;
-    let mut kx = Mat::<f64>::zeros(n, chunk.min(total.max(1)));
-    let mut mx = Mat::<f64>::zeros(n, chunk.min(total.max(1)));
-    let mut orth_err = 0.0f64;
-    let full = opts.full_orthogonality_check || (n as f64) * (total as f64).powi(2) <= 2e10;
-    let mut c0 = 0;
-    while c0 < total {
-        let w = chunk.min(total - c0);
-        let x = phi.as_ref().subcols(c0, w);
-        sym_spmm(k, x, kx.as_mut().subcols_mut(0, w));
-        sym_spmm(m, x, mx.as_mut().subcols_mut(0, w));
-        for c in 0..w {
-            let lam = lambdas[c0 + c];
-            let kc = kx.as_ref().col(c);
-            let mc = mx.as_ref().col(c);
-            let mut num = 0.0;
-            for r in 0..n {
-                let d = kc[r] - lam * mc[r];
-                num += d * d;
-            }
-            let num = num.sqrt();
-            let den = kc.norm_l2() + lam.abs().max(LAMBDA_FLOOR) * mc.norm_l2();
-            residuals.push(num / den);
-            let xn = x.col(c).norm_l2();
-            backward.push(num / ((k_norm + lam.abs() * m_norm) * xn));
-        }
-        // Orthonormality against this chunk: all columns (full) or a window of neighbours;
-        // ΦᵀMΦ is symmetric, so only the columns up to the chunk's last are needed (every
-        // pair is met once, by the chunk of its later column).
-        let (a0, a1) = if full {
-            (0, c0 + w)
-        } else {
-            let span = 2 * target.max(chunk);
-            (c0.saturating_sub(span), c0 + w)
-        };
-        let g = mm(
-            phi.as_ref().subcols(a0, a1 - a0).transpose(),
-            mx.as_ref().subcols(0, w),
-            ctx.par,
-        );
-        for c in 0..w {
-            for r in 0..(a1 - a0) {
-                let expect = if a0 + r == c0 + c { 1.0 } else { 0.0 };
-                orth_err = orth_err.max((g[(r, c)] - expect).abs());
-            }
-        }
-        c0 += w;
-    }
-    ctx.timing.check_s = t.elapsed().as_secs_f64();
-    ctx.timing.total_s = t_total.elapsed().as_secs_f64();
-    Ok(EigenSolution {
-        frequencies_hz: lambdas.iter().map(|&l| lambda_to_hz(l)).collect(),
-        eigenvalues_rad2_s2: lambdas,
-        modes: phi,
-        relative_residuals: residuals,
-        backward_errors: backward,
-        m_orthonormality_error: orth_err,
-        sturm_count: nu_max,
-        sturm_count_below_min: nu0,
+    Ok(BandOut {
+        lambdas,
+        phi,
         slices,
-        timing: ctx.timing,
     })
+}
+
+/// Band bounds for `bands` concurrent bands between the factorisations `first` (lower bound)
+/// and `top = (shift, Sturm count)`: factorisations of `K − λ_i M`, ascending, chosen so that
+/// every band has about the same *work*. With `x = (√λ − √λ_lo)/(√λ_top − √λ_lo)` the count
+/// model is `ν(λ) − ν₀ ≈ N·x^α`, fitted to one probe at x = ½ (the default track has
+/// α ≈ 1: its rail and sleepers are slender), and a mode at x costs `1 + 2x²` units:
+/// measured on the default track to 5 kHz, the slices near f_max need about 2.7 times the
+/// time per mode of the lowest ones (their spectrum is denser in θ and more modes are
+/// deflated). Band i then ends where the work `W(x) = x^α + 2α/(α+2)·x^{α+2}` reaches
+/// `i/bands · W(1)`. A split whose count does not lie strictly between its neighbours' is
+/// dropped (fewer, non-empty bands).
+fn choose_splits(
+    ctx: &mut Ctx<'_>,
+    first: &ShiftFactor,
+    top: (f64, usize),
+    bands: usize,
+    lam_max: f64,
+) -> Result<Vec<ShiftFactor>, EigenError> {
+    let nu0 = first.negative_count;
+    let total = top.1.saturating_sub(nu0).max(1) as f64;
+    let (a, b) = (first.shift.max(0.0).sqrt(), top.0.max(0.0).sqrt());
+    let lam_at = |x: f64| (a + x * (b - a)).powi(2);
+    let probe = factorize(ctx, lam_at(0.5), 1.0, lam_max)?;
+    let frac = probe.negative_count.saturating_sub(nu0) as f64 / total;
+    let alpha = if frac <= 0.0 {
+        4.0
+    } else if frac >= 1.0 {
+        0.25
+    } else {
+        (frac.ln() / 0.5f64.ln()).clamp(0.25, 4.0)
+    };
+    let work = |x: f64| x.powf(alpha) + 2.0 * alpha / (alpha + 2.0) * x.powf(alpha + 2.0);
+    let mut probe = Some(probe);
+    let mut out: Vec<ShiftFactor> = Vec::new();
+    for i in 1..bands {
+        let goal = i as f64 / bands as f64 * work(1.0);
+        // W is increasing: bisection for W(x) = goal.
+        let (mut x0, mut x1) = (0.0f64, 1.0f64);
+        for _ in 0..60 {
+            let xm = 0.5 * (x0 + x1);
+            if work(xm) < goal {
+                x0 = xm;
+            } else {
+                x1 = xm;
+            }
+        }
+        let x = 0.5 * (x0 + x1);
+        let f = match probe.take() {
+            Some(p) if (x - 0.5).abs() <= 0.02 => p,
+            other => {
+                probe = other;
+                factorize(ctx, lam_at(x), 1.0, lam_max)?
+            }
+        };
+        let above_last = out.last().map_or(nu0, |l| l.negative_count);
+        if f.negative_count > above_last && f.negative_count < top.1 && f.shift < top.0 {
+            out.push(f);
+        }
+    }
+    Ok(out)
+}
+
+/// Smallest model (free DOFs) that is split into concurrent bands by default: below it the
+/// solves are cheap and not memory-bound, and one band is as fast.
+const AUTO_BANDS_MIN_DOFS: usize = 20_000;
+
+/// Largest width of a slice in a band above 0 Hz, as a multiple of its distance from the
+/// band's lower bound (see `run_band`).
+const CAP_RATIO: f64 = 0.7;
+
+/// Relative half-width in λ of the window of modes around a band bound that gets a joint
+/// Rayleigh–Ritz step.
+const BOUND_WINDOW: f64 = 0.05;
+/// At most this many modes on each side of a band bound enter that step.
+const BOUND_WINDOW_MAX: usize = 48;
+
+/// Rayleigh–Ritz step on the columns `x` (approximate eigenvectors, λ ascending in
+/// `lambdas`): with `K̂ = XᵀKX`, `M̂ = XᵀMX = Q D Qᵀ` and `W = Q D^{-1/2} Qᵀ`, the eigenpairs
+/// `(λ̂, U)` of `W K̂ W` give `X ← X W U` (M-orthonormal) and `λ ← λ̂` (ascending).
+fn rayleigh_ritz_window(
+    k: SparseColMatRef<'_, usize, f64>,
+    m: SparseColMatRef<'_, usize, f64>,
+    mut x: MatMut<'_, f64>,
+    lambdas: &mut [f64],
+    par: Par,
+) -> Result<(), EigenError> {
+    let (n, w) = (x.nrows(), x.ncols());
+    let mut kx = Mat::<f64>::zeros(n, w);
+    let mut mx = Mat::<f64>::zeros(n, w);
+    sym_spmm(k, x.as_ref(), kx.as_mut());
+    sym_spmm(m, x.as_ref(), mx.as_mut());
+    let sym = |a: Mat<f64>| Mat::<f64>::from_fn(w, w, |r, c| 0.5 * (a[(r, c)] + a[(c, r)]));
+    let kh = sym(mm(x.as_ref().transpose(), kx.as_ref(), par));
+    let mh = sym(mm(x.as_ref().transpose(), mx.as_ref(), par));
+    let (d, q) = dense_eig(mh.as_ref())?;
+    if d[0] <= 0.5 {
+        // The columns are M-orthonormal to ≈1e-7: a Gram matrix this far from I means the
+        // band solves returned something else than eigenvectors.
+        return Err(EigenError::Factorization {
+            shift_rad2_s2: lambdas[0],
+            reason: format!("modes at a band bound are not M-orthonormal (smallest Gram eigenvalue {:.3e}); set concurrent_bands = 1", d[0]),
+        });
+    }
+    let qd = Mat::<f64>::from_fn(w, w, |r, c| q[(r, c)] / d[c].sqrt());
+    let wm = mm(qd.as_ref(), q.as_ref().transpose(), par);
+    let c = sym(mm(
+        mm(wm.as_ref(), kh.as_ref(), par).as_ref(),
+        wm.as_ref(),
+        par,
+    ));
+    let (lam, u) = dense_eig(c.as_ref())?;
+    let s = mm(wm.as_ref(), u.as_ref(), par);
+    let y = mm(x.as_ref(), s.as_ref(), par);
+    x.copy_from(&y);
+    lambdas.copy_from_slice(&lam);
+    Ok(())
 }
 
 /// A copy of `a` without its stored zero entries (same values, same shape).
@@ -925,6 +1328,15 @@ fn validate(o: &EigenOptions) -> Result<(), EigenError> {
             o.subspace_ratio.to_string(),
             "must be in [1.5, 10]",
         );
+    }
+    if let Some(b) = o.concurrent_bands {
+        if b == 0 || b > 64 {
+            return bad(
+                "concurrent_bands",
+                b.to_string(),
+                "must be in 1..=64 (or unset for one band per thread)",
+            );
+        }
     }
     if o.modes_per_slice == 0 {
         return bad("modes_per_slice", "0".into(), "must be ≥ 1");

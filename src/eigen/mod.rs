@@ -152,6 +152,14 @@ pub struct EigenOptions {
     pub refine_solves: bool,
     /// Seed of the deterministic random start block.
     pub seed: u64,
+    /// Number of frequency bands solved concurrently, one thread each (`None`: as many as
+    /// rayon has threads, but no more than `count / modes_per_slice`, and one when
+    /// `parallel` is false or the model has fewer than 20,000 free DOFs; `Some(b)` forces
+    /// b, run one after the other when `parallel` is false). The band bounds are Sturm-counted factorisations, so every band finds exactly
+    /// its eigenvalues; a band above the lowest cannot deflate the modes below it and starts
+    /// its first slice below its bound (as for `f_min > 0`).
+    #[serde(default)]
+    pub concurrent_bands: Option<usize>,
     /// Compute the full M-orthonormality error ΦᵀMΦ − I even when it is expensive
     /// (n·m² > 2·10¹⁰); otherwise only within slices and between neighbouring slices.
     pub full_orthogonality_check: bool,
@@ -175,6 +183,7 @@ impl EigenOptions {
             refine_solves: false,
             seed: 0x5eed_c0de_1234_5678,
             full_orthogonality_check: false,
+            concurrent_bands: None,
         }
     }
 }
@@ -237,6 +246,28 @@ pub struct EigenTiming {
     pub orthogonalization_passes: usize,
     /// Stored entries of the LDLᵀ factor.
     pub factor_entries: usize,
+    /// Bands solved concurrently (see [`EigenOptions::concurrent_bands`]); with more than
+    /// one, the per-phase times above are summed over the bands (thread-seconds) and only
+    /// `total_s` is wall-clock time.
+    #[serde(default)]
+    pub bands: usize,
+}
+
+impl EigenTiming {
+    /// Adds the work counters and phase times of a band solved with its own context.
+    fn absorb(&mut self, o: &EigenTiming) {
+        self.factorize_s += o.factorize_s;
+        self.factorizations += o.factorizations;
+        self.solve_s += o.solve_s;
+        self.solved_vectors += o.solved_vectors;
+        self.check_s += o.check_s;
+        self.orthogonalize_s += o.orthogonalize_s;
+        self.orthogonalize_spmm_s += o.orthogonalize_spmm_s;
+        self.rayleigh_ritz_s += o.rayleigh_ritz_s;
+        self.restart_s += o.restart_s;
+        self.orthogonalized_blocks += o.orthogonalized_blocks;
+        self.orthogonalization_passes += o.orthogonalization_passes;
+    }
 }
 
 /// Result of [`solve`]: all modes with f_min ≤ f < f_max.

@@ -561,3 +561,116 @@ fn converged_pairs_above_a_boundary_carry_into_the_next_slice() {
     assert!(check_against_dense(&sol, &dense, 0.0, f_max) < 1e-8);
     assert!(sol.m_orthonormality_error < 1e-10);
 }
+
+/// Slices of a solution tile the band: every slice starts where the previous ended, with the
+/// same Sturm count (also across the bounds of concurrent bands).
+fn assert_slices_tile(sol: &EigenSolution) {
+    for w in sol.slices.windows(2) {
+        assert_eq!(w[0].shift_hi_rad2_s2, w[1].shift_lo_rad2_s2, "slice bounds");
+        assert_eq!(
+            w[0].sturm_hi, w[1].sturm_lo,
+            "Sturm counts at a slice bound"
+        );
+    }
+}
+
+/// Concurrent bands: the same eigenvalues as the dense solver (1e-8), the exact count, a
+/// full M-orthonormality check across the band bounds (the model is small enough for the
+/// full ΦᵀMΦ), with rigid-body modes in the lowest band (free lattice), with `f_min > 0`
+/// (grounded lattice: every band starts with a two-sided slice), run concurrently and one
+/// after the other.
+#[test]
+fn concurrent_bands_match_dense_solver_with_exact_counts() {
+    let (k, m) = lattice3d(6, 5, 4, 0.0, 7);
+    let dense = dense_eigenvalues(&k, &m);
+    let f_max = lambda_to_hz(dense[dense.len() / 2]) * 1.0001;
+    for (bands, parallel) in [(2usize, true), (3, false)] {
+        let mut o = EigenOptions::new(f_max);
+        o.block_size = 6;
+        o.modes_per_slice = 40;
+        o.concurrent_bands = Some(bands);
+        o.parallel = parallel;
+        let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+        assert_quality(&sol);
+        assert_slices_tile(&sol);
+        let worst = check_against_dense(&sol, &dense, 0.0, f_max);
+        eprintln!(
+            "free lattice, {} bands: {} modes in {} slices, worst rel err {worst:e}, M-orth {:.1e}",
+            sol.timing.bands,
+            sol.frequencies_hz.len(),
+            sol.slices.len(),
+            sol.m_orthonormality_error
+        );
+        assert_eq!(sol.timing.bands, bands);
+        assert!(worst < 1e-8, "worst relative eigenvalue error {worst:e}");
+        assert!(sol.frequencies_hz[2] < 1e-3 && sol.frequencies_hz[3] > 1.0);
+    }
+    let (k, m) = lattice3d(5, 5, 5, 2e6, 11);
+    let dense = dense_eigenvalues(&k, &m);
+    let f_min = lambda_to_hz(dense[40]) * 0.9999 + lambda_to_hz(dense[39]) * 0.0001;
+    let f_max = lambda_to_hz(dense[300]) * 0.5 + lambda_to_hz(dense[301]) * 0.5;
+    let mut o = EigenOptions::new(f_max);
+    o.f_min_hz = f_min;
+    o.block_size = 8;
+    o.modes_per_slice = 60;
+    o.concurrent_bands = Some(2);
+    let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+    assert_quality(&sol);
+    assert_slices_tile(&sol);
+    let worst = check_against_dense(&sol, &dense, f_min, f_max);
+    eprintln!(
+        "grounded lattice, 2 bands from f_min: {} modes, {} slices, worst rel err {worst:e}",
+        sol.frequencies_hz.len(),
+        sol.slices.len()
+    );
+    assert_eq!(sol.timing.bands, 2);
+    assert_eq!(sol.frequencies_hz.len(), 261);
+    assert!(worst < 1e-8);
+}
+
+/// Concurrent bands on a spectrum full of exactly coincident pairs (square lattice, closed
+/// form): a band bound between or near the two members of a pair must neither lose nor
+/// duplicate one (the Sturm counts at the shared bound decide), and the pairs' vectors stay
+/// M-orthonormal across the bound.
+#[test]
+fn concurrent_bands_keep_double_eigenvalues_at_their_bounds() {
+    let (nn, kk, mm) = (20usize, 1.0e6, 2.0);
+    let (k, m) = square_lattice(nn, kk, mm);
+    let mu: Vec<f64> = (0..nn)
+        .map(|i| {
+            4.0 * kk
+                * (i as f64 * std::f64::consts::PI / (2.0 * nn as f64))
+                    .sin()
+                    .powi(2)
+        })
+        .collect();
+    let mut exact: Vec<f64> = mu
+        .iter()
+        .flat_map(|a| mu.iter().map(move |b| (a + b) / mm))
+        .collect();
+    exact.sort_by(f64::total_cmp);
+    let mut idx = 250;
+    while (exact[idx + 1] - exact[idx]) < 1e-6 * exact[idx] {
+        idx += 1;
+    }
+    let f_max = lambda_to_hz(0.5 * (exact[idx] + exact[idx + 1]));
+    for bands in [2usize, 4] {
+        let mut o = EigenOptions::new(f_max);
+        o.block_size = 4;
+        o.modes_per_slice = 30;
+        o.concurrent_bands = Some(bands);
+        let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+        assert_quality(&sol);
+        assert_slices_tile(&sol);
+        let worst = check_against_dense(&sol, &exact, 0.0, f_max);
+        eprintln!(
+            "square lattice, {} bands: {} modes, {} slices, worst rel err {worst:e}",
+            sol.timing.bands,
+            sol.frequencies_hz.len(),
+            sol.slices.len()
+        );
+        assert_eq!(sol.timing.bands, bands);
+        assert_eq!(sol.sturm_count, idx + 1);
+        assert!(worst < 1e-8);
+    }
+}
