@@ -893,23 +893,21 @@ fn run_band(
             _ => None,
         };
         let mut out;
-        let (hi, nu_hi, next) = if let Some(f) = capped {
-            let carried_below = carried.iter().filter(|&&x| x < f.shift).count();
-            let need_new = (f.negative_count - nu_cur).saturating_sub(carried_below);
-            let want = need_new + opts.block_size.max(need_new / 5);
+        // A slice to a bound whose Sturm count is known: the cap, or the band top.
+        let known_end = match capped {
+            Some(f) => Some((f.shift, f.negative_count, Some(f))),
+            None if last && !two_sided => Some((top_shift, nu_max, None)),
+            None => None,
+        };
+        let (hi, nu_hi, next) = if let Some((hi, nu_hi, next)) = known_end {
+            let carried_below = carried.iter().filter(|&&x| x < hi).count();
+            let need_new = (nu_hi - nu_cur).saturating_sub(carried_below);
+            let want = need_new + opts.block_size.max((nu_hi - nu_cur) / 5);
             out = {
                 let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
-                lanczos_slice(
-                    ctx,
-                    &cur,
-                    locked,
-                    want,
-                    Some((f.shift, need_new)),
-                    None,
-                    opts,
-                )?
+                lanczos_slice(ctx, &cur, locked, want, Some((hi, need_new)), None, opts)?
             };
-            (f.shift, f.negative_count, Some(f))
+            (hi, nu_hi, next)
         } else if two_sided {
             // Width of about `target` modes (count model ν ∝ λ^{3/2} up to the band top),
             // corrected once if the Sturm count says it holds far more.
@@ -954,23 +952,6 @@ fn run_band(
             )?;
             mid = Some(m);
             (hi, nu_hi, next)
-        } else if last {
-            let need = remaining;
-            let need_new = need.saturating_sub(nc);
-            let want = need_new + opts.block_size.max(remaining / 5);
-            out = {
-                let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
-                lanczos_slice(
-                    ctx,
-                    &cur,
-                    locked,
-                    want,
-                    Some((top_shift, need_new)),
-                    None,
-                    opts,
-                )?
-            };
-            (top_shift, nu_max, None)
         } else {
             let want = target.saturating_sub(nc).max(target / 2);
             out = {

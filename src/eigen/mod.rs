@@ -46,6 +46,23 @@
 //!   near 0) a short probe finds λ₁ and the first slice starts at 0.9 λ₁ (Sturm count 0
 //!   there is verified). For `f_min > 0` the first Lanczos shift sits 10 % of the slice width
 //!   below λ_min so that an eigenvalue just below λ_min cannot swamp the iteration.
+//! * **Concurrent bands** ([`EigenOptions::concurrent_bands`]). With several threads and a
+//!   model of at least 20,000 DOFs the band is cut into one sub-band per thread, each sliced
+//!   as above on one thread. The sub-band bounds are factorisations shared by the two
+//!   neighbouring bands, so their Sturm counts make every band find exactly its own
+//!   eigenvalues. Why it pays: the block solves and the re-orthogonalisation are
+//!   memory-bound; a parallel column-group solve reads the whole factor once per group, a
+//!   band on its own thread once per block, and each band deflates only its own modes.
+//!   The bounds follow a work model (count law `ν ∝ x^α` fitted to one probe factorisation,
+//!   cost per mode `1 + 2x²`, see `choose_splits`). A band above 0 Hz cannot deflate the
+//!   modes below its bound lo, so its first slice is *two-sided*: the Lanczos shift sits at
+//!   the midpoint of `[lo, hi)`, the wanted pairs are all eigenvalues in `[lo, hi)` (Sturm
+//!   count known) ordered by |θ|, and the undeflated ones below lo are farther from the
+//!   shift than every wanted one. Its later slices are capped at 0.7 times their distance
+//!   from lo. The modes within 5 % in λ of a bound (at most 48 on each side) get one joint
+//!   Rayleigh–Ritz step, since across a bound they were not deflated against each other.
+//!   Measured on the default track to 5 kHz (152,358 DOFs, idle 2-core machine): one band
+//!   110 s, two bands 85 s; M-orthonormality error across the bound 2e-8 (5e-14 in one band).
 //! * **Verification.** Every returned pair gets its true relative residual
 //!   `‖Kφ − λMφ‖₂ / (‖Kφ‖₂ + max(|λ|, λ_floor)‖Mφ‖₂)` with `λ_floor = (2π·1 Hz)²` (the floor
 //!   avoids 0/0 for rigid-body modes, but for them this measure is dominated by the round-off

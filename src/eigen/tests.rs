@@ -335,10 +335,9 @@ fn grounded_3d_lattice_band_with_f_min_matches_dense_solver() {
     assert!(worst < 1e-8);
 }
 
-#[test]
-fn square_lattice_double_eigenvalues_closed_form_and_sturm() {
-    let (nn, kk, mm) = (20usize, 1.0e6, 2.0);
-    let (k, m) = square_lattice(nn, kk, mm);
+/// Closed-form eigenvalues (ascending) of [`square_lattice`]: `(μ_a + μ_b)/m` with the
+/// free-free chain values `μ_i = 4k sin²(iπ/2n)`; every `a ≠ b` pair is a double eigenvalue.
+fn square_lattice_exact(nn: usize, kk: f64, mm: f64) -> Vec<f64> {
     let mu: Vec<f64> = (0..nn)
         .map(|i| {
             4.0 * kk
@@ -347,13 +346,19 @@ fn square_lattice_double_eigenvalues_closed_form_and_sturm() {
                     .powi(2)
         })
         .collect();
-    let mut exact: Vec<f64> = Vec::new();
-    for a in &mu {
-        for b in &mu {
-            exact.push((a + b) / mm);
-        }
-    }
+    let mut exact: Vec<f64> = mu
+        .iter()
+        .flat_map(|a| mu.iter().map(move |b| (a + b) / mm))
+        .collect();
     exact.sort_by(f64::total_cmp);
+    exact
+}
+
+#[test]
+fn square_lattice_double_eigenvalues_closed_form_and_sturm() {
+    let (nn, kk, mm) = (20usize, 1.0e6, 2.0);
+    let (k, m) = square_lattice(nn, kk, mm);
+    let exact = square_lattice_exact(nn, kk, mm);
     // f_max between two distinct eigenvalues around index 150.
     let mut idx = 150;
     while (exact[idx + 1] - exact[idx]) < 1e-6 * exact[idx] {
@@ -636,19 +641,7 @@ fn concurrent_bands_match_dense_solver_with_exact_counts() {
 fn concurrent_bands_keep_double_eigenvalues_at_their_bounds() {
     let (nn, kk, mm) = (20usize, 1.0e6, 2.0);
     let (k, m) = square_lattice(nn, kk, mm);
-    let mu: Vec<f64> = (0..nn)
-        .map(|i| {
-            4.0 * kk
-                * (i as f64 * std::f64::consts::PI / (2.0 * nn as f64))
-                    .sin()
-                    .powi(2)
-        })
-        .collect();
-    let mut exact: Vec<f64> = mu
-        .iter()
-        .flat_map(|a| mu.iter().map(move |b| (a + b) / mm))
-        .collect();
-    exact.sort_by(f64::total_cmp);
+    let exact = square_lattice_exact(nn, kk, mm);
     let mut idx = 250;
     while (exact[idx + 1] - exact[idx]) < 1e-6 * exact[idx] {
         idx += 1;
