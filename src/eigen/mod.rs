@@ -208,7 +208,8 @@ impl EigenOptions {
 /// Diagnostics of one spectrum slice `[shift_lo, shift_hi)`.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct SliceReport {
-    /// Lower shift σ_i (rad²/s²) — also the Lanczos shift of the slice.
+    /// Lower bound σ_i (rad²/s²); also the Lanczos shift of the slice, except for the
+    /// two-sided first slice of a band above 0 Hz, whose shift is the midpoint of the slice.
     pub shift_lo_rad2_s2: f64,
     /// Upper boundary σ_{i+1} (rad²/s²).
     pub shift_hi_rad2_s2: f64,
