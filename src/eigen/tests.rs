@@ -354,17 +354,22 @@ fn square_lattice_exact(nn: usize, kk: f64, mm: f64) -> Vec<f64> {
     exact
 }
 
+/// The first index `i ≥ start` with `λ_{i+1}` distinct from `λ_i` (relative 1e-6), and the
+/// frequency (Hz) midway between them: an `f_max` that splits no coincident pair.
+fn gap_after(exact: &[f64], start: usize) -> (usize, f64) {
+    let mut idx = start;
+    while (exact[idx + 1] - exact[idx]) < 1e-6 * exact[idx] {
+        idx += 1;
+    }
+    (idx, lambda_to_hz(0.5 * (exact[idx] + exact[idx + 1])))
+}
+
 #[test]
 fn square_lattice_double_eigenvalues_closed_form_and_sturm() {
     let (nn, kk, mm) = (20usize, 1.0e6, 2.0);
     let (k, m) = square_lattice(nn, kk, mm);
     let exact = square_lattice_exact(nn, kk, mm);
-    // f_max between two distinct eigenvalues around index 150.
-    let mut idx = 150;
-    while (exact[idx + 1] - exact[idx]) < 1e-6 * exact[idx] {
-        idx += 1;
-    }
-    let f_max = lambda_to_hz(0.5 * (exact[idx] + exact[idx + 1]));
+    let (idx, f_max) = gap_after(&exact, 150);
     let mut o = EigenOptions::new(f_max);
     o.block_size = 4;
     o.modes_per_slice = 30;
@@ -642,11 +647,7 @@ fn concurrent_bands_keep_double_eigenvalues_at_their_bounds() {
     let (nn, kk, mm) = (20usize, 1.0e6, 2.0);
     let (k, m) = square_lattice(nn, kk, mm);
     let exact = square_lattice_exact(nn, kk, mm);
-    let mut idx = 250;
-    while (exact[idx + 1] - exact[idx]) < 1e-6 * exact[idx] {
-        idx += 1;
-    }
-    let f_max = lambda_to_hz(0.5 * (exact[idx] + exact[idx + 1]));
+    let (idx, f_max) = gap_after(&exact, 250);
     for bands in [2usize, 4] {
         let mut o = EigenOptions::new(f_max);
         o.block_size = 4;
