@@ -220,3 +220,69 @@ pub fn tall_right_mul_in_place(mut v: MatMut<'_, f64>, s: MatRef<'_, f64>, par: 
         blocks.into_par_iter().for_each(work);
     }
 }
+
+/// Rows per block of [`tall_update_then_t_mul`]: a block of a 600-column basis (1.2 MB) stays
+/// in cache between its two products.
+const FUSE_ROWS: usize = 256;
+
+/// For a diagonal `M = diag(d)`: `z ← z − v c`, then returns `vᵀ M z` of the updated `z`, in
+/// one sweep over `v` (n × j) by row blocks, so `v` is read from memory once for both
+/// products instead of twice (the first pass's update and the second pass's coefficients of
+/// the block Gram–Schmidt). Parallel over row ranges like [`tall_mul_add`].
+pub fn tall_update_then_t_mul(
+    mut z: MatMut<'_, f64>,
+    v: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    d: &[f64],
+    par: Par,
+) -> Mat<f64> {
+    let (n, j, b) = (v.nrows(), v.ncols(), z.ncols());
+    debug_assert_eq!(d.len(), n);
+    if j == 0 || b == 0 {
+        return Mat::<f64>::zeros(j, b);
+    }
+    let ranges = row_ranges(n, row_threads(n, par));
+    let mut views: Vec<(MatMut<'_, f64>, usize)> = Vec::with_capacity(ranges.len());
+    let mut rest = z.as_mut();
+    for &(r0, len) in &ranges {
+        let (head, tail) = rest.split_at_row_mut(len);
+        views.push((head, r0));
+        rest = tail;
+    }
+    let work = |(mut zv, r0): (MatMut<'_, f64>, usize)| {
+        let mut acc = Mat::<f64>::zeros(j, b);
+        let mut dz = Mat::<f64>::zeros(FUSE_ROWS.min(zv.nrows()), b);
+        let mut i = 0;
+        while i < zv.nrows() {
+            let len = FUSE_ROWS.min(zv.nrows() - i);
+            let vb = v.subrows(r0 + i, len);
+            let mut zb = zv.as_mut().subrows_mut(i, len);
+            matmul(zb.as_mut(), Accum::Add, vb, c, -1.0, Par::Seq);
+            for col in 0..b {
+                for r in 0..len {
+                    dz[(r, col)] = d[r0 + i + r] * zb[(r, col)];
+                }
+            }
+            matmul(
+                acc.as_mut(),
+                Accum::Add,
+                vb.transpose(),
+                dz.as_ref().subrows(0, len),
+                1.0,
+                Par::Seq,
+            );
+            i += len;
+        }
+        acc
+    };
+    let parts: Vec<Mat<f64>> = if views.len() == 1 {
+        views.into_iter().map(work).collect()
+    } else {
+        views.into_par_iter().map(work).collect()
+    };
+    let mut out = Mat::<f64>::zeros(j, b);
+    for p in &parts {
+        out += p;
+    }
+    out
+}

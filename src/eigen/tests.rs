@@ -482,6 +482,19 @@ fn row_split_tall_products_match_sequential_gemm() {
         v2.as_ref().subcols(20, 17) == v.as_ref().subcols(20, 17),
         "tail untouched"
     );
+    // Fused Gram–Schmidt sweep for a diagonal M: z − V c and Vᵀ diag(d) (z − V c), against
+    // the plain products, on split rows (par) and in one piece (Seq); n is not a multiple of
+    // the row block.
+    let d: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64).collect();
+    let zu = &z - &v * &c;
+    let dzu = Mat::<f64>::from_fn(n, 5, |i, j| d[i] * zu[(i, j)]);
+    let expect = v.transpose() * &dzu;
+    for p in [par, faer::Par::Seq] {
+        let mut z3 = z.clone();
+        let got = super::spmm::tall_update_then_t_mul(z3.as_mut(), v.as_ref(), c.as_ref(), &d, p);
+        assert!((&z3 - &zu).norm_max() <= 1e-12 * zu.norm_max());
+        assert!((&got - &expect).norm_max() <= 1e-12 * expect.norm_max());
+    }
 }
 
 #[test]
