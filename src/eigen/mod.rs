@@ -28,7 +28,7 @@
 //!   product, with the coefficients `(MV)ᵀz` taken from `M V` stored beside `V` — for a
 //!   diagonal (lumped) M from `Vᵀ(d∘z)` instead, with no `M V` stored and the first pass's
 //!   update fused with the second pass's coefficients in one sweep over V, which cut the
-//!   default track's 5 kHz run from 85 to 75 s and its peak memory by 1.1 GB — then a
+//!   default track's 5 kHz run from 85 to 75–80 s and its peak memory by 1.1 GB — then a
 //!   symmetric (Löwdin) orthonormalisation of the block with one sparse product `M z`, which
 //!   is carried into `M V`; another round when a column still shrank by half in the second
 //!   pass or the block's Gram matrix is ill-conditioned).
@@ -65,8 +65,8 @@
 //!   from lo. The modes within 5 % in λ of a bound (at most 48 on each side) get one joint
 //!   Rayleigh–Ritz step, since across a bound they were not deflated against each other.
 //!   Measured on the default track to 5 kHz (152,358 DOFs, idle 2-core machine, with the
-//!   fused lumped-mass Gram–Schmidt below): one band 93.5 s, 2.7 GB; two bands 74.7 s,
-//!   4.4 GB; M-orthonormality error across the bound 2e-8 (4e-14 in one band).
+//!   fused lumped-mass Gram–Schmidt below): one band 93.5 s, 2.7 GB; two bands 74.7 and
+//!   79.6 s (two runs), 4.4 GB; M-orthonormality error across the bound 2e-8 (4e-14 in one band).
 //! * **Verification.** Every returned pair gets its true relative residual
 //!   `‖Kφ − λMφ‖₂ / (‖Kφ‖₂ + max(|λ|, λ_floor)‖Mφ‖₂)` with `λ_floor = (2π·1 Hz)²` (the floor
 //!   avoids 0/0 for rigid-body modes, but for them this measure is dominated by the round-off
