@@ -153,6 +153,9 @@ impl Ctx<'_> {
             // ‖projected part‖²_M per column over the round, and in its last pass.
             let mut removed = vec![0.0f64; b];
             let mut removed_last = vec![0.0f64; b];
+            // The locked vectors are eigenvectors: Op keeps a block M-orthogonal to them up to
+            // round-off, so one projection per block suffices (again after a random
+            // replacement, which is not orthogonal to them).
             if let Some(d) = self.m_diag {
                 // Diagonal M: coefficients Vᵀ(d∘z) from V itself; the first pass's update
                 // and the second pass's coefficients in one sweep over V (three reads of V
@@ -191,31 +194,29 @@ impl Ctx<'_> {
                 } else {
                     removed_last.fill(0.0);
                 }
-            }
-            for pass in 0..if self.m_diag.is_some() { 0 } else { 2 } {
-                passes += 1;
-                removed_last.fill(0.0);
-                // The locked vectors are eigenvectors: Op keeps a block M-orthogonal to them
-                // up to round-off, so one projection per block suffices (again after a random
-                // replacement, which is not orthogonal to them).
-                if locked.ncols() > 0 && ((rounds == 1 && pass == 0) || replaced_last) {
-                    let cl = tall_t_mul(m_locked, z.as_ref(), par);
-                    tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
-                    add_squared_col_norms(cl.as_ref(), &mut removed, &mut removed_last);
-                }
-                if j > 0 {
-                    let cv = tall_t_mul(m_basis, z.as_ref(), par);
-                    tall_mul_add(z.as_mut(), basis, cv.as_ref(), -1.0, par);
-                    add_squared_col_norms(cv.as_ref(), &mut removed, &mut removed_last);
-                    // c += cv · r_acc
-                    matmul(
-                        c.as_mut(),
-                        Accum::Add,
-                        cv.as_ref(),
-                        r_acc.as_ref(),
-                        1.0,
-                        Par::Seq,
-                    );
+            } else {
+                for pass in 0..2 {
+                    passes += 1;
+                    removed_last.fill(0.0);
+                    if locked.ncols() > 0 && ((rounds == 1 && pass == 0) || replaced_last) {
+                        let cl = tall_t_mul(m_locked, z.as_ref(), par);
+                        tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
+                        add_squared_col_norms(cl.as_ref(), &mut removed, &mut removed_last);
+                    }
+                    if j > 0 {
+                        let cv = tall_t_mul(m_basis, z.as_ref(), par);
+                        tall_mul_add(z.as_mut(), basis, cv.as_ref(), -1.0, par);
+                        add_squared_col_norms(cv.as_ref(), &mut removed, &mut removed_last);
+                        // c += cv · r_acc
+                        matmul(
+                            c.as_mut(),
+                            Accum::Add,
+                            cv.as_ref(),
+                            r_acc.as_ref(),
+                            1.0,
+                            Par::Seq,
+                        );
+                    }
                 }
             }
             replaced_last = false;
@@ -677,7 +678,20 @@ pub fn solve(
     }
     let sys = &sys;
     let band_par = if bands > 1 { Par::Seq } else { par };
-    let run = |i: usize, (first, from_zero, top): (ShiftFactor, bool, (f64, usize))| {
+    // Every band writes its modes into its own columns of one n × total matrix (no copies).
+    let mut phi = Mat::<f64>::zeros(n, total);
+    let mut views: Vec<MatMut<'_, f64>> = Vec::with_capacity(bands);
+    let mut rest = phi.as_mut();
+    for (first, _, top) in &jobs {
+        let (head, tail) = rest.split_at_col_mut(top.1 - first.negative_count);
+        views.push(head);
+        rest = tail;
+    }
+    let run = |i: usize,
+               ((first, from_zero, top), view): (
+        (ShiftFactor, bool, (f64, usize)),
+        MatMut<'_, f64>,
+    )| {
         let mut ctx = Ctx {
             k,
             m,
@@ -688,39 +702,30 @@ pub fn solve(
             // Band 0 keeps the seed of the single-band solver (reproducible results).
             rng: Rng((opts.seed ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)) | 1),
         };
-        run_band(&mut ctx, first, from_zero, top, lam_max, opts, progress)
-            .map(|out| (out, ctx.timing))
+        run_band(
+            &mut ctx, view, first, from_zero, top, lam_max, opts, progress,
+        )
+        .map(|out| (out, ctx.timing))
     };
     let outs: Vec<Result<(BandOut, EigenTiming), EigenError>> = if bands > 1 && opts.parallel {
         use rayon::prelude::*;
         jobs.into_par_iter()
+            .zip(views)
             .enumerate()
             .map(|(i, job)| run(i, job))
             .collect()
     } else {
         jobs.into_iter()
+            .zip(views)
             .enumerate()
             .map(|(i, job)| run(i, job))
             .collect()
     };
     let mut lambdas: Vec<f64> = Vec::with_capacity(total);
     let mut slices: Vec<SliceReport> = Vec::new();
-    let mut phi = if bands == 1 {
-        Mat::<f64>::zeros(0, 0)
-    } else {
-        Mat::<f64>::zeros(n, total)
-    };
     for out in outs {
         let (band, t) = out?;
         timing.absorb(&t);
-        if bands == 1 {
-            phi = band.phi;
-        } else {
-            let c0 = lambdas.len();
-            phi.as_mut()
-                .subcols_mut(c0, band.lambdas.len())
-                .copy_from(band.phi.as_ref());
-        }
         lambdas.extend_from_slice(&band.lambdas);
         slices.extend(band.slices);
     }
@@ -856,24 +861,25 @@ pub fn solve(
     })
 }
 
-/// Eigenpairs of one band `[lower bound of first, top)`, found slice by slice.
+/// What one band `[lower bound of first, top)` found besides its eigenvectors (written into
+/// the band's columns of the solution).
 struct BandOut {
-    /// Eigenvalues (rad²/s²) in the order of `phi`'s columns.
+    /// Eigenvalues (rad²/s²) in the order of the band's columns.
     lambdas: Vec<f64>,
-    /// Eigenvectors, n × (Sturm count of the band).
-    phi: Mat<f64>,
     /// The band's slices, ascending.
     slices: Vec<SliceReport>,
 }
 
 /// Spectrum slicing over one band: from the factorisation `first` at the band's lower bound
 /// (`from_zero`: the negative rigid-body shift σ₀ of a band that starts at 0 Hz, with the
-/// grounded-structure probe; otherwise a bound λ_lo > 0, below which the first Lanczos shift
-/// sits, see [`solve`]) up to `top = (shift, Sturm count)`. `lam_max` (rad²/s²) scales the
-/// small moves of a shift that hits a zero pivot.
+/// grounded-structure probe; otherwise a bound λ_lo > 0, where the band starts with a
+/// two-sided slice) up to `top = (shift, Sturm count)`. The eigenvectors go into `phi`
+/// (n × the band's Sturm count) in the order of the returned eigenvalues. `lam_max`
+/// (rad²/s²) scales the small moves of a shift that hits a zero pivot.
 #[allow(clippy::too_many_arguments)]
 fn run_band(
     ctx: &mut Ctx<'_>,
+    mut phi: MatMut<'_, f64>,
     first: ShiftFactor,
     from_zero: bool,
     top: (f64, usize),
@@ -886,7 +892,7 @@ fn run_band(
     let nu0 = first.negative_count;
     let total = nu_max.saturating_sub(nu0);
     let mut reported = 0usize;
-    let mut phi = Mat::<f64>::zeros(n, total);
+    debug_assert_eq!((phi.nrows(), phi.ncols()), (n, total));
     let mut lambdas: Vec<f64> = Vec::with_capacity(total);
     let mut slices: Vec<SliceReport> = Vec::new();
     let mut cur = first;
@@ -1166,11 +1172,7 @@ fn run_band(
             None => break,
         }
     }
-    Ok(BandOut {
-        lambdas,
-        phi,
-        slices,
-    })
+    Ok(BandOut { lambdas, slices })
 }
 
 /// Band bounds for `bands` concurrent bands between the factorisations `first` (lower bound)

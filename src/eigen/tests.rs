@@ -597,6 +597,26 @@ fn assert_slices_tile(sol: &EigenSolution) {
     }
 }
 
+/// Solves with `o` (its `concurrent_bands` set), checks residuals, orthonormality,
+/// slice tiling, the band count and the eigenvalues against `exact` (closed form or dense
+/// solver) to 1e-8 relative.
+fn solve_in_bands(k: &Sp, m: &Sp, o: &EigenOptions, exact: &[f64], label: &str) -> EigenSolution {
+    let sol = solve(k.as_ref(), m.as_ref(), o, None).unwrap();
+    assert_quality(&sol);
+    assert_slices_tile(&sol);
+    let worst = check_against_dense(&sol, exact, o.f_min_hz, o.f_max_hz);
+    eprintln!(
+        "{label}, {} bands: {} modes in {} slices, worst rel err {worst:e}, M-orth {:.1e}",
+        sol.timing.bands,
+        sol.frequencies_hz.len(),
+        sol.slices.len(),
+        sol.m_orthonormality_error
+    );
+    assert_eq!(Some(sol.timing.bands), o.concurrent_bands);
+    assert!(worst < 1e-8, "worst relative eigenvalue error {worst:e}");
+    sol
+}
+
 /// Concurrent bands: the same eigenvalues as the dense solver (1e-8), the exact count, a
 /// full M-orthonormality check across the band bounds (the model is small enough for the
 /// full ΦᵀMΦ), with rigid-body modes in the lowest band (free lattice), with `f_min > 0`
@@ -613,19 +633,7 @@ fn concurrent_bands_match_dense_solver_with_exact_counts() {
         o.modes_per_slice = 40;
         o.concurrent_bands = Some(bands);
         o.parallel = parallel;
-        let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
-        assert_quality(&sol);
-        assert_slices_tile(&sol);
-        let worst = check_against_dense(&sol, &dense, 0.0, f_max);
-        eprintln!(
-            "free lattice, {} bands: {} modes in {} slices, worst rel err {worst:e}, M-orth {:.1e}",
-            sol.timing.bands,
-            sol.frequencies_hz.len(),
-            sol.slices.len(),
-            sol.m_orthonormality_error
-        );
-        assert_eq!(sol.timing.bands, bands);
-        assert!(worst < 1e-8, "worst relative eigenvalue error {worst:e}");
+        let sol = solve_in_bands(&k, &m, &o, &dense, "free lattice");
         assert!(sol.frequencies_hz[2] < 1e-3 && sol.frequencies_hz[3] > 1.0);
     }
     let (k, m) = lattice3d(5, 5, 5, 2e6, 11);
@@ -637,18 +645,8 @@ fn concurrent_bands_match_dense_solver_with_exact_counts() {
     o.block_size = 8;
     o.modes_per_slice = 60;
     o.concurrent_bands = Some(2);
-    let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
-    assert_quality(&sol);
-    assert_slices_tile(&sol);
-    let worst = check_against_dense(&sol, &dense, f_min, f_max);
-    eprintln!(
-        "grounded lattice, 2 bands from f_min: {} modes, {} slices, worst rel err {worst:e}",
-        sol.frequencies_hz.len(),
-        sol.slices.len()
-    );
-    assert_eq!(sol.timing.bands, 2);
+    let sol = solve_in_bands(&k, &m, &o, &dense, "grounded lattice from f_min");
     assert_eq!(sol.frequencies_hz.len(), 261);
-    assert!(worst < 1e-8);
 }
 
 /// Concurrent bands on a spectrum full of exactly coincident pairs (square lattice, closed
@@ -666,18 +664,7 @@ fn concurrent_bands_keep_double_eigenvalues_at_their_bounds() {
         o.block_size = 4;
         o.modes_per_slice = 30;
         o.concurrent_bands = Some(bands);
-        let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
-        assert_quality(&sol);
-        assert_slices_tile(&sol);
-        let worst = check_against_dense(&sol, &exact, 0.0, f_max);
-        eprintln!(
-            "square lattice, {} bands: {} modes, {} slices, worst rel err {worst:e}",
-            sol.timing.bands,
-            sol.frequencies_hz.len(),
-            sol.slices.len()
-        );
-        assert_eq!(sol.timing.bands, bands);
+        let sol = solve_in_bands(&k, &m, &o, &exact, "square lattice");
         assert_eq!(sol.sturm_count, idx + 1);
-        assert!(worst < 1e-8);
     }
 }
