@@ -260,5 +260,18 @@ fn main() -> anyhow::Result<()> {
         .map(|f| format!("{f:.1}"))
         .collect();
     println!("lowest frequencies (Hz): {}", shown.join(", "));
+    // Bit-level digest of the eigenvalues and mode shapes (FNV-1a): equal digests on two
+    // runs mean bit-identical results (the solve must not depend on thread timing).
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: f64| {
+        for byte in x.to_bits().to_le_bytes() {
+            h = (h ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    sol.eigenvalues_rad2_s2.iter().for_each(|&l| eat(l));
+    for c in 0..sol.modes.ncols() {
+        sol.modes.col(c).iter().step_by(97).for_each(|&x| eat(x));
+    }
+    println!("digest {h:016x} (eigenvalues and every 97th entry of every mode, bitwise)");
     Ok(())
 }

@@ -182,12 +182,6 @@ impl ShiftedSystem {
             })
     }
 
-    /// Sets the parallelism of the numeric factorisations and the solves (the column groups
-    /// of [`Self::solve_in_place`] follow it).
-    pub fn set_par(&mut self, par: Par) {
-        self.par = par;
-    }
-
     /// Dimension n.
     pub fn n(&self) -> usize {
         self.n
@@ -198,8 +192,15 @@ impl ShiftedSystem {
         self.symbolic.len_val()
     }
 
-    /// Numeric LDLᵀ of `K − σM` (σ in rad²/s²). Returns `None` on a zero pivot.
+    /// Numeric LDLᵀ of `K − σM` (σ in rad²/s²) with the parallelism given at construction.
+    /// Returns `None` on a zero pivot.
     pub fn factorize(&self, shift: f64) -> Result<Option<ShiftFactor>, EigenError> {
+        self.factorize_with(shift, self.par)
+    }
+
+    /// [`Self::factorize`] with the parallelism `par` (e.g. `Par::Seq` while other
+    /// factorisations or solves run on the other threads).
+    pub fn factorize_with(&self, shift: f64, par: Par) -> Result<Option<ShiftFactor>, EigenError> {
         let mut a_val = vec![0.0f64; self.row_idx.len()];
         for &(p, q) in &self.k_map {
             a_val[q] += self.k_val[p];
@@ -218,7 +219,7 @@ impl ShiftedSystem {
         let mut values = vec![0.0f64; self.symbolic.len_val()];
         let req = self
             .symbolic
-            .factorize_numeric_ldlt_scratch::<f64>(self.par, Spec::default());
+            .factorize_numeric_ldlt_scratch::<f64>(par, Spec::default());
         let mut mem = MemBuffer::try_new(req).map_err(|_| EigenError::Factorization {
             shift_rad2_s2: shift,
             reason: "out of memory for the LDLᵀ workspace".into(),
@@ -228,7 +229,7 @@ impl ShiftedSystem {
             a,
             Side::Lower,
             LdltRegularization::default(),
-            self.par,
+            par,
             MemStack::new(&mut mem),
             Spec::default(),
         );
@@ -288,9 +289,10 @@ impl ShiftedSystem {
         (neg, min_abs, max_abs)
     }
 
-    /// Workspace for solving with up to `ncols` right-hand sides.
+    /// Workspace for solving with up to `ncols` right-hand sides, with the parallelism given
+    /// at construction or any less parallel one.
     pub fn solve_buffer(&self, ncols: usize) -> SolveWorkspace {
-        let groups = self.column_groups(ncols);
+        let groups = column_groups(ncols, self.par);
         let width = ncols.div_ceil(groups.max(1)).max(1);
         SolveWorkspace {
             ncols,
@@ -299,26 +301,15 @@ impl ShiftedSystem {
                     MemBuffer::new(
                         self.symbolic
                             .solve_in_place_scratch::<f64>(width, Par::Seq)
-                            .or(self.symbolic.solve_in_place_scratch::<f64>(ncols, self.par)),
+                            .or(self.symbolic.solve_in_place_scratch::<f64>(ncols, self.par))
+                            .or(self.symbolic.solve_in_place_scratch::<f64>(ncols, Par::Seq)),
                     )
                 })
                 .collect(),
         }
     }
 
-    /// Number of column groups solved concurrently: one per thread of `par`, at most one per
-    /// column. faer's supernodal triangular solves parallelise inside the dense supernode
-    /// blocks only, which a block of 8 right-hand sides does not fill; independent column
-    /// groups, each solved sequentially, keep every core busy (measured on the default
-    /// track: see the module doc).
-    fn column_groups(&self, ncols: usize) -> usize {
-        match self.par {
-            Par::Seq => 1,
-            Par::Rayon(t) => t.get().min(ncols).max(1),
-        }
-    }
-
-    /// Overwrites `rhs` with `(K − σM)⁻¹ rhs`.
+    /// Overwrites `rhs` with `(K − σM)⁻¹ rhs`, with the parallelism given at construction.
     ///
     /// With a parallel `par`, the columns are split into one contiguous group per thread and
     /// the groups are solved concurrently (each sequentially, with its own workspace).
@@ -328,13 +319,14 @@ impl ShiftedSystem {
         mut rhs: MatMut<'_, f64>,
         ws: &mut SolveWorkspace,
     ) {
+        let par = self.par;
         if rhs.ncols() > ws.ncols {
             *ws = self.solve_buffer(rhs.ncols());
         }
         let l = LdltRef::new(&self.symbolic, &f.values);
-        let groups = self.column_groups(rhs.ncols()).min(ws.bufs.len());
+        let groups = column_groups(rhs.ncols(), par).min(ws.bufs.len());
         if groups <= 1 {
-            l.solve_in_place_with_conj(Conj::No, rhs, self.par, MemStack::new(&mut ws.bufs[0]));
+            l.solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut ws.bufs[0]));
             return;
         }
         let width = rhs.ncols().div_ceil(groups);
@@ -353,6 +345,36 @@ impl ShiftedSystem {
             .for_each(|(part, buf)| {
                 l.solve_in_place_with_conj(Conj::No, part, Par::Seq, MemStack::new(buf));
             });
+    }
+
+    /// [`Self::solve_in_place`] as one column group whatever `par` (at most the parallelism
+    /// given at construction): faer's supernodal solve then parallelises inside the supernodes
+    /// only and gives bitwise the same result for every `par`, which the column groups do not
+    /// (a solver switching its parallelism with the load stays reproducible).
+    pub fn solve_in_place_one_group(
+        &self,
+        f: &ShiftFactor,
+        rhs: MatMut<'_, f64>,
+        ws: &mut SolveWorkspace,
+        par: Par,
+    ) {
+        if rhs.ncols() > ws.ncols {
+            *ws = self.solve_buffer(rhs.ncols());
+        }
+        let l = LdltRef::new(&self.symbolic, &f.values);
+        l.solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut ws.bufs[0]));
+    }
+}
+
+/// Number of column groups solved concurrently: one per thread of `par`, at most one per
+/// column. faer's supernodal triangular solves parallelise inside the dense supernode blocks
+/// only, which a block of 8 right-hand sides does not fill; independent column groups, each
+/// solved sequentially, keep every core busy (measured on the default track: see the module
+/// doc).
+fn column_groups(ncols: usize, par: Par) -> usize {
+    match par {
+        Par::Seq => 1,
+        Par::Rayon(t) => t.get().min(ncols).max(1),
     }
 }
 

@@ -31,24 +31,34 @@
 //!   default track's 5 kHz run from 85 to 75–80 s and its peak memory by 1.1 GB — then a
 //!   symmetric (Löwdin) orthonormalisation of the block with one sparse product `M z`, which
 //!   is carried into `M V`; another round when a column still shrank by half in the second
-//!   pass or the block's Gram matrix is ill-conditioned).
+//!   pass or the block's Gram matrix is ill-conditioned). For a lumped M the second pass's
+//!   update is skipped when its coefficients, which the fused sweep yields anyway, are below
+//!   1e-12 of the column (on the default track they always are: below 1e-13).
 //!   The Rayleigh quotient `H = Vᵀ M Op V` is formed column block by column block; thick
 //!   restart keeps the best Ritz vectors (and converged ones at the far negative end of θ).
 //!   All modes found in earlier slices are deflated (the new basis is kept M-orthogonal to
-//!   them; being eigenvectors of `Op`, they need one projection per block, not one per pass),
-//!   and so are the converged pairs that the previous slice found above its upper boundary
+//!   them; being eigenvectors of `Op`, they need one projection per block, not one per pass,
+//!   made after the first basis pass so that the round-off of the large unreduced block does
+//!   not stay in the small result), and so are the converged pairs that the previous slice found above its upper boundary
 //!   (they are carried into this slice instead of being found again).
 //!   Every accepted Ritz vector gets one free inverse-iteration step `x' = x + Q(Es)/θ`, which
 //!   removes the amplification of the Lanczos residual by `K − σM` in the true residual.
+//!   Convergence is checked when the subspace is full and, from half of it on, every 4
+//!   blocks, so a slice stops as soon as its wanted pairs have converged instead of
+//!   finishing the cycle (default track to 5 kHz: 2480 → 2224 solved vectors).
 //! * **Adaptive boundaries.** A slice is not cut in advance: Lanczos runs at the lower shift
-//!   until `modes_per_slice` Ritz values nearest above it have converged, the next boundary τ
+//!   until 1.25 × `modes_per_slice` Ritz values nearest above it have converged (the
+//!   boundary then keeps about `modes_per_slice` of them), the next boundary τ
 //!   is put in the widest relative gap of the last third of them, and the Sturm count at τ
 //!   must equal the number found below τ (otherwise the slice is iterated again with the
 //!   count known, and [`EigenError::MissedModes`] names the interval if that fails). The last
-//!   slice ends at `λ_max` with its count known. For a grounded structure (no eigenvalue
+//!   slice (once at most 1.5 × `modes_per_slice` modes remain) ends at `λ_max` with its count
+//!   known and is two-sided (shift at its midpoint, see below) with everything below it
+//!   deflated, so that its top modes are no farther from the shift than its bottom ones.
+//!   For a grounded structure (no eigenvalue
 //!   near 0) a short probe finds λ₁ and the first slice starts at 0.9 λ₁ (Sturm count 0
-//!   there is verified). For `f_min > 0` the first Lanczos shift sits 10 % of the slice width
-//!   below λ_min so that an eigenvalue just below λ_min cannot swamp the iteration.
+//!   there is verified). For `f_min > 0` the first slice is two-sided (see below), so that
+//!   the eigenvalues just below λ_min, which are not deflated, cannot swamp the iteration.
 //! * **Concurrent bands** ([`EigenOptions::concurrent_bands`]). With several threads and a
 //!   model of at least 20,000 DOFs the band is cut into one sub-band per thread, each sliced
 //!   as above on one thread. The sub-band bounds are factorisations shared by the two
@@ -57,16 +67,22 @@
 //!   memory-bound; a parallel column-group solve reads the whole factor once per group, a
 //!   band on its own thread once per block, and each band deflates only its own modes.
 //!   The bounds follow a work model (count law `ν ∝ x^α` fitted to one probe factorisation,
-//!   cost per mode `1 + 2x²`, see `choose_splits`). A band above 0 Hz cannot deflate the
+//!   cost per mode `1 + 2x²`, see `choose_splits`); the probe sits where the bound of the
+//!   prior α = 1 would be, is factorised alongside the band's end factorisations and, if the
+//!   fit confirms it, is the bound. While several bands run, each is sequential; the last
+//!   one running switches to all threads (`Ctx::par`), so the threads whose bands are done
+//!   help it finish. Its results do not depend on when that happens: the row ranges of the
+//!   dense products are fixed, the factorisations and the one-group solves give bitwise the
+//!   same numbers for every parallelism (tested). A band above 0 Hz cannot deflate the
 //!   modes below its bound lo, so its first slice is *two-sided*: the Lanczos shift sits at
 //!   the midpoint of `[lo, hi)`, the wanted pairs are all eigenvalues in `[lo, hi)` (Sturm
 //!   count known) ordered by |θ|, and the undeflated ones below lo are farther from the
 //!   shift than every wanted one. Its later slices are capped at 0.7 times their distance
-//!   from lo. The modes within 5 % in λ of a bound (at most 48 on each side) get one joint
+//!   from lo. The modes within 20 % in λ of a bound (at most 96 on each side) get one joint
 //!   Rayleigh–Ritz step, since across a bound they were not deflated against each other.
-//!   Measured on the default track to 5 kHz (152,358 DOFs, idle 2-core machine, with the
-//!   fused lumped-mass Gram–Schmidt below): one band 93.5 s, 2.7 GB; two bands 74.7 and
-//!   79.6 s (two runs), 4.4 GB; M-orthonormality error across the bound 2e-8 (4e-14 in one band).
+//!   Measured on the default track to 5 kHz (152,358 DOFs, idle 2-core machine): two bands
+//!   59.8–61 s, 4.5 GB; M-orthonormality error across the bound 8e-8 (residual / gap of
+//!   modes accepted at the tolerance; within a band ≈ 1e-13).
 //! * **Verification.** Every returned pair gets its true relative residual
 //!   `‖Kφ − λMφ‖₂ / (‖Kφ‖₂ + max(|λ|, λ_floor)‖Mφ‖₂)` with `λ_floor = (2π·1 Hz)²` (the floor
 //!   avoids 0/0 for rigid-body modes, but for them this measure is dominated by the round-off
@@ -264,13 +280,16 @@ pub struct EigenTiming {
     pub restart_s: f64,
     /// Blocks M-orthonormalised (one per block solve, plus start blocks).
     pub orthogonalized_blocks: usize,
-    /// Classical Gram–Schmidt passes over all those blocks (≥ 2 per block).
+    /// Classical Gram–Schmidt passes applied over all those blocks: 2 per block for a
+    /// consistent M; for a lumped M the second pass's update is skipped when it is
+    /// negligible (its coefficients below 1e-12 of the column, measured in the first pass's
+    /// sweep), so 1 per block is then possible.
     pub orthogonalization_passes: usize,
     /// Stored entries of the LDLᵀ factor.
     pub factor_entries: usize,
     /// Bands solved concurrently (see [`EigenOptions::concurrent_bands`]); with more than
-    /// one, the per-phase times above are summed over the bands (thread-seconds) and only
-    /// `total_s` is wall-clock time.
+    /// one, the per-phase times above are summed over the bands (thread-seconds while several
+    /// run; the last band running uses all threads) and only `total_s` is wall-clock time.
     #[serde(default)]
     pub bands: usize,
 }

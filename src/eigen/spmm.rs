@@ -3,9 +3,9 @@
 //!
 //! Because the matrix is stored with both triangles, column i of the CSC arrays is also row i,
 //! so `y[i, c] = Σ_k a_k x[row_k, c]` over column i is a gather dot product that needs no
-//! atomics and parallelises over i. Up to [`COLS`] (8, one Lanczos block) columns of `x` are handled in one sweep
-//! over the matrix, so the (memory-bound) matrix is read once per group instead of once per
-//! column.
+//! atomics and parallelises over i. Up to [`COLS`] (8, one Lanczos block) columns of `x`,
+//! packed row-major, are handled in one sweep over the matrix, so the (memory-bound) matrix
+//! is read once per group instead of once per column.
 //!
 //! The dense products `Vᵀ Z` (j × b, a reduction over the n rows) and `Z −= V C` with a tall
 //! `V` (n × j) and a thin `Z` (n × b) are split into one contiguous row range per thread, each
@@ -28,6 +28,10 @@ const ROW_CHUNK: usize = 2048;
 const MIN_ROWS_PER_THREAD: usize = 8192;
 
 /// `y = A x` for symmetric `A` stored in full (both triangles).
+///
+/// The columns of `x` are taken [`COLS`] at a time and packed row-major (`COLS` values of
+/// one row side by side, zero-padded), so every stored entry of `A` meets one contiguous
+/// run of `x` (one cache line) and the inner product vectorises across the columns.
 pub fn sym_spmm(a: SparseColMatRef<'_, usize, f64>, x: MatRef<'_, f64>, mut y: MatMut<'_, f64>) {
     let cp = a.symbolic().col_ptr();
     let ri = a.symbolic().row_idx();
@@ -35,29 +39,22 @@ pub fn sym_spmm(a: SparseColMatRef<'_, usize, f64>, x: MatRef<'_, f64>, mut y: M
     let v = a.val();
     let n = a.nrows();
     debug_assert_eq!(y.nrows(), n);
+    let mut packed = vec![0.0f64; n * COLS];
     let mut c0 = 0;
     while c0 < x.ncols() {
         let w = COLS.min(x.ncols() - c0);
-        // Contiguous copies of the input columns only if x is not column-major contiguous.
-        let owned: Vec<Vec<f64>>;
-        let mut xs: [&[f64]; COLS] = [&[]; COLS];
-        let all_contiguous = (0..w).all(|c| x.col(c0 + c).try_as_col_major().is_some());
-        if all_contiguous {
-            for (c, slot) in xs.iter_mut().enumerate().take(w) {
-                *slot = x
-                    .col(c0 + c)
-                    .try_as_col_major()
-                    .expect("checked")
-                    .as_slice();
-            }
-        } else {
-            owned = (0..w)
-                .map(|c| x.col(c0 + c).iter().copied().collect())
-                .collect();
-            for (c, slot) in xs.iter_mut().enumerate().take(w) {
-                *slot = &owned[c];
-            }
-        }
+        packed
+            .par_chunks_mut(ROW_CHUNK * COLS)
+            .enumerate()
+            .for_each(|(chunk, rows)| {
+                let i0 = chunk * ROW_CHUNK;
+                for (di, row) in rows.chunks_exact_mut(COLS).enumerate() {
+                    for (c, slot) in row.iter_mut().enumerate() {
+                        *slot = if c < w { x[(i0 + di, c0 + c)] } else { 0.0 };
+                    }
+                }
+            });
+        let xs = &packed;
         // Output: w disjoint columns, written chunk-wise in parallel.
         let mut outs: Vec<&mut [f64]> = Vec::with_capacity(w);
         let mut rest = y.as_mut().subcols_mut(c0, w);
@@ -94,8 +91,11 @@ pub fn sym_spmm(a: SparseColMatRef<'_, usize, f64>, x: MatRef<'_, f64>, mut y: M
                     };
                     let mut acc = [0.0f64; COLS];
                     for (&a_ip, &r) in v[start..end].iter().zip(&ri[start..end]) {
-                        for (acc_c, x_c) in acc.iter_mut().zip(&xs).take(w) {
-                            *acc_c += a_ip * x_c[r];
+                        let xr: &[f64; COLS] = xs[r * COLS..(r + 1) * COLS]
+                            .try_into()
+                            .expect("a packed row holds COLS values");
+                        for (acc_c, x_c) in acc.iter_mut().zip(xr) {
+                            *acc_c += a_ip * x_c;
                         }
                     }
                     for (piece, a) in pieces.iter_mut().zip(acc) {
@@ -107,12 +107,19 @@ pub fn sym_spmm(a: SparseColMatRef<'_, usize, f64>, x: MatRef<'_, f64>, mut y: M
     }
 }
 
-/// Threads for the row-split dense products of an n-row block (1 = sequential).
-fn row_threads(n: usize, par: Par) -> usize {
-    match par {
-        Par::Seq => 1,
-        Par::Rayon(t) => t.get().min(n / MIN_ROWS_PER_THREAD).max(1),
-    }
+/// Row ranges of the row-split dense products of an n-row block: one per rayon thread (at
+/// least [`MIN_ROWS_PER_THREAD`] rows each) whatever `par`, so that the partial sums of the
+/// reductions, and with them the results, are bitwise the same for every `par`; `par` only
+/// decides whether the ranges run concurrently ([`run_concurrently`]).
+fn row_threads(n: usize) -> usize {
+    rayon::current_num_threads()
+        .min(n / MIN_ROWS_PER_THREAD)
+        .max(1)
+}
+
+/// Whether the row ranges of a product run concurrently.
+fn run_concurrently(par: Par) -> bool {
+    matches!(par, Par::Rayon(t) if t.get() > 1)
 }
 
 /// Row ranges `(start, len)` of `threads` nearly equal parts of `0..n`.
@@ -133,26 +140,28 @@ pub fn tall_t_mul(v: MatRef<'_, f64>, z: MatRef<'_, f64>, par: Par) -> Mat<f64> 
     if j == 0 || b == 0 {
         return c;
     }
-    let t = row_threads(n, par);
+    let t = row_threads(n);
     if t == 1 {
         matmul(c.as_mut(), Accum::Replace, v.transpose(), z, 1.0, Par::Seq);
         return c;
     }
-    let parts: Vec<Mat<f64>> = row_ranges(n, t)
-        .into_par_iter()
-        .map(|(r0, len)| {
-            let mut p = Mat::<f64>::zeros(j, b);
-            matmul(
-                p.as_mut(),
-                Accum::Replace,
-                v.subrows(r0, len).transpose(),
-                z.subrows(r0, len),
-                1.0,
-                Par::Seq,
-            );
-            p
-        })
-        .collect();
+    let part = |(r0, len): (usize, usize)| {
+        let mut p = Mat::<f64>::zeros(j, b);
+        matmul(
+            p.as_mut(),
+            Accum::Replace,
+            v.subrows(r0, len).transpose(),
+            z.subrows(r0, len),
+            1.0,
+            Par::Seq,
+        );
+        p
+    };
+    let parts: Vec<Mat<f64>> = if run_concurrently(par) {
+        row_ranges(n, t).into_par_iter().map(part).collect()
+    } else {
+        row_ranges(n, t).into_iter().map(part).collect()
+    };
     for p in &parts {
         c += p;
     }
@@ -171,8 +180,9 @@ pub fn tall_mul_add(
     if v.ncols() == 0 || c.ncols() == 0 {
         return;
     }
-    let t = row_threads(n, par);
-    if t == 1 {
+    let t = row_threads(n);
+    if t == 1 || !run_concurrently(par) {
+        // No reduction over rows: the row split does not change the result.
         matmul(z, Accum::Add, v, c, alpha, Par::Seq);
         return;
     }
@@ -214,7 +224,7 @@ pub fn tall_right_mul_in_place(mut v: MatMut<'_, f64>, s: MatRef<'_, f64>, par: 
         matmul(tmp.as_mut(), Accum::Replace, blk.as_ref(), s, 1.0, Par::Seq);
         blk.subcols_mut(0, k).copy_from(&tmp);
     };
-    if row_threads(n, par) == 1 {
+    if row_threads(n) == 1 || !run_concurrently(par) {
         blocks.into_iter().for_each(work);
     } else {
         blocks.into_par_iter().for_each(work);
@@ -241,7 +251,7 @@ pub fn tall_update_then_t_mul(
     if j == 0 || b == 0 {
         return Mat::<f64>::zeros(j, b);
     }
-    let ranges = row_ranges(n, row_threads(n, par));
+    let ranges = row_ranges(n, row_threads(n));
     let mut views: Vec<(MatMut<'_, f64>, usize)> = Vec::with_capacity(ranges.len());
     let mut rest = z.as_mut();
     for &(r0, len) in &ranges {
@@ -275,7 +285,7 @@ pub fn tall_update_then_t_mul(
         }
         acc
     };
-    let parts: Vec<Mat<f64>> = if views.len() == 1 {
+    let parts: Vec<Mat<f64>> = if views.len() == 1 || !run_concurrently(par) {
         views.into_iter().map(work).collect()
     } else {
         views.into_par_iter().map(work).collect()
