@@ -142,7 +142,7 @@ impl Ctx<'_> {
     /// Parallelism of the next operation: `Par::Seq` while other concurrent bands run (one
     /// thread per band), `par` once this band is the last one running, so that the threads
     /// whose bands are done help it finish (rayon's work stealing picks up its row-split
-    /// products and column-group solves).
+    /// products, factorisations and the supernode-parallel parts of its one-group solves).
     fn par(&self) -> Par {
         match self.running {
             Some(r) if r.load(AtomicOrdering::Relaxed) > 1 => Par::Seq,
@@ -712,11 +712,11 @@ pub fn solve(
         None => 1,
     };
     let probe_x = (likely_bands >= 2).then(|| split_probe_x(likely_bands));
-    let probe_at = |x: f64| {
-        let (a, b) = (s_first.max(0.0).sqrt(), lam_max.sqrt());
-        (a + x * (b - a)).powi(2)
+    let probe_factor = || {
+        probe_x
+            .map(|x| end_factor(lambda_at(s_first, lam_max, x), 1.0))
+            .transpose()
     };
-    let probe_factor = || probe_x.map(|x| end_factor(probe_at(x), 1.0)).transpose();
     let (top, (first, probe)) = if opts.parallel {
         rayon::join(
             || end_factor(lam_max, 1.0),
@@ -1305,6 +1305,13 @@ fn run_band(
     Ok(BandOut { lambdas, slices })
 }
 
+/// λ (rad²/s²) at the fraction `x` of the way from `lo` to `hi` in √λ (i.e. in frequency),
+/// `x = (√λ − √λ_lo)/(√λ_hi − √λ_lo)` with a negative `lo` (rigid-body shift) taken as 0.
+fn lambda_at(lo: f64, hi: f64, x: f64) -> f64 {
+    let (a, b) = (lo.max(0.0).sqrt(), hi.max(0.0).sqrt());
+    (a + x * (b - a)).powi(2)
+}
+
 /// Work of the modes up to `x` (see [`choose_splits`]) for the count exponent `alpha`.
 fn band_work(x: f64, alpha: f64) -> f64 {
     x.powf(alpha) + 2.0 * alpha / (alpha + 2.0) * x.powf(alpha + 2.0)
@@ -1356,8 +1363,7 @@ fn choose_splits(
 ) -> Result<Vec<ShiftFactor>, EigenError> {
     let nu0 = first.negative_count;
     let total = top.1.saturating_sub(nu0).max(1) as f64;
-    let (a, b) = (first.shift.max(0.0).sqrt(), top.0.max(0.0).sqrt());
-    let lam_at = |x: f64| (a + x * (b - a)).powi(2);
+    let lam_at = |x: f64| lambda_at(first.shift, top.0, x);
     let (xp, probe) = match probe {
         Some(p) => p,
         None => (0.5, factorize(ctx, lam_at(0.5), 1.0, lam_max)?),

@@ -311,8 +311,9 @@ fn free_3d_lattice_matches_dense_solver() {
     assert!(sol.frequencies_hz[2] < 1e-3 && sol.frequencies_hz[3] > 1.0);
 }
 
-#[test]
-fn grounded_3d_lattice_band_with_f_min_matches_dense_solver() {
+/// Grounded 5 × 5 × 5 lattice, its dense eigenvalues, and options for the band from just
+/// below its 41st eigenvalue to midway between its 301st and 302nd (261 modes).
+fn grounded_lattice_band() -> (Sp, Sp, Vec<f64>, EigenOptions) {
     let (k, m) = lattice3d(5, 5, 5, 2e6, 11);
     let dense = dense_eigenvalues(&k, &m);
     let f_min = lambda_to_hz(dense[40]) * 0.9999 + lambda_to_hz(dense[39]) * 0.0001;
@@ -321,6 +322,13 @@ fn grounded_3d_lattice_band_with_f_min_matches_dense_solver() {
     o.f_min_hz = f_min;
     o.block_size = 8;
     o.modes_per_slice = 60;
+    (k, m, dense, o)
+}
+
+#[test]
+fn grounded_3d_lattice_band_with_f_min_matches_dense_solver() {
+    let (k, m, dense, mut o) = grounded_lattice_band();
+    let (f_min, f_max) = (o.f_min_hz, o.f_max_hz);
     o.ordering = FillOrdering::Identity;
     let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
     assert_quality(&sol);
@@ -677,14 +685,7 @@ fn concurrent_bands_match_dense_solver_with_exact_counts() {
         let sol = solve_in_bands(&k, &m, &o, &dense, "free lattice");
         assert!(sol.frequencies_hz[2] < 1e-3 && sol.frequencies_hz[3] > 1.0);
     }
-    let (k, m) = lattice3d(5, 5, 5, 2e6, 11);
-    let dense = dense_eigenvalues(&k, &m);
-    let f_min = lambda_to_hz(dense[40]) * 0.9999 + lambda_to_hz(dense[39]) * 0.0001;
-    let f_max = lambda_to_hz(dense[300]) * 0.5 + lambda_to_hz(dense[301]) * 0.5;
-    let mut o = EigenOptions::new(f_max);
-    o.f_min_hz = f_min;
-    o.block_size = 8;
-    o.modes_per_slice = 60;
+    let (k, m, dense, mut o) = grounded_lattice_band();
     o.concurrent_bands = Some(2);
     let sol = solve_in_bands(&k, &m, &o, &dense, "grounded lattice from f_min");
     assert_eq!(sol.frequencies_hz.len(), 261);
@@ -705,7 +706,7 @@ fn concurrent_bands_are_bitwise_reproducible() {
             factor::ShiftedSystem::new(k.as_ref(), m.as_ref(), FillOrdering::Auto, faer::Par::Seq)
                 .unwrap();
         let (mut lo, mut hi) = (1.0f64, 1e6f64);
-        for _ in 0..60 {
+        for _ in 0..40 {
             let mid = (lo * hi).sqrt();
             let nu = sys
                 .factorize(hz_to_lambda(mid))
