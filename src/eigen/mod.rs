@@ -55,9 +55,10 @@
 //!   slice (once at most 1.5 × `modes_per_slice` modes remain) ends at `λ_max` with its count
 //!   known and is two-sided (shift at its midpoint, see below) with everything below it
 //!   deflated, so that its top modes are no farther from the shift than its bottom ones.
-//!   For a grounded structure (no eigenvalue
-//!   near 0) a short probe finds λ₁ and the first slice starts at 0.9 λ₁ (Sturm count 0
-//!   there is verified). For `f_min > 0` the first slice is two-sided (see below), so that
+//!   For a grounded structure (no eigenvalue below 4/0.9 · |σ₀|, shown by a Sturm count
+//!   factorised beside the band's ends) a short probe finds λ₁ and the first slice starts at
+//!   0.9 λ₁ (Sturm count 0 there is verified); otherwise the probe could not move the shift
+//!   and is skipped (default track to 5 kHz: 176 solved vectors saved). For `f_min > 0` the first slice is two-sided (see below), so that
 //!   the eigenvalues just below λ_min, which are not deflated, cannot swamp the iteration.
 //! * **Concurrent bands** ([`EigenOptions::concurrent_bands`]). With several threads and a
 //!   model of at least 20,000 DOFs the band is cut into one sub-band per thread, each sliced
@@ -77,12 +78,15 @@
 //!   modes below its bound lo, so its first slice is *two-sided*: the Lanczos shift sits at
 //!   the midpoint of `[lo, hi)`, the wanted pairs are all eigenvalues in `[lo, hi)` (Sturm
 //!   count known) ordered by |θ|, and the undeflated ones below lo are farther from the
-//!   shift than every wanted one. Its later slices are capped at 0.7 times their distance
-//!   from lo. The modes within 20 % in λ of a bound (at most 96 on each side) get one joint
+//!   shift than every wanted one. It holds at most 1.2 × `modes_per_slice` modes: it
+//!   deflates nothing and needs the most solves per mode. The band's later one-sided slices
+//!   are capped at 0.7 times their distance from lo; its two-sided last slice, with the same
+//!   margin from its midpoint shift, may be up to 4.7 times that distance wide. The modes within 20 % in λ of a bound (at most 96 on each side) get one joint
 //!   Rayleigh–Ritz step, since across a bound they were not deflated against each other.
 //!   Measured on the default track to 5 kHz (152,358 DOFs, idle 2-core machine): two bands
-//!   59.8–61 s, 4.5 GB; M-orthonormality error across the bound 8e-8 (residual / gap of
-//!   modes accepted at the tolerance; within a band ≈ 1e-13).
+//!   52.7–54.6 s over four runs, 1968 solved vectors, 4.7 GB; M-orthonormality error across
+//!   the bound 4.5e-8 (residual / gap of modes accepted at the tolerance; within a band
+//!   ≈ 1e-13). To 2 kHz: 25.7 s.
 //! * **Verification.** Every returned pair gets its true relative residual
 //!   `‖Kφ − λMφ‖₂ / (‖Kφ‖₂ + max(|λ|, λ_floor)‖Mφ‖₂)` with `λ_floor = (2π·1 Hz)²` (the floor
 //!   avoids 0/0 for rigid-body modes, but for them this measure is dominated by the round-off
@@ -143,7 +147,12 @@ pub struct EigenOptions {
     /// (measured on the 126,800-DOF track to 2 kHz: 8 needs ~20 % fewer solved vectors than
     /// 16 and less dense work; 32 needs ~40 % more. On the 152,358-DOF default to 5 kHz with
     /// the parallel column-group solves: 4 needs 18 % fewer vectors but each costs 1.7× as
-    /// much; 12 and 16 need 50–140 % more).
+    /// much; 12 and 16 need 50–140 % more). In concurrent bands (one-group solves) a larger
+    /// block pays better, measured 2026-11-25 on the default track to 5 kHz: b = 8 → 1968
+    /// vectors, 52.7–54.6 s; 10 → 2110, 52.9 s; 12 → 2280, 49.5–51.3 s; 14 → 2352, 52.0 s;
+    /// 16 → 2464, 50.5 s (RPM1: 8 → 89.4 s, 12 → 84.4 s). 12 is not the default because on a
+    /// 4-bay track to 1 kHz (one slice) it stopped where one pair of a four-fold cluster at
+    /// 103.7 Hz had a relative residual of 1.25e-4 (8: 2.6e-5 at worst).
     pub block_size: usize,
     /// Maximum thick restarts per slice before giving up. Default 30.
     pub max_restarts: usize,

@@ -309,6 +309,10 @@ fn free_3d_lattice_matches_dense_solver() {
     assert!(worst < 1e-8, "worst relative eigenvalue error {worst:e}");
     // Three rigid translations.
     assert!(sol.frequencies_hz[2] < 1e-3 && sol.frequencies_hz[3] > 1.0);
+    // Eigenvalues below GROUNDED_TEST·|σ₀| (the rigid ones): no grounded-structure probe,
+    // every solved vector belongs to a slice.
+    let in_slices: usize = sol.slices.iter().map(|s| s.solved_vectors).sum();
+    assert_eq!(sol.timing.solved_vectors, in_slices);
 }
 
 /// Grounded 5 × 5 × 5 lattice, its dense eigenvalues, and options for the band from just
@@ -442,6 +446,9 @@ fn grounded_lattice_from_zero_moves_first_shift_up_and_matches_dense() {
     );
     assert_eq!(sol.frequencies_hz.len(), 120);
     assert!(sol.slices[0].shift_lo_rad2_s2 > 0.5 * sol.eigenvalues_rad2_s2[0]);
+    // The probe that found λ₁ ran (its solves belong to no slice).
+    let in_slices: usize = sol.slices.iter().map(|s| s.solved_vectors).sum();
+    assert!(sol.timing.solved_vectors > in_slices);
     assert!(worst < 1e-8);
 }
 
