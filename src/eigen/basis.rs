@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use super::cache::{CacheKey, CacheLookup, CacheMeta, ModalCache};
 use super::classify::{
-    classify_wheel_mode, ClassifyError, TrackClassifier, TrackModeClass, WheelModeClass,
+    classify_wheel_modes, ClassifyError, TrackClassifier, TrackModeClass, WheelModeClass,
 };
 use super::{solve, EigenError, EigenOptions};
 use crate::fe::assembly::FeMatrices;
@@ -183,7 +183,7 @@ fn basis<C: Serialize + DeserializeOwned + Send>(
     // In chunks: one pass over the elements per chunk (element stiffnesses are rebuilt per
     // pass), bounded memory for the expanded mode shapes; chunks in parallel (rayon keeps
     // their order).
-    const CHUNK: usize = 64;
+    const CHUNK: usize = 256;
     let nm = sol.frequencies_hz.len();
     let per_chunk: Vec<Vec<C>> = {
         use rayon::prelude::*;
@@ -263,12 +263,7 @@ pub fn wheel_basis(
         "wheel",
         fmax_hz,
         || Ok(wheel.assemble()?.0),
-        |u, f| {
-            u.iter()
-                .zip(f)
-                .map(|(u, &f)| Ok(classify_wheel_mode(wheel, u, f)?))
-                .collect()
-        },
+        |u, f| Ok(classify_wheel_modes(wheel, u, f)?),
     )
 }
 

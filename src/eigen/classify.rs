@@ -63,7 +63,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::fe::assembly::{spring_energy, strain_energy_per_part, strain_energy_per_part_many};
+use crate::fe::assembly::{spring_energy, strain_energy_per_part_many};
 use crate::fe::hex8;
 use crate::mesh::Part;
 use crate::structure::track::SpringKind;
@@ -742,18 +742,42 @@ pub fn classify_wheel_mode(
     u_free: &[f64],
     f_hz: f64,
 ) -> Result<WheelModeClass, ClassifyError> {
-    if u_free.len() != wheel.dofmap.n_free() {
-        return Err(ClassifyError::Length {
-            expected: wheel.dofmap.n_free(),
-            got: u_free.len(),
-        });
+    Ok(classify_wheel_modes(wheel, &[u_free], &[f_hz])?.remove(0))
+}
+
+/// [`classify_wheel_mode`] of several modes: the element strain energies of all of them in
+/// one pass over the elements (each element stiffness built once).
+pub fn classify_wheel_modes(
+    wheel: &WheelStructure,
+    u_free: &[&[f64]],
+    f_hz: &[f64],
+) -> Result<Vec<WheelModeClass>, ClassifyError> {
+    let mut full = Vec::with_capacity(u_free.len());
+    for u in u_free {
+        if u.len() != wheel.dofmap.n_free() {
+            return Err(ClassifyError::Length {
+                expected: wheel.dofmap.n_free(),
+                got: u.len(),
+            });
+        }
+        if u.iter().any(|v| !v.is_finite()) {
+            return Err(ClassifyError::NonFinite);
+        }
+        full.push(wheel.dofmap.expand(u)?);
     }
-    if u_free.iter().any(|v| !v.is_finite()) {
-        return Err(ClassifyError::NonFinite);
-    }
-    let u = wheel.dofmap.expand(u_free)?;
-    let ew = strain_energy_per_part(&wheel.mesh, &wheel.materials, &u)?.get(Part::Wheel);
-    let es = spring_energy(&wheel.springs, &u);
+    let refs: Vec<&[f64]> = full.iter().map(|u| u.as_slice()).collect();
+    let energies = strain_energy_per_part_many(&wheel.mesh, &wheel.materials, &refs)?;
+    full.iter()
+        .zip(&energies)
+        .zip(f_hz)
+        .map(|((u, e), &f)| Ok(wheel_shape_class(wheel, u, e.get(Part::Wheel), f)))
+        .collect()
+}
+
+/// Family of a wheel mode from its full displacement vector `u`, its element strain energy
+/// `ew` (J) and its frequency `f_hz` (Hz).
+fn wheel_shape_class(wheel: &WheelStructure, u: &[f64], ew: f64, f_hz: f64) -> WheelModeClass {
+    let es = spring_energy(&wheel.springs, u);
     let tot = ew + es;
     let (energy_wheel, energy_suspension) = if tot > 0.0 {
         (ew / tot, es / tot)
@@ -793,13 +817,13 @@ pub fn classify_wheel_mode(
     } else {
         WheelFamily::Other
     };
-    Ok(WheelModeClass {
+    WheelModeClass {
         family,
         energy_wheel,
         energy_suspension,
         rigid,
         rim_shares,
-    })
+    }
 }
 
 #[cfg(test)]
