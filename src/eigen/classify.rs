@@ -103,6 +103,14 @@ pub enum ClassifyError {
         /// given length
         got: usize,
     },
+    /// A different number of frequencies than of mode shapes.
+    #[error("{modes} mode shapes but {frequencies} frequencies: pass one frequency per mode")]
+    Count {
+        /// number of mode shapes
+        modes: usize,
+        /// number of frequencies
+        frequencies: usize,
+    },
     /// The mode shape contains NaN or infinite values.
     #[error("mode shape contains non-finite values")]
     NonFinite,
@@ -745,13 +753,20 @@ pub fn classify_wheel_mode(
     Ok(classify_wheel_modes(wheel, &[u_free], &[f_hz])?.remove(0))
 }
 
-/// [`classify_wheel_mode`] of several modes: the element strain energies of all of them in
-/// one pass over the elements (each element stiffness built once).
+/// [`classify_wheel_mode`] of several modes (`f_hz[i]` is the frequency of `u_free[i]`):
+/// the element strain energies of all of them in one pass over the elements (each element
+/// stiffness built once).
 pub fn classify_wheel_modes(
     wheel: &WheelStructure,
     u_free: &[&[f64]],
     f_hz: &[f64],
 ) -> Result<Vec<WheelModeClass>, ClassifyError> {
+    if f_hz.len() != u_free.len() {
+        return Err(ClassifyError::Count {
+            modes: u_free.len(),
+            frequencies: f_hz.len(),
+        });
+    }
     let mut full = Vec::with_capacity(u_free.len());
     for u in u_free {
         if u.len() != wheel.dofmap.n_free() {

@@ -364,6 +364,21 @@ fn wheel_fields_of_known_shape() {
         classify_wheel_mode(&w, &[1.0], 1.0),
         Err(ClassifyError::Length { .. })
     ));
+    // The batch (one element pass for all modes) gives each mode's own classification.
+    let batch = classify_wheel_modes(&w, &[&um, &ex], &[500.0, 500.0]).unwrap();
+    for (b, one) in batch
+        .iter()
+        .zip([classify_wheel_mode(&w, &um, 500.0).unwrap(), r])
+    {
+        assert_eq!((b.family, b.rigid), (one.family, one.rigid));
+        assert!((b.energy_wheel - one.energy_wheel).abs() < 1e-12);
+        assert!((b.energy_suspension - one.energy_suspension).abs() < 1e-12);
+        assert_eq!(b.rim_shares, one.rim_shares);
+    }
+    assert!(matches!(
+        classify_wheel_modes(&w, &[&um, &ex], &[500.0]),
+        Err(ClassifyError::Count { .. })
+    ));
 }
 
 /// A sleeper-dominated mode (sleepers carry most of the kinetic energy) during which the rail
