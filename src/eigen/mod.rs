@@ -78,8 +78,9 @@
 //!   modes below its bound lo, so its first slice is *two-sided*: the Lanczos shift sits at
 //!   the midpoint of `[lo, hi)`, the wanted pairs are all eigenvalues in `[lo, hi)` (Sturm
 //!   count known) ordered by |θ|, and the undeflated ones below lo are farther from the
-//!   shift than every wanted one. It holds at most 1.2 × `modes_per_slice` modes: it
-//!   deflates nothing and needs the most solves per mode. The band's later one-sided slices
+//!   shift than every wanted one. It is cut for about `modes_per_slice` modes and re-cut
+//!   once if its Sturm count says more than 1.2 times that: it deflates nothing and needs
+//!   the most solves per mode. The band's later one-sided slices
 //!   are capped at 0.7 times their distance from lo; its two-sided last slice, with the same
 //!   margin from its midpoint shift, may be up to 4.7 times that distance wide. The modes within 20 % in λ of a bound (at most 96 on each side) get one joint
 //!   Rayleigh–Ritz step, since across a bound they were not deflated against each other.
