@@ -1043,8 +1043,10 @@ fn run_band(
             lanczos_slice(ctx, &cur, empty, 1, None, None, &popts)?
         };
         let l1 = probe.lambdas.first().copied().unwrap_or(0.0);
-        if 0.9 * l1 > GROUNDED_MOVE * cur.shift.abs() {
-            let f = factorize(ctx, 0.9 * l1, -1.0, lam_max)?;
+        let moved = GROUNDED_SHIFT * l1;
+        // (True whenever the probe returned a value: l1 ≥ λ₁ > GROUNDED_TEST · |σ₀|.)
+        if moved > GROUNDED_MOVE * cur.shift.abs() {
+            let f = factorize(ctx, moved, -1.0, lam_max)?;
             if f.negative_count == 0 {
                 cur = f;
             }
@@ -1336,14 +1338,18 @@ fn run_band(
     Ok(BandOut { lambdas, slices })
 }
 
-/// The grounded-structure probe of `run_band` moves the first shift from σ₀ < 0 up to
-/// 0.9 λ₁ only if 0.9 λ₁ > `GROUNDED_MOVE` · |σ₀|.
+/// Fraction of the probed λ₁ (an upper bound of it) where the grounded-structure probe of
+/// `run_band` puts the first shift (kept only if the Sturm count there is 0).
+const GROUNDED_SHIFT: f64 = 0.9;
+
+/// The probe moves the first shift from σ₀ < 0 up to `GROUNDED_SHIFT` · λ₁ only if that
+/// exceeds `GROUNDED_MOVE` · |σ₀|.
 const GROUNDED_MOVE: f64 = 4.0;
 
 /// Where the caller counts eigenvalues before that probe, as a multiple of |σ₀|: no
-/// eigenvalue below it ⇔ λ₁ > GROUNDED_MOVE / 0.9 · |σ₀|, the condition under which the
-/// probe can move the shift.
-const GROUNDED_TEST: f64 = GROUNDED_MOVE / 0.9;
+/// eigenvalue below it ⇔ λ₁ > GROUNDED_MOVE / GROUNDED_SHIFT · |σ₀|, the condition under
+/// which the probe can move the shift.
+const GROUNDED_TEST: f64 = GROUNDED_MOVE / GROUNDED_SHIFT;
 
 /// λ (rad²/s²) at the fraction `x` of the way from `lo` to `hi` in √λ (i.e. in frequency),
 /// `x = (√λ − √λ_lo)/(√λ_hi − √λ_lo)` with a negative `lo` (rigid-body shift) taken as 0.
