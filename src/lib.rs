@@ -32,6 +32,7 @@
 pub mod contact;
 pub mod dynamics;
 pub mod eigen;
+pub mod explicit;
 pub mod fe;
 pub mod growth;
 pub mod io;

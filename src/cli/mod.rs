@@ -2,6 +2,7 @@
 
 mod contact_cmd;
 pub mod engine;
+mod explicit_cmd;
 mod grow_cmd;
 mod initiation_cmd;
 mod merge_cmd;
@@ -10,6 +11,7 @@ mod model_cmd;
 mod modes_cmd;
 mod passage_cmd;
 mod predict_cmd;
+mod progress;
 mod receptance_cmd;
 mod study_cmd;
 mod sweep_cmd;
@@ -67,6 +69,9 @@ enum Command {
     Modes(modes_cmd::ModesCmd),
     /// One reduced-order wheel passage: contact forces, wear along the rail, PSDs, plots.
     Passage(passage_cmd::PassageCmd),
+    /// One passage of the full explicit FE path (untruncated track and wheel): the files of
+    /// `passage` plus explicit.json.
+    Explicit(explicit_cmd::ExplicitCmd),
     /// Receptances of the rail and the wheel at the contact and the contact force per unit
     /// roughness, with their peaks (which resonances a sweep can lock on).
     Receptance(receptance_cmd::ReceptanceCmd),
@@ -93,6 +98,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Contact(c) => c.run(),
         Command::Modes(c) => c.run(),
         Command::Passage(c) => c.run(),
+        Command::Explicit(c) => c.run(),
         Command::Receptance(c) => c.run(),
         Command::Grow(c) => c.run(),
         Command::Predict(c) => c.run(),

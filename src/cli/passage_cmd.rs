@@ -154,7 +154,7 @@ pub fn write_outputs(
     Ok(())
 }
 
-fn print_summary(
+pub fn print_summary(
     s: &PassageSummary,
     rec: &corrugation::dynamics::passage::PassageRecord,
     out: &Path,

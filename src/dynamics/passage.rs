@@ -288,93 +288,27 @@ impl PassageEngine {
         let rail_line = RailContactLine::new(track, track_modes, &frame, hertz.b_m)?;
         let wheel_contact = WheelContact::new(wheel, wheel_modes, &frame, hertz.b_m)?;
 
-        // Constant wheel loads as full-DOF vectors, projected on the modes.
-        let nw = wheel.dofmap.n_dofs();
+        // Constant wheel loads as free-DOF vectors, projected on the modes.
         let mw = wheel_modes.ncols();
-        let project = |full: &[f64]| -> Vec<f64> {
+        let project = |free: &[f64]| -> Vec<f64> {
             let mut g = vec![0.0; mw];
-            for (d, &f) in full.iter().enumerate() {
+            for (r, &f) in free.iter().enumerate() {
                 if f == 0.0 {
                     continue;
                 }
-                if let Some(r) = wheel.dofmap.free_index(d) {
-                    let row = wheel_modes.row(r);
-                    for i in 0..mw {
-                        g[i] += f * row[i];
-                    }
+                let row = wheel_modes.row(r);
+                for i in 0..mw {
+                    g[i] += f * row[i];
                 }
             }
             g
         };
-        // Gravity: M · (−g e_z) over the free DOFs (mass matrix row sums in z).
-        let g = model.vehicle.gravity;
-        let mut grav_free = vec![0.0; wheel.dofmap.n_free()];
-        {
-            let m = wheel_mats.m.as_ref();
-            let mut ez = vec![0.0; wheel.dofmap.n_free()];
-            for node in 0..wheel.dofmap.n_nodes() {
-                if let Some(r) = wheel.dofmap.free_index(3 * node + 2) {
-                    ez[r] = 1.0;
-                }
-            }
-            let cols = m.symbolic().col_ptr();
-            let rows = m.symbolic().row_idx();
-            let vals = m.val();
-            for j in 0..m.ncols() {
-                for p in cols[j]..cols[j + 1] {
-                    grav_free[rows[p]] -= g * vals[p] * ez[j];
-                }
-            }
-        }
-        let mut wheel_gravity = vec![0.0; mw];
-        for (r, &f) in grav_free.iter().enumerate() {
-            if f != 0.0 {
-                let row = wheel_modes.row(r);
-                for i in 0..mw {
-                    wheel_gravity[i] += f * row[i];
-                }
-            }
-        }
+        let loads = WheelLoads::new(model, wheel, wheel_mats)?;
+        let radius = loads.contact_radius_m;
+        let wheel_gravity = project(&loads.gravity);
+        let wheel_torque = project(&loads.torque);
+        let wheel_drawbar = project(&loads.drawbar);
         let w_load = model.vehicle.wheel_load;
-        let f_l0 = model.contact.traction_coefficient * w_load;
-        let bearing = wheel.topology.bearing_nodes();
-        // Contact radius: the tread contact node's distance from the axle.
-        let cn = wheel.topology.contact_node();
-        let radius = -wheel.mesh.nodes[cn][2];
-        // Torque T = F_L0 · R about +y: forces c (ŷ × r_i) on the journal nodes minus their
-        // resultant, spread with the balanced weights (which has no moment about the axle), so
-        // the load is a pure couple whatever the grading of the node angles.
-        let wj = crate::structure::wheel::balanced_journal_weights(&wheel.mesh, &bearing);
-        let mut torque_full = vec![0.0; nw];
-        let r2: f64 = bearing
-            .iter()
-            .map(|&b| {
-                let p = wheel.mesh.nodes[b];
-                p[0] * p[0] + p[2] * p[2]
-            })
-            .sum();
-        if r2 <= 0.0 {
-            return Err(DynamicsError::Other(
-                "journal nodes on the axle axis: cannot apply the driving torque".into(),
-            ));
-        }
-        let t_y = f_l0 * radius;
-        let (mut sx, mut sz) = (0.0, 0.0);
-        for &b in &bearing {
-            let p = wheel.mesh.nodes[b];
-            torque_full[3 * b] += t_y / r2 * p[2];
-            torque_full[3 * b + 2] += -t_y / r2 * p[0];
-            sx += t_y / r2 * p[2];
-            sz += -t_y / r2 * p[0];
-        }
-        let mut drawbar_full = vec![0.0; nw];
-        for (&b, &w) in bearing.iter().zip(&wj) {
-            torque_full[3 * b] -= w * sx;
-            torque_full[3 * b + 2] -= w * sz;
-            drawbar_full[3 * b] -= f_l0 * w;
-        }
-        let wheel_torque = project(&torque_full);
-        let wheel_drawbar = project(&drawbar_full);
 
         let layout = &track.layout;
         let track_modes_for_point = match opts.rail_point_offset_m {
@@ -594,22 +528,7 @@ impl PassageEngine {
     /// The contact configuration of a passage at `speed_m_per_s`: the model's grid around the
     /// static Hertz patch, and the tangential tolerance [`PASSAGE_TANGENTIAL_TOL`].
     pub fn contact_config(&self, speed_m_per_s: f64) -> Result<TransientConfig, DynamicsError> {
-        let m = &self.model;
-        let mut cfg = TransientConfig::around_hertz(
-            m.wheel.radius,
-            m.contact.rail_crown_radius,
-            m.rail.youngs_modulus,
-            m.rail.poisson_ratio,
-            m.contact.friction,
-            speed_m_per_s,
-            self.wheel_load_n,
-            m.contact.grid_nx,
-            m.contact.grid_ny,
-            m.contact.grid_margin,
-        )
-        .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
-        cfg.tangential_tol = PASSAGE_TANGENTIAL_TOL;
-        Ok(cfg)
+        contact_config_for(&self.model, speed_m_per_s)
     }
 
     /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth).
@@ -674,31 +593,14 @@ impl PassageEngine {
             })?;
         // --- Static start: steady rolling at the static load.
         fill_heights(x0, &mut heights);
-        let mut static_res = None;
-        let mut prev_xi = f64::NAN;
-        for k in 0..(20 * nx) {
-            let r = contact
-                .step(&StepInputs {
-                    normal: NormalInput::Force(f_n0),
-                    longitudinal: Longitudinal::Force(f_l0),
-                    lateral_creepage: 0.0,
-                    spin_per_m: spin,
-                    rail_height_m: profile.map(|_| &heights[..]),
-                })
-                .map_err(|source| DynamicsError::Contact {
-                    t_s: 0.0,
-                    x_m: x0,
-                    source,
-                })?;
-            let done =
-                k > 2 * nx && (r.creepage - prev_xi).abs() <= 1e-6 * r.creepage.abs().max(1e-6);
-            prev_xi = r.creepage;
-            static_res = Some(r);
-            if done {
-                break;
-            }
-        }
-        let st = static_res.expect("at least one step");
+        let st = steady_contact(
+            &mut contact,
+            f_n0,
+            f_l0,
+            spin,
+            profile.map(|_| &heights[..]),
+            x0,
+        )?;
         let (xi0, delta0) = (st.creepage, st.approach_m);
 
         let mut rr = vec![0.0; 3 * mt];
@@ -737,36 +639,14 @@ impl PassageEngine {
         let target_n = u_rail_n - delta0 - u_wheel_n_el;
         let mut vw0 = vec![0.0; mw];
         if nr > 0 {
-            // Least-norm solutions of O c = b (3 × nr) via the normal equations on the
-            // observation side: c = Oᵀ (O Oᵀ)⁻¹ b, with a tiny Tikhonov term for rank loss.
             let o: Vec<[f64; 3]> = self.rigid.iter().map(|&i| obs(i)).collect();
-            let mut g = [[0.0; 3]; 3];
-            for oi in &o {
-                for a in 0..3 {
-                    for b in 0..3 {
-                        g[a][b] += oi[a] * oi[b];
-                    }
-                }
-            }
-            let tr_g = g[0][0] + g[1][1] + g[2][2];
-            for (a, row) in g.iter_mut().enumerate() {
-                row[a] += 1e-12 * tr_g;
-            }
-            let solve3 = |b: [f64; 3]| -> [f64; 3] {
-                let m = nalgebra::Matrix3::from_fn(|r, c| g[r][c]);
-                let x = m
-                    .lu()
-                    .solve(&nalgebra::Vector3::new(b[0], b[1], b[2]))
-                    .unwrap_or_else(nalgebra::Vector3::zeros);
-                [x[0], x[1], x[2]]
-            };
-            let y = solve3([0.0, target_n, 0.0]);
+            let c = rigid_least_norm(&o, [0.0, target_n, 0.0]);
             for (k, &i) in self.rigid.iter().enumerate() {
-                qw0[i] = o[k][0] * y[0] + o[k][1] * y[1] + o[k][2] * y[2];
+                qw0[i] = c[k];
             }
-            let y = solve3([xi0 * v, 0.0, 0.0]);
+            let c = rigid_least_norm(&o, [xi0 * v, 0.0, 0.0]);
             for (k, &i) in self.rigid.iter().enumerate() {
-                vw0[i] = o[k][0] * y[0] + o[k][1] * y[1] + o[k][2] * y[2];
+                vw0[i] = c[k];
             }
         }
         tr.set_state(&qt0, &vec![0.0; mt], &ft);
@@ -1165,4 +1045,200 @@ mod tests {
         // never shrinks, bad input leaves the grid alone
         assert_eq!(grid_for_profile(g, r, f64::NAN, 1e-4), g);
     }
+}
+
+/// The constant loads on the wheel substructure as free-DOF vectors (N): gravity on every
+/// mass, the driving torque `T = μ_t W R` as a pure couple on the journal nodes, and the
+/// train's resistance `−μ_t W` on the journal nodes (docs/theory.md §5.3). Shared by the
+/// reduced and the explicit passage so that both apply the same loads.
+#[derive(Clone, Debug)]
+pub struct WheelLoads {
+    /// Gravity `M (−g e_z)` (N).
+    pub gravity: Vec<f64>,
+    /// The driving torque's journal forces (N).
+    pub torque: Vec<f64>,
+    /// The train's resistance on the journals (N).
+    pub drawbar: Vec<f64>,
+    /// Distance of the tread contact node from the axle (m).
+    pub contact_radius_m: f64,
+}
+
+impl WheelLoads {
+    /// The loads of `model` on `wheel` with its assembled matrices.
+    pub fn new(
+        model: &Model,
+        wheel: &WheelStructure,
+        wheel_mats: &crate::fe::assembly::FeMatrices,
+    ) -> Result<Self, DynamicsError> {
+        let nf = wheel.dofmap.n_free();
+        // Gravity: M · (−g e_z) over the free DOFs (mass matrix row sums in z).
+        let g = model.vehicle.gravity;
+        let mut gravity = vec![0.0; nf];
+        {
+            let m = wheel_mats.m.as_ref();
+            let mut ez = vec![0.0; nf];
+            for node in 0..wheel.dofmap.n_nodes() {
+                if let Some(r) = wheel.dofmap.free_index(3 * node + 2) {
+                    ez[r] = 1.0;
+                }
+            }
+            let cols = m.symbolic().col_ptr();
+            let rows = m.symbolic().row_idx();
+            let vals = m.val();
+            for j in 0..m.ncols() {
+                for p in cols[j]..cols[j + 1] {
+                    gravity[rows[p]] -= g * vals[p] * ez[j];
+                }
+            }
+        }
+        let f_l0 = model.contact.traction_coefficient * model.vehicle.wheel_load;
+        let bearing = wheel.topology.bearing_nodes();
+        // Contact radius: the tread contact node's distance from the axle.
+        let cn = wheel.topology.contact_node();
+        let radius = -wheel.mesh.nodes[cn][2];
+        // Torque T = F_L0 · R about +y: forces c (ŷ × r_i) on the journal nodes minus their
+        // resultant, spread with the balanced weights (which has no moment about the axle), so
+        // the load is a pure couple whatever the grading of the node angles.
+        let wj = crate::structure::wheel::balanced_journal_weights(&wheel.mesh, &bearing);
+        let nw = wheel.dofmap.n_dofs();
+        let mut torque_full = vec![0.0; nw];
+        let r2: f64 = bearing
+            .iter()
+            .map(|&b| {
+                let p = wheel.mesh.nodes[b];
+                p[0] * p[0] + p[2] * p[2]
+            })
+            .sum();
+        if r2 <= 0.0 {
+            return Err(DynamicsError::Other(
+                "journal nodes on the axle axis: cannot apply the driving torque".into(),
+            ));
+        }
+        let t_y = f_l0 * radius;
+        let (mut sx, mut sz) = (0.0, 0.0);
+        for &b in &bearing {
+            let p = wheel.mesh.nodes[b];
+            torque_full[3 * b] += t_y / r2 * p[2];
+            torque_full[3 * b + 2] += -t_y / r2 * p[0];
+            sx += t_y / r2 * p[2];
+            sz += -t_y / r2 * p[0];
+        }
+        let mut drawbar_full = vec![0.0; nw];
+        for (&b, &w) in bearing.iter().zip(&wj) {
+            torque_full[3 * b] -= w * sx;
+            torque_full[3 * b + 2] -= w * sz;
+            drawbar_full[3 * b] -= f_l0 * w;
+        }
+        let restrict = |full: &[f64]| -> Vec<f64> {
+            let mut out = vec![0.0; nf];
+            for (d, &f) in full.iter().enumerate() {
+                if let Some(r) = wheel.dofmap.free_index(d) {
+                    out[r] = f;
+                }
+            }
+            out
+        };
+        Ok(WheelLoads {
+            gravity,
+            torque: restrict(&torque_full),
+            drawbar: restrict(&drawbar_full),
+            contact_radius_m: radius,
+        })
+    }
+
+    /// Gravity + torque + resistance (N).
+    pub fn total(&self) -> Vec<f64> {
+        (0..self.gravity.len())
+            .map(|i| self.gravity[i] + self.torque[i] + self.drawbar[i])
+            .collect()
+    }
+}
+
+/// The contact configuration of a passage of `model` at `speed_m_per_s` (m/s) under the wheel
+/// load: the model's grid around the static Hertz patch, and the tangential tolerance
+/// [`PASSAGE_TANGENTIAL_TOL`]. The reduced and the explicit passage use it alike.
+pub fn contact_config_for(
+    model: &Model,
+    speed_m_per_s: f64,
+) -> Result<TransientConfig, DynamicsError> {
+    let m = model;
+    let mut cfg = TransientConfig::around_hertz(
+        m.wheel.radius,
+        m.contact.rail_crown_radius,
+        m.rail.youngs_modulus,
+        m.rail.poisson_ratio,
+        m.contact.friction,
+        speed_m_per_s,
+        m.vehicle.wheel_load,
+        m.contact.grid_nx,
+        m.contact.grid_ny,
+        m.contact.grid_margin,
+    )
+    .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
+    cfg.tangential_tol = PASSAGE_TANGENTIAL_TOL;
+    Ok(cfg)
+}
+
+/// Brings the contact to steady rolling at the static load (normal force `f_n0`, longitudinal
+/// force `f_l0`, N) by stepping with constant inputs until the creepage settles (relative
+/// change ≤ 1e-6, at most 20 grid lengths): the static start of a passage.
+pub fn steady_contact(
+    contact: &mut TransientRolling,
+    f_n0: f64,
+    f_l0: f64,
+    spin_per_m: f64,
+    heights: Option<&[f64]>,
+    x0: f64,
+) -> Result<crate::contact::StepResult, DynamicsError> {
+    let nx = contact.config().grid.nx;
+    let mut res = None;
+    let mut prev_xi = f64::NAN;
+    for k in 0..(20 * nx) {
+        let r = contact
+            .step(&StepInputs {
+                normal: NormalInput::Force(f_n0),
+                longitudinal: Longitudinal::Force(f_l0),
+                lateral_creepage: 0.0,
+                spin_per_m,
+                rail_height_m: heights,
+            })
+            .map_err(|source| DynamicsError::Contact {
+                t_s: 0.0,
+                x_m: x0,
+                source,
+            })?;
+        let done = k > 2 * nx && (r.creepage - prev_xi).abs() <= 1e-6 * r.creepage.abs().max(1e-6);
+        prev_xi = r.creepage;
+        res = Some(r);
+        if done {
+            break;
+        }
+    }
+    res.ok_or_else(|| DynamicsError::Other("contact grid has no columns".into()))
+}
+
+/// The least-norm combination of the wheel's rigid modes that meets three observations:
+/// `o[k]` holds what rigid mode `k` shows at (contact x, contact n, axle x); returns the
+/// mode coefficients `c = Oᵀ (O Oᵀ)⁻¹ b` (a tiny Tikhonov term guards against rank loss).
+pub fn rigid_least_norm(o: &[[f64; 3]], b: [f64; 3]) -> Vec<f64> {
+    let mut g = [[0.0; 3]; 3];
+    for oi in o {
+        for a in 0..3 {
+            for c in 0..3 {
+                g[a][c] += oi[a] * oi[c];
+            }
+        }
+    }
+    let tr_g = g[0][0] + g[1][1] + g[2][2];
+    for (a, row) in g.iter_mut().enumerate() {
+        row[a] += 1e-12 * tr_g;
+    }
+    let m = nalgebra::Matrix3::from_fn(|r, c| g[r][c]);
+    let y = m
+        .lu()
+        .solve(&nalgebra::Vector3::new(b[0], b[1], b[2]))
+        .unwrap_or_else(nalgebra::Vector3::zeros);
+    o.iter()
+        .map(|ok| ok[0] * y[0] + ok[1] * y[1] + ok[2] * y[2])
+        .collect()
 }

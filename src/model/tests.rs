@@ -204,12 +204,16 @@ fn extends_chain_resolves_relative_paths_and_detects_loops() {
 }
 
 #[test]
-fn explicit_time_step_above_the_courant_limit_is_rejected() {
-    // c_d of steel (E 210 GPa, ν 0.3, ρ 7800) = 6020 m/s: at 0.8 mm the limit is 1.33e-7 s.
-    assert!(dutch_with(&["explicit.time_step=1.3e-7"]).is_ok());
-    let e = err_text(dutch_with(&["explicit.time_step=1.4e-7"]));
-    assert!(
-        e.contains("explicit.time_step") && e.contains("Courant"),
-        "{e}"
-    );
+fn explicit_section_takes_a_safety_factor_and_an_optional_step() {
+    let m = dutch_with(&[]).unwrap();
+    assert_eq!(m.explicit.safety, 0.9);
+    assert_eq!(m.explicit.time_step, None);
+    assert!(dutch_with(&["explicit.time_step=5e-8"]).is_ok());
+    let e = err_text(dutch_with(&["explicit.safety=1.5"]));
+    assert!(e.contains("explicit.safety"), "{e}");
+    let e = err_text(dutch_with(&["explicit.time_step=1.0"]));
+    assert!(e.contains("explicit.time_step"), "{e}");
+    // The removed key is refused by name.
+    let e = err_text(dutch_with(&["explicit.element_length=0.0008"]));
+    assert!(e.contains("element_length"), "{e}");
 }

@@ -1,0 +1,113 @@
+//! `corrugation explicit`: one passage of the full explicit FE path (docs/theory.md §6): the
+//! untruncated track and wheel, central difference, the same contact, wear and analysis as
+//! `passage`. Writes the files of `passage` plus `explicit.json` (time steps, ω_max, step
+//! counts, energy error, wall and CPU time).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+
+use corrugation::dynamics::passage::PassageOptions;
+use corrugation::dynamics::RailProfile;
+use corrugation::explicit::{ExplicitModel, ExplicitOptions, ExplicitRecord};
+use corrugation::io::write_atomic;
+
+use super::ModelArgs;
+
+/// How the wheel is modelled in the explicit path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum WheelMode {
+    /// Not rotating: the contact point is fixed on the wheel (as in the reduced model).
+    Fixed,
+}
+
+/// One explicit FE passage: contact forces, wear along the rail, PSDs, plots, explicit.json.
+#[derive(Debug, Args)]
+pub struct ExplicitCmd {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Rail-top profile (CSV with a header: x in m, height in µm), e.g. a corrugation.
+    #[arg(long, value_name = "FILE.csv")]
+    corrugation: Option<PathBuf>,
+    /// The wheel: `fixed` (not rotating, as the reduced model).
+    #[arg(long, value_enum, default_value = "fixed")]
+    wheel: WheelMode,
+    /// Output directory.
+    #[arg(long, default_value = "corrugation-out/explicit", value_name = "DIR")]
+    out: PathBuf,
+    /// Print the summary (the keys of `passage --json` plus the explicit figures) as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+impl ExplicitCmd {
+    pub fn run(self) -> anyhow::Result<()> {
+        let m = self.model.load()?;
+        let profile = match &self.corrugation {
+            Some(p) => Some(RailProfile::read_csv_um(p)?),
+            None => None,
+        };
+        std::fs::create_dir_all(&self.out)
+            .with_context(|| format!("creating {}", self.out.display()))?;
+        let pb = super::progress::bar("explicit: set-up (assembly, static solves, stable step)");
+        let em = ExplicitModel::new(&m, ExplicitOptions::from_model(&m))
+            .context("building the explicit model")?;
+        pb.set_message("explicit passage (contact steps)");
+        let opts = PassageOptions::default();
+        let rec = em
+            .passage(
+                m.run.speed(),
+                profile.as_ref(),
+                &opts,
+                &mut |done, total| {
+                    pb.set_length(total as u64);
+                    pb.set_position(done as u64);
+                },
+            )
+            .context("running the explicit passage")?;
+        pb.finish_and_clear();
+        let summary = corrugation::dynamics::analysis::summarise(&rec.record)?;
+        super::passage_cmd::write_outputs(&self.out, &rec.record, &summary)?;
+        write_explicit_json(&self.out, &rec)?;
+        if self.json {
+            let mut v = serde_json::to_value(&summary)?;
+            if let (Some(o), serde_json::Value::Object(e)) =
+                (v.as_object_mut(), serde_json::to_value(&rec.info)?)
+            {
+                for (k, x) in e {
+                    o.insert(format!("explicit_{k}"), x);
+                }
+            }
+            println!("{}", serde_json::to_string_pretty(&v)?);
+        } else {
+            super::passage_cmd::print_summary(&summary, &rec.record, &self.out);
+            let i = &rec.info;
+            println!(
+                "  explicit: track {} + wheel {} DOFs; dt {:.3e} s (track, {} per contact step), {:.3e} s (wheel, {}); ω_max {:.4e} rad/s (Gershgorin bound {:.4e}); {} FE steps in {:.1} s wall{}",
+                i.dofs[0],
+                i.dofs[1],
+                i.dt_s,
+                i.track_substeps,
+                i.dt_wheel_s,
+                i.wheel_substeps,
+                i.omega_max_estimate,
+                i.omega_max_bound,
+                i.steps,
+                i.seconds,
+                i.cpu_seconds
+                    .map_or(String::new(), |c| format!(", {c:.1} s CPU"))
+            );
+        }
+        Ok(())
+    }
+}
+
+fn write_explicit_json(out: &Path, rec: &ExplicitRecord) -> anyhow::Result<()> {
+    let json = serde_json::to_string_pretty(&rec.info)?;
+    write_atomic(&out.join("explicit.json"), |f| {
+        use std::io::Write;
+        f.write_all(json.as_bytes())
+    })?;
+    Ok(())
+}

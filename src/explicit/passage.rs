@@ -1,0 +1,1065 @@
+//! The explicit passage (E1: the wheel as the reduced model has it, not rotating, its
+//! contact point fixed on the wheel); docs/theory.md §6.3.
+//!
+//! # One contact step `t_n → t_{n+1}` (`Δt_c = Δx/V`, the transient contact's step)
+//! 1. **Predictor.** The last contact force `F_n` (contact frame x, t, n; on the wheel, its
+//!    opposite on the rail) is held over the step at the end-of-step contact position
+//!    `x_{n+1}`; the track runs `N_t` central-difference steps of `Δt_c/N_t`, the wheel `N_w`
+//!    of `Δt_c/N_w`, each below its own stable step.
+//! 2. **Contact.** The contact is solved at `x_{n+1}` with the predicted kinematics and the
+//!    structures' one-contact-step compliance `G = G_rail + G_wheel` (the contact-point
+//!    displacement after one contact step under a unit held force, from rest) as its series
+//!    compliance: approach `δ_pred + G_n F_{n,N}`, creepages from the predicted relative
+//!    displacement increments over the step. The solver then returns the force `F_{n+1}`
+//!    that is consistent with the end-of-step kinematics.
+//! 3. **Corrector.** Both structures get the response to `F_{n+1} − F_n` held over the step
+//!    (unit-load response fields: the wheel's once per passage, the rail's per node plane of
+//!    the contact line, interpolated like the load): since the FE is linear the state is
+//!    then exactly the one under `F_{n+1}` held over the step.
+//!
+//! The plain alternative, holding `F_n` without the corrector ([`Coupling::HeldForce`]),
+//! is explicit in the contact stiffness: with `k_contact · G` of order one it is at the edge
+//! of stability (kept to show that in a test).
+//!
+//! # Start
+//! As the reduced passage: the contact brought to steady rolling at the static load; the
+//! track and the wheel's elastic deformation by static solves of the full `K` under the
+//! static contact force and the wheel loads (no dynamic relaxation); the wheel's rigid
+//! modes placed so that the approach is the steady one and turned so that the creepage is.
+
+use std::time::Instant;
+
+use faer::Mat;
+
+use super::operator::{ExplicitOperator, StepScratch};
+use super::stable::{StableStep, DEFAULT_SAFETY};
+use super::ExplicitError;
+use crate::contact::{Longitudinal, NormalInput, StepInputs, TransientRolling, WearAccumulator};
+use crate::dynamics::passage::{
+    contact_config_for, grid_for_profile, rigid_least_norm, steady_contact, EnergyBalance,
+    Histories, PassageOptions, PassageRecord, RailPointRecord, WheelLoads,
+};
+use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
+use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
+use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
+use crate::model::Model;
+use crate::structure::{TrackStructure, WheelStructure};
+
+/// How the contact force couples the structures over a contact step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Coupling {
+    /// Held-force predictor, contact solved with the one-step compliance, exact linear
+    /// corrector (the default).
+    #[default]
+    PredictorCorrector,
+    /// The last contact force held over the step, no corrector (unstable when the contact
+    /// stiffness times the one-step compliance is of order one; for tests).
+    HeldForce,
+}
+
+/// Options of the explicit path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExplicitOptions {
+    /// Safety factor on the computed critical step (−), in (0, 1]; default
+    /// [`DEFAULT_SAFETY`] = 0.9.
+    pub safety: f64,
+    /// A time step for both substructures (s), checked against their stable limits; `None`
+    /// (default) = each substructure at `safety ×` its own limit.
+    pub time_step_s: Option<f64>,
+    /// The coupling scheme (default predictor–corrector).
+    pub coupling: Coupling,
+}
+
+impl Default for ExplicitOptions {
+    fn default() -> Self {
+        Self {
+            safety: DEFAULT_SAFETY,
+            time_step_s: None,
+            coupling: Coupling::PredictorCorrector,
+        }
+    }
+}
+
+impl ExplicitOptions {
+    /// The options of a model's `[explicit]` section.
+    pub fn from_model(model: &Model) -> Self {
+        Self {
+            safety: model.explicit.safety,
+            time_step_s: model.explicit.time_step,
+            coupling: Coupling::PredictorCorrector,
+        }
+    }
+}
+
+/// What the explicit path reports besides the passage record.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ExplicitInfo {
+    /// Track time step (s).
+    pub dt_s: f64,
+    /// Wheel time step (s).
+    pub dt_wheel_s: f64,
+    /// Contact step `Δx/V` (s).
+    pub contact_dt_s: f64,
+    /// Track sub-steps per contact step (−).
+    pub track_substeps: usize,
+    /// Wheel sub-steps per contact step (−).
+    pub wheel_substeps: usize,
+    /// Estimated ω_max of the track (rad/s).
+    pub omega_max_estimate: f64,
+    /// Estimated ω_max of the wheel (rad/s).
+    pub omega_max_wheel_estimate: f64,
+    /// Gershgorin bound on the track's ω_max (rad/s).
+    pub omega_max_bound: f64,
+    /// Track FE steps of the passage (−).
+    pub steps: usize,
+    /// Contact steps of the passage (−).
+    pub contact_steps: usize,
+    /// Relative energy error of the passage (−; see [`EnergyBalance::relative_error`]).
+    pub energy_error: f64,
+    /// Wall time of the dynamic phase (s).
+    pub seconds: f64,
+    /// CPU time (user + system) of the dynamic phase (s), where the OS reports it.
+    pub cpu_seconds: Option<f64>,
+    /// Track and wheel DOFs.
+    pub dofs: [usize; 2],
+    /// Wall time of the set-up: assembly, static solves, stable steps (s).
+    pub setup_seconds: f64,
+}
+
+/// A passage of the explicit path.
+#[derive(Clone, Debug)]
+pub struct ExplicitRecord {
+    /// The passage, in the same form as the reduced one.
+    pub record: PassageRecord,
+    /// Step sizes, counts, timing.
+    pub info: ExplicitInfo,
+}
+
+/// One substructure ready for explicit steps.
+struct Part {
+    op: ExplicitOperator,
+    step: StableStep,
+    dt_max_s: f64,
+}
+
+impl Part {
+    fn new(
+        mats: &crate::fe::assembly::FeMatrices,
+        opts: &ExplicitOptions,
+        name: &'static str,
+    ) -> Result<Self, ExplicitError> {
+        let op = ExplicitOperator::new(mats.k.as_ref(), mats.m.as_ref(), mats.c.as_ref())?;
+        let step = StableStep::estimate(&op)?;
+        let limit = step.with_safety(opts.safety);
+        let dt_max_s = match opts.time_step_s {
+            Some(dt) if dt > step.critical_s => {
+                return Err(ExplicitError::TimeStepTooLarge {
+                    given_s: dt,
+                    limit_s: step.critical_s,
+                    part: name,
+                    omega_max: step.omega_max_estimate,
+                })
+            }
+            Some(dt) => dt,
+            None => limit,
+        };
+        Ok(Part { op, step, dt_max_s })
+    }
+
+    /// Sub-steps and step length inside a contact step of `dt_c` (s).
+    fn substeps(&self, dt_c: f64) -> (usize, f64) {
+        let n = (dt_c / self.dt_max_s).ceil().max(1.0) as usize;
+        (n, dt_c / n as f64)
+    }
+}
+
+/// The response of a substructure to a unit force held over one contact step from rest:
+/// displacement and half-step velocity, one pair per contact-frame direction.
+struct UnitResponse {
+    u: [Vec<f64>; 3],
+    v: [Vec<f64>; 3],
+}
+
+impl UnitResponse {
+    fn compute(
+        op: &ExplicitOperator,
+        dt: f64,
+        steps: usize,
+        load: impl Fn(usize, &mut [f64]),
+        scratch: &mut StepScratch,
+    ) -> Self {
+        let n = op.n();
+        let mut mk = |d: usize| {
+            let mut f = vec![0.0; n];
+            load(d, &mut f);
+            let (mut u, mut v) = (vec![0.0; n], vec![0.0; n]);
+            op.advance(dt, steps, &mut u, &mut v, &f, scratch);
+            (u, v)
+        };
+        let (a, b, c) = (mk(0), mk(1), mk(2));
+        UnitResponse {
+            u: [a.0, b.0, c.0],
+            v: [a.1, b.1, c.1],
+        }
+    }
+
+    /// `u += Σ_d s·f_d u_d`, `v += Σ_d s·f_d v_d`.
+    fn add_to(&self, scale: f64, f: [f64; 3], u: &mut [f64], v: &mut [f64]) {
+        for d in 0..3 {
+            let a = scale * f[d];
+            if a == 0.0 {
+                continue;
+            }
+            u.iter_mut().zip(&self.u[d]).for_each(|(x, r)| *x += a * r);
+            v.iter_mut().zip(&self.v[d]).for_each(|(x, r)| *x += a * r);
+        }
+    }
+}
+
+/// The rail's unit responses of two adjacent node planes (lazily computed as the contact
+/// moves; a plane's response is reused while the contact is next to it).
+struct RailResponses {
+    dt: f64,
+    steps: usize,
+    slots: Vec<(usize, UnitResponse)>,
+}
+
+impl RailResponses {
+    fn get(&mut self, m: &ExplicitModel, plane: usize, scratch: &mut StepScratch) -> usize {
+        if let Some(i) = self.slots.iter().position(|(p, _)| *p == plane) {
+            return i;
+        }
+        let r = UnitResponse::compute(
+            &m.track.op,
+            self.dt,
+            self.steps,
+            |d, f| {
+                let mut force = [0.0; 3];
+                force[d] = -1.0;
+                add_nodes_load(
+                    &m.line.nodes[plane],
+                    &m.track_structure.dofmap,
+                    &m.frame,
+                    1.0,
+                    force,
+                    f,
+                )
+            },
+            scratch,
+        );
+        if self.slots.len() >= 2 {
+            // Keep the plane the contact is still next to; the contact only moves forward.
+            let drop = if self.slots[0].0 < self.slots[1].0 {
+                0
+            } else {
+                1
+            };
+            self.slots.remove(drop);
+        }
+        self.slots.push((plane, r));
+        self.slots.len() - 1
+    }
+}
+
+/// The model of the explicit path: the full track and wheel, their operators and stable
+/// steps, and the static start (speed-independent), built once for any number of passages.
+pub struct ExplicitModel {
+    model: Model,
+    frame: ContactFrame,
+    track_structure: TrackStructure,
+    wheel_structure: WheelStructure,
+    track: Part,
+    wheel: Part,
+    line: RailContactLine,
+    wheel_nodes: Vec<(usize, f64)>,
+    /// Rigid modes of the wheel (M-orthonormal, free DOFs), 3 columns.
+    rigid: Vec<Vec<f64>>,
+    /// (contact x, contact n, axle x) of each rigid mode.
+    rigid_obs: Vec<[f64; 3]>,
+    loads: WheelLoads,
+    wheel_const: Vec<f64>,
+    /// Static deflection of the track and elastic deflection of the wheel.
+    track_static: Vec<f64>,
+    wheel_static: Vec<f64>,
+    x_start_m: f64,
+    zone_m: [f64; 2],
+    wheel_radius_m: f64,
+    opts: ExplicitOptions,
+    setup_seconds: f64,
+}
+
+impl ExplicitModel {
+    /// Builds the explicit model of `model`: structures, matrices, operators, stable steps
+    /// and the static deflections.
+    pub fn new(model: &Model, opts: ExplicitOptions) -> Result<Self, ExplicitError> {
+        let t0 = Instant::now();
+        if !(opts.safety > 0.0 && opts.safety <= 1.0) {
+            return Err(ExplicitError::Static {
+                part: "model",
+                reason: format!("explicit.safety = {} must be in (0, 1]", opts.safety),
+            });
+        }
+        let frame = ContactFrame::for_inclination(model.rail.inclination);
+        let track_structure = TrackStructure::build(model)?;
+        let wheel_structure = WheelStructure::build(model)?;
+        let (tm, _) = track_structure.assemble()?;
+        let (wm, _) = wheel_structure.assemble()?;
+        let track = Part::new(&tm, &opts, "track")?;
+        let wheel = Part::new(&wm, &opts, "wheel")?;
+        let hertz = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
+            radius_x_m: model.wheel.radius,
+            radius_y_m: model.contact.rail_crown_radius,
+            youngs_pa: model.rail.youngs_modulus,
+            poisson: model.rail.poisson_ratio,
+            load_n: model.vehicle.wheel_load,
+        })
+        .map_err(|e| DynamicsError::Other(format!("static Hertz contact: {e}")))?;
+        let n_t = track_structure.dofmap.n_free();
+        let line = RailContactLine::new(&track_structure, &Mat::zeros(n_t, 0), &frame, hertz.b_m)?;
+        let rigid = wheel_rigid_modes(&wheel_structure, &wheel.op)?;
+        let n_w = wheel_structure.dofmap.n_free();
+        let rigid_mat = Mat::from_fn(n_w, rigid.len(), |i, k| rigid[k][i]);
+        let wc = WheelContact::new(&wheel_structure, &rigid_mat, &frame, hertz.b_m)?;
+        let nr = rigid.len();
+        let rigid_obs: Vec<[f64; 3]> = (0..nr)
+            .map(|k| [wc.rows[k], wc.rows[2 * nr + k], wc.axle_x[k]])
+            .collect();
+        let loads = WheelLoads::new(model, &wheel_structure, &wm)?;
+        let wheel_const = loads.total();
+        let x_start_m = track_structure.layout.wheel_start;
+        let zone_m = track_structure.layout.solution_zone;
+
+        // Static deflections under the static contact force (x, t, n) = (μ_t W, 0, W/cos α).
+        let w_load = model.vehicle.wheel_load;
+        let f0 = [
+            model.contact.traction_coefficient * w_load,
+            0.0,
+            w_load / frame.n[2],
+        ];
+        let mut ft = vec![0.0; n_t];
+        add_line_force(
+            &line,
+            &track_structure,
+            &frame,
+            x_start_m,
+            [-f0[0], -f0[1], -f0[2]],
+            &mut ft,
+        )?;
+        let track_static = {
+            let fac = StiffnessFactor::new(tm.k.as_ref())?;
+            solve_one(&fac, &ft)
+        };
+        let mut fw = wheel_const.clone();
+        add_nodes_load(&wc.nodes, &wheel_structure.dofmap, &frame, 1.0, f0, &mut fw);
+        let wheel_static =
+            wheel_elastic_static(&wheel_structure, &wm, &wheel.op, &rigid, &wc.nodes, &fw)?;
+        Ok(ExplicitModel {
+            model: model.clone(),
+            frame,
+            track_structure,
+            wheel_structure,
+            track,
+            wheel,
+            line,
+            wheel_nodes: wc.nodes,
+            rigid,
+            rigid_obs,
+            wheel_radius_m: loads.contact_radius_m,
+            loads,
+            wheel_const,
+            track_static,
+            wheel_static,
+            x_start_m,
+            zone_m,
+            opts,
+            setup_seconds: t0.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// Stable steps of the track and the wheel.
+    pub fn stable_steps(&self) -> [StableStep; 2] {
+        [self.track.step, self.wheel.step]
+    }
+
+    /// Track and wheel DOFs.
+    pub fn dofs(&self) -> [usize; 2] {
+        [self.track.op.n(), self.wheel.op.n()]
+    }
+
+    /// The track structure.
+    pub fn track_structure(&self) -> &TrackStructure {
+        &self.track_structure
+    }
+
+    /// The rail's contact line (node sets and weights per node plane).
+    pub fn rail_line(&self) -> &RailContactLine {
+        &self.line
+    }
+
+    /// Rail displacement at `x` (m) on the contact line, contact-frame components (m).
+    fn rail_at(&self, u: &[f64], x: f64) -> Result<[f64; 3], ExplicitError> {
+        let (p, s) = self.locate(x)?;
+        let axes = [self.frame.x, self.frame.t, self.frame.n];
+        let dm = &self.track_structure.dofmap;
+        Ok(axes.map(|a| {
+            (1.0 - s) * nodes_dot(&self.line.nodes[p], dm, a, |i| u[i])
+                + s * nodes_dot(&self.line.nodes[p + 1], dm, a, |i| u[i])
+        }))
+    }
+
+    fn wheel_at(&self, u: &[f64]) -> [f64; 3] {
+        let axes = [self.frame.x, self.frame.t, self.frame.n];
+        let dm = &self.wheel_structure.dofmap;
+        axes.map(|a| nodes_dot(&self.wheel_nodes, dm, a, |i| u[i]))
+    }
+
+    fn locate(&self, x: f64) -> Result<(usize, f64), ExplicitError> {
+        self.line.locate(x).ok_or_else(|| {
+            ExplicitError::Dynamics(DynamicsError::Other(format!(
+                "contact point x = {x:.4} m is off the rail: lengthen the track (track.bays)"
+            )))
+        })
+    }
+
+    /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth);
+    /// `progress(done, total)` is called every few contact steps.
+    pub fn passage(
+        &self,
+        speed_m_per_s: f64,
+        profile: Option<&RailProfile>,
+        popts: &PassageOptions,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<ExplicitRecord, ExplicitError> {
+        if !(speed_m_per_s > 0.0 && speed_m_per_s.is_finite()) {
+            return Err(DynamicsError::Other(format!(
+                "speed {speed_m_per_s} m/s must be finite and > 0"
+            ))
+            .into());
+        }
+        let v = speed_m_per_s;
+        let mut cfg = contact_config_for(&self.model, v)?;
+        let approach_h = cfg_hertz_approach(&self.model)?;
+        if let Some(p) = profile {
+            cfg.grid = grid_for_profile(cfg.grid, cfg.radius_x_m, approach_h, p.peak_to_trough_m());
+        }
+        let mut contact = TransientRolling::new(cfg)
+            .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
+        let dt_c = contact.time_step_s();
+        let dx = v * dt_c;
+        let (nt, dtt) = self.track.substeps(dt_c);
+        let (nw, dtw) = self.wheel.substeps(dt_c);
+        let frame = self.frame;
+        let w_load = self.model.vehicle.wheel_load;
+        let f_l0 = self.model.contact.traction_coefficient * w_load;
+        let f_n0 = w_load / frame.n[2];
+        let spin = frame.n[1] / self.wheel_radius_m;
+        let x0 = self.x_start_m;
+        let [z0, z1] = self.zone_m;
+        let half_grid = contact.config().grid.half_length_x_m;
+        let x_end = z1 + half_grid + 2.0 * dx;
+        let n_steps = ((x_end - x0) / dx).ceil() as usize;
+        let (nx, ny) = (contact.config().grid.nx, contact.config().grid.ny);
+        let xs: Vec<f64> = contact.x_m().to_vec();
+        let mut heights = vec![0.0; nx];
+        let fill_heights = |xc: f64, h: &mut [f64]| {
+            if let Some(p) = profile {
+                for (hi, &xi) in h.iter_mut().zip(&xs) {
+                    *hi = p.height_at(xc + xi);
+                }
+            }
+        };
+
+        // --- Static start.
+        fill_heights(x0, &mut heights);
+        let st = steady_contact(
+            &mut contact,
+            f_n0,
+            f_l0,
+            spin,
+            profile.map(|_| &heights[..]),
+            x0,
+        )?;
+        let (xi0, delta0) = (st.creepage, st.approach_m);
+        let (n_t, n_w) = (self.track.op.n(), self.wheel.op.n());
+        let mut ut = self.track_static.clone();
+        let mut vt = vec![0.0; n_t];
+        let mut uw = self.wheel_static.clone();
+        let mut vw = vec![0.0; n_w];
+        let u_rail = self.rail_at(&ut, x0)?;
+        let u_wheel_el = self.wheel_at(&uw);
+        let target_n = u_rail[2] - delta0 - u_wheel_el[2];
+        let c = rigid_least_norm(&self.rigid_obs, [0.0, target_n, 0.0]);
+        let cv = rigid_least_norm(&self.rigid_obs, [xi0 * v, 0.0, 0.0]);
+        for (k, r) in self.rigid.iter().enumerate() {
+            uw.iter_mut().zip(r).for_each(|(x, y)| *x += c[k] * y);
+            vw.iter_mut().zip(r).for_each(|(x, y)| *x += cv[k] * y);
+        }
+
+        // --- Unit responses and scratch.
+        let mut sc_t = self.track.op.scratch();
+        let mut sc_w = self.wheel.op.scratch();
+        let corrected = self.opts.coupling == Coupling::PredictorCorrector;
+        let wheel_resp = UnitResponse::compute(
+            &self.wheel.op,
+            dtw,
+            nw,
+            |d, f| {
+                let mut force = [0.0; 3];
+                force[d] = 1.0;
+                add_nodes_load(
+                    &self.wheel_nodes,
+                    &self.wheel_structure.dofmap,
+                    &frame,
+                    1.0,
+                    force,
+                    f,
+                )
+            },
+            &mut sc_w,
+        );
+        let g_wheel: [f64; 3] = [0, 1, 2].map(|d| self.wheel_at(&wheel_resp.u[d])[d]);
+        let mut rail_resp = RailResponses {
+            dt: dtt,
+            steps: nt,
+            slots: Vec::new(),
+        };
+
+        // --- Records.
+        let mut h = Histories::default();
+        let mut rail_point = popts.rail_point_offset_m.map(|off| {
+            let x = z0 + off;
+            let p = (0..self.line.planes_x_m.len())
+                .min_by(|&a, &b| {
+                    (self.line.planes_x_m[a] - x)
+                        .abs()
+                        .total_cmp(&(self.line.planes_x_m[b] - x).abs())
+                })
+                .unwrap_or(0);
+            let node = self.line.nodes[p]
+                .iter()
+                .copied()
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .map_or(0, |(n, _)| n);
+            (
+                node,
+                RailPointRecord {
+                    position_m: self.track_structure.mesh.nodes[node],
+                    displacement_m: Vec::with_capacity(n_steps),
+                },
+            )
+        });
+        let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
+        let mut wear = WearAccumulator::new(&contact, z0, nbins);
+        let mut eb = EnergyBalance::default();
+        let mut ku = vec![0.0; n_t.max(n_w)];
+        let stored = |op: &ExplicitOperator, u: &[f64], v: &[f64], ku: &mut [f64]| {
+            op.apply_k(u, &mut ku[..u.len()]);
+            0.5 * u.iter().zip(ku.iter()).map(|(a, b)| a * b).sum::<f64>() + op.kinetic_energy(v)
+        };
+        let e_start = if popts.energy {
+            stored(&self.track.op, &ut, &vt, &mut ku) + stored(&self.wheel.op, &uw, &vw, &mut ku)
+        } else {
+            0.0
+        };
+        let hertz_energy = |f: f64, d: f64, cz: f64| 0.4 * f * (d - cz * f).max(0.0);
+        let mut f = [st.fx_n, st.fy_n, st.normal_force_n];
+        // The start's force on the structures is the static one (lateral 0).
+        f[1] = 0.0;
+        let mut series_last = [0.0; 3];
+        let e_contact_start = hertz_energy(st.normal_force_n, st.approach_m, 0.0);
+        let mut last_delta = st.approach_m;
+        let mut p_damp_prev = if popts.energy {
+            self.track.op.damper_power(&vt, &mut sc_t) + self.wheel.op.damper_power(&vw, &mut sc_w)
+        } else {
+            0.0
+        };
+        let mut ftrack = vec![0.0; n_t];
+        let mut fwheel = self.wheel_const.clone();
+        let axes = [frame.x, frame.t, frame.n];
+        let dm_t = &self.track_structure.dofmap;
+        let dm_w = &self.wheel_structure.dofmap;
+        let t_wall = Instant::now();
+        let cpu0 = cpu_seconds();
+        progress(0, n_steps);
+        for n in 1..=n_steps {
+            let t = n as f64 * dt_c;
+            let xc = x0 + v * t;
+            let (p, s) = self.locate(xc)?;
+            // Predictor: F_n held at x_{n+1}.
+            let ur_old = self.rail_at(&ut, xc)?;
+            let uw_old = self.wheel_at(&uw);
+            ftrack.iter_mut().for_each(|x| *x = 0.0);
+            let neg = [-f[0], -f[1], -f[2]];
+            add_nodes_load(&self.line.nodes[p], dm_t, &frame, 1.0 - s, neg, &mut ftrack);
+            add_nodes_load(&self.line.nodes[p + 1], dm_t, &frame, s, neg, &mut ftrack);
+            fwheel.copy_from_slice(&self.wheel_const);
+            add_nodes_load(&self.wheel_nodes, dm_w, &frame, 1.0, f, &mut fwheel);
+            let e_ext_before = if popts.energy {
+                // Work of the constant wheel loads: exact for a held load, f·Δu.
+                self.wheel_const
+                    .iter()
+                    .zip(&uw)
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>()
+            } else {
+                0.0
+            };
+            let torque_before = if popts.energy {
+                self.loads
+                    .torque
+                    .iter()
+                    .zip(&uw)
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>()
+            } else {
+                0.0
+            };
+            let gravity_before = if popts.energy {
+                self.loads
+                    .gravity
+                    .iter()
+                    .zip(&uw)
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>()
+            } else {
+                0.0
+            };
+            self.track
+                .op
+                .advance(dtt, nt, &mut ut, &mut vt, &ftrack, &mut sc_t);
+            self.wheel
+                .op
+                .advance(dtw, nw, &mut uw, &mut vw, &fwheel, &mut sc_w);
+            let ur_new = self.rail_at(&ut, xc)?;
+            let uw_new = self.wheel_at(&uw);
+            // One-step compliance at x_{n+1}.
+            let (ia, ib) = if corrected {
+                let a = rail_resp.get(self, p, &mut sc_t);
+                let b = rail_resp.get(self, p + 1, &mut sc_t);
+                // get() may have dropped a slot: look both up again.
+                let ia = rail_resp
+                    .slots
+                    .iter()
+                    .position(|(q, _)| *q == p)
+                    .unwrap_or(a);
+                let ib = rail_resp
+                    .slots
+                    .iter()
+                    .position(|(q, _)| *q == p + 1)
+                    .unwrap_or(b);
+                (ia, ib)
+            } else {
+                (0, 0)
+            };
+            let series = if corrected {
+                let ra = &rail_resp.slots[ia].1;
+                let rb = &rail_resp.slots[ib].1;
+                let mut g = [0.0; 3];
+                for d in 0..3 {
+                    // Rail displacement at x_{n+1} (along −axis_d: the load is −e_d) under the
+                    // interpolated unit load.
+                    let at = |u: &[f64]| {
+                        (1.0 - s) * nodes_dot(&self.line.nodes[p], dm_t, axes[d], |i| u[i])
+                            + s * nodes_dot(&self.line.nodes[p + 1], dm_t, axes[d], |i| u[i])
+                    };
+                    let gr = -((1.0 - s) * at(&ra.u[d]) + s * at(&rb.u[d]));
+                    g[d] = (gr + g_wheel[d]).max(0.0);
+                }
+                g
+            } else {
+                [0.0; 3]
+            };
+            contact
+                .set_series_compliance(series)
+                .map_err(|source| DynamicsError::Contact {
+                    t_s: t,
+                    x_m: xc,
+                    source,
+                })?;
+            let delta = ur_new[2] - uw_new[2] + series[2] * f[2];
+            let xi = ((uw_new[0] - uw_old[0]) - (ur_new[0] - ur_old[0])) / (v * dt_c);
+            let eta = ((uw_new[1] - uw_old[1]) - (ur_new[1] - ur_old[1])) / (v * dt_c);
+            fill_heights(xc, &mut heights);
+            let r = contact
+                .step(&StepInputs {
+                    normal: NormalInput::Approach(delta),
+                    longitudinal: Longitudinal::Creepage(xi),
+                    lateral_creepage: eta,
+                    spin_per_m: spin,
+                    rail_height_m: profile.map(|_| &heights[..]),
+                })
+                .map_err(|source| DynamicsError::Contact {
+                    t_s: t,
+                    x_m: xc,
+                    source,
+                })?;
+            let f_new = [r.fx_n, r.fy_n, r.normal_force_n];
+            if corrected {
+                let df = [f_new[0] - f[0], f_new[1] - f[1], f_new[2] - f[2]];
+                let (ra, rb) = (&rail_resp.slots[ia].1, &rail_resp.slots[ib].1);
+                ra.add_to(1.0 - s, df, &mut ut, &mut vt);
+                rb.add_to(s, df, &mut ut, &mut vt);
+                wheel_resp.add_to(1.0, df, &mut uw, &mut vw);
+            }
+            if !(ut.iter().all(|x| x.is_finite())) {
+                return Err(ExplicitError::Diverged {
+                    t_s: t,
+                    x_m: xc,
+                    part: "track",
+                });
+            }
+            if !(uw.iter().all(|x| x.is_finite())) {
+                return Err(ExplicitError::Diverged {
+                    t_s: t,
+                    x_m: xc,
+                    part: "wheel",
+                });
+            }
+            if xc - half_grid < z1 && xc + half_grid > z0 {
+                wear.add_step(&contact, xc);
+            }
+            if popts.energy {
+                let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+                eb.external_work_j += dot(&self.wheel_const, &uw) - e_ext_before;
+                eb.torque_work_j += dot(&self.loads.torque, &uw) - torque_before;
+                eb.gravity_work_j += dot(&self.loads.gravity, &uw) - gravity_before;
+                let p_damp = self.track.op.damper_power(&vt, &mut sc_t)
+                    + self.wheel.op.damper_power(&vw, &mut sc_w);
+                eb.damper_dissipation_j += 0.5 * dt_c * (p_damp + p_damp_prev);
+                p_damp_prev = p_damp;
+                // Work of the contact force (held over the step) on the two structures, with
+                // the corrected end-of-step displacements.
+                let ur_end = self.rail_at(&ut, xc)?;
+                let uw_end = self.wheel_at(&uw);
+                let f_held = if corrected { f_new } else { f };
+                for d in 0..3 {
+                    eb.contact_work_j +=
+                        f_held[d] * ((uw_end[d] - uw_old[d]) - (ur_end[d] - ur_old[d]));
+                }
+                eb.frictional_work_j += r.frictional_power_w * dt_c;
+                eb.spin_work_j -= v * spin * r.mz_nm * dt_c;
+                // Convective work: the force rolling over the deflected rail, V F·∂u/∂x.
+                let hx = self.line.planes_x_m[p + 1] - self.line.planes_x_m[p];
+                for d in [1usize, 2] {
+                    let slope = (nodes_dot(&self.line.nodes[p + 1], dm_t, axes[d], |i| ut[i])
+                        - nodes_dot(&self.line.nodes[p], dm_t, axes[d], |i| ut[i]))
+                        / hx;
+                    eb.convective_work_j += v * f_new[d] * slope * dt_c;
+                }
+            }
+            series_last = series;
+            f = f_new;
+            last_delta = r.approach_m;
+            h.t_s.push(t);
+            h.x_m.push(xc);
+            h.normal_n.push(r.normal_force_n);
+            h.longitudinal_n.push(r.fx_n);
+            h.lateral_n.push(r.fy_n);
+            h.creepage.push(xi);
+            h.approach_m.push(delta - series[2] * f[2]);
+            let cols = contact
+                .pressure_pa()
+                .chunks_exact(ny)
+                .filter(|row| row.iter().any(|&pp| pp > 0.0))
+                .count();
+            h.contact_length_m.push(cols as f64 * dx);
+            h.slip_fraction.push(r.slip_area_fraction());
+            h.frictional_power_w.push(r.frictional_power_w);
+            if let Some((node, rec)) = rail_point.as_mut() {
+                let node = *node;
+                rec.displacement_m
+                    .push([0, 1, 2].map(|c| dm_t.free_index(3 * node + c).map_or(0.0, |i| ut[i])));
+            }
+            if n % 16 == 0 || n == n_steps {
+                progress(n, n_steps);
+            }
+        }
+        if popts.energy {
+            let e_end = stored(&self.track.op, &ut, &vt, &mut ku)
+                + stored(&self.wheel.op, &uw, &vw, &mut ku);
+            eb.stored_change_j = e_end - e_start;
+            // The half-space part of the approach: the solver's approach less the series
+            // compliance's share (the structures' own compliance, whose energy is in the
+            // stored energy: no separate spring).
+            eb.contact_energy_change_j =
+                hertz_energy(f[2], last_delta, series_last[2]) - e_contact_start;
+            eb.residual_spring_energy_change_j = 0.0;
+        }
+        let mut w = vec![0.0; nbins];
+        wear.work_x(&mut w);
+        let seconds = t_wall.elapsed().as_secs_f64();
+        let info = ExplicitInfo {
+            dt_s: dtt,
+            dt_wheel_s: dtw,
+            contact_dt_s: dt_c,
+            track_substeps: nt,
+            wheel_substeps: nw,
+            omega_max_estimate: self.track.step.omega_max_estimate,
+            omega_max_wheel_estimate: self.wheel.step.omega_max_estimate,
+            omega_max_bound: self.track.step.omega_max_bound,
+            steps: n_steps * nt,
+            contact_steps: n_steps,
+            energy_error: if popts.energy {
+                eb.relative_error()
+            } else {
+                f64::NAN
+            },
+            seconds,
+            cpu_seconds: match (cpu0, cpu_seconds()) {
+                (Some(a), Some(b)) => Some(b - a),
+                _ => None,
+            },
+            dofs: [n_t, n_w],
+            setup_seconds: self.setup_seconds,
+        };
+        Ok(ExplicitRecord {
+            record: PassageRecord {
+                speed_m_per_s: v,
+                dt_s: dt_c,
+                x_start_m: x0,
+                zone_m: self.zone_m,
+                histories: h,
+                wear_x_m: wear.x_m(),
+                wear_j_per_m: w,
+                rail_point: rail_point.map(|(_, r)| r),
+                energy: eb,
+                static_creepage: xi0,
+                static_approach_m: delta0,
+                steps: n_steps,
+                seconds,
+            },
+            info,
+        })
+    }
+}
+
+/// The static Hertz approach at the model's wheel load (m).
+fn cfg_hertz_approach(model: &Model) -> Result<f64, ExplicitError> {
+    let h = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
+        radius_x_m: model.wheel.radius,
+        radius_y_m: model.contact.rail_crown_radius,
+        youngs_pa: model.rail.youngs_modulus,
+        poisson: model.rail.poisson_ratio,
+        load_n: model.vehicle.wheel_load,
+    })
+    .map_err(|e| DynamicsError::Other(format!("static Hertz contact: {e}")))?;
+    Ok(h.approach_m)
+}
+
+/// Adds the load of a contact-frame force (N, on the rail) at `x` (m) into `f`.
+fn add_line_force(
+    line: &RailContactLine,
+    track: &TrackStructure,
+    frame: &ContactFrame,
+    x: f64,
+    force: [f64; 3],
+    f: &mut [f64],
+) -> Result<(), ExplicitError> {
+    let (p, s) = line.locate(x).ok_or_else(|| {
+        DynamicsError::Other(format!(
+            "wheel start x = {x:.4} m is off the rail: lengthen the track (track.bays)"
+        ))
+    })?;
+    add_nodes_load(&line.nodes[p], &track.dofmap, frame, 1.0 - s, force, f);
+    add_nodes_load(&line.nodes[p + 1], &track.dofmap, frame, s, force, f);
+    Ok(())
+}
+
+fn solve_one(fac: &StiffnessFactor, rhs: &[f64]) -> Vec<f64> {
+    let mut b = Mat::from_fn(rhs.len(), 1, |i, _| rhs[i]);
+    let mut ws = fac.workspace(1);
+    fac.solve_in_place(b.as_mut(), &mut ws);
+    (0..rhs.len()).map(|i| b[(i, 0)]).collect()
+}
+
+/// The wheel's three rigid-body modes in the x–z plane (translation x, translation z with the
+/// sprung mass, rotation about the axle), M-orthonormal over the free DOFs; checked to carry
+/// no elastic force (`‖K r‖` against `‖K‖ ‖r‖`).
+fn wheel_rigid_modes(
+    wheel: &WheelStructure,
+    op: &ExplicitOperator,
+) -> Result<Vec<Vec<f64>>, ExplicitError> {
+    let n = wheel.dofmap.n_free();
+    let dm = &wheel.dofmap;
+    let mut modes: Vec<Vec<f64>> = Vec::new();
+    for kind in 0..3 {
+        let mut r = vec![0.0; n];
+        for (node, p) in wheel.mesh.nodes.iter().enumerate() {
+            let (ux, uz) = match kind {
+                0 => (1.0, 0.0),
+                1 => (0.0, 1.0),
+                _ => (p[2], -p[0]),
+            };
+            if let Some(i) = dm.free_index(3 * node) {
+                r[i] = ux;
+            }
+            if let Some(i) = dm.free_index(3 * node + 2) {
+                r[i] = uz;
+            }
+        }
+        modes.push(r);
+    }
+    let mass = op.mass();
+    let mdot = |a: &[f64], b: &[f64]| -> f64 { (0..n).map(|i| a[i] * mass[i] * b[i]).sum() };
+    for k in 0..modes.len() {
+        for j in 0..k {
+            let c = mdot(&modes[k], &modes[j]);
+            let (head, tail) = modes.split_at_mut(k);
+            tail[0]
+                .iter_mut()
+                .zip(&head[j])
+                .for_each(|(x, y)| *x -= c * y);
+        }
+        let nn = mdot(&modes[k], &modes[k]).sqrt();
+        if nn.is_nan() || nn <= 0.0 {
+            return Err(ExplicitError::Static {
+                part: "wheel",
+                reason: "a rigid-body mode of the wheel has no mass".into(),
+            });
+        }
+        modes[k].iter_mut().for_each(|x| *x /= nn);
+    }
+    // Check K r ≈ 0 relative to the stiffness scale.
+    let mut kr = vec![0.0; n];
+    let scale = op.gershgorin_omega2().sqrt();
+    for (k, r) in modes.iter().enumerate() {
+        op.apply_k(r, &mut kr);
+        // ‖M^{-½} K r‖ / ‖M^{½} r‖ is an angular frequency squared: compare with ω_bound².
+        let num: f64 = (0..n).map(|i| kr[i] * kr[i] / mass[i]).sum::<f64>().sqrt();
+        if num > 1e-6 * scale * scale {
+            return Err(ExplicitError::Static {
+                part: "wheel",
+                reason: format!(
+                    "rigid mode {k} of the wheel is not free (relative elastic force {:.2e}): the wheel's supports are not those of the explicit path's rigid-mode model",
+                    num / (scale * scale)
+                ),
+            });
+        }
+    }
+    Ok(modes)
+}
+
+/// The elastic static deflection of the free-floating wheel under `f` (N): the rigid
+/// components of `f` are removed (`f − M R Rᵀ f`), three DOFs that fix the rigid motion in a
+/// statically determinate way are held by a stiff spring (their reactions vanish for a
+/// balanced load, so the spring's size does not matter), and the rigid part of the solution
+/// is removed (`u − R Rᵀ M u`).
+fn wheel_elastic_static(
+    wheel: &WheelStructure,
+    mats: &crate::fe::assembly::FeMatrices,
+    op: &ExplicitOperator,
+    rigid: &[Vec<f64>],
+    contact_nodes: &[(usize, f64)],
+    f: &[f64],
+) -> Result<Vec<f64>, ExplicitError> {
+    let n = f.len();
+    let mass = op.mass();
+    let mut fe = f.to_vec();
+    for r in rigid {
+        let c: f64 = r.iter().zip(f).map(|(a, b)| a * b).sum();
+        fe.iter_mut()
+            .zip(r)
+            .zip(mass)
+            .for_each(|((x, ri), mi)| *x -= c * mi * ri);
+    }
+    // Supports: x and z of the contact node, x of the node farthest from it in z.
+    let dm = &wheel.dofmap;
+    let cn = contact_nodes
+        .iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|&(nd, _)| nd)
+        .unwrap_or_else(|| wheel.topology.contact_node());
+    let zc = wheel.mesh.nodes[cn][2];
+    let far = (0..wheel.mesh.nodes.len())
+        .filter(|&nd| nd != wheel.sprung_node && dm.free_index(3 * nd).is_some())
+        .max_by(|&a, &b| {
+            (wheel.mesh.nodes[a][2] - zc)
+                .abs()
+                .total_cmp(&(wheel.mesh.nodes[b][2] - zc).abs())
+        })
+        .unwrap_or(cn);
+    let held: Vec<usize> = [3 * cn, 3 * cn + 2, 3 * far]
+        .iter()
+        .filter_map(|&d| dm.free_index(d))
+        .collect();
+    if held.len() != 3 {
+        return Err(ExplicitError::Static {
+            part: "wheel",
+            reason: "the contact node's x/z DOFs are not free".into(),
+        });
+    }
+    let mut k = mats.k.clone();
+    {
+        let (cp, ri) = (
+            k.symbolic().col_ptr().to_vec(),
+            k.symbolic().row_idx().to_vec(),
+        );
+        let vals = k.val_mut();
+        for &d in &held {
+            let p =
+                (cp[d]..cp[d + 1])
+                    .find(|&p| ri[p] == d)
+                    .ok_or_else(|| ExplicitError::Static {
+                        part: "wheel",
+                        reason: "K has no diagonal entry at a support DOF".into(),
+                    })?;
+            vals[p] *= 2.0;
+        }
+    }
+    let fac = StiffnessFactor::new(k.as_ref()).map_err(|e| ExplicitError::Static {
+        part: "wheel",
+        reason: e.to_string(),
+    })?;
+    let mut u = solve_one(&fac, &fe);
+    for r in rigid {
+        let c: f64 = (0..n).map(|i| r[i] * mass[i] * u[i]).sum();
+        u.iter_mut().zip(r).for_each(|(x, y)| *x -= c * y);
+    }
+    Ok(u)
+}
+
+/// CPU time (user + system) of this process (s), from `/proc/self/stat`; `None` elsewhere.
+pub fn cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = &s[s.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let utime: f64 = f.get(11)?.parse().ok()?;
+    let stime: f64 = f.get(12)?.parse().ok()?;
+    // Linux reports clock ticks of 1/100 s (USER_HZ) on every supported architecture.
+    Some((utime + stime) / 100.0)
+}
+
+/// Runs explicit passages of one model behind the [`crate::dynamics::PassageRunner`]
+/// interface, so that sweeps, growth and studies take `--engine explicit`.
+pub struct ExplicitRunner {
+    /// The explicit model.
+    pub model: ExplicitModel,
+}
+
+impl crate::dynamics::PassageRunner for ExplicitRunner {
+    fn run(
+        &self,
+        speed_kmh: f64,
+        profile: Option<&RailProfile>,
+    ) -> Result<PassageSummary, DynamicsError> {
+        let opts = PassageOptions {
+            energy: false,
+            rail_point_offset_m: None,
+        };
+        let rec = self
+            .model
+            .passage(
+                crate::units::kmh_to_ms(speed_kmh),
+                profile,
+                &opts,
+                &mut |_, _| {},
+            )
+            .map_err(|e| DynamicsError::Other(format!("explicit passage: {e}")))?;
+        crate::dynamics::analysis::summarise(&rec.record)
+    }
+}
