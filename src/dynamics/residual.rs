@@ -122,10 +122,9 @@ pub(crate) fn nodes_dot(
 /// The sparse factor of the track stiffness `K` (N/m, free DOFs), for block solves.
 ///
 /// The LDLᵀ of `K − σM` at σ = 0 from the eigensolver's [`ShiftedSystem`]: METIS ordering
-/// and concurrent column-group solves (default track, 5 kHz: 43.6 M factor entries against
-/// 52.4 M with faer's AMD Cholesky; the cold residual flexibility of a passage took about
-/// 12 s wall with that Cholesky, 7.6 s with this factor, values equal to 2e-10). All pivots
-/// must be positive: `K` is positive definite when the track is supported.
+/// and concurrent column-group solves (smaller and faster than a plain sparse Cholesky of
+/// `K`: docs/performance.md §5). All pivots must be positive: `K` is positive definite when
+/// the track is supported.
 pub struct StiffnessFactor {
     sys: ShiftedSystem,
     factor: ShiftFactor,
