@@ -1,5 +1,5 @@
-//! Benchmark of one reduced-order passage of the default model (issue 5: under 1 s at 140 km/h
-//! over the 1 m solution zone, modes cached): prepares the model once from the modal cache, then
+//! Benchmark of one reduced-order passage of the default model (target: under 1 s at
+//! 140 km/h over the 1 m solution zone, modes cached; figures in docs/performance.md): prepares the model once from the modal cache, then
 //! runs the passage `reps` times with the energy balance (as `corrugation passage`) and without
 //! (as the studies), and prints wall and CPU seconds per passage and ms per step.
 //!

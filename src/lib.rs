@@ -5,6 +5,11 @@
 //! eigenmodes, a modal-superposition wheel passage coupled to transient frictional rolling
 //! contact, and the wear-growth loop of Li et al. (TU Delft).
 //!
+//! The physics, equations and numerical methods of every stage, with the published
+//! references, are in `docs/theory.md` of the repository (module docs cite its sections as
+//! "docs/theory.md §N"); measured run times and the benchmark commands in
+//! `docs/performance.md`.
+//!
 //! The pipeline, one module per stage, data flowing one way (a stage never imports a later
 //! one):
 //!

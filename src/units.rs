@@ -52,7 +52,7 @@ mod tests {
 
     #[test]
     fn reference_speed_is_38_89_m_per_s() {
-        // method.md: 140 km/h = 38.89 m/s.
+        // docs/theory.md §1.2: 140 km/h = 38.89 m/s.
         assert!((kmh_to_ms(140.0) - 38.888_888_9).abs() < 1e-6);
         assert!((ms_to_kmh(kmh_to_ms(54.8)) - 54.8).abs() < 1e-12);
     }

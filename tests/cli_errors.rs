@@ -163,7 +163,7 @@ fn contact_rejects_a_negative_friction_coefficient_cleanly() {
 fn contact_command_json_keys_and_hertz_geometry() {
     // Transient rolling from rest over 20 grid steps with a prescribed creepage: the normal
     // part is the Hertz problem of the model (a = 7.162 mm, b = 5.387 mm, p0 = 1237.6 MPa,
-    // approach 104.1 µm for the reference wheel on the R300 crown, design-notes.md).
+    // approach 104.1 µm for the reference wheel on the R300 crown, docs/theory.md §6.2).
     let (code, out, err) = run(&["contact", "--json", "--creepage", "-0.001", "--steps", "20"]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();

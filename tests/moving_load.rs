@@ -1,5 +1,4 @@
-//! Modal synthesis vs the full FE matrices (issue 5, "How it is shown to be right", first
-//! bullet) on a small track (6 bays, coarse mesh): a moving constant vertical and
+//! Modal synthesis vs the full FE matrices (docs/theory.md §7.9) on a small track (6 bays, coarse mesh): a moving constant vertical and
 //! longitudinal load through the passage's reduced path vs direct Newmark integration of the
 //! full K, M, C; the static deflection under the wheel load vs a direct sparse solve; and
 //! what the off-diagonal modal damping does.

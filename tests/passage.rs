@@ -42,7 +42,7 @@ fn cache() -> ModalCache {
 
 /// Static equilibrium and the driving torque: in the solution zone the mean normal force is
 /// the static wheel load along the inclined contact normal, W / cos α, and the mean
-/// longitudinal force is the traction coefficient times W, both within 1 % (issue 5).
+/// longitudinal force is the traction coefficient times W, both within 1 % (docs/theory.md §7.4–§7.5).
 /// The energy of the passage balances within 1 %, and on the structural side alone:
 /// external work + contact work = Δ(kinetic + strain) + damper dissipation (to 0.1 %: the
 /// damper and contact powers are integrated by the trapezoidal rule).
@@ -65,7 +65,7 @@ fn passage_holds_the_static_load_and_the_traction_and_balances_energy() {
         structural.abs() < 1e-3 * e.external_work_j.abs(),
         "structural energy residual {structural} J ({e:?})"
     );
-    // The whole balance (issue 5): work of the driving torque, gravity and train resistance,
+    // The whole balance (docs/theory.md §7.8): work of the driving torque, gravity and train resistance,
     // plus the inputs of the nominal motion (spin creepage, rolling over the deflected rail)
     // = stored + dampers + frictional work + contact elastic energy, within 1 %.
     assert!(
@@ -121,8 +121,8 @@ fn run_cli(cmd: &[&str], out: &std::path::Path) -> serde_json::Value {
     serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("{e}: {stdout}"))
 }
 
-/// `passage --json` has the keys of issue 5 and writes its files; `grow --json` and
-/// `predict --json` run end to end on the small model and have the keys of issue 6.
+/// `passage --json` has its documented keys (README) and writes its files; `grow --json` and
+/// `predict --json` run end to end on the small model and have their documented keys.
 #[test]
 fn passage_grow_and_predict_commands_write_their_outputs() {
     let dir = std::env::temp_dir().join(format!("corrugation-test-cli-{}", std::process::id()));
@@ -325,7 +325,7 @@ fn receptance_command_and_wheel_lines() {
     }
 }
 
-/// Issue 5's physics check, the part that holds (method.md §6): on the smooth rail the
+/// The physics check, the part that holds (docs/theory.md §2.4): on the smooth rail the
 /// differential wear follows F_L, not F_N — the band-passed wear correlates more strongly
 /// with the band-passed F_L than with F_N along the solution zone (measured 0.85 vs 0.40),
 /// and the strongest wear component is one of F_L's components within the PSD's wavelength

@@ -71,7 +71,7 @@ fn rigid_body_motions_are_stress_free_and_the_suspension_carries_the_static_load
     // Static load: (sprung + unsprung) g = wheel_load.
     let total = (w.sprung_mass + w.unsprung_mass) * m.vehicle.gravity;
     assert!((total - m.vehicle.wheel_load).abs() < 1e-9 * m.vehicle.wheel_load);
-    // Half wheelset within the 600–900 kg of track-parameters.md.
+    // Half wheelset within the 600–900 kg of docs/theory.md §3.6.
     assert!(
         w.unsprung_mass > 600.0 && w.unsprung_mass < 900.0,
         "{}",

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Convergence of the key track frequencies of RPM3 (deliverable of issue 3):
+# Convergence of the key track frequencies of RPM3 (docs/theory.md §3.3):
 #   * the pinned-pinned frequency (vertical bending, nodes at the sleepers);
 #   * the lowest longitudinal-compression (LC) frequencies;
 # versus the mesh refinement (3 levels) and versus the width of the rigidly held strip

@@ -46,7 +46,7 @@ if [[ "$group" == all || "$group" == bench ]]; then
   cargo run --release --example assembly_bench
   cargo run --release --example contact_bench
   /usr/bin/time -v cargo run --release -- mesh 2>&1 | grep -E "free DOFs|build|Maximum resident|Elapsed"
-  echo "== eigen: all track modes of the default model below 5 kHz, cold (issue 3 benchmark)"
+  echo "== eigen: all track modes of the default model below 5 kHz, cold (docs/performance.md)"
   cargo build --release --example track_modes_bench
   /usr/bin/time -v target/release/examples/track_modes_bench 5000 2>&1 \
     | grep -E "modes|eigen total|orthogonalisation|slice|peak|Maximum resident|Elapsed"

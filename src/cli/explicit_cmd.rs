@@ -1,4 +1,4 @@
-//! `corrugation explicit`: one passage of the full explicit FE path (docs/theory.md §6): the
+//! `corrugation explicit`: one passage of the full explicit FE path (docs/theory.md §8): the
 //! untruncated track and wheel, central difference, the same contact, wear and analysis as
 //! `passage`. Writes the files of `passage` plus `explicit.json` (time steps, ω_max, step
 //! counts, energy error, wall and CPU time).

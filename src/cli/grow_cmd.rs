@@ -1,5 +1,5 @@
-//! `corrugation grow`: trial-amplitude growth (method.md §2, the reference procedure) and,
-//! with `--rounds`, iterative growth (issue 6 items 1–2).
+//! `corrugation grow`: trial-amplitude growth (docs/theory.md §10.1–§10.4, the reference
+//! procedure) and, with `--rounds`, iterative growth (§10.5).
 //!
 //! Outputs in `--out DIR` (default `corrugation-out/grow`), written atomically:
 //! * `consistency.csv` — per amplitude and reference component: the matched W_f, F_L, F_N

@@ -1,4 +1,5 @@
-//! `corrugation passage`: one reduced-order passage of the wheel over the track (issue 5).
+//! `corrugation passage`: one reduced-order passage of the wheel over the track
+//! (docs/theory.md §7).
 //!
 //! Outputs in `--out DIR` (default `corrugation-out/passage`), all written atomically:
 //! * `forces.csv` — per time step: `t_s, x_m, fn_n, fl_n, flat_n, creepage, approach_m,

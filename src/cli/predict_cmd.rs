@@ -1,4 +1,4 @@
-//! `corrugation predict`: the main job (issue 6 item 6). On one model (default: the embedded
+//! `corrugation predict`: the main job. On one model (default: the embedded
 //! Dutch track, RPM3):
 //! 1. the modal bases of track and wheel (cached: a rerun reuses them);
 //! 2. one passage on the smooth rail (forces, wear, PSDs, plots) → `DIR/passage/`;

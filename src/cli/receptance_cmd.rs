@@ -1,7 +1,7 @@
 //! `corrugation receptance`: the reduced model's receptances at the contact (rail at the
 //! mid-span and over the sleeper nearest the solution-zone centre, the wheel at its contact
 //! point) and the normal contact force per unit roughness, with their peaks: which
-//! resonances a sweep's frequency selection can lock on (method.md §5).
+//! resonances a sweep's frequency selection can lock on (docs/theory.md §7.6).
 //!
 //! Outputs in `--out DIR` (default `corrugation-out/receptance`), written atomically:
 //! * `receptance.csv` — `frequency_hz`, then for each rail position `P` (`mid`, `sleeper`, or

@@ -205,7 +205,7 @@ mod tests {
 
     #[test]
     fn reference_wheel_on_r300_crown() {
-        // design-notes.md: a = 7.162 mm, b = 5.387 mm, p0 = 1237.6 MPa, approach 104.1 µm.
+        // docs/theory.md §6.2: a = 7.162 mm, b = 5.387 mm, p0 = 1237.6 MPa, approach 104.1 µm.
         let h = HertzContact::solve(&HertzInput::wheel_on_rail(
             0.46,
             f64::INFINITY,

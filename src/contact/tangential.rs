@@ -31,7 +31,7 @@ pub enum TangentialAlgorithm {
     /// the manifold of the slip directions (quadratic convergence of the directions).
     #[default]
     Newton,
-    /// The former method: slip directions only by Kalker's element test (a Jacobi-type
+    /// The alternative: slip directions only by Kalker's element test (a Jacobi-type
     /// fixed-point iteration, one exact product per sweep; slow, and it can stall and fall
     /// back to FISTA). Kept to compare.
     ElementTest,
@@ -226,7 +226,7 @@ impl TangentialSolver {
     ///    `κ_i = |S_i|/g_i` spreads over orders of magnitude (large where the slip is large
     ///    and the bound `µ p` small, at the trailing edge). Scaling by the inverse diagonal
     ///    removes that spread: on the passage of the default model it halves the influence
-    ///    products per step (34 → 18, issue 5). It leaves a slip element's search direction
+    ///    products per step (docs/performance.md). It leaves a slip element's search direction
     ///    along its tangent (a scalar per element), so the CG stays on the same model.
     ///
     /// The outer loop ends when the adhesion residual is below tolerance, no element changes

@@ -30,7 +30,7 @@ fn normal_only(nx: usize, ny: usize, margin: f64) -> (StepResult, f64, f64, f64)
 
 #[test]
 fn grid_normal_solver_reproduces_hertz_and_converges() {
-    // Closed form: Hertz (reference numbers of design-notes.md, checked in hertz.rs).
+    // Closed form: Hertz (reference numbers of docs/theory.md §6.2, checked in hertz.rs).
     let h = reference_hertz();
     let mut errs = Vec::new();
     for &n in &[16usize, 32, 64] {

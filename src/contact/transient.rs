@@ -22,7 +22,7 @@
 //! The previous displacement `u(t − Δt)` on rows `1..=nx` is the extended product the
 //! tangential solver computes anyway for its final residual, so a step needs no extra FFT.
 //!
-//! # Frictional work (method.md §4)
+//! # Frictional work (docs/theory.md §6.6)
 //! Per element and step: power density `P_i = −τ̄_i · s_i` (W/m², ≥ 0, zero in stick) and
 //! work density `P_i Δt` (J/m²), with `τ̄_i = ½ (τ_i(t) + τ_{i+1}(t − Δt))` the trapezoidal
 //! mean of the traction along the material path `x_{i+1} → x_i` of the step (second order;
@@ -411,8 +411,8 @@ impl TransientRolling {
         Ok(())
     }
 
-    /// Choose the tangential algorithm (default [`TangentialAlgorithm::Newton`]; the former
-    /// [`TangentialAlgorithm::ElementTest`] is kept to compare).
+    /// Choose the tangential algorithm (default [`TangentialAlgorithm::Newton`];
+    /// [`TangentialAlgorithm::ElementTest`] is the alternative, kept to compare).
     pub fn set_tangential_algorithm(&mut self, algorithm: TangentialAlgorithm) {
         self.tang.algorithm = algorithm;
     }

@@ -1,4 +1,4 @@
-//! From a passage record to its [`PassageSummary`] (method.md §5): the signals along the rail
+//! From a passage record to its [`PassageSummary`] (docs/theory.md §9): the signals along the rail
 //! in the solution zone (`x = x₀ + V t` maps time to position), zero-phase band-pass
 //! 20–80 mm, one-sided PSD in the wavelength domain (Hann window, ×8 zero padding, see
 //! [`crate::spectral::psd`]), peaks with sub-bin accuracy, `f = V/λ`.

@@ -1,4 +1,4 @@
-//! Time integration of a reduced modal system `q̈ + C_q q̇ + Ω² q = f(t)` (issue 5 item 3).
+//! Time integration of a reduced modal system `q̈ + C_q q̇ + Ω² q = f(t)` (docs/theory.md §7.2).
 //!
 //! **Scheme: velocity Verlet (Newmark β = 0, γ = ½) with the damping implicit.**
 //!

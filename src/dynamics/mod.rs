@@ -1,4 +1,4 @@
-//! The reduced-order wheel passage (method.md §3–4): modal synthesis of the track and the
+//! The reduced-order wheel passage (docs/theory.md §7): modal synthesis of the track and the
 //! wheel, the moving frictional rolling contact, time integration, and the frictional work
 //! (wear) along the rail.
 //!

@@ -1,5 +1,5 @@
-//! Validation of the modal synthesis against the full FE matrices (issue 5, "How it is shown
-//! to be right", first bullet): a constant load moving along the rail's contact line, solved
+//! Validation of the modal synthesis against the full FE matrices (docs/theory.md §7.9): a
+//! constant load moving along the rail's contact line, solved
 //! (a) by the reduced-order path of the passage and (b) by direct time integration of the
 //! full sparse `K`, `M`, `C`; and the static deflection under the wheel load, modal vs a
 //! direct sparse solve.

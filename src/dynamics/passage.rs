@@ -1,9 +1,9 @@
-//! One passage of the wheel over the track (method.md §3–4; issue 5 items 1–4).
+//! One passage of the wheel over the track (docs/theory.md §7).
 //!
 //! # The coupled problem
 //! Track modes `q_t` and wheel modes `q_w` (see [`super::reduced`]) each obey
 //! `q̈ + C_q q̇ + Ω² q = Φᵀ f`, integrated by [`super::integrator::ModalVerlet`] with the
-//! time step of the contact grid, `Δt = Δx / V` (design-notes.md: material moves one grid
+//! time step of the contact grid, `Δt = Δx / V` (docs/theory.md §6.5: material moves one grid
 //! element per step in Kalker's transient theory). At each step:
 //!
 //! 1. both substructures advance their displacements to `t_{n+1}`;
@@ -18,14 +18,14 @@
 //! 4. the transient rolling contact step ([`crate::contact::TransientRolling`]) gives the
 //!    forces on the wheel (F_L = Fx, lateral, F_N) and the frictional power density, which
 //!    is accumulated in rail-fixed bins: `W_f(x) = Σ τ·s Δt` integrated across the rail
-//!    head (J/m, method.md §4 with k = 1: the coefficient scales, it does not shape);
+//!    head (J/m, docs/theory.md §6.6 with k = 1: the coefficient scales, it does not shape);
 //! 5. the forces act on the wheel and, opposite, on the rail at `x_c`; both substructures
 //!    complete the step.
 //!
 //! # Loads and rigid-body motion of the wheel
 //! Gravity acts on every wheel mass and the sprung mass (total = `vehicle.wheel_load`). The
 //! driving torque is constant, `T = μ_t W R` (traction coefficient μ_t), applied as
-//! tangential forces on the journal nodes; design-notes.md prefers a constant torque to a
+//! tangential forces on the journal nodes; a constant torque is preferred to a
 //! feedback controller (it does not itself excite the kHz band). A constant longitudinal
 //! force `−μ_t W` on the journal nodes stands for the train resisting the traction (the
 //! vehicle's inertia keeps the speed). The wheel's three rigid modes (x, z, rotation) are
@@ -59,7 +59,7 @@ pub const RIGID_HZ: f64 = 0.5;
 
 /// Relative tolerance of the tangential contact solver in a passage (traction error ≈ this ×
 /// µ p_max; the contact module's default is 1e-6). Measured on the default model (140 km/h,
-/// 2 and 5 kHz, issue 5) against the former plain CG at 1e-6: the force histories move by
+/// 2 and 5 kHz) against the former plain CG at 1e-6: the force histories move by
 /// ≤ 6e-5 of the mean F_L (≤ 5e-6 of the mean F_N), the band RMS of F_L and of the wear by
 /// ≤ 6e-4 (relative), the dominant wavelength by < 1e-5 — no more than with the Jacobi CG at
 /// 1e-6 (most of it is a start transient: the static start's creepage moves by ~4e-5
@@ -74,7 +74,7 @@ pub struct PassageOptions {
     /// integrator's implicit solve).
     pub energy: bool,
     /// Distance after the solution-zone start of the rail-top node whose displacement is
-    /// recorded (m); `None` = no rail-point record. Issue 5 asks for 0.6 m.
+    /// recorded (m); `None` = no rail-point record. Default 0.6 m.
     pub rail_point_offset_m: Option<f64>,
 }
 
@@ -191,7 +191,7 @@ pub struct PassageRecord {
     /// Bin centres of the wear along the rail in the solution zone (m).
     pub wear_x_m: Vec<f64>,
     /// Frictional work per metre of rail `W_f(x) = Σ τ·s Δt` integrated across the rail head
-    /// (J/m). The wear is proportional to it (method.md §4); the wear coefficient
+    /// (J/m). The wear is proportional to it (docs/theory.md §6.6); the wear coefficient
     /// (`wear.coefficient`, m³/J) converts it to a worn depth only in the iterative growth.
     pub wear_j_per_m: Vec<f64>,
     /// The rail-point record.

@@ -1,6 +1,6 @@
 //! Receptance (dynamic compliance, m/N) of the reduced track and wheel at the contact point:
 //! which structural resonances the moving contact can see, and at which frequencies the
-//! frequency selection of a sweep may lock on (method.md §5, "Frequency selection").
+//! frequency selection of a sweep may lock on (docs/theory.md §2.3 and §7.6).
 //!
 //! For a reduced system `q̈ + C_q q̇ + Ω² q = Φᵀ f` (module [`super::reduced`]) and
 //! observation/load rows `r_a = Φᵀ e_a` (the modal rows of a weighted node set in direction
@@ -11,7 +11,7 @@
 //! ```
 //!
 //! with the **full** projected damping matrix (the discrete dampers are not proportional;
-//! design-notes.md). It is computed exactly by one complex LU factorisation of the m × m
+//! docs/theory.md §7.1). It is computed exactly by one complex LU factorisation of the m × m
 //! dynamic stiffness per frequency (frequencies in parallel with rayon); no modal-damping
 //! approximation. The truncated modes above f_max add their static compliance (the passage's
 //! constant residual compliance, [`super::residual`]) to the diagonal terms.
@@ -21,7 +21,7 @@
 //! Hertz compliance `c_H = dδ/dN = 2δ/(3N)`; its maxima are the coupled wheel–track
 //! resonances that amplify a roughness of that frequency. The longitudinal receptance
 //! `H_xx^rail` is what turns a fluctuating creep force into a fluctuating rail surface
-//! velocity (the creepage feedback of method.md §2a).
+//! velocity (the creepage feedback of docs/theory.md §2.2 a).
 //!
 //! References: Ewins, *Modal Testing*, ch. 2 (receptance of non-proportionally damped
 //! systems); Grassie, Gregory, Harrison & Johnson, "The dynamic response of railway track to

@@ -1,11 +1,11 @@
-//! Modal synthesis of the wheel–track system (method.md §3; issue 5 item 1–2).
+//! Modal synthesis of the wheel–track system (docs/theory.md §7.1).
 //!
 //! Each substructure (track, wheel with the sprung mass) is reduced to its mass-normalised
 //! modes below f_max: `q̈ + C_q q̇ + Ω² q = Φᵀ f`, with
 //! - `Ω² = diag(ω_i²)` (rad²/s²),
 //! - `C_q = Φᵀ C Φ` the **full** projected damping matrix of the discrete dampers (1/s): the
 //!   railpad and ballast dampers are not proportional, so `C_q` is not diagonal
-//!   (design-notes.md, "Non-proportional damping"),
+//!   (docs/theory.md §7.1),
 //! - `Φᵀ f` the generalised force (N·m/√kg… i.e. N per unit modal coordinate).
 //!
 //! The two substructures are coupled only through the contact force, which acts at the
@@ -27,8 +27,8 @@
 //! contact force onto the nodes (virtual work: the force and the displacement are
 //! interpolated consistently). Spreading over the patch width keeps the coarse mesh's
 //! local flexibility under a point load out of the model; the contact solver's half-space
-//! supplies the local (Hertzian) compliance (design-notes.md, "Modal truncation and local
-//! contact flexibility").
+//! supplies the local (Hertzian) compliance (docs/theory.md §7.1 and
+//! §7.7).
 
 use faer::sparse::SparseColMatRef;
 use faer::Mat;

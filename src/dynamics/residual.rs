@@ -1,5 +1,4 @@
-//! Residual (static) flexibility of the rail at the moving contact (issue 5 item 1: "a
-//! static (residual-flexibility) correction for truncated modes at the contact").
+//! Residual (static) flexibility of the rail at the moving contact (docs/theory.md §7.7).
 //!
 //! # What it is
 //! For a unit force in direction `d` of the contact frame (x rolling, t lateral tangent,
@@ -31,10 +30,10 @@
 //! model at 5 kHz (20 mm elements), +134 % / +96 % on the test track at 3 kHz (80 mm) —
 //! the plane value is dominated by local indentation under a load concentrated on one node
 //! plane, and the consistent form would modulate the contact stiffness at the
-//! element-passing wavelength (20 mm on the former default mesh, inside the 20–80 mm band;
-//! the default zone mesh is now 10 mm).
+//! element-passing wavelength (inside the 20–80 mm band for 20 mm elements; the default
+//! zone elements are 10 mm, docs/theory.md §3.1).
 //!
-//! # Local contact flexibility (design-notes.md, "do not count it twice")
+//! # Local contact flexibility (docs/theory.md §7.7, "do not count it twice")
 //! `G` of a Hertz-sized load on the mesh contains local indentation of the head that the
 //! contact's half-space already supplies (Hertz `dδ/dF` = 6.9e-10 m/N at 100 kN; Mindlin's
 //! no-slip tangential compliance ≈ 8.4e-10 m/N). Measured ([`lateral_spread_flexibility`],
@@ -123,10 +122,9 @@ pub(crate) fn nodes_dot(
 /// The sparse factor of the track stiffness `K` (N/m, free DOFs), for block solves.
 ///
 /// The LDLᵀ of `K − σM` at σ = 0 from the eigensolver's [`ShiftedSystem`]: METIS ordering
-/// and concurrent column-group solves (default track, 5 kHz: 43.6 M factor entries against
-/// 52.4 M with faer's AMD Cholesky; the cold residual flexibility of a passage took about
-/// 12 s wall with that Cholesky, 7.6 s with this factor, values equal to 2e-10). All pivots
-/// must be positive: `K` is positive definite when the track is supported.
+/// and concurrent column-group solves (smaller and faster than a plain sparse Cholesky of
+/// `K`: docs/performance.md §5). All pivots must be positive: `K` is positive definite when
+/// the track is supported.
 pub struct StiffnessFactor {
     sys: ShiftedSystem,
     factor: ShiftFactor,

@@ -1,7 +1,7 @@
 //! What one passage reports to the analyses built on top of it (growth loop, sweeps, studies):
 //! scalar indicators, the wavelength components and the band-limited spectra of the
 //! differential wear `W_f`, the longitudinal force `F_L` and the normal force `F_N` in the
-//! solution zone (method.md §5). No time histories: a summary is small enough to keep one per
+//! solution zone (docs/theory.md §9). No time histories: a summary is small enough to keep one per
 //! speed of a sweep and to store as JSON.
 //!
 //! Units: forces N, lengths in SI except the fields whose name ends in `_mm` (wavelengths in

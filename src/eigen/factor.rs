@@ -13,13 +13,10 @@
 //! definite, the number of negative entries of `D` equals the number of eigenvalues
 //! `λ = ω²` of `K φ = λ M φ` with `λ < σ`.
 //!
-//! **Ordering and solves, measured** on the default track (152,358 DOFs, σ = (2π·5 kHz)²,
-//! 2-core machine, `track_modes_bench 5000 --probe`): factor entries AMD 52.4 M, given
-//! numbering 121.9 M, METIS nested dissection 43.6 M ([`super::ordering`]; `Auto` keeps the
-//! smallest); numeric LDLᵀ 1.0–1.3 s. Block solves (s per right-hand side, METIS): 1 RHS
-//! 0.076; 16 RHS sequential 0.0147, split into two concurrent column groups 0.0095; 64 RHS
-//! 0.0097 → 0.0053. In the whole 5 kHz extraction (block 8) the solves took 120 s for 4064
-//! vectors with AMD and faer's own parallelism, 57 s with METIS and the column groups.
+//! **Ordering and solves.** The fill-reducing ordering is METIS nested dissection
+//! ([`super::ordering`]), AMD or the given numbering; `Auto` keeps the one with the smallest
+//! factor. Block solves split their right-hand sides into concurrent column groups
+//! (`column_groups`). Measured factor sizes and solve costs: docs/performance.md §3.1.
 //!
 //! The numeric factorisation is faer's supernodal/simplicial LDLᵀ *without pivoting*. That is
 //! not backward stable for indefinite matrices in general; in practice (measured on this
@@ -369,8 +366,7 @@ impl ShiftedSystem {
 /// Number of column groups solved concurrently: one per thread of `par`, at most one per
 /// column. faer's supernodal triangular solves parallelise inside the dense supernode blocks
 /// only, which a block of 8 right-hand sides does not fill; independent column groups, each
-/// solved sequentially, keep every core busy (measured on the default track: see the module
-/// doc).
+/// solved sequentially, keep every core busy (measured: docs/performance.md §3.1).
 fn column_groups(ncols: usize, par: Par) -> usize {
     match par {
         Par::Seq => 1,

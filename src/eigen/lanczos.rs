@@ -112,8 +112,7 @@ fn mm(a: MatRef<'_, f64>, b: MatRef<'_, f64>, par: Par) -> Mat<f64> {
 /// first pass's sweep over V at no extra read). Skipping leaves z M-orthogonal to V to that
 /// level instead of to round-off; a Ritz value then errs by at most about this fraction of
 /// θ_max, two orders below the convergence floor `tolerance · θ_max / 100` for the default
-/// tolerance. Measured on the default track to 5 kHz: every c₁ of 2608 columns was below
-/// 1e-13 of its column, so the pass that costs one read of V is never needed there.
+/// tolerance. On the default track the pass is never needed (docs/performance.md §3.3).
 const NEGLIGIBLE_SECOND_PASS: f64 = 1e-12;
 
 /// Blocks between two convergence checks of a Lanczos cycle before its subspace is full (one
@@ -1393,11 +1392,10 @@ const PROBE_AS_BOUND: f64 = 0.03;
 /// every band has about the same *work*. With `x = (√λ − √λ_lo)/(√λ_top − √λ_lo)` the count
 /// model is `ν(λ) − ν₀ ≈ N·x^α`, fitted to one probe `(x_p, factorisation at x_p)` (the
 /// default track has α ≈ 1: its rail and sleepers are slender; without a probe one is
-/// factorised at x = ½), and a mode at x costs `1 + 2x²` units: measured on the default
-/// track to 5 kHz, the slices near f_max need about 2.7 times the time per mode of the
-/// lowest ones (their spectrum is denser in θ and more modes are deflated). Band i then ends
-/// where the work `W(x) = x^α + 2α/(α+2)·x^{α+2}` reaches `i/bands · W(1)`; the probe is
-/// that bound if it lies within [`PROBE_AS_BOUND`] of it. A split whose count does not lie
+/// factorised at x = ½), and a mode at x costs `1 + 2x²` units (the slices near f_max take
+/// longer per mode: denser spectrum in θ, more deflated modes; docs/performance.md §3.3).
+/// Band i then ends where the work `W(x) = x^α + 2α/(α+2)·x^{α+2}` reaches
+/// `i/bands · W(1)`; the probe is that bound if it lies within [`PROBE_AS_BOUND`] of it. A split whose count does not lie
 /// strictly between its neighbours' is dropped (fewer, non-empty bands).
 fn choose_splits(
     ctx: &mut Ctx<'_>,

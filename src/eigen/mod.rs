@@ -27,13 +27,12 @@
 //!   re-orthogonalisation (two passes of block classical Gram–Schmidt in the M-inner
 //!   product, with the coefficients `(MV)ᵀz` taken from `M V` stored beside `V` — for a
 //!   diagonal (lumped) M from `Vᵀ(d∘z)` instead, with no `M V` stored and the first pass's
-//!   update fused with the second pass's coefficients in one sweep over V, which cut the
-//!   default track's 5 kHz run from 85 to 75–80 s and its peak memory by 1.1 GB — then a
+//!   update fused with the second pass's coefficients in one sweep over V — then a
 //!   symmetric (Löwdin) orthonormalisation of the block with one sparse product `M z`, which
 //!   is carried into `M V`; another round when a column still shrank by half in the second
 //!   pass or the block's Gram matrix is ill-conditioned). For a lumped M the second pass's
 //!   update is skipped when its coefficients, which the fused sweep yields anyway, are below
-//!   1e-12 of the column (on the default track they always are: below 1e-13).
+//!   1e-12 of the column.
 //!   The Rayleigh quotient `H = Vᵀ M Op V` is formed column block by column block; thick
 //!   restart keeps the best Ritz vectors (and converged ones at the far negative end of θ).
 //!   All modes found in earlier slices are deflated (the new basis is kept M-orthogonal to
@@ -45,7 +44,7 @@
 //!   removes the amplification of the Lanczos residual by `K − σM` in the true residual.
 //!   Convergence is checked when the subspace is full and, from half of it on, every 4
 //!   blocks, so a slice stops as soon as its wanted pairs have converged instead of
-//!   finishing the cycle (default track to 5 kHz: 2480 → 2224 solved vectors).
+//!   finishing the cycle.
 //! * **Adaptive boundaries.** A slice is not cut in advance: Lanczos runs at the lower shift
 //!   until 1.25 × `modes_per_slice` Ritz values nearest above it have converged (the
 //!   boundary then keeps about `modes_per_slice` of them), the next boundary τ
@@ -58,7 +57,7 @@
 //!   For a grounded structure (no eigenvalue below 4/0.9 · |σ₀|, shown by a Sturm count
 //!   factorised beside the band's ends) a short probe finds λ₁ and the first slice starts at
 //!   0.9 λ₁ (Sturm count 0 there is verified); otherwise the probe could not move the shift
-//!   and is skipped (default track to 5 kHz: 176 solved vectors saved). For `f_min > 0` the first slice is two-sided (see below), so that
+//!   and is skipped. For `f_min > 0` the first slice is two-sided (see below), so that
 //!   the eigenvalues just below λ_min, which are not deflated, cannot swamp the iteration.
 //! * **Concurrent bands** ([`EigenOptions::concurrent_bands`]). With several threads and a
 //!   model of at least 20,000 DOFs the band is cut into one sub-band per thread, each sliced
@@ -84,10 +83,7 @@
 //!   are capped at 0.7 times their distance from lo; its two-sided last slice, with the same
 //!   margin from its midpoint shift, may be up to 4.7 times that distance wide. The modes within 20 % in λ of a bound (at most 96 on each side) get one joint
 //!   Rayleigh–Ritz step, since across a bound they were not deflated against each other.
-//!   Measured on the default track to 5 kHz (152,358 DOFs, idle 2-core machine): two bands
-//!   52.7–54.6 s over four runs, 1968 solved vectors, 4.7 GB; M-orthonormality error across
-//!   the bound 4.5e-8 (residual / gap of modes accepted at the tolerance; within a band
-//!   ≈ 1e-13). To 2 kHz: 25.7 s.
+//!   Times, memory and the orthonormality across a bound: docs/performance.md §2–§3.
 //! * **Verification.** Every returned pair gets its true relative residual
 //!   `‖Kφ − λMφ‖₂ / (‖Kφ‖₂ + max(|λ|, λ_floor)‖Mφ‖₂)` with `λ_floor = (2π·1 Hz)²` (the floor
 //!   avoids 0/0 for rigid-body modes, but for them this measure is dominated by the round-off
@@ -117,10 +113,8 @@ use faer::Mat;
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum FillOrdering {
     /// Run the METIS, identity (given numbering) and AMD symbolic analyses and keep the one
-    /// with the smallest factor (default). Measured: on rail-like meshes numbered along x the
-    /// identity gives ~2x less fill and ~2.7x faster factorisation than AMD; on the default
-    /// track (152,358 DOFs, sleepers numbered after the rail) AMD 52.4 M factor entries,
-    /// identity 121.9 M, METIS 43.6 M (kept).
+    /// with the smallest factor (default; on the default track METIS, docs/performance.md
+    /// §3.1).
     #[default]
     Auto,
     /// faer's approximate minimum degree (robust for any numbering).
@@ -140,20 +134,13 @@ pub struct EigenOptions {
     pub f_min_hz: f64,
     /// Convergence tolerance on the Ritz residual of the transformed problem,
     /// `‖Op x − θ x‖_M ≤ tol · max(θ, θ_max/100)` (dimensionless). Default 1e-8. Much smaller
-    /// values may be unattainable: the residuals stagnate at ≈ u·κ(K − σM)·θ_max (measured
-    /// ≈ 1e-11·θ_max on the rail-like benchmark). Eigenvalues are far more accurate than
+    /// values may be unattainable: the residuals stagnate at ≈ u·κ(K − σM)·θ_max
+    /// (docs/performance.md §3.3). Eigenvalues are far more accurate than
     /// tol (error ∝ tol²).
     pub tolerance: f64,
-    /// Block size b of the block Lanczos method (right-hand sides per solve). Default 8
-    /// (measured on the 126,800-DOF track to 2 kHz: 8 needs ~20 % fewer solved vectors than
-    /// 16 and less dense work; 32 needs ~40 % more. On the 152,358-DOF default to 5 kHz with
-    /// the parallel column-group solves: 4 needs 18 % fewer vectors but each costs 1.7× as
-    /// much; 12 and 16 need 50–140 % more). In concurrent bands (one-group solves) a larger
-    /// block pays better, measured 2026-11-25 on the default track to 5 kHz: b = 8 → 1968
-    /// vectors, 52.7–54.6 s; 10 → 2110, 52.9 s; 12 → 2280, 49.5–51.3 s; 14 → 2352, 52.0 s;
-    /// 16 → 2464, 50.5 s (RPM1: 8 → 89.4 s, 12 → 84.4 s). 12 is not the default because on a
-    /// 4-bay track to 1 kHz (one slice) it stopped where one pair of a four-fold cluster at
-    /// 103.7 Hz had a relative residual of 1.25e-4 (8: 2.6e-5 at worst).
+    /// Block size b of the block Lanczos method (right-hand sides per solve). Default 8; why
+    /// 8 (solved vectors and times for 4–32, and an accuracy case against 12):
+    /// docs/performance.md §3.3.
     pub block_size: usize,
     /// Maximum thick restarts per slice before giving up. Default 30.
     pub max_restarts: usize,
@@ -163,27 +150,10 @@ pub struct EigenOptions {
     pub restart_keep: f64,
     /// Target number of modes per slice; the slice boundaries are placed (with Sturm counts)
     /// so that each slice holds about this many. Default 125. The solved-vector count
-    /// depends erratically on where the boundaries land; measured 2026-11-25 on the default
-    /// track (152,358 DOFs, all earlier slices deflated, idle 2-core machine):
-    ///
-    /// | modes/slice | RPM3 to 5 kHz | RPM3 to 2 kHz | RPM1 to 5 kHz |
-    /// |---|---|---|---|
-    /// | 75 | 3128 vectors, 120 s | | |
-    /// | 100 | 3064, 122 s | 1224, 42 s | 3080, 183 s |
-    /// | 110 | 3224, 128 s | | |
-    /// | **125** | 2672, 108–113 s | 952, 36 s | 2816, 174 s |
-    /// | 140 | 2792, 112 s | | |
-    ///
-    /// (Before all earlier slices were deflated, on a 126,800-DOF track, 150 needed 27
-    /// restarts in one slice to 5 kHz.)
+    /// depends erratically on where the boundaries land (measured: docs/performance.md §3.3).
     pub modes_per_slice: usize,
     /// Largest Krylov subspace of a slice, as a multiple of the modes wanted in it (at least
-    /// wanted + 4 blocks), in [1.5, 10]. Default 2.5. Measured on the default track to
-    /// 5 kHz (152,358 DOFs): with only the previous slice deflated, 2 → 4064 solved vectors,
-    /// 3 → 3472, 4 → 4136 (which also pays more re-orthogonalisation per vector); with all
-    /// earlier slices deflated, 2.5 → 3064 vectors, 122 s, 3 → 2880, 118 s. 3 is not the
-    /// default because on the free bar of the tests it stops one cycle earlier, with relative
-    /// residuals of 1.4e-7 instead of ≤ 1e-10 (still within the tolerance's floor).
+    /// wanted + 4 blocks), in [1.5, 10]. Default 2.5 (why: docs/performance.md §3.3).
     pub subspace_ratio: f64,
     /// Magnitude (Hz) of the negative shift used for the lowest slice when `f_min_hz == 0`:
     /// σ₀ = −(2π f)². `None` → max(1 Hz, f_max / 100).

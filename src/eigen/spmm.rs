@@ -10,8 +10,8 @@
 //! The dense products `Vᵀ Z` (j × b, a reduction over the n rows) and `Z −= V C` with a tall
 //! `V` (n × j) and a thin `Z` (n × b) are split into one contiguous row range per thread, each
 //! computed by a sequential gemm; the partial `Vᵀ Z` are summed. faer's own parallel gemm
-//! splits these shapes poorly (measured on the 126,800-DOF track: 3–7× slower than the
-//! sequential product for b = 64), the row split has one barrier per product.
+//! splits these shapes poorly (docs/performance.md §3.2); the row split has one barrier per
+//! product.
 
 use faer::linalg::matmul::matmul;
 use faer::sparse::SparseColMatRef;

@@ -1,6 +1,6 @@
 //! The full explicit FE path: the wheel passage integrated on the untruncated `K`, `M`, `C` of
 //! the same track and wheel substructures the reduced model is built from, to confirm or
-//! refute the reduced model's frequency selection (docs/theory.md §6).
+//! refute the reduced model's frequency selection (docs/theory.md §8).
 //!
 //! - [`operator`]: the central-difference step of one substructure (lumped mass, lagged
 //!   damper force, no numerical damping, state in f64).

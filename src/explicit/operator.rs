@@ -1,6 +1,6 @@
 //! The central-difference operator of one substructure: the untruncated stiffness `K`
 //! (N/m), the lumped mass `M` (kg, diagonal) and the discrete damping `C` (N·s/m) over the
-//! free DOFs, and the explicit step (docs/theory.md §6.1)
+//! free DOFs, and the explicit step (docs/theory.md §8.1)
 //!
 //! ```text
 //! v_{k+½} = v_{k−½} + Δt M⁻¹ (f_k − K u_k − C v_{k−½})

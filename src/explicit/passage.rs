@@ -1,5 +1,5 @@
 //! The explicit passage (E1: the wheel as the reduced model has it, not rotating, its
-//! contact point fixed on the wheel); docs/theory.md §6.3.
+//! contact point fixed on the wheel); docs/theory.md §8.4.
 //!
 //! # One contact step `t_n → t_{n+1}` (`Δt_c = Δx/V`, the transient contact's step)
 //! 1. **Predictor.** The last contact force `F_n` (contact frame x, t, n; on the wheel, its

@@ -1,4 +1,4 @@
-//! The stable time step of the central difference (docs/theory.md §6.2).
+//! The stable time step of the central difference (docs/theory.md §8.2).
 //!
 //! Undamped, the central difference is stable for `Δt ≤ 2/ω_max`, `ω_max²` the largest
 //! eigenvalue of `M⁻¹K` (equivalently of `A = M^{-½} K M^{-½}` with the lumped `M`). With a

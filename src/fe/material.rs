@@ -15,7 +15,7 @@ pub struct IsotropicElastic {
 }
 
 impl IsotropicElastic {
-    /// Steel of rail and wheel (track-parameters.md): E = 210 GPa, ν = 0.3, ρ = 7800 kg/m³.
+    /// Steel of rail and wheel (docs/theory.md §3.6): E = 210 GPa, ν = 0.3, ρ = 7800 kg/m³.
     pub const STEEL: IsotropicElastic = IsotropicElastic {
         youngs_modulus: 210.0e9,
         poisson_ratio: 0.3,
@@ -61,7 +61,7 @@ mod tests {
 
     #[test]
     fn steel_bar_wave_speed_is_5190() {
-        // track-parameters.md: √(E/ρ) ≈ 5190 m/s.
+        // docs/theory.md §3.6: √(E/ρ) ≈ 5190 m/s.
         assert!((IsotropicElastic::STEEL.bar_wave_speed() - 5188.7).abs() < 1.0);
     }
 

@@ -1,4 +1,4 @@
-//! The consistency table and the growth phase (method.md §5, "Consistency table", "Phase").
+//! The consistency table and the growth phase (docs/theory.md §10.2–§10.3).
 //!
 //! ## Matching
 //! For each reference component `λ_ref,j` (the wavelengths of the trial corrugation = those of

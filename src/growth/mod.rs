@@ -1,8 +1,8 @@
 //! Growth analysis: trial corrugations, the consistency table and the growth phase
-//! (method.md §2 b–d and §5).
+//! (docs/theory.md §2.2 b–d and §10).
 //!
 //! - [`trial`]: the trial corrugation `h(x) = −c · W_band(x)` with `c` such that the
-//!   peak-to-trough of `h` is `2A_max` (design-notes.md, "Trial corrugation sign").
+//!   peak-to-trough of `h` is `2A_max` (docs/theory.md §10.1).
 //! - [`consistency`]: matching the wavelength components of `W_f`, `F_L`, `F_N` of a new
 //!   passage to the reference components, the Case 1 / Case 2 / grey classification, and the
 //!   growth phase (sign of the correlation of the new wear with the corrugation).

@@ -1,4 +1,4 @@
-//! The growth procedures on top of the passage engine (method.md §2; issue 6 items 1–2).
+//! The growth procedures on top of the passage engine (docs/theory.md §2.2 and §10).
 //!
 //! **Trial-amplitude growth (the reference procedure).** One passage on the smooth rail gives
 //! the initial differential wear `W_band` (20–80 mm) and its wavelength components, the
@@ -17,7 +17,7 @@
 //! The limiting amplitude `(2A_max)_l` is the largest amplitude of the ascending list up to
 //! which every amplitude grows consistently (`None` if the smallest already does not).
 //! Every component's frequency is also compared with the nearest longitudinal-compression
-//! and vertical-bending eigenfrequencies (the "difference", method.md §5).
+//! and vertical-bending eigenfrequencies (the "difference", docs/theory.md §9.5).
 //!
 //! **Iterative growth (beyond the reference).** Round after round, the wear of `N`
 //! passages is removed from the rail: depth `Δh(x) = −N·k·W_f(x)/(2b)` (m), with `k`

@@ -2,8 +2,8 @@
 //!
 //! The corrugation is in antiphase with the differential wear (a wear peak digs a trough):
 //! the rail-top height is `h(x) = −c · W_band(x)` (m), with `c = 2A_max / (max W_band −
-//! min W_band)` so that `max h − min h = 2A_max` (method.md §2 b; design-notes.md, "Trial
-//! corrugation sign"). `W_band` must already be band-passed (20–80 mm,
+//! min W_band)` so that `max h − min h = 2A_max` (docs/theory.md §2.2 b and
+//! §10.1). `W_band` must already be band-passed (20–80 mm,
 //! [`crate::spectral::band_pass`]); its unit is whatever the wear is measured in (J/m² of
 //! frictional work, or m of depth), `c` converts it to metres.
 

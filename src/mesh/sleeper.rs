@@ -7,7 +7,7 @@
 //! x ∈ [x_c − w/2, x_c + w/2], y ∈ [−a, L − a] (a = rail-seat offset from the sleeper's
 //! track-centre end, L = length), z ∈ [−t_pad − H, −t_pad].
 //! Default 1.25 × 0.25 × 0.2 m: V = 0.0625 m³, 156.25 kg at 2500 kg/m³
-//! (track-parameters.md: about 130–150 kg for the real, tapered half sleeper).
+//! (docs/theory.md §3.1: about 130–150 kg for the real, tapered half sleeper).
 //!
 //! The top face (fastening springs, by interpolation in its quads) and the bottom face
 //! (ballast springs, by area weights) are returned as quads with their areas.

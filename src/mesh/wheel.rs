@@ -28,7 +28,7 @@
 //! y 0.15 … 0.33 (axle box centre ≈ 0.24 m outboard of the rolling circle, i.e. ≈ 1 m from the
 //! track centre); one brake disc as a solid ring r 0.095 … 0.32, y −0.42 … −0.36. With steel
 //! (7800 kg/m³) the half wheelset is ≈ 686 kg (without the disc ≈ 549 kg, below the
-//! 600–900 kg of track-parameters.md: the disc mass stands for the axle-mounted brake disc
+//! 600–900 kg of docs/theory.md §3.6: the disc mass stands for the axle-mounted brake disc
 //! that a wheelset of that mass carries).
 //!
 //! Volume check (Pappus–Guldinus): V = 2π ∫∫ r dA over the meridian. The faceted mesh replaces

@@ -11,7 +11,7 @@
 //!
 //! Units are SI everywhere, except `run.speed_kmh` (km/h), converted in [`crate::units`].
 //!
-//! The fastening models RPM1–RPM5 (method.md §3) are *data*: each is a [`HoldPattern`] — which
+//! The fastening models RPM1–RPM5 (docs/theory.md §3.2) are *data*: each is a [`HoldPattern`] — which
 //! rail-foot regions are held rigidly, in which direction — and any other pattern can be given
 //! with `fastening.model = "custom"` and a `[fastening.custom]` table.
 
@@ -105,14 +105,14 @@ pub struct Model {
     pub mesh: MeshParams,
     /// Run parameters of a passage.
     pub run: Run,
-    /// Wear law (method.md §4).
+    /// Wear law (docs/theory.md §6.6).
     pub wear: Wear,
-    /// The full explicit FE path (docs/theory.md §6); optional section.
+    /// The full explicit FE path (docs/theory.md §8); optional section.
     #[serde(default)]
     pub explicit: Explicit,
 }
 
-/// Wear law: W_f = k Σ τ·s·Δt (method.md §4).
+/// Wear law: W_f = k Σ τ·s·Δt (docs/theory.md §6.6).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Wear {
@@ -125,7 +125,7 @@ pub struct Wear {
 
 /// The full explicit FE path (used to confirm the reduced model's frequency selection): a
 /// central-difference integration of the same track and wheel FE models as the reduced
-/// passage, untruncated (docs/theory.md §6).
+/// passage, untruncated (docs/theory.md §8).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Explicit {
@@ -204,7 +204,7 @@ pub struct Sleeper {
     pub density: f64,
 }
 
-/// Named fastening models of method.md §3, or a custom hold pattern.
+/// Named fastening models of docs/theory.md §3.2, or a custom hold pattern.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum FasteningModel {
     /// V-3-4: railpad springs; longitudinally rigid at all three columns; laterally at four rows.
@@ -308,7 +308,7 @@ pub struct HoldPattern {
 }
 
 impl HoldPattern {
-    /// The pattern of a named model for a `rows × columns` fastening grid (method.md table):
+    /// The pattern of a named model for a `rows × columns` fastening grid (docs/theory.md §3.2):
     /// the first number of the Li et al. code (V-3-4) is the vertical hold (V = springs,
     /// ∞ = rigid everywhere), the second the longitudinal one (number of rigid columns, ∞ =
     /// continuous), the third the lateral one (number of rigid rows). `None` for `custom`.

@@ -9,7 +9,7 @@ fn dutch_with(overrides: &[&str]) -> Result<Model, ModelError> {
 fn embedded_default_is_dutch_rpm3_with_stated_parameters() {
     let m = Model::default_model();
     assert_eq!(m.fastening.model, FasteningModel::Rpm3);
-    // Stated / literature values of track-parameters.md.
+    // Stated / literature values of docs/theory.md §3.6.
     assert_eq!(m.run.speed_kmh, 140.0);
     assert_eq!(m.wheel.radius, 0.46);
     assert_eq!(m.contact.friction, 0.4);
@@ -153,7 +153,7 @@ fn custom_pattern_round_trips_and_is_checked() {
 fn presets_follow_the_method_table() {
     use RigidRegion::*;
     let p = |m| HoldPattern::preset(m, 4, 3).unwrap();
-    // method.md §3 table: vertical / longitudinal / lateral.
+    // docs/theory.md §3.2 table: vertical / longitudinal / lateral.
     let r1 = p(FasteningModel::Rpm1);
     assert_eq!(
         (r1.z.rigid, r1.x.rigid, &r1.x.indices[..]),

@@ -2,7 +2,7 @@
 //!
 //! - [`correlation_coefficient`]: Pearson's normalised correlation at zero lag,
 //!   `r = Σ (a−ā)(b−b̄) / √(Σ (a−ā)² Σ (b−b̄)²)` ∈ [−1, 1]. For the growth phase this is the
-//!   sign that matters (method.md §5, "Phase").
+//!   sign that matters (docs/theory.md §10.3).
 //! - [`cross_phase_rad`]: the cross-spectral phase at one wavelength. Each signal is written
 //!   near wavenumber `κ = 1/λ` as `A cos(2π κ x + φ)`; the phase of the Hann-windowed Fourier
 //!   sum `Z = Σ w_n (s_n − s̄) e^{−2πi κ x_n}` (at the exact `κ`, no bin rounding) is `φ`, and the

@@ -1,4 +1,4 @@
-//! Relative deviation and difference of spectral components (method.md §5).
+//! Relative deviation and difference of spectral components (docs/theory.md §9.5).
 //!
 //! - **Deviation** of a component from its reference component:
 //!   `d = |λ_j − λ_ref,j| / λ_ref,j` (dimensionless; 0.03 = 3 %), the references being the

@@ -31,7 +31,7 @@
 //! extends ≈ 0.15 m beyond the zone of interest, or discard that margin after filtering.
 //!
 //! Reference: the FFT-domain zero-phase filtering of short records as recommended in
-//! design-notes.md ("Short records"); symmetric extension as in the DCT-I (Strang, "The
+//! docs/theory.md §9.2 ("Short records"); symmetric extension as in the DCT-I (Strang, "The
 //! discrete cosine transform", SIAM Review 41 (1999) 135–147).
 
 use super::signal::{check_finite, check_positive};

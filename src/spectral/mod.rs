@@ -2,7 +2,7 @@
 //!
 //! This module turns signals along the rail (differential wear `W_f`, longitudinal contact force
 //! `F_L`, normal force `F_N`, rail-top height) into the quantities the corrugation analysis is
-//! judged on (method.md §4–§5):
+//! judged on (docs/theory.md §6.6 and §9):
 //!
 //! - [`signal`]: a signal sampled uniformly along the rail (`x0_m`, `dx_m`, values); time maps to
 //!   position by `x = v t`; linear resampling of irregular samples (contact forces at time
@@ -17,7 +17,7 @@
 //! - [`deviation`]: the relative deviation `|λ − λ_ref| / λ_ref` (and the same ratio, called a
 //!   *difference*, against another reference such as an eigenfrequency).
 //!
-//! ## Short records (design-notes.md, "Short records")
+//! ## Short records (docs/theory.md §9.2)
 //! A solution zone of length `L` (0.5–1 m) has an intrinsic wavenumber resolution
 //! `Δκ = 1/L`. For `L = 1 m`, `Δκ = 1 m⁻¹`; at `λ = 40 mm` (`κ = 25 m⁻¹`) the neighbouring
 //! resolvable wavenumbers are 24 and 26 m⁻¹, i.e. `λ = 41.7` and `38.5 mm`: a wavelength

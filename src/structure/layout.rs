@@ -4,10 +4,10 @@
 //! `bays·s` long, overhangs half a bay beyond the first and last sleeper. A fastening's
 //! footprint (`footprint_length` along x × `footprint_width` across y, centred on the sleeper
 //! and on the rail centre line) is divided into `columns` along x and `rows` across y: cell
-//! (r, c) carries one spring-damper of the `rows × columns` grid (method.md §3). A rigid
+//! (r, c) carries one spring-damper of the `rows × columns` grid (docs/theory.md §3.2). A rigid
 //! *column* c is the strip `|x − x_c| ≤ w/2` across the whole foot; a rigid *row* r is the strip
 //! `|y − y_r| ≤ w/2` over the footprint length (w = `strip_width`). Held regions have a physical
-//! size, so the held stiffness converges under mesh refinement (design-notes "Traps").
+//! size, so the held stiffness converges under mesh refinement (docs/theory.md §3.3).
 
 use crate::model::{HoldPattern, Model, RigidRegion};
 

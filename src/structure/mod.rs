@@ -11,7 +11,7 @@
 //!
 //! Springs are spread by area so that neither a spring nor a rigid hold acts on a single node
 //! of a solid: point supports make the stiffness grow without bound under refinement
-//! (design-notes "Traps").
+//! (docs/theory.md §3.3).
 
 pub mod layout;
 pub mod track;

@@ -3,7 +3,7 @@
 //! - **Rail**: the UIC54 section mesh (inclined by `rail.inclination`) extruded through node
 //!   planes graded from `mesh.element_length` down to `mesh.fine_element_length` around the
 //!   solution zone, with node planes at every footprint-cell and held-strip edge.
-//! - **Railpad** (per fastening, method.md §3): a `rows × columns` grid of spring-dampers,
+//! - **Railpad** (per fastening, docs/theory.md §3.2): a `rows × columns` grid of spring-dampers,
 //!   stiffness `k/(rows·columns)` each. Each grid spring acts on its footprint cell: it is
 //!   spread over the rail-foot underside nodes of the cell in proportion to their tributary
 //!   area (trapezoidal weights), each node tied to the sleeper-top point straight below it

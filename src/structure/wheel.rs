@@ -6,7 +6,7 @@
 //!   point of the undeformed wheel is (0, 0, −R)).
 //! - Half wheelset on a symmetric track: the nodes of the axle's symmetry plane are held
 //!   laterally (u_y = 0), which also removes roll and yaw.
-//! - The car body and bogie above the primary suspension are one lumped mass (method.md §3:
+//! - The car body and bogie above the primary suspension are one lumped mass (docs/theory.md §3.5:
 //!   they matter only below tens of Hz) on a node above the journal centre, moving vertically
 //!   only (its x and y are held: the vehicle frame guides it). Its mass is
 //!   `wheel_load / g − unsprung mass`, so that the static load on the rail is `wheel_load`.

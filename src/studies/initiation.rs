@@ -1,4 +1,4 @@
-//! Initiation comparison (issue 6 part 3; method.md §6): several models (e.g. RPM1–RPM5) on
+//! Initiation comparison (docs/theory.md §11.4): several models (e.g. RPM1–RPM5) on
 //! the smooth rail, tabulated by the band RMS and the strongest PSD peaks of `F_L`, `F_N` and
 //! the differential wear, and whether each initiates corrugation.
 //!
@@ -7,14 +7,14 @@
 //! 1. the differential wear is significant: `wear_band_rms / wear_mean ≥ min_relative_wear`
 //!    (the RMS of the 20–80 mm band-passed frictional work relative to its mean along the
 //!    rail; default [`InitiationCriterion::DEFAULT_MIN_RELATIVE_WEAR`] = 1 %), and
-//! 2. the wear follows the longitudinal force (method.md §6, "on the smooth rail the
+//! 2. the wear follows the longitudinal force (docs/theory.md §2.4, "on the smooth rail the
 //!    differential wear follows F_L"): the dominant wavelength of `F_L` deviates from the
 //!    dominant wear wavelength by at most `max_wavelength_deviation` (default 3 %, the
-//!    consistency limit of method.md §5), deviation = `|λ_FL − λ_W| / λ_W`.
+//!    consistency limit of docs/theory.md §10.2), deviation = `|λ_FL − λ_W| / λ_W`.
 //!
 //! The 1 % threshold is a stated engineering choice, not a published value: it separates
 //! "wear with a visible 20–80 mm ripple" from numerical noise and is to be checked against the
-//! RPM1–RPM5 contrast of method.md §6 once the passage engine runs (change it with
+//! RPM1–RPM5 contrast of docs/theory.md §2.4 once the passage engine runs (change it with
 //! `--min-relative-wear`). A model without a wear or `F_L` peak in the band does not initiate.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -41,7 +41,7 @@ pub struct InitiationCriterion {
 impl InitiationCriterion {
     /// Default threshold on the relative band RMS of the wear (1 %).
     pub const DEFAULT_MIN_RELATIVE_WEAR: f64 = 0.01;
-    /// Default wavelength match tolerance (3 %, method.md §5).
+    /// Default wavelength match tolerance (3 %, docs/theory.md §10.2).
     pub const DEFAULT_MAX_WAVELENGTH_DEVIATION: f64 = 0.03;
 }
 
@@ -367,7 +367,7 @@ pub fn criterion_text(c: &InitiationCriterion) -> String {
         "Criterion: a case initiates corrugation when the RMS of the 20–80 mm band-passed \
          differential wear is at least {:.2} % of the mean wear, and the dominant wavelength of \
          F_L deviates at most {:.1} % from the dominant wear wavelength (the wear follows F_L, \
-         method.md §6).",
+         docs/theory.md §2.4 and §11.4).",
         100.0 * c.min_relative_wear,
         100.0 * c.max_wavelength_deviation
     )

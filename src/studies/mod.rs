@@ -1,14 +1,14 @@
 //! Analyses on top of the passage engine, written against the [`PassageRunner`] interface so
-//! that their logic is tested with cheap stand-in runners (issue 6, parts 3–5):
+//! that their logic is tested with cheap stand-in runners (docs/theory.md §11):
 //!
 //! - [`speeds`]: the speed list of a sweep (`54.8:219:2` or `60,80,100`) and its shards
 //!   (`--shard I/N`).
 //! - [`sweep`]: passages over the speeds in parallel, one JSON file per finished speed
 //!   (atomic, resumable), and the assembly of the frequency-selection maps, the dominant
-//!   wavelength / frequency vs speed and the range ratios (method.md §5, "frequency
-//!   selection"); [`sweep::merge`] joins shard directories into the unsharded result.
+//!   wavelength / frequency vs speed and the range ratios (docs/theory.md §2.3,
+//!   "frequency selection"); [`sweep::merge`] joins shard directories into the unsharded result.
 //! - [`initiation`]: the initiation table of several models on the smooth rail (band RMS, PSD
-//!   peaks, a stated initiation criterion; method.md §6).
+//!   peaks, a stated initiation criterion; docs/theory.md §11.4).
 //! - [`study`]: design-study files (TOML): a base model, parameters varied as lists, ranges
 //!   or a full grid through the model's `--set` machinery, the initiation indicators per case,
 //!   one table and plots.

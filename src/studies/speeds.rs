@@ -3,7 +3,7 @@
 //! **Range** `start:stop:step` (km/h): the grid `v_k = start + k·step`, `k = 0, 1, …, K` with
 //! `K = ⌊(stop − start)/step + 10⁻⁹⌋`. The stop is included when it falls on the grid (within
 //! 10⁻⁹ steps); otherwise the last speed is the last grid point below it — the stop is **not**
-//! appended. So `54.8:219:1` is the 165 speeds 54.8 … 218.8 of issue 5 and `54.8:219:2` the 83
+//! appended. So `54.8:219:1` is the 165 speeds 54.8 … 218.8 and `54.8:219:2` the 83
 //! speeds 54.8 … 218.8. Each `v_k` is computed from `k` (no accumulated round-off) and rounded
 //! to 10⁻⁹ km/h, so that `0.1`-steps print as written.
 //!

@@ -1,4 +1,4 @@
-//! Design studies (issue 6 part 5): a TOML study file names a base model and parameters to
+//! Design studies (docs/theory.md §11.5): a TOML study file names a base model and parameters to
 //! vary; every case gets the initiation indicators ([`super::initiation`]) and optionally the
 //! growth loop (a hook supplied by the caller); the output is one table and plots of the
 //! indicators vs the parameters.

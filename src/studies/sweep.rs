@@ -1,5 +1,5 @@
 //! Speed sweeps: passages over many speeds in parallel, resumable, and the frequency-selection
-//! maps (method.md §5 "frequency selection"; issue 6 part 4).
+//! maps (docs/theory.md §2.3 and §11.2).
 //!
 //! # Files of a sweep directory `DIR`
 //! - `speeds/<stem>.json` — the [`PassageSummary`] of each speed ([`speed_file_stem`]), written
@@ -75,7 +75,7 @@ pub struct MapOptions {
 }
 
 impl Default for MapOptions {
-    /// The 20–80 mm band of method.md §5 at 0.25 mm, 401 frequencies, no lines.
+    /// The 20–80 mm band of docs/theory.md §9.2 at 0.25 mm, 401 frequencies, no lines.
     fn default() -> Self {
         Self {
             wavelength_min_mm: 20.0,
@@ -693,7 +693,7 @@ fn write_report(dir: &Path, r: &SweepRecord) -> Result<(), StudiesError> {
     d.paragraph(format!(
         "{} speeds from {} to {} km/h. Speed range ratio {:.3}; wavelength range ratio of the \
          dominant wear wavelength {}. Frequency selection shows as a wavelength range ratio \
-         much smaller than the speed range ratio (method.md §5).",
+         much smaller than the speed range ratio (docs/theory.md §2.3).",
         r.speeds_kmh.len(),
         r.speeds_kmh[0],
         r.speeds_kmh[r.speeds_kmh.len() - 1],

@@ -281,7 +281,7 @@ fn bar_like_rail_longitudinal_modes_are_compression() {
 /// column, lateral pads only): the pinned-pinned mode — vertical bending with nodes at the
 /// supports, wavelength 2 × spacing — must be found and flagged. Closed form bound: the
 /// simply supported Euler–Bernoulli span, f = (π/s)² √(EI/ρA) / 2π (≈ 1.31 kHz for UIC54,
-/// s = 0.6 m); shear and rotary inertia lower it (design-notes: about 1.0–1.1 kHz), the
+/// s = 0.6 m); shear and rotary inertia lower it (docs/theory.md §3.6: about 1.0–1.1 kHz), the
 /// coarse fully integrated hex8 mesh raises it.
 /// Run: `cargo test --release --lib classify::tests::pinned -- --ignored` (~10 s in dev).
 #[test]
