@@ -51,7 +51,7 @@ use crate::contact::WearAccumulator;
 use crate::contact::{
     GridSpec, Longitudinal, NormalInput, StepInputs, TransientConfig, TransientRolling,
 };
-use crate::model::Model;
+use crate::model::{Model, ResidualVariation};
 use crate::structure::{TrackStructure, WheelStructure};
 
 /// Frequencies below this are rigid-body modes (Hz).
@@ -732,6 +732,17 @@ impl PassageEngine {
                 }
                 u_w[d] = su;
                 v_w[d] = sv;
+            }
+            if let (Some(r), ResidualVariation::Consistent) =
+                (&self.residual, self.model.run.residual_variation)
+            {
+                contact
+                    .set_series_compliance(r.consistent_at(xc)?)
+                    .map_err(|source| DynamicsError::Contact {
+                        t_s: t,
+                        x_m: xc,
+                        source,
+                    })?;
             }
             let delta = u_r[2] - u_w[2];
             let xi = (v_w[0] - v_r[0]) / v;

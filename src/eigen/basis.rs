@@ -87,6 +87,7 @@ pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey
             run.remove("speed_kmh");
             run.remove("fmax");
             run.remove("residual_flexibility");
+            run.remove("residual_variation");
         }
         // The wheel's modal damping ratio is added after the modes are found.
         if let Some(w) = o.get_mut("wheel").and_then(|r| r.as_object_mut()) {

@@ -7,15 +7,18 @@
 //!    `x_{n+1}`; the track runs `N_t` central-difference steps of `Δt_c/N_t`, the wheel `N_w`
 //!    of `Δt_c/N_w`, each below its own stable step.
 //! 2. **Contact.** The contact is solved at `x_{n+1}` with the predicted kinematics and the
-//!    structures' one-contact-step compliance `G = G_rail + G_wheel` (the contact-point
-//!    displacement after one contact step under a unit held force, from rest) as its series
-//!    compliance: approach `δ_pred + G_n F_{n,N}`, creepages from the predicted relative
-//!    displacement increments over the step. The solver then returns the force `F_{n+1}`
-//!    that is consistent with the end-of-step kinematics.
-//! 3. **Corrector.** Both structures get the response to `F_{n+1} − F_n` held over the step
-//!    (unit-load response fields: the wheel's once per passage, the rail's per node plane of
-//!    the contact line, interpolated like the load): since the FE is linear the state is
-//!    then exactly the one under `F_{n+1}` held over the step.
+//!    structures' one-contact-step compliance `G = G_rail + G_wheel` as its series
+//!    compliance (`G`: the contact-point displacement at the end of a contact step under a
+//!    unit force ramped from 0 to 1 over the step, from rest): approach `δ_pred + G_n F_{n,N}`,
+//!    creepages from the predicted relative displacement increments over the step. The
+//!    solver then returns the force `F_{n+1}` that is consistent with the end-of-step
+//!    kinematics.
+//! 3. **Corrector.** Both structures get the response to the change `F_{n+1} − F_n` ramped
+//!    linearly over the step (unit-load response fields: the wheel's once per passage, the
+//!    rail's per node plane of the contact line, interpolated like the load). Since the FE
+//!    is linear, the state is then exactly the one under the force interpolated linearly
+//!    from `F_n` to `F_{n+1}` (first-order hold), whose work matches the contact solver's
+//!    path-mean traction, so the energy balances.
 //!
 //! The plain alternative, holding `F_n` without the corrector ([`Coupling::HeldForce`]),
 //! is explicit in the contact stiffness: with `k_contact · G` of order one it is at the edge
@@ -49,7 +52,7 @@ use crate::structure::{TrackStructure, WheelStructure};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Coupling {
     /// Held-force predictor, contact solved with the one-step compliance, exact linear
-    /// corrector (the default).
+    /// corrector to the linearly interpolated force (the default).
     #[default]
     PredictorCorrector,
     /// The last contact force held over the step, no corrector (unstable when the contact
@@ -181,6 +184,12 @@ struct UnitResponse {
 }
 
 impl UnitResponse {
+    /// The response over `steps` steps of `dt` (s) from rest to a unit load in each
+    /// contact-frame direction (`load(d, f)` fills it), ramped linearly from 0 at the
+    /// step's start to 1 at its end: sub-step `k` applies `k/steps` of it, and the next
+    /// contact step's first sub-step applies the full new force. The structure thus sees the
+    /// contact force interpolated linearly between contact steps (first-order hold),
+    /// consistent with the contact solver's path-mean traction.
     fn compute(
         op: &ExplicitOperator,
         dt: f64,
@@ -189,11 +198,16 @@ impl UnitResponse {
         scratch: &mut StepScratch,
     ) -> Self {
         let n = op.n();
+        let mut fk = vec![0.0; n];
         let mut mk = |d: usize| {
             let mut f = vec![0.0; n];
             load(d, &mut f);
             let (mut u, mut v) = (vec![0.0; n], vec![0.0; n]);
-            op.advance(dt, steps, &mut u, &mut v, &f, scratch);
+            for k in 0..steps {
+                let a = k as f64 / steps as f64;
+                fk.iter_mut().zip(&f).for_each(|(x, y)| *x = a * y);
+                op.step(dt, &mut u, &mut v, &fk, scratch);
+            }
             (u, v)
         };
         let (a, b, c) = (mk(0), mk(1), mk(2));
@@ -586,6 +600,7 @@ impl ExplicitModel {
         let t_wall = Instant::now();
         let cpu0 = cpu_seconds();
         progress(0, n_steps);
+        let mut ur_prev = self.rail_at(&ut, x0)?;
         for n in 1..=n_steps {
             let t = n as f64 * dt_c;
             let xc = x0 + v * t;
@@ -635,6 +650,7 @@ impl ExplicitModel {
             self.wheel
                 .op
                 .advance(dtw, nw, &mut uw, &mut vw, &fwheel, &mut sc_w);
+
             let ur_new = self.rail_at(&ut, xc)?;
             let uw_new = self.wheel_at(&uw);
             // One-step compliance at x_{n+1}.
@@ -732,25 +748,30 @@ impl ExplicitModel {
                     + self.wheel.op.damper_power(&vw, &mut sc_w);
                 eb.damper_dissipation_j += 0.5 * dt_c * (p_damp + p_damp_prev);
                 p_damp_prev = p_damp;
-                // Work of the contact force (held over the step) on the two structures, with
+                // Work of the contact force on the two structures over the step, with
                 // the corrected end-of-step displacements.
                 let ur_end = self.rail_at(&ut, xc)?;
                 let uw_end = self.wheel_at(&uw);
-                let f_held = if corrected { f_new } else { f };
+                // With the corrector the force ramps from F_n to F_{n+1} over the step (its
+                // mean does the work); without it F_n is held.
+                let f_work = if corrected {
+                    [0, 1, 2].map(|d| 0.5 * (f[d] + f_new[d]))
+                } else {
+                    f
+                };
                 for d in 0..3 {
                     eb.contact_work_j +=
-                        f_held[d] * ((uw_end[d] - uw_old[d]) - (ur_end[d] - ur_old[d]));
+                        f_work[d] * ((uw_end[d] - uw_old[d]) - (ur_end[d] - ur_old[d]));
                 }
                 eb.frictional_work_j += r.frictional_power_w * dt_c;
                 eb.spin_work_j -= v * spin * r.mz_nm * dt_c;
-                // Convective work: the force rolling over the deflected rail, V F·∂u/∂x.
-                let hx = self.line.planes_x_m[p + 1] - self.line.planes_x_m[p];
+                // Convective work: the force rolling over the deflected rail, the change of
+                // the rail displacement under the contact as the contact moves from x_n to
+                // x_{n+1} on the state at t_n (lateral and normal, as the reduced passage).
                 for d in [1usize, 2] {
-                    let slope = (nodes_dot(&self.line.nodes[p + 1], dm_t, axes[d], |i| ut[i])
-                        - nodes_dot(&self.line.nodes[p], dm_t, axes[d], |i| ut[i]))
-                        / hx;
-                    eb.convective_work_j += v * f_new[d] * slope * dt_c;
+                    eb.convective_work_j += f_work[d] * (ur_old[d] - ur_prev[d]);
                 }
+                ur_prev = ur_end;
             }
             series_last = series;
             f = f_new;

@@ -536,6 +536,26 @@ pub struct Run {
     /// contact (default true; `false` = modal flexibility only).
     #[serde(default = "default_true")]
     pub residual_flexibility: bool,
+    /// How the residual flexibility varies along the rail: `"mean"` (default: one constant,
+    /// its length-weighted mean along the travel; the element-to-element variation of a
+    /// graded mesh is an artefact) or `"consistent"` (position dependent: the flexibility of
+    /// the load as the passage spreads it over the two node planes around the contact, which
+    /// dips between planes as the full FE model's own local compliance does; for comparing
+    /// with the explicit path, docs/theory.md §8.6).
+    #[serde(default)]
+    pub residual_variation: ResidualVariation,
+}
+
+/// How the residual flexibility of the truncated track modes varies along the rail.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ResidualVariation {
+    /// One constant: the length-weighted mean of the structural residual along the travel.
+    #[default]
+    Mean,
+    /// The consistent quadratic form of the load at the contact position (position
+    /// dependent, mesh dependent).
+    Consistent,
 }
 
 fn default_true() -> bool {
