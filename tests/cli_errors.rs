@@ -202,3 +202,58 @@ fn nonzero_rail_structural_damping_is_rejected() {
     assert!(err.contains("rail.structural_damping"), "{err}");
     assert!(err.contains("not modelled"), "{err}");
 }
+
+/// `S` of the robustness reproductions: a short passage model.
+const S: [&str; 4] = ["--set", "run.fmax=1000", "--set", "track.bays=6"];
+
+fn with_s<'a>(args: &[&'a str]) -> Vec<&'a str> {
+    let mut v = args.to_vec();
+    v.extend(S);
+    v
+}
+
+#[test]
+fn unphysical_youngs_modulus_is_refused_before_any_allocation() {
+    // Rail E = 1e-12 Pa panicked on a 47.5 GB allocation; sleeper E = 1e-12 Pa hung.
+    for key in ["rail", "sleeper", "wheel"] {
+        let set = format!("{key}.youngs_modulus=1e-12");
+        assert_clean_error(
+            &with_s(&["passage", "--set", &set]),
+            &[
+                &format!("{key}.youngs_modulus"),
+                "1000000000 to 10000000000000 Pa",
+            ],
+        );
+    }
+}
+
+#[test]
+fn tiny_gravity_density_and_sleeper_height_name_their_key() {
+    for (set, key) in [
+        ("vehicle.gravity=0", "vehicle.gravity"),
+        ("vehicle.gravity=1e-3", "vehicle.gravity"),
+        ("wheel.density=1e-3", "wheel.density"),
+        ("sleeper.height=1e-4", "sleeper.height"),
+        ("wheel.conicity=0.2", "wheel.conicity"),
+        ("rail.poisson_ratio=0.4999", "rail.poisson_ratio"),
+    ] {
+        assert_clean_error(&with_s(&["mesh", "--set", set]), &[key, "allowed"]);
+    }
+}
+
+#[test]
+fn zero_railpad_stiffness_is_blamed_on_the_fastening() {
+    let (_, _, err) = run(&with_s(&[
+        "passage",
+        "--set",
+        "fastening.vertical_stiffness=0",
+    ]));
+    assert!(
+        err.contains("fastening.vertical_stiffness") && !err.contains("ballast"),
+        "{err}"
+    );
+    assert_clean_error(
+        &with_s(&["passage", "--set", "fastening.vertical_stiffness=0"]),
+        &["fastening.vertical_stiffness"],
+    );
+}
