@@ -257,3 +257,72 @@ fn zero_railpad_stiffness_is_blamed_on_the_fastening() {
         &["fastening.vertical_stiffness"],
     );
 }
+
+#[test]
+fn a_cause_the_message_already_prints_is_not_repeated() {
+    let (code, _, err) = run(&["model", "--model", "/nonexistent/track.toml"]);
+    assert_ne!(code, 0);
+    // The OS message was printed twice (by the error and again as its source).
+    let os = std::io::Error::from(std::io::ErrorKind::NotFound).to_string();
+    let first = err
+        .find("No such file")
+        .or_else(|| err.find(&os))
+        .expect(&err);
+    assert!(!err[first + 1..].contains("No such file"), "{err}");
+}
+
+#[test]
+fn zero_friction_is_refused_by_the_model_and_the_contact_command() {
+    // µ = 0 with traction 0 ran into a secant failure printed twice.
+    assert_clean_error(
+        &with_s(&[
+            "passage",
+            "--set",
+            "contact.friction=0",
+            "--set",
+            "contact.traction_coefficient=0",
+        ]),
+        &["contact.friction", "greater than 0"],
+    );
+    assert_clean_error(
+        &["contact", "--friction", "0", "--traction-coefficient", "0"],
+        &["--friction", "greater than 0"],
+    );
+}
+
+#[test]
+fn contact_normal_load_and_steps_are_range_checked() {
+    // 1e12 N gave a 1.5 m patch; the range is that of vehicle.wheel_load (0, 500 kN].
+    assert_clean_error(
+        &["contact", "--normal-load", "1e12"],
+        &["--normal-load", "500000 N", "vehicle.wheel_load"],
+    );
+    assert_clean_error(&["contact", "--normal-load", "0"], &["--normal-load"]);
+    // 1e9 steps ran for hours.
+    assert_clean_error(&["contact", "--steps", "1000000000"], &["--steps", "10000"]);
+    assert_clean_error(&["contact", "--steps", "0"], &["--steps"]);
+}
+
+#[test]
+fn a_contact_grid_beyond_a_reasonable_passage_time_is_refused() {
+    // 256 x 256 is inside each key's range but ran for over 600 s: 256^2 * 256 = 16777216
+    // > 12 * 32^2 * 24 = 294912.
+    assert_clean_error(
+        &with_s(&[
+            "passage",
+            "--set",
+            "contact.grid_nx=256",
+            "--set",
+            "contact.grid_ny=256",
+        ]),
+        &["contact.grid_nx", "16777216", "294912"],
+    );
+    let (code, _, err) = run(&[
+        "model",
+        "--set",
+        "contact.grid_nx=64",
+        "--set",
+        "contact.grid_ny=64",
+    ]);
+    assert_eq!(code, 0, "{err}");
+}

@@ -446,14 +446,15 @@ pub struct Vehicle {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Contact {
-    /// Coulomb friction coefficient (−).
+    /// Coulomb friction coefficient (−), greater than 0 and at most 2.
     pub friction: f64,
     /// Traction coefficient: mean F_L / F_N, set by the driving torque (−).
     pub traction_coefficient: f64,
     /// Lateral radius of the rail head crown (m).
     pub rail_crown_radius: f64,
     /// Contact-patch grid elements along the rolling direction (−). The passage's time step
-    /// is one grid element over the speed, Δt = Δx / V.
+    /// is one grid element over the speed, Δt = Δx / V. 8 to 256, and
+    /// `grid_nx² · grid_ny` at most [`MAX_GRID_WORK`] (the passage's work grows so).
     pub grid_nx: usize,
     /// Contact-patch grid elements across the rail (−).
     pub grid_ny: usize,
@@ -744,7 +745,7 @@ impl Model {
         c.elastic("wheel", w.youngs_modulus, w.poisson_ratio, w.density)?;
         c.range("wheel.damping_ratio", w.damping_ratio, 0.0, 0.1, "(-)")?;
         let v = &self.vehicle;
-        c.pos("vehicle.wheel_load", v.wheel_load, 500e3, "N")?;
+        c.pos("vehicle.wheel_load", v.wheel_load, MAX_WHEEL_LOAD_N, "N")?;
         c.pos(
             "vehicle.primary_stiffness",
             v.primary_stiffness,
@@ -762,7 +763,12 @@ impl Model {
         // mass). Earth's surface: 9.78 to 9.83.
         c.range("vehicle.gravity", v.gravity, 9.0, 10.5, "m/s^2")?;
         let k = &self.contact;
-        c.range("contact.friction", k.friction, 0.0, 2.0, "(-)")?;
+        c.pos(
+            "contact.friction",
+            k.friction,
+            2.0,
+            "(-) (> 0: the driving torque is transmitted by friction)",
+        )?;
         c.range(
             "contact.traction_coefficient",
             k.traction_coefficient,
@@ -779,6 +785,20 @@ impl Model {
         )?;
         c.int("contact.grid_nx", k.grid_nx, 8, 256)?;
         c.int("contact.grid_ny", k.grid_ny, 4, 256)?;
+        // A passage's contact work grows as grid_nx² · grid_ny (grid_nx cells per step and
+        // steps of one cell): refuse grids far beyond the default's time.
+        let work = k.grid_nx * k.grid_nx * k.grid_ny;
+        if work > MAX_GRID_WORK {
+            return c.fail(
+                "contact.grid_nx",
+                format!("{} (with contact.grid_ny = {})", k.grid_nx, k.grid_ny),
+                format!(
+                    "grid_nx^2 * grid_ny at most {MAX_GRID_WORK} (here {work}: {:.0} times the 32 x 24 default's passage time; e.g. 64 x 64 is {:.1} times)",
+                    work as f64 / (32.0 * 32.0 * 24.0),
+                    64.0 * 64.0 * 64.0 / (32.0 * 32.0 * 24.0)
+                ),
+            );
+        }
         c.range("contact.grid_margin", k.grid_margin, 1.05, 3.0, "(-)")?;
         let m = &self.mesh;
         c.pos(
@@ -851,6 +871,13 @@ impl Model {
         Ok(())
     }
 }
+
+/// Largest static wheel load (N): 50 t per wheel, beyond any railway axle load.
+pub const MAX_WHEEL_LOAD_N: f64 = 500e3;
+
+/// Largest `contact.grid_nx² · contact.grid_ny`: 12 times the default 32 × 24 grid's passage
+/// time (64 × 64 takes 10.7 times; 256 × 256 would take 680 times, hours in place of minutes).
+pub const MAX_GRID_WORK: usize = 12 * 32 * 32 * 24;
 
 /// Allowed Young's modulus of the rail, sleeper and wheel (Pa): the solids a track is made of
 /// (steel 2.1e11, concrete 3.8e10, polymers from 1e9). Far outside it the modal bases and the
