@@ -326,3 +326,32 @@ fn a_contact_grid_beyond_a_reasonable_passage_time_is_refused() {
     ]);
     assert_eq!(code, 0, "{err}");
 }
+
+#[test]
+fn a_mesh_beyond_the_size_limit_is_refused_with_its_estimate_and_keys() {
+    // Each of these aborted on an allocation. The limit is 1e6 DOFs per substructure.
+    for (sets, key) in [
+        (
+            vec!["mesh.fine_element_length=1e-4"],
+            "mesh.fine_element_length",
+        ),
+        (
+            vec!["mesh.section_size=0.002", "mesh.head_size=0.001"],
+            "mesh.section_size",
+        ),
+        (
+            vec!["mesh.sleeper_elements=[64,64,64]"],
+            "mesh.sleeper_elements",
+        ),
+        (
+            vec!["mesh.wheel_segments=720", "mesh.wheel_element_size=0.005"],
+            "mesh.wheel_segments",
+        ),
+    ] {
+        let mut args = vec!["mesh"];
+        for s in &sets {
+            args.extend(["--set", s]);
+        }
+        assert_clean_error(&args, &[key, "DOFs", "GiB", "limit of 1000000 DOFs"]);
+    }
+}
