@@ -355,3 +355,42 @@ fn a_mesh_beyond_the_size_limit_is_refused_with_its_estimate_and_keys() {
         assert_clean_error(&args, &[key, "DOFs", "GiB", "limit of 1000000 DOFs"]);
     }
 }
+
+#[test]
+fn a_wheel_that_leaves_the_rail_is_an_error_not_zero_forces() {
+    // A primary suspension of 1e3 N/m let the wheel leave the rail; the passage exited 0
+    // with every force zero.
+    let dir = std::env::temp_dir().join(format!("corrugation-cli-lost-{}", std::process::id()));
+    let out = dir.join("out");
+    let cache = dir.join("cache");
+    let mut args = vec![
+        "passage",
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+        "--set",
+        "run.fmax=1000",
+        "--set",
+        "vehicle.primary_stiffness=1e3",
+    ];
+    args.extend(SMALL_MODEL);
+    assert_clean_error(&args, &["lost contact", "vehicle.primary_stiffness"]);
+    assert!(!out.join("forces.csv").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_sweep_beyond_the_model_speed_limit_is_refused() {
+    // run.speed_kmh allows 1 to 500 km/h; `sweep --speeds 600` ran anyway.
+    assert_clean_error(
+        &[
+            "sweep",
+            "--speeds",
+            "600",
+            "--out",
+            "/nonexistent/never-written",
+        ],
+        &["--speeds", "600", "1 to 500 km/h"],
+    );
+}

@@ -64,6 +64,19 @@ pub enum DynamicsError {
         /// What became non-finite.
         what: String,
     },
+    /// The wheel left the rail: the contact force was zero at some steps, so the forces and
+    /// the wear of the passage are not those of a rolling wheel.
+    #[error("the wheel lost contact with the rail at t = {t_s:.6} s (x = {x_m:.4} m), {lost} of {steps} steps without contact: the forces and wear would be zero there, not a result; check vehicle.primary_stiffness (a soft suspension lets the wheel bounce off), vehicle.wheel_load and the rail profile's amplitude")]
+    ContactLost {
+        /// First time without contact (s).
+        t_s: f64,
+        /// Contact position then (m).
+        x_m: f64,
+        /// Steps without contact.
+        lost: usize,
+        /// Steps of the passage.
+        steps: usize,
+    },
     /// Any other failure of the passage (message says what to change).
     #[error("{0}")]
     Other(String),

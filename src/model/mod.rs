@@ -833,7 +833,13 @@ impl Model {
             "m",
         )?;
         let run = &self.run;
-        c.range("run.speed_kmh", run.speed_kmh, 1.0, 500.0, "km/h")?;
+        c.range(
+            "run.speed_kmh",
+            run.speed_kmh,
+            SPEED_KMH[0],
+            SPEED_KMH[1],
+            "km/h",
+        )?;
         c.range(
             "run.solution_zone_offset",
             run.solution_zone_offset,
@@ -871,6 +877,10 @@ impl Model {
         Ok(())
     }
 }
+
+/// Allowed train speed (km/h), of `run.speed_kmh` and of every speed a sweep, study or
+/// initiation table runs: the model is not meant beyond 500 km/h.
+pub const SPEED_KMH: [f64; 2] = [1.0, 500.0];
 
 /// Largest static wheel load (N): 50 t per wheel, beyond any railway axle load.
 pub const MAX_WHEEL_LOAD_N: f64 = 500e3;
