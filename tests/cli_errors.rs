@@ -394,3 +394,19 @@ fn a_sweep_beyond_the_model_speed_limit_is_refused() {
         &["--speeds", "600", "1 to 500 km/h"],
     );
 }
+
+#[test]
+fn a_corrugation_csv_without_a_header_is_refused_not_shortened() {
+    // Its first row was taken as the header and silently lost.
+    let p = tmp_file("no_header.csv", "1.0,0.0\n1.01,5.0\n1.02,0.0\n");
+    assert_clean_error(
+        &[
+            "passage",
+            "--corrugation",
+            p.to_str().unwrap(),
+            "--out",
+            "/nonexistent/x",
+        ],
+        &["no_header.csv", "`1.0, 0.0`", "header"],
+    );
+}

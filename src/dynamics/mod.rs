@@ -138,7 +138,8 @@ impl RailProfile {
     }
 
     /// Reads a CSV file with a header line and two columns: `x` in m and the rail-top
-    /// height in µm (the unit users measure corrugation in), converted here to m.
+    /// height in µm (the unit users measure corrugation in), converted here to m. A numeric
+    /// first line is an error (a file without a header would lose its first row).
     pub fn read_csv_um(path: &Path) -> Result<Self, DynamicsError> {
         let err = |reason: String| DynamicsError::Profile {
             path: path.display().to_string(),
@@ -150,6 +151,13 @@ impl RailProfile {
             .comment(Some(b'#'))
             .from_path(path)
             .map_err(|e| err(e.to_string()))?;
+        let header = rdr.headers().map_err(|e| err(e.to_string()))?;
+        if header.len() >= 2 && header.iter().take(2).all(|f| f.parse::<f64>().is_ok()) {
+            return Err(err(format!(
+                "the first line `{}` is numbers, not a header: add a header line `x_m, height_um` (without one the first row would be lost)",
+                header.iter().collect::<Vec<_>>().join(", ")
+            )));
+        }
         let (mut xs, mut hs) = (Vec::new(), Vec::new());
         for (line, rec) in rdr.records().enumerate() {
             let rec = rec.map_err(|e| err(e.to_string()))?;
