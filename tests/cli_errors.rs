@@ -410,3 +410,18 @@ fn a_corrugation_csv_without_a_header_is_refused_not_shortened() {
         &["no_header.csv", "`1.0, 0.0`", "header"],
     );
 }
+
+#[test]
+fn an_unwritable_out_directory_is_refused_before_the_computation() {
+    // `passage` found out only after the whole passage. A regular file cannot hold outputs.
+    let f = tmp_file("not_a_dir", "x");
+    let out = f.join("sub");
+    for cmd in ["passage", "sweep", "grow", "predict", "modes"] {
+        let t = std::time::Instant::now();
+        assert_clean_error(
+            &[cmd, "--out", out.to_str().unwrap()],
+            &["--out", "not_a_dir", "cannot write there"],
+        );
+        assert!(t.elapsed().as_secs_f64() < 10.0, "{cmd} computed first");
+    }
+}

@@ -57,6 +57,7 @@ impl SweepCmd {
             );
         }
         let model = self.model.load()?;
+        super::check_out_dir(&self.out)?;
         let cache = self.cache.as_deref();
         // One modal model for both the mode lines and the passages.
         let prepared = engine::prepared(&model, cache)?;
