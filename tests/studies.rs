@@ -540,6 +540,31 @@ fn interrupted_sweep_resumes_without_recomputing() {
     let idle = ModeLocked::default();
     sweep(&idle, &speeds, &dir, &opts(), KEY, false).unwrap();
     assert_eq!(idle.calls.load(Ordering::SeqCst), 0);
+    // The temp file of a killed run with a pid above any pid_max (2^22) is removed: a finished
+    // sweep leaves no orphan `*.tmp.<pid>` (the file of pid 4242 above is not asserted: a
+    // process of that pid may be running on the test machine, whose files are kept).
+    let orphan = dir.join("map_wear_wavelength.npy.tmp.4294967000");
+    std::fs::write(&orphan, b"partial").unwrap();
+    sweep(&idle, &speeds, &dir, &opts(), KEY, false).unwrap();
+    for d in [dir.clone(), dir.join("speeds")] {
+        let tmp: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .filter(|n| n.contains(".tmp.") && !n.ends_with(&format!(".tmp.{}", 4242)))
+            .collect();
+        assert!(tmp.is_empty(), "orphan temp files: {tmp:?}");
+    }
+    // sweep.json is the commit marker: a run that fails (here: is killed) in its output stage
+    // leaves none, even where an earlier run had written one.
+    assert!(dir.join("sweep.json").exists());
+    let blocker = dir.join("map_wavelength.csv");
+    std::fs::remove_file(&blocker).unwrap();
+    std::fs::create_dir(&blocker).unwrap();
+    assert!(sweep(&idle, &speeds, &dir, &opts(), KEY, false).is_err());
+    assert!(
+        !dir.join("sweep.json").exists(),
+        "sweep.json beside an unfinished output stage"
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 

@@ -466,14 +466,30 @@ fn nan_none(v: Option<f64>) -> f64 {
     v.unwrap_or(f64::NAN)
 }
 
+/// Writes the assembled outputs. `sweep.json` is the commit marker: it is removed first and
+/// written last, so a run killed in between leaves no complete-looking sweep beside missing
+/// or stale maps; temp files of killed earlier runs are removed first.
 fn write_outputs(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesError> {
     let io = StudiesError::io;
+    for d in [dir.to_path_buf(), dir.join("speeds")] {
+        crate::io::remove_stale_temp_files(&d).map_err(io(&d))?;
+    }
     let json = dir.join("sweep.json");
+    match std::fs::remove_file(&json) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io(&json)(e)),
+        _ => {}
+    }
+    write_maps(dir, r, m)?;
     crate::io::write_atomic(&json, |w| {
         serde_json::to_writer_pretty(&mut *w, r).map_err(std::io::Error::other)?;
         w.write_all(b"\n")
     })
-    .map_err(io(&json))?;
+    .map_err(io(&json))
+}
+
+/// Every output of [`write_outputs`] but `sweep.json`.
+fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesError> {
+    let io = StudiesError::io;
     let p = dir.join("dominant.csv");
     crate::io::write_csv(
         &p,
