@@ -42,6 +42,38 @@ where
     result
 }
 
+/// Removes the temp files `<name>.tmp.<pid>` of [`write_atomic`] in `dir` that a killed
+/// process left: those of processes no longer running (on Linux, no `/proc/<pid>`; where
+/// that cannot be told, none is removed). Returns how many were removed; a missing `dir` has
+/// none.
+pub fn remove_stale_temp_files(dir: &Path) -> io::Result<usize> {
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(0),
+        Err(e) => return Err(e),
+    };
+    let can_tell = Path::new("/proc/self").exists();
+    let mut removed = 0;
+    for entry in entries {
+        let entry = entry?;
+        let name = entry.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.rsplit_once(".tmp."))
+            .and_then(|(_, pid)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let dead =
+            pid != std::process::id() && can_tell && !Path::new(&format!("/proc/{pid}")).exists();
+        if dead && entry.file_type()?.is_file() {
+            std::fs::remove_file(entry.path())?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}
+
 /// Writes text atomically.
 pub fn write_text(path: &Path, text: &str) -> io::Result<()> {
     write_atomic(path, |w| w.write_all(text.as_bytes()))

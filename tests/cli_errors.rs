@@ -202,3 +202,226 @@ fn nonzero_rail_structural_damping_is_rejected() {
     assert!(err.contains("rail.structural_damping"), "{err}");
     assert!(err.contains("not modelled"), "{err}");
 }
+
+/// `S` of the robustness reproductions: a short passage model.
+const S: [&str; 4] = ["--set", "run.fmax=1000", "--set", "track.bays=6"];
+
+fn with_s<'a>(args: &[&'a str]) -> Vec<&'a str> {
+    let mut v = args.to_vec();
+    v.extend(S);
+    v
+}
+
+#[test]
+fn unphysical_youngs_modulus_is_refused_before_any_allocation() {
+    // Rail E = 1e-12 Pa panicked on a 47.5 GB allocation; sleeper E = 1e-12 Pa hung.
+    for key in ["rail", "sleeper", "wheel"] {
+        let set = format!("{key}.youngs_modulus=1e-12");
+        assert_clean_error(
+            &with_s(&["passage", "--set", &set]),
+            &[
+                &format!("{key}.youngs_modulus"),
+                "1000000000 to 10000000000000 Pa",
+            ],
+        );
+    }
+}
+
+#[test]
+fn tiny_gravity_density_and_sleeper_height_name_their_key() {
+    for (set, key) in [
+        ("vehicle.gravity=0", "vehicle.gravity"),
+        ("vehicle.gravity=1e-3", "vehicle.gravity"),
+        ("wheel.density=1e-3", "wheel.density"),
+        ("sleeper.height=1e-4", "sleeper.height"),
+        ("wheel.conicity=0.2", "wheel.conicity"),
+        ("rail.poisson_ratio=0.4999", "rail.poisson_ratio"),
+    ] {
+        assert_clean_error(&with_s(&["mesh", "--set", set]), &[key, "allowed"]);
+    }
+}
+
+#[test]
+fn zero_railpad_stiffness_is_blamed_on_the_fastening() {
+    let (_, _, err) = run(&with_s(&[
+        "passage",
+        "--set",
+        "fastening.vertical_stiffness=0",
+    ]));
+    assert!(
+        err.contains("fastening.vertical_stiffness") && !err.contains("ballast"),
+        "{err}"
+    );
+    assert_clean_error(
+        &with_s(&["passage", "--set", "fastening.vertical_stiffness=0"]),
+        &["fastening.vertical_stiffness"],
+    );
+}
+
+#[test]
+fn a_cause_the_message_already_prints_is_not_repeated() {
+    let (code, _, err) = run(&["model", "--model", "/nonexistent/track.toml"]);
+    assert_ne!(code, 0);
+    // The OS message was printed twice (by the error and again as its source).
+    let os = std::io::Error::from(std::io::ErrorKind::NotFound).to_string();
+    let first = err
+        .find("No such file")
+        .or_else(|| err.find(&os))
+        .expect(&err);
+    assert!(!err[first + 1..].contains("No such file"), "{err}");
+}
+
+#[test]
+fn zero_friction_is_refused_by_the_model_and_the_contact_command() {
+    // µ = 0 with traction 0 ran into a secant failure printed twice.
+    assert_clean_error(
+        &with_s(&[
+            "passage",
+            "--set",
+            "contact.friction=0",
+            "--set",
+            "contact.traction_coefficient=0",
+        ]),
+        &["contact.friction", "greater than 0"],
+    );
+    assert_clean_error(
+        &["contact", "--friction", "0", "--traction-coefficient", "0"],
+        &["--friction", "greater than 0"],
+    );
+}
+
+#[test]
+fn contact_normal_load_and_steps_are_range_checked() {
+    // 1e12 N gave a 1.5 m patch; the range is that of vehicle.wheel_load (0, 500 kN].
+    assert_clean_error(
+        &["contact", "--normal-load", "1e12"],
+        &["--normal-load", "500000 N", "vehicle.wheel_load"],
+    );
+    assert_clean_error(&["contact", "--normal-load", "0"], &["--normal-load"]);
+    // 1e9 steps ran for hours.
+    assert_clean_error(&["contact", "--steps", "1000000000"], &["--steps", "10000"]);
+    assert_clean_error(&["contact", "--steps", "0"], &["--steps"]);
+}
+
+#[test]
+fn a_contact_grid_beyond_a_reasonable_passage_time_is_refused() {
+    // 256 x 256 is inside each key's range but ran for over 600 s: 256^2 * 256 = 16777216
+    // > 12 * 32^2 * 24 = 294912.
+    assert_clean_error(
+        &with_s(&[
+            "passage",
+            "--set",
+            "contact.grid_nx=256",
+            "--set",
+            "contact.grid_ny=256",
+        ]),
+        &["contact.grid_nx", "16777216", "294912"],
+    );
+    let (code, _, err) = run(&[
+        "model",
+        "--set",
+        "contact.grid_nx=64",
+        "--set",
+        "contact.grid_ny=64",
+    ]);
+    assert_eq!(code, 0, "{err}");
+}
+
+#[test]
+fn a_mesh_beyond_the_size_limit_is_refused_with_its_estimate_and_keys() {
+    // Each of these aborted on an allocation. The limit is 1e6 DOFs per substructure.
+    for (sets, key) in [
+        (
+            vec!["mesh.fine_element_length=1e-4"],
+            "mesh.fine_element_length",
+        ),
+        (
+            vec!["mesh.section_size=0.002", "mesh.head_size=0.001"],
+            "mesh.section_size",
+        ),
+        (
+            vec!["mesh.sleeper_elements=[64,64,64]"],
+            "mesh.sleeper_elements",
+        ),
+        (
+            vec!["mesh.wheel_segments=720", "mesh.wheel_element_size=0.005"],
+            "mesh.wheel_segments",
+        ),
+    ] {
+        let mut args = vec!["mesh"];
+        for s in &sets {
+            args.extend(["--set", s]);
+        }
+        assert_clean_error(&args, &[key, "DOFs", "GiB", "limit of 1000000 DOFs"]);
+    }
+}
+
+#[test]
+fn a_wheel_that_leaves_the_rail_is_an_error_not_zero_forces() {
+    // A primary suspension of 1e3 N/m let the wheel leave the rail; the passage exited 0
+    // with every force zero.
+    let dir = std::env::temp_dir().join(format!("corrugation-cli-lost-{}", std::process::id()));
+    let out = dir.join("out");
+    let cache = dir.join("cache");
+    let mut args = vec![
+        "passage",
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+        "--set",
+        "run.fmax=1000",
+        "--set",
+        "vehicle.primary_stiffness=1e3",
+    ];
+    args.extend(SMALL_MODEL);
+    assert_clean_error(&args, &["lost contact", "vehicle.primary_stiffness"]);
+    assert!(!out.join("forces.csv").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_sweep_beyond_the_model_speed_limit_is_refused() {
+    // run.speed_kmh allows 1 to 500 km/h; `sweep --speeds 600` ran anyway.
+    assert_clean_error(
+        &[
+            "sweep",
+            "--speeds",
+            "600",
+            "--out",
+            "/nonexistent/never-written",
+        ],
+        &["--speeds", "600", "1 to 500 km/h"],
+    );
+}
+
+#[test]
+fn a_corrugation_csv_without_a_header_is_refused_not_shortened() {
+    // Its first row was taken as the header and silently lost.
+    let p = tmp_file("no_header.csv", "1.0,0.0\n1.01,5.0\n1.02,0.0\n");
+    assert_clean_error(
+        &[
+            "passage",
+            "--corrugation",
+            p.to_str().unwrap(),
+            "--out",
+            "/nonexistent/x",
+        ],
+        &["no_header.csv", "`1.0, 0.0`", "header"],
+    );
+}
+
+#[test]
+fn an_unwritable_out_directory_is_refused_before_the_computation() {
+    // `passage` found out only after the whole passage. A regular file cannot hold outputs.
+    let f = tmp_file("not_a_dir", "x");
+    let out = f.join("sub");
+    for cmd in ["passage", "sweep", "grow", "predict", "modes"] {
+        let t = std::time::Instant::now();
+        assert_clean_error(
+            &[cmd, "--out", out.to_str().unwrap()],
+            &["--out", "not_a_dir", "cannot write there"],
+        );
+        assert!(t.elapsed().as_secs_f64() < 10.0, "{cmd} computed first");
+    }
+}

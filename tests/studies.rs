@@ -19,7 +19,9 @@ use corrugation::studies::initiation::{
 };
 use corrugation::studies::speeds::{parse_speeds, Shard};
 use corrugation::studies::study::{run_study, Study};
-use corrugation::studies::sweep::{merge, read_summary, speed_file, sweep, MapOptions};
+use corrugation::studies::sweep::{
+    merge, read_summary, speed_file, sweep, write_shard_plan, MapOptions,
+};
 use corrugation::studies::{BoxError, StudiesError};
 use corrugation::units::kmh_to_ms;
 
@@ -329,11 +331,13 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
     let runner = ModeLocked::default();
     let whole = base.join("whole");
     sweep(&runner, &speeds, &whole, &opts(), KEY, false).unwrap();
+    write_shard_plan(&whole, &speeds, Shard::ALL).unwrap();
     let mut shard_dirs = Vec::new();
     for i in 0..3 {
         let d = base.join(format!("shard{i}"));
-        let sel = Shard { index: i, count: 3 }.select(&speeds);
-        sweep(&runner, &sel, &d, &opts(), KEY, false).unwrap();
+        let shard = Shard { index: i, count: 3 };
+        sweep(&runner, &shard.select(&speeds), &d, &opts(), KEY, false).unwrap();
+        write_shard_plan(&d, &speeds, shard).unwrap();
         shard_dirs.push(d);
     }
     assert_eq!(runner.calls.load(Ordering::SeqCst), 2 * speeds.len());
@@ -381,6 +385,71 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("different models"), "{e}");
+    // The shards must form one complete sweep: a missing shard, a shard given twice, a
+    // shard of another sweep and an unfinished shard are refused (each was merged before).
+    let e = merge(&shard_dirs[..2], &base.join("m1")).unwrap_err();
+    assert!(
+        matches!(&e, StudiesError::ShardsMissing { count: 3, missing } if missing == &[2]),
+        "{e}"
+    );
+    let twice = [
+        shard_dirs[0].clone(),
+        shard_dirs[1].clone(),
+        shard_dirs[1].clone(),
+        shard_dirs[2].clone(),
+    ];
+    let e = merge(&twice, &base.join("m2")).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            StudiesError::ShardTwice {
+                index: 1,
+                count: 3,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let other = base.join("other");
+    let other_speeds = parse_speeds("60:200:20").unwrap();
+    let shard = Shard { index: 2, count: 3 };
+    sweep(
+        &runner,
+        &shard.select(&other_speeds),
+        &other,
+        &opts(),
+        KEY,
+        false,
+    )
+    .unwrap();
+    write_shard_plan(&other, &other_speeds, shard).unwrap();
+    let mixed = [shard_dirs[0].clone(), shard_dirs[1].clone(), other];
+    let e = merge(&mixed, &base.join("m3")).unwrap_err();
+    assert!(
+        matches!(e, StudiesError::ShardsOfDifferentSweeps { .. }),
+        "{e}"
+    );
+    // Shard 2 of 60:200:10 is 80, 110, 140, 170, 200 (5 speeds); a run of only 2 is unfinished.
+    let short = base.join("short");
+    let shard = Shard { index: 2, count: 3 };
+    sweep(&runner, &[80.0, 110.0], &short, &opts(), KEY, false).unwrap();
+    write_shard_plan(&short, &speeds, shard).unwrap();
+    let e = merge(
+        &[shard_dirs[0].clone(), shard_dirs[1].clone(), short],
+        &base.join("m4"),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            StudiesError::ShardUnfinished {
+                have: 2,
+                want: 5,
+                ..
+            }
+        ),
+        "{e}"
+    );
     std::fs::remove_dir_all(base).ok();
 }
 
@@ -471,6 +540,31 @@ fn interrupted_sweep_resumes_without_recomputing() {
     let idle = ModeLocked::default();
     sweep(&idle, &speeds, &dir, &opts(), KEY, false).unwrap();
     assert_eq!(idle.calls.load(Ordering::SeqCst), 0);
+    // The temp file of a killed run with a pid above any pid_max (2^22) is removed: a finished
+    // sweep leaves no orphan `*.tmp.<pid>` (the file of pid 4242 above is not asserted: a
+    // process of that pid may be running on the test machine, whose files are kept).
+    let orphan = dir.join("map_wear_wavelength.npy.tmp.4294967000");
+    std::fs::write(&orphan, b"partial").unwrap();
+    sweep(&idle, &speeds, &dir, &opts(), KEY, false).unwrap();
+    for d in [dir.clone(), dir.join("speeds")] {
+        let tmp: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .filter(|n| n.contains(".tmp.") && !n.ends_with(&format!(".tmp.{}", 4242)))
+            .collect();
+        assert!(tmp.is_empty(), "orphan temp files: {tmp:?}");
+    }
+    // sweep.json is the commit marker: a run that fails (here: is killed) in its output stage
+    // leaves none, even where an earlier run had written one.
+    assert!(dir.join("sweep.json").exists());
+    let blocker = dir.join("map_wavelength.csv");
+    std::fs::remove_file(&blocker).unwrap();
+    std::fs::create_dir(&blocker).unwrap();
+    assert!(sweep(&idle, &speeds, &dir, &opts(), KEY, false).is_err());
+    assert!(
+        !dir.join("sweep.json").exists(),
+        "sweep.json beside an unfinished output stage"
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 

@@ -8,6 +8,11 @@ use clap::Args;
 use corrugation::contact::report::{solve_case, ContactCase, TangentialLoading};
 
 use super::ModelArgs;
+use corrugation::model::MAX_WHEEL_LOAD_N;
+
+/// Most transient steps of `contact --steps`: the patch is crossed in about `grid_nx` (40)
+/// steps, so this is hundreds of crossings, seconds of work, and no hang.
+const MAX_STEPS: usize = 10_000;
 
 /// Solves the wheel–rail contact (Hertz + half-space grid, Kalker's exact tangential theory)
 /// for the model's wheel, rail crown, steel, load and friction.
@@ -28,7 +33,8 @@ pub struct ContactCmd {
     /// Friction coefficient (−). Default: contact.friction.
     #[arg(long, value_name = "MU")]
     friction: Option<f64>,
-    /// 1 = steady rolling; K > 1 = transient rolling from rest over K grid steps.
+    /// 1 = steady rolling; K > 1 = transient rolling from rest over K grid steps (at most
+    /// 10000: a grid point crosses the patch in about 40 steps).
     #[arg(long, value_name = "K", default_value_t = 1)]
     steps: usize,
     /// Print the result as one JSON object.
@@ -42,6 +48,26 @@ pub struct ContactCmd {
 impl ContactCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let m = self.model.load()?;
+        if let Some(n) = self.normal_load {
+            if !(n.is_finite() && n > 0.0 && n <= MAX_WHEEL_LOAD_N) {
+                anyhow::bail!(
+                    "--normal-load {n}: out of range, allowed greater than 0 and at most {MAX_WHEEL_LOAD_N} N (as vehicle.wheel_load)"
+                );
+            }
+        }
+        if let Some(mu) = self.friction {
+            if !(mu.is_finite() && mu > 0.0 && mu <= 2.0) {
+                anyhow::bail!(
+                    "--friction {mu}: out of range, allowed greater than 0 and at most 2 (as contact.friction)"
+                );
+            }
+        }
+        if self.steps == 0 || self.steps > MAX_STEPS {
+            anyhow::bail!(
+                "--steps {}: out of range, allowed 1 (steady rolling) to {MAX_STEPS} (transient from rest)",
+                self.steps
+            );
+        }
         let tangential = match (self.creepage, self.traction_coefficient) {
             (Some(x), _) => TangentialLoading::Creepage(x),
             (None, Some(t)) => TangentialLoading::TractionCoefficient(t),

@@ -354,6 +354,7 @@ impl GrowCmd {
             );
         }
         let m = self.model.load()?;
+        super::check_out_dir(&self.out)?;
         let cache = ModalCache::new(self.cache.clone().unwrap_or_else(default_cache_dir));
         let prepared = PreparedModel::new(&m, &cache, &PassageOptions::default())
             .context("preparing the modal model")?;

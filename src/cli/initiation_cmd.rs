@@ -100,8 +100,11 @@ impl InitiationCmd {
         let mut rows = Vec::new();
         for (name, model) in &cases {
             let speed = self.speed.unwrap_or(model.run.speed_kmh);
-            if !(speed.is_finite() && speed > 0.0) {
-                anyhow::bail!("--speed must be positive km/h (got {speed})");
+            let [lo, hi] = corrugation::model::SPEED_KMH;
+            if !(speed.is_finite() && (lo..=hi).contains(&speed)) {
+                anyhow::bail!(
+                    "--speed {speed}: out of range, allowed {lo} to {hi} km/h (as run.speed_kmh)"
+                );
             }
             // One engine at a time: each holds its modal basis.
             let runner = engine::runner_for(model, self.cache.as_deref())?;

@@ -56,6 +56,17 @@ impl ModelArgs {
     }
 }
 
+/// Creates the output directory `dir` and checks a file can be written in it, so that a
+/// command refuses an unwritable `--out` before its computation, not after.
+pub fn check_out_dir(dir: &std::path::Path) -> anyhow::Result<()> {
+    let fail =
+        |e: std::io::Error| anyhow::anyhow!("--out {}: cannot write there: {e}", dir.display());
+    std::fs::create_dir_all(dir).map_err(fail)?;
+    let probe = dir.join(format!(".write-check.{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(fail)?;
+    std::fs::remove_file(&probe).map_err(fail)
+}
+
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Print the resolved model (after `extends` and `--set`) as TOML.

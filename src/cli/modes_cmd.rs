@@ -122,6 +122,7 @@ impl ModesCmd {
             anyhow::bail!("--fmax must be a positive number of Hz (got {})", self.fmax);
         }
         let m = self.model.load()?;
+        super::check_out_dir(&self.out)?;
         let cache_dir = self.cache.clone().unwrap_or_else(default_cache_dir);
         let cache = ModalCache::new(&cache_dir);
         let track = TrackStructure::build(&m).context("building the track model")?;

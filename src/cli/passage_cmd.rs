@@ -53,6 +53,7 @@ impl PassageCmd {
             Some(p) => Some(RailProfile::read_csv_um(p)?),
             None => None,
         };
+        super::check_out_dir(&self.out)?;
         let cache = ModalCache::new(self.cache.clone().unwrap_or_else(default_cache_dir));
         let opts = PassageOptions::default();
         let prepared =

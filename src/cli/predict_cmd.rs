@@ -85,6 +85,7 @@ impl PredictCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let t0 = Instant::now();
         let m = self.model.load()?;
+        super::check_out_dir(&self.out)?;
         let speeds = parse_speeds(&self.speeds)?;
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("creating {}", self.out.display()))?;

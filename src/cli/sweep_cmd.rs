@@ -7,7 +7,7 @@ use std::time::Instant;
 use clap::Args;
 
 use corrugation::studies::speeds::{parse_speeds, Shard};
-use corrugation::studies::sweep::{sweep, MapOptions};
+use corrugation::studies::sweep::{sweep, write_shard_plan, MapOptions};
 
 use super::{engine, ModelArgs};
 
@@ -57,6 +57,7 @@ impl SweepCmd {
             );
         }
         let model = self.model.load()?;
+        super::check_out_dir(&self.out)?;
         let cache = self.cache.as_deref();
         // One modal model for both the mode lines and the passages.
         let prepared = engine::prepared(&model, cache)?;
@@ -73,6 +74,8 @@ impl SweepCmd {
             blake3::hash(&serde_json::to_vec(&model)?).to_hex()
         );
         let out = sweep(runner.as_ref(), &speeds, &self.out, &opts, &run_key, true)?;
+        // Which shard of which sweep this directory holds: `merge` checks the shards form one.
+        write_shard_plan(&self.out, &all, shard)?;
         eprintln!(
             "sweep: {} speed(s), {} computed, {} reused; speed range ratio {:.3}, wavelength range ratio {}; {}",
             speeds.len(),

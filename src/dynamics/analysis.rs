@@ -101,8 +101,26 @@ pub fn band_spectrum(psd: &Psd) -> WavelengthSpectrum {
     out
 }
 
+/// [`DynamicsError::ContactLost`] when the normal force is zero (or not positive) at any step:
+/// a wheel off the rail transmits no force and wears nothing, which is no rolling result.
+pub fn check_contact(h: &crate::dynamics::passage::Histories) -> Result<(), DynamicsError> {
+    let lost: Vec<usize> = (0..h.normal_n.len())
+        .filter(|&i| h.normal_n[i].is_nan() || h.normal_n[i] <= 0.0)
+        .collect();
+    match lost.first() {
+        None => Ok(()),
+        Some(&i) => Err(DynamicsError::ContactLost {
+            t_s: h.t_s[i],
+            x_m: h.x_m[i],
+            lost: lost.len(),
+            steps: h.normal_n.len(),
+        }),
+    }
+}
+
 /// The summary of a passage record.
 pub fn summarise(rec: &PassageRecord) -> Result<PassageSummary, DynamicsError> {
+    check_contact(&rec.histories)?;
     let v = rec.speed_m_per_s;
     let h = &rec.histories;
     let fl = analyse(&zone_signal(rec, &h.longitudinal_n)?, v)?;
@@ -128,4 +146,42 @@ pub fn summarise(rec: &PassageRecord) -> Result<PassageSummary, DynamicsError> {
         steps: rec.steps,
         seconds: rec.seconds,
     })
+}
+
+#[cfg(test)]
+mod contact_tests {
+    use super::*;
+    use crate::dynamics::passage::Histories;
+
+    fn histories(normal_n: &[f64]) -> Histories {
+        let n = normal_n.len();
+        Histories {
+            t_s: (0..n).map(|i| i as f64 * 1e-4).collect(),
+            x_m: (0..n).map(|i| 1.0 + i as f64 * 1e-3).collect(),
+            normal_n: normal_n.to_vec(),
+            ..Histories::default()
+        }
+    }
+
+    #[test]
+    fn a_step_without_normal_force_is_a_lost_contact_not_a_result() {
+        assert!(check_contact(&histories(&[1e5, 9e4, 1.1e5])).is_ok());
+        // Steps 2 and 3 of 4 at zero force: the first is at t = 2e-4 s, x = 1.002 m.
+        match check_contact(&histories(&[1e5, 2e4, 0.0, 0.0])) {
+            Err(DynamicsError::ContactLost {
+                lost: 2, steps: 4, ..
+            }) => {}
+            other => panic!("{other:?}"),
+        }
+        let e = check_contact(&histories(&[1e5, 0.0, 0.0, f64::NAN])).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.contains("t = 0.000100 s") && text.contains("x = 1.0010 m"),
+            "{text}"
+        );
+        assert!(
+            text.contains("3 of 4") && text.contains("vehicle.primary_stiffness"),
+            "{text}"
+        );
+    }
 }

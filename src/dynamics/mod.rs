@@ -64,6 +64,19 @@ pub enum DynamicsError {
         /// What became non-finite.
         what: String,
     },
+    /// The wheel left the rail: the contact force was zero at some steps, so the forces and
+    /// the wear of the passage are not those of a rolling wheel.
+    #[error("the wheel lost contact with the rail at t = {t_s:.6} s (x = {x_m:.4} m), {lost} of {steps} steps without contact: the forces and wear would be zero there, not a result; check vehicle.primary_stiffness (a soft suspension lets the wheel bounce off), vehicle.wheel_load and the rail profile's amplitude")]
+    ContactLost {
+        /// First time without contact (s).
+        t_s: f64,
+        /// Contact position then (m).
+        x_m: f64,
+        /// Steps without contact.
+        lost: usize,
+        /// Steps of the passage.
+        steps: usize,
+    },
     /// Any other failure of the passage (message says what to change).
     #[error("{0}")]
     Other(String),
@@ -125,7 +138,8 @@ impl RailProfile {
     }
 
     /// Reads a CSV file with a header line and two columns: `x` in m and the rail-top
-    /// height in µm (the unit users measure corrugation in), converted here to m.
+    /// height in µm (the unit users measure corrugation in), converted here to m. A numeric
+    /// first line is an error (a file without a header would lose its first row).
     pub fn read_csv_um(path: &Path) -> Result<Self, DynamicsError> {
         let err = |reason: String| DynamicsError::Profile {
             path: path.display().to_string(),
@@ -137,6 +151,13 @@ impl RailProfile {
             .comment(Some(b'#'))
             .from_path(path)
             .map_err(|e| err(e.to_string()))?;
+        let header = rdr.headers().map_err(|e| err(e.to_string()))?;
+        if header.len() >= 2 && header.iter().take(2).all(|f| f.parse::<f64>().is_ok()) {
+            return Err(err(format!(
+                "the first line `{}` is numbers, not a header: add a header line `x_m, height_um` (without one the first row would be lost)",
+                header.iter().collect::<Vec<_>>().join(", ")
+            )));
+        }
         let (mut xs, mut hs) = (Vec::new(), Vec::new());
         for (line, rec) in rdr.records().enumerate() {
             let rec = rec.map_err(|e| err(e.to_string()))?;

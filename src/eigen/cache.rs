@@ -15,7 +15,9 @@
 //! directory that is never read. **Integrity.** On load, the blake3 hash of each .npy file is
 //! checked against `meta.json` and shapes against the metadata, so a truncated or corrupted
 //! entry is reported as [`CacheLookup::Corrupt`] (and can be recomputed and overwritten with
-//! [`ModalCache::store`]), never trusted.
+//! [`ModalCache::store`]), never trusted. Auxiliary files of an entry (derived data such as
+//! the residual flexibility, [`ModalCache::store_aux`]) carry the blake3 hash of their content
+//! on their first line, checked on load: a mismatch is a miss, recomputed.
 //!
 //! The key ([`CacheKey`]) is a blake3 hash of labelled parts supplied by the caller (model
 //! parameters, mesh, f_max, …) plus the crate version (`CARGO_PKG_VERSION`), so any change of
@@ -242,6 +244,9 @@ fn finish_file(path: &Path, bw: std::io::BufWriter<fs::File>) -> Result<(), Cach
     f.sync_all().map_err(io_err("sync", path))
 }
 
+/// First bytes of an auxiliary file: the tag, then the blake3 hex of the payload and `\n`.
+const AUX_HASH_TAG: &str = "blake3 ";
+
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), CacheError> {
     let mut f = fs::File::create(path).map_err(io_err("create", path))?;
     f.write_all(bytes).map_err(io_err("write", path))?;
@@ -329,6 +334,8 @@ impl ModalCache {
     /// Stores an auxiliary file `name` (derived data of the basis, e.g. the residual
     /// flexibility) inside the existing entry of `key`, atomically (temp file + rename).
     /// Fails when the entry does not exist: derived data lives and dies with its modes.
+    /// The file is a line `blake3 <hex of bytes>` and then `bytes`; [`Self::load_aux`]
+    /// checks the hash.
     pub fn store_aux(&self, key: &CacheKey, name: &str, bytes: &[u8]) -> Result<(), CacheError> {
         if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') {
             return Err(CacheError::InvalidData(format!(
@@ -347,7 +354,9 @@ impl ModalCache {
             std::process::id(),
             TMP_COUNTER.fetch_add(1, Ordering::Relaxed)
         ));
-        let result = write_file(&tmp, bytes).and_then(|_| {
+        let mut content = format!("{AUX_HASH_TAG}{}\n", blake3::hash(bytes).to_hex()).into_bytes();
+        content.extend_from_slice(bytes);
+        let result = write_file(&tmp, &content).and_then(|_| {
             let fin = d.join(name);
             fs::rename(&tmp, &fin).map_err(io_err("rename", &tmp))
         });
@@ -357,10 +366,15 @@ impl ModalCache {
         result
     }
 
-    /// The auxiliary file `name` of the entry of `key`, if present (the caller validates
-    /// its content).
+    /// The auxiliary file `name` of the entry of `key`, if present and its blake3 hash
+    /// matches the one stored with it (the caller validates its content). A truncated,
+    /// corrupted or hash-less file is `None`, like a missing one: recomputed, never trusted.
     pub fn load_aux(&self, key: &CacheKey, name: &str) -> Option<Vec<u8>> {
-        fs::read(self.entry_dir(key).join(name)).ok()
+        let content = fs::read(self.entry_dir(key).join(name)).ok()?;
+        let rest = content.strip_prefix(AUX_HASH_TAG.as_bytes())?;
+        let nl = rest.iter().position(|&b| b == b'\n')?;
+        let (hex, payload) = (&rest[..nl], &rest[nl + 1..]);
+        (hex == blake3::hash(payload).to_hex().as_bytes()).then(|| payload.to_vec())
     }
 
     /// Looks up `key`; validates hashes, shapes and metadata.
@@ -473,6 +487,33 @@ mod tests {
             classification: serde_json::json!({"kinds": ["rigid", "bending", "compression"]}),
         };
         (f, m, meta)
+    }
+
+    #[test]
+    fn auxiliary_files_are_checked_against_their_hash() {
+        let dir = tmpdir("aux");
+        let cache = ModalCache::new(&dir);
+        let key = CacheKey::new().str("model", "aux");
+        let (f, m, meta) = sample();
+        cache.store(&key, &f, &m, meta).unwrap();
+        let payload = br#"{"residual": [1.5e-10, 2.5e-10]}"#;
+        cache.store_aux(&key, "r.json", payload).unwrap();
+        assert_eq!(
+            cache.load_aux(&key, "r.json").as_deref(),
+            Some(&payload[..])
+        );
+        let path = cache.entry_dir(&key).join("r.json");
+        let good = fs::read(&path).unwrap();
+        // One changed digit of a value (still valid JSON), a truncation, a file without the
+        // hash line: none is returned.
+        let mut flipped = good.clone();
+        let i = flipped.len() - 4; // the 1 of 2.5e-10: 2.5e-20
+        flipped[i] = if flipped[i] == b'1' { b'2' } else { b'1' };
+        for bad in [flipped, good[..good.len() - 3].to_vec(), payload.to_vec()] {
+            fs::write(&path, &bad).unwrap();
+            assert_eq!(cache.load_aux(&key, "r.json"), None);
+        }
+        fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

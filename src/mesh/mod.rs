@@ -118,6 +118,18 @@ pub enum MeshError {
         /// Passes made.
         iterations: usize,
     },
+    /// The mesh would have more nodes than allowed (refused before allocating them).
+    #[error("the mesh would have {nodes} nodes ({layers} layers of {per_layer}), more than {limit}: use larger elements")]
+    TooLarge {
+        /// Nodes of the mesh.
+        nodes: usize,
+        /// Node layers (circumferential, along the rail).
+        layers: usize,
+        /// Nodes per layer.
+        per_layer: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// The generated mesh has an invalid element (a bug or an extreme parameter set).
     #[error("generated mesh is invalid: {reason}; try a smaller element size")]
     InvalidElement {

@@ -97,6 +97,9 @@ pub struct WheelParams {
     /// Minimum number of element layers through the web thickness (linear hexahedra need
     /// several layers to bend well).
     pub web_layers: usize,
+    /// Most nodes the mesh may have: a larger one is refused ([`MeshError::TooLarge`]) before
+    /// its nodes are allocated.
+    pub max_nodes: usize,
 }
 
 impl Default for WheelParams {
@@ -126,6 +129,7 @@ impl Default for WheelParams {
             contact_size_m: 0.015,
             contact_half_width_m: 0.03,
             web_layers: 3,
+            max_nodes: usize::MAX,
         }
     }
 }
@@ -453,6 +457,14 @@ pub fn wheel(p: &WheelParams, material: usize) -> Result<(Mesh, WheelTopology), 
     let thetas: Vec<f64> = s[1..].iter().map(|v| v / p.radius_m).collect();
     let nt = thetas.len();
     let nm = meridian.len();
+    if nt.saturating_mul(nm) > p.max_nodes {
+        return Err(MeshError::TooLarge {
+            nodes: nt.saturating_mul(nm),
+            layers: nt,
+            per_layer: nm,
+            limit: p.max_nodes,
+        });
+    }
     let mut mesh = Mesh {
         nodes: Vec::with_capacity(nt * nm),
         elements: Vec::with_capacity(nt * quads.len()),

@@ -172,11 +172,11 @@ pub struct Rail {
     pub profile: String,
     /// Rail cant as tan(angle) (−): 0.025 = 1/40; 0 = upright.
     pub inclination: f64,
-    /// Young's modulus (Pa).
+    /// Young's modulus (Pa), 1e9 to 1e13 ([`YOUNGS_MODULUS_PA`]).
     pub youngs_modulus: f64,
-    /// Poisson's ratio (−).
+    /// Poisson's ratio (−), 0 to 0.45 ([`POISSON_RATIO`]).
     pub poisson_ratio: f64,
-    /// Density (kg/m³).
+    /// Density (kg/m³), 1000 to 20000 ([`DENSITY_KG_M3`]).
     pub density: f64,
     /// Stiffness-proportional (Rayleigh β) structural damping of the steel (s); 0 in the
     /// reference, where all damping sits in the discrete dampers. Only 0 is accepted: steel
@@ -188,19 +188,19 @@ pub struct Rail {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Sleeper {
-    /// Length across the track (m).
+    /// Length across the track (m), 0.3 to 5.
     pub length: f64,
-    /// Width along the rail (m).
+    /// Width along the rail (m), 0.05 to `track.sleeper_spacing`.
     pub width: f64,
-    /// Height (m).
+    /// Height (m), 0.05 to 1.
     pub height: f64,
     /// Distance from the sleeper's track-centre end to the rail centre line (m).
     pub rail_seat: f64,
-    /// Young's modulus (Pa).
+    /// Young's modulus (Pa), 1e9 to 1e13 ([`YOUNGS_MODULUS_PA`]).
     pub youngs_modulus: f64,
-    /// Poisson's ratio (−).
+    /// Poisson's ratio (−), 0 to 0.45 ([`POISSON_RATIO`]).
     pub poisson_ratio: f64,
-    /// Density (kg/m³).
+    /// Density (kg/m³), 1000 to 20000 ([`DENSITY_KG_M3`]).
     pub density: f64,
 }
 
@@ -435,13 +435,13 @@ impl Ballast {
 pub struct Wheel {
     /// Nominal rolling radius (m).
     pub radius: f64,
-    /// Tread conicity (−): 0.025 = 1/40.
+    /// Tread conicity (−): 0.025 = 1/40; 0 to 0.1.
     pub conicity: f64,
-    /// Young's modulus (Pa).
+    /// Young's modulus (Pa), 1e9 to 1e13 ([`YOUNGS_MODULUS_PA`]).
     pub youngs_modulus: f64,
-    /// Poisson's ratio (−).
+    /// Poisson's ratio (−), 0 to 0.45 ([`POISSON_RATIO`]).
     pub poisson_ratio: f64,
-    /// Density (kg/m³).
+    /// Density (kg/m³), 1000 to 20000 ([`DENSITY_KG_M3`]).
     pub density: f64,
     /// Modal damping ratio of the wheel's elastic modes (−), added to the diagonal of the
     /// wheel's projected damping as `2 ζ ω_i` (1/s); default 0, as in the reference (no
@@ -460,7 +460,7 @@ pub struct Vehicle {
     pub primary_stiffness: f64,
     /// Primary suspension damping per wheel (N·s/m).
     pub primary_damping: f64,
-    /// Gravitational acceleration (m/s²).
+    /// Gravitational acceleration (m/s²), 9 to 10.5 (the sprung mass is load / gravity).
     pub gravity: f64,
 }
 
@@ -468,14 +468,15 @@ pub struct Vehicle {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Contact {
-    /// Coulomb friction coefficient (−).
+    /// Coulomb friction coefficient (−), greater than 0 and at most 2.
     pub friction: f64,
     /// Traction coefficient: mean F_L / F_N, set by the driving torque (−).
     pub traction_coefficient: f64,
     /// Lateral radius of the rail head crown (m).
     pub rail_crown_radius: f64,
     /// Contact-patch grid elements along the rolling direction (−). The passage's time step
-    /// is one grid element over the speed, Δt = Δx / V.
+    /// is one grid element over the speed, Δt = Δx / V. 8 to 256, and
+    /// `grid_nx² · grid_ny` at most [`MAX_GRID_WORK`] (the passage's work grows so).
     pub grid_nx: usize,
     /// Contact-patch grid elements across the rail (−).
     pub grid_ny: usize,
@@ -640,14 +641,15 @@ impl Model {
             "s (Rayleigh beta; steel damping is not modelled yet: all damping sits in the discrete dampers, as in the reference)",
         )?;
         let s = &self.sleeper;
-        c.pos("sleeper.length", s.length, 5.0, "m")?;
-        c.pos(
+        c.range("sleeper.length", s.length, 0.3, 5.0, "m")?;
+        c.range(
             "sleeper.width",
             s.width,
+            0.05,
             t.sleeper_spacing,
-            "m (below sleeper spacing)",
+            "m (at most the sleeper spacing)",
         )?;
-        c.pos("sleeper.height", s.height, 1.0, "m")?;
+        c.range("sleeper.height", s.height, 0.05, 1.0, "m")?;
         c.range(
             "sleeper.rail_seat",
             s.rail_seat,
@@ -733,6 +735,35 @@ impl Model {
             }
             (_, None) => {}
         }
+        // The rail floats on the railpads where no rigid hold acts: a direction without a hold
+        // needs a railpad spring, else the rail is a free body in it.
+        let pattern = self.fastening.hold_pattern();
+        for (h, key, k) in [
+            (
+                &pattern.x,
+                "fastening.longitudinal_stiffness",
+                f.longitudinal_stiffness,
+            ),
+            (
+                &pattern.y,
+                "fastening.lateral_stiffness",
+                f.lateral_stiffness,
+            ),
+            (
+                &pattern.z,
+                "fastening.vertical_stiffness",
+                f.vertical_stiffness,
+            ),
+        ] {
+            if h.rigid == RigidRegion::None {
+                c.pos(
+                    key,
+                    k,
+                    1e12,
+                    "N/m (> 0: this direction has no rigid hold in the fastening model, so the railpad springs alone support the rail)",
+                )?;
+            }
+        }
         let b = &self.ballast;
         c.spring_damper("ballast", b.stiffness(), b.damping())?;
         // Sleepers float on the ballast: they need a spring in every direction.
@@ -750,11 +781,13 @@ impl Model {
         }
         let w = &self.wheel;
         c.range("wheel.radius", w.radius, 0.2, 0.8, "m")?;
-        c.range("wheel.conicity", w.conicity, 0.0, 0.2, "(-)")?;
+        // The wheel mesh needs |c| < 0.2 (the tread must stay above the rim); treads are 1/40
+        // to 1/20, so the model stops well inside.
+        c.range("wheel.conicity", w.conicity, 0.0, 0.1, "(-)")?;
         c.elastic("wheel", w.youngs_modulus, w.poisson_ratio, w.density)?;
         c.range("wheel.damping_ratio", w.damping_ratio, 0.0, 0.1, "(-)")?;
         let v = &self.vehicle;
-        c.pos("vehicle.wheel_load", v.wheel_load, 500e3, "N")?;
+        c.pos("vehicle.wheel_load", v.wheel_load, MAX_WHEEL_LOAD_N, "N")?;
         c.pos(
             "vehicle.primary_stiffness",
             v.primary_stiffness,
@@ -768,9 +801,16 @@ impl Model {
             1e9,
             "N s/m",
         )?;
-        c.range("vehicle.gravity", v.gravity, 0.0, 100.0, "m/s^2")?;
+        // The sprung mass is wheel_load / gravity: near 0 it runs away (0 gives an infinite
+        // mass). Earth's surface: 9.78 to 9.83.
+        c.range("vehicle.gravity", v.gravity, 9.0, 10.5, "m/s^2")?;
         let k = &self.contact;
-        c.range("contact.friction", k.friction, 0.0, 2.0, "(-)")?;
+        c.pos(
+            "contact.friction",
+            k.friction,
+            2.0,
+            "(-) (> 0: the driving torque is transmitted by friction)",
+        )?;
         c.range(
             "contact.traction_coefficient",
             k.traction_coefficient,
@@ -787,6 +827,20 @@ impl Model {
         )?;
         c.int("contact.grid_nx", k.grid_nx, 8, 256)?;
         c.int("contact.grid_ny", k.grid_ny, 4, 256)?;
+        // A passage's contact work grows as grid_nx² · grid_ny (grid_nx cells per step and
+        // steps of one cell): refuse grids far beyond the default's time.
+        let work = k.grid_nx * k.grid_nx * k.grid_ny;
+        if work > MAX_GRID_WORK {
+            return c.fail(
+                "contact.grid_nx",
+                format!("{} (with contact.grid_ny = {})", k.grid_nx, k.grid_ny),
+                format!(
+                    "grid_nx^2 * grid_ny at most {MAX_GRID_WORK} (here {work}: {:.0} times the 32 x 24 default's passage time; e.g. 64 x 64 is {:.1} times)",
+                    work as f64 / (32.0 * 32.0 * 24.0),
+                    64.0 * 64.0 * 64.0 / (32.0 * 32.0 * 24.0)
+                ),
+            );
+        }
         c.range("contact.grid_margin", k.grid_margin, 1.05, 3.0, "(-)")?;
         let m = &self.mesh;
         c.pos(
@@ -821,7 +875,13 @@ impl Model {
             "m",
         )?;
         let run = &self.run;
-        c.range("run.speed_kmh", run.speed_kmh, 1.0, 500.0, "km/h")?;
+        c.range(
+            "run.speed_kmh",
+            run.speed_kmh,
+            SPEED_KMH[0],
+            SPEED_KMH[1],
+            "km/h",
+        )?;
         c.range(
             "run.solution_zone_offset",
             run.solution_zone_offset,
@@ -847,6 +907,30 @@ impl Model {
         Ok(())
     }
 }
+
+/// Allowed train speed (km/h), of `run.speed_kmh` and of every speed a sweep, study or
+/// initiation table runs: the model is not meant beyond 500 km/h.
+pub const SPEED_KMH: [f64; 2] = [1.0, 500.0];
+
+/// Largest static wheel load (N): 50 t per wheel, beyond any railway axle load.
+pub const MAX_WHEEL_LOAD_N: f64 = 500e3;
+
+/// Largest `contact.grid_nx² · contact.grid_ny`: 12 times the default 32 × 24 grid's passage
+/// time (64 × 64 takes 10.7 times; 256 × 256 would take 680 times, hours in place of minutes).
+pub const MAX_GRID_WORK: usize = 12 * 32 * 32 * 24;
+
+/// Allowed Young's modulus of the rail, sleeper and wheel (Pa): the solids a track is made of
+/// (steel 2.1e11, concrete 3.8e10, polymers from 1e9). Far outside it the modal bases and the
+/// contact grid go out of scale (e.g. E = 1e-12 Pa puts thousands of modes below `run.fmax`).
+pub const YOUNGS_MODULUS_PA: [f64; 2] = [1e9, 1e13];
+
+/// Allowed Poisson's ratio of the rail, sleeper and wheel (−). Above 0.45 a solid is nearly
+/// incompressible: its dilatational wave speed, hence the explicit time step, runs away and
+/// the linear hexahedra lock.
+pub const POISSON_RATIO: [f64; 2] = [0.0, 0.45];
+
+/// Allowed density of the rail, sleeper and wheel (kg/m³): steel 7800, concrete 2500.
+pub const DENSITY_KG_M3: [f64; 2] = [1000.0, 20000.0];
 
 struct Checker<'a> {
     file: &'a str,
@@ -906,16 +990,33 @@ impl Checker<'_> {
         }
         Ok(())
     }
+    /// Young's modulus, Poisson's ratio and density of a solid part in their physical ranges
+    /// ([`YOUNGS_MODULUS_PA`], [`POISSON_RATIO`], [`DENSITY_KG_M3`]).
     fn elastic(&mut self, part: &str, e: f64, nu: f64, rho: f64) -> Result<(), ModelError> {
-        self.pos(&format!("{part}.youngs_modulus"), e, 1e13, "Pa")?;
-        if !(nu.is_finite() && (0.0..0.5).contains(&nu)) {
-            return self.fail(
-                &format!("{part}.poisson_ratio"),
-                nu.to_string(),
-                "0 to 0.5 (0.5 excluded: incompressible material is not supported)".into(),
-            );
-        }
-        self.pos(&format!("{part}.density"), rho, 1e5, "kg/m^3")
+        let [e_lo, e_hi] = YOUNGS_MODULUS_PA;
+        self.range(
+            &format!("{part}.youngs_modulus"),
+            e,
+            e_lo,
+            e_hi,
+            "Pa (solids of a track: steel 2.1e11, concrete 3.8e10)",
+        )?;
+        let [nu_lo, nu_hi] = POISSON_RATIO;
+        self.range(
+            &format!("{part}.poisson_ratio"),
+            nu,
+            nu_lo,
+            nu_hi,
+            "(-) (nearly incompressible material is not supported)",
+        )?;
+        let [rho_lo, rho_hi] = DENSITY_KG_M3;
+        self.range(
+            &format!("{part}.density"),
+            rho,
+            rho_lo,
+            rho_hi,
+            "kg/m^3 (steel 7800, concrete 2500)",
+        )
     }
 }
 

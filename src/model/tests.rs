@@ -217,3 +217,71 @@ fn explicit_section_takes_a_safety_factor_and_an_optional_step() {
     let e = err_text(dutch_with(&["explicit.element_length=0.0008"]));
     assert!(e.contains("element_length"), "{e}");
 }
+
+#[test]
+fn material_parameters_outside_their_physical_range_are_rejected_with_the_range() {
+    // Each limit is the stated constant: just inside passes, just outside fails naming the key.
+    for (part, key) in [
+        ("rail", "youngs_modulus"),
+        ("sleeper", "youngs_modulus"),
+        ("wheel", "youngs_modulus"),
+    ] {
+        for v in ["1e-12", "9.9e8", "1.1e13"] {
+            let e = err_text(dutch_with(&[&format!("{part}.{key}={v}")]));
+            assert!(
+                e.contains(&format!("{part}.{key}"))
+                    && e.contains("1000000000 to 10000000000000 Pa"),
+                "{e}"
+            );
+        }
+    }
+    assert!(dutch_with(&["sleeper.youngs_modulus=1e9", "wheel.youngs_modulus=1e9"]).is_ok());
+    for (key, bad) in [
+        ("rail.density", "999"),
+        ("wheel.density", "1e-3"),
+        ("sleeper.density", "20001"),
+        ("rail.poisson_ratio", "0.4999"),
+        ("wheel.poisson_ratio", "0.46"),
+        ("sleeper.poisson_ratio", "-0.1"),
+    ] {
+        let e = err_text(dutch_with(&[&format!("{key}={bad}")]));
+        assert!(e.contains(key) && e.contains("allowed"), "{key}: {e}");
+    }
+}
+
+#[test]
+fn poisson_ratio_near_one_half_is_blamed_not_the_time_step() {
+    let e = err_text(dutch_with(&["rail.poisson_ratio=0.4999"]));
+    assert!(
+        e.contains("rail.poisson_ratio") && e.contains("0 to 0.45"),
+        "{e}"
+    );
+    assert!(!e.contains("explicit.time_step"), "{e}");
+}
+
+#[test]
+fn gravity_sleeper_size_and_conicity_are_checked_by_the_model_not_later() {
+    for (kv, key) in [
+        ("vehicle.gravity=0", "vehicle.gravity"),
+        ("vehicle.gravity=1e-3", "vehicle.gravity"),
+        ("sleeper.height=1e-4", "sleeper.height"),
+        ("sleeper.width=1e-3", "sleeper.width"),
+        // The wheel mesh needs |c| < 0.2: the model must refuse 0.2 itself.
+        ("wheel.conicity=0.2", "wheel.conicity"),
+    ] {
+        let e = err_text(dutch_with(&[kv]));
+        assert!(e.contains(key) && e.contains("allowed"), "{kv}: {e}");
+    }
+    assert!(dutch_with(&["vehicle.gravity=9.78", "wheel.conicity=0.05"]).is_ok());
+}
+
+#[test]
+fn zero_railpad_stiffness_without_a_rigid_hold_names_the_fastening() {
+    // RPM3 holds z by the springs alone: k_z = 0 leaves the rail unsupported vertically.
+    let e = err_text(dutch_with(&["fastening.vertical_stiffness=0"]));
+    assert!(e.contains("fastening.vertical_stiffness"), "{e}");
+    assert!(!e.contains("ballast"), "{e}");
+    // RPM4 holds z rigidly everywhere: there k_z = 0 is allowed; x is always held by RPM1-5.
+    assert!(dutch_with(&["fastening.model=RPM4", "fastening.vertical_stiffness=0"]).is_ok());
+    assert!(dutch_with(&[]).unwrap().fastening.longitudinal_stiffness == 0.0);
+}

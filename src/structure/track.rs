@@ -95,6 +95,32 @@ impl TrackStructure {
         let section = SectionMesh::uic54(&params)?;
 
         let [f0, f1] = layout.fine_zone;
+        // Refuse a model too large to build before grading or allocating it: the node planes
+        // along the rail are about the fine zone over its element length plus the track over
+        // the coarse one; a half sleeper has (nx+1)(ny+3)(nz+1) nodes (two extra y lines at
+        // the rail foot edges).
+        let [sx, sy, sz] = m.mesh.sleeper_elements;
+        let sleeper_nodes = ((sx + 1) * (sy + 3) * (sz + 1) * layout.sleepers.len()) as f64;
+        let section_nodes = section.nodes.len() as f64;
+        let size_hint = |planes: f64| {
+            move || {
+                format!(
+                    "rail {planes:.0} node planes (mesh.fine_element_length = {} m, mesh.element_length = {} m) x {section_nodes} section nodes (mesh.section_size = {} m, mesh.head_size = {} m), sleepers {sleeper_nodes} nodes (mesh.sleeper_elements = {:?}); coarsen these",
+                    m.mesh.fine_element_length,
+                    m.mesh.element_length,
+                    m.mesh.section_size,
+                    m.mesh.head_size,
+                    m.mesh.sleeper_elements
+                )
+            }
+        };
+        let planes_estimate =
+            (f1 - f0) / m.mesh.fine_element_length + layout.length / m.mesh.element_length;
+        super::check_size(
+            "track",
+            planes_estimate * section_nodes + sleeper_nodes,
+            size_hint(planes_estimate),
+        )?;
         let planes = grade(&GradingSpec {
             zones: vec![FineZone {
                 start_m: f0,
@@ -104,6 +130,12 @@ impl TrackStructure {
             breakpoints_m: layout.x_breakpoints(&hold),
             ..GradingSpec::new(0.0, layout.length, m.mesh.element_length)
         })?;
+        let planes_n = planes.len() as f64;
+        super::check_size(
+            "track",
+            planes_n * section_nodes + sleeper_nodes,
+            size_hint(planes_n),
+        )?;
         let (mut mesh, rail) = extrude_rail(&section, &planes, RAIL_MATERIAL)?;
 
         let mut sleepers = Vec::with_capacity(layout.sleepers.len());

@@ -100,9 +100,25 @@ impl WheelStructure {
             axial_size_m: m.mesh.wheel_element_size,
             radial_size_m: m.mesh.wheel_element_size,
             contact_size_m: 0.5 * m.mesh.wheel_element_size,
+            max_nodes: super::MAX_DOFS / 3,
             ..WheelParams::default()
         };
-        let (mut mesh, topology) = wheel(&params, 0)?;
+        let (mut mesh, topology) = wheel(&params, 0).map_err(|e| match e {
+            crate::mesh::MeshError::TooLarge {
+                nodes,
+                layers,
+                per_layer,
+                ..
+            } => super::too_large(
+                "wheel",
+                nodes as f64,
+                format!(
+                    "{layers} circumferential layers (mesh.wheel_segments = {}) x {per_layer} meridian nodes (mesh.wheel_element_size = {} m); coarsen these",
+                    m.mesh.wheel_segments, m.mesh.wheel_element_size
+                ),
+            ),
+            e => e.into(),
+        })?;
         let materials = vec![m.wheel_material()];
         let unsprung_mass = crate::fe::assembly::mass_per_part(&mesh, &materials)?.get(Part::Wheel);
         let sprung_mass = m.vehicle.wheel_load / m.vehicle.gravity - unsprung_mass;

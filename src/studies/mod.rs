@@ -69,6 +69,48 @@ pub enum StudiesError {
     /// Shard directories that cannot be merged.
     #[error("merge: {0}")]
     Merge(String),
+    /// Shards of a sweep are missing from a merge.
+    #[error("merge: incomplete sweep: shard(s) {missing:?} of {count} not given; pass every shard directory of the sweep")]
+    ShardsMissing {
+        /// Shard count of the sweep.
+        count: usize,
+        /// Indices not given.
+        missing: Vec<usize>,
+    },
+    /// The same shard given twice to a merge.
+    #[error("merge: shard {index}/{count} given twice ({} and {}); pass each shard once", first.display(), second.display())]
+    ShardTwice {
+        /// Shard index.
+        index: usize,
+        /// Shard count.
+        count: usize,
+        /// First directory.
+        first: PathBuf,
+        /// Second directory.
+        second: PathBuf,
+    },
+    /// Shards of different sweeps (speeds or shard count differ).
+    #[error("merge: {} and {} are shards of different sweeps (--speeds or the shard count N differ); merge only the shards of one sweep", first.display(), second.display())]
+    ShardsOfDifferentSweeps {
+        /// First directory.
+        first: PathBuf,
+        /// The other directory.
+        second: PathBuf,
+    },
+    /// A shard directory whose sweep is not finished or has other speeds than its shard.
+    #[error("merge: {} holds {have} speed(s) but shard {index}/{count} of its sweep has {want}; rerun `sweep --shard {index}/{count}` into it", dir.display())]
+    ShardUnfinished {
+        /// The directory.
+        dir: PathBuf,
+        /// Shard index.
+        index: usize,
+        /// Shard count.
+        count: usize,
+        /// Speeds in its sweep.json.
+        have: usize,
+        /// Speeds of the shard.
+        want: usize,
+    },
     /// A study file key that is unknown, missing, of the wrong type or out of range.
     #[error("{file}: key `{key}`: {message}")]
     StudyKey {

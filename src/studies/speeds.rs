@@ -10,7 +10,8 @@
 //! **List** `60,80,100` (one value is a list of one). Lists are sorted ascending; duplicates
 //! are an error.
 //!
-//! Every speed must be finite, positive and at most [`MAX_SPEED_KMH`]; at most [`MAX_SPEEDS`].
+//! Every speed must be finite and within [`MIN_SPEED_KMH`] to [`MAX_SPEED_KMH`], the range of
+//! the model's `run.speed_kmh`; at most [`MAX_SPEEDS`].
 //!
 //! **Shard** `I/N` (`I = 0 … N−1`): the speeds at positions `I, I+N, I+2N, …` of the sorted
 //! list, so the `N` shards partition the list (every speed in exactly one shard).
@@ -20,8 +21,11 @@
 
 use super::StudiesError;
 
-/// Highest accepted speed (km/h).
-pub const MAX_SPEED_KMH: f64 = 1000.0;
+/// Lowest accepted speed (km/h): that of `run.speed_kmh` ([`crate::model::SPEED_KMH`]).
+pub const MIN_SPEED_KMH: f64 = crate::model::SPEED_KMH[0];
+
+/// Highest accepted speed (km/h): that of `run.speed_kmh` ([`crate::model::SPEED_KMH`]).
+pub const MAX_SPEED_KMH: f64 = crate::model::SPEED_KMH[1];
 
 /// Most speeds in one sweep.
 pub const MAX_SPEEDS: usize = 100_000;
@@ -76,10 +80,10 @@ pub fn parse_speeds(spec: &str) -> Result<Vec<f64>, StudiesError> {
     };
     if let Some(v) = speeds
         .iter()
-        .find(|v| !v.is_finite() || **v <= 0.0 || **v > MAX_SPEED_KMH)
+        .find(|v| !(v.is_finite() && **v >= MIN_SPEED_KMH && **v <= MAX_SPEED_KMH))
     {
         return Err(bad(format!(
-            "speed {v} km/h outside (0, {MAX_SPEED_KMH}] km/h"
+            "speed {v} km/h out of range, allowed {MIN_SPEED_KMH} to {MAX_SPEED_KMH} km/h (as run.speed_kmh)"
         )));
     }
     speeds.sort_by(f64::total_cmp);
@@ -178,8 +182,12 @@ mod tests {
         for (spec, needle) in [
             ("60,60", "twice"),
             ("60,abc", "`abc` is not a number"),
-            ("0,60", "outside"),
-            ("-5", "outside"),
+            ("0,60", "out of range"),
+            ("-5", "out of range"),
+            // The model's run.speed_kmh stops at 500 km/h: a sweep may not go beyond it.
+            ("600", "allowed 1 to 500 km/h"),
+            ("400:600:100", "speed 600 km/h out of range"),
+            ("0.5", "allowed 1 to 500"),
             ("10:5:1", "below start"),
             ("10:20:0", "positive"),
             ("10:20", "start:stop:step"),

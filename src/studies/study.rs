@@ -346,15 +346,17 @@ impl Study {
             if v.is_empty() {
                 return Err(key_error(file, "speeds_kmh", "is empty"));
             }
-            if let Some(s) = v
-                .iter()
-                .find(|s| !s.is_finite() || **s <= 0.0 || **s > super::speeds::MAX_SPEED_KMH)
-            {
+            if let Some(s) = v.iter().find(|s| {
+                !(s.is_finite()
+                    && **s >= super::speeds::MIN_SPEED_KMH
+                    && **s <= super::speeds::MAX_SPEED_KMH)
+            }) {
                 return Err(key_error(
                     file,
                     "speeds_kmh",
                     format!(
-                        "speed {s} km/h outside (0, {}] km/h",
+                        "speed {s} km/h out of range, allowed {} to {} km/h (as run.speed_kmh)",
+                        super::speeds::MIN_SPEED_KMH,
                         super::speeds::MAX_SPEED_KMH
                     ),
                 ));

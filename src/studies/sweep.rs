@@ -11,6 +11,9 @@
 //! - `speeds/run.key` — what produced the speed files (a hash of the resolved model and the
 //!   program version, given by the caller): a rerun with another key is refused
 //!   ([`check_run_key`]), so a resume never mixes models; shards must share it to merge.
+//! - `speeds/shard.json` — [`ShardPlan`]: which shard `I/N` of which speeds the directory
+//!   holds (written by the `sweep` command, `0/1` for an unsharded sweep); [`merge`] takes
+//!   only directories that form every shard of one sweep once, each finished.
 //! - `sweep.json` — [`SweepRecord`]: the speeds, dominant wavelength and frequency per speed,
 //!   the range ratios, `seconds`, the map options. `seconds` is the **sum of the passages'
 //!   own wall times** (`PassageSummary::seconds`, read from the speed files), so the file
@@ -463,14 +466,30 @@ fn nan_none(v: Option<f64>) -> f64 {
     v.unwrap_or(f64::NAN)
 }
 
+/// Writes the assembled outputs. `sweep.json` is the commit marker: it is removed first and
+/// written last, so a run killed in between leaves no complete-looking sweep beside missing
+/// or stale maps; temp files of killed earlier runs are removed first.
 fn write_outputs(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesError> {
     let io = StudiesError::io;
+    for d in [dir.to_path_buf(), dir.join("speeds")] {
+        crate::io::remove_stale_temp_files(&d).map_err(io(&d))?;
+    }
     let json = dir.join("sweep.json");
+    match std::fs::remove_file(&json) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io(&json)(e)),
+        _ => {}
+    }
+    write_maps(dir, r, m)?;
     crate::io::write_atomic(&json, |w| {
         serde_json::to_writer_pretty(&mut *w, r).map_err(std::io::Error::other)?;
         w.write_all(b"\n")
     })
-    .map_err(io(&json))?;
+    .map_err(io(&json))
+}
+
+/// Every output of [`write_outputs`] but `sweep.json`.
+fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesError> {
+    let io = StudiesError::io;
     let p = dir.join("dominant.csv");
     crate::io::write_csv(
         &p,
@@ -773,6 +792,113 @@ pub fn read_record(dir: &Path) -> Result<SweepRecord, StudiesError> {
     })
 }
 
+/// The shard plan file in `DIR/speeds`: which shard of which sweep the directory holds
+/// ([`ShardPlan`]), written by [`write_shard_plan`] before the passages and checked by
+/// [`merge`].
+pub const SHARD_PLAN_FILE: &str = "shard.json";
+
+/// Which shard of which sweep a sweep directory holds.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShardPlan {
+    /// Shard index `I` (0 … count−1).
+    pub index: usize,
+    /// Shard count `N`.
+    pub count: usize,
+    /// Every speed of the whole sweep (km/h), ascending.
+    pub speeds_kmh: Vec<f64>,
+}
+
+/// Writes `dir/speeds/shard.json`: `dir` holds shard `shard` of the sweep of `all_speeds_kmh`.
+pub fn write_shard_plan(
+    dir: &Path,
+    all_speeds_kmh: &[f64],
+    shard: super::speeds::Shard,
+) -> Result<(), StudiesError> {
+    let p = dir.join("speeds").join(SHARD_PLAN_FILE);
+    let plan = ShardPlan {
+        index: shard.index,
+        count: shard.count,
+        speeds_kmh: all_speeds_kmh.to_vec(),
+    };
+    let text =
+        serde_json::to_string_pretty(&plan).map_err(|e| StudiesError::Invalid(e.to_string()))?;
+    if let Some(parent) = p.parent() {
+        std::fs::create_dir_all(parent).map_err(StudiesError::io(parent))?;
+    }
+    crate::io::write_text(&p, &text).map_err(StudiesError::io(&p))
+}
+
+fn read_shard_plan(dir: &Path) -> Result<ShardPlan, StudiesError> {
+    let p = dir.join("speeds").join(SHARD_PLAN_FILE);
+    let text = std::fs::read_to_string(&p).map_err(StudiesError::io(&p))?;
+    serde_json::from_str(&text).map_err(|e| StudiesError::BadFile {
+        path: p,
+        reason: format!("not a shard plan ({e}); rerun the sweep of this shard"),
+    })
+}
+
+/// Checks that the shard directories form one complete sweep: the same sweep (speeds and
+/// shard count) in each, every shard `0 … N−1` exactly once, and each finished with its
+/// shard's speeds (from its `sweep.json`).
+fn check_shards(dirs: &[PathBuf], records: &[SweepRecord]) -> Result<(), StudiesError> {
+    let plans = dirs
+        .iter()
+        .map(|d| read_shard_plan(d))
+        .collect::<Result<Vec<_>, _>>()?;
+    let first = &plans[0];
+    let count = first.count;
+    let mut given: Vec<Option<&PathBuf>> = vec![None; count];
+    for ((d, p), rec) in dirs.iter().zip(&plans).zip(records) {
+        if p.count != count
+            || p.speeds_kmh.len() != first.speeds_kmh.len()
+            || p.speeds_kmh
+                .iter()
+                .zip(&first.speeds_kmh)
+                .any(|(a, b)| !same_speed(*a, *b))
+            || p.index >= count
+        {
+            return Err(StudiesError::ShardsOfDifferentSweeps {
+                first: dirs[0].clone(),
+                second: d.clone(),
+            });
+        }
+        if let Some(prev) = given[p.index] {
+            return Err(StudiesError::ShardTwice {
+                index: p.index,
+                count,
+                first: prev.clone(),
+                second: d.clone(),
+            });
+        }
+        given[p.index] = Some(d);
+        let want = super::speeds::Shard {
+            index: p.index,
+            count,
+        }
+        .select(&p.speeds_kmh);
+        let same = want.len() == rec.speeds_kmh.len()
+            && want
+                .iter()
+                .zip(&rec.speeds_kmh)
+                .all(|(a, b)| same_speed(*a, *b));
+        if !same {
+            return Err(StudiesError::ShardUnfinished {
+                dir: d.clone(),
+                index: p.index,
+                count,
+                have: rec.speeds_kmh.len(),
+                want: want.len(),
+            });
+        }
+    }
+    let missing: Vec<usize> = (0..count).filter(|&i| given[i].is_none()).collect();
+    if !missing.is_empty() {
+        return Err(StudiesError::ShardsMissing { count, missing });
+    }
+    Ok(())
+}
+
 /// Joins shard directories (each a finished `sweep` of some speeds, with its `sweep.json`)
 /// into `out`: the speed files are copied byte for byte, then [`assemble`]d over the union of
 /// the speeds — the same files as the unsharded sweep. The shards must have the same map
@@ -813,8 +939,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), S
     }
     let mut opts: Option<(MapOptions, &PathBuf)> = None;
     let mut files: Vec<(f64, Vec<u8>, PathBuf)> = Vec::new();
-    for d in dirs {
-        let rec = read_record(d)?;
+    let records = dirs
+        .iter()
+        .map(|d| read_record(d))
+        .collect::<Result<Vec<_>, _>>()?;
+    for (d, rec) in dirs.iter().zip(&records) {
         match &opts {
             None => opts = Some((rec.map.clone(), d)),
             Some((o, first)) if *o != rec.map => {
@@ -833,6 +962,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), S
             files.push((v, bytes, p));
         }
     }
+    check_shards(dirs, &records)?;
     files.sort_by(|a, b| a.0.total_cmp(&b.0));
     files.dedup_by(|b, a| same_speed(a.0, b.0) && a.1 == b.1);
     if let Some(w) = files.windows(2).find(|w| same_speed(w[0].0, w[1].0)) {
@@ -848,6 +978,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), S
         crate::io::write_atomic(&p, |w| w.write_all(bytes)).map_err(StudiesError::io(&p))?;
     }
     let speeds: Vec<f64> = files.iter().map(|f| f.0).collect();
+    write_shard_plan(out, &speeds, super::speeds::Shard::ALL)?;
     let (o, _) = opts.expect("at least one shard");
     assemble(out, &speeds, &o)
 }
