@@ -41,3 +41,6 @@ pub enum StructureError {
     #[error("supports: {0}")]
     Support(String),
 }
+
+#[cfg(test)]
+mod hold_tests;
