@@ -152,6 +152,7 @@ fn fastening_models_hold_exactly_the_dofs_of_the_method_table() {
             let h = [&hold.x, &hold.y, &hold.z][d];
             match h.rigid {
                 RigidRegion::None => false,
+                RigidRegion::GridPoints => unreachable!("no preset holds grid points"),
                 RigidRegion::Continuous => true,
                 RigidRegion::Columns => l.sleepers.iter().any(|&xs| {
                     h.indices

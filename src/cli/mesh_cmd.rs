@@ -79,6 +79,7 @@ impl MeshCmd {
             let name = match k {
                 SpringKind::Fastening => "fastening",
                 SpringKind::Ballast => "ballast",
+                SpringKind::Hold => "elastic_hold",
             };
             *springs.entry(name.to_string()).or_insert(0) += 1;
         }
@@ -260,6 +261,7 @@ fn write_mesh_vtu(
             part.push(match kind {
                 SpringKind::Fastening => 3.0,
                 SpringKind::Ballast => 4.0,
+                SpringKind::Hold => 5.0,
             });
         }
     }

@@ -1,5 +1,6 @@
 //! Command definitions (clap) and dispatch. Each command lives in its own file.
 
+mod compliance_cmd;
 mod contact_cmd;
 pub mod engine;
 mod explicit_cmd;
@@ -99,6 +100,9 @@ enum Command {
     Study(study_cmd::StudyCmd),
     /// Initiation table of RPM1–RPM5 (or any models) on the smooth rail.
     Initiation(initiation_cmd::InitiationCmd),
+    /// Static longitudinal compliance of RPM1–RPM5, rigid and with elastic x-holds: u_x of
+    /// the rail head, web and foot ahead of a wheel load with a longitudinal force.
+    Compliance(compliance_cmd::ComplianceCmd),
 }
 
 /// Runs the parsed command.
@@ -117,5 +121,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Merge(c) => c.run(),
         Command::Study(c) => c.run(),
         Command::Initiation(c) => c.run(),
+        Command::Compliance(c) => c.run(),
     }
 }

@@ -11,6 +11,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod analysis;
+pub mod compliance;
 pub mod integrator;
 pub mod moving_load;
 pub mod passage;

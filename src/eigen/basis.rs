@@ -89,6 +89,19 @@ pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey
             run.remove("residual_flexibility");
             run.remove("residual_variation");
         }
+        // Dampers enter neither K nor M: the elastic holds' damping stays out of the key (the
+        // railpad and ballast dampers stay in, as they always were, so existing caches remain
+        // valid).
+        if let Some(f) = o.get_mut("fastening").and_then(|r| r.as_object_mut()) {
+            f.remove("hold_damping");
+            if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
+                for h in c.values_mut() {
+                    if let Some(h) = h.as_object_mut() {
+                        h.remove("damping");
+                    }
+                }
+            }
+        }
         // The wheel's modal damping ratio is added after the modes are found.
         if let Some(w) = o.get_mut("wheel").and_then(|r| r.as_object_mut()) {
             w.remove("damping_ratio");
@@ -327,5 +340,45 @@ mod key_tests {
             assert_eq!(x.row_idx(), y.row_idx());
             assert_eq!(x.val(), y.val());
         }
+    }
+
+    /// Elastic holds: the stiffness is in the track key, the damping is not (it enters only C);
+    /// a rigid preset keeps the key it had before elastic holds existed (no new keys written).
+    #[test]
+    fn hold_stiffness_enters_the_key_and_hold_damping_does_not() {
+        let rigid = model(&[]);
+        let json = serde_json::to_value(&rigid.fastening).unwrap();
+        assert!(json.get("hold").is_none() && json.get("hold_stiffness").is_none());
+        let el = |k: &str, c: &str| {
+            model(&[
+                "fastening.hold=\"elastic\"",
+                &format!("fastening.hold_stiffness={k}"),
+                &format!("fastening.hold_damping={c}"),
+            ])
+        };
+        assert_ne!(key(&rigid, "track"), key(&el("1e9", "0"), "track"));
+        assert_ne!(key(&el("1e9", "0"), "track"), key(&el("3e9", "0"), "track"));
+        assert_eq!(
+            key(&el("1e9", "0"), "track"),
+            key(&el("1e9", "5e4"), "track")
+        );
+        let custom = |k: &str, c: &str| {
+            model(&[
+                "fastening.model=custom",
+                &format!(
+                    "fastening.custom.x={{ elastic = \"columns\", indices = [1], stiffness = {k}, damping = {c} }}"
+                ),
+                "fastening.custom.y={ rigid = \"rows\", indices = [0, 3] }",
+                "fastening.custom.z={ rigid = \"none\" }",
+            ])
+        };
+        assert_ne!(
+            key(&custom("1e9", "0"), "track"),
+            key(&custom("2e9", "0"), "track")
+        );
+        assert_eq!(
+            key(&custom("1e9", "0"), "track"),
+            key(&custom("1e9", "7e3"), "track")
+        );
     }
 }

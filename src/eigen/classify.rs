@@ -187,7 +187,7 @@ pub struct TrackEnergyShares {
     pub rail: f64,
     /// Sleeper elements.
     pub sleepers: f64,
-    /// Fastening (railpad) springs.
+    /// Fastening springs (railpads and elastic holds).
     pub fastening: f64,
     /// Ballast springs.
     pub ballast: f64,
@@ -523,7 +523,8 @@ impl TrackClassifier {
             let (mut ef, mut eb) = (0.0, 0.0);
             for (s, k) in track.springs.iter().zip(&track.spring_kinds) {
                 match k {
-                    SpringKind::Fastening => ef += s.energy(u),
+                    // An elastic hold is part of the fastening.
+                    SpringKind::Fastening | SpringKind::Hold => ef += s.energy(u),
                     SpringKind::Ballast => eb += s.energy(u),
                 }
             }

@@ -15,6 +15,7 @@
 //! rail-foot regions are held rigidly, in which direction — and any other pattern can be given
 //! with `fastening.model = "custom"` and a `[fastening.custom]` table.
 
+mod holds;
 mod load;
 
 pub use load::{apply_override, load_model, load_model_str, ModelSource, BUILTIN_DUTCH};
@@ -241,11 +242,13 @@ impl FasteningModel {
     }
 }
 
-/// Which rail-foot region is held rigidly (fixed to the ground) in one direction.
+/// A rail-foot region held in one direction: rigidly (`rigid = "…"`) or by grounded springs
+/// (`elastic = "…"`). Columns, rows and the continuous region have a physical size, so what
+/// they hold converges under mesh refinement; `grid_points` does not (docs/theory.md §3.3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RigidRegion {
-    /// Not held rigidly (only the springs act).
+    /// Not held (only the railpad springs act).
     None,
     /// The listed columns: strips of width `strip_width` along x, across the whole foot.
     Columns,
@@ -253,50 +256,107 @@ pub enum RigidRegion {
     Rows,
     /// Every node of the rail-foot underside, along the whole rail.
     Continuous,
+    /// One rail-foot node per railpad grid point (the `rows × columns` cell centres, where the
+    /// railpad springs sit; the mesh gets a node there). A node-like hold: its stiffness grows
+    /// without bound under mesh refinement (docs/theory.md §3.3), so results depend on the mesh.
+    GridPoints,
 }
 
-/// Rigid hold in one direction.
-#[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// The hold of one direction: `{ rigid = "columns", indices = [1] }` fixes the region's DOFs;
+/// `{ elastic = "columns", indices = [1], stiffness = 1e9, damping = 0.0 }` instead ties them to
+/// the ground by spring-dampers whose stiffness (N/m) and damping (N·s/m) *per fastening* are
+/// spread over the region's nodes by tributary area (evenly over the grid points for
+/// `grid_points`; per bay of one sleeper spacing for `continuous`). Give one of `rigid` and
+/// `elastic`; an absent `rigid` means `"none"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DirectionHold {
-    /// The held region.
+    /// The region held rigidly (`"none"` when the direction is held elastically or not at all).
+    #[serde(default = "region_none")]
     pub rigid: RigidRegion,
+    /// The region held by springs; absent for a rigid hold.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub elastic: Option<RigidRegion>,
     /// Column or row indices (0-based; columns counted along +x, rows along +y) for
     /// `columns`/`rows`; empty otherwise.
     #[serde(default)]
     pub indices: Vec<usize>,
+    /// Elastic hold: stiffness per fastening (N/m), greater than 0 and at most
+    /// [`MAX_HOLD_STIFFNESS`]; shared equally by the listed columns/rows or grid points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// Elastic hold: damping per fastening (N·s/m), 0 to 1e12; default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
 }
+
+fn region_none() -> RigidRegion {
+    RigidRegion::None
+}
+
+/// Largest stiffness per fastening of an elastic hold (N/m): far above any railpad, so that
+/// "k → ∞" can be approached, yet small enough to keep K well conditioned.
+pub const MAX_HOLD_STIFFNESS: f64 = 1e13;
 
 impl DirectionHold {
     fn none() -> Self {
-        DirectionHold {
-            rigid: RigidRegion::None,
-            indices: vec![],
-        }
+        Self::rigid(RigidRegion::None, vec![])
     }
     fn continuous() -> Self {
-        DirectionHold {
-            rigid: RigidRegion::Continuous,
-            indices: vec![],
-        }
+        Self::rigid(RigidRegion::Continuous, vec![])
     }
     fn columns(indices: Vec<usize>) -> Self {
-        DirectionHold {
-            rigid: RigidRegion::Columns,
-            indices,
-        }
+        Self::rigid(RigidRegion::Columns, indices)
     }
     fn rows(indices: Vec<usize>) -> Self {
+        Self::rigid(RigidRegion::Rows, indices)
+    }
+    fn rigid(region: RigidRegion, indices: Vec<usize>) -> Self {
         DirectionHold {
-            rigid: RigidRegion::Rows,
+            rigid: region,
+            elastic: None,
             indices,
+            stiffness: None,
+            damping: None,
+        }
+    }
+
+    /// The held region, rigid or elastic.
+    pub fn region(&self) -> RigidRegion {
+        self.elastic.unwrap_or(self.rigid)
+    }
+
+    /// Stiffness (N/m) and damping (N·s/m) per fastening of an elastic hold; `None` for a
+    /// rigid hold or none.
+    pub fn elastic_stiffness_damping(&self) -> Option<(f64, f64)> {
+        match self.elastic {
+            Some(r) if r != RigidRegion::None => {
+                Some((self.stiffness.unwrap_or(0.0), self.damping.unwrap_or(0.0)))
+            }
+            _ => None,
+        }
+    }
+
+    /// The same region held elastically with `k` (N/m) and `c` (N·s/m) per fastening; a
+    /// direction not held stays so.
+    fn made_elastic(&self, k: f64, c: f64) -> Self {
+        if self.rigid == RigidRegion::None {
+            return self.clone();
+        }
+        DirectionHold {
+            rigid: RigidRegion::None,
+            elastic: Some(self.rigid),
+            indices: self.indices.clone(),
+            stiffness: Some(k),
+            damping: Some(c),
         }
     }
 }
 
 /// How the rail foot is held, per direction: the general description of which the RPM models
-/// are instances. Springs act in a direction whenever its stiffness or damping is non-zero.
-#[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// are instances. Railpad springs act in a direction whenever its stiffness or damping is
+/// non-zero, whatever the hold.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HoldPattern {
     /// Longitudinal (x).
@@ -361,16 +421,90 @@ pub struct Fastening {
     pub longitudinal_stiffness: f64,
     /// Longitudinal damping per fastening (N·s/m).
     pub longitudinal_damping: f64,
+    /// How the regions of a preset (RPM1–RPM5) are held: `"rigid"` (default, the models as
+    /// published) or `"elastic"`: every rigidly held region of the directions in
+    /// `hold_directions` becomes grounded springs of `hold_stiffness` and `hold_damping` per
+    /// fastening. Not allowed with `model = "custom"` (give `elastic` regions there).
+    #[serde(default, skip_serializing_if = "HoldKind::is_rigid")]
+    pub hold: HoldKind,
+    /// Stiffness per fastening of the elastic holds of a preset (N/m), greater than 0 and at
+    /// most [`MAX_HOLD_STIFFNESS`]; required with `hold = "elastic"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_stiffness: Option<f64>,
+    /// Damping per fastening of the elastic holds of a preset (N·s/m), 0 to 1e12; default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_damping: Option<f64>,
+    /// Directions whose preset holds become elastic with `hold = "elastic"`, e.g. `["x"]`;
+    /// default all three.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_directions: Option<Vec<Axis>>,
+}
+
+/// Rigid or elastic holds of a preset fastening model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HoldKind {
+    /// Held DOFs are fixed (the published models).
+    #[default]
+    Rigid,
+    /// Held regions are tied to the ground by spring-dampers.
+    Elastic,
+}
+
+impl HoldKind {
+    fn is_rigid(&self) -> bool {
+        *self == HoldKind::Rigid
+    }
+}
+
+/// A global direction, as named in the model file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Axis {
+    /// Longitudinal.
+    X,
+    /// Lateral.
+    Y,
+    /// Vertical.
+    Z,
+}
+
+impl Axis {
+    /// DOF offset within a node (0, 1, 2).
+    pub fn index(self) -> usize {
+        self as usize
+    }
 }
 
 impl Fastening {
-    /// The hold pattern in force: the preset of the named model, or the custom one.
+    /// The hold pattern in force: the preset of the named model (its holds made elastic when
+    /// `hold = "elastic"`), or the custom one.
     pub fn hold_pattern(&self) -> HoldPattern {
-        HoldPattern::preset(self.model, self.rows, self.columns).unwrap_or_else(|| {
-            self.custom
+        match HoldPattern::preset(self.model, self.rows, self.columns) {
+            Some(mut p) => {
+                if self.hold == HoldKind::Elastic {
+                    let k = self.hold_stiffness.unwrap_or(0.0);
+                    let c = self.hold_damping.unwrap_or(0.0);
+                    let dirs = self
+                        .hold_directions
+                        .clone()
+                        .unwrap_or_else(|| vec![Axis::X, Axis::Y, Axis::Z]);
+                    for a in dirs {
+                        let h = match a {
+                            Axis::X => &mut p.x,
+                            Axis::Y => &mut p.y,
+                            Axis::Z => &mut p.z,
+                        };
+                        *h = h.made_elastic(k, c);
+                    }
+                }
+                p
+            }
+            None => self
+                .custom
                 .clone()
-                .expect("validated: custom model has a pattern")
-        })
+                .expect("validated: custom model has a pattern"),
+        }
     }
 
     /// Stiffness per fastening in x, y, z (N/m).
@@ -683,58 +817,7 @@ impl Model {
         )?;
         c.range("fastening.pad_thickness", f.pad_thickness, 0.0, 0.05, "m")?;
         c.spring_damper("fastening", f.stiffness(), f.damping())?;
-        match (f.model, &f.custom) {
-            (FasteningModel::Custom, None) => {
-                return Err(ModelError::Key {
-                    file: file.into(),
-                    key: "fastening.custom".into(),
-                    message: "fastening.model = \"custom\" needs a [fastening.custom] table with x, y, z holds".into(),
-                })
-            }
-            (FasteningModel::Custom, Some(p)) => {
-                for (d, h) in [("x", &p.x), ("y", &p.y), ("z", &p.z)] {
-                    let n = match h.rigid {
-                        RigidRegion::Columns => f.columns,
-                        RigidRegion::Rows => f.rows,
-                        RigidRegion::None | RigidRegion::Continuous => 0,
-                    };
-                    let key = format!("fastening.custom.{d}.indices");
-                    if n == 0 && !h.indices.is_empty() {
-                        return Err(ModelError::Key {
-                            file: file.into(),
-                            key,
-                            message: "indices are only allowed with rigid = \"columns\" or \"rows\"".into(),
-                        });
-                    }
-                    if n > 0 && h.indices.is_empty() {
-                        return Err(ModelError::Key {
-                            file: file.into(),
-                            key,
-                            message: "give at least one column/row index".into(),
-                        });
-                    }
-                    if let Some(&i) = h.indices.iter().find(|&&i| i >= n.max(1)) {
-                        return Err(ModelError::OutOfRange {
-                            file: file.into(),
-                            key,
-                            value: i.to_string(),
-                            allowed: format!("0..={}", n.saturating_sub(1)),
-                        });
-                    }
-                }
-            }
-            (_, Some(_)) => {
-                return Err(ModelError::Key {
-                    file: file.into(),
-                    key: "fastening.custom".into(),
-                    message: format!(
-                        "only allowed with fastening.model = \"custom\" (model is {})",
-                        f.model.name()
-                    ),
-                })
-            }
-            (_, None) => {}
-        }
+        f.validate_holds(file)?;
         // The rail floats on the railpads where no rigid hold acts: a direction without a hold
         // needs a railpad spring, else the rail is a free body in it.
         let pattern = self.fastening.hold_pattern();
@@ -755,7 +838,7 @@ impl Model {
                 f.vertical_stiffness,
             ),
         ] {
-            if h.rigid == RigidRegion::None {
+            if h.region() == RigidRegion::None {
                 c.pos(
                     key,
                     k,

@@ -285,3 +285,137 @@ fn zero_railpad_stiffness_without_a_rigid_hold_names_the_fastening() {
     assert!(dutch_with(&["fastening.model=RPM4", "fastening.vertical_stiffness=0"]).is_ok());
     assert!(dutch_with(&[]).unwrap().fastening.longitudinal_stiffness == 0.0);
 }
+
+#[test]
+fn elastic_holds_parse_and_nonsense_is_an_error_naming_the_key() {
+    let custom = |x: &str| {
+        dutch_with(&[
+            "fastening.model=custom",
+            &format!("fastening.custom.x={x}"),
+            "fastening.custom.y={ rigid = \"rows\", indices = [0, 3] }",
+            "fastening.custom.z={ rigid = \"none\" }",
+        ])
+    };
+    let m =
+        custom("{ elastic = \"columns\", indices = [1], stiffness = 1e9, damping = 5.0 }").unwrap();
+    let p = m.fastening.hold_pattern();
+    assert_eq!(p.x.region(), RigidRegion::Columns);
+    assert_eq!(p.x.rigid, RigidRegion::None);
+    assert_eq!(p.x.elastic_stiffness_damping(), Some((1e9, 5.0)));
+    assert_eq!(p.y.elastic_stiffness_damping(), None);
+    // A preset made elastic in x only; damping defaults to 0.
+    let m = dutch_with(&[
+        "fastening.hold=\"elastic\"",
+        "fastening.hold_stiffness=3e8",
+        "fastening.hold_directions=[\"x\"]",
+    ])
+    .unwrap();
+    let p = m.fastening.hold_pattern();
+    assert_eq!(
+        (p.x.region(), p.x.elastic_stiffness_damping()),
+        (RigidRegion::Columns, Some((3e8, 0.0)))
+    );
+    assert_eq!((p.y.rigid, p.y.elastic), (RigidRegion::Rows, None));
+    for (x, key, what) in [
+        (
+            "{ elastic = \"columns\", indices = [1], stiffness = 0.0 }",
+            "fastening.custom.x.stiffness",
+            "greater than 0",
+        ),
+        (
+            "{ elastic = \"columns\", indices = [1], stiffness = -1e9 }",
+            "fastening.custom.x.stiffness",
+            "greater than 0",
+        ),
+        (
+            "{ elastic = \"columns\", indices = [1] }",
+            "fastening.custom.x.stiffness",
+            "needs stiffness",
+        ),
+        (
+            "{ elastic = \"columns\", indices = [3], stiffness = 1e9 }",
+            "fastening.custom.x.indices",
+            "0..=2",
+        ),
+        (
+            "{ elastic = \"columns\", indices = [1, 1], stiffness = 1e9 }",
+            "fastening.custom.x.indices",
+            "distinct",
+        ),
+        (
+            "{ elastic = \"rows\", indices = [4], stiffness = 1e9 }",
+            "fastening.custom.x.indices",
+            "0..=3",
+        ),
+        (
+            "{ elastic = \"continuous\", indices = [0], stiffness = 1e9 }",
+            "fastening.custom.x.indices",
+            "only allowed",
+        ),
+        (
+            "{ elastic = \"grid_points\", stiffness = 1e9, damping = -1.0 }",
+            "fastening.custom.x.damping",
+            "0 to",
+        ),
+        (
+            "{ elastic = \"none\", stiffness = 1e9 }",
+            "fastening.custom.x.elastic",
+            "needs a region",
+        ),
+        (
+            "{ rigid = \"columns\", elastic = \"columns\", indices = [1], stiffness = 1e9 }",
+            "fastening.custom.x",
+            "not both",
+        ),
+        (
+            "{ rigid = \"columns\", indices = [1], stiffness = 1e9 }",
+            "fastening.custom.x.stiffness",
+            "only allowed with an elastic",
+        ),
+    ] {
+        let e = err_text(custom(x));
+        assert!(e.contains(key) && e.contains(what), "{x}: {e}");
+    }
+    for (sets, key, what) in [
+        (
+            vec!["fastening.hold=\"elastic\""],
+            "fastening.hold_stiffness",
+            "needs hold_stiffness",
+        ),
+        (
+            vec![
+                "fastening.hold=\"elastic\"",
+                "fastening.hold_stiffness=1e14",
+            ],
+            "fastening.hold_stiffness",
+            "at most",
+        ),
+        (
+            vec!["fastening.hold_stiffness=1e9"],
+            "fastening.hold_stiffness",
+            "only allowed with fastening.hold",
+        ),
+        (
+            vec![
+                "fastening.hold=\"elastic\"",
+                "fastening.hold_stiffness=1e9",
+                "fastening.hold_directions=[\"z\"]",
+            ],
+            "fastening.hold_directions",
+            "RPM3 holds nothing",
+        ),
+        (vec!["fastening.hold=\"plastic\""], "fastening.hold", ""),
+    ] {
+        let e = err_text(dutch_with(&sets));
+        assert!(e.contains(key) && e.contains(what), "{sets:?}: {e}");
+    }
+    let e = err_text(dutch_with(&[
+        "fastening.model=custom",
+        "fastening.custom.x={ rigid = \"none\" }",
+        "fastening.custom.y={ rigid = \"none\" }",
+        "fastening.custom.z={ rigid = \"none\" }",
+        "fastening.hold=\"elastic\"",
+        "fastening.hold_stiffness=1e9",
+    ]));
+    assert!(e.contains("fastening.hold") && e.contains("custom"), "{e}");
+}

@@ -4,10 +4,11 @@
 //! `bays·s` long, overhangs half a bay beyond the first and last sleeper. A fastening's
 //! footprint (`footprint_length` along x × `footprint_width` across y, centred on the sleeper
 //! and on the rail centre line) is divided into `columns` along x and `rows` across y: cell
-//! (r, c) carries one spring-damper of the `rows × columns` grid (docs/theory.md §3.2). A rigid
-//! *column* c is the strip `|x − x_c| ≤ w/2` across the whole foot; a rigid *row* r is the strip
-//! `|y − y_r| ≤ w/2` over the footprint length (w = `strip_width`). Held regions have a physical
-//! size, so the held stiffness converges under mesh refinement (docs/theory.md §3.3).
+//! (r, c) carries one spring-damper of the `rows × columns` grid (docs/theory.md §3.2). A held
+//! (rigid or elastic) *column* c is the strip `|x − x_c| ≤ w/2` across the whole foot; a held
+//! *row* r is the strip `|y − y_r| ≤ w/2` over the footprint length (w = `strip_width`). These
+//! regions have a physical size, so the held stiffness converges under mesh refinement
+//! (docs/theory.md §3.3); held *grid points* (one node per cell centre) do not.
 
 use crate::model::{HoldPattern, Model, RigidRegion};
 
@@ -92,14 +93,21 @@ impl Layout {
         [a, a + pitch]
     }
 
+    /// Node x of grid column `c` (the railpad grid point) on the sleeper at `xs` (m): the
+    /// column centre.
+    pub fn grid_point_x(&self, xs: f64, c: usize) -> f64 {
+        self.column_centre(xs, c)
+    }
+
     /// x-coordinates that must be node planes of the rail mesh: the rail ends and the strip
-    /// edges of every rigidly held column of `hold` (x direction or any direction held by
-    /// columns), sorted and deduplicated. Spring cells need no node planes: their tributary
-    /// weights are clipped to the cell exactly.
+    /// edges of every held column of `hold` (rigid or elastic, any direction), the footprint
+    /// ends where rows are held and the column centres where grid points are held, sorted and
+    /// deduplicated. Spring cells need no node planes: their tributary weights are clipped to
+    /// the cell exactly.
     pub fn x_breakpoints(&self, hold: &HoldPattern) -> Vec<f64> {
         let mut v = vec![0.0, self.length];
         for h in [&hold.x, &hold.y, &hold.z] {
-            if h.rigid != RigidRegion::Columns {
+            if h.region() != RigidRegion::Columns {
                 continue;
             }
             for &xs in &self.sleepers {
@@ -110,30 +118,42 @@ impl Layout {
             }
         }
         for h in [&hold.x, &hold.y, &hold.z] {
-            if h.rigid == RigidRegion::Rows {
+            match h.region() {
                 // Rows are held over the footprint length: its ends are node planes.
-                for &xs in &self.sleepers {
-                    v.extend([
-                        xs - 0.5 * self.footprint_length,
-                        xs + 0.5 * self.footprint_length,
-                    ]);
+                RigidRegion::Rows => {
+                    for &xs in &self.sleepers {
+                        v.extend([
+                            xs - 0.5 * self.footprint_length,
+                            xs + 0.5 * self.footprint_length,
+                        ]);
+                    }
                 }
+                RigidRegion::GridPoints => {
+                    for &xs in &self.sleepers {
+                        v.extend((0..self.columns).map(|c| self.grid_point_x(xs, c)));
+                    }
+                }
+                _ => {}
             }
         }
         sort_dedup(v)
     }
 
     /// y-coordinates (rail-section frame, upright) that must be node lines on the foot
-    /// underside: the strip edges of every rigidly held row of `hold`.
+    /// underside: the strip edges of every held row of `hold` (rigid or elastic) and the row
+    /// centres where grid points are held.
     pub fn y_foot_lines(&self, hold: &HoldPattern) -> Vec<f64> {
         let mut v = Vec::new();
         for h in [&hold.x, &hold.y, &hold.z] {
-            if h.rigid != RigidRegion::Rows {
-                continue;
-            }
-            for &r in &h.indices {
-                let yc = self.row_centre(r);
-                v.extend([yc - 0.5 * self.strip_width, yc + 0.5 * self.strip_width]);
+            match h.region() {
+                RigidRegion::Rows => {
+                    for &r in &h.indices {
+                        let yc = self.row_centre(r);
+                        v.extend([yc - 0.5 * self.strip_width, yc + 0.5 * self.strip_width]);
+                    }
+                }
+                RigidRegion::GridPoints => v.extend((0..self.rows).map(|r| self.row_centre(r))),
+                _ => {}
             }
         }
         sort_dedup(v)

@@ -85,3 +85,6 @@ pub(crate) fn too_large(part: &'static str, nodes: f64, reduce: String) -> Struc
         reduce,
     }
 }
+
+#[cfg(test)]
+mod hold_tests;

@@ -12,6 +12,10 @@
 //! - **Rigid holds**: the fastening model's [`HoldPattern`](crate::model::HoldPattern) fixes
 //!   rail-foot underside DOFs to the ground, region by region (columns and rows are strips of
 //!   physical width; their edges are node lines, so the held set is exact).
+//! - **Elastic holds**: a region held elastically is tied to the ground in its direction by
+//!   spring-dampers, the stiffness and damping per fastening spread over the region's nodes by
+//!   tributary area (per bay of one sleeper spacing for the continuous region; evenly over the
+//!   grid-point nodes). As k → ∞ they approach the rigid hold of the same region.
 //! - **Ballast**: per half sleeper, stiffness and damping in x, y, z spread over the
 //!   bottom-face nodes by tributary area, to the ground.
 
@@ -43,6 +47,8 @@ pub enum SpringKind {
     Fastening,
     /// A ballast spring-damper (sleeper to ground).
     Ballast,
+    /// An elastic hold of the fastening (rail foot to ground, one direction).
+    Hold,
 }
 
 /// The track substructure, before assembly.
@@ -173,6 +179,14 @@ impl TrackStructure {
             &mut spring_kinds,
         )?;
         add_ballast(m, &sleepers, &mut springs, &mut spring_kinds);
+        add_elastic_holds(
+            &hold,
+            &layout,
+            m.track.sleeper_spacing,
+            &rail,
+            &mut springs,
+            &mut spring_kinds,
+        )?;
 
         let held = held_dofs(&hold, &layout, &rail)?;
         let dofmap = DofMap::with_constraints(mesh.nodes.len(), &held)?;
@@ -319,6 +333,13 @@ pub fn held_dofs(
     for (d, hold) in [&p.x, &p.y, &p.z].into_iter().enumerate() {
         match hold.rigid {
             RigidRegion::None => {}
+            RigidRegion::GridPoints => {
+                for &xs in &layout.sleepers {
+                    for (_, node) in grid_point_nodes(layout, rail, xs)? {
+                        dofs.push(3 * node + d);
+                    }
+                }
+            }
             RigidRegion::Continuous => {
                 for i in 0..planes.len() {
                     dofs.extend(foot.iter().map(|&j| 3 * rail.node(i, j) + d));
@@ -378,4 +399,150 @@ pub fn held_dofs(
     dofs.sort_unstable();
     dofs.dedup();
     Ok(dofs)
+}
+
+/// The rail-foot node at each railpad grid point (row, column cell centre) of the fastening on
+/// the sleeper at `xs`, with its share of the grid (1/(rows·columns)). The mesh has node planes
+/// and foot lines there ([`Layout::x_breakpoints`], [`Layout::y_foot_lines`]).
+fn grid_point_nodes(
+    layout: &Layout,
+    rail: &RailTopology,
+    xs: f64,
+) -> Result<Vec<(f64, usize)>, StructureError> {
+    let tol = 1e-7;
+    let foot = &rail.section.foot_underside;
+    let foot_s = &rail.section.foot_underside_s_m;
+    let share = 1.0 / (layout.rows * layout.columns) as f64;
+    let mut out = Vec::with_capacity(layout.rows * layout.columns);
+    for c in 0..layout.columns {
+        let xc = layout.grid_point_x(xs, c);
+        let i = nearest(&rail.planes_x_m, xc)
+            .filter(|&i| (rail.planes_x_m[i] - xc).abs() <= tol)
+            .ok_or_else(|| {
+                StructureError::Support(format!(
+                    "held grid point of column {c} at x = {xc} m has no rail node plane"
+                ))
+            })?;
+        for r in 0..layout.rows {
+            let yr = layout.row_centre(r);
+            let k = nearest(foot_s, yr)
+                .filter(|&k| (foot_s[k] - yr).abs() <= tol)
+                .ok_or_else(|| {
+                    StructureError::Support(format!(
+                        "held grid point of row {r} at y = {yr} m has no rail-foot node line"
+                    ))
+                })?;
+            out.push((share, rail.node(i, foot[k])));
+        }
+    }
+    Ok(out)
+}
+
+fn nearest(v: &[f64], x: f64) -> Option<usize> {
+    (0..v.len()).min_by(|&a, &b| (v[a] - x).abs().total_cmp(&(v[b] - x).abs()))
+}
+
+/// Grounded spring-dampers of the elastic holds of `p` (see the module docs): for each held
+/// direction, the stiffness and damping per fastening spread over the region's foot nodes.
+/// Per fastening the stiffnesses sum to the stated k (per sleeper spacing of rail for the
+/// continuous region).
+pub fn add_elastic_holds(
+    p: &HoldPattern,
+    layout: &Layout,
+    sleeper_spacing: f64,
+    rail: &RailTopology,
+    springs: &mut Vec<Spring>,
+    kinds: &mut Vec<SpringKind>,
+) -> Result<(), StructureError> {
+    let foot = &rail.section.foot_underside;
+    let foot_s = &rail.section.foot_underside_s_m;
+    let planes = &rail.planes_x_m;
+    let all_y = tributary_lengths(foot_s, f64::NEG_INFINITY, f64::INFINITY);
+    // (share of the per-fastening k, node) pairs of one fastening's region.
+    let mut push = |d: usize, k: f64, c: f64, parts: &[(f64, usize)]| {
+        for &(share, node) in parts {
+            if share > 0.0 {
+                springs.push(Spring::new(
+                    vec![(3 * node + d, 1.0)],
+                    vec![],
+                    k * share,
+                    c * share,
+                ));
+                kinds.push(SpringKind::Hold);
+            }
+        }
+    };
+    // Nodes of the patch [xa, xb] × [ya, yb] (ya/yb None: the whole foot) with their area
+    // fractions of the patch, scaled by `scale`.
+    let patch = |xa: f64, xb: f64, ly: &[f64], scale: f64, what: &str| {
+        let lx = tributary_lengths(planes, xa, xb);
+        let (sx, sy): (f64, f64) = (lx.iter().sum(), ly.iter().sum());
+        if sx <= 0.0 || sy <= 0.0 {
+            return Err(StructureError::Support(format!(
+                "elastic hold: {what} contains no rail-foot nodes"
+            )));
+        }
+        let mut v = Vec::new();
+        for (i, &wx) in lx.iter().enumerate().filter(|(_, &w)| w > 0.0) {
+            for (k, &wy) in ly.iter().enumerate().filter(|(_, &w)| w > 0.0) {
+                v.push((scale * wx * wy / (sx * sy), rail.node(i, foot[k])));
+            }
+        }
+        Ok(v)
+    };
+    for (d, hold) in [&p.x, &p.y, &p.z].into_iter().enumerate() {
+        let Some((k, c)) = hold.elastic_stiffness_damping() else {
+            continue;
+        };
+        let half = 0.5 * layout.strip_width;
+        match hold.region() {
+            RigidRegion::None => {}
+            RigidRegion::Continuous => {
+                // k per fastening = k / s per metre of rail.
+                let scale = layout.length / sleeper_spacing;
+                push(
+                    d,
+                    k,
+                    c,
+                    &patch(0.0, layout.length, &all_y, scale, "the rail foot")?,
+                );
+            }
+            RigidRegion::Columns => {
+                let n = hold.indices.len() as f64;
+                for &xs in &layout.sleepers {
+                    for &col in &hold.indices {
+                        let xc = layout.column_centre(xs, col);
+                        let what = format!("column {col} at x = {xc} m");
+                        push(
+                            d,
+                            k,
+                            c,
+                            &patch(xc - half, xc + half, &all_y, 1.0 / n, &what)?,
+                        );
+                    }
+                }
+            }
+            RigidRegion::Rows => {
+                let n = hold.indices.len() as f64;
+                for &xs in &layout.sleepers {
+                    let (xa, xb) = (
+                        xs - 0.5 * layout.footprint_length,
+                        xs + 0.5 * layout.footprint_length,
+                    );
+                    for &r in &hold.indices {
+                        let yr = layout.row_centre(r);
+                        let ly = tributary_lengths(foot_s, yr - half, yr + half);
+                        let what = format!("row {r} at y = {yr} m (sleeper at x = {xs} m)");
+                        push(d, k, c, &patch(xa, xb, &ly, 1.0 / n, &what)?);
+                    }
+                }
+            }
+            RigidRegion::GridPoints => {
+                for &xs in &layout.sleepers {
+                    push(d, k, c, &grid_point_nodes(layout, rail, xs)?);
+                }
+            }
+        }
+    }
+    Ok(())
 }

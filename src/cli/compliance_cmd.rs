@@ -1,0 +1,219 @@
+//! `corrugation compliance`: the static longitudinal-compliance check
+//! ([`corrugation::dynamics::compliance`]) for RPM1–RPM5, rigid and with elastic x-holds.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+use serde::Serialize;
+
+use corrugation::dynamics::compliance::{longitudinal_compliance, ComplianceLoad};
+use corrugation::model::load_model;
+use corrugation::structure::TrackStructure;
+
+use super::ModelArgs;
+
+/// Static longitudinal compliance of the fastening models: u_x of the rail head, web and foot
+/// ahead of a wheel load with a longitudinal force (compliance.csv, compliance.json).
+#[derive(Debug, Args)]
+pub struct ComplianceCmd {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Fastening models, each applied as --set fastening.model=NAME.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "RPM1,RPM2,RPM3,RPM4,RPM5",
+        value_name = "NAMES"
+    )]
+    variants: Vec<String>,
+    /// Elastic longitudinal hold stiffnesses per fastening (N/m): each model is also run with
+    /// its x-holds made elastic (fastening.hold = "elastic", hold_directions = ["x"]).
+    /// Give --elastic none for rigid holds only.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1e9",
+        value_name = "N_PER_M"
+    )]
+    elastic: Vec<String>,
+    /// Vertical wheel load on the rail (N).
+    #[arg(long, default_value_t = 100e3, value_name = "N")]
+    vertical: f64,
+    /// Longitudinal force on the rail, along +x (N).
+    #[arg(long, default_value_t = 15e3, value_name = "N")]
+    longitudinal: f64,
+    /// Load position along the rail (m); default mid-track.
+    #[arg(long, value_name = "M")]
+    x: Option<f64>,
+    /// Distance ahead of the load where u_x is reported (m).
+    #[arg(long, default_value_t = 0.1, value_name = "M")]
+    ahead: f64,
+    /// Output directory.
+    #[arg(long, default_value = "corrugation-out/compliance", value_name = "DIR")]
+    out: PathBuf,
+    /// Print the table as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+/// One row of the table (displacements in m).
+#[derive(Debug, Serialize)]
+struct Row {
+    model: String,
+    hold: &'static str,
+    hold_stiffness_n_per_m: Option<f64>,
+    x_load_m: f64,
+    x_probe_m: f64,
+    head_m: f64,
+    web_m: f64,
+    foot_m: f64,
+    mean_at_load_m: f64,
+    vertical_at_load_m: f64,
+    head_longitudinal_only_m: f64,
+    web_longitudinal_only_m: f64,
+    foot_longitudinal_only_m: f64,
+}
+
+impl ComplianceCmd {
+    /// Runs the command.
+    pub fn run(self) -> anyhow::Result<()> {
+        for (name, v) in [
+            ("--vertical", self.vertical),
+            ("--longitudinal", self.longitudinal),
+        ] {
+            if !v.is_finite() || v.abs() > 1e7 {
+                anyhow::bail!("{name} must be a finite force up to 1e7 N (got {v})");
+            }
+        }
+        if !(self.ahead.is_finite() && self.ahead >= 0.0) {
+            anyhow::bail!(
+                "--ahead must be a finite distance ≥ 0 m (got {})",
+                self.ahead
+            );
+        }
+        let mut stiffnesses = Vec::new();
+        for s in &self.elastic {
+            if s == "none" {
+                continue;
+            }
+            let k: f64 = s
+                .parse()
+                .with_context(|| format!("--elastic {s}: not a number (N/m) or \"none\""))?;
+            stiffnesses.push(k);
+        }
+        // All models first, so a bad name or key stops before any solve.
+        let mut cases = Vec::new();
+        for v in &self.variants {
+            let mut sets = self.model.set.clone();
+            sets.push(format!("fastening.model={v}"));
+            cases.push((v.clone(), None, sets.clone()));
+            for &k in &stiffnesses {
+                let mut s = sets.clone();
+                s.extend([
+                    "fastening.hold=elastic".to_string(),
+                    format!("fastening.hold_stiffness={k:e}"),
+                    "fastening.hold_directions=[\"x\"]".to_string(),
+                ]);
+                cases.push((v.clone(), Some(k), s));
+            }
+        }
+        let mut models = Vec::new();
+        for (name, k, sets) in &cases {
+            let m =
+                load_model(&self.model.source(), sets).with_context(|| format!("model {name}"))?;
+            models.push((name.clone(), *k, m));
+        }
+        let load = ComplianceLoad {
+            vertical_n: self.vertical,
+            longitudinal_n: self.longitudinal,
+            x_m: self.x,
+            ahead_m: self.ahead,
+        };
+        let mut rows = Vec::new();
+        for (name, k, m) in &models {
+            let track = TrackStructure::build(m).with_context(|| format!("building {name}"))?;
+            let r = longitudinal_compliance(m, &track, &load)
+                .with_context(|| format!("compliance of {name}"))?;
+            rows.push(Row {
+                model: name.clone(),
+                hold: if k.is_some() { "elastic" } else { "rigid" },
+                hold_stiffness_n_per_m: *k,
+                x_load_m: r.x_load_m,
+                x_probe_m: r.x_probe_m,
+                head_m: r.head_m,
+                web_m: r.web_m,
+                foot_m: r.foot_m,
+                mean_at_load_m: r.mean_at_load_m,
+                vertical_at_load_m: r.vertical_at_load_m,
+                head_longitudinal_only_m: r.longitudinal_only_m[0],
+                web_longitudinal_only_m: r.longitudinal_only_m[1],
+                foot_longitudinal_only_m: r.longitudinal_only_m[2],
+            });
+        }
+        std::fs::create_dir_all(&self.out)
+            .with_context(|| format!("creating {}", self.out.display()))?;
+        let mut csv = String::from("model,hold,hold_stiffness_n_per_m,x_load_m,x_probe_m,head_m,web_m,foot_m,mean_at_load_m,vertical_at_load_m,head_longitudinal_only_m,web_longitudinal_only_m,foot_longitudinal_only_m\n");
+        for r in &rows {
+            let k = r.hold_stiffness_n_per_m.map(|k| format!("{k:e}"));
+            writeln!(
+                csv,
+                "{},{},{},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+                r.model,
+                r.hold,
+                k.unwrap_or_default(),
+                r.x_load_m,
+                r.x_probe_m,
+                r.head_m,
+                r.web_m,
+                r.foot_m,
+                r.mean_at_load_m,
+                r.vertical_at_load_m,
+                r.head_longitudinal_only_m,
+                r.web_longitudinal_only_m,
+                r.foot_longitudinal_only_m
+            )?;
+        }
+        let csv_path = self.out.join("compliance.csv");
+        std::fs::write(&csv_path, csv)
+            .with_context(|| format!("writing {}", csv_path.display()))?;
+        let json = serde_json::json!({ "load": load, "rows": rows });
+        let json_path = self.out.join("compliance.json");
+        std::fs::write(&json_path, serde_json::to_string_pretty(&json)?)
+            .with_context(|| format!("writing {}", json_path.display()))?;
+        if self.json {
+            println!("{json}");
+        } else {
+            println!(
+                "u_x {} m ahead of {} kN down + {} kN along x (µm; in brackets the longitudinal force alone; w at the load in µm)",
+                self.ahead,
+                self.vertical / 1e3,
+                self.longitudinal / 1e3
+            );
+            println!(
+                "{:<6} {:<8} {:>10} {:>20} {:>20} {:>20} {:>8}",
+                "model", "hold", "k (N/m)", "head", "web", "foot", "w"
+            );
+            for r in &rows {
+                let k = r
+                    .hold_stiffness_n_per_m
+                    .map(|k| format!("{k:.1e}"))
+                    .unwrap_or_else(|| "rigid".into());
+                let pair = |a: f64, b: f64| format!("{:.3} ({:.3})", a * 1e6, b * 1e6);
+                println!(
+                    "{:<6} {:<8} {:>10} {:>20} {:>20} {:>20} {:>8.1}",
+                    r.model,
+                    r.hold,
+                    k,
+                    pair(r.head_m, r.head_longitudinal_only_m),
+                    pair(r.web_m, r.web_longitudinal_only_m),
+                    pair(r.foot_m, r.foot_longitudinal_only_m),
+                    r.vertical_at_load_m * 1e6
+                );
+            }
+            println!("wrote {} and compliance.json", csv_path.display());
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,198 @@
+//! Checks of the fastening's hold pattern: rigid and elastic regions, indices, the elastic
+//! variant of the presets. Every error names the dotted key and what is allowed.
+
+use super::{
+    DirectionHold, Fastening, FasteningModel, HoldKind, ModelError, RigidRegion, MAX_HOLD_STIFFNESS,
+};
+
+/// Largest damping per fastening of an elastic hold (N·s/m), as for the railpad dampers.
+const MAX_HOLD_DAMPING: f64 = 1e12;
+
+impl Fastening {
+    /// Checks `custom`, `hold`, `hold_stiffness`, `hold_damping` and `hold_directions`.
+    pub(super) fn validate_holds(&self, file: &str) -> Result<(), ModelError> {
+        let key_err = |key: &str, message: String| ModelError::Key {
+            file: file.into(),
+            key: key.into(),
+            message,
+        };
+        match (self.model, &self.custom) {
+            (FasteningModel::Custom, None) => return Err(key_err(
+                "fastening.custom",
+                "fastening.model = \"custom\" needs a [fastening.custom] table with x, y, z holds"
+                    .into(),
+            )),
+            (FasteningModel::Custom, Some(p)) => {
+                for (d, h) in [("x", &p.x), ("y", &p.y), ("z", &p.z)] {
+                    self.check_direction(file, &format!("fastening.custom.{d}"), h)?;
+                }
+            }
+            (_, Some(_)) => {
+                return Err(key_err(
+                    "fastening.custom",
+                    format!(
+                        "only allowed with fastening.model = \"custom\" (model is {})",
+                        self.model.name()
+                    ),
+                ))
+            }
+            (_, None) => {}
+        }
+        match self.hold {
+            HoldKind::Rigid => {
+                for (key, given) in [
+                    ("fastening.hold_stiffness", self.hold_stiffness.is_some()),
+                    ("fastening.hold_damping", self.hold_damping.is_some()),
+                    ("fastening.hold_directions", self.hold_directions.is_some()),
+                ] {
+                    if given {
+                        return Err(key_err(
+                            key,
+                            "only allowed with fastening.hold = \"elastic\"".into(),
+                        ));
+                    }
+                }
+            }
+            HoldKind::Elastic => {
+                if self.model == FasteningModel::Custom {
+                    return Err(key_err(
+                        "fastening.hold",
+                        "\"elastic\" applies to the presets RPM1–RPM5; with model = \"custom\" give elastic regions in [fastening.custom], e.g. x = { elastic = \"columns\", indices = [1], stiffness = 1e9 }".into(),
+                    ));
+                }
+                let Some(k) = self.hold_stiffness else {
+                    return Err(key_err(
+                        "fastening.hold_stiffness",
+                        "fastening.hold = \"elastic\" needs hold_stiffness (N/m per fastening)"
+                            .into(),
+                    ));
+                };
+                check_stiffness(file, "fastening.hold_stiffness", k)?;
+                check_damping(file, "fastening.hold_damping", self.hold_damping)?;
+                if let Some(dirs) = &self.hold_directions {
+                    if dirs.is_empty() {
+                        return Err(key_err(
+                            "fastening.hold_directions",
+                            "give at least one of \"x\", \"y\", \"z\"".into(),
+                        ));
+                    }
+                    // A direction the preset does not hold cannot be made elastic.
+                    let preset = self.hold_pattern();
+                    for a in dirs {
+                        let h = [&preset.x, &preset.y, &preset.z][a.index()];
+                        if h.region() == RigidRegion::None {
+                            return Err(key_err(
+                                "fastening.hold_directions",
+                                format!(
+                                    "{} holds nothing in {:?}: remove it from the list",
+                                    self.model.name(),
+                                    a
+                                ),
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// One direction of a custom pattern under `key` (`fastening.custom.x`, …).
+    fn check_direction(&self, file: &str, key: &str, h: &DirectionHold) -> Result<(), ModelError> {
+        let key_err = |k: String, message: String| ModelError::Key {
+            file: file.into(),
+            key: k,
+            message,
+        };
+        if let Some(e) = h.elastic {
+            if h.rigid != RigidRegion::None {
+                return Err(key_err(
+                    key.into(),
+                    "give either rigid or elastic, not both".into(),
+                ));
+            }
+            if e == RigidRegion::None {
+                return Err(key_err(
+                    format!("{key}.elastic"),
+                    "an elastic hold needs a region: \"columns\", \"rows\", \"continuous\" or \"grid_points\" (for no hold write rigid = \"none\")".into(),
+                ));
+            }
+            let Some(k) = h.stiffness else {
+                return Err(key_err(
+                    format!("{key}.stiffness"),
+                    "an elastic hold needs stiffness (N/m per fastening)".into(),
+                ));
+            };
+            check_stiffness(file, &format!("{key}.stiffness"), k)?;
+            check_damping(file, &format!("{key}.damping"), h.damping)?;
+        } else if h.stiffness.is_some() || h.damping.is_some() {
+            let k = if h.stiffness.is_some() {
+                "stiffness"
+            } else {
+                "damping"
+            };
+            return Err(key_err(
+                format!("{key}.{k}"),
+                "only allowed with an elastic hold (elastic = \"columns\" etc. instead of rigid)"
+                    .into(),
+            ));
+        }
+        let n = match h.region() {
+            RigidRegion::Columns => self.columns,
+            RigidRegion::Rows => self.rows,
+            RigidRegion::None | RigidRegion::Continuous | RigidRegion::GridPoints => 0,
+        };
+        let ikey = format!("{key}.indices");
+        if n == 0 && !h.indices.is_empty() {
+            return Err(key_err(
+                ikey,
+                "indices are only allowed with the regions \"columns\" or \"rows\"".into(),
+            ));
+        }
+        if n > 0 && h.indices.is_empty() {
+            return Err(key_err(ikey, "give at least one column/row index".into()));
+        }
+        if let Some(&i) = h.indices.iter().find(|&&i| i >= n.max(1)) {
+            return Err(ModelError::OutOfRange {
+                file: file.into(),
+                key: ikey,
+                value: i.to_string(),
+                allowed: format!("0..={}", n.saturating_sub(1)),
+            });
+        }
+        let mut sorted = h.indices.clone();
+        sorted.sort_unstable();
+        if sorted.windows(2).any(|w| w[0] == w[1]) {
+            return Err(key_err(ikey, "indices must be distinct".into()));
+        }
+        Ok(())
+    }
+}
+
+fn check_stiffness(file: &str, key: &str, k: f64) -> Result<(), ModelError> {
+    if !(k.is_finite() && k > 0.0 && k <= MAX_HOLD_STIFFNESS) {
+        return Err(ModelError::OutOfRange {
+            file: file.into(),
+            key: key.into(),
+            value: k.to_string(),
+            allowed: format!(
+                "greater than 0 and at most {MAX_HOLD_STIFFNESS:e} N/m per fastening (a rigid hold: rigid = …)"
+            ),
+        });
+    }
+    Ok(())
+}
+
+fn check_damping(file: &str, key: &str, c: Option<f64>) -> Result<(), ModelError> {
+    match c {
+        Some(c) if !(c.is_finite() && (0.0..=MAX_HOLD_DAMPING).contains(&c)) => {
+            Err(ModelError::OutOfRange {
+                file: file.into(),
+                key: key.into(),
+                value: c.to_string(),
+                allowed: format!("0 to {MAX_HOLD_DAMPING:e} N s/m per fastening"),
+            })
+        }
+        _ => Ok(()),
+    }
+}
