@@ -298,7 +298,15 @@ fn moving_load_matches_the_direct_implicit_solution() {
         };
         let p = nearest_plane(&line, 0.5 * l);
         let probe = Probe::contact_node(&line, p).unwrap();
-        let direct = direct_response(&track, &fm, &line, &frame, &load, &[probe.clone()]).unwrap();
+        let direct = direct_response(
+            &track,
+            &fm,
+            &line,
+            &frame,
+            &load,
+            std::slice::from_ref(&probe),
+        )
+        .unwrap();
         // Explicit: static start, then N sub-steps per load step with the load moving.
         let f0 = line_load_vector(&track, &line, &frame, load.x_at(0), force).unwrap();
         let mut b = Mat::from_fn(n, 1, |i, _| f0[i]);
@@ -397,7 +405,12 @@ fn coupled_passage_is_stable_where_the_held_force_is_not_and_balances_energy() {
     )
     .unwrap();
     match naive.passage(m.run.speed(), None, &opts, &mut |_, _| {}) {
-        Err(e) => eprintln!("held force: {e}"),
+        Err(e) => {
+            // The force grows until the patch leaves the contact grid or the state diverges.
+            let t = e.to_string();
+            eprintln!("held force: {t}");
+            assert!(t.contains("grid boundary") || t.contains("diverged"), "{t}");
+        }
         Ok(r) => {
             let h = &r.record.histories.normal_n;
             let (lo, hi) = h

@@ -1,6 +1,7 @@
-//! The one place where the commands `sweep`, `study` and `initiation` get their passage
-//! engine: the reduced-order engine of [`corrugation::dynamics::passage::PreparedModel`]
-//! (modal bases from the cache, built once per model).
+//! The one place where the commands get their passage engine: the reduced-order engine of
+//! [`corrugation::dynamics::passage::PreparedModel`] (modal bases from the cache, built once
+//! per model), or with `--engine explicit` the full explicit FE path
+//! ([`corrugation::explicit::ExplicitModel`], docs/theory.md §8).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -9,8 +10,39 @@ use anyhow::Context;
 use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
 use corrugation::dynamics::PassageRunner;
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
+use corrugation::explicit::{ExplicitModel, ExplicitOptions, ExplicitRunner};
 use corrugation::growth::procedure::{trial_growth, ModeLines};
 use corrugation::model::Model;
+
+/// Which engine runs the passages (`--engine`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Engine {
+    /// The reduced-order modal passage (default).
+    #[default]
+    Reduced,
+    /// The full explicit FE path (untruncated track and wheel; minutes per passage).
+    Explicit,
+}
+
+/// The explicit FE model of `model` (its `[explicit]` options).
+pub fn explicit_model(model: &Model) -> anyhow::Result<ExplicitModel> {
+    ExplicitModel::new(model, ExplicitOptions::from_model(model))
+        .context("building the explicit FE model")
+}
+
+/// The passage runner of a model on `engine` (see [`runner_for`]).
+pub fn runner_for_engine(
+    model: &Model,
+    cache: Option<&Path>,
+    engine: Engine,
+) -> anyhow::Result<Box<dyn PassageRunner>> {
+    match engine {
+        Engine::Reduced => runner_for(model, cache),
+        Engine::Explicit => Ok(Box::new(ExplicitRunner {
+            model: explicit_model(model)?,
+        })),
+    }
+}
 
 fn cache_of(cache: Option<&Path>) -> ModalCache {
     ModalCache::new(

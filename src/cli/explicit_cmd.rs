@@ -48,42 +48,48 @@ impl ExplicitCmd {
             Some(p) => Some(RailProfile::read_csv_um(p)?),
             None => None,
         };
-        std::fs::create_dir_all(&self.out)
-            .with_context(|| format!("creating {}", self.out.display()))?;
-        let pb = super::progress::bar("explicit: set-up (assembly, static solves, stable step)");
-        let em = ExplicitModel::new(&m, ExplicitOptions::from_model(&m))
-            .context("building the explicit model")?;
-        pb.set_message("explicit passage (contact steps)");
-        let opts = PassageOptions::default();
-        let rec = em
-            .passage(
-                m.run.speed(),
-                profile.as_ref(),
-                &opts,
-                &mut |done, total| {
-                    pb.set_length(total as u64);
-                    pb.set_position(done as u64);
-                },
-            )
-            .context("running the explicit passage")?;
-        pb.finish_and_clear();
-        let summary = corrugation::dynamics::analysis::summarise(&rec.record)?;
-        super::passage_cmd::write_outputs(&self.out, &rec.record, &summary)?;
-        write_explicit_json(&self.out, &rec)?;
-        if self.json {
-            let mut v = serde_json::to_value(&summary)?;
-            if let (Some(o), serde_json::Value::Object(e)) =
-                (v.as_object_mut(), serde_json::to_value(&rec.info)?)
-            {
-                for (k, x) in e {
-                    o.insert(format!("explicit_{k}"), x);
-                }
+        run_explicit(&m, profile.as_ref(), &self.out, self.json)
+    }
+}
+
+/// One explicit passage of `m` over `profile`, its files in `out` (those of `passage` plus
+/// `explicit.json`) and its summary on stdout (`json`: as JSON).
+pub fn run_explicit(
+    m: &corrugation::model::Model,
+    profile: Option<&RailProfile>,
+    out: &Path,
+    json: bool,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let pb = super::progress::bar("explicit: set-up (assembly, static solves, stable step)");
+    let em = ExplicitModel::new(m, ExplicitOptions::from_model(m))
+        .context("building the explicit model")?;
+    pb.set_message("explicit passage (contact steps)");
+    let opts = PassageOptions::default();
+    let rec = em
+        .passage(m.run.speed(), profile, &opts, &mut |done, total| {
+            pb.set_length(total as u64);
+            pb.set_position(done as u64);
+        })
+        .context("running the explicit passage")?;
+    pb.finish_and_clear();
+    let summary = corrugation::dynamics::analysis::summarise(&rec.record)?;
+    super::passage_cmd::write_outputs(out, &rec.record, &summary)?;
+    write_explicit_json(out, &rec)?;
+    if json {
+        let mut v = serde_json::to_value(&summary)?;
+        if let (Some(o), serde_json::Value::Object(e)) =
+            (v.as_object_mut(), serde_json::to_value(&rec.info)?)
+        {
+            for (k, x) in e {
+                o.insert(format!("explicit_{k}"), x);
             }
-            println!("{}", serde_json::to_string_pretty(&v)?);
-        } else {
-            super::passage_cmd::print_summary(&summary, &rec.record, &self.out);
-            let i = &rec.info;
-            println!(
+        }
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        super::passage_cmd::print_summary(&summary, &rec.record, out);
+        let i = &rec.info;
+        println!(
                 "  explicit: track {} + wheel {} DOFs; dt {:.3e} s (track, {} per contact step), {:.3e} s (wheel, {}); ω_max {:.4e} rad/s (Gershgorin bound {:.4e}); {} FE steps in {:.1} s wall{}",
                 i.dofs[0],
                 i.dofs[1],
@@ -98,9 +104,8 @@ impl ExplicitCmd {
                 i.cpu_seconds
                     .map_or(String::new(), |c| format!(", {c:.1} s CPU"))
             );
-        }
-        Ok(())
     }
+    Ok(())
 }
 
 fn write_explicit_json(out: &Path, rec: &ExplicitRecord) -> anyhow::Result<()> {

@@ -60,6 +60,10 @@ pub struct GrowCmd {
     /// Modal cache directory.
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
+    /// Passage engine: `reduced` (modal, default) or `explicit` (the full explicit FE
+    /// path, minutes per passage).
+    #[arg(long, value_enum, default_value = "reduced")]
+    engine: super::engine::Engine,
 }
 
 /// One matched component in the JSON.
@@ -362,15 +366,19 @@ impl GrowCmd {
             longitudinal_hz: prepared.longitudinal_compression_hz(),
             vertical_hz: prepared.vertical_bending_hz(),
         };
+        let explicit = match self.engine {
+            super::engine::Engine::Explicit => Some(super::engine::explicit_model(&m)?),
+            super::engine::Engine::Reduced => None,
+        };
+        let recorder: &dyn corrugation::dynamics::PassageRecorder = match &explicit {
+            Some(e) => e,
+            None => &prepared.engine,
+        };
         let pb = progress_bar("trial-amplitude growth (passages)");
         pb.set_length(1 + self.amplitudes_um.len() as u64);
-        let g = trial_growth(
-            &prepared.engine,
-            m.run.speed(),
-            &self.amplitudes_um,
-            &modes,
-            |k| pb.set_position(k as u64 + 1),
-        )?;
+        let g = trial_growth(recorder, m.run.speed(), &self.amplitudes_um, &modes, |k| {
+            pb.set_position(k as u64 + 1)
+        })?;
         pb.finish_and_clear();
         write_growth_files(&self.out, &g)?;
         let mut rounds = Vec::new();
@@ -378,7 +386,7 @@ impl GrowCmd {
             let pb = progress_bar("iterative growth (rounds)");
             pb.set_length(self.rounds as u64);
             let (r, _) = iterative_growth(
-                &prepared.engine,
+                recorder,
                 m.run.speed(),
                 &IterativeOptions {
                     passages_per_round: self.passages_per_round,

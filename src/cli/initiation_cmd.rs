@@ -50,6 +50,10 @@ pub struct InitiationCmd {
     /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
+    /// Passage engine: `reduced` (modal, default) or `explicit` (the full explicit FE
+    /// path, minutes per passage).
+    #[arg(long, value_enum, default_value = "reduced")]
+    engine: super::engine::Engine,
 }
 
 impl InitiationCmd {
@@ -107,7 +111,7 @@ impl InitiationCmd {
                 );
             }
             // One engine at a time: each holds its modal basis.
-            let runner = engine::runner_for(model, self.cache.as_deref())?;
+            let runner = engine::runner_for_engine(model, self.cache.as_deref(), self.engine)?;
             rows.extend(run_initiation(
                 &[(name.clone(), runner.as_ref())],
                 speed,

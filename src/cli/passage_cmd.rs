@@ -44,6 +44,10 @@ pub struct PassageCmd {
     /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
+    /// Passage engine: `reduced` (modal, default) or `explicit` (the full explicit FE
+    /// path, minutes per passage).
+    #[arg(long, value_enum, default_value = "reduced")]
+    engine: super::engine::Engine,
 }
 
 impl PassageCmd {
@@ -54,6 +58,9 @@ impl PassageCmd {
             None => None,
         };
         super::check_out_dir(&self.out)?;
+        if self.engine == super::engine::Engine::Explicit {
+            return super::explicit_cmd::run_explicit(&m, profile.as_ref(), &self.out, self.json);
+        }
         let cache = ModalCache::new(self.cache.clone().unwrap_or_else(default_cache_dir));
         let opts = PassageOptions::default();
         let prepared =

@@ -33,6 +33,10 @@ pub struct SweepCmd {
     /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
+    /// Passage engine: `reduced` (modal, default) or `explicit` (the full explicit FE
+    /// path, minutes per passage).
+    #[arg(long, value_enum, default_value = "reduced")]
+    engine: super::engine::Engine,
 }
 
 /// Wheel modes drawn on the maps: contact participation ≥ this share of the largest (−).
@@ -66,7 +70,10 @@ impl SweepCmd {
             wheel_lines_hz: prepared.wheel_contact_modes_hz(WHEEL_LINE_SHARE),
             ..MapOptions::default()
         };
-        let runner: Box<dyn corrugation::dynamics::PassageRunner> = Box::new(prepared);
+        let runner: Box<dyn corrugation::dynamics::PassageRunner> = match self.engine {
+            engine::Engine::Reduced => Box::new(prepared),
+            engine::Engine::Explicit => engine::runner_for_engine(&model, cache, self.engine)?,
+        };
         // Resume only into a directory of the same model and program version.
         let run_key = format!(
             "{} {}",

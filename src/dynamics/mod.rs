@@ -199,6 +199,41 @@ impl RailProfile {
     }
 }
 
+/// Anything that produces full passage records (histories, wear) of one model: the
+/// reduced-order engine and the explicit FE path. The growth procedure takes it, so that
+/// trial corrugations run on either engine.
+pub trait PassageRecorder: Sync {
+    /// One passage at `speed_m_per_s` (m/s) over `profile` (`None` = smooth rail), without
+    /// the energy ledger or the rail-point record.
+    fn record(
+        &self,
+        speed_m_per_s: f64,
+        profile: Option<&RailProfile>,
+    ) -> Result<passage::PassageRecord, DynamicsError>;
+
+    /// Hertz semi-axis across the rail at the static load (m): the width the wear is spread
+    /// over in the iterative growth.
+    fn hertz_b_m(&self) -> f64;
+}
+
+impl PassageRecorder for passage::PassageEngine {
+    fn record(
+        &self,
+        speed_m_per_s: f64,
+        profile: Option<&RailProfile>,
+    ) -> Result<passage::PassageRecord, DynamicsError> {
+        let quiet = passage::PassageOptions {
+            energy: false,
+            rail_point_offset_m: None,
+        };
+        self.passage(speed_m_per_s, profile, &quiet, None)
+    }
+
+    fn hertz_b_m(&self) -> f64 {
+        passage::PassageEngine::hertz_b_m(self)
+    }
+}
+
 /// Runs passages of one prepared model (modal basis built once) at any speed over any rail
 /// profile. The reduced-order engine implements it; the sweeps and studies take it so that
 /// their logic is tested with cheap stand-ins.

@@ -298,6 +298,7 @@ pub struct ExplicitModel {
     x_start_m: f64,
     zone_m: [f64; 2],
     wheel_radius_m: f64,
+    hertz_b_m: f64,
     opts: ExplicitOptions,
     setup_seconds: f64,
 }
@@ -379,6 +380,7 @@ impl ExplicitModel {
             rigid,
             rigid_obs,
             wheel_radius_m: loads.contact_radius_m,
+            hertz_b_m: hertz.b_m,
             loads,
             wheel_const,
             track_static,
@@ -477,7 +479,7 @@ impl ExplicitModel {
         let half_grid = contact.config().grid.half_length_x_m;
         let x_end = z1 + half_grid + 2.0 * dx;
         let n_steps = ((x_end - x0) / dx).ceil() as usize;
-        let (nx, ny) = (contact.config().grid.nx, contact.config().grid.ny);
+        let nx = contact.config().grid.nx;
         let xs: Vec<f64> = contact.x_m().to_vec();
         let mut heights = vec![0.0; nx];
         let fill_heights = |xc: f64, h: &mut [f64]| {
@@ -499,204 +501,68 @@ impl ExplicitModel {
             x0,
         )?;
         let (xi0, delta0) = (st.creepage, st.approach_m);
-        let (n_t, n_w) = (self.track.op.n(), self.wheel.op.n());
-        let mut ut = self.track_static.clone();
-        let mut vt = vec![0.0; n_t];
-        let mut uw = self.wheel_static.clone();
-        let mut vw = vec![0.0; n_w];
-        let u_rail = self.rail_at(&ut, x0)?;
-        let u_wheel_el = self.wheel_at(&uw);
-        let target_n = u_rail[2] - delta0 - u_wheel_el[2];
-        let c = rigid_least_norm(&self.rigid_obs, [0.0, target_n, 0.0]);
-        let cv = rigid_least_norm(&self.rigid_obs, [xi0 * v, 0.0, 0.0]);
-        for (k, r) in self.rigid.iter().enumerate() {
-            uw.iter_mut().zip(r).for_each(|(x, y)| *x += c[k] * y);
-            vw.iter_mut().zip(r).for_each(|(x, y)| *x += cv[k] * y);
-        }
+        let mut s_ = self.start_state(v, xi0, delta0)?;
 
-        // --- Unit responses and scratch.
+        // --- Unit responses, scratch, records.
         let mut sc_t = self.track.op.scratch();
         let mut sc_w = self.wheel.op.scratch();
         let corrected = self.opts.coupling == Coupling::PredictorCorrector;
-        let wheel_resp = UnitResponse::compute(
-            &self.wheel.op,
-            dtw,
-            nw,
-            |d, f| {
-                let mut force = [0.0; 3];
-                force[d] = 1.0;
-                add_nodes_load(
-                    &self.wheel_nodes,
-                    &self.wheel_structure.dofmap,
-                    &frame,
-                    1.0,
-                    force,
-                    f,
-                )
-            },
-            &mut sc_w,
-        );
-        let g_wheel: [f64; 3] = [0, 1, 2].map(|d| self.wheel_at(&wheel_resp.u[d])[d]);
+        let (wheel_resp, g_wheel) = self.wheel_response(dtw, nw, &mut sc_w);
         let mut rail_resp = RailResponses {
             dt: dtt,
             steps: nt,
             slots: Vec::new(),
         };
-
-        // --- Records.
         let mut h = Histories::default();
-        let mut rail_point = popts.rail_point_offset_m.map(|off| {
-            let x = z0 + off;
-            let p = (0..self.line.planes_x_m.len())
-                .min_by(|&a, &b| {
-                    (self.line.planes_x_m[a] - x)
-                        .abs()
-                        .total_cmp(&(self.line.planes_x_m[b] - x).abs())
-                })
-                .unwrap_or(0);
-            let node = self.line.nodes[p]
-                .iter()
-                .copied()
-                .max_by(|a, b| a.1.total_cmp(&b.1))
-                .map_or(0, |(n, _)| n);
-            (
-                node,
-                RailPointRecord {
-                    position_m: self.track_structure.mesh.nodes[node],
-                    displacement_m: Vec::with_capacity(n_steps),
-                },
-            )
-        });
+        let mut rail_point = self.rail_point(popts, n_steps);
         let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
         let mut wear = WearAccumulator::new(&contact, z0, nbins);
-        let mut eb = EnergyBalance::default();
-        let mut ku = vec![0.0; n_t.max(n_w)];
-        let stored = |op: &ExplicitOperator, u: &[f64], v: &[f64], ku: &mut [f64]| {
-            op.apply_k(u, &mut ku[..u.len()]);
-            0.5 * u.iter().zip(ku.iter()).map(|(a, b)| a * b).sum::<f64>() + op.kinetic_energy(v)
-        };
-        let e_start = if popts.energy {
-            stored(&self.track.op, &ut, &vt, &mut ku) + stored(&self.wheel.op, &uw, &vw, &mut ku)
-        } else {
-            0.0
-        };
-        let hertz_energy = |f: f64, d: f64, cz: f64| 0.4 * f * (d - cz * f).max(0.0);
-        let mut f = [st.fx_n, st.fy_n, st.normal_force_n];
+        let mut ledger = Ledger::new(self, popts.energy, &s_, &st, x0, &mut sc_t, &mut sc_w)?;
         // The start's force on the structures is the static one (lateral 0).
-        f[1] = 0.0;
-        let mut series_last = [0.0; 3];
-        let e_contact_start = hertz_energy(st.normal_force_n, st.approach_m, 0.0);
+        let mut f = [st.fx_n, 0.0, st.normal_force_n];
+        let mut series = [0.0; 3];
         let mut last_delta = st.approach_m;
-        let mut p_damp_prev = if popts.energy {
-            self.track.op.damper_power(&vt, &mut sc_t) + self.wheel.op.damper_power(&vw, &mut sc_w)
-        } else {
-            0.0
-        };
-        let mut ftrack = vec![0.0; n_t];
+        let mut ftrack = vec![0.0; self.track.op.n()];
         let mut fwheel = self.wheel_const.clone();
-        let axes = [frame.x, frame.t, frame.n];
         let dm_t = &self.track_structure.dofmap;
         let dm_w = &self.wheel_structure.dofmap;
         let t_wall = Instant::now();
         let cpu0 = cpu_seconds();
         progress(0, n_steps);
-        let mut ur_prev = self.rail_at(&ut, x0)?;
         for n in 1..=n_steps {
             let t = n as f64 * dt_c;
             let xc = x0 + v * t;
             let (p, s) = self.locate(xc)?;
             // Predictor: F_n held at x_{n+1}.
-            let ur_old = self.rail_at(&ut, xc)?;
-            let uw_old = self.wheel_at(&uw);
+            let ur_old = self.rail_at(&s_.ut, xc)?;
+            let uw_old = self.wheel_at(&s_.uw);
             ftrack.iter_mut().for_each(|x| *x = 0.0);
             let neg = [-f[0], -f[1], -f[2]];
             add_nodes_load(&self.line.nodes[p], dm_t, &frame, 1.0 - s, neg, &mut ftrack);
             add_nodes_load(&self.line.nodes[p + 1], dm_t, &frame, s, neg, &mut ftrack);
             fwheel.copy_from_slice(&self.wheel_const);
             add_nodes_load(&self.wheel_nodes, dm_w, &frame, 1.0, f, &mut fwheel);
-            let e_ext_before = if popts.energy {
-                // Work of the constant wheel loads: exact for a held load, f·Δu.
-                self.wheel_const
-                    .iter()
-                    .zip(&uw)
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>()
+            ledger.before_step(&s_.uw);
+            let State { ut, vt, uw, vw } = &mut s_;
+            self.track.op.advance(dtt, nt, ut, vt, &ftrack, &mut sc_t);
+            self.wheel.op.advance(dtw, nw, uw, vw, &fwheel, &mut sc_w);
+            let ur_new = self.rail_at(&s_.ut, xc)?;
+            let uw_new = self.wheel_at(&s_.uw);
+            // Contact at x_{n+1} with the one-step compliance as the series compliance.
+            let slots = if corrected {
+                let (g, ia, ib) =
+                    self.one_step_compliance(&mut rail_resp, &mut sc_t, p, s, g_wheel);
+                series = g;
+                Some((ia, ib))
             } else {
-                0.0
+                None
             };
-            let torque_before = if popts.energy {
-                self.loads
-                    .torque
-                    .iter()
-                    .zip(&uw)
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>()
-            } else {
-                0.0
+            let to_contact = |source| DynamicsError::Contact {
+                t_s: t,
+                x_m: xc,
+                source,
             };
-            let gravity_before = if popts.energy {
-                self.loads
-                    .gravity
-                    .iter()
-                    .zip(&uw)
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>()
-            } else {
-                0.0
-            };
-            self.track
-                .op
-                .advance(dtt, nt, &mut ut, &mut vt, &ftrack, &mut sc_t);
-            self.wheel
-                .op
-                .advance(dtw, nw, &mut uw, &mut vw, &fwheel, &mut sc_w);
-
-            let ur_new = self.rail_at(&ut, xc)?;
-            let uw_new = self.wheel_at(&uw);
-            // One-step compliance at x_{n+1}.
-            let (ia, ib) = if corrected {
-                let a = rail_resp.get(self, p, &mut sc_t);
-                let b = rail_resp.get(self, p + 1, &mut sc_t);
-                // get() may have dropped a slot: look both up again.
-                let ia = rail_resp
-                    .slots
-                    .iter()
-                    .position(|(q, _)| *q == p)
-                    .unwrap_or(a);
-                let ib = rail_resp
-                    .slots
-                    .iter()
-                    .position(|(q, _)| *q == p + 1)
-                    .unwrap_or(b);
-                (ia, ib)
-            } else {
-                (0, 0)
-            };
-            let series = if corrected {
-                let ra = &rail_resp.slots[ia].1;
-                let rb = &rail_resp.slots[ib].1;
-                let mut g = [0.0; 3];
-                for d in 0..3 {
-                    // Rail displacement at x_{n+1} (along −axis_d: the load is −e_d) under the
-                    // interpolated unit load.
-                    let at = |u: &[f64]| {
-                        (1.0 - s) * nodes_dot(&self.line.nodes[p], dm_t, axes[d], |i| u[i])
-                            + s * nodes_dot(&self.line.nodes[p + 1], dm_t, axes[d], |i| u[i])
-                    };
-                    let gr = -((1.0 - s) * at(&ra.u[d]) + s * at(&rb.u[d]));
-                    g[d] = (gr + g_wheel[d]).max(0.0);
-                }
-                g
-            } else {
-                [0.0; 3]
-            };
-            contact
-                .set_series_compliance(series)
-                .map_err(|source| DynamicsError::Contact {
-                    t_s: t,
-                    x_m: xc,
-                    source,
-                })?;
+            contact.set_series_compliance(series).map_err(to_contact)?;
             let delta = ur_new[2] - uw_new[2] + series[2] * f[2];
             let xi = ((uw_new[0] - uw_old[0]) - (ur_new[0] - ur_old[0])) / (v * dt_c);
             let eta = ((uw_new[1] - uw_old[1]) - (ur_new[1] - ur_old[1])) / (v * dt_c);
@@ -709,108 +575,60 @@ impl ExplicitModel {
                     spin_per_m: spin,
                     rail_height_m: profile.map(|_| &heights[..]),
                 })
-                .map_err(|source| DynamicsError::Contact {
-                    t_s: t,
-                    x_m: xc,
-                    source,
-                })?;
+                .map_err(to_contact)?;
             let f_new = [r.fx_n, r.fy_n, r.normal_force_n];
-            if corrected {
+            // Corrector: the response to the force change, ramped over the step.
+            if let Some((ia, ib)) = slots {
                 let df = [f_new[0] - f[0], f_new[1] - f[1], f_new[2] - f[2]];
                 let (ra, rb) = (&rail_resp.slots[ia].1, &rail_resp.slots[ib].1);
-                ra.add_to(1.0 - s, df, &mut ut, &mut vt);
-                rb.add_to(s, df, &mut ut, &mut vt);
-                wheel_resp.add_to(1.0, df, &mut uw, &mut vw);
+                ra.add_to(1.0 - s, df, &mut s_.ut, &mut s_.vt);
+                rb.add_to(s, df, &mut s_.ut, &mut s_.vt);
+                wheel_resp.add_to(1.0, df, &mut s_.uw, &mut s_.vw);
             }
-            if !(ut.iter().all(|x| x.is_finite())) {
-                return Err(ExplicitError::Diverged {
-                    t_s: t,
-                    x_m: xc,
-                    part: "track",
-                });
-            }
-            if !(uw.iter().all(|x| x.is_finite())) {
-                return Err(ExplicitError::Diverged {
-                    t_s: t,
-                    x_m: xc,
-                    part: "wheel",
-                });
-            }
+            s_.check_finite(t, xc)?;
             if xc - half_grid < z1 && xc + half_grid > z0 {
                 wear.add_step(&contact, xc);
             }
-            if popts.energy {
-                let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-                eb.external_work_j += dot(&self.wheel_const, &uw) - e_ext_before;
-                eb.torque_work_j += dot(&self.loads.torque, &uw) - torque_before;
-                eb.gravity_work_j += dot(&self.loads.gravity, &uw) - gravity_before;
-                let p_damp = self.track.op.damper_power(&vt, &mut sc_t)
-                    + self.wheel.op.damper_power(&vw, &mut sc_w);
-                eb.damper_dissipation_j += 0.5 * dt_c * (p_damp + p_damp_prev);
-                p_damp_prev = p_damp;
-                // Work of the contact force on the two structures over the step, with
-                // the corrected end-of-step displacements.
-                let ur_end = self.rail_at(&ut, xc)?;
-                let uw_end = self.wheel_at(&uw);
-                // With the corrector the force ramps from F_n to F_{n+1} over the step (its
-                // mean does the work); without it F_n is held.
-                let f_work = if corrected {
-                    [0, 1, 2].map(|d| 0.5 * (f[d] + f_new[d]))
-                } else {
-                    f
-                };
-                for d in 0..3 {
-                    eb.contact_work_j +=
-                        f_work[d] * ((uw_end[d] - uw_old[d]) - (ur_end[d] - ur_old[d]));
-                }
-                eb.frictional_work_j += r.frictional_power_w * dt_c;
-                eb.spin_work_j -= v * spin * r.mz_nm * dt_c;
-                // Convective work: the force rolling over the deflected rail, the change of
-                // the rail displacement under the contact as the contact moves from x_n to
-                // x_{n+1} on the state at t_n (lateral and normal, as the reduced passage).
-                for d in [1usize, 2] {
-                    eb.convective_work_j += f_work[d] * (ur_old[d] - ur_prev[d]);
-                }
-                ur_prev = ur_end;
-            }
-            series_last = series;
+            // With the corrector the force ramps from F_n to F_{n+1} over the step (its mean
+            // does the work); without it F_n is held.
+            let f_work = if corrected {
+                [0, 1, 2].map(|d| 0.5 * (f[d] + f_new[d]))
+            } else {
+                f
+            };
+            ledger.after_step(
+                &s_,
+                [&mut sc_t, &mut sc_w],
+                LedgerStep {
+                    xc,
+                    dt_c,
+                    v,
+                    spin,
+                    f_work,
+                    old: [ur_old, uw_old],
+                },
+                &r,
+            )?;
             f = f_new;
             last_delta = r.approach_m;
-            h.t_s.push(t);
-            h.x_m.push(xc);
-            h.normal_n.push(r.normal_force_n);
-            h.longitudinal_n.push(r.fx_n);
-            h.lateral_n.push(r.fy_n);
-            h.creepage.push(xi);
-            h.approach_m.push(delta - series[2] * f[2]);
-            let cols = contact
-                .pressure_pa()
-                .chunks_exact(ny)
-                .filter(|row| row.iter().any(|&pp| pp > 0.0))
-                .count();
-            h.contact_length_m.push(cols as f64 * dx);
-            h.slip_fraction.push(r.slip_area_fraction());
-            h.frictional_power_w.push(r.frictional_power_w);
+            push_history(
+                &mut h,
+                &contact,
+                &r,
+                [t, xc, xi, delta - series[2] * f[2]],
+                dx,
+            );
             if let Some((node, rec)) = rail_point.as_mut() {
                 let node = *node;
-                rec.displacement_m
-                    .push([0, 1, 2].map(|c| dm_t.free_index(3 * node + c).map_or(0.0, |i| ut[i])));
+                rec.displacement_m.push(
+                    [0, 1, 2].map(|c| dm_t.free_index(3 * node + c).map_or(0.0, |i| s_.ut[i])),
+                );
             }
             if n % 16 == 0 || n == n_steps {
                 progress(n, n_steps);
             }
         }
-        if popts.energy {
-            let e_end = stored(&self.track.op, &ut, &vt, &mut ku)
-                + stored(&self.wheel.op, &uw, &vw, &mut ku);
-            eb.stored_change_j = e_end - e_start;
-            // The half-space part of the approach: the solver's approach less the series
-            // compliance's share (the structures' own compliance, whose energy is in the
-            // stored energy: no separate spring).
-            eb.contact_energy_change_j =
-                hertz_energy(f[2], last_delta, series_last[2]) - e_contact_start;
-            eb.residual_spring_energy_change_j = 0.0;
-        }
+        let eb = ledger.finish(&s_, f[2], last_delta, series[2]);
         let mut w = vec![0.0; nbins];
         wear.work_x(&mut w);
         let seconds = t_wall.elapsed().as_secs_f64();
@@ -835,7 +653,7 @@ impl ExplicitModel {
                 (Some(a), Some(b)) => Some(b - a),
                 _ => None,
             },
-            dofs: [n_t, n_w],
+            dofs: self.dofs(),
             setup_seconds: self.setup_seconds,
         };
         Ok(ExplicitRecord {
@@ -857,6 +675,314 @@ impl ExplicitModel {
             info,
         })
     }
+
+    /// The start: the static deflections, the wheel's rigid modes placed so that the
+    /// approach is the steady one `delta0` (m) with the axle and the contact point at x = 0,
+    /// and turning so that the creepage is `xi0` (−) at `v` (m/s).
+    fn start_state(&self, v: f64, xi0: f64, delta0: f64) -> Result<State, ExplicitError> {
+        let mut st = State {
+            ut: self.track_static.clone(),
+            vt: vec![0.0; self.track.op.n()],
+            uw: self.wheel_static.clone(),
+            vw: vec![0.0; self.wheel.op.n()],
+        };
+        let u_rail = self.rail_at(&st.ut, self.x_start_m)?;
+        let u_wheel_el = self.wheel_at(&st.uw);
+        let target_n = u_rail[2] - delta0 - u_wheel_el[2];
+        let c = rigid_least_norm(&self.rigid_obs, [0.0, target_n, 0.0]);
+        let cv = rigid_least_norm(&self.rigid_obs, [xi0 * v, 0.0, 0.0]);
+        for (k, r) in self.rigid.iter().enumerate() {
+            st.uw.iter_mut().zip(r).for_each(|(x, y)| *x += c[k] * y);
+            st.vw.iter_mut().zip(r).for_each(|(x, y)| *x += cv[k] * y);
+        }
+        Ok(st)
+    }
+
+    /// The wheel's unit responses over one contact step (`steps` of `dt`, s) and its
+    /// one-step compliance at the contact point per contact-frame direction (m/N).
+    fn wheel_response(
+        &self,
+        dt: f64,
+        steps: usize,
+        scratch: &mut StepScratch,
+    ) -> (UnitResponse, [f64; 3]) {
+        let r = UnitResponse::compute(
+            &self.wheel.op,
+            dt,
+            steps,
+            |d, f| {
+                let mut force = [0.0; 3];
+                force[d] = 1.0;
+                add_nodes_load(
+                    &self.wheel_nodes,
+                    &self.wheel_structure.dofmap,
+                    &self.frame,
+                    1.0,
+                    force,
+                    f,
+                )
+            },
+            scratch,
+        );
+        let g = [0, 1, 2].map(|d| self.wheel_at(&r.u[d])[d]);
+        (r, g)
+    }
+
+    /// The rail's one-step compliance at `(p, s)` (plane, weight) plus the wheel's `g_wheel`
+    /// (m/N per direction), and the slots of the two planes' unit responses in `rail`.
+    fn one_step_compliance(
+        &self,
+        rail: &mut RailResponses,
+        scratch: &mut StepScratch,
+        p: usize,
+        s: f64,
+        g_wheel: [f64; 3],
+    ) -> ([f64; 3], usize, usize) {
+        rail.get(self, p, scratch);
+        rail.get(self, p + 1, scratch);
+        // get() may have dropped a slot: look both up now.
+        let slot = |q: usize| rail.slots.iter().position(|(x, _)| *x == q).unwrap_or(0);
+        let (ia, ib) = (slot(p), slot(p + 1));
+        let (ra, rb) = (&rail.slots[ia].1, &rail.slots[ib].1);
+        let axes = [self.frame.x, self.frame.t, self.frame.n];
+        let dm = &self.track_structure.dofmap;
+        let g = [0, 1, 2].map(|d| {
+            // Rail displacement at x along axis d under the interpolated unit load −e_d.
+            let at = |u: &[f64]| {
+                (1.0 - s) * nodes_dot(&self.line.nodes[p], dm, axes[d], |i| u[i])
+                    + s * nodes_dot(&self.line.nodes[p + 1], dm, axes[d], |i| u[i])
+            };
+            let gr = -((1.0 - s) * at(&ra.u[d]) + s * at(&rb.u[d]));
+            (gr + g_wheel[d]).max(0.0)
+        });
+        (g, ia, ib)
+    }
+
+    /// The rail-top node recorded by a passage (`popts.rail_point_offset_m` into the
+    /// solution zone), with room for `n_steps` records.
+    fn rail_point(
+        &self,
+        popts: &PassageOptions,
+        n_steps: usize,
+    ) -> Option<(usize, RailPointRecord)> {
+        let x = self.zone_m[0] + popts.rail_point_offset_m?;
+        let px = &self.line.planes_x_m;
+        let p = (0..px.len()).min_by(|&a, &b| (px[a] - x).abs().total_cmp(&(px[b] - x).abs()))?;
+        let (node, _) = self.line.nodes[p]
+            .iter()
+            .copied()
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        Some((
+            node,
+            RailPointRecord {
+                position_m: self.track_structure.mesh.nodes[node],
+                displacement_m: Vec::with_capacity(n_steps),
+            },
+        ))
+    }
+}
+
+/// The state of both substructures: displacements (m) and half-step velocities (m/s).
+struct State {
+    ut: Vec<f64>,
+    vt: Vec<f64>,
+    uw: Vec<f64>,
+    vw: Vec<f64>,
+}
+
+impl State {
+    fn check_finite(&self, t: f64, xc: f64) -> Result<(), ExplicitError> {
+        for (part, u) in [("track", &self.ut), ("wheel", &self.uw)] {
+            if !u.iter().all(|x| x.is_finite()) {
+                return Err(ExplicitError::Diverged {
+                    t_s: t,
+                    x_m: xc,
+                    part,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One step's inputs to the energy ledger.
+struct LedgerStep {
+    /// Contact position (m).
+    xc: f64,
+    /// Contact step (s).
+    dt_c: f64,
+    /// Speed (m/s).
+    v: f64,
+    /// Spin creepage (1/m).
+    spin: f64,
+    /// The contact force that did the work over the step (N, on the wheel).
+    f_work: [f64; 3],
+    /// Rail and wheel contact-point displacement at the step's start (m).
+    old: [[f64; 3]; 2],
+}
+
+/// The energy ledger of an explicit passage (the same terms as the reduced passage's,
+/// [`EnergyBalance`]); inactive (no cost) when the passage does not keep it.
+struct Ledger<'a> {
+    m: &'a ExplicitModel,
+    on: bool,
+    eb: EnergyBalance,
+    e_start: f64,
+    e_contact_start: f64,
+    p_damp_prev: f64,
+    ur_prev: [f64; 3],
+    /// Wheel-load work potentials `f·u` at the step's start: all, torque, gravity.
+    before: [f64; 3],
+    ku: Vec<f64>,
+}
+
+impl<'a> Ledger<'a> {
+    fn new(
+        m: &'a ExplicitModel,
+        on: bool,
+        s: &State,
+        st: &crate::contact::StepResult,
+        x0: f64,
+        sc_t: &mut StepScratch,
+        sc_w: &mut StepScratch,
+    ) -> Result<Self, ExplicitError> {
+        let mut l = Ledger {
+            m,
+            on,
+            eb: EnergyBalance::default(),
+            e_start: 0.0,
+            e_contact_start: hertz_energy(st.normal_force_n, st.approach_m, 0.0),
+            p_damp_prev: 0.0,
+            ur_prev: m.rail_at(&s.ut, x0)?,
+            before: [0.0; 3],
+            ku: if on {
+                vec![0.0; m.track.op.n().max(m.wheel.op.n())]
+            } else {
+                Vec::new()
+            },
+        };
+        if on {
+            l.e_start = l.stored(s);
+            l.p_damp_prev =
+                m.track.op.damper_power(&s.vt, sc_t) + m.wheel.op.damper_power(&s.vw, sc_w);
+        }
+        Ok(l)
+    }
+
+    /// Kinetic + strain energy of both substructures (J).
+    fn stored(&mut self, s: &State) -> f64 {
+        let mut e = 0.0;
+        for (op, u, v) in [
+            (&self.m.track.op, &s.ut, &s.vt),
+            (&self.m.wheel.op, &s.uw, &s.vw),
+        ] {
+            let ku = &mut self.ku[..u.len()];
+            op.apply_k(u, ku);
+            e += 0.5 * dot(u, ku) + op.kinetic_energy(v);
+        }
+        e
+    }
+
+    fn before_step(&mut self, uw: &[f64]) {
+        if self.on {
+            let l = &self.m.loads;
+            self.before = [
+                dot(&self.m.wheel_const, uw),
+                dot(&l.torque, uw),
+                dot(&l.gravity, uw),
+            ];
+        }
+    }
+
+    fn after_step(
+        &mut self,
+        s: &State,
+        [sc_t, sc_w]: [&mut StepScratch; 2],
+        k: LedgerStep,
+        r: &crate::contact::StepResult,
+    ) -> Result<(), ExplicitError> {
+        if !self.on {
+            return Ok(());
+        }
+        let (m, eb) = (self.m, &mut self.eb);
+        // Constant wheel loads: exact work f·Δu.
+        eb.external_work_j += dot(&m.wheel_const, &s.uw) - self.before[0];
+        eb.torque_work_j += dot(&m.loads.torque, &s.uw) - self.before[1];
+        eb.gravity_work_j += dot(&m.loads.gravity, &s.uw) - self.before[2];
+        let p_damp = m.track.op.damper_power(&s.vt, sc_t) + m.wheel.op.damper_power(&s.vw, sc_w);
+        eb.damper_dissipation_j += 0.5 * k.dt_c * (p_damp + self.p_damp_prev);
+        self.p_damp_prev = p_damp;
+        // Work of the contact force on the two structures, with the corrected end-of-step
+        // displacements.
+        let ur_end = m.rail_at(&s.ut, k.xc)?;
+        let uw_end = m.wheel_at(&s.uw);
+        let [ur_old, uw_old] = k.old;
+        for d in 0..3 {
+            eb.contact_work_j += k.f_work[d] * ((uw_end[d] - uw_old[d]) - (ur_end[d] - ur_old[d]));
+        }
+        eb.frictional_work_j += r.frictional_power_w * k.dt_c;
+        eb.spin_work_j -= k.v * k.spin * r.mz_nm * k.dt_c;
+        // Convective work: the force rolling over the deflected rail, the change of the rail
+        // displacement under the contact as the contact moves from x_n to x_{n+1} on the
+        // state at t_n (lateral and normal, as the reduced passage).
+        for d in [1usize, 2] {
+            eb.convective_work_j += k.f_work[d] * (ur_old[d] - self.ur_prev[d]);
+        }
+        self.ur_prev = ur_end;
+        Ok(())
+    }
+
+    /// The balance at the end: `f_n` the last normal force (N), `delta` the contact
+    /// solver's last approach (m), `c_n` the last normal series compliance (m/N).
+    fn finish(mut self, s: &State, f_n: f64, delta: f64, c_n: f64) -> EnergyBalance {
+        if self.on {
+            self.eb.stored_change_j = self.stored(s) - self.e_start;
+            // The half-space part of the approach: the solver's approach less the series
+            // compliance's share (the structures' own compliance, whose energy is in the
+            // stored energy: no separate spring).
+            self.eb.contact_energy_change_j = hertz_energy(f_n, delta, c_n) - self.e_contact_start;
+            self.eb.residual_spring_energy_change_j = 0.0;
+        }
+        self.eb
+    }
+}
+
+/// Hertz estimate of the contact's elastic energy `(2/5) F (δ − c F)` (J) for the normal
+/// force `f` (N), the approach `d` (m) and a series compliance `c` (m/N) whose share of the
+/// approach is not in the half-space.
+fn hertz_energy(f: f64, d: f64, c: f64) -> f64 {
+    0.4 * f * (d - c * f).max(0.0)
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Appends one contact step to the histories: `[t (s), x_c (m), ξ (−), approach (m)]`,
+/// the contact result and the contact length (columns with pressure × `dx`, m).
+fn push_history(
+    h: &mut Histories,
+    contact: &TransientRolling,
+    r: &crate::contact::StepResult,
+    [t, xc, xi, approach]: [f64; 4],
+    dx: f64,
+) {
+    let ny = contact.config().grid.ny;
+    h.t_s.push(t);
+    h.x_m.push(xc);
+    h.normal_n.push(r.normal_force_n);
+    h.longitudinal_n.push(r.fx_n);
+    h.lateral_n.push(r.fy_n);
+    h.creepage.push(xi);
+    h.approach_m.push(approach);
+    let cols = contact
+        .pressure_pa()
+        .chunks_exact(ny)
+        .filter(|row| row.iter().any(|&pp| pp > 0.0))
+        .count();
+    h.contact_length_m.push(cols as f64 * dx);
+    h.slip_fraction.push(r.slip_area_fraction());
+    h.frictional_power_w.push(r.frictional_power_w);
 }
 
 /// The static Hertz approach at the model's wheel load (m).
@@ -1053,6 +1179,29 @@ pub fn cpu_seconds() -> Option<f64> {
     let stime: f64 = f.get(12)?.parse().ok()?;
     // Linux reports clock ticks of 1/100 s (USER_HZ) on every supported architecture.
     Some((utime + stime) / 100.0)
+}
+
+impl crate::dynamics::PassageRecorder for ExplicitModel {
+    fn record(
+        &self,
+        speed_m_per_s: f64,
+        profile: Option<&RailProfile>,
+    ) -> Result<PassageRecord, DynamicsError> {
+        let opts = PassageOptions {
+            energy: false,
+            rail_point_offset_m: None,
+        };
+        self.passage(speed_m_per_s, profile, &opts, &mut |_, _| {})
+            .map(|r| r.record)
+            .map_err(|e| match e {
+                ExplicitError::Dynamics(d) => d,
+                other => DynamicsError::Other(format!("explicit passage: {other}")),
+            })
+    }
+
+    fn hertz_b_m(&self) -> f64 {
+        self.hertz_b_m
+    }
 }
 
 /// Runs explicit passages of one model behind the [`crate::dynamics::PassageRunner`]

@@ -36,8 +36,9 @@ use super::{
     GrowthError, GrowthPhase,
 };
 use crate::dynamics::analysis::{analyse, wear_signal, zone_signal, Analysed};
-use crate::dynamics::passage::{PassageEngine, PassageOptions, PassageRecord};
+use crate::dynamics::passage::PassageRecord;
 use crate::dynamics::summary::{PassageSummary, WavelengthComponent};
+use crate::dynamics::PassageRecorder;
 use crate::dynamics::{DynamicsError, RailProfile};
 use crate::spectral::{band_pass, relative_difference, BandPass, Signal};
 
@@ -163,24 +164,17 @@ pub fn analyse_record(
     ))
 }
 
-fn quiet() -> PassageOptions {
-    PassageOptions {
-        energy: false,
-        rail_point_offset_m: None,
-    }
-}
-
 /// Runs the trial-amplitude procedure at `speed_m_per_s` for the amplitudes `2A_max` (µm,
 /// any order; run ascending). `on_passage` is called after each passage (for progress).
 pub fn trial_growth(
-    engine: &PassageEngine,
+    engine: &dyn PassageRecorder,
     speed_m_per_s: f64,
     amplitudes_um: &[f64],
     modes: &ModeLines,
     mut on_passage: impl FnMut(usize),
 ) -> Result<TrialGrowth, ProcedureError> {
     let thresholds = ConsistencyThresholds::default();
-    let rec0 = engine.passage(speed_m_per_s, None, &quiet(), None)?;
+    let rec0 = engine.record(speed_m_per_s, None)?;
     on_passage(0);
     let smooth = crate::dynamics::analysis::summarise(&rec0)?;
     let (w0, _, _) = analyse_record(&rec0)?;
@@ -201,7 +195,7 @@ pub fn trial_growth(
             .map(|i| trial.height.x_m(i))
             .collect();
         let profile = RailProfile::new(x, trial.height.values.clone())?;
-        let rec = engine.passage(speed_m_per_s, Some(&profile), &quiet(), None)?;
+        let rec = engine.record(speed_m_per_s, Some(&profile))?;
         on_passage(k + 1);
         let summary = crate::dynamics::analysis::summarise(&rec)?;
         let (w, fl, fnn) = analyse_record(&rec)?;
@@ -273,7 +267,7 @@ pub struct IterativeOptions {
 /// Iterative growth from the smooth rail (see the module doc). Returns the rounds and the
 /// final rail profile.
 pub fn iterative_growth(
-    engine: &PassageEngine,
+    engine: &dyn PassageRecorder,
     speed_m_per_s: f64,
     opts: &IterativeOptions,
     mut on_round: impl FnMut(&GrowthRound),
@@ -283,7 +277,7 @@ pub fn iterative_growth(
     let mut rounds = Vec::new();
     let mut last_amp = 0.0;
     for round in 1..=opts.max_rounds {
-        let rec = engine.passage(speed_m_per_s, profile.as_ref(), &quiet(), None)?;
+        let rec = engine.record(speed_m_per_s, profile.as_ref())?;
         let w = wear_signal(&rec)?;
         let wb = band_pass(&w, &BandPass::default()).map_err(GrowthError::from)?;
         let scale = opts.passages_per_round as f64 * opts.wear_coefficient_m3_per_j / width;

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# The explicit FE path against the reduced model (validation/explicit.md). Run from the
+# repo root; each case is about 10 minutes on 2 cores (one explicit passage) plus the
+# reduced passages (seconds, once the modal bases are cached).
+#   bash validation/explicit.sh            # every case
+#   bash validation/explicit.sh rpm3-140   # one case: rpm3-140 rpm1-140 rpm4-140 rpm3-98
+#                                          #   rpm3-118 rpm3-heavy-wheel rpm3-trial10
+# Outputs: validation/out/explicit/CASE/{explicit,reduced,reduced-consistent}/ and
+# CASE/table.md (explicit_compare's side-by-side table, the misses listed under it).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release --quiet --bin corrugation --example explicit_compare
+BIN=target/release/corrugation
+CMP=target/release/examples/explicit_compare
+OUT=validation/out/explicit
+
+case_sets() {
+  case "$1" in
+    rpm3-140) echo "--set fastening.model=RPM3 --set run.speed_kmh=140" ;;
+    rpm1-140) echo "--set fastening.model=RPM1 --set run.speed_kmh=140" ;;
+    rpm4-140) echo "--set fastening.model=RPM4 --set run.speed_kmh=140" ;;
+    rpm3-98) echo "--set fastening.model=RPM3 --set run.speed_kmh=98" ;;
+    rpm3-118) echo "--set fastening.model=RPM3 --set run.speed_kmh=118" ;;
+    rpm3-heavy-wheel) echo "--set fastening.model=RPM3 --set run.speed_kmh=140 --set wheel.density=9000" ;;
+    rpm3-trial10) echo "--set fastening.model=RPM3 --set run.speed_kmh=140" ;;
+    *) echo "unknown case $1" >&2; exit 2 ;;
+  esac
+}
+
+run_case() {
+  local c=$1 dir=$OUT/$1 sets prof=()
+  sets=$(case_sets "$c")
+  mkdir -p "$dir"
+  if [ "$c" = rpm3-trial10 ]; then
+    # The reduced model's 10 µm trial corrugation: −c·W_band of its smooth passage.
+    # shellcheck disable=SC2086
+    $BIN grow $sets --amplitudes-um 10 --out "$dir/grow" > /dev/null
+    awk -F, 'NR == 1 { print "x_m,height_um"; next } { printf "%s,%.9g\n", $1, 10 * $3 }' \
+      "$dir/grow/trial_shape.csv" > "$dir/trial10.csv"
+    prof=(--corrugation "$dir/trial10.csv")
+  fi
+  # shellcheck disable=SC2086
+  /usr/bin/time -v $BIN passage $sets "${prof[@]}" --out "$dir/reduced" --json > "$dir/reduced.json" 2> "$dir/reduced.time"
+  # shellcheck disable=SC2086
+  /usr/bin/time -v $BIN passage $sets "${prof[@]}" --set run.residual_variation='"consistent"' \
+    --out "$dir/reduced-consistent" --json > "$dir/reduced-consistent.json" 2> "$dir/reduced-consistent.time"
+  # shellcheck disable=SC2086
+  /usr/bin/time -v $BIN explicit $sets "${prof[@]}" --out "$dir/explicit" --json > "$dir/explicit.json" 2> "$dir/explicit.time"
+  $CMP "$dir/explicit" "$dir/reduced" "$dir/reduced-consistent" | tee "$dir/table.md"
+}
+
+if [ $# -eq 0 ]; then
+  set -- rpm3-140 rpm1-140 rpm4-140 rpm3-98 rpm3-118 rpm3-heavy-wheel rpm3-trial10
+fi
+for c in "$@"; do
+  echo "== $c"
+  run_case "$c"
+done
