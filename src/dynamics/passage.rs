@@ -112,6 +112,35 @@ pub struct Histories {
     pub frictional_power_w: Vec<f64>,
 }
 
+impl Histories {
+    /// Appends one contact step: `[t (s), x_c (m), ξ (−), approach (m)]`, the contact
+    /// result, and the contact length (grid columns along x with any pressure × `dx`, m).
+    pub fn push_step(
+        &mut self,
+        contact: &TransientRolling,
+        r: &crate::contact::StepResult,
+        [t, xc, xi, approach]: [f64; 4],
+        dx: f64,
+    ) {
+        let ny = contact.config().grid.ny;
+        self.t_s.push(t);
+        self.x_m.push(xc);
+        self.normal_n.push(r.normal_force_n);
+        self.longitudinal_n.push(r.fx_n);
+        self.lateral_n.push(r.fy_n);
+        self.creepage.push(xi);
+        self.approach_m.push(approach);
+        let cols = contact
+            .pressure_pa()
+            .chunks_exact(ny)
+            .filter(|row| row.iter().any(|&p| p > 0.0))
+            .count();
+        self.contact_length_m.push(cols as f64 * dx);
+        self.slip_fraction.push(r.slip_area_fraction());
+        self.frictional_power_w.push(r.frictional_power_w);
+    }
+}
+
 /// The displacement history of one rail-top node.
 #[derive(Clone, Debug, Default)]
 pub struct RailPointRecord {
@@ -572,7 +601,7 @@ impl PassageEngine {
         let half_grid = contact.config().grid.half_length_x_m;
         let x_end = z1 + half_grid + 2.0 * dx;
         let n_steps = ((x_end - x0) / dx).ceil() as usize;
-        let (nx, ny) = (contact.config().grid.nx, contact.config().grid.ny);
+        let nx = contact.config().grid.nx;
         let xs: Vec<f64> = contact.x_m().to_vec();
         let mut heights = vec![0.0; nx];
         let fill_heights = |xc: f64, h: &mut [f64]| {
@@ -805,22 +834,7 @@ impl PassageEngine {
                 eb.convective_work_j += v * (f[2] * dun + f[1] * dut) * dt;
             }
             last_delta = r.approach_m;
-            h.t_s.push(t);
-            h.x_m.push(xc);
-            h.normal_n.push(r.normal_force_n);
-            h.longitudinal_n.push(r.fx_n);
-            h.lateral_n.push(r.fy_n);
-            h.creepage.push(xi);
-            h.approach_m.push(delta);
-            // grid rows along x with any pressure: the contact length
-            let cols = contact
-                .pressure_pa()
-                .chunks_exact(ny)
-                .filter(|row| row.iter().any(|&p| p > 0.0))
-                .count();
-            h.contact_length_m.push(cols as f64 * dx);
-            h.slip_fraction.push(r.slip_area_fraction());
-            h.frictional_power_w.push(r.frictional_power_w);
+            h.push_step(&contact, &r, [t, xc, xi, delta], dx);
             if let (Some(rec), Some((_, _, rows))) =
                 (rail_point.as_mut(), self.track_modes_for_point.as_ref())
             {

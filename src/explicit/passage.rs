@@ -611,13 +611,7 @@ impl ExplicitModel {
             )?;
             f = f_new;
             last_delta = r.approach_m;
-            push_history(
-                &mut h,
-                &contact,
-                &r,
-                [t, xc, xi, delta - series[2] * f[2]],
-                dx,
-            );
+            h.push_step(&contact, &r, [t, xc, xi, delta - series[2] * f[2]], dx);
             if let Some((node, rec)) = rail_point.as_mut() {
                 let node = *node;
                 rec.displacement_m.push(
@@ -958,33 +952,6 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Appends one contact step to the histories: `[t (s), x_c (m), ξ (−), approach (m)]`,
-/// the contact result and the contact length (columns with pressure × `dx`, m).
-fn push_history(
-    h: &mut Histories,
-    contact: &TransientRolling,
-    r: &crate::contact::StepResult,
-    [t, xc, xi, approach]: [f64; 4],
-    dx: f64,
-) {
-    let ny = contact.config().grid.ny;
-    h.t_s.push(t);
-    h.x_m.push(xc);
-    h.normal_n.push(r.normal_force_n);
-    h.longitudinal_n.push(r.fx_n);
-    h.lateral_n.push(r.fy_n);
-    h.creepage.push(xi);
-    h.approach_m.push(approach);
-    let cols = contact
-        .pressure_pa()
-        .chunks_exact(ny)
-        .filter(|row| row.iter().any(|&pp| pp > 0.0))
-        .count();
-    h.contact_length_m.push(cols as f64 * dx);
-    h.slip_fraction.push(r.slip_area_fraction());
-    h.frictional_power_w.push(r.frictional_power_w);
-}
-
 /// The static Hertz approach at the model's wheel load (m).
 fn cfg_hertz_approach(model: &Model) -> Result<f64, ExplicitError> {
     let h = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
@@ -1217,19 +1184,10 @@ impl crate::dynamics::PassageRunner for ExplicitRunner {
         speed_kmh: f64,
         profile: Option<&RailProfile>,
     ) -> Result<PassageSummary, DynamicsError> {
-        let opts = PassageOptions {
-            energy: false,
-            rail_point_offset_m: None,
-        };
+        use crate::dynamics::PassageRecorder;
         let rec = self
             .model
-            .passage(
-                crate::units::kmh_to_ms(speed_kmh),
-                profile,
-                &opts,
-                &mut |_, _| {},
-            )
-            .map_err(|e| DynamicsError::Other(format!("explicit passage: {e}")))?;
-        crate::dynamics::analysis::summarise(&rec.record)
+            .record(crate::units::kmh_to_ms(speed_kmh), profile)?;
+        crate::dynamics::analysis::summarise(&rec)
     }
 }
