@@ -425,3 +425,25 @@ fn an_unwritable_out_directory_is_refused_before_the_computation() {
         assert!(t.elapsed().as_secs_f64() < 10.0, "{cmd} computed first");
     }
 }
+
+/// A user time step above the explicit path's computed stable limit is refused with the
+/// key and the limit (after the set-up's progress line), by `explicit` and by
+/// `passage --engine explicit` alike.
+#[test]
+fn explicit_time_step_above_the_computed_limit_is_refused() {
+    for cmd in [&["explicit"][..], &["passage", "--engine", "explicit"][..]] {
+        let out = std::env::temp_dir().join(format!("corrugation-explicit-dt-{}", cmd.len()));
+        let out = out.to_string_lossy().into_owned();
+        let mut args: Vec<&str> = cmd.to_vec();
+        args.extend(SMALL_MODEL);
+        args.extend(["--set", "explicit.time_step=1e-5", "--out", &out]);
+        let (code, _o, err) = run(&args);
+        assert_ne!(code, 0, "{args:?} must fail");
+        assert!(!err.contains("panicked"), "{err}");
+        let last = err.trim_end().lines().last().unwrap_or("");
+        assert!(
+            last.contains("explicit.time_step") && last.contains("stable limit"),
+            "{err}"
+        );
+    }
+}

@@ -1,12 +1,13 @@
 //! `corrugation explicit`: one passage of the full explicit FE path (docs/theory.md §8): the
 //! untruncated track and wheel, central difference, the same contact, wear and analysis as
-//! `passage`. Writes the files of `passage` plus `explicit.json` (time steps, ω_max, step
+//! `passage`. The wheel does not rotate (its contact point is fixed on the wheel, as in the
+//! reduced model). Writes the files of `passage` plus `explicit.json` (time steps, ω_max, step
 //! counts, energy error, wall and CPU time).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use corrugation::dynamics::passage::PassageOptions;
 use corrugation::dynamics::RailProfile;
@@ -14,13 +15,6 @@ use corrugation::explicit::{ExplicitModel, ExplicitOptions, ExplicitRecord};
 use corrugation::io::write_atomic;
 
 use super::ModelArgs;
-
-/// How the wheel is modelled in the explicit path.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum WheelMode {
-    /// Not rotating: the contact point is fixed on the wheel (as in the reduced model).
-    Fixed,
-}
 
 /// One explicit FE passage: contact forces, wear along the rail, PSDs, plots, explicit.json.
 #[derive(Debug, Args)]
@@ -30,9 +24,6 @@ pub struct ExplicitCmd {
     /// Rail-top profile (CSV with a header: x in m, height in µm), e.g. a corrugation.
     #[arg(long, value_name = "FILE.csv")]
     corrugation: Option<PathBuf>,
-    /// The wheel: `fixed` (not rotating, as the reduced model).
-    #[arg(long, value_enum, default_value = "fixed")]
-    wheel: WheelMode,
     /// Output directory.
     #[arg(long, default_value = "corrugation-out/explicit", value_name = "DIR")]
     out: PathBuf,
