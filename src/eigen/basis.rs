@@ -6,9 +6,12 @@
 //! sections of the model (track, rail, sleeper, fastening, ballast, wheel, vehicle, mesh, and
 //! the solution zone, which places the fine mesh), f_max, the substructure name and the
 //! program version. Speed, contact, wear and explicit settings do not change the modes, so a
-//! speed sweep reuses one entry. The track's key leaves out the wheel, the vehicle and the
-//! wheel's mesh keys (the track is built without them), so a study of wheel or suspension
-//! parameters reuses the track's modes, the expensive ones.
+//! speed sweep reuses one entry. No key holds a damper (railpads, ballast, elastic holds,
+//! primary suspension): dampers enter C only, so a damping study reuses the modes. The
+//! track's key leaves out the wheel, the vehicle and the wheel's mesh keys (the track is
+//! built without them), so a study of wheel or suspension parameters reuses the track's
+//! modes, the expensive ones; the wheel's key holds only the wheel, the vehicle and the
+//! wheel's mesh keys, so a fastening, ballast or rail study shares one wheel basis.
 
 use std::io::IsTerminal;
 use std::time::Instant;
@@ -89,22 +92,36 @@ pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey
             run.remove("residual_flexibility");
             run.remove("residual_variation");
         }
-        // Dampers enter neither K nor M: the elastic holds' damping stays out of the key (the
-        // railpad and ballast dampers stay in, as they always were, so existing caches remain
-        // valid).
-        if let Some(f) = o.get_mut("fastening").and_then(|r| r.as_object_mut()) {
-            f.remove("hold_damping");
-            if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
-                for h in c.values_mut() {
-                    if let Some(h) = h.as_object_mut() {
-                        h.remove("damping");
+        // Dampers enter neither K nor M: the railpad, ballast and elastic-hold damping stay out
+        // of the key (a damping study reuses the modes).
+        for part in ["fastening", "ballast"] {
+            if let Some(f) = o.get_mut(part).and_then(|r| r.as_object_mut()) {
+                f.retain(|k, _| !k.ends_with("damping"));
+                if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
+                    for h in c.values_mut() {
+                        if let Some(h) = h.as_object_mut() {
+                            h.remove("damping");
+                        }
                     }
                 }
             }
         }
+        if let Some(v) = o.get_mut("vehicle").and_then(|r| r.as_object_mut()) {
+            v.remove("primary_damping");
+        }
         // The wheel's modal damping ratio is added after the modes are found.
         if let Some(w) = o.get_mut("wheel").and_then(|r| r.as_object_mut()) {
             w.remove("damping_ratio");
+        }
+        // `WheelStructure::build` reads only the wheel, the vehicle and the wheel's mesh keys:
+        // a fastening, ballast or rail study shares one wheel basis.
+        if substructure == "wheel" {
+            o.retain(|k, _| matches!(k.as_str(), "wheel" | "vehicle" | "mesh"));
+            if let Some(mesh) = o.get_mut("mesh").and_then(|r| r.as_object_mut()) {
+                mesh.retain(|k, _| {
+                    matches!(k.as_str(), "wheel_segments" | "wheel_element_size" | "mass")
+                });
+            }
         }
         // `TrackStructure::build` reads none of the wheel's or the vehicle's keys.
         if substructure == "track" {
@@ -340,6 +357,40 @@ mod key_tests {
             assert_eq!(x.row_idx(), y.row_idx());
             assert_eq!(x.val(), y.val());
         }
+    }
+
+    /// The dampers (railpads, ballast, primary suspension) enter only C: no key changes with
+    /// them, and the track's K and M are bit-identical. The wheel's key ignores every track
+    /// parameter (a fastening or rail study shares one wheel basis) but not the wheel's.
+    #[test]
+    fn keys_ignore_the_dampers_and_the_wheel_key_ignores_the_track() {
+        let base = model(&[]);
+        let damped = model(&[
+            "fastening.vertical_damping=5e4",
+            "fastening.longitudinal_damping=1e4",
+            "ballast.vertical_damping=8e4",
+            "vehicle.primary_damping=2e3",
+        ]);
+        for sub in ["track", "wheel"] {
+            assert_eq!(key(&base, sub), key(&damped, sub), "{sub}");
+        }
+        let (a, _) = TrackStructure::build(&base).unwrap().assemble().unwrap();
+        let (b, _) = TrackStructure::build(&damped).unwrap().assemble().unwrap();
+        assert_eq!(a.k.val(), b.k.val());
+        assert_eq!(a.m.val(), b.m.val());
+        assert_ne!(a.c.val(), b.c.val());
+        let tracky = model(&[
+            "fastening.model=RPM1",
+            "fastening.vertical_stiffness=3e8",
+            "rail.youngs_modulus=2.2e11",
+            "track.bays=3",
+        ]);
+        assert_eq!(key(&base, "wheel"), key(&tracky, "wheel"));
+        assert_ne!(key(&base, "track"), key(&tracky, "track"));
+        assert_ne!(
+            key(&base, "wheel"),
+            key(&model(&["wheel.radius=0.45"]), "wheel")
+        );
     }
 
     /// Elastic holds: the stiffness is in the track key, the damping is not (it enters only C);
