@@ -75,10 +75,15 @@ impl SweepCmd {
             engine::Engine::Explicit => engine::runner_for_engine(&model, cache, self.engine)?,
         };
         // Resume only into a directory of the same model and program version.
+        // (The explicit engine's results are never mixed with the reduced ones.)
         let run_key = format!(
-            "{} {}",
+            "{} {}{}",
             env!("CARGO_PKG_VERSION"),
-            blake3::hash(&serde_json::to_vec(&model)?).to_hex()
+            blake3::hash(&serde_json::to_vec(&model)?).to_hex(),
+            match self.engine {
+                engine::Engine::Reduced => "",
+                engine::Engine::Explicit => " explicit",
+            }
         );
         let out = sweep(runner.as_ref(), &speeds, &self.out, &opts, &run_key, true)?;
         // Which shard of which sweep this directory holds: `merge` checks the shards form one.
