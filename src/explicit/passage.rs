@@ -184,6 +184,12 @@ struct UnitResponse {
 }
 
 impl UnitResponse {
+    /// Zero fields for `n` DOFs.
+    fn zeros(n: usize) -> Self {
+        let z = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        UnitResponse { u: z(), v: z() }
+    }
+
     /// The response over `steps` steps of `dt` (s) from rest to a unit load in each
     /// contact-frame direction (`load(d, f)` fills it), ramped linearly from 0 at the
     /// step's start to 1 at its end: sub-step `k` applies `k/steps` of it, and the next
@@ -198,22 +204,34 @@ impl UnitResponse {
         scratch: &mut StepScratch,
     ) -> Self {
         let n = op.n();
-        let mut fk = vec![0.0; n];
-        let mut mk = |d: usize| {
-            let mut f = vec![0.0; n];
-            load(d, &mut f);
-            let (mut u, mut v) = (vec![0.0; n], vec![0.0; n]);
+        let mut r = UnitResponse::zeros(n);
+        let (mut f, mut fk) = (vec![0.0; n], vec![0.0; n]);
+        r.compute_into(op, dt, steps, load, [&mut f, &mut fk], scratch);
+        r
+    }
+
+    /// [`Self::compute`] into these fields, with the load buffers `f` and `fk` (length n):
+    /// no allocation.
+    fn compute_into(
+        &mut self,
+        op: &ExplicitOperator,
+        dt: f64,
+        steps: usize,
+        load: impl Fn(usize, &mut [f64]),
+        [f, fk]: [&mut [f64]; 2],
+        scratch: &mut StepScratch,
+    ) {
+        for d in 0..3 {
+            f.iter_mut().for_each(|x| *x = 0.0);
+            load(d, f);
+            let (u, v) = (&mut self.u[d], &mut self.v[d]);
+            u.iter_mut().for_each(|x| *x = 0.0);
+            v.iter_mut().for_each(|x| *x = 0.0);
             for k in 0..steps {
                 let a = k as f64 / steps as f64;
-                fk.iter_mut().zip(&f).for_each(|(x, y)| *x = a * y);
-                op.step(dt, &mut u, &mut v, &fk, scratch);
+                fk.iter_mut().zip(f.iter()).for_each(|(x, y)| *x = a * y);
+                op.step(dt, u, v, fk, scratch);
             }
-            (u, v)
-        };
-        let (a, b, c) = (mk(0), mk(1), mk(2));
-        UnitResponse {
-            u: [a.0, b.0, c.0],
-            v: [a.1, b.1, c.1],
         }
     }
 
@@ -235,15 +253,45 @@ impl UnitResponse {
 struct RailResponses {
     dt: f64,
     steps: usize,
-    slots: Vec<(usize, UnitResponse)>,
+    /// Two slots `(plane, response)`; `usize::MAX` marks an empty one.
+    slots: [(usize, UnitResponse); 2],
+    /// Load buffers of [`UnitResponse::compute_into`].
+    f: Vec<f64>,
+    fk: Vec<f64>,
 }
 
 impl RailResponses {
+    /// Two empty slots for `n` DOFs (allocated once per passage).
+    fn new(n: usize, dt: f64, steps: usize) -> Self {
+        RailResponses {
+            dt,
+            steps,
+            slots: [
+                (usize::MAX, UnitResponse::zeros(n)),
+                (usize::MAX, UnitResponse::zeros(n)),
+            ],
+            f: vec![0.0; n],
+            fk: vec![0.0; n],
+        }
+    }
+
+    /// The slot holding `plane`'s response, computed into the slot of the plane farther
+    /// behind when it is not there (the contact only moves forward; no allocation).
     fn get(&mut self, m: &ExplicitModel, plane: usize, scratch: &mut StepScratch) -> usize {
         if let Some(i) = self.slots.iter().position(|(p, _)| *p == plane) {
             return i;
         }
-        let r = UnitResponse::compute(
+        let (a, b) = (self.slots[0].0, self.slots[1].0);
+        let i = if a == usize::MAX {
+            0
+        } else if b == usize::MAX {
+            1
+        } else if a < b {
+            0
+        } else {
+            1
+        };
+        self.slots[i].1.compute_into(
             &m.track.op,
             self.dt,
             self.steps,
@@ -259,19 +307,11 @@ impl RailResponses {
                     f,
                 )
             },
+            [&mut self.f, &mut self.fk],
             scratch,
         );
-        if self.slots.len() >= 2 {
-            // Keep the plane the contact is still next to; the contact only moves forward.
-            let drop = if self.slots[0].0 < self.slots[1].0 {
-                0
-            } else {
-                1
-            };
-            self.slots.remove(drop);
-        }
-        self.slots.push((plane, r));
-        self.slots.len() - 1
+        self.slots[i].0 = plane;
+        i
     }
 }
 
@@ -508,11 +548,7 @@ impl ExplicitModel {
         let mut sc_w = self.wheel.op.scratch();
         let corrected = self.opts.coupling == Coupling::PredictorCorrector;
         let (wheel_resp, g_wheel) = self.wheel_response(dtw, nw, &mut sc_w);
-        let mut rail_resp = RailResponses {
-            dt: dtt,
-            steps: nt,
-            slots: Vec::new(),
-        };
+        let mut rail_resp = RailResponses::new(self.track.op.n(), dtt, nt);
         let mut h = Histories::default();
         let mut rail_point = self.rail_point(popts, n_steps);
         let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
