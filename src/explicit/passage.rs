@@ -339,6 +339,8 @@ pub struct ExplicitModel {
     zone_m: [f64; 2],
     wheel_radius_m: f64,
     hertz_b_m: f64,
+    /// Static Hertz approach at the wheel load (m).
+    hertz_approach_m: f64,
     opts: ExplicitOptions,
     setup_seconds: f64,
 }
@@ -421,6 +423,7 @@ impl ExplicitModel {
             rigid_obs,
             wheel_radius_m: loads.contact_radius_m,
             hertz_b_m: hertz.b_m,
+            hertz_approach_m: hertz.approach_m,
             loads,
             wheel_const,
             track_static,
@@ -499,9 +502,13 @@ impl ExplicitModel {
         }
         let v = speed_m_per_s;
         let mut cfg = contact_config_for(&self.model, v)?;
-        let approach_h = cfg_hertz_approach(&self.model)?;
         if let Some(p) = profile {
-            cfg.grid = grid_for_profile(cfg.grid, cfg.radius_x_m, approach_h, p.peak_to_trough_m());
+            cfg.grid = grid_for_profile(
+                cfg.grid,
+                cfg.radius_x_m,
+                self.hertz_approach_m,
+                p.peak_to_trough_m(),
+            );
         }
         let mut contact = TransientRolling::new(cfg)
             .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
@@ -986,19 +993,6 @@ fn hertz_energy(f: f64, d: f64, c: f64) -> f64 {
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// The static Hertz approach at the model's wheel load (m).
-fn cfg_hertz_approach(model: &Model) -> Result<f64, ExplicitError> {
-    let h = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
-        radius_x_m: model.wheel.radius,
-        radius_y_m: model.contact.rail_crown_radius,
-        youngs_pa: model.rail.youngs_modulus,
-        poisson: model.rail.poisson_ratio,
-        load_n: model.vehicle.wheel_load,
-    })
-    .map_err(|e| DynamicsError::Other(format!("static Hertz contact: {e}")))?;
-    Ok(h.approach_m)
 }
 
 /// Adds the load of a contact-frame force (N, on the rail) at `x` (m) into `f`.
