@@ -262,7 +262,7 @@ fn zero_railpad_stiffness_is_blamed_on_the_fastening() {
 fn a_cause_the_message_already_prints_is_not_repeated() {
     let (code, _, err) = run(&["model", "--model", "/nonexistent/track.toml"]);
     assert_ne!(code, 0);
-    // The OS message was printed twice (by the error and again as its source).
+    // The OS message appears once, although the error also carries it as its source.
     let os = std::io::Error::from(std::io::ErrorKind::NotFound).to_string();
     let first = err
         .find("No such file")
@@ -397,7 +397,7 @@ fn a_sweep_beyond_the_model_speed_limit_is_refused() {
 
 #[test]
 fn a_corrugation_csv_without_a_header_is_refused_not_shortened() {
-    // Its first row was taken as the header and silently lost.
+    // A numeric first line is data, not a header: refusing it keeps the first row from being lost.
     let p = tmp_file("no_header.csv", "1.0,0.0\n1.01,5.0\n1.02,0.0\n");
     assert_clean_error(
         &[

@@ -386,7 +386,7 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
         .to_string();
     assert!(e.contains("different models"), "{e}");
     // The shards must form one complete sweep: a missing shard, a shard given twice, a
-    // shard of another sweep and an unfinished shard are refused (each was merged before).
+    // shard of another sweep and an unfinished shard are refused.
     let e = merge(&shard_dirs[..2], &base.join("m1")).unwrap_err();
     assert!(
         matches!(&e, StudiesError::ShardsMissing { count: 3, missing } if missing == &[2]),

@@ -568,23 +568,9 @@ impl PassageEngine {
         opts: &PassageOptions,
         progress: Option<&indicatif::ProgressBar>,
     ) -> Result<PassageRecord, DynamicsError> {
-        if !(speed_m_per_s > 0.0 && speed_m_per_s.is_finite()) {
-            return Err(DynamicsError::Other(format!(
-                "speed {speed_m_per_s} m/s must be finite and > 0"
-            )));
-        }
         let v = speed_m_per_s;
-        let mut cfg = self.contact_config(v)?;
-        if let Some(p) = profile {
-            cfg.grid = grid_for_profile(
-                cfg.grid,
-                cfg.radius_x_m,
-                self.hertz_approach_m,
-                p.peak_to_trough_m(),
-            );
-        }
-        let mut contact = TransientRolling::new(cfg)
-            .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
+        let mut contact =
+            passage_contact(&self.model, v, profile.map(|p| (p, self.hertz_approach_m)))?;
         let dt = contact.time_step_s();
         let dx = v * dt;
         let mut tr = ModalVerlet::new(&self.track_sys, dt)?;
@@ -1202,6 +1188,26 @@ pub fn contact_config_for(
     .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
     cfg.tangential_tol = PASSAGE_TANGENTIAL_TOL;
     Ok(cfg)
+}
+
+/// The transient contact of a passage of `model` at `speed_m_per_s` (m/s, finite and > 0):
+/// [`contact_config_for`], with the grid lengthened for a rail profile `(profile, static Hertz
+/// approach (m))` by [`grid_for_profile`]. The reduced and the explicit passage use it alike.
+pub fn passage_contact(
+    model: &Model,
+    speed_m_per_s: f64,
+    profile: Option<(&RailProfile, f64)>,
+) -> Result<TransientRolling, DynamicsError> {
+    if !(speed_m_per_s > 0.0 && speed_m_per_s.is_finite()) {
+        return Err(DynamicsError::Other(format!(
+            "speed {speed_m_per_s} m/s must be finite and > 0"
+        )));
+    }
+    let mut cfg = contact_config_for(model, speed_m_per_s)?;
+    if let Some((p, approach_m)) = profile {
+        cfg.grid = grid_for_profile(cfg.grid, cfg.radius_x_m, approach_m, p.peak_to_trough_m());
+    }
+    TransientRolling::new(cfg).map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))
 }
 
 /// Brings the contact to steady rolling at the static load (normal force `f_n0`, longitudinal

@@ -20,9 +20,12 @@
 // Numerical kernels index several parallel arrays with one loop index.
 #![allow(clippy::needless_range_loop)]
 
+mod ledger;
 pub mod operator;
 pub mod passage;
+mod response;
 pub mod stable;
+mod start;
 
 pub use operator::ExplicitOperator;
 pub use passage::{ExplicitModel, ExplicitOptions, ExplicitRecord, ExplicitRunner};

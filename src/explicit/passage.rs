@@ -34,13 +34,16 @@ use std::time::Instant;
 
 use faer::Mat;
 
+use super::ledger::{Ledger, LedgerStep, State};
 use super::operator::{ExplicitOperator, StepScratch};
+use super::response::{RailResponses, UnitResponse};
 use super::stable::{StableStep, DEFAULT_SAFETY};
+use super::start::{add_line_force, solve_one, wheel_elastic_static, wheel_rigid_modes};
 use super::ExplicitError;
-use crate::contact::{Longitudinal, NormalInput, StepInputs, TransientRolling, WearAccumulator};
+use crate::contact::{Longitudinal, NormalInput, StepInputs, WearAccumulator};
 use crate::dynamics::passage::{
-    contact_config_for, grid_for_profile, rigid_least_norm, steady_contact, EnergyBalance,
-    Histories, PassageOptions, PassageRecord, RailPointRecord, WheelLoads,
+    passage_contact, rigid_least_norm, steady_contact, Histories, PassageOptions, PassageRecord,
+    RailPointRecord, WheelLoads,
 };
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
 use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
@@ -139,8 +142,8 @@ pub struct ExplicitRecord {
 }
 
 /// One substructure ready for explicit steps.
-struct Part {
-    op: ExplicitOperator,
+pub(super) struct Part {
+    pub(super) op: ExplicitOperator,
     step: StableStep,
     dt_max_s: f64,
 }
@@ -176,145 +179,6 @@ impl Part {
     }
 }
 
-/// The response of a substructure to a unit force held over one contact step from rest:
-/// displacement and half-step velocity, one pair per contact-frame direction.
-struct UnitResponse {
-    u: [Vec<f64>; 3],
-    v: [Vec<f64>; 3],
-}
-
-impl UnitResponse {
-    /// Zero fields for `n` DOFs.
-    fn zeros(n: usize) -> Self {
-        let z = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
-        UnitResponse { u: z(), v: z() }
-    }
-
-    /// The response over `steps` steps of `dt` (s) from rest to a unit load in each
-    /// contact-frame direction (`load(d, f)` fills it), ramped linearly from 0 at the
-    /// step's start to 1 at its end: sub-step `k` applies `k/steps` of it, and the next
-    /// contact step's first sub-step applies the full new force. The structure thus sees the
-    /// contact force interpolated linearly between contact steps (first-order hold),
-    /// consistent with the contact solver's path-mean traction.
-    fn compute(
-        op: &ExplicitOperator,
-        dt: f64,
-        steps: usize,
-        load: impl Fn(usize, &mut [f64]),
-        scratch: &mut StepScratch,
-    ) -> Self {
-        let n = op.n();
-        let mut r = UnitResponse::zeros(n);
-        let (mut f, mut fk) = (vec![0.0; n], vec![0.0; n]);
-        r.compute_into(op, dt, steps, load, [&mut f, &mut fk], scratch);
-        r
-    }
-
-    /// [`Self::compute`] into these fields, with the load buffers `f` and `fk` (length n):
-    /// no allocation.
-    fn compute_into(
-        &mut self,
-        op: &ExplicitOperator,
-        dt: f64,
-        steps: usize,
-        load: impl Fn(usize, &mut [f64]),
-        [f, fk]: [&mut [f64]; 2],
-        scratch: &mut StepScratch,
-    ) {
-        for d in 0..3 {
-            f.iter_mut().for_each(|x| *x = 0.0);
-            load(d, f);
-            let (u, v) = (&mut self.u[d], &mut self.v[d]);
-            u.iter_mut().for_each(|x| *x = 0.0);
-            v.iter_mut().for_each(|x| *x = 0.0);
-            for k in 0..steps {
-                let a = k as f64 / steps as f64;
-                fk.iter_mut().zip(f.iter()).for_each(|(x, y)| *x = a * y);
-                op.step(dt, u, v, fk, scratch);
-            }
-        }
-    }
-
-    /// `u += Σ_d s·f_d u_d`, `v += Σ_d s·f_d v_d`.
-    fn add_to(&self, scale: f64, f: [f64; 3], u: &mut [f64], v: &mut [f64]) {
-        for d in 0..3 {
-            let a = scale * f[d];
-            if a == 0.0 {
-                continue;
-            }
-            u.iter_mut().zip(&self.u[d]).for_each(|(x, r)| *x += a * r);
-            v.iter_mut().zip(&self.v[d]).for_each(|(x, r)| *x += a * r);
-        }
-    }
-}
-
-/// The rail's unit responses of two adjacent node planes (lazily computed as the contact
-/// moves; a plane's response is reused while the contact is next to it).
-struct RailResponses {
-    dt: f64,
-    steps: usize,
-    /// Two slots `(plane, response)`; `usize::MAX` marks an empty one.
-    slots: [(usize, UnitResponse); 2],
-    /// Load buffers of [`UnitResponse::compute_into`].
-    f: Vec<f64>,
-    fk: Vec<f64>,
-}
-
-impl RailResponses {
-    /// Two empty slots for `n` DOFs (allocated once per passage).
-    fn new(n: usize, dt: f64, steps: usize) -> Self {
-        RailResponses {
-            dt,
-            steps,
-            slots: [
-                (usize::MAX, UnitResponse::zeros(n)),
-                (usize::MAX, UnitResponse::zeros(n)),
-            ],
-            f: vec![0.0; n],
-            fk: vec![0.0; n],
-        }
-    }
-
-    /// The slot holding `plane`'s response, computed into the slot of the plane farther
-    /// behind when it is not there (the contact only moves forward; no allocation).
-    fn get(&mut self, m: &ExplicitModel, plane: usize, scratch: &mut StepScratch) -> usize {
-        if let Some(i) = self.slots.iter().position(|(p, _)| *p == plane) {
-            return i;
-        }
-        let (a, b) = (self.slots[0].0, self.slots[1].0);
-        let i = if a == usize::MAX {
-            0
-        } else if b == usize::MAX {
-            1
-        } else if a < b {
-            0
-        } else {
-            1
-        };
-        self.slots[i].1.compute_into(
-            &m.track.op,
-            self.dt,
-            self.steps,
-            |d, f| {
-                let mut force = [0.0; 3];
-                force[d] = -1.0;
-                add_nodes_load(
-                    &m.line.nodes[plane],
-                    &m.track_structure.dofmap,
-                    &m.frame,
-                    1.0,
-                    force,
-                    f,
-                )
-            },
-            [&mut self.f, &mut self.fk],
-            scratch,
-        );
-        self.slots[i].0 = plane;
-        i
-    }
-}
-
 /// The model of the explicit path: the full track and wheel, their operators and stable
 /// steps, and the static start (speed-independent), built once for any number of passages.
 pub struct ExplicitModel {
@@ -322,16 +186,16 @@ pub struct ExplicitModel {
     frame: ContactFrame,
     track_structure: TrackStructure,
     wheel_structure: WheelStructure,
-    track: Part,
-    wheel: Part,
+    pub(super) track: Part,
+    pub(super) wheel: Part,
     line: RailContactLine,
     wheel_nodes: Vec<(usize, f64)>,
     /// Rigid modes of the wheel (M-orthonormal, free DOFs), 3 columns.
     rigid: Vec<Vec<f64>>,
     /// (contact x, contact n, axle x) of each rigid mode.
     rigid_obs: Vec<[f64; 3]>,
-    loads: WheelLoads,
-    wheel_const: Vec<f64>,
+    pub(super) loads: WheelLoads,
+    pub(super) wheel_const: Vec<f64>,
     /// Static deflection of the track and elastic deflection of the wheel.
     track_static: Vec<f64>,
     wheel_static: Vec<f64>,
@@ -461,7 +325,7 @@ impl ExplicitModel {
     }
 
     /// Rail displacement at `x` (m) on the contact line, contact-frame components (m).
-    fn rail_at(&self, u: &[f64], x: f64) -> Result<[f64; 3], ExplicitError> {
+    pub(super) fn rail_at(&self, u: &[f64], x: f64) -> Result<[f64; 3], ExplicitError> {
         let (p, s) = self.locate(x)?;
         let axes = [self.frame.x, self.frame.t, self.frame.n];
         let dm = &self.track_structure.dofmap;
@@ -471,7 +335,7 @@ impl ExplicitModel {
         }))
     }
 
-    fn wheel_at(&self, u: &[f64]) -> [f64; 3] {
+    pub(super) fn wheel_at(&self, u: &[f64]) -> [f64; 3] {
         let axes = [self.frame.x, self.frame.t, self.frame.n];
         let dm = &self.wheel_structure.dofmap;
         axes.map(|a| nodes_dot(&self.wheel_nodes, dm, a, |i| u[i]))
@@ -494,24 +358,9 @@ impl ExplicitModel {
         popts: &PassageOptions,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<ExplicitRecord, ExplicitError> {
-        if !(speed_m_per_s > 0.0 && speed_m_per_s.is_finite()) {
-            return Err(DynamicsError::Other(format!(
-                "speed {speed_m_per_s} m/s must be finite and > 0"
-            ))
-            .into());
-        }
         let v = speed_m_per_s;
-        let mut cfg = contact_config_for(&self.model, v)?;
-        if let Some(p) = profile {
-            cfg.grid = grid_for_profile(
-                cfg.grid,
-                cfg.radius_x_m,
-                self.hertz_approach_m,
-                p.peak_to_trough_m(),
-            );
-        }
-        let mut contact = TransientRolling::new(cfg)
-            .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
+        let mut contact =
+            passage_contact(&self.model, v, profile.map(|p| (p, self.hertz_approach_m)))?;
         let dt_c = contact.time_step_s();
         let dx = v * dt_c;
         let (nt, dtt) = self.track.substeps(dt_c);
@@ -775,8 +624,21 @@ impl ExplicitModel {
         s: f64,
         g_wheel: [f64; 3],
     ) -> ([f64; 3], usize, usize) {
-        rail.get(self, p, scratch);
-        rail.get(self, p + 1, scratch);
+        for q in [p, p + 1] {
+            let load = |d: usize, f: &mut [f64]| {
+                let mut force = [0.0; 3];
+                force[d] = -1.0;
+                add_nodes_load(
+                    &self.line.nodes[q],
+                    &self.track_structure.dofmap,
+                    &self.frame,
+                    1.0,
+                    force,
+                    f,
+                )
+            };
+            rail.get(&self.track.op, q, load, scratch);
+        }
         // get() may have dropped a slot: look both up now.
         let slot = |q: usize| rail.slots.iter().position(|(x, _)| *x == q).unwrap_or(0);
         let (ia, ib) = (slot(p), slot(p + 1));
@@ -817,354 +679,6 @@ impl ExplicitModel {
             },
         ))
     }
-}
-
-/// The state of both substructures: displacements (m) and half-step velocities (m/s).
-struct State {
-    ut: Vec<f64>,
-    vt: Vec<f64>,
-    uw: Vec<f64>,
-    vw: Vec<f64>,
-}
-
-impl State {
-    fn check_finite(&self, t: f64, xc: f64) -> Result<(), ExplicitError> {
-        for (part, u) in [("track", &self.ut), ("wheel", &self.uw)] {
-            if !u.iter().all(|x| x.is_finite()) {
-                return Err(ExplicitError::Diverged {
-                    t_s: t,
-                    x_m: xc,
-                    part,
-                });
-            }
-        }
-        Ok(())
-    }
-}
-
-/// One step's inputs to the energy ledger.
-struct LedgerStep {
-    /// Contact position (m).
-    xc: f64,
-    /// Contact step (s).
-    dt_c: f64,
-    /// Speed (m/s).
-    v: f64,
-    /// Spin creepage (1/m).
-    spin: f64,
-    /// The contact force that did the work over the step (N, on the wheel).
-    f_work: [f64; 3],
-    /// Rail and wheel contact-point displacement at the step's start (m).
-    old: [[f64; 3]; 2],
-}
-
-/// The energy ledger of an explicit passage (the same terms as the reduced passage's,
-/// [`EnergyBalance`]); inactive (no cost) when the passage does not keep it.
-struct Ledger<'a> {
-    m: &'a ExplicitModel,
-    on: bool,
-    eb: EnergyBalance,
-    e_start: f64,
-    e_contact_start: f64,
-    p_damp_prev: f64,
-    ur_prev: [f64; 3],
-    /// Wheel-load work potentials `f·u` at the step's start: all, torque, gravity.
-    before: [f64; 3],
-    ku: Vec<f64>,
-}
-
-impl<'a> Ledger<'a> {
-    fn new(
-        m: &'a ExplicitModel,
-        on: bool,
-        s: &State,
-        st: &crate::contact::StepResult,
-        x0: f64,
-        sc_t: &mut StepScratch,
-        sc_w: &mut StepScratch,
-    ) -> Result<Self, ExplicitError> {
-        let mut l = Ledger {
-            m,
-            on,
-            eb: EnergyBalance::default(),
-            e_start: 0.0,
-            e_contact_start: hertz_energy(st.normal_force_n, st.approach_m, 0.0),
-            p_damp_prev: 0.0,
-            ur_prev: m.rail_at(&s.ut, x0)?,
-            before: [0.0; 3],
-            ku: if on {
-                vec![0.0; m.track.op.n().max(m.wheel.op.n())]
-            } else {
-                Vec::new()
-            },
-        };
-        if on {
-            l.e_start = l.stored(s);
-            l.p_damp_prev =
-                m.track.op.damper_power(&s.vt, sc_t) + m.wheel.op.damper_power(&s.vw, sc_w);
-        }
-        Ok(l)
-    }
-
-    /// Kinetic + strain energy of both substructures (J).
-    fn stored(&mut self, s: &State) -> f64 {
-        let mut e = 0.0;
-        for (op, u, v) in [
-            (&self.m.track.op, &s.ut, &s.vt),
-            (&self.m.wheel.op, &s.uw, &s.vw),
-        ] {
-            let ku = &mut self.ku[..u.len()];
-            op.apply_k(u, ku);
-            e += 0.5 * dot(u, ku) + op.kinetic_energy(v);
-        }
-        e
-    }
-
-    fn before_step(&mut self, uw: &[f64]) {
-        if self.on {
-            let l = &self.m.loads;
-            self.before = [
-                dot(&self.m.wheel_const, uw),
-                dot(&l.torque, uw),
-                dot(&l.gravity, uw),
-            ];
-        }
-    }
-
-    fn after_step(
-        &mut self,
-        s: &State,
-        [sc_t, sc_w]: [&mut StepScratch; 2],
-        k: LedgerStep,
-        r: &crate::contact::StepResult,
-    ) -> Result<(), ExplicitError> {
-        if !self.on {
-            return Ok(());
-        }
-        let (m, eb) = (self.m, &mut self.eb);
-        // Constant wheel loads: exact work f·Δu.
-        eb.external_work_j += dot(&m.wheel_const, &s.uw) - self.before[0];
-        eb.torque_work_j += dot(&m.loads.torque, &s.uw) - self.before[1];
-        eb.gravity_work_j += dot(&m.loads.gravity, &s.uw) - self.before[2];
-        let p_damp = m.track.op.damper_power(&s.vt, sc_t) + m.wheel.op.damper_power(&s.vw, sc_w);
-        eb.damper_dissipation_j += 0.5 * k.dt_c * (p_damp + self.p_damp_prev);
-        self.p_damp_prev = p_damp;
-        // Work of the contact force on the two structures, with the corrected end-of-step
-        // displacements.
-        let ur_end = m.rail_at(&s.ut, k.xc)?;
-        let uw_end = m.wheel_at(&s.uw);
-        let [ur_old, uw_old] = k.old;
-        for d in 0..3 {
-            eb.contact_work_j += k.f_work[d] * ((uw_end[d] - uw_old[d]) - (ur_end[d] - ur_old[d]));
-        }
-        eb.frictional_work_j += r.frictional_power_w * k.dt_c;
-        eb.spin_work_j -= k.v * k.spin * r.mz_nm * k.dt_c;
-        // Convective work: the force rolling over the deflected rail, the change of the rail
-        // displacement under the contact as the contact moves from x_n to x_{n+1} on the
-        // state at t_n (lateral and normal, as the reduced passage).
-        for d in [1usize, 2] {
-            eb.convective_work_j += k.f_work[d] * (ur_old[d] - self.ur_prev[d]);
-        }
-        self.ur_prev = ur_end;
-        Ok(())
-    }
-
-    /// The balance at the end: `f_n` the last normal force (N), `delta` the contact
-    /// solver's last approach (m), `c_n` the last normal series compliance (m/N).
-    fn finish(mut self, s: &State, f_n: f64, delta: f64, c_n: f64) -> EnergyBalance {
-        if self.on {
-            self.eb.stored_change_j = self.stored(s) - self.e_start;
-            // The half-space part of the approach: the solver's approach less the series
-            // compliance's share (the structures' own compliance, whose energy is in the
-            // stored energy: no separate spring).
-            self.eb.contact_energy_change_j = hertz_energy(f_n, delta, c_n) - self.e_contact_start;
-            self.eb.residual_spring_energy_change_j = 0.0;
-        }
-        self.eb
-    }
-}
-
-/// Hertz estimate of the contact's elastic energy `(2/5) F (δ − c F)` (J) for the normal
-/// force `f` (N), the approach `d` (m) and a series compliance `c` (m/N) whose share of the
-/// approach is not in the half-space.
-fn hertz_energy(f: f64, d: f64, c: f64) -> f64 {
-    0.4 * f * (d - c * f).max(0.0)
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Adds the load of a contact-frame force (N, on the rail) at `x` (m) into `f`.
-fn add_line_force(
-    line: &RailContactLine,
-    track: &TrackStructure,
-    frame: &ContactFrame,
-    x: f64,
-    force: [f64; 3],
-    f: &mut [f64],
-) -> Result<(), ExplicitError> {
-    let (p, s) = line.locate(x).ok_or_else(|| {
-        DynamicsError::Other(format!(
-            "wheel start x = {x:.4} m is off the rail: lengthen the track (track.bays)"
-        ))
-    })?;
-    add_nodes_load(&line.nodes[p], &track.dofmap, frame, 1.0 - s, force, f);
-    add_nodes_load(&line.nodes[p + 1], &track.dofmap, frame, s, force, f);
-    Ok(())
-}
-
-fn solve_one(fac: &StiffnessFactor, rhs: &[f64]) -> Vec<f64> {
-    let mut b = Mat::from_fn(rhs.len(), 1, |i, _| rhs[i]);
-    let mut ws = fac.workspace(1);
-    fac.solve_in_place(b.as_mut(), &mut ws);
-    (0..rhs.len()).map(|i| b[(i, 0)]).collect()
-}
-
-/// The wheel's three rigid-body modes in the x–z plane (translation x, translation z with the
-/// sprung mass, rotation about the axle), M-orthonormal over the free DOFs; checked to carry
-/// no elastic force (`‖K r‖` against `‖K‖ ‖r‖`).
-fn wheel_rigid_modes(
-    wheel: &WheelStructure,
-    op: &ExplicitOperator,
-) -> Result<Vec<Vec<f64>>, ExplicitError> {
-    let n = wheel.dofmap.n_free();
-    let dm = &wheel.dofmap;
-    let mut modes: Vec<Vec<f64>> = Vec::new();
-    for kind in 0..3 {
-        let mut r = vec![0.0; n];
-        for (node, p) in wheel.mesh.nodes.iter().enumerate() {
-            let (ux, uz) = match kind {
-                0 => (1.0, 0.0),
-                1 => (0.0, 1.0),
-                _ => (p[2], -p[0]),
-            };
-            if let Some(i) = dm.free_index(3 * node) {
-                r[i] = ux;
-            }
-            if let Some(i) = dm.free_index(3 * node + 2) {
-                r[i] = uz;
-            }
-        }
-        modes.push(r);
-    }
-    let mass = op.mass();
-    let mdot = |a: &[f64], b: &[f64]| -> f64 { (0..n).map(|i| a[i] * mass[i] * b[i]).sum() };
-    for k in 0..modes.len() {
-        for j in 0..k {
-            let c = mdot(&modes[k], &modes[j]);
-            let (head, tail) = modes.split_at_mut(k);
-            tail[0]
-                .iter_mut()
-                .zip(&head[j])
-                .for_each(|(x, y)| *x -= c * y);
-        }
-        let nn = mdot(&modes[k], &modes[k]).sqrt();
-        if nn.is_nan() || nn <= 0.0 {
-            return Err(ExplicitError::Static {
-                part: "wheel",
-                reason: "a rigid-body mode of the wheel has no mass".into(),
-            });
-        }
-        modes[k].iter_mut().for_each(|x| *x /= nn);
-    }
-    // Check K r ≈ 0 relative to the stiffness scale.
-    let mut kr = vec![0.0; n];
-    let scale = op.gershgorin_omega2().sqrt();
-    for (k, r) in modes.iter().enumerate() {
-        op.apply_k(r, &mut kr);
-        // ‖M^{-½} K r‖ / ‖M^{½} r‖ is an angular frequency squared: compare with ω_bound².
-        let num: f64 = (0..n).map(|i| kr[i] * kr[i] / mass[i]).sum::<f64>().sqrt();
-        if num > 1e-6 * scale * scale {
-            return Err(ExplicitError::Static {
-                part: "wheel",
-                reason: format!(
-                    "rigid mode {k} of the wheel is not free (relative elastic force {:.2e}): the wheel's supports are not those of the explicit path's rigid-mode model",
-                    num / (scale * scale)
-                ),
-            });
-        }
-    }
-    Ok(modes)
-}
-
-/// The elastic static deflection of the free-floating wheel under `f` (N): the rigid
-/// components of `f` are removed (`f − M R Rᵀ f`), three DOFs that fix the rigid motion in a
-/// statically determinate way are held by a stiff spring (their reactions vanish for a
-/// balanced load, so the spring's size does not matter), and the rigid part of the solution
-/// is removed (`u − R Rᵀ M u`).
-fn wheel_elastic_static(
-    wheel: &WheelStructure,
-    mats: &crate::fe::assembly::FeMatrices,
-    op: &ExplicitOperator,
-    rigid: &[Vec<f64>],
-    contact_nodes: &[(usize, f64)],
-    f: &[f64],
-) -> Result<Vec<f64>, ExplicitError> {
-    let n = f.len();
-    let mass = op.mass();
-    let mut fe = f.to_vec();
-    for r in rigid {
-        let c: f64 = r.iter().zip(f).map(|(a, b)| a * b).sum();
-        fe.iter_mut()
-            .zip(r)
-            .zip(mass)
-            .for_each(|((x, ri), mi)| *x -= c * mi * ri);
-    }
-    // Supports: x and z of the contact node, x of the node farthest from it in z.
-    let dm = &wheel.dofmap;
-    let cn = contact_nodes
-        .iter()
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|&(nd, _)| nd)
-        .unwrap_or_else(|| wheel.topology.contact_node());
-    let zc = wheel.mesh.nodes[cn][2];
-    let far = (0..wheel.mesh.nodes.len())
-        .filter(|&nd| nd != wheel.sprung_node && dm.free_index(3 * nd).is_some())
-        .max_by(|&a, &b| {
-            (wheel.mesh.nodes[a][2] - zc)
-                .abs()
-                .total_cmp(&(wheel.mesh.nodes[b][2] - zc).abs())
-        })
-        .unwrap_or(cn);
-    let held: Vec<usize> = [3 * cn, 3 * cn + 2, 3 * far]
-        .iter()
-        .filter_map(|&d| dm.free_index(d))
-        .collect();
-    if held.len() != 3 {
-        return Err(ExplicitError::Static {
-            part: "wheel",
-            reason: "the contact node's x/z DOFs are not free".into(),
-        });
-    }
-    let mut k = mats.k.clone();
-    {
-        let (cp, ri) = (
-            k.symbolic().col_ptr().to_vec(),
-            k.symbolic().row_idx().to_vec(),
-        );
-        let vals = k.val_mut();
-        for &d in &held {
-            let p =
-                (cp[d]..cp[d + 1])
-                    .find(|&p| ri[p] == d)
-                    .ok_or_else(|| ExplicitError::Static {
-                        part: "wheel",
-                        reason: "K has no diagonal entry at a support DOF".into(),
-                    })?;
-            vals[p] *= 2.0;
-        }
-    }
-    let fac = StiffnessFactor::new(k.as_ref()).map_err(|e| ExplicitError::Static {
-        part: "wheel",
-        reason: e.to_string(),
-    })?;
-    let mut u = solve_one(&fac, &fe);
-    for r in rigid {
-        let c: f64 = (0..n).map(|i| r[i] * mass[i] * u[i]).sum();
-        u.iter_mut().zip(r).for_each(|(x, y)| *x -= c * y);
-    }
-    Ok(u)
 }
 
 /// CPU time (user + system) of this process (s), from `/proc/self/stat`; `None` elsewhere.

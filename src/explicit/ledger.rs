@@ -1,0 +1,183 @@
+//! The energy ledger of an explicit passage (docs/theory.md §7.8, §8.4): the same terms as the
+//! reduced passage's [`EnergyBalance`], from the state at contact-step boundaries.
+
+use super::operator::StepScratch;
+use super::passage::ExplicitModel;
+use super::ExplicitError;
+use crate::dynamics::passage::EnergyBalance;
+
+/// The state of both substructures: displacements (m) and half-step velocities (m/s).
+pub(super) struct State {
+    pub(super) ut: Vec<f64>,
+    pub(super) vt: Vec<f64>,
+    pub(super) uw: Vec<f64>,
+    pub(super) vw: Vec<f64>,
+}
+
+impl State {
+    pub(super) fn check_finite(&self, t: f64, xc: f64) -> Result<(), ExplicitError> {
+        for (part, u) in [("track", &self.ut), ("wheel", &self.uw)] {
+            if !u.iter().all(|x| x.is_finite()) {
+                return Err(ExplicitError::Diverged {
+                    t_s: t,
+                    x_m: xc,
+                    part,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One step's inputs to the energy ledger.
+pub(super) struct LedgerStep {
+    /// Contact position (m).
+    pub(super) xc: f64,
+    /// Contact step (s).
+    pub(super) dt_c: f64,
+    /// Speed (m/s).
+    pub(super) v: f64,
+    /// Spin creepage (1/m).
+    pub(super) spin: f64,
+    /// The contact force that did the work over the step (N, on the wheel).
+    pub(super) f_work: [f64; 3],
+    /// Rail and wheel contact-point displacement at the step's start (m).
+    pub(super) old: [[f64; 3]; 2],
+}
+
+/// The energy ledger of an explicit passage (the same terms as the reduced passage's,
+/// [`EnergyBalance`]); inactive (no cost) when the passage does not keep it.
+pub(super) struct Ledger<'a> {
+    m: &'a ExplicitModel,
+    on: bool,
+    eb: EnergyBalance,
+    e_start: f64,
+    e_contact_start: f64,
+    p_damp_prev: f64,
+    ur_prev: [f64; 3],
+    /// Wheel-load work potentials `f·u` at the step's start: all, torque, gravity.
+    before: [f64; 3],
+    ku: Vec<f64>,
+}
+
+impl<'a> Ledger<'a> {
+    pub(super) fn new(
+        m: &'a ExplicitModel,
+        on: bool,
+        s: &State,
+        st: &crate::contact::StepResult,
+        x0: f64,
+        sc_t: &mut StepScratch,
+        sc_w: &mut StepScratch,
+    ) -> Result<Self, ExplicitError> {
+        let mut l = Ledger {
+            m,
+            on,
+            eb: EnergyBalance::default(),
+            e_start: 0.0,
+            e_contact_start: hertz_energy(st.normal_force_n, st.approach_m, 0.0),
+            p_damp_prev: 0.0,
+            ur_prev: m.rail_at(&s.ut, x0)?,
+            before: [0.0; 3],
+            ku: if on {
+                vec![0.0; m.track.op.n().max(m.wheel.op.n())]
+            } else {
+                Vec::new()
+            },
+        };
+        if on {
+            l.e_start = l.stored(s);
+            l.p_damp_prev =
+                m.track.op.damper_power(&s.vt, sc_t) + m.wheel.op.damper_power(&s.vw, sc_w);
+        }
+        Ok(l)
+    }
+
+    /// Kinetic + strain energy of both substructures (J).
+    fn stored(&mut self, s: &State) -> f64 {
+        let mut e = 0.0;
+        for (op, u, v) in [
+            (&self.m.track.op, &s.ut, &s.vt),
+            (&self.m.wheel.op, &s.uw, &s.vw),
+        ] {
+            let ku = &mut self.ku[..u.len()];
+            op.apply_k(u, ku);
+            e += 0.5 * dot(u, ku) + op.kinetic_energy(v);
+        }
+        e
+    }
+
+    pub(super) fn before_step(&mut self, uw: &[f64]) {
+        if self.on {
+            let l = &self.m.loads;
+            self.before = [
+                dot(&self.m.wheel_const, uw),
+                dot(&l.torque, uw),
+                dot(&l.gravity, uw),
+            ];
+        }
+    }
+
+    pub(super) fn after_step(
+        &mut self,
+        s: &State,
+        [sc_t, sc_w]: [&mut StepScratch; 2],
+        k: LedgerStep,
+        r: &crate::contact::StepResult,
+    ) -> Result<(), ExplicitError> {
+        if !self.on {
+            return Ok(());
+        }
+        let (m, eb) = (self.m, &mut self.eb);
+        // Constant wheel loads: exact work f·Δu.
+        eb.external_work_j += dot(&m.wheel_const, &s.uw) - self.before[0];
+        eb.torque_work_j += dot(&m.loads.torque, &s.uw) - self.before[1];
+        eb.gravity_work_j += dot(&m.loads.gravity, &s.uw) - self.before[2];
+        let p_damp = m.track.op.damper_power(&s.vt, sc_t) + m.wheel.op.damper_power(&s.vw, sc_w);
+        eb.damper_dissipation_j += 0.5 * k.dt_c * (p_damp + self.p_damp_prev);
+        self.p_damp_prev = p_damp;
+        // Work of the contact force on the two structures, with the corrected end-of-step
+        // displacements.
+        let ur_end = m.rail_at(&s.ut, k.xc)?;
+        let uw_end = m.wheel_at(&s.uw);
+        let [ur_old, uw_old] = k.old;
+        for d in 0..3 {
+            eb.contact_work_j += k.f_work[d] * ((uw_end[d] - uw_old[d]) - (ur_end[d] - ur_old[d]));
+        }
+        eb.frictional_work_j += r.frictional_power_w * k.dt_c;
+        eb.spin_work_j -= k.v * k.spin * r.mz_nm * k.dt_c;
+        // Convective work: the force rolling over the deflected rail, the change of the rail
+        // displacement under the contact as the contact moves from x_n to x_{n+1} on the
+        // state at t_n (lateral and normal, as the reduced passage).
+        for d in [1usize, 2] {
+            eb.convective_work_j += k.f_work[d] * (ur_old[d] - self.ur_prev[d]);
+        }
+        self.ur_prev = ur_end;
+        Ok(())
+    }
+
+    /// The balance at the end: `f_n` the last normal force (N), `delta` the contact
+    /// solver's last approach (m), `c_n` the last normal series compliance (m/N).
+    pub(super) fn finish(mut self, s: &State, f_n: f64, delta: f64, c_n: f64) -> EnergyBalance {
+        if self.on {
+            self.eb.stored_change_j = self.stored(s) - self.e_start;
+            // The half-space part of the approach: the solver's approach less the series
+            // compliance's share (the structures' own compliance, whose energy is in the
+            // stored energy: no separate spring).
+            self.eb.contact_energy_change_j = hertz_energy(f_n, delta, c_n) - self.e_contact_start;
+            self.eb.residual_spring_energy_change_j = 0.0;
+        }
+        self.eb
+    }
+}
+
+/// Hertz estimate of the contact's elastic energy `(2/5) F (δ − c F)` (J) for the normal
+/// force `f` (N), the approach `d` (m) and a series compliance `c` (m/N) whose share of the
+/// approach is not in the half-space.
+fn hertz_energy(f: f64, d: f64, c: f64) -> f64 {
+    0.4 * f * (d - c * f).max(0.0)
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}

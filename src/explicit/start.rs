@@ -1,0 +1,184 @@
+//! The static start of the explicit passage (docs/theory.md §8.5): the static deflections by
+//! direct solves of the full `K` (no dynamic relaxation), and the wheel's rigid-body modes,
+//! which the wheel's elastic static solution removes and the start places.
+
+use faer::Mat;
+
+use super::operator::ExplicitOperator;
+use super::ExplicitError;
+use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine};
+use crate::dynamics::residual::StiffnessFactor;
+use crate::dynamics::DynamicsError;
+use crate::structure::{TrackStructure, WheelStructure};
+
+/// Adds the load of a contact-frame force (N, on the rail) at `x` (m) into `f`.
+pub(super) fn add_line_force(
+    line: &RailContactLine,
+    track: &TrackStructure,
+    frame: &ContactFrame,
+    x: f64,
+    force: [f64; 3],
+    f: &mut [f64],
+) -> Result<(), ExplicitError> {
+    let (p, s) = line.locate(x).ok_or_else(|| {
+        DynamicsError::Other(format!(
+            "wheel start x = {x:.4} m is off the rail: lengthen the track (track.bays)"
+        ))
+    })?;
+    add_nodes_load(&line.nodes[p], &track.dofmap, frame, 1.0 - s, force, f);
+    add_nodes_load(&line.nodes[p + 1], &track.dofmap, frame, s, force, f);
+    Ok(())
+}
+
+pub(super) fn solve_one(fac: &StiffnessFactor, rhs: &[f64]) -> Vec<f64> {
+    let mut b = Mat::from_fn(rhs.len(), 1, |i, _| rhs[i]);
+    let mut ws = fac.workspace(1);
+    fac.solve_in_place(b.as_mut(), &mut ws);
+    (0..rhs.len()).map(|i| b[(i, 0)]).collect()
+}
+
+/// The wheel's three rigid-body modes in the x–z plane (translation x, translation z with the
+/// sprung mass, rotation about the axle), M-orthonormal over the free DOFs; checked to carry
+/// no elastic force (`‖K r‖` against `‖K‖ ‖r‖`).
+pub(super) fn wheel_rigid_modes(
+    wheel: &WheelStructure,
+    op: &ExplicitOperator,
+) -> Result<Vec<Vec<f64>>, ExplicitError> {
+    let n = wheel.dofmap.n_free();
+    let dm = &wheel.dofmap;
+    let mut modes: Vec<Vec<f64>> = Vec::new();
+    for kind in 0..3 {
+        let mut r = vec![0.0; n];
+        for (node, p) in wheel.mesh.nodes.iter().enumerate() {
+            let (ux, uz) = match kind {
+                0 => (1.0, 0.0),
+                1 => (0.0, 1.0),
+                _ => (p[2], -p[0]),
+            };
+            if let Some(i) = dm.free_index(3 * node) {
+                r[i] = ux;
+            }
+            if let Some(i) = dm.free_index(3 * node + 2) {
+                r[i] = uz;
+            }
+        }
+        modes.push(r);
+    }
+    let mass = op.mass();
+    let mdot = |a: &[f64], b: &[f64]| -> f64 { (0..n).map(|i| a[i] * mass[i] * b[i]).sum() };
+    for k in 0..modes.len() {
+        for j in 0..k {
+            let c = mdot(&modes[k], &modes[j]);
+            let (head, tail) = modes.split_at_mut(k);
+            tail[0]
+                .iter_mut()
+                .zip(&head[j])
+                .for_each(|(x, y)| *x -= c * y);
+        }
+        let nn = mdot(&modes[k], &modes[k]).sqrt();
+        if nn.is_nan() || nn <= 0.0 {
+            return Err(ExplicitError::Static {
+                part: "wheel",
+                reason: "a rigid-body mode of the wheel has no mass".into(),
+            });
+        }
+        modes[k].iter_mut().for_each(|x| *x /= nn);
+    }
+    // Check K r ≈ 0 relative to the stiffness scale.
+    let mut kr = vec![0.0; n];
+    let scale = op.gershgorin_omega2().sqrt();
+    for (k, r) in modes.iter().enumerate() {
+        op.apply_k(r, &mut kr);
+        // ‖M^{-½} K r‖ / ‖M^{½} r‖ is an angular frequency squared: compare with ω_bound².
+        let num: f64 = (0..n).map(|i| kr[i] * kr[i] / mass[i]).sum::<f64>().sqrt();
+        if num > 1e-6 * scale * scale {
+            return Err(ExplicitError::Static {
+                part: "wheel",
+                reason: format!(
+                    "rigid mode {k} of the wheel is not free (relative elastic force {:.2e}): the wheel's supports are not those of the explicit path's rigid-mode model",
+                    num / (scale * scale)
+                ),
+            });
+        }
+    }
+    Ok(modes)
+}
+
+/// The elastic static deflection of the free-floating wheel under `f` (N): the rigid
+/// components of `f` are removed (`f − M R Rᵀ f`), three DOFs that fix the rigid motion in a
+/// statically determinate way are held by a stiff spring (their reactions vanish for a
+/// balanced load, so the spring's size does not matter), and the rigid part of the solution
+/// is removed (`u − R Rᵀ M u`).
+pub(super) fn wheel_elastic_static(
+    wheel: &WheelStructure,
+    mats: &crate::fe::assembly::FeMatrices,
+    op: &ExplicitOperator,
+    rigid: &[Vec<f64>],
+    contact_nodes: &[(usize, f64)],
+    f: &[f64],
+) -> Result<Vec<f64>, ExplicitError> {
+    let n = f.len();
+    let mass = op.mass();
+    let mut fe = f.to_vec();
+    for r in rigid {
+        let c: f64 = r.iter().zip(f).map(|(a, b)| a * b).sum();
+        fe.iter_mut()
+            .zip(r)
+            .zip(mass)
+            .for_each(|((x, ri), mi)| *x -= c * mi * ri);
+    }
+    // Supports: x and z of the contact node, x of the node farthest from it in z.
+    let dm = &wheel.dofmap;
+    let cn = contact_nodes
+        .iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|&(nd, _)| nd)
+        .unwrap_or_else(|| wheel.topology.contact_node());
+    let zc = wheel.mesh.nodes[cn][2];
+    let far = (0..wheel.mesh.nodes.len())
+        .filter(|&nd| nd != wheel.sprung_node && dm.free_index(3 * nd).is_some())
+        .max_by(|&a, &b| {
+            (wheel.mesh.nodes[a][2] - zc)
+                .abs()
+                .total_cmp(&(wheel.mesh.nodes[b][2] - zc).abs())
+        })
+        .unwrap_or(cn);
+    let held: Vec<usize> = [3 * cn, 3 * cn + 2, 3 * far]
+        .iter()
+        .filter_map(|&d| dm.free_index(d))
+        .collect();
+    if held.len() != 3 {
+        return Err(ExplicitError::Static {
+            part: "wheel",
+            reason: "the contact node's x/z DOFs are not free".into(),
+        });
+    }
+    let mut k = mats.k.clone();
+    {
+        let (cp, ri) = (
+            k.symbolic().col_ptr().to_vec(),
+            k.symbolic().row_idx().to_vec(),
+        );
+        let vals = k.val_mut();
+        for &d in &held {
+            let p =
+                (cp[d]..cp[d + 1])
+                    .find(|&p| ri[p] == d)
+                    .ok_or_else(|| ExplicitError::Static {
+                        part: "wheel",
+                        reason: "K has no diagonal entry at a support DOF".into(),
+                    })?;
+            vals[p] *= 2.0;
+        }
+    }
+    let fac = StiffnessFactor::new(k.as_ref()).map_err(|e| ExplicitError::Static {
+        part: "wheel",
+        reason: e.to_string(),
+    })?;
+    let mut u = solve_one(&fac, &fe);
+    for r in rigid {
+        let c: f64 = (0..n).map(|i| r[i] * mass[i] * u[i]).sum();
+        u.iter_mut().zip(r).for_each(|(x, y)| *x -= c * y);
+    }
+    Ok(u)
+}
