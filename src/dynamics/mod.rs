@@ -15,6 +15,7 @@ pub mod compliance;
 pub mod integrator;
 pub mod moving_load;
 pub mod passage;
+pub mod patch;
 pub mod receptance;
 pub mod reduced;
 pub mod residual;

@@ -98,6 +98,9 @@ pub enum ExplicitError {
         /// Which substructure.
         part: &'static str,
     },
+    /// The contact patch's node-plane weights could not be formed.
+    #[error(transparent)]
+    Patch(#[from] crate::dynamics::patch::PatchError),
     /// An error of the shared passage machinery (contact, profile, structure).
     #[error(transparent)]
     Dynamics(#[from] crate::dynamics::DynamicsError),

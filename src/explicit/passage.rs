@@ -45,10 +45,11 @@ use crate::dynamics::passage::{
     passage_contact, rigid_least_norm, steady_contact, Histories, PassageOptions, PassageRecord,
     RailPointRecord, WheelLoads,
 };
+use crate::dynamics::patch::{max_planes, plane_weights, PlaneWeights};
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
 use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
-use crate::model::Model;
+use crate::model::{LoadSpread, Model};
 use crate::structure::{TrackStructure, WheelStructure};
 
 /// How the contact force couples the structures over a contact step.
@@ -74,6 +75,9 @@ pub struct ExplicitOptions {
     pub time_step_s: Option<f64>,
     /// The coupling scheme (default predictor–corrector).
     pub coupling: Coupling,
+    /// How the contact force is spread over the rail's node planes (default: over the
+    /// static Hertz patch).
+    pub load_spread: LoadSpread,
 }
 
 impl Default for ExplicitOptions {
@@ -82,6 +86,7 @@ impl Default for ExplicitOptions {
             safety: DEFAULT_SAFETY,
             time_step_s: None,
             coupling: Coupling::PredictorCorrector,
+            load_spread: LoadSpread::Patch,
         }
     }
 }
@@ -93,6 +98,7 @@ impl ExplicitOptions {
             safety: model.explicit.safety,
             time_step_s: model.explicit.time_step,
             coupling: Coupling::PredictorCorrector,
+            load_spread: model.explicit.load_spread,
         }
     }
 }
@@ -203,6 +209,9 @@ pub struct ExplicitModel {
     zone_m: [f64; 2],
     wheel_radius_m: f64,
     hertz_b_m: f64,
+    /// Half-length of the patch the rail load is spread over (m): the static Hertz `a`,
+    /// or 0 for the node-plane load.
+    patch_a_m: f64,
     /// Static Hertz approach at the wheel load (m).
     hertz_approach_m: f64,
     opts: ExplicitOptions,
@@ -249,6 +258,10 @@ impl ExplicitModel {
         let wheel_const = loads.total();
         let x_start_m = track_structure.layout.wheel_start;
         let zone_m = track_structure.layout.solution_zone;
+        let patch_a_m = match opts.load_spread {
+            LoadSpread::Patch => hertz.a_m,
+            LoadSpread::Node => 0.0,
+        };
 
         // Static deflections under the static contact force (x, t, n) = (μ_t W, 0, W/cos α).
         let w_load = model.vehicle.wheel_load;
@@ -262,10 +275,10 @@ impl ExplicitModel {
             &line,
             &track_structure,
             &frame,
-            x_start_m,
+            &plane_weights(&line.planes_x_m, x_start_m, patch_a_m)?,
             [-f0[0], -f0[1], -f0[2]],
             &mut ft,
-        )?;
+        );
         let track_static = {
             let fac = StiffnessFactor::new(tm.k.as_ref())?;
             solve_one(&fac, &ft)
@@ -287,6 +300,7 @@ impl ExplicitModel {
             rigid_obs,
             wheel_radius_m: loads.contact_radius_m,
             hertz_b_m: hertz.b_m,
+            patch_a_m,
             hertz_approach_m: hertz.approach_m,
             loads,
             wheel_const,
@@ -326,13 +340,18 @@ impl ExplicitModel {
 
     /// Rail displacement at `x` (m) on the contact line, contact-frame components (m).
     pub(super) fn rail_at(&self, u: &[f64], x: f64) -> Result<[f64; 3], ExplicitError> {
-        let (p, s) = self.locate(x)?;
+        Ok(self.rail_under(u, &self.weights(x)?))
+    }
+
+    /// Rail displacement under the patch of plane weights `w`, contact-frame components (m).
+    fn rail_under(&self, u: &[f64], w: &PlaneWeights) -> [f64; 3] {
         let axes = [self.frame.x, self.frame.t, self.frame.n];
         let dm = &self.track_structure.dofmap;
-        Ok(axes.map(|a| {
-            (1.0 - s) * nodes_dot(&self.line.nodes[p], dm, a, |i| u[i])
-                + s * nodes_dot(&self.line.nodes[p + 1], dm, a, |i| u[i])
-        }))
+        axes.map(|a| {
+            w.iter()
+                .map(|(j, wj)| wj * nodes_dot(&self.line.nodes[j], dm, a, |i| u[i]))
+                .sum()
+        })
     }
 
     pub(super) fn wheel_at(&self, u: &[f64]) -> [f64; 3] {
@@ -341,12 +360,9 @@ impl ExplicitModel {
         axes.map(|a| nodes_dot(&self.wheel_nodes, dm, a, |i| u[i]))
     }
 
-    fn locate(&self, x: f64) -> Result<(usize, f64), ExplicitError> {
-        self.line.locate(x).ok_or_else(|| {
-            ExplicitError::Dynamics(DynamicsError::Other(format!(
-                "contact point x = {x:.4} m is off the rail: lengthen the track (track.bays)"
-            )))
-        })
+    /// The node planes' weights of the rail load with the contact at `x` (m).
+    fn weights(&self, x: f64) -> Result<PlaneWeights, ExplicitError> {
+        Ok(plane_weights(&self.line.planes_x_m, x, self.patch_a_m)?)
     }
 
     /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth);
@@ -404,7 +420,8 @@ impl ExplicitModel {
         let mut sc_w = self.wheel.op.scratch();
         let corrected = self.opts.coupling == Coupling::PredictorCorrector;
         let (wheel_resp, g_wheel) = self.wheel_response(dtw, nw, &mut sc_w);
-        let mut rail_resp = RailResponses::new(self.track.op.n(), dtt, nt);
+        let slots = max_planes(&self.line.planes_x_m, self.patch_a_m) + 1;
+        let mut rail_resp = RailResponses::new(self.track.op.n(), dtt, nt, slots);
         let mut h = Histories::default();
         let mut rail_point = self.rail_point(popts, n_steps);
         let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
@@ -424,31 +441,27 @@ impl ExplicitModel {
         for n in 1..=n_steps {
             let t = n as f64 * dt_c;
             let xc = x0 + v * t;
-            let (p, s) = self.locate(xc)?;
+            let pw = self.weights(xc)?;
             // Predictor: F_n held at x_{n+1}.
-            let ur_old = self.rail_at(&s_.ut, xc)?;
+            let ur_old = self.rail_under(&s_.ut, &pw);
             let uw_old = self.wheel_at(&s_.uw);
             ftrack.iter_mut().for_each(|x| *x = 0.0);
             let neg = [-f[0], -f[1], -f[2]];
-            add_nodes_load(&self.line.nodes[p], dm_t, &frame, 1.0 - s, neg, &mut ftrack);
-            add_nodes_load(&self.line.nodes[p + 1], dm_t, &frame, s, neg, &mut ftrack);
+            for (j, wj) in pw.iter() {
+                add_nodes_load(&self.line.nodes[j], dm_t, &frame, wj, neg, &mut ftrack);
+            }
             fwheel.copy_from_slice(&self.wheel_const);
             add_nodes_load(&self.wheel_nodes, dm_w, &frame, 1.0, f, &mut fwheel);
             ledger.before_step(&s_.uw);
             let State { ut, vt, uw, vw } = &mut s_;
             self.track.op.advance(dtt, nt, ut, vt, &ftrack, &mut sc_t);
             self.wheel.op.advance(dtw, nw, uw, vw, &fwheel, &mut sc_w);
-            let ur_new = self.rail_at(&s_.ut, xc)?;
+            let ur_new = self.rail_under(&s_.ut, &pw);
             let uw_new = self.wheel_at(&s_.uw);
             // Contact at x_{n+1} with the one-step compliance as the series compliance.
-            let slots = if corrected {
-                let (g, ia, ib) =
-                    self.one_step_compliance(&mut rail_resp, &mut sc_t, p, s, g_wheel);
-                series = g;
-                Some((ia, ib))
-            } else {
-                None
-            };
+            if corrected {
+                series = self.one_step_compliance(&mut rail_resp, &mut sc_t, &pw, g_wheel);
+            }
             let to_contact = |source| DynamicsError::Contact {
                 t_s: t,
                 x_m: xc,
@@ -470,11 +483,11 @@ impl ExplicitModel {
                 .map_err(to_contact)?;
             let f_new = [r.fx_n, r.fy_n, r.normal_force_n];
             // Corrector: the response to the force change, ramped over the step.
-            if let Some((ia, ib)) = slots {
+            if corrected {
                 let df = [f_new[0] - f[0], f_new[1] - f[1], f_new[2] - f[2]];
-                let (ra, rb) = (&rail_resp.slots[ia].1, &rail_resp.slots[ib].1);
-                ra.add_to(1.0 - s, df, &mut s_.ut, &mut s_.vt);
-                rb.add_to(s, df, &mut s_.ut, &mut s_.vt);
+                for (j, wj) in pw.iter() {
+                    rail_resp.response(j).add_to(wj, df, &mut s_.ut, &mut s_.vt);
+                }
                 wheel_resp.add_to(1.0, df, &mut s_.uw, &mut s_.vw);
             }
             s_.check_finite(t, xc)?;
@@ -614,17 +627,16 @@ impl ExplicitModel {
         (r, g)
     }
 
-    /// The rail's one-step compliance at `(p, s)` (plane, weight) plus the wheel's `g_wheel`
-    /// (m/N per direction), and the slots of the two planes' unit responses in `rail`.
+    /// The rail's one-step compliance under the patch of plane weights `w` plus the wheel's
+    /// `g_wheel` (m/N per direction); the planes' unit responses are made ready in `rail`.
     fn one_step_compliance(
         &self,
         rail: &mut RailResponses,
         scratch: &mut StepScratch,
-        p: usize,
-        s: f64,
+        w: &PlaneWeights,
         g_wheel: [f64; 3],
-    ) -> ([f64; 3], usize, usize) {
-        for q in [p, p + 1] {
+    ) -> [f64; 3] {
+        for (q, _) in w.iter() {
             let load = |d: usize, f: &mut [f64]| {
                 let mut force = [0.0; 3];
                 force[d] = -1.0;
@@ -637,24 +649,17 @@ impl ExplicitModel {
                     f,
                 )
             };
-            rail.get(&self.track.op, q, load, scratch);
+            rail.ensure(&self.track.op, q, w.first, load, scratch);
         }
-        // get() may have dropped a slot: look both up now.
-        let slot = |q: usize| rail.slots.iter().position(|(x, _)| *x == q).unwrap_or(0);
-        let (ia, ib) = (slot(p), slot(p + 1));
-        let (ra, rb) = (&rail.slots[ia].1, &rail.slots[ib].1);
-        let axes = [self.frame.x, self.frame.t, self.frame.n];
-        let dm = &self.track_structure.dofmap;
-        let g = [0, 1, 2].map(|d| {
-            // Rail displacement at x along axis d under the interpolated unit load −e_d.
-            let at = |u: &[f64]| {
-                (1.0 - s) * nodes_dot(&self.line.nodes[p], dm, axes[d], |i| u[i])
-                    + s * nodes_dot(&self.line.nodes[p + 1], dm, axes[d], |i| u[i])
-            };
-            let gr = -((1.0 - s) * at(&ra.u[d]) + s * at(&rb.u[d]));
+        [0, 1, 2].map(|d| {
+            // Rail displacement under the patch along axis d under the spread unit load −e_d:
+            // the quadratic form Σ_jk w_j w_k g_jk.
+            let gr: f64 = -w
+                .iter()
+                .map(|(k, wk)| wk * self.rail_under(&rail.response(k).u[d], w)[d])
+                .sum::<f64>();
             (gr + g_wheel[d]).max(0.0)
-        });
-        (g, ia, ib)
+        })
     }
 
     /// The rail-top node recorded by a passage (`popts.rail_point_offset_m` into the

@@ -77,55 +77,58 @@ impl UnitResponse {
     }
 }
 
-/// The rail's unit responses of two adjacent node planes (lazily computed as the contact
-/// moves; a plane's response is reused while the contact is next to it).
+/// The rail's unit responses of the node planes under the patch (lazily computed as the
+/// contact moves; a plane's response is reused while the patch covers it).
 pub(super) struct RailResponses {
     dt: f64,
     steps: usize,
-    /// Two slots `(plane, response)`; `usize::MAX` marks an empty one.
-    pub(super) slots: [(usize, UnitResponse); 2],
+    /// Slots `(plane, response)`; `usize::MAX` marks an empty one.
+    slots: Vec<(usize, UnitResponse)>,
     /// Load buffers of [`UnitResponse::compute_into`].
     f: Vec<f64>,
     fk: Vec<f64>,
 }
 
 impl RailResponses {
-    /// Two empty slots for `n` DOFs (allocated once per passage).
-    pub(super) fn new(n: usize, dt: f64, steps: usize) -> Self {
+    /// `slots` empty slots for `n` DOFs (allocated once per passage; at least the most
+    /// planes a patch covers, plus one).
+    pub(super) fn new(n: usize, dt: f64, steps: usize, slots: usize) -> Self {
         RailResponses {
             dt,
             steps,
-            slots: [
-                (usize::MAX, UnitResponse::zeros(n)),
-                (usize::MAX, UnitResponse::zeros(n)),
-            ],
+            slots: (0..slots.max(2))
+                .map(|_| (usize::MAX, UnitResponse::zeros(n)))
+                .collect(),
             f: vec![0.0; n],
             fk: vec![0.0; n],
         }
     }
 
-    /// The slot holding `plane`'s response, computed into the slot of the plane farther
-    /// behind when it is not there (the contact only moves forward; no allocation).
-    pub(super) fn get(
+    /// Makes `plane`'s response ready: computed into an empty slot or the slot of a plane
+    /// behind `first` (the patch's first plane; the contact only moves forward) when it is
+    /// not held yet. No allocation.
+    pub(super) fn ensure(
         &mut self,
         op: &ExplicitOperator,
         plane: usize,
+        first: usize,
         load: impl Fn(usize, &mut [f64]),
         scratch: &mut StepScratch,
-    ) -> usize {
-        if let Some(i) = self.slots.iter().position(|(p, _)| *p == plane) {
-            return i;
+    ) {
+        if self.slots.iter().any(|(p, _)| *p == plane) {
+            return;
         }
-        let (a, b) = (self.slots[0].0, self.slots[1].0);
-        let i = if a == usize::MAX {
-            0
-        } else if b == usize::MAX {
-            1
-        } else if a < b {
-            0
-        } else {
-            1
-        };
+        // An empty slot, else the one farthest behind the patch.
+        let i = self
+            .slots
+            .iter()
+            .position(|(p, _)| *p == usize::MAX)
+            .or_else(|| {
+                (0..self.slots.len())
+                    .filter(|&i| self.slots[i].0 < first)
+                    .min_by_key(|&i| self.slots[i].0)
+            })
+            .expect("RailResponses: more planes under the patch than slots");
         self.slots[i].1.compute_into(
             op,
             self.dt,
@@ -135,6 +138,15 @@ impl RailResponses {
             scratch,
         );
         self.slots[i].0 = plane;
-        i
+    }
+
+    /// The response of `plane` (made ready by [`Self::ensure`]).
+    pub(super) fn response(&self, plane: usize) -> &UnitResponse {
+        &self
+            .slots
+            .iter()
+            .find(|(p, _)| *p == plane)
+            .expect("RailResponses::ensure not called for this plane")
+            .1
     }
 }

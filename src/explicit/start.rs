@@ -6,28 +6,24 @@ use faer::Mat;
 
 use super::operator::ExplicitOperator;
 use super::ExplicitError;
+use crate::dynamics::patch::PlaneWeights;
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine};
 use crate::dynamics::residual::StiffnessFactor;
-use crate::dynamics::DynamicsError;
 use crate::structure::{TrackStructure, WheelStructure};
 
-/// Adds the load of a contact-frame force (N, on the rail) at `x` (m) into `f`.
+/// Adds the load of a contact-frame force (N, on the rail) spread over the planes of `w`
+/// into `f`.
 pub(super) fn add_line_force(
     line: &RailContactLine,
     track: &TrackStructure,
     frame: &ContactFrame,
-    x: f64,
+    w: &PlaneWeights,
     force: [f64; 3],
     f: &mut [f64],
-) -> Result<(), ExplicitError> {
-    let (p, s) = line.locate(x).ok_or_else(|| {
-        DynamicsError::Other(format!(
-            "wheel start x = {x:.4} m is off the rail: lengthen the track (track.bays)"
-        ))
-    })?;
-    add_nodes_load(&line.nodes[p], &track.dofmap, frame, 1.0 - s, force, f);
-    add_nodes_load(&line.nodes[p + 1], &track.dofmap, frame, s, force, f);
-    Ok(())
+) {
+    for (j, wj) in w.iter() {
+        add_nodes_load(&line.nodes[j], &track.dofmap, frame, wj, force, f);
+    }
 }
 
 pub(super) fn solve_one(fac: &StiffnessFactor, rhs: &[f64]) -> Vec<f64> {

@@ -140,6 +140,23 @@ pub struct Explicit {
     /// larger value is an error. Default: none (computed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_step: Option<f64>,
+    /// How the contact force is applied to the rail's node planes: `"patch"` (default, the
+    /// static Hertz patch's parabolic line load through the shape functions of every plane
+    /// under it) or `"node"` (the two planes around the contact point, linear
+    /// interpolation; the mesh then indents locally under a node line, docs/theory.md §8.6).
+    #[serde(default)]
+    pub load_spread: LoadSpread,
+}
+
+/// How the explicit path applies the contact force to the rail (docs/theory.md §8.6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LoadSpread {
+    /// Over the static Hertz patch along the rail (parabolic line load).
+    #[default]
+    Patch,
+    /// On the two node planes around the contact point (linear interpolation).
+    Node,
 }
 
 fn default_explicit_safety() -> f64 {
@@ -151,6 +168,7 @@ impl Default for Explicit {
         Self {
             safety: default_explicit_safety(),
             time_step: None,
+            load_spread: LoadSpread::Patch,
         }
     }
 }
