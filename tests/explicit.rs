@@ -357,15 +357,13 @@ fn passage_model() -> Model {
 }
 
 /// The coupling: with the predictor–corrector the explicit passage runs through and holds
-/// the static load (mean F_L = μ_t W within 1 %, mean F_N = W/cos α within 2 %: on this
-/// coarse test mesh the full FE's local compliance varies along each 80 mm element, which
-/// modulates F_N by a few kN at the element-passing frequency and its harmonics, so its
-/// mean over one sleeper pitch is less sharp than the reduced passage's); holding the last
+/// the static load (mean F_L = μ_t W within 1 %, mean F_N = W/cos α within 2 %); holding the last
 /// contact force over a contact step without the corrector, with the same step sizes, is
 /// unstable (it diverges or its normal force oscillates by more than the load itself).
 /// The energy of the coupled passage balances: work of the wheel loads, the spin and the
 /// convective rolling work = change of stored energy + damper and frictional dissipation +
-/// change of the contact's elastic energy, within 1 %.
+/// change of the contact's elastic energy (with the series spring that removes the mesh's
+/// local compliance variation, docs/theory.md §8.6), within 1 %.
 #[test]
 fn coupled_passage_is_stable_where_the_held_force_is_not_and_balances_energy() {
     let m = passage_model();

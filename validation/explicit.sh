@@ -5,18 +5,27 @@
 #   bash validation/explicit.sh            # every case
 #   bash validation/explicit.sh rpm3-140   # one case: rpm3-140 rpm1-140 rpm4-140 rpm3-98
 #                                          #   rpm3-118 rpm3-heavy-wheel rpm3-trial10
+#                                          # convergence checks: rpm3-140-dtc-half (half the
+#                                          #   contact step), rpm3-140-node (node-line load)
 # Outputs: validation/out/explicit/CASE/{explicit,reduced,reduced-consistent}/ and
 # CASE/table.md (explicit_compare's side-by-side table, the misses listed under it).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release --quiet --bin corrugation --example explicit_compare
-BIN=target/release/corrugation
-CMP=target/release/examples/explicit_compare
-OUT=validation/out/explicit
+# PROFILE=dev uses the dev profile (with CARGO_PROFILE_DEV_OPT_LEVEL=3: optimised, no LTO,
+# a much shorter build); default release.
+PROFILE=${PROFILE:-release}
+DIR=$PROFILE
+[ "$PROFILE" = dev ] && DIR=debug
+cargo build --profile "$PROFILE" --quiet --bin corrugation --example explicit_compare
+BIN=target/$DIR/corrugation
+CMP=target/$DIR/examples/explicit_compare
+OUT=${OUT:-validation/out/explicit}
 
 case_sets() {
   case "$1" in
     rpm3-140) echo "--set fastening.model=RPM3 --set run.speed_kmh=140" ;;
+    rpm3-140-dtc-half) echo "--set fastening.model=RPM3 --set run.speed_kmh=140 --set contact.grid_nx=64" ;;
+    rpm3-140-node) echo "--set fastening.model=RPM3 --set run.speed_kmh=140 --set explicit.load_spread=\"node\"" ;;
     rpm1-140) echo "--set fastening.model=RPM1 --set run.speed_kmh=140" ;;
     rpm4-140) echo "--set fastening.model=RPM4 --set run.speed_kmh=140" ;;
     rpm3-98) echo "--set fastening.model=RPM3 --set run.speed_kmh=98" ;;

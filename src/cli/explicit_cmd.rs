@@ -100,7 +100,10 @@ pub fn run_explicit(
 }
 
 fn write_explicit_json(out: &Path, rec: &ExplicitRecord) -> anyhow::Result<()> {
-    let json = serde_json::to_string_pretty(&rec.info)?;
+    // The explicit figures plus the energy ledger (J) of the passage.
+    let mut v = serde_json::to_value(&rec.info)?;
+    v["energy"] = serde_json::to_value(rec.record.energy)?;
+    let json = serde_json::to_string_pretty(&v)?;
     write_atomic(&out.join("explicit.json"), |f| {
         use std::io::Write;
         f.write_all(json.as_bytes())

@@ -43,6 +43,10 @@ pub(super) struct LedgerStep {
     pub(super) f_work: [f64; 3],
     /// Rail and wheel contact-point displacement at the step's start (m).
     pub(super) old: [[f64; 3]; 2],
+    /// The contact force at the step's start and end (N, on the wheel).
+    pub(super) forces: [[f64; 3]; 2],
+    /// The removed local compliance variation `Δg` at the step's end position (m/N).
+    pub(super) dg: [f64; 3],
 }
 
 /// The energy ledger of an explicit passage (the same terms as the reduced passage's,
@@ -55,6 +59,8 @@ pub(super) struct Ledger<'a> {
     e_contact_start: f64,
     p_damp_prev: f64,
     ur_prev: [f64; 3],
+    /// The removed normal local compliance variation at the last position (m/N).
+    dg_prev: f64,
     /// Wheel-load work potentials `f·u` at the step's start: all, torque, gravity.
     before: [f64; 3],
     ku: Vec<f64>,
@@ -78,6 +84,7 @@ impl<'a> Ledger<'a> {
             e_contact_start: hertz_energy(st.normal_force_n, st.approach_m, 0.0),
             p_damp_prev: 0.0,
             ur_prev: m.rail_at(&s.ut, x0)?,
+            dg_prev: m.local_variation(x0, &m.weights(x0)?)[2],
             before: [0.0; 3],
             ku: if on {
                 vec![0.0; m.track.op.n().max(m.wheel.op.n())]
@@ -153,6 +160,20 @@ impl<'a> Ledger<'a> {
             eb.convective_work_j += k.f_work[d] * (ur_old[d] - self.ur_prev[d]);
         }
         self.ur_prev = ur_end;
+        // The removed local compliance variation acts as a series spring of compliance
+        // −Δg(x) (docs/theory.md §8.6). Tangential: on the creepage increments at the step's
+        // end position, energy −Δg F̄ ΔF. Normal: in the approach, energy −½Δg(x)F², and
+        // rolling from x_n to x_{n+1} at F_n changes it by −½(Δg_{n+1} − Δg_n)F_n², of
+        // which the contact chain's balance leaves +½(Δg_{n+1} − Δg_n)F_n² as an input.
+        let [fo, fnew] = k.forces;
+        for d in 0..2 {
+            eb.residual_spring_energy_change_j -=
+                k.dg[d] * 0.5 * (fo[d] + fnew[d]) * (fnew[d] - fo[d]);
+        }
+        eb.residual_spring_energy_change_j -=
+            0.5 * (k.dg[2] * fnew[2] * fnew[2] - self.dg_prev * fo[2] * fo[2]);
+        eb.convective_work_j += 0.5 * (k.dg[2] - self.dg_prev) * fo[2] * fo[2];
+        self.dg_prev = k.dg[2];
         Ok(())
     }
 
@@ -165,7 +186,6 @@ impl<'a> Ledger<'a> {
             // compliance's share (the structures' own compliance, whose energy is in the
             // stored energy: no separate spring).
             self.eb.contact_energy_change_j = hertz_energy(f_n, delta, c_n) - self.e_contact_start;
-            self.eb.residual_spring_energy_change_j = 0.0;
         }
         self.eb
     }

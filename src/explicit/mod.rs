@@ -21,6 +21,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod ledger;
+mod local;
 pub mod operator;
 pub mod passage;
 mod response;

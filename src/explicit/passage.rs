@@ -35,6 +35,7 @@ use std::time::Instant;
 use faer::Mat;
 
 use super::ledger::{Ledger, LedgerStep, State};
+use super::local::LocalCompliance;
 use super::operator::{ExplicitOperator, StepScratch};
 use super::response::{RailResponses, UnitResponse};
 use super::stable::{StableStep, DEFAULT_SAFETY};
@@ -49,7 +50,7 @@ use crate::dynamics::patch::{max_planes, plane_weights, PlaneWeights};
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
 use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
-use crate::model::{LoadSpread, Model};
+use crate::model::{ExplicitLocalCompliance, LoadSpread, Model};
 use crate::structure::{TrackStructure, WheelStructure};
 
 /// How the contact force couples the structures over a contact step.
@@ -78,6 +79,9 @@ pub struct ExplicitOptions {
     /// How the contact force is spread over the rail's node planes (default: over the
     /// static Hertz patch).
     pub load_spread: LoadSpread,
+    /// Whether the element-scale variation of the mesh's local compliance is removed from
+    /// the contact (default) or kept.
+    pub local_compliance: ExplicitLocalCompliance,
 }
 
 impl Default for ExplicitOptions {
@@ -87,6 +91,7 @@ impl Default for ExplicitOptions {
             time_step_s: None,
             coupling: Coupling::PredictorCorrector,
             load_spread: LoadSpread::Patch,
+            local_compliance: ExplicitLocalCompliance::Constant,
         }
     }
 }
@@ -99,6 +104,7 @@ impl ExplicitOptions {
             time_step_s: model.explicit.time_step,
             coupling: Coupling::PredictorCorrector,
             load_spread: model.explicit.load_spread,
+            local_compliance: model.explicit.local_compliance,
         }
     }
 }
@@ -136,6 +142,9 @@ pub struct ExplicitInfo {
     pub dofs: [usize; 2],
     /// Wall time of the set-up: assembly, static solves, stable steps (s).
     pub setup_seconds: f64,
+    /// Contact steps at which the series compliance `G − Δg` was negative and clamped to 0
+    /// (−; docs/theory.md §8.6).
+    pub clamped_steps: usize,
 }
 
 /// A passage of the explicit path.
@@ -212,6 +221,8 @@ pub struct ExplicitModel {
     /// Half-length of the patch the rail load is spread over (m): the static Hertz `a`,
     /// or 0 for the node-plane load.
     patch_a_m: f64,
+    /// The mesh's local compliance under the patch, when its variation is removed.
+    local: Option<LocalCompliance>,
     /// Static Hertz approach at the wheel load (m).
     hertz_approach_m: f64,
     opts: ExplicitOptions,
@@ -264,12 +275,7 @@ impl ExplicitModel {
         };
 
         // Static deflections under the static contact force (x, t, n) = (μ_t W, 0, W/cos α).
-        let w_load = model.vehicle.wheel_load;
-        let f0 = [
-            model.contact.traction_coefficient * w_load,
-            0.0,
-            w_load / frame.n[2],
-        ];
+        let f0 = static_contact_force(model, &frame);
         let mut ft = vec![0.0; n_t];
         add_line_force(
             &line,
@@ -279,10 +285,24 @@ impl ExplicitModel {
             [-f0[0], -f0[1], -f0[2]],
             &mut ft,
         );
-        let track_static = {
-            let fac = StiffnessFactor::new(tm.k.as_ref())?;
-            solve_one(&fac, &ft)
+        let fac = StiffnessFactor::new(tm.k.as_ref())?;
+        let track_static = solve_one(&fac, &ft);
+        let local = match opts.local_compliance {
+            ExplicitLocalCompliance::Mesh => None,
+            ExplicitLocalCompliance::Constant => {
+                let px = &line.planes_x_m;
+                let x_hi = (zone_m[1] + 0.05).min(px[px.len() - 1] - 2.0 * patch_a_m - 1e-9);
+                Some(LocalCompliance::compute(
+                    &track_structure,
+                    &fac,
+                    &line,
+                    &frame,
+                    patch_a_m,
+                    [x_start_m, x_hi],
+                )?)
+            }
         };
+        drop(fac);
         let mut fw = wheel_const.clone();
         add_nodes_load(&wc.nodes, &wheel_structure.dofmap, &frame, 1.0, f0, &mut fw);
         let wheel_static =
@@ -301,6 +321,7 @@ impl ExplicitModel {
             wheel_radius_m: loads.contact_radius_m,
             hertz_b_m: hertz.b_m,
             patch_a_m,
+            local,
             hertz_approach_m: hertz.approach_m,
             loads,
             wheel_const,
@@ -360,8 +381,17 @@ impl ExplicitModel {
         axes.map(|a| nodes_dot(&self.wheel_nodes, dm, a, |i| u[i]))
     }
 
+    /// The element-scale variation `Δg` (m/N per contact-frame direction) of the mesh's local
+    /// compliance under the patch of weights `w` at `x` (m) that the contact is relieved of;
+    /// zero when it is kept (`explicit.local_compliance = "mesh"`).
+    pub(super) fn local_variation(&self, x: f64, w: &PlaneWeights) -> [f64; 3] {
+        self.local
+            .as_ref()
+            .map_or([0.0; 3], |lc| lc.variation(x, w))
+    }
+
     /// The node planes' weights of the rail load with the contact at `x` (m).
-    fn weights(&self, x: f64) -> Result<PlaneWeights, ExplicitError> {
+    pub(super) fn weights(&self, x: f64) -> Result<PlaneWeights, ExplicitError> {
         Ok(plane_weights(&self.line.planes_x_m, x, self.patch_a_m)?)
     }
 
@@ -431,6 +461,8 @@ impl ExplicitModel {
         let mut f = [st.fx_n, 0.0, st.normal_force_n];
         let mut series = [0.0; 3];
         let mut last_delta = st.approach_m;
+        let mut clamped = 0usize;
+        let mut series_c = [0.0; 3];
         let mut ftrack = vec![0.0; self.track.op.n()];
         let mut fwheel = self.wheel_const.clone();
         let dm_t = &self.track_structure.dofmap;
@@ -467,7 +499,19 @@ impl ExplicitModel {
                 x_m: xc,
                 source,
             };
-            contact.set_series_compliance(series).map_err(to_contact)?;
+            // The contact's series compliance: the one-step compliance, less the mesh's
+            // element-scale local compliance variation when that is removed.
+            let dg = self.local_variation(xc, &pw);
+            for d in 0..3 {
+                series_c[d] = series[d] - dg[d];
+                if series_c[d] < 0.0 {
+                    series_c[d] = 0.0;
+                    clamped += 1;
+                }
+            }
+            contact
+                .set_series_compliance(series_c)
+                .map_err(to_contact)?;
             let delta = ur_new[2] - uw_new[2] + series[2] * f[2];
             let xi = ((uw_new[0] - uw_old[0]) - (ur_new[0] - ur_old[0])) / (v * dt_c);
             let eta = ((uw_new[1] - uw_old[1]) - (ur_new[1] - ur_old[1])) / (v * dt_c);
@@ -511,6 +555,8 @@ impl ExplicitModel {
                     spin,
                     f_work,
                     old: [ur_old, uw_old],
+                    forces: [f, f_new],
+                    dg,
                 },
                 &r,
             )?;
@@ -527,7 +573,7 @@ impl ExplicitModel {
                 progress(n, n_steps);
             }
         }
-        let eb = ledger.finish(&s_, f[2], last_delta, series[2]);
+        let eb = ledger.finish(&s_, f[2], last_delta, series_c[2]);
         let mut w = vec![0.0; nbins];
         wear.work_x(&mut w);
         let seconds = t_wall.elapsed().as_secs_f64();
@@ -554,6 +600,7 @@ impl ExplicitModel {
             },
             dofs: self.dofs(),
             setup_seconds: self.setup_seconds,
+            clamped_steps: clamped,
         };
         Ok(ExplicitRecord {
             record: PassageRecord {
@@ -585,7 +632,11 @@ impl ExplicitModel {
             uw: self.wheel_static.clone(),
             vw: vec![0.0; self.wheel.op.n()],
         };
-        let u_rail = self.rail_at(&st.ut, self.x_start_m)?;
+        let w0 = self.weights(self.x_start_m)?;
+        let mut u_rail = self.rail_under(&st.ut, &w0);
+        // The contact sees the rail without the mesh's local compliance variation.
+        u_rail[2] += self.local_variation(self.x_start_m, &w0)[2]
+            * static_contact_force(&self.model, &self.frame)[2];
         let u_wheel_el = self.wheel_at(&st.uw);
         let target_n = u_rail[2] - delta0 - u_wheel_el[2];
         let c = rigid_least_norm(&self.rigid_obs, [0.0, target_n, 0.0]);
@@ -684,6 +735,12 @@ impl ExplicitModel {
             },
         ))
     }
+}
+
+/// The static contact force (N, on the wheel, contact frame x, t, n): `(μ_t W, 0, W/cos α)`.
+fn static_contact_force(model: &Model, frame: &ContactFrame) -> [f64; 3] {
+    let w = model.vehicle.wheel_load;
+    [model.contact.traction_coefficient * w, 0.0, w / frame.n[2]]
 }
 
 /// CPU time (user + system) of this process (s), from `/proc/self/stat`; `None` elsewhere.

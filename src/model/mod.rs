@@ -146,6 +146,23 @@ pub struct Explicit {
     /// interpolation; the mesh then indents locally under a node line, docs/theory.md §8.6).
     #[serde(default)]
     pub load_spread: LoadSpread,
+    /// What the contact sees of the mesh's local compliance under the moving load:
+    /// `"constant"` (default: its element-scale variation with the load's position is
+    /// removed, the mean kept, as the reduced passage's constant residual flexibility) or
+    /// `"mesh"` (the mesh's own, position dependent; docs/theory.md §8.6).
+    #[serde(default)]
+    pub local_compliance: ExplicitLocalCompliance,
+}
+
+/// The explicit path's treatment of the mesh's local compliance (docs/theory.md §8.6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ExplicitLocalCompliance {
+    /// The element-scale variation removed (series compliance −Δg(x)).
+    #[default]
+    Constant,
+    /// The mesh's own position-dependent local compliance.
+    Mesh,
 }
 
 /// How the explicit path applies the contact force to the rail (docs/theory.md §8.6).
@@ -169,6 +186,7 @@ impl Default for Explicit {
             safety: default_explicit_safety(),
             time_step: None,
             load_spread: LoadSpread::Patch,
+            local_compliance: ExplicitLocalCompliance::Constant,
         }
     }
 }
