@@ -37,6 +37,7 @@ use faer::Mat;
 use super::ledger::{Ledger, LedgerStep, State};
 use super::operator::{ExplicitOperator, StepScratch};
 use super::response::{RailResponses, UnitResponse};
+use super::rotating::{RotatingWheel, WheelParts};
 use super::stable::{StableStep, DEFAULT_SAFETY};
 use super::start::{add_line_force, solve_one, wheel_elastic_static, wheel_rigid_modes};
 use super::ExplicitError;
@@ -48,7 +49,7 @@ use crate::dynamics::passage::{
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
 use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
-use crate::model::Model;
+use crate::model::{ExplicitWheel, Model};
 use crate::structure::{TrackStructure, WheelStructure};
 
 /// How the contact force couples the structures over a contact step.
@@ -74,6 +75,11 @@ pub struct ExplicitOptions {
     pub time_step_s: Option<f64>,
     /// The coupling scheme (default predictor–corrector).
     pub coupling: Coupling,
+    /// The wheel treatment (default fixed, `explicit.wheel`; docs/theory.md §8.7).
+    pub wheel: ExplicitWheel,
+    /// The rotating wheel's spin rate (rad/s); `None` (default) = `V/R` at the contact
+    /// radius, rolling without slip. Another value only isolates the effect of the rotation.
+    pub spin_rate_rad_s: Option<f64>,
 }
 
 impl Default for ExplicitOptions {
@@ -82,6 +88,8 @@ impl Default for ExplicitOptions {
             safety: DEFAULT_SAFETY,
             time_step_s: None,
             coupling: Coupling::PredictorCorrector,
+            wheel: ExplicitWheel::Fixed,
+            spin_rate_rad_s: None,
         }
     }
 }
@@ -93,6 +101,8 @@ impl ExplicitOptions {
             safety: model.explicit.safety,
             time_step_s: model.explicit.time_step,
             coupling: Coupling::PredictorCorrector,
+            wheel: model.explicit.wheel,
+            spin_rate_rad_s: None,
         }
     }
 }
@@ -130,6 +140,10 @@ pub struct ExplicitInfo {
     pub dofs: [usize; 2],
     /// Wall time of the set-up: assembly, static solves, stable steps (s).
     pub setup_seconds: f64,
+    /// The wheel treatment: `"fixed"` or `"rotating"` (`explicit.wheel`).
+    pub wheel: &'static str,
+    /// The rotating wheel's spin rate (rad/s; 0 for the fixed wheel).
+    pub spin_rate_rad_s: f64,
 }
 
 /// A passage of the explicit path.
@@ -398,6 +412,11 @@ impl ExplicitModel {
         )?;
         let (xi0, delta0) = (st.creepage, st.approach_m);
         let mut s_ = self.start_state(v, xi0, delta0)?;
+        // The rotating wheel (rotating.rs); `None` for the fixed wheel.
+        let mut rot = self.rotating_wheel(v, nw, dtw)?;
+        if let Some(r) = &rot {
+            r.add_rolling_velocity(&self.wheel_structure, &s_.uw, &mut s_.vw);
+        }
 
         // --- Unit responses, scratch, records.
         let mut sc_t = self.track.op.scratch();
@@ -409,7 +428,8 @@ impl ExplicitModel {
         let mut rail_point = self.rail_point(popts, n_steps);
         let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
         let mut wear = WearAccumulator::new(&contact, z0, nbins);
-        let mut ledger = Ledger::new(self, popts.energy, &s_, &st, x0, &mut sc_t, &mut sc_w)?;
+        let keep = popts.energy && rot.is_none();
+        let mut ledger = Ledger::new(self, keep, &s_, &st, x0, &mut sc_t, &mut sc_w)?;
         // The start's force on the structures is the static one (lateral 0).
         let mut f = [st.fx_n, 0.0, st.normal_force_n];
         let mut series = [0.0; 3];
@@ -427,19 +447,35 @@ impl ExplicitModel {
             let (p, s) = self.locate(xc)?;
             // Predictor: F_n held at x_{n+1}.
             let ur_old = self.rail_at(&s_.ut, xc)?;
-            let uw_old = self.wheel_at(&s_.uw);
+            let uw_old = match &rot {
+                Some(r) => r.wheel_at(&s_.uw, t - dt_c, t),
+                None => self.wheel_at(&s_.uw),
+            };
             ftrack.iter_mut().for_each(|x| *x = 0.0);
             let neg = [-f[0], -f[1], -f[2]];
             add_nodes_load(&self.line.nodes[p], dm_t, &frame, 1.0 - s, neg, &mut ftrack);
             add_nodes_load(&self.line.nodes[p + 1], dm_t, &frame, s, neg, &mut ftrack);
-            fwheel.copy_from_slice(&self.wheel_const);
-            add_nodes_load(&self.wheel_nodes, dm_w, &frame, 1.0, f, &mut fwheel);
             ledger.before_step(&s_.uw);
             let State { ut, vt, uw, vw } = &mut s_;
             self.track.op.advance(dtt, nt, ut, vt, &ftrack, &mut sc_t);
-            self.wheel.op.advance(dtw, nw, uw, vw, &fwheel, &mut sc_w);
+            let (uw_new, g_wheel) = match rot.as_mut() {
+                Some(r) => {
+                    r.advance(&self.wheel.op, uw, vw, f, t);
+                    let g = if corrected {
+                        r.compliance(&self.wheel.op)
+                    } else {
+                        g_wheel
+                    };
+                    (r.wheel_at(uw, t, t), g)
+                }
+                None => {
+                    fwheel.copy_from_slice(&self.wheel_const);
+                    add_nodes_load(&self.wheel_nodes, dm_w, &frame, 1.0, f, &mut fwheel);
+                    self.wheel.op.advance(dtw, nw, uw, vw, &fwheel, &mut sc_w);
+                    (self.wheel_at(uw), g_wheel)
+                }
+            };
             let ur_new = self.rail_at(&s_.ut, xc)?;
-            let uw_new = self.wheel_at(&s_.uw);
             // Contact at x_{n+1} with the one-step compliance as the series compliance.
             let slots = if corrected {
                 let (g, ia, ib) =
@@ -475,7 +511,10 @@ impl ExplicitModel {
                 let (ra, rb) = (&rail_resp.slots[ia].1, &rail_resp.slots[ib].1);
                 ra.add_to(1.0 - s, df, &mut s_.ut, &mut s_.vt);
                 rb.add_to(s, df, &mut s_.ut, &mut s_.vt);
-                wheel_resp.add_to(1.0, df, &mut s_.uw, &mut s_.vw);
+                match &rot {
+                    Some(r) => r.correct(df, &mut s_.uw, &mut s_.vw),
+                    None => wheel_resp.add_to(1.0, df, &mut s_.uw, &mut s_.vw),
+                }
             }
             s_.check_finite(t, xc)?;
             if xc - half_grid < z1 && xc + half_grid > z0 {
@@ -541,6 +580,8 @@ impl ExplicitModel {
             },
             dofs: self.dofs(),
             setup_seconds: self.setup_seconds,
+            wheel: self.opts.wheel.as_str(),
+            spin_rate_rad_s: rot.as_ref().map_or(0.0, |r| r.omega()),
         };
         Ok(ExplicitRecord {
             record: PassageRecord {
@@ -560,6 +601,30 @@ impl ExplicitModel {
             },
             info,
         })
+    }
+
+    /// The rotating wheel of a passage at `v` (m/s) with `steps` wheel sub-steps of `dt` (s)
+    /// per contact step (spin rate `V/R` unless the options set one); `None` for the fixed
+    /// wheel.
+    fn rotating_wheel(
+        &self,
+        v: f64,
+        steps: usize,
+        dt: f64,
+    ) -> Result<Option<RotatingWheel>, ExplicitError> {
+        if self.opts.wheel == ExplicitWheel::Fixed {
+            return Ok(None);
+        }
+        let parts = WheelParts {
+            structure: &self.wheel_structure,
+            op: &self.wheel.op,
+            contact_nodes: &self.wheel_nodes,
+            frame: self.frame,
+            loads: &self.loads,
+            wheel_const: &self.wheel_const,
+        };
+        let omega = self.opts.spin_rate_rad_s.unwrap_or(v / self.wheel_radius_m);
+        RotatingWheel::new(&parts, omega, steps, dt).map(Some)
     }
 
     /// The start: the static deflections, the wheel's rigid modes placed so that the

@@ -140,6 +140,33 @@ pub struct Explicit {
     /// larger value is an error. Default: none (computed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_step: Option<f64>,
+    /// The wheel treatment of the explicit path (docs/theory.md §8.7): `"fixed"` (default,
+    /// the wheel as the reduced model has it, not rotating) or `"rotating"` (its elastic
+    /// motion in a frame spinning at V/R, with the Coriolis and spin-softening terms).
+    #[serde(default)]
+    pub wheel: ExplicitWheel,
+}
+
+/// The wheel treatment of the explicit path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ExplicitWheel {
+    /// Not rotating: the contact point is fixed on the wheel (as in the reduced model).
+    #[default]
+    Fixed,
+    /// Rotating at `Ω = V/R`: the wheel's elastic motion in the spinning frame, the contact
+    /// point moving around the tread.
+    Rotating,
+}
+
+impl ExplicitWheel {
+    /// The key's value as written in a model file (`"fixed"`, `"rotating"`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ExplicitWheel::Fixed => "fixed",
+            ExplicitWheel::Rotating => "rotating",
+        }
+    }
 }
 
 fn default_explicit_safety() -> f64 {
@@ -151,6 +178,7 @@ impl Default for Explicit {
         Self {
             safety: default_explicit_safety(),
             time_step: None,
+            wheel: ExplicitWheel::Fixed,
         }
     }
 }
