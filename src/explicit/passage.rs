@@ -130,7 +130,8 @@ pub struct ExplicitInfo {
     pub steps: usize,
     /// Contact steps of the passage (−).
     pub contact_steps: usize,
-    /// Relative energy error of the passage (−; see [`EnergyBalance::relative_error`]).
+    /// Relative energy error of the passage (−; see [`EnergyBalance::relative_error`]); not
+    /// a number when the ledger is not kept (no energy option, or the rotating wheel).
     pub energy_error: f64,
     /// Wall time of the dynamic phase (s).
     pub seconds: f64,
@@ -416,6 +417,12 @@ impl ExplicitModel {
         let mut rot = self.rotating_wheel(v, nw, dtw)?;
         if let Some(r) = &rot {
             r.add_rolling_velocity(&self.wheel_structure, &s_.uw, &mut s_.vw);
+            // The wheel's material velocity at the contact back to the steady creepage's.
+            let dv = xi0 * v - r.contact_velocity_x(&s_.uw, &s_.vw);
+            let c = rigid_least_norm(&self.rigid_obs, [dv, 0.0, 0.0]);
+            for (k, m) in self.rigid.iter().enumerate() {
+                s_.vw.iter_mut().zip(m).for_each(|(x, y)| *x += c[k] * y);
+            }
         }
 
         // --- Unit responses, scratch, records.
@@ -568,11 +575,7 @@ impl ExplicitModel {
             omega_max_bound: self.track.step.omega_max_bound,
             steps: n_steps * nt,
             contact_steps: n_steps,
-            energy_error: if popts.energy {
-                eb.relative_error()
-            } else {
-                f64::NAN
-            },
+            energy_error: if keep { eb.relative_error() } else { f64::NAN },
             seconds,
             cpu_seconds: match (cpu0, cpu_seconds()) {
                 (Some(a), Some(b)) => Some(b - a),

@@ -24,6 +24,7 @@
 //! of the two angle planes around the contact (computed as the contact reaches a plane).
 
 use super::operator::{ExplicitOperator, StepScratch};
+use super::response::UnitResponse;
 use super::ExplicitError;
 use crate::dynamics::passage::WheelLoads;
 use crate::dynamics::reduced::ContactFrame;
@@ -271,8 +272,7 @@ type PlaneNodes = Vec<([usize; 3], f64)>;
 /// in the spinning x, y, z) and the key of the plane (its index counted along the travel).
 struct PlaneResponse {
     key: Option<i64>,
-    u: [Vec<f64>; 3],
-    v: [Vec<f64>; 3],
+    r: UnitResponse,
 }
 
 /// Where the contact is on the wheel: angle plane `j` (counted along the travel), weight `s`
@@ -352,11 +352,9 @@ impl RotatingWheel {
                 ground[i] = p.loads.gravity[i] + p.loads.drawbar[i];
             }
         }
-        let zeros = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
         let slot = || PlaneResponse {
             key: None,
-            u: zeros(),
-            v: zeros(),
+            r: UnitResponse::zeros(n),
         };
         let sc = spin.scratch(p.op);
         Ok(RotatingWheel {
@@ -517,8 +515,7 @@ impl RotatingWheel {
             &mut self.slots[i],
             PlaneResponse {
                 key: None,
-                u: Default::default(),
-                v: Default::default(),
+                r: UnitResponse::zeros(0),
             },
         );
         let at = OnWheel {
@@ -531,7 +528,7 @@ impl RotatingWheel {
             let mut e = [0.0; 3];
             e[c] = 1.0;
             self.load(at, e, &mut unit);
-            let (u, v) = (&mut slot.u[c], &mut slot.v[c]);
+            let (u, v) = (&mut slot.r.u[c], &mut slot.r.v[c]);
             u.iter_mut().for_each(|x| *x = 0.0);
             v.iter_mut().for_each(|x| *x = 0.0);
             for k in 0..self.steps {
@@ -563,8 +560,8 @@ impl RotatingWheel {
         // g[c][c'] = displacement along c' at the contact under the interpolated unit load c.
         let mut g = [[0.0; 3]; 3];
         for c in 0..3 {
-            let ua = self.read(at, &ra.u[c]);
-            let ub = self.read(at, &rb.u[c]);
+            let ua = self.read(at, &ra.r.u[c]);
+            let ub = self.read(at, &rb.r.u[c]);
             for cp in 0..3 {
                 g[c][cp] = (1.0 - at.s) * ua[cp] + at.s * ub[cp];
             }
@@ -587,16 +584,15 @@ impl RotatingWheel {
         let at = self.at;
         let dr = to_spinning(at.cs, self.ground_of(df));
         for (key, wj) in [(at.j, 1.0 - at.s), (at.j + 1, at.s)] {
-            let r = self.slot(key);
-            for c in 0..3 {
-                let a = wj * dr[c];
-                if a == 0.0 {
-                    continue;
-                }
-                u.iter_mut().zip(&r.u[c]).for_each(|(x, y)| *x += a * y);
-                v.iter_mut().zip(&r.v[c]).for_each(|(x, y)| *x += a * y);
-            }
+            self.slot(key).r.add_to(wj, dr, u, v);
         }
+    }
+
+    /// The ground-x material velocity (m/s) of the wheel at the contact at t = 0 beyond
+    /// rigid rolling, `v + Ω ŷ × u` (x component: `v_x + Ω u_z`), from the state `u`, `v`.
+    pub(super) fn contact_velocity_x(&self, u: &[f64], v: &[f64]) -> f64 {
+        let at = self.locate(0.0);
+        self.read(at, v)[0] + self.spin.omega * self.read(at, u)[2]
     }
 
     /// Adds to `v` (at t = 0, frames aligned) the spinning-frame velocity of the ground-fixed
