@@ -1,8 +1,9 @@
 //! `corrugation explicit`: one passage of the full explicit FE path (docs/theory.md §8): the
 //! untruncated track and wheel, central difference, the same contact, wear and analysis as
 //! `passage`. The wheel does not rotate (its contact point is fixed on the wheel, as in the
-//! reduced model). Writes the files of `passage` plus `explicit.json` (time steps, ω_max, step
-//! counts, energy error, wall and CPU time).
+//! reduced model) unless `--wheel rotating` (or `explicit.wheel = "rotating"`) spins it at
+//! V/R. Writes the files of `passage` plus `explicit.json` (time steps, ω_max, step counts,
+//! energy error, wall and CPU time, wheel treatment and spin rate).
 
 use std::path::{Path, PathBuf};
 
@@ -13,6 +14,7 @@ use corrugation::dynamics::passage::PassageOptions;
 use corrugation::dynamics::RailProfile;
 use corrugation::explicit::{ExplicitModel, ExplicitOptions, ExplicitRecord};
 use corrugation::io::write_atomic;
+use corrugation::model::ExplicitWheel;
 
 use super::ModelArgs;
 
@@ -30,11 +32,29 @@ pub struct ExplicitCmd {
     /// Print the summary (the keys of `passage --json` plus the explicit figures) as JSON.
     #[arg(long)]
     json: bool,
+    /// The wheel treatment (overrides `explicit.wheel`): `fixed` (not rotating, the contact
+    /// point fixed on the wheel) or `rotating` (spinning at V/R, docs/theory.md §8.7).
+    #[arg(long, value_enum, value_name = "fixed|rotating")]
+    wheel: Option<WheelArg>,
+}
+
+/// `--wheel`: the explicit path's wheel treatment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum WheelArg {
+    /// Not rotating (the reduced model's wheel).
+    Fixed,
+    /// Spinning at V/R with the Coriolis and spin-softening terms.
+    Rotating,
 }
 
 impl ExplicitCmd {
     pub fn run(self) -> anyhow::Result<()> {
-        let m = self.model.load()?;
+        let mut m = self.model.load()?;
+        match self.wheel {
+            Some(WheelArg::Fixed) => m.explicit.wheel = ExplicitWheel::Fixed,
+            Some(WheelArg::Rotating) => m.explicit.wheel = ExplicitWheel::Rotating,
+            None => {}
+        }
         let profile = match &self.corrugation {
             Some(p) => Some(RailProfile::read_csv_um(p)?),
             None => None,
@@ -81,9 +101,15 @@ pub fn run_explicit(
         super::passage_cmd::print_summary(&summary, &rec.record, out);
         let i = &rec.info;
         println!(
-                "  explicit: track {} + wheel {} DOFs; dt {:.3e} s (track, {} per contact step), {:.3e} s (wheel, {}); ω_max {:.4e} rad/s (Gershgorin bound {:.4e}); {} FE steps in {:.1} s wall{}",
+                "  explicit: track {} + wheel {} DOFs ({} wheel{}); dt {:.3e} s (track, {} per contact step), {:.3e} s (wheel, {}); ω_max {:.4e} rad/s (Gershgorin bound {:.4e}); {} FE steps in {:.1} s wall{}",
                 i.dofs[0],
                 i.dofs[1],
+                i.wheel,
+                if i.wheel == "rotating" {
+                    format!(" at {:.2} rad/s", i.spin_rate_rad_s)
+                } else {
+                    String::new()
+                },
                 i.dt_s,
                 i.track_substeps,
                 i.dt_wheel_s,

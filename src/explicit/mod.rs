@@ -14,8 +14,12 @@
 //!   the FE is linear). Same static start, contact, wear accounting and analysis as the
 //!   reduced passage, so the two differ only by what the reduced model approximates.
 //!
-//! Assumptions: small displacements (linear FE); the wheel is not rotating (its contact
-//! point is fixed on the wheel, as in the reduced model).
+//! - [`rotating`]: the rotating wheel (`explicit.wheel = "rotating"`): its elastic motion in
+//!   a frame spinning at `V/R` with the Coriolis and spin-softening terms, the contact point
+//!   moving around the tread.
+//!
+//! Assumptions: small displacements (linear FE); by default the wheel is not rotating (its
+//! contact point is fixed on the wheel, as in the reduced model).
 
 // Numerical kernels index several parallel arrays with one loop index.
 #![allow(clippy::needless_range_loop)]
@@ -25,6 +29,7 @@ mod local;
 pub mod operator;
 pub mod passage;
 mod response;
+pub mod rotating;
 pub mod stable;
 mod start;
 
@@ -102,6 +107,9 @@ pub enum ExplicitError {
     /// The contact patch's node-plane weights could not be formed.
     #[error(transparent)]
     Patch(#[from] crate::dynamics::patch::PatchError),
+    /// The rotating wheel cannot be set up.
+    #[error("rotating wheel (explicit.wheel = \"rotating\"): {0}")]
+    Rotating(String),
     /// An error of the shared passage machinery (contact, profile, structure).
     #[error(transparent)]
     Dynamics(#[from] crate::dynamics::DynamicsError),

@@ -38,6 +38,7 @@ use super::ledger::{Ledger, LedgerStep, State};
 use super::local::LocalCompliance;
 use super::operator::{ExplicitOperator, StepScratch};
 use super::response::{RailResponses, UnitResponse};
+use super::rotating::{RotatingWheel, WheelParts};
 use super::stable::{StableStep, DEFAULT_SAFETY};
 use super::start::{add_line_force, solve_one, wheel_elastic_static, wheel_rigid_modes};
 use super::ExplicitError;
@@ -50,7 +51,7 @@ use crate::dynamics::patch::{max_planes, plane_weights, PlaneWeights};
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
 use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
-use crate::model::{ExplicitLocalCompliance, LoadSpread, Model};
+use crate::model::{ExplicitLocalCompliance, ExplicitWheel, LoadSpread, Model};
 use crate::structure::{TrackStructure, WheelStructure};
 
 /// How the contact force couples the structures over a contact step.
@@ -82,6 +83,11 @@ pub struct ExplicitOptions {
     /// Whether the element-scale variation of the mesh's local compliance is removed from
     /// the contact (default) or kept.
     pub local_compliance: ExplicitLocalCompliance,
+    /// The wheel treatment (default fixed, `explicit.wheel`; docs/theory.md §8.7).
+    pub wheel: ExplicitWheel,
+    /// The rotating wheel's spin rate (rad/s); `None` (default) = `V/R` at the contact
+    /// radius, rolling without slip. Another value only isolates the effect of the rotation.
+    pub spin_rate_rad_s: Option<f64>,
 }
 
 impl Default for ExplicitOptions {
@@ -92,6 +98,8 @@ impl Default for ExplicitOptions {
             coupling: Coupling::PredictorCorrector,
             load_spread: LoadSpread::Patch,
             local_compliance: ExplicitLocalCompliance::Constant,
+            wheel: ExplicitWheel::Fixed,
+            spin_rate_rad_s: None,
         }
     }
 }
@@ -105,6 +113,8 @@ impl ExplicitOptions {
             coupling: Coupling::PredictorCorrector,
             load_spread: model.explicit.load_spread,
             local_compliance: model.explicit.local_compliance,
+            wheel: model.explicit.wheel,
+            spin_rate_rad_s: None,
         }
     }
 }
@@ -132,7 +142,8 @@ pub struct ExplicitInfo {
     pub steps: usize,
     /// Contact steps of the passage (−).
     pub contact_steps: usize,
-    /// Relative energy error of the passage (−; see [`EnergyBalance::relative_error`]).
+    /// Relative energy error of the passage (−; see [`EnergyBalance::relative_error`]); not
+    /// a number when the ledger is not kept (no energy option, or the rotating wheel).
     pub energy_error: f64,
     /// Wall time of the dynamic phase (s).
     pub seconds: f64,
@@ -145,6 +156,10 @@ pub struct ExplicitInfo {
     /// Contact steps at which the series compliance `G − Δg` was negative and clamped to 0
     /// (−; docs/theory.md §8.6).
     pub clamped_steps: usize,
+    /// The wheel treatment: `"fixed"` or `"rotating"` (`explicit.wheel`).
+    pub wheel: &'static str,
+    /// The rotating wheel's spin rate (rad/s; 0 for the fixed wheel).
+    pub spin_rate_rad_s: f64,
 }
 
 /// A passage of the explicit path.
@@ -444,6 +459,17 @@ impl ExplicitModel {
         )?;
         let (xi0, delta0) = (st.creepage, st.approach_m);
         let mut s_ = self.start_state(v, xi0, delta0)?;
+        // The rotating wheel (rotating.rs); `None` for the fixed wheel.
+        let mut rot = self.rotating_wheel(v, nw, dtw)?;
+        if let Some(r) = &rot {
+            r.add_rolling_velocity(&self.wheel_structure, &s_.uw, &mut s_.vw);
+            // The wheel's material velocity at the contact back to the steady creepage's.
+            let dv = xi0 * v - r.contact_velocity_x(&s_.uw, &s_.vw);
+            let c = rigid_least_norm(&self.rigid_obs, [dv, 0.0, 0.0]);
+            for (k, m) in self.rigid.iter().enumerate() {
+                s_.vw.iter_mut().zip(m).for_each(|(x, y)| *x += c[k] * y);
+            }
+        }
 
         // --- Unit responses, scratch, records.
         let mut sc_t = self.track.op.scratch();
@@ -456,7 +482,8 @@ impl ExplicitModel {
         let mut rail_point = self.rail_point(popts, n_steps);
         let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
         let mut wear = WearAccumulator::new(&contact, z0, nbins);
-        let mut ledger = Ledger::new(self, popts.energy, &s_, &st, x0, &mut sc_t, &mut sc_w)?;
+        let keep = popts.energy && rot.is_none();
+        let mut ledger = Ledger::new(self, keep, &s_, &st, x0, &mut sc_t, &mut sc_w)?;
         // The start's force on the structures is the static one (lateral 0).
         let mut f = [st.fx_n, 0.0, st.normal_force_n];
         let mut series = [0.0; 3];
@@ -476,20 +503,36 @@ impl ExplicitModel {
             let pw = self.weights(xc)?;
             // Predictor: F_n held at x_{n+1}.
             let ur_old = self.rail_under(&s_.ut, &pw);
-            let uw_old = self.wheel_at(&s_.uw);
+            let uw_old = match &rot {
+                Some(r) => r.wheel_at(&s_.uw, t - dt_c, t),
+                None => self.wheel_at(&s_.uw),
+            };
             ftrack.iter_mut().for_each(|x| *x = 0.0);
             let neg = [-f[0], -f[1], -f[2]];
             for (j, wj) in pw.iter() {
                 add_nodes_load(&self.line.nodes[j], dm_t, &frame, wj, neg, &mut ftrack);
             }
-            fwheel.copy_from_slice(&self.wheel_const);
-            add_nodes_load(&self.wheel_nodes, dm_w, &frame, 1.0, f, &mut fwheel);
             ledger.before_step(&s_.uw);
             let State { ut, vt, uw, vw } = &mut s_;
             self.track.op.advance(dtt, nt, ut, vt, &ftrack, &mut sc_t);
-            self.wheel.op.advance(dtw, nw, uw, vw, &fwheel, &mut sc_w);
+            let (uw_new, g_wheel) = match rot.as_mut() {
+                Some(r) => {
+                    r.advance(&self.wheel.op, uw, vw, f, t);
+                    let g = if corrected {
+                        r.compliance(&self.wheel.op)
+                    } else {
+                        g_wheel
+                    };
+                    (r.wheel_at(uw, t, t), g)
+                }
+                None => {
+                    fwheel.copy_from_slice(&self.wheel_const);
+                    add_nodes_load(&self.wheel_nodes, dm_w, &frame, 1.0, f, &mut fwheel);
+                    self.wheel.op.advance(dtw, nw, uw, vw, &fwheel, &mut sc_w);
+                    (self.wheel_at(uw), g_wheel)
+                }
+            };
             let ur_new = self.rail_under(&s_.ut, &pw);
-            let uw_new = self.wheel_at(&s_.uw);
             // Contact at x_{n+1} with the one-step compliance as the series compliance.
             if corrected {
                 series = self.one_step_compliance(&mut rail_resp, &mut sc_t, &pw, g_wheel);
@@ -532,7 +575,10 @@ impl ExplicitModel {
                 for (j, wj) in pw.iter() {
                     rail_resp.response(j).add_to(wj, df, &mut s_.ut, &mut s_.vt);
                 }
-                wheel_resp.add_to(1.0, df, &mut s_.uw, &mut s_.vw);
+                match &rot {
+                    Some(r) => r.correct(df, &mut s_.uw, &mut s_.vw),
+                    None => wheel_resp.add_to(1.0, df, &mut s_.uw, &mut s_.vw),
+                }
             }
             s_.check_finite(t, xc)?;
             if xc - half_grid < z1 && xc + half_grid > z0 {
@@ -588,11 +634,7 @@ impl ExplicitModel {
             omega_max_bound: self.track.step.omega_max_bound,
             steps: n_steps * nt,
             contact_steps: n_steps,
-            energy_error: if popts.energy {
-                eb.relative_error()
-            } else {
-                f64::NAN
-            },
+            energy_error: if keep { eb.relative_error() } else { f64::NAN },
             seconds,
             cpu_seconds: match (cpu0, cpu_seconds()) {
                 (Some(a), Some(b)) => Some(b - a),
@@ -601,6 +643,8 @@ impl ExplicitModel {
             dofs: self.dofs(),
             setup_seconds: self.setup_seconds,
             clamped_steps: clamped,
+            wheel: self.opts.wheel.as_str(),
+            spin_rate_rad_s: rot.as_ref().map_or(0.0, |r| r.omega()),
         };
         Ok(ExplicitRecord {
             record: PassageRecord {
@@ -620,6 +664,30 @@ impl ExplicitModel {
             },
             info,
         })
+    }
+
+    /// The rotating wheel of a passage at `v` (m/s) with `steps` wheel sub-steps of `dt` (s)
+    /// per contact step (spin rate `V/R` unless the options set one); `None` for the fixed
+    /// wheel.
+    fn rotating_wheel(
+        &self,
+        v: f64,
+        steps: usize,
+        dt: f64,
+    ) -> Result<Option<RotatingWheel>, ExplicitError> {
+        if self.opts.wheel == ExplicitWheel::Fixed {
+            return Ok(None);
+        }
+        let parts = WheelParts {
+            structure: &self.wheel_structure,
+            op: &self.wheel.op,
+            contact_nodes: &self.wheel_nodes,
+            frame: self.frame,
+            loads: &self.loads,
+            wheel_const: &self.wheel_const,
+        };
+        let omega = self.opts.spin_rate_rad_s.unwrap_or(v / self.wheel_radius_m);
+        RotatingWheel::new(&parts, omega, steps, dt).map(Some)
     }
 
     /// The start: the static deflections, the wheel's rigid modes placed so that the

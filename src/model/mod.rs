@@ -152,6 +152,11 @@ pub struct Explicit {
     /// `"mesh"` (the mesh's own, position dependent; docs/theory.md §8.6).
     #[serde(default)]
     pub local_compliance: ExplicitLocalCompliance,
+    /// The wheel treatment of the explicit path (docs/theory.md §8.7): `"fixed"` (default,
+    /// the wheel as the reduced model has it, not rotating) or `"rotating"` (its elastic
+    /// motion in a frame spinning at V/R, with the Coriolis and spin-softening terms).
+    #[serde(default)]
+    pub wheel: ExplicitWheel,
 }
 
 /// The explicit path's treatment of the mesh's local compliance (docs/theory.md §8.6).
@@ -176,6 +181,29 @@ pub enum LoadSpread {
     Node,
 }
 
+
+/// The wheel treatment of the explicit path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ExplicitWheel {
+    /// Not rotating: the contact point is fixed on the wheel (as in the reduced model).
+    #[default]
+    Fixed,
+    /// Rotating at `Ω = V/R`: the wheel's elastic motion in the spinning frame, the contact
+    /// point moving around the tread.
+    Rotating,
+}
+
+impl ExplicitWheel {
+    /// The key's value as written in a model file (`"fixed"`, `"rotating"`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ExplicitWheel::Fixed => "fixed",
+            ExplicitWheel::Rotating => "rotating",
+        }
+    }
+}
+
 fn default_explicit_safety() -> f64 {
     0.9
 }
@@ -187,6 +215,7 @@ impl Default for Explicit {
             time_step: None,
             load_spread: LoadSpread::Patch,
             local_compliance: ExplicitLocalCompliance::Constant,
+            wheel: ExplicitWheel::Fixed,
         }
     }
 }

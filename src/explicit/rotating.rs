@@ -1,0 +1,662 @@
+//! The rotating wheel of the explicit path (E1r, docs/theory.md §8.7): the wheel's elastic
+//! motion in a frame spinning with it at `Ω` about the axle (the wheel frame's y axis through
+//! the origin), with the Coriolis (gyroscopic) and spin-softening terms
+//!
+//! ```text
+//! M ü + (C + 2Ω G) u̇ + (K − Ω² M_⊥) u = f(t),   G = M J,  J u = ŷ × u,  M_⊥ u = M (u_x, 0, u_z)
+//! ```
+//!
+//! (`u` in the spinning frame's components; `G` is skew with a lumped mass, so the Coriolis
+//! force does no work). The centrifugal load of the undeformed wheel and the stress
+//! stiffening it causes are left out (relative order `Ω²/ω²` of the lowest wheel mode, below
+//! 0.2 % at 140 km/h). The central difference takes the Coriolis term at the mean of the two
+//! half-step velocities (implicit midpoint in that term only: per node a 2×2 rotation of the
+//! half-step velocity, a Cayley transform), which keeps the scheme's discrete energy
+//! `½ v_{k+½}ᵀ M v_{k+½} + ½ u_kᵀ (K − Ω² M_⊥) u_{k+1}` exactly conserved without damping and
+//! load, and leaves the stable step of the non-rotating wheel unchanged.
+//!
+//! In the spinning frame the ground-fixed loads rotate (gravity, the train's resistance on
+//! the journals; the driving torque turns with the wheel), the primary suspension's vertical
+//! direction rotates on the journal nodes, and the contact point moves around the tread at
+//! `−Ω`: the contact force is applied to the tread nodes of the two angle planes around the
+//! contact's material angle `Ωt`, interpolated linearly in angle, and the wheel's
+//! displacement at the contact is read the same way. The coupling's unit responses are those
+//! of the two angle planes around the contact (computed as the contact reaches a plane).
+
+use super::operator::{ExplicitOperator, StepScratch};
+use super::response::UnitResponse;
+use super::ExplicitError;
+use crate::dynamics::passage::WheelLoads;
+use crate::dynamics::reduced::ContactFrame;
+use crate::fe::assembly::DofMap;
+use crate::structure::WheelStructure;
+
+/// A substructure spinning at `Ω` (rad/s) about the y axis through the origin: the
+/// spinning nodes' x and z DOFs and their lumped masses, and the gyroscopic central
+/// difference step.
+#[derive(Clone, Debug)]
+pub struct SpinFrame {
+    omega: f64,
+    /// Free indices of the x and z DOF of each spinning node, and its lumped mass (kg).
+    pairs: Vec<(usize, usize, f64)>,
+}
+
+/// Scratch of [`SpinFrame::step`] (allocated once).
+#[derive(Clone, Debug)]
+pub struct SpinScratch {
+    f: Vec<f64>,
+    v_old: Vec<[f64; 2]>,
+    op: StepScratch,
+}
+
+impl SpinFrame {
+    /// The spin at `omega` (rad/s, positive about +y) of `nodes` of a substructure with the
+    /// operator `op` and DOF map `dofmap`. Every spinning node needs free x and z DOFs with
+    /// equal lumped masses (so that the Coriolis matrix is skew).
+    pub fn new(
+        op: &ExplicitOperator,
+        dofmap: &DofMap,
+        nodes: impl IntoIterator<Item = usize>,
+        omega: f64,
+    ) -> Result<Self, ExplicitError> {
+        if !omega.is_finite() {
+            return Err(ExplicitError::Rotating(format!(
+                "spin rate {omega} rad/s is not finite"
+            )));
+        }
+        let m = op.mass();
+        let mut pairs = Vec::new();
+        for node in nodes {
+            let (Some(ix), Some(iz)) =
+                (dofmap.free_index(3 * node), dofmap.free_index(3 * node + 2))
+            else {
+                return Err(ExplicitError::Rotating(format!(
+                    "node {node} of the spinning wheel has a held x or z DOF: only the lateral DOF may be held"
+                )));
+            };
+            if (m[ix] - m[iz]).abs() > 1e-9 * m[ix] {
+                return Err(ExplicitError::Rotating(format!(
+                    "node {node} has lumped masses {:e} (x) and {:e} (z) kg: the Coriolis term needs equal masses (no point mass on a spinning node)",
+                    m[ix], m[iz]
+                )));
+            }
+            pairs.push((ix, iz, m[ix]));
+        }
+        Ok(SpinFrame { omega, pairs })
+    }
+
+    /// The spin rate (rad/s).
+    pub fn omega(&self) -> f64 {
+        self.omega
+    }
+
+    /// Scratch for [`Self::step`].
+    pub fn scratch(&self, op: &ExplicitOperator) -> SpinScratch {
+        SpinScratch {
+            f: vec![0.0; op.n()],
+            v_old: vec![[0.0; 2]; self.pairs.len()],
+            op: op.scratch(),
+        }
+    }
+
+    /// One central-difference step of length `dt` (s) in the spinning frame under the load
+    /// `f` (N, spinning-frame components): `u` from `u_k` to `u_{k+1}`, `v` from `v_{k−½}` to
+    /// `v_{k+½}`. With `Ω = 0` it is bitwise [`ExplicitOperator::step`]. No allocation.
+    ///
+    /// The operator's step runs with the spin-softening force and the Coriolis force of the
+    /// lagged velocity added to `f`; each spinning node's velocity is then corrected to the
+    /// midpoint rule of the Coriolis term, `(I + hJ) v⁺ = (I − hJ) v⁻ + Δt a` with
+    /// `h = ΩΔt` (`J² = −I` in the x–z plane, so `(I + hJ)⁻¹ = (I − hJ)/(1 + h²)`), and the
+    /// displacement with it.
+    pub fn step(
+        &self,
+        op: &ExplicitOperator,
+        dt: f64,
+        u: &mut [f64],
+        v: &mut [f64],
+        f: &[f64],
+        sc: &mut SpinScratch,
+    ) {
+        let w = self.omega;
+        sc.f.copy_from_slice(f);
+        let w2 = w * w;
+        for (p, &(ix, iz, m)) in self.pairs.iter().enumerate() {
+            let (vx, vz) = (v[ix], v[iz]);
+            sc.v_old[p] = [vx, vz];
+            // −Ω² M_⊥ u moved to the load side; −2Ω m ŷ × v with ŷ × v = (v_z, 0, −v_x).
+            sc.f[ix] += m * (w2 * u[ix] - 2.0 * w * vz);
+            sc.f[iz] += m * (w2 * u[iz] + 2.0 * w * vx);
+        }
+        op.step(dt, u, v, &sc.f, &mut sc.op);
+        let h = w * dt;
+        let inv = 1.0 / (1.0 + h * h);
+        for (p, &(ix, iz, _)) in self.pairs.iter().enumerate() {
+            let [ox, oz] = sc.v_old[p];
+            let (tx, tz) = (v[ix], v[iz]);
+            // b = v_tmp + hJ v⁻ = (I − hJ) v⁻ + Δt a; v⁺ = (I − hJ) b / (1 + h²).
+            let (bx, bz) = (tx + h * oz, tz - h * ox);
+            let (nx, nz) = ((bx - h * bz) * inv, (bz + h * bx) * inv);
+            v[ix] = nx;
+            v[iz] = nz;
+            u[ix] += dt * (nx - tx);
+            u[iz] += dt * (nz - tz);
+        }
+    }
+
+    /// The scheme's conserved energy (J) between `u_k` (`u_prev`) and `u_{k+1}` (`u`) with
+    /// the half-step velocity `v = v_{k+½}`: `½ vᵀMv + ½ u_kᵀ K u_{k+1} − ½ Ω² u_kᵀ M_⊥ u_{k+1}`
+    /// (kinetic energy relative to the spinning frame, strain energy, centrifugal potential);
+    /// `ku` is scratch of length n.
+    pub fn discrete_energy(
+        &self,
+        op: &ExplicitOperator,
+        u_prev: &[f64],
+        u: &[f64],
+        v: &[f64],
+        ku: &mut [f64],
+    ) -> f64 {
+        op.apply_k(u, ku);
+        let strain: f64 = 0.5
+            * u_prev
+                .iter()
+                .zip(ku.iter())
+                .map(|(a, b)| a * b)
+                .sum::<f64>();
+        let centrifugal: f64 = self
+            .pairs
+            .iter()
+            .map(|&(ix, iz, m)| m * (u_prev[ix] * u[ix] + u_prev[iz] * u[iz]))
+            .sum();
+        op.kinetic_energy(v) + strain - 0.5 * self.omega * self.omega * centrifugal
+    }
+}
+
+/// `(cos α, sin α)` of a rotation about +y by `α` (rad): ground components of a spinning-frame
+/// vector `(x, z)` are `(c x + s z, −s x + c z)`.
+fn to_ground([c, s]: [f64; 2], [x, y, z]: [f64; 3]) -> [f64; 3] {
+    [c * x + s * z, y, -s * x + c * z]
+}
+
+/// Spinning-frame components of a ground vector (the inverse of [`to_ground`]).
+fn to_spinning([c, s]: [f64; 2], [x, y, z]: [f64; 3]) -> [f64; 3] {
+    [c * x - s * z, y, s * x + c * z]
+}
+
+/// The primary suspension of the spinning wheel: a vertical spring-damper from the
+/// (non-spinning) sprung mass to the journal nodes, whose vertical direction in the spinning
+/// frame is `d(t) = (−sin Ωt, 0, cos Ωt)`. The assembled operator holds it along the
+/// spinning z; [`Suspension::correction`] is the difference to the true direction.
+struct Suspension {
+    sprung: usize,
+    /// Journal nodes: free x and z indices and the balanced weight.
+    journal: Vec<(usize, usize, f64)>,
+    k: f64,
+    c: f64,
+}
+
+impl Suspension {
+    fn new(wheel: &WheelStructure) -> Result<Option<Self>, ExplicitError> {
+        let Some(spring) = wheel.springs.first() else {
+            return Ok(None);
+        };
+        let dm = &wheel.dofmap;
+        let bad = || {
+            ExplicitError::Rotating(
+                "the primary suspension is not a vertical spring from the sprung mass to the journal nodes".into(),
+            )
+        };
+        let sprung = match spring.side_a.as_slice() {
+            [(d, w)] if *w == 1.0 && d % 3 == 2 => dm.free_index(*d).ok_or_else(bad)?,
+            _ => return Err(bad()),
+        };
+        let mut journal = Vec::with_capacity(spring.side_b.len());
+        for &(d, w) in &spring.side_b {
+            if d % 3 != 2 {
+                return Err(bad());
+            }
+            let (ix, iz) = (dm.free_index(d - 2), dm.free_index(d));
+            journal.push((ix.ok_or_else(bad)?, iz.ok_or_else(bad)?, w));
+        }
+        Ok(Some(Suspension {
+            sprung,
+            journal,
+            k: spring.stiffness,
+            c: spring.damping,
+        }))
+    }
+
+    /// Adds to `f` the true spring-damper force minus the assembled one at the rotation
+    /// `cs = (cos Ωt, sin Ωt)` (`omega` in rad/s), with the lagged velocity `v` (exactly zero
+    /// at `Ωt = 0`, `Ω = 0`).
+    fn correction(&self, cs: [f64; 2], omega: f64, u: &[f64], v: &[f64], f: &mut [f64]) {
+        let [c, s] = cs;
+        let (mut r_a, mut rd_a) = (u[self.sprung], v[self.sprung]);
+        let (mut r_t, mut rd_t) = (r_a, rd_a);
+        for &(ix, iz, w) in &self.journal {
+            r_a -= w * u[iz];
+            rd_a -= w * v[iz];
+            r_t -= w * (-s * u[ix] + c * u[iz]);
+            // d/dt (d · u) = d · u̇ + ḋ · u with ḋ = Ω (−cos, 0, −sin).
+            rd_t -= w * ((-s * v[ix] + c * v[iz]) + omega * (-c * u[ix] - s * u[iz]));
+        }
+        let fa = self.k * r_a + self.c * rd_a;
+        let ft = self.k * r_t + self.c * rd_t;
+        f[self.sprung] += fa - ft;
+        for &(ix, iz, w) in &self.journal {
+            f[ix] += ft * w * (-s);
+            f[iz] += ft * w * c - fa * w;
+        }
+    }
+}
+
+/// The wheel's parts the rotating treatment needs (borrowed from the explicit model).
+pub(super) struct WheelParts<'a> {
+    /// The wheel substructure.
+    pub(super) structure: &'a WheelStructure,
+    /// Its operator (with the suspension along the spinning z).
+    pub(super) op: &'a ExplicitOperator,
+    /// The tread nodes and lateral weights of the contact at θ = 0.
+    pub(super) contact_nodes: &'a [(usize, f64)],
+    /// The contact frame.
+    pub(super) frame: ContactFrame,
+    /// The wheel loads.
+    pub(super) loads: &'a WheelLoads,
+    /// Their sum (N).
+    pub(super) wheel_const: &'a [f64],
+}
+
+/// A node set of one angle plane: free indices (x, y, z; `usize::MAX` = held) and weight.
+type PlaneNodes = Vec<([usize; 3], f64)>;
+
+/// The unit responses of one angle plane (rest to a unit load ramped over a contact step
+/// in the spinning x, y, z) and the key of the plane (its index counted along the travel).
+struct PlaneResponse {
+    key: Option<i64>,
+    r: UnitResponse,
+}
+
+/// Where the contact is on the wheel: angle plane `j` (counted along the travel), weight `s`
+/// of plane `j + 1`, and the rotation `(cos Ωt, sin Ωt)`.
+#[derive(Clone, Copy, Debug)]
+struct OnWheel {
+    j: i64,
+    s: f64,
+    cs: [f64; 2],
+}
+
+/// The rotating wheel of a passage: spin, moving contact, rotated loads, suspension, and the
+/// coupling's plane responses.
+pub(super) struct RotatingWheel {
+    spin: SpinFrame,
+    sc: SpinScratch,
+    axes: [[f64; 3]; 3],
+    thetas: Vec<f64>,
+    planes: Vec<PlaneNodes>,
+    /// The constant loads (N) and their ground-fixed part on the spinning nodes (gravity and
+    /// resistance), which rotates.
+    wheel_const: Vec<f64>,
+    ground: Vec<f64>,
+    suspension: Option<Suspension>,
+    /// Contact-step sub-steps and their length (s).
+    steps: usize,
+    dt: f64,
+    slots: [PlaneResponse; 2],
+    f: Vec<f64>,
+    fk: Vec<f64>,
+    /// The contact's place during the current contact step (held at its end).
+    at: OnWheel,
+}
+
+impl RotatingWheel {
+    /// The rotating wheel at `omega` (rad/s) for contact steps of `steps` sub-steps of `dt`
+    /// (s).
+    pub(super) fn new(
+        p: &WheelParts<'_>,
+        omega: f64,
+        steps: usize,
+        dt: f64,
+    ) -> Result<Self, ExplicitError> {
+        let w = p.structure;
+        let topo = &w.topology;
+        let nm = topo.meridian.len();
+        let k0 = topo.contact_angle_index();
+        let nt = topo.thetas.len();
+        let ring = (0..nt).flat_map(|k| (0..nm).map(move |m| topo.node(k, m)));
+        let spin = SpinFrame::new(p.op, &w.dofmap, ring, omega)?;
+        let dm = &w.dofmap;
+        let free =
+            |node: usize| [0, 1, 2].map(|c| dm.free_index(3 * node + c).unwrap_or(usize::MAX));
+        // The contact's meridian nodes and weights, repeated at every angle.
+        let merid: Vec<(usize, f64)> = p
+            .contact_nodes
+            .iter()
+            .map(|&(node, wt)| (node - topo.node(k0, 0), wt))
+            .collect();
+        if merid.iter().any(|&(m, _)| m >= nm) {
+            return Err(ExplicitError::Rotating(
+                "the wheel's contact nodes are not on the contact angle plane".into(),
+            ));
+        }
+        let planes = (0..nt)
+            .map(|k| {
+                merid
+                    .iter()
+                    .map(|&(m, wt)| (free(topo.node(k, m)), wt))
+                    .collect()
+            })
+            .collect();
+        let n = p.op.n();
+        let mut ground = vec![0.0; n];
+        for &(ix, iz, _) in &spin.pairs {
+            for i in [ix, iz] {
+                ground[i] = p.loads.gravity[i] + p.loads.drawbar[i];
+            }
+        }
+        let slot = || PlaneResponse {
+            key: None,
+            r: UnitResponse::zeros(n),
+        };
+        let sc = spin.scratch(p.op);
+        Ok(RotatingWheel {
+            spin,
+            sc,
+            axes: [p.frame.x, p.frame.t, p.frame.n],
+            thetas: topo.thetas.clone(),
+            planes,
+            wheel_const: p.wheel_const.to_vec(),
+            ground,
+            suspension: Suspension::new(w)?,
+            steps,
+            dt,
+            slots: [slot(), slot()],
+            f: vec![0.0; n],
+            fk: vec![0.0; n],
+            at: OnWheel {
+                j: 0,
+                s: 0.0,
+                cs: [1.0, 0.0],
+            },
+        })
+    }
+
+    /// The spin rate (rad/s).
+    pub(super) fn omega(&self) -> f64 {
+        self.spin.omega
+    }
+
+    /// The contact's place on the wheel at time `t` (s): the material angle under the
+    /// contact is `Ωt` (the tread runs backwards through the contact at `−Ω`).
+    fn locate(&self, t: f64) -> OnWheel {
+        let phi = self.spin.omega * t;
+        let th = &self.thetas;
+        let nt = th.len();
+        let tau = std::f64::consts::TAU;
+        let turns = ((phi - th[0]) / tau).floor();
+        let psi = phi - turns * tau;
+        let k = th.partition_point(|&x| x <= psi).saturating_sub(1);
+        let next = if k + 1 < nt { th[k + 1] } else { th[0] + tau };
+        let s = ((psi - th[k]) / (next - th[k])).clamp(0.0, 1.0);
+        OnWheel {
+            j: k as i64 + nt as i64 * turns as i64,
+            s,
+            cs: [phi.cos(), phi.sin()],
+        }
+    }
+
+    fn plane(&self, j: i64) -> &PlaneNodes {
+        &self.planes[j.rem_euclid(self.planes.len() as i64) as usize]
+    }
+
+    /// Spinning-frame components of the weighted displacement at `at`.
+    fn read(&self, at: OnWheel, u: &[f64]) -> [f64; 3] {
+        let mut d = [0.0; 3];
+        for (j, wj) in [(at.j, 1.0 - at.s), (at.j + 1, at.s)] {
+            if wj == 0.0 {
+                continue;
+            }
+            for &(idx, wt) in self.plane(j) {
+                for c in 0..3 {
+                    if idx[c] != usize::MAX {
+                        d[c] += wj * wt * u[idx[c]];
+                    }
+                }
+            }
+        }
+        d
+    }
+
+    /// Adds the spinning-frame force `fr` (N) at `at` into `f`.
+    fn load(&self, at: OnWheel, fr: [f64; 3], f: &mut [f64]) {
+        for (j, wj) in [(at.j, 1.0 - at.s), (at.j + 1, at.s)] {
+            if wj == 0.0 {
+                continue;
+            }
+            for &(idx, wt) in self.plane(j) {
+                for c in 0..3 {
+                    if fr[c] != 0.0 && idx[c] != usize::MAX {
+                        f[idx[c]] += wj * wt * fr[c];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Ground components of a contact-frame vector.
+    fn ground_of(&self, fc: [f64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|c| (0..3).map(|d| fc[d] * self.axes[d][c]).sum())
+    }
+
+    /// Contact-frame components (m) of the wheel's displacement at the material point under
+    /// the contact at `t_place` (s), with the state `u` at time `t_state` (s).
+    pub(super) fn wheel_at(&self, u: &[f64], t_state: f64, t_place: f64) -> [f64; 3] {
+        let at = self.locate(t_place);
+        let g = to_ground(self.locate(t_state).cs, self.read(at, u));
+        self.axes.map(|a| a[0] * g[0] + a[1] * g[1] + a[2] * g[2])
+    }
+
+    /// Advances the wheel over the contact step ending at `t_end` (s) (`steps` sub-steps)
+    /// under the contact force `fc` (N, contact frame, on the wheel) held at the contact's
+    /// end-of-step place and direction, the rotating ground loads, the torque and the
+    /// suspension.
+    pub(super) fn advance(
+        &mut self,
+        op: &ExplicitOperator,
+        u: &mut [f64],
+        v: &mut [f64],
+        fc: [f64; 3],
+        t_end: f64,
+    ) {
+        self.at = self.locate(t_end);
+        let fr = to_spinning(self.at.cs, self.ground_of(fc));
+        let t0 = t_end - self.steps as f64 * self.dt;
+        for k in 0..self.steps {
+            let a = self.spin.omega * (t0 + k as f64 * self.dt);
+            let (s, c) = a.sin_cos();
+            // cos a − 1 without cancellation.
+            let cm1 = -2.0 * (0.5 * a).sin().powi(2);
+            self.f.copy_from_slice(&self.wheel_const);
+            for &(ix, iz, _) in &self.spin.pairs {
+                let (gx, gz) = (self.ground[ix], self.ground[iz]);
+                self.f[ix] += cm1 * gx - s * gz;
+                self.f[iz] += s * gx + cm1 * gz;
+            }
+            let mut f = std::mem::take(&mut self.f);
+            self.load(self.at, fr, &mut f);
+            if let Some(sus) = &self.suspension {
+                sus.correction([c, s], self.spin.omega, u, v, &mut f);
+            }
+            self.spin.step(op, self.dt, u, v, &f, &mut self.sc);
+            self.f = f;
+        }
+    }
+
+    /// Makes sure the plane responses of `j` and `j + 1` are in the slots (computing the
+    /// missing ones in place of those not needed).
+    fn ensure(&mut self, op: &ExplicitOperator, j: i64) {
+        for key in [j, j + 1] {
+            if self.slots.iter().any(|s| s.key == Some(key)) {
+                continue;
+            }
+            let i = if self.slots[0].key.is_some_and(|k| k == j || k == j + 1) {
+                1
+            } else {
+                0
+            };
+            self.compute_slot(op, i, key);
+        }
+    }
+
+    /// The responses of plane `key` into slot `i`: from rest, a unit spinning-frame load in
+    /// x, y, z ramped from 0 to 1 over a contact step (sub-step `k` applies `k/steps`).
+    fn compute_slot(&mut self, op: &ExplicitOperator, i: usize, key: i64) {
+        let mut unit = std::mem::take(&mut self.f);
+        let mut fk = std::mem::take(&mut self.fk);
+        let mut slot = std::mem::replace(
+            &mut self.slots[i],
+            PlaneResponse {
+                key: None,
+                r: UnitResponse::zeros(0),
+            },
+        );
+        let at = OnWheel {
+            j: key,
+            s: 0.0,
+            cs: [1.0, 0.0],
+        };
+        for c in 0..3 {
+            unit.iter_mut().for_each(|x| *x = 0.0);
+            let mut e = [0.0; 3];
+            e[c] = 1.0;
+            self.load(at, e, &mut unit);
+            let (u, v) = (&mut slot.r.u[c], &mut slot.r.v[c]);
+            u.iter_mut().for_each(|x| *x = 0.0);
+            v.iter_mut().for_each(|x| *x = 0.0);
+            for k in 0..self.steps {
+                let a = k as f64 / self.steps as f64;
+                fk.iter_mut().zip(&unit).for_each(|(x, y)| *x = a * y);
+                self.spin.step(op, self.dt, u, v, &fk, &mut self.sc);
+            }
+        }
+        slot.key = Some(key);
+        self.slots[i] = slot;
+        self.f = unit;
+        self.fk = fk;
+    }
+
+    fn slot(&self, key: i64) -> &PlaneResponse {
+        if self.slots[0].key == Some(key) {
+            &self.slots[0]
+        } else {
+            &self.slots[1]
+        }
+    }
+
+    /// The wheel's one-contact-step compliance (m/N) per contact-frame direction at the
+    /// contact's place of the current step (after [`Self::advance`]).
+    pub(super) fn compliance(&mut self, op: &ExplicitOperator) -> [f64; 3] {
+        let at = self.at;
+        self.ensure(op, at.j);
+        let (ra, rb) = (self.slot(at.j), self.slot(at.j + 1));
+        // g[c][c'] = displacement along c' at the contact under the interpolated unit load c.
+        let mut g = [[0.0; 3]; 3];
+        for c in 0..3 {
+            let ua = self.read(at, &ra.r.u[c]);
+            let ub = self.read(at, &rb.r.u[c]);
+            for cp in 0..3 {
+                g[c][cp] = (1.0 - at.s) * ua[cp] + at.s * ub[cp];
+            }
+        }
+        self.axes.map(|a| {
+            let ar = to_spinning(at.cs, a);
+            let mut x = 0.0;
+            for c in 0..3 {
+                for cp in 0..3 {
+                    x += ar[c] * g[c][cp] * ar[cp];
+                }
+            }
+            x
+        })
+    }
+
+    /// Adds the response to the contact-force change `df` (N, contact frame) ramped over the
+    /// current step to the state (after [`Self::compliance`]).
+    pub(super) fn correct(&self, df: [f64; 3], u: &mut [f64], v: &mut [f64]) {
+        let at = self.at;
+        let dr = to_spinning(at.cs, self.ground_of(df));
+        for (key, wj) in [(at.j, 1.0 - at.s), (at.j + 1, at.s)] {
+            self.slot(key).r.add_to(wj, dr, u, v);
+        }
+    }
+
+    /// The ground-x material velocity (m/s) of the wheel at the contact at t = 0 beyond
+    /// rigid rolling, `v + Ω ŷ × u` (x component: `v_x + Ω u_z`), from the state `u`, `v`.
+    pub(super) fn contact_velocity_x(&self, u: &[f64], v: &[f64]) -> f64 {
+        let at = self.locate(0.0);
+        self.read(at, v)[0] + self.spin.omega * self.read(at, u)[2]
+    }
+
+    /// Adds to `v` (at t = 0, frames aligned) the spinning-frame velocity of the ground-fixed
+    /// deflection `u` (steady rolling): `v = −Ω ∂w/∂θ` of the cylindrical components
+    /// `w = (w_r, w_θ, w_y)` of `u` at each spinning node (central differences over the
+    /// angle planes), so that the static deflection stays under the contact instead of
+    /// turning away with the wheel.
+    pub(super) fn add_rolling_velocity(&self, wheel: &WheelStructure, u: &[f64], v: &mut [f64]) {
+        let topo = &wheel.topology;
+        let (nt, nm) = (topo.thetas.len(), topo.meridian.len());
+        let tau = std::f64::consts::TAU;
+        let dm = &wheel.dofmap;
+        let get = |node: usize, c: usize| dm.free_index(3 * node + c).map_or(0.0, |i| u[i]);
+        // Cylindrical components at the node's own angle θ: e_r = (sin θ, 0, −cos θ),
+        // e_θ = (cos θ, 0, sin θ).
+        let cyl = |k: usize, m: usize, th: f64| {
+            let node = topo.node(k, m);
+            let (s, c) = th.sin_cos();
+            let (x, y, z) = (get(node, 0), get(node, 1), get(node, 2));
+            [s * x - c * z, c * x + s * z, y]
+        };
+        for k in 0..nt {
+            let th = topo.thetas[k];
+            let (kp, km) = ((k + 1) % nt, (k + nt - 1) % nt);
+            let h2 = (topo.thetas[kp] - th).rem_euclid(tau);
+            let h1 = (th - topo.thetas[km]).rem_euclid(tau);
+            let (s, c) = th.sin_cos();
+            for m in 0..nm {
+                let w0 = cyl(k, m, th);
+                let wp = cyl(kp, m, topo.thetas[kp]);
+                let wm = cyl(km, m, topo.thetas[km]);
+                let d = [0, 1, 2].map(|q| {
+                    (h1 * h1 * (wp[q] - w0[q]) + h2 * h2 * (w0[q] - wm[q])) / (h1 * h2 * (h1 + h2))
+                });
+                let om = self.spin.omega;
+                let (dr, dt, dy) = (-om * d[0], -om * d[1], -om * d[2]);
+                let node = topo.node(k, m);
+                let cart = [s * dr + c * dt, dy, -c * dr + s * dt];
+                for q in 0..3 {
+                    if let Some(i) = dm.free_index(3 * node + q) {
+                        v[i] += cart[q];
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ground and spinning components are inverse rotations, and the ground vertical seen
+    /// from the spinning frame is `(−sin α, 0, cos α)`.
+    #[test]
+    fn rotations_are_inverse() {
+        let a: f64 = 0.7;
+        let cs = [a.cos(), a.sin()];
+        let x = [0.3, -1.2, 2.5];
+        let y = to_ground(cs, to_spinning(cs, x));
+        for c in 0..3 {
+            assert!((x[c] - y[c]).abs() < 1e-15);
+        }
+        let d = to_spinning(cs, [0.0, 0.0, 1.0]);
+        assert!((d[0] + a.sin()).abs() < 1e-15 && (d[2] - a.cos()).abs() < 1e-15);
+    }
+}
