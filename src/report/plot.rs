@@ -776,7 +776,7 @@ mod tests {
             };
             let t = ticks(lo, hi, TICKS);
             assert!(t.len() >= 2, "{lo}..{hi}");
-            let labels: Vec<String> = t.iter().map(|v| f(v)).collect();
+            let labels: Vec<String> = t.iter().map(f).collect();
             for w in labels.windows(2) {
                 assert_ne!(w[0], w[1], "{lo}..{hi}: {labels:?}");
             }
