@@ -43,6 +43,7 @@ pub mod growth;
 pub mod io;
 pub mod mesh;
 pub mod model;
+pub mod progress;
 pub mod report;
 pub mod spectral;
 pub mod structure;

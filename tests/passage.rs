@@ -376,3 +376,122 @@ fn smooth_rail_wear_follows_the_longitudinal_force() {
         / (top.wavelength_mm * 1e-3);
     assert!(matched < res, "{matched} vs resolution {res}");
 }
+
+/// Runs the binary with the small model and plain progress lines every 0.2 s; returns
+/// (stdout, stderr) and asserts success.
+fn run_plain(cmd: &[&str], out: &std::path::Path) -> (String, String) {
+    let cache = std::env::temp_dir().join("corrugation-test-cache-passage-cli");
+    let mut args: Vec<String> = cmd.iter().map(|s| s.to_string()).collect();
+    args.extend(small_args());
+    args.extend([
+        "--cache".into(),
+        cache.display().to_string(),
+        "--out".into(),
+        out.display().to_string(),
+    ]);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_corrugation"))
+        .args(&args)
+        .env("CORRUGATION_PROGRESS_SECONDS", "0.2")
+        .output()
+        .expect("binary runs");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    );
+    assert!(o.status.success(), "{cmd:?} failed: {stderr}");
+    (stdout, stderr)
+}
+
+/// The last non-empty lines of `stdout` after the blank line that opens the verdict.
+fn verdict_lines(stdout: &str) -> Vec<&str> {
+    let lines: Vec<&str> = stdout.lines().collect();
+    let start = lines
+        .iter()
+        .rposition(|l| l.is_empty())
+        .expect("blank line");
+    lines[start + 1..].to_vec()
+}
+
+/// `grow` and `predict` end with the plain-language verdict (one of the four headline forms,
+/// then the strongest wear component and its nearest mode, then the initiation check against
+/// the threshold); the report opens with the same verdict, explains the consistency classes,
+/// compares with the wheel modes and names the fastening model as in model files. With
+/// stderr not a terminal, every long stage prints plain progress lines (its name, a count
+/// `k/n` and the end), never "0/0".
+#[test]
+fn grow_and_predict_print_a_verdict_and_plain_progress() {
+    let dir = std::env::temp_dir().join(format!("corrugation-test-verdict-{}", std::process::id()));
+    let heads = [
+        "No consistent growth on this track at 140 km/h: ",
+        "Corrugation grows consistently on this track at 140 km/h ",
+        "No corrugation initiates on this track at 140 km/h: ",
+    ];
+    let (out, err) = run_plain(&["grow", "--amplitudes-um", "10,80"], &dir.join("grow"));
+    let v = verdict_lines(&out);
+    assert!(heads.iter().any(|h| v[0].starts_with(h)), "{out}");
+    assert!(!out.contains("limiting amplitude none"), "{out}");
+    if !v[0].starts_with(heads[2]) {
+        assert!(v[1].starts_with("Strongest wear component "), "{out}");
+        assert!(v[1].contains("; nearest mode: "), "{out}");
+    }
+    assert!(
+        v.last().unwrap().starts_with("Initiation criterion: ")
+            && v.last().unwrap().contains("threshold 1 %"),
+        "{out}"
+    );
+    assert!(
+        err.contains("trial-amplitude growth (passages: smooth rail + trials) ..."),
+        "{err}"
+    );
+    assert!(
+        err.contains("trial-amplitude growth (passages: smooth rail + trials): done (3/3, "),
+        "{err}"
+    );
+    assert!(err.contains("modal bases below 1500 Hz"), "{err}");
+    assert!(!err.contains("0/0"), "{err}");
+    let g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("grow/grow.json")).unwrap())
+            .unwrap();
+    assert_eq!(g["verdict"]["lines"][0].as_str(), Some(v[0]));
+
+    let (out, err) = run_plain(
+        &["predict", "--amplitudes-um", "10", "--speeds", "100,140"],
+        &dir.join("predict"),
+    );
+    let v = verdict_lines(&out);
+    assert!(heads.iter().any(|h| v[0].starts_with(h)), "{out}");
+    assert!(err.contains("sweep passages (speeds) ..."), "{err}");
+    assert!(
+        err.contains("sweep passages (speeds): done (2/2, "),
+        "{err}"
+    );
+    assert!(
+        err.contains("smooth-rail passage (time steps): done ("),
+        "{err}"
+    );
+    assert!(!err.contains("0/0"), "{err}");
+    let md = std::fs::read_to_string(dir.join("predict/report.md")).unwrap();
+    let verdict_at = md.find("## Verdict").expect("verdict section");
+    assert!(
+        verdict_at < md.find("## Model").unwrap(),
+        "verdict not first"
+    );
+    assert!(md.contains(v[0]), "report lacks the verdict");
+    assert!(
+        md.contains("Fastening model RPM3,"),
+        "fastening not printed as RPM3"
+    );
+    assert!(!md.contains("Rpm3"));
+    for s in [
+        "Case 1: all three signals consistent",
+        "light green",
+        "grey = inconsistent",
+        "nearest wheel (Hz)",
+        "rel. difference wheel",
+        "(rel. deviation)",
+        "initiation threshold 1 %",
+    ] {
+        assert!(md.contains(s), "report lacks {s:?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

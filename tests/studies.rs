@@ -14,6 +14,7 @@ use corrugation::dynamics::{
     WavelengthSpectrum,
 };
 use corrugation::model::Model;
+use corrugation::progress::Silent;
 use corrugation::studies::initiation::{
     evaluate, run_initiation, write_initiation, InitiationCriterion,
 };
@@ -221,7 +222,7 @@ fn map_ridges_lie_on_the_mode_lines() {
     let dir = tmpdir("ridges");
     let speeds = parse_speeds("54.8:219:8").unwrap();
     let runner = ModeLocked::default();
-    let out = sweep(&runner, &speeds, &dir, &opts(), KEY, false).unwrap();
+    let out = sweep(&runner, &speeds, &dir, &opts(), KEY, &Silent).unwrap();
     let m = &out.maps;
     let (nl, nf) = (m.wavelength_mm.len(), m.frequency_hz.len());
     let df_grid = m.frequency_hz[1] - m.frequency_hz[0];
@@ -330,13 +331,13 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
     let speeds = parse_speeds("60:200:10").unwrap();
     let runner = ModeLocked::default();
     let whole = base.join("whole");
-    sweep(&runner, &speeds, &whole, &opts(), KEY, false).unwrap();
+    sweep(&runner, &speeds, &whole, &opts(), KEY, &Silent).unwrap();
     write_shard_plan(&whole, &speeds, Shard::ALL).unwrap();
     let mut shard_dirs = Vec::new();
     for i in 0..3 {
         let d = base.join(format!("shard{i}"));
         let shard = Shard { index: i, count: 3 };
-        sweep(&runner, &shard.select(&speeds), &d, &opts(), KEY, false).unwrap();
+        sweep(&runner, &shard.select(&speeds), &d, &opts(), KEY, &Silent).unwrap();
         write_shard_plan(&d, &speeds, shard).unwrap();
         shard_dirs.push(d);
     }
@@ -373,14 +374,14 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
         frequency_lines_hz: vec![500.0],
         ..MapOptions::default()
     };
-    sweep(&runner, &[70.0], &odd, &other, KEY, false).unwrap();
+    sweep(&runner, &[70.0], &odd, &other, KEY, &Silent).unwrap();
     let e = merge(&[shard_dirs[0].clone(), odd], &base.join("x"))
         .unwrap_err()
         .to_string();
     assert!(e.contains("different map options"), "{e}");
     // ... and so are shards of another model (run key).
     let foreign = base.join("foreign");
-    sweep(&runner, &[70.0], &foreign, &opts(), "other-model", false).unwrap();
+    sweep(&runner, &[70.0], &foreign, &opts(), "other-model", &Silent).unwrap();
     let e = merge(&[shard_dirs[0].clone(), foreign], &base.join("y"))
         .unwrap_err()
         .to_string();
@@ -419,7 +420,7 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
         &other,
         &opts(),
         KEY,
-        false,
+        &Silent,
     )
     .unwrap();
     write_shard_plan(&other, &other_speeds, shard).unwrap();
@@ -432,7 +433,7 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
     // Shard 2 of 60:200:10 is 80, 110, 140, 170, 200 (5 speeds); a run of only 2 is unfinished.
     let short = base.join("short");
     let shard = Shard { index: 2, count: 3 };
-    sweep(&runner, &[80.0, 110.0], &short, &opts(), KEY, false).unwrap();
+    sweep(&runner, &[80.0, 110.0], &short, &opts(), KEY, &Silent).unwrap();
     write_shard_plan(&short, &speeds, shard).unwrap();
     let e = merge(
         &[shard_dirs[0].clone(), shard_dirs[1].clone(), short],
@@ -468,7 +469,7 @@ fn interrupted_sweep_resumes_without_recomputing() {
             panic,
             ..Default::default()
         };
-        let e = sweep(&broken, &speeds, &dir, &opts(), KEY, false).unwrap_err();
+        let e = sweep(&broken, &speeds, &dir, &opts(), KEY, &Silent).unwrap_err();
         let StudiesError::Passages { failures } = &e else {
             panic!("{e}")
         };
@@ -512,7 +513,7 @@ fn interrupted_sweep_resumes_without_recomputing() {
         "truncated file does not parse"
     );
     let good = ModeLocked::default();
-    let out = sweep(&good, &speeds, &dir, &opts(), KEY, false).unwrap();
+    let out = sweep(&good, &speeds, &dir, &opts(), KEY, &Silent).unwrap();
     let mut ran = good.speeds_run.lock().unwrap().clone();
     ran.sort_by(f64::total_cmp);
     let mut expect = vec![speeds[5]];
@@ -531,21 +532,21 @@ fn interrupted_sweep_resumes_without_recomputing() {
         &dir,
         &opts(),
         "another model",
-        false,
+        &Silent,
     )
     .unwrap_err()
     .to_string();
     assert!(e.contains("another model or program version"), "{e}");
     // A third run computes nothing.
     let idle = ModeLocked::default();
-    sweep(&idle, &speeds, &dir, &opts(), KEY, false).unwrap();
+    sweep(&idle, &speeds, &dir, &opts(), KEY, &Silent).unwrap();
     assert_eq!(idle.calls.load(Ordering::SeqCst), 0);
     // The temp file of a killed run with a pid above any pid_max (2^22) is removed: a finished
     // sweep leaves no orphan `*.tmp.<pid>` (the file of pid 4242 above is not asserted: a
     // process of that pid may be running on the test machine, whose files are kept).
     let orphan = dir.join("map_wear_wavelength.npy.tmp.4294967000");
     std::fs::write(&orphan, b"partial").unwrap();
-    sweep(&idle, &speeds, &dir, &opts(), KEY, false).unwrap();
+    sweep(&idle, &speeds, &dir, &opts(), KEY, &Silent).unwrap();
     for d in [dir.clone(), dir.join("speeds")] {
         let tmp: Vec<_> = std::fs::read_dir(&d)
             .unwrap()
@@ -560,7 +561,7 @@ fn interrupted_sweep_resumes_without_recomputing() {
     let blocker = dir.join("map_wavelength.csv");
     std::fs::remove_file(&blocker).unwrap();
     std::fs::create_dir(&blocker).unwrap();
-    assert!(sweep(&idle, &speeds, &dir, &opts(), KEY, false).is_err());
+    assert!(sweep(&idle, &speeds, &dir, &opts(), KEY, &Silent).is_err());
     assert!(
         !dir.join("sweep.json").exists(),
         "sweep.json beside an unfinished output stage"
@@ -610,7 +611,7 @@ fn initiation_table_applies_the_stated_criterion() {
     }
     let (a, b) = (Fixed(strong), Fixed(tiny));
     let cases: Vec<(String, &dyn PassageRunner)> = vec![("RPM3".into(), &a), ("RPM2".into(), &b)];
-    let rows = run_initiation(&cases, v, &c, 3, false).unwrap();
+    let rows = run_initiation(&cases, v, &c, 3, &Silent).unwrap();
     assert_eq!(
         rows.iter().map(|r| r.initiates).collect::<Vec<_>>(),
         vec![true, false]
@@ -678,14 +679,14 @@ fn study_runs_every_case_writes_table_and_plots_and_resumes() {
         )]))
     };
     // Growth requested but not available: an error naming the key, before anything runs.
-    let e = run_study(&study, &factory, None, &dir.join("out"), false)
+    let e = run_study(&study, &factory, None, &dir.join("out"), &Silent)
         .unwrap_err()
         .to_string();
     assert!(e.contains("s.toml") && e.contains("`growth`"), "{e}");
     assert_eq!(built.load(Ordering::SeqCst), 0);
 
     let out = dir.join("out");
-    let o = run_study(&study, &factory, Some(&growth), &out, false).unwrap();
+    let o = run_study(&study, &factory, Some(&growth), &out, &Silent).unwrap();
     assert_eq!((o.computed, o.reused), (6, 0));
     let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
@@ -725,13 +726,13 @@ fn study_runs_every_case_writes_table_and_plots_and_resumes() {
         .contains("study_relative_wear.png"));
     // Rerun: every case reused, no runner built.
     let before = built.load(Ordering::SeqCst);
-    let o2 = run_study(&study, &factory, Some(&growth), &out, false).unwrap();
+    let o2 = run_study(&study, &factory, Some(&growth), &out, &Silent).unwrap();
     assert_eq!((o2.computed, o2.reused), (0, 6));
     assert_eq!(built.load(Ordering::SeqCst), before);
     // Other speeds: every case is recomputed, none is taken from the old files.
     let mut other = study.clone();
     other.speeds_kmh = Some(vec![120.0]);
-    let o3 = run_study(&other, &factory, Some(&growth), &out, false).unwrap();
+    let o3 = run_study(&other, &factory, Some(&growth), &out, &Silent).unwrap();
     assert_eq!((o3.computed, o3.reused), (6, 0));
     std::fs::remove_dir_all(dir).ok();
 }

@@ -53,9 +53,27 @@ fn cache_of(cache: Option<&Path>) -> ModalCache {
 }
 
 /// The prepared reduced-order model (modal bases loaded from or stored in the cache).
+/// Off a terminal a plain progress line says every interval that the bases are being built.
 pub fn prepared(model: &Model, cache: Option<&Path>) -> anyhow::Result<PreparedModel> {
-    PreparedModel::new(model, &cache_of(cache), &PassageOptions::default())
-        .context("preparing the modal model")
+    let pb = super::progress::background(&format!(
+        "modal bases below {} Hz (track and wheel; loaded from the cache or computed)",
+        model.run.fmax
+    ));
+    let p = PreparedModel::new(model, &cache_of(cache), &PassageOptions::default())
+        .context("preparing the modal model")?;
+    pb.finish_and_clear();
+    Ok(p)
+}
+
+/// The mode families the growth's components are compared with: the track's
+/// longitudinal-compression and vertical-bending modes and the wheel modes the contact sees
+/// (those drawn on the sweep's maps).
+pub fn mode_lines(p: &PreparedModel) -> ModeLines {
+    ModeLines {
+        longitudinal_hz: p.longitudinal_compression_hz(),
+        vertical_hz: p.vertical_bending_hz(),
+        wheel_hz: p.wheel_contact_modes_hz(super::sweep_cmd::WHEEL_LINE_SHARE),
+    }
 }
 
 /// The passage runner of a model: modal basis from the cache in `cache` (default cache
@@ -83,10 +101,7 @@ pub fn study_growth(
             &owned
         }
     };
-    let modes = ModeLines {
-        longitudinal_hz: p.longitudinal_compression_hz(),
-        vertical_hz: p.vertical_bending_hz(),
-    };
+    let modes = mode_lines(p);
     let g = trial_growth(
         &p.engine,
         model.run.speed(),

@@ -85,7 +85,7 @@ pub fn run_explicit(
         .context("running the explicit passage")?;
     pb.finish_and_clear();
     let summary = corrugation::dynamics::analysis::summarise(&rec.record)?;
-    super::passage_cmd::write_outputs(out, &rec.record, &summary)?;
+    super::passage_cmd::write_outputs(out, &rec.record, &summary, m.mesh.fine_element_length)?;
     write_explicit_json(out, &rec)?;
     if json {
         let mut v = serde_json::to_value(&summary)?;

@@ -20,14 +20,18 @@ use anyhow::Context;
 use clap::Args;
 use serde::Serialize;
 
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
-use corrugation::eigen::basis::progress_bar;
-use corrugation::eigen::cache::{default_cache_dir, ModalCache};
+use corrugation::dynamics::summary::PassageSummary;
 use corrugation::growth::procedure::{
-    iterative_growth, trial_growth, GrowthRound, IterativeOptions, ModeLines, TrialGrowth,
+    iterative_growth, trial_growth, GrowthRound, IterativeOptions, TrialGrowth,
+};
+use corrugation::growth::procedure::{ModeLines, ProcedureError};
+use corrugation::growth::verdict::{
+    growth_verdict, no_initiation_verdict, sig, InitiationCheck, Verdict,
 };
 use corrugation::growth::PhaseRelation;
 use corrugation::io::{write_atomic, write_csv};
+use corrugation::model::Model;
+use corrugation::studies::initiation::{evaluate, InitiationCriterion};
 use corrugation::units::m_to_mm;
 
 use super::ModelArgs;
@@ -112,6 +116,8 @@ pub struct GrowJson {
     pub fl_band_rms_n: Vec<f64>,
     pub fn_band_rms_n: Vec<f64>,
     pub iterative: Vec<GrowthRound>,
+    /// The plain-language verdict.
+    pub verdict: Verdict,
     pub seconds: f64,
 }
 
@@ -135,6 +141,7 @@ pub fn grow_json(
     g: &TrialGrowth,
     speed_kmh: f64,
     iterative: Vec<GrowthRound>,
+    verdict: Verdict,
     seconds: f64,
 ) -> GrowJson {
     let refs_mm: Vec<f64> = g
@@ -201,7 +208,49 @@ pub fn grow_json(
             .map(|a| a.summary.fn_band_rms_n)
             .collect(),
         iterative,
+        verdict,
         seconds,
+    }
+}
+
+/// The smooth rail's relative wear against the model's initiation threshold
+/// (`wear.initiation_threshold`), for the verdict.
+pub fn initiation_check(m: &Model, smooth: &PassageSummary) -> InitiationCheck {
+    let c = InitiationCriterion::from_model(m);
+    let row = evaluate("model", smooth, &c, 1);
+    InitiationCheck {
+        relative_wear: row.relative_wear,
+        threshold: c.min_relative_wear,
+        initiates: row.initiates,
+    }
+}
+
+/// The trial growth of `recorder` (progress on stderr), or `None` when the smooth rail left no
+/// wear component to grow (the verdict "no initiation" is then printed by the caller).
+pub fn run_trial_growth(
+    recorder: &dyn corrugation::dynamics::PassageRecorder,
+    m: &Model,
+    amplitudes_um: &[f64],
+    modes: &ModeLines,
+) -> anyhow::Result<Option<TrialGrowth>> {
+    let pb = super::progress::bar("trial-amplitude growth (passages: smooth rail + trials)");
+    pb.set_length(1 + amplitudes_um.len() as u64);
+    let r = trial_growth(recorder, m.run.speed(), amplitudes_um, modes, |k| {
+        pb.set_position(k as u64 + 1)
+    });
+    pb.finish_and_clear();
+    match r {
+        Ok(g) => Ok(Some(g)),
+        Err(ProcedureError::NoReference) => Ok(None),
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// Prints the verdict as the last lines on stdout.
+pub fn print_verdict(v: &Verdict) {
+    println!();
+    for l in &v.lines {
+        println!("{l}");
     }
 }
 
@@ -343,6 +392,36 @@ pub fn write_text_csv(
     .with_context(|| format!("writing {}", path.display()))
 }
 
+/// The growth table on stdout (figures to 3–4 significant digits).
+fn print_growth(j: &GrowJson) {
+    println!(
+        "trial-amplitude growth at {} km/h: reference wavelengths {} mm",
+        sig(j.speed_kmh, 4),
+        j.reference_wavelengths_mm
+            .iter()
+            .map(|&v| sig(v, 3))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    for (i, a) in j.amplitudes_um.iter().enumerate() {
+        println!(
+            "  2A_max {:>5} µm: {} (r = {:+.2}), consistent growth: {}, F_L band RMS {} N, F_N band RMS {} N",
+            sig(*a, 4),
+            j.phase[i],
+            j.correlation[i],
+            if j.grows_consistently[i] { "yes" } else { "no" },
+            sig(j.fl_band_rms_n[i], 3),
+            sig(j.fn_band_rms_n[i], 3)
+        );
+    }
+    match j.limiting_amplitude_um {
+        Some(a) => println!("  limiting amplitude (2A_max)_l = {} µm", sig(a, 4)),
+        None => println!(
+            "  limiting amplitude: none (the smallest trial amplitude does not grow consistently)"
+        ),
+    }
+}
+
 impl GrowCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let t0 = Instant::now();
@@ -359,13 +438,8 @@ impl GrowCmd {
         }
         let m = self.model.load()?;
         super::check_out_dir(&self.out)?;
-        let cache = ModalCache::new(self.cache.clone().unwrap_or_else(default_cache_dir));
-        let prepared = PreparedModel::new(&m, &cache, &PassageOptions::default())
-            .context("preparing the modal model")?;
-        let modes = ModeLines {
-            longitudinal_hz: prepared.longitudinal_compression_hz(),
-            vertical_hz: prepared.vertical_bending_hz(),
-        };
+        let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
+        let modes = super::engine::mode_lines(&prepared);
         let explicit = match self.engine {
             super::engine::Engine::Explicit => Some(super::engine::explicit_model(&m)?),
             super::engine::Engine::Reduced => None,
@@ -374,16 +448,33 @@ impl GrowCmd {
             Some(e) => e,
             None => &prepared.engine,
         };
-        let pb = progress_bar("trial-amplitude growth (passages)");
-        pb.set_length(1 + self.amplitudes_um.len() as u64);
-        let g = trial_growth(recorder, m.run.speed(), &self.amplitudes_um, &modes, |k| {
-            pb.set_position(k as u64 + 1)
-        })?;
-        pb.finish_and_clear();
+        let Some(g) = run_trial_growth(recorder, &m, &self.amplitudes_um, &modes)? else {
+            let v = no_initiation_verdict(m.run.speed_kmh, None);
+            let text = serde_json::to_string_pretty(&serde_json::json!({
+                "speed_kmh": m.run.speed_kmh,
+                "verdict": v,
+            }))?;
+            write_atomic(&self.out.join("grow.json"), |f| {
+                use std::io::Write;
+                f.write_all(text.as_bytes())
+            })?;
+            if self.json {
+                println!("{text}");
+            } else {
+                print_verdict(&v);
+            }
+            return Ok(());
+        };
+        let verdict = growth_verdict(
+            &g,
+            m.run.speed_kmh,
+            &modes,
+            Some(initiation_check(&m, &g.smooth)),
+        );
         write_growth_files(&self.out, &g)?;
         let mut rounds = Vec::new();
         if self.rounds > 0 {
-            let pb = progress_bar("iterative growth (rounds)");
+            let pb = super::progress::bar("iterative growth (rounds)");
             pb.set_length(self.rounds as u64);
             let (r, _) = iterative_growth(
                 recorder,
@@ -420,7 +511,13 @@ impl GrowCmd {
             )?;
             rounds = r;
         }
-        let j = grow_json(&g, m.run.speed_kmh, rounds, t0.elapsed().as_secs_f64());
+        let j = grow_json(
+            &g,
+            m.run.speed_kmh,
+            rounds,
+            verdict,
+            t0.elapsed().as_secs_f64(),
+        );
         let text = serde_json::to_string_pretty(&j)?;
         write_atomic(&self.out.join("grow.json"), |f| {
             use std::io::Write;
@@ -429,21 +526,9 @@ impl GrowCmd {
         if self.json {
             println!("{text}");
         } else {
-            println!(
-                "trial-amplitude growth at {:.1} km/h: references {:?} mm",
-                j.speed_kmh, j.reference_wavelengths_mm
-            );
-            for (i, a) in j.amplitudes_um.iter().enumerate() {
-                println!(
-                    "  2A_max {a:>6.1} µm: {} (r = {:+.2}), consistent growth: {}, F_L band RMS {:.1} N, F_N band RMS {:.1} N",
-                    j.phase[i], j.correlation[i], j.grows_consistently[i], j.fl_band_rms_n[i], j.fn_band_rms_n[i]
-                );
-            }
-            match j.limiting_amplitude_um {
-                Some(a) => println!("  limiting amplitude (2A_max)_l = {a} µm"),
-                None => println!("  no trial amplitude grows consistently"),
-            }
+            print_growth(&j);
             println!("  outputs in {}", self.out.display());
+            print_verdict(&j.verdict);
         }
         Ok(())
     }

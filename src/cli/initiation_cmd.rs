@@ -32,9 +32,10 @@ pub struct InitiationCmd {
     /// Speed (km/h); default: the model's run.speed_kmh.
     #[arg(long, value_name = "KMH")]
     speed: Option<f64>,
-    /// Initiation threshold on the wear's band RMS relative to its mean (−).
-    #[arg(long, default_value_t = InitiationCriterion::DEFAULT_MIN_RELATIVE_WEAR, value_name = "RATIO")]
-    min_relative_wear: f64,
+    /// Initiation threshold on the wear's band RMS relative to its mean (−, 0 to 1); default:
+    /// each model's `wear.initiation_threshold` (0.01 in the shipped models).
+    #[arg(long, value_name = "RATIO")]
+    min_relative_wear: Option<f64>,
     /// Largest relative deviation of F_L's dominant wavelength from the wear's (−).
     #[arg(long, default_value_t = InitiationCriterion::DEFAULT_MAX_WAVELENGTH_DEVIATION, value_name = "RATIO")]
     max_wavelength_deviation: f64,
@@ -56,25 +57,41 @@ pub struct InitiationCmd {
     engine: super::engine::Engine,
 }
 
+/// One model's line: its relative wear against its threshold and the outcome.
+fn initiation_line(r: &corrugation::studies::initiation::InitiationRow) -> String {
+    use corrugation::growth::verdict::sig;
+    let pc = |v: Option<f64>| v.map_or("–".into(), |v| format!("{} %", sig(100.0 * v, 3)));
+    format!(
+        "{:>8}: F_L band RMS {} N, wear band RMS / mean {} (threshold {}), initiates: {} ({})",
+        r.name,
+        sig(r.fl_band_rms_n, 3),
+        pc(r.relative_wear),
+        pc(r.threshold),
+        if r.initiates { "yes" } else { "no" },
+        r.reason
+    )
+}
+
 impl InitiationCmd {
     /// Runs the command.
     pub fn run(self) -> anyhow::Result<()> {
         let t0 = Instant::now();
-        let criterion = InitiationCriterion {
-            min_relative_wear: self.min_relative_wear,
-            max_wavelength_deviation: self.max_wavelength_deviation,
-        };
-        for (name, v) in [
-            ("--min-relative-wear", criterion.min_relative_wear),
-            (
-                "--max-wavelength-deviation",
-                criterion.max_wavelength_deviation,
-            ),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                anyhow::bail!("{name} must be a finite number ≥ 0 (got {v})");
+        if let Some(v) = self.min_relative_wear {
+            if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
+                anyhow::bail!("--min-relative-wear must be a number from 0 to 1 (got {v})");
             }
         }
+        let v = self.max_wavelength_deviation;
+        if !(v.is_finite() && v >= 0.0) {
+            anyhow::bail!("--max-wavelength-deviation must be a finite number ≥ 0 (got {v})");
+        }
+        // Each model's own threshold unless the flag overrides it.
+        let criterion_of = |m: &corrugation::model::Model| InitiationCriterion {
+            min_relative_wear: self
+                .min_relative_wear
+                .unwrap_or(m.wear.initiation_threshold),
+            max_wavelength_deviation: self.max_wavelength_deviation,
+        };
         if !(1..=20).contains(&self.peaks) {
             anyhow::bail!("--peaks must be 1 … 20 (got {})", self.peaks);
         }
@@ -115,22 +132,18 @@ impl InitiationCmd {
             rows.extend(run_initiation(
                 &[(name.clone(), runner.as_ref())],
                 speed,
-                &criterion,
+                &criterion_of(model),
                 self.peaks,
-                true,
+                &super::progress::bar(&format!("initiation: {name}")),
             )?);
         }
+        let Some((_, first)) = cases.first() else {
+            anyhow::bail!("no models to compare: give --variants or --models");
+        };
+        let criterion = criterion_of(first);
         write_initiation(&self.out, &rows, &criterion, self.peaks)?;
         for r in &rows {
-            eprintln!(
-                "{:>8}: F_L band RMS {:.1} N, wear band RMS/mean {}, initiates: {} ({})",
-                r.name,
-                r.fl_band_rms_n,
-                r.relative_wear
-                    .map_or("–".into(), |v| format!("{:.3} %", 100.0 * v)),
-                if r.initiates { "yes" } else { "no" },
-                r.reason
-            );
+            eprintln!("{}", initiation_line(r));
         }
         if self.json {
             let j = serde_json::json!({

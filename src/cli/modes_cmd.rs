@@ -127,8 +127,20 @@ impl ModesCmd {
         let cache = ModalCache::new(&cache_dir);
         let track = TrackStructure::build(&m).context("building the track model")?;
         let wheel = WheelStructure::build(&m).context("building the wheel model")?;
+        let pb = super::progress::background(&format!(
+            "track modes below {} Hz (Lanczos, or the cache)",
+            self.fmax
+        ));
         let tb = track_basis(&m, &track, &cache, self.fmax)?;
+        pb.finish_and_clear();
+        drop(pb);
+        let pb = super::progress::background(&format!(
+            "wheel modes below {} Hz (Lanczos, or the cache)",
+            self.fmax
+        ));
         let wb = wheel_basis(&m, &wheel, &cache, self.fmax)?;
+        pb.finish_and_clear();
+        drop(pb);
 
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("creating {}", self.out.display()))?;

@@ -19,10 +19,8 @@ use anyhow::Context;
 use clap::Args;
 
 use corrugation::dynamics::analysis::{analyse, wear_signal, zone_signal};
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
+use corrugation::dynamics::passage::PassageOptions;
 use corrugation::dynamics::{summary::PassageSummary, RailProfile};
-use corrugation::eigen::basis::progress_bar;
-use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::io::{write_atomic, write_csv};
 
 use super::ModelArgs;
@@ -61,18 +59,16 @@ impl PassageCmd {
         if self.engine == super::engine::Engine::Explicit {
             return super::explicit_cmd::run_explicit(&m, profile.as_ref(), &self.out, self.json);
         }
-        let cache = ModalCache::new(self.cache.clone().unwrap_or_else(default_cache_dir));
         let opts = PassageOptions::default();
-        let prepared =
-            PreparedModel::new(&m, &cache, &opts).context("preparing the modal model")?;
-        let pb = progress_bar("passage");
+        let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
+        let pb = super::progress::bar("passage (time steps)");
         let rec = prepared
             .engine
-            .passage(m.run.speed(), profile.as_ref(), &opts, Some(&pb))
+            .passage(m.run.speed(), profile.as_ref(), &opts, Some(pb.handle()))
             .context("running the passage")?;
         pb.finish_and_clear();
         let summary = corrugation::dynamics::analysis::summarise(&rec)?;
-        write_outputs(&self.out, &rec, &summary)?;
+        write_outputs(&self.out, &rec, &summary, m.mesh.fine_element_length)?;
         if self.json {
             println!("{}", serde_json::to_string_pretty(&summary)?);
         } else {
@@ -82,10 +78,15 @@ impl PassageCmd {
     }
 }
 
+///
+/// `element_length_m` (m): the node-plane spacing of the rail mesh in the solution zone
+/// (`mesh.fine_element_length`), named on the F_N plot, whose fine ripple is the contact
+/// passing the node planes.
 pub fn write_outputs(
     out: &Path,
     rec: &corrugation::dynamics::passage::PassageRecord,
     s: &PassageSummary,
+    element_length_m: f64,
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let h = &rec.histories;
@@ -154,7 +155,7 @@ pub fn write_outputs(
                 .map(|(k, p)| vec![1.0 / k, v * k, *p]),
         )?;
     }
-    write_plots(out, rec, &w, &fl, &fnn)?;
+    write_plots(out, rec, &w, &fl, &fnn, element_length_m)?;
     let json = serde_json::to_string_pretty(s)?;
     write_atomic(&out.join("summary.json"), |f| {
         use std::io::Write;
@@ -223,6 +224,7 @@ fn write_plots(
     w: &corrugation::dynamics::analysis::Analysed,
     fl: &corrugation::dynamics::analysis::Analysed,
     fnn: &corrugation::dynamics::analysis::Analysed,
+    element_length_m: f64,
 ) -> anyhow::Result<()> {
     use corrugation::report::plot::{line_plot, line_plot_log_y, Series};
     let h = &rec.histories;
@@ -244,7 +246,13 @@ fn write_plots(
     )?;
     line_plot(
         &out.join("normal_force_x"),
-        "Normal force in the solution zone",
+        &format!(
+            "Normal force, raw (fine ripple: element passing, {} mm)",
+            corrugation::growth::verdict::trim_zeros(&corrugation::growth::verdict::sig(
+                corrugation::units::m_to_mm(element_length_m),
+                3
+            ))
+        ),
         "x (m)",
         "F_N (N)",
         &[Series::new(

@@ -18,9 +18,7 @@ use anyhow::Context;
 use clap::Args;
 use serde::Serialize;
 
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
 use corrugation::dynamics::receptance::peaks;
-use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::io::{write_atomic, write_csv};
 use corrugation::report::plot::{line_plot_log_y, Series};
 
@@ -139,9 +137,7 @@ impl ReceptanceCmd {
             .map(|i| self.from_hz + i as f64 * self.step_hz)
             .map(|f| if f == 0.0 { 0.25 * self.step_hz } else { f })
             .collect();
-        let cache = ModalCache::new(self.cache.clone().unwrap_or_else(default_cache_dir));
-        let prepared = PreparedModel::new(&m, &cache, &PassageOptions::default())
-            .context("preparing the modal model")?;
+        let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
         let eng = &prepared.engine;
         let (labels, positions): (Vec<String>, Vec<f64>) = if self.at_m.is_empty() {
             let [mid, sl] = eng.midspan_and_sleeper_m();
@@ -152,9 +148,8 @@ impl ReceptanceCmd {
                 self.at_m.clone(),
             )
         };
-        let pb = corrugation::eigen::basis::progress_bar("receptance");
-        pb.set_message(format!(
-            "{n} frequencies, {} modes",
+        let pb = super::progress::bar(&format!(
+            "receptance ({n} frequencies, {} modes)",
             prepared.track_frequencies_hz.len()
         ));
         let r = eng

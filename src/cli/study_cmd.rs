@@ -52,7 +52,9 @@ impl StudyCmd {
         let growth = |m: &Model, r: &dyn PassageRunner| {
             engine::study_growth(m, r, cache).map_err(Into::<BoxError>::into)
         };
-        let o = run_study(&study, &factory, Some(&growth), &out, true)?;
+        let pb = super::progress::bar(&format!("study `{}`", study.title));
+        let o = run_study(&study, &factory, Some(&growth), &out, &pb)?;
+        drop(pb);
         eprintln!(
             "study `{}`: {} case(s), {} computed, {} reused → {}",
             study.title,

@@ -85,7 +85,9 @@ impl SweepCmd {
                 engine::Engine::Explicit => " explicit",
             }
         );
-        let out = sweep(runner.as_ref(), &speeds, &self.out, &opts, &run_key, true)?;
+        let pb = super::progress::bar("speed sweep");
+        let out = sweep(runner.as_ref(), &speeds, &self.out, &opts, &run_key, &pb)?;
+        drop(pb);
         // Which shard of which sweep this directory holds: `merge` checks the shards form one.
         write_shard_plan(&self.out, &all, shard)?;
         eprintln!(

@@ -6,12 +6,14 @@
 //! - [`consistency`]: matching the wavelength components of `W_f`, `F_L`, `F_N` of a new
 //!   passage to the reference components, the Case 1 / Case 2 / grey classification, and the
 //!   growth phase (sign of the correlation of the new wear with the corrugation).
+//! - [`verdict`]: the plain-language verdict of a trial-amplitude growth.
 //!
 //! Lengths are metres, frequencies Hz; deviations are dimensionless ratios (0.03 = 3 %).
 
 pub mod consistency;
 pub mod procedure;
 pub mod trial;
+pub mod verdict;
 
 pub use consistency::{
     classify, consistency_table, growth_phase, match_nearest, ComponentMatch, ConsistencyCase,

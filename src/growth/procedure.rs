@@ -17,7 +17,8 @@
 //! The limiting amplitude `(2A_max)_l` is the largest amplitude of the ascending list up to
 //! which every amplitude grows consistently (`None` if the smallest already does not).
 //! Every component's frequency is also compared with the nearest longitudinal-compression
-//! and vertical-bending eigenfrequencies (the "difference", docs/theory.md §9.5).
+//! and vertical-bending eigenfrequencies of the track and the nearest wheel mode the contact
+//! sees (the relative "difference", docs/theory.md §9.5).
 //!
 //! **Iterative growth (beyond the reference).** Round after round, the wear of `N`
 //! passages is removed from the rail: depth `Δh(x) = −N·k·W_f(x)/(2b)` (m), with `k`
@@ -75,6 +76,10 @@ pub struct EigenComparison {
     pub nearest_vertical_hz: Option<f64>,
     /// Relative difference to it (−).
     pub vertical_difference: Option<f64>,
+    /// Nearest wheel mode the contact sees (Hz).
+    pub nearest_wheel_hz: Option<f64>,
+    /// Relative difference to it (−).
+    pub wheel_difference: Option<f64>,
 }
 
 /// One trial amplitude.
@@ -109,13 +114,16 @@ pub struct TrialGrowth {
     pub smooth_wear_band: Signal,
 }
 
-/// Eigenfrequencies of the two families the components are compared with (Hz).
+/// Eigenfrequencies of the mode families the components are compared with (Hz).
 #[derive(Clone, Debug, Default)]
 pub struct ModeLines {
-    /// Longitudinal-compression modes (Hz).
+    /// Longitudinal-compression modes of the track (Hz).
     pub longitudinal_hz: Vec<f64>,
-    /// Vertical-bending modes (Hz).
+    /// Vertical-bending modes of the track (Hz).
     pub vertical_hz: Vec<f64>,
+    /// Wheel modes the contact sees (Hz; e.g.
+    /// [`crate::dynamics::passage::PreparedModel::wheel_contact_modes_hz`]).
+    pub wheel_hz: Vec<f64>,
 }
 
 fn nearest(f: f64, list: &[f64]) -> (Option<f64>, Option<f64>) {
@@ -139,6 +147,7 @@ fn compare(
     for c in comps {
         let (lh, ld) = nearest(c.frequency_hz, &modes.longitudinal_hz);
         let (vh, vd) = nearest(c.frequency_hz, &modes.vertical_hz);
+        let (wh, wd) = nearest(c.frequency_hz, &modes.wheel_hz);
         out.push(EigenComparison {
             signal: signal.into(),
             amplitude_um,
@@ -148,6 +157,8 @@ fn compare(
             longitudinal_difference: ld,
             nearest_vertical_hz: vh,
             vertical_difference: vd,
+            nearest_wheel_hz: wh,
+            wheel_difference: wd,
         });
     }
 }

@@ -122,6 +122,19 @@ pub struct Wear {
     /// growth uses it for the worn depth per passage. Default 1e-13 (Archard K ≈ 1e-4, mild
     /// wear, H ≈ 3 GPa, µ = 0.4: k = K/(µH)).
     pub coefficient: f64,
+    /// Initiation threshold (−): the smooth rail initiates corrugation only when the RMS of
+    /// its 20–80 mm band-passed differential wear is at least this fraction of the mean wear
+    /// (and F_L follows the wear; docs/theory.md §11.4). Default 0.01, range 0 to 1. A
+    /// stated choice, not a published value.
+    #[serde(default = "default_initiation_threshold")]
+    pub initiation_threshold: f64,
+}
+
+/// Default of [`Wear::initiation_threshold`] (−).
+pub const DEFAULT_INITIATION_THRESHOLD: f64 = 0.01;
+
+fn default_initiation_threshold() -> f64 {
+    DEFAULT_INITIATION_THRESHOLD
 }
 
 /// The full explicit FE path (used to confirm the reduced model's frequency selection): a
@@ -291,6 +304,20 @@ pub enum FasteningModel {
     /// The pattern in `[fastening.custom]`.
     #[serde(rename = "custom")]
     Custom,
+}
+
+impl std::fmt::Display for FasteningModel {
+    /// The name used in model files: `RPM1` … `RPM5`, `custom`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            FasteningModel::Rpm1 => "RPM1",
+            FasteningModel::Rpm2 => "RPM2",
+            FasteningModel::Rpm3 => "RPM3",
+            FasteningModel::Rpm4 => "RPM4",
+            FasteningModel::Rpm5 => "RPM5",
+            FasteningModel::Custom => "custom",
+        })
+    }
 }
 
 impl FasteningModel {
@@ -1039,6 +1066,13 @@ impl Model {
         )?;
         c.range("run.fmax", run.fmax, 100.0, 20000.0, "Hz")?;
         c.pos("wear.coefficient", self.wear.coefficient, 1e-6, "m^3/J")?;
+        c.range(
+            "wear.initiation_threshold",
+            self.wear.initiation_threshold,
+            0.0,
+            1.0,
+            "-",
+        )?;
         c.range("explicit.safety", self.explicit.safety, 0.1, 1.0, "-")?;
         if let Some(dt) = self.explicit.time_step {
             // The stable limit depends on the assembled matrices and is checked when the

@@ -419,3 +419,37 @@ fn elastic_holds_parse_and_nonsense_is_an_error_naming_the_key() {
     ]));
     assert!(e.contains("fastening.hold") && e.contains("custom"), "{e}");
 }
+
+#[test]
+fn fastening_model_prints_as_in_model_files() {
+    for m in [
+        FasteningModel::Rpm1,
+        FasteningModel::Rpm2,
+        FasteningModel::Rpm3,
+        FasteningModel::Rpm4,
+        FasteningModel::Rpm5,
+        FasteningModel::Custom,
+    ] {
+        let serde_name = serde_json::to_value(m).unwrap();
+        assert_eq!(serde_name.as_str(), Some(m.to_string().as_str()));
+    }
+    assert_eq!(FasteningModel::Rpm3.to_string(), "RPM3");
+}
+
+#[test]
+fn initiation_threshold_is_read_defaulted_and_range_checked() {
+    // A model file without the key gets the default.
+    let text = BUILTIN_DUTCH.replace("initiation_threshold = 0.01", "");
+    assert!(!text.contains("initiation_threshold ="));
+    let m = load_model_str(&text, "no-threshold.toml", &[]).unwrap();
+    assert_eq!(m.wear.initiation_threshold, DEFAULT_INITIATION_THRESHOLD);
+    let m = dutch_with(&["wear.initiation_threshold=0.002"]).unwrap();
+    assert_eq!(m.wear.initiation_threshold, 0.002);
+    let e = dutch_with(&["wear.initiation_threshold=1.5"])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("wear.initiation_threshold") && e.contains("0 to 1"),
+        "{e}"
+    );
+}

@@ -91,7 +91,7 @@ impl OverlayLine {
 
 /// Smallest vertical distance (px) between two line labels drawn at the same end of the
 /// plot; a label closer than this to one already drawn is left out (its line is still drawn).
-const LABEL_MIN_GAP_PX: i32 = 15;
+const LABEL_MIN_GAP_PX: i32 = 18;
 
 /// Horizontal distance (px) within which two label anchors count as "at the same end" (about
 /// the width of a label such as `wheel 1043 Hz`).
@@ -391,23 +391,44 @@ fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     Some((lo, hi))
 }
 
-fn log_label(v: &f64) -> String {
-    format!("{:.1e}", 10f64.powf(*v))
-}
+/// Ticks per axis that plotters places by default (at most).
+const TICKS: usize = 10;
 
-fn num_label(v: &f64) -> String {
-    let a = v.abs();
-    if a != 0.0 && !(1e-3..1e5).contains(&a) {
-        format!("{v:.2e}")
-    } else {
-        let s = format!("{v:.4}");
-        let s = s.trim_end_matches('0').trim_end_matches('.');
+/// Tick labels of a linear axis over `[lo, hi]` with at most `n` ticks: as many decimals (or,
+/// for |v| ≥ 1e6 or < 1e-3, significant digits) as the tick spacing needs, so that
+/// neighbouring ticks never print the same label.
+fn linear_labels(lo: f64, hi: f64, n: usize) -> impl Fn(&f64) -> String {
+    let step = ((hi - lo).abs() / n.max(1) as f64).max(1e-300);
+    let a = lo.abs().max(hi.abs());
+    let sci = a != 0.0 && !(1e-3..1e6).contains(&a);
+    let sig = ((a / step).log10().floor() as i64 + 2).clamp(2, 12) as usize;
+    let dec = (-step.log10().floor() as i64).clamp(0, 12) as usize;
+    move |v: &f64| {
+        if sci {
+            return format!("{:.*e}", sig - 1, v);
+        }
+        let s = format!("{v:.dec$}");
+        let s = if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            s.as_str()
+        };
         if s == "-0" {
             "0".into()
         } else {
             s.into()
         }
     }
+}
+
+/// Tick labels of a log axis drawn as `log10(value)` over `[lo, hi]` (decades) with at most
+/// `n` ticks: the value in scientific notation with as many significant digits as
+/// neighbouring ticks need to differ.
+fn log_labels(lo: f64, hi: f64, n: usize) -> impl Fn(&f64) -> String {
+    let step = ((hi - lo).abs() / n.max(1) as f64).max(1e-12);
+    let rel = 10f64.powf(step) - 1.0;
+    let sig = ((-rel.log10()).ceil() as i64 + 1).clamp(2, 8) as usize;
+    move |v: &f64| format!("{:.*e}", sig - 1, 10f64.powf(*v))
 }
 
 fn palette(i: usize) -> RGBColor {
@@ -477,15 +498,21 @@ fn lines_on<DB: DrawingBackend>(
         .y_label_area_size(85)
         .build_cartesian_2d(x0..x1, (y0 - ypad)..(y1 + ypad))
         .map_err(es)?;
-    let ylab: &dyn Fn(&f64) -> String = if spec.log_y { &log_label } else { &num_label };
+    let (ylo, yhi) = (y0 - ypad, y1 + ypad);
+    let ylab: Box<dyn Fn(&f64) -> String> = if spec.log_y {
+        Box::new(log_labels(ylo, yhi, TICKS))
+    } else {
+        Box::new(linear_labels(ylo, yhi, TICKS))
+    };
+    let xlab = linear_labels(x0, x1, TICKS);
     chart
         .configure_mesh()
         .x_desc(spec.x_label)
         .y_desc(spec.y_label)
         .label_style((FONT_FAMILY, 14))
         .axis_desc_style((FONT_FAMILY, 16))
-        .x_label_formatter(&num_label)
-        .y_label_formatter(ylab)
+        .x_label_formatter(&xlab)
+        .y_label_formatter(&*ylab)
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(es)?;
@@ -614,8 +641,8 @@ fn heat_on<DB: DrawingBackend>(
         .y_desc(map.y_label)
         .label_style((FONT_FAMILY, 14))
         .axis_desc_style((FONT_FAMILY, 16))
-        .x_label_formatter(&num_label)
-        .y_label_formatter(&num_label)
+        .x_label_formatter(&linear_labels(xe[0], xe[xe.len() - 1], TICKS))
+        .y_label_formatter(&linear_labels(ye[0], ye[ye.len() - 1], TICKS))
         .draw()
         .map_err(es)?;
     let (xa, xb, ya, yb) = (xe[0], xe[xe.len() - 1], ye[0], ye[ye.len() - 1]);
@@ -624,6 +651,7 @@ fn heat_on<DB: DrawingBackend>(
     };
     // Pixel anchors of the labels drawn so far (solid lines first: their labels win).
     let mut labels: Vec<(i32, i32)> = Vec::new();
+    let mut pending: Vec<(String, i32, i32)> = Vec::new();
     let ordered = map
         .lines
         .iter()
@@ -659,17 +687,23 @@ fn heat_on<DB: DrawingBackend>(
                 continue;
             }
             labels.push((px, py));
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    l.name.clone(),
-                    (x, y),
-                    (FONT_FAMILY, 13)
-                        .into_font()
-                        .color(&WHITE)
-                        .pos(Pos::new(HPos::Right, VPos::Bottom)),
-                )))
-                .map_err(es)?;
+            pending.push((l.name.clone(), px, py));
         }
+    }
+    // Labels after all lines, each on a dark box, so that no later line crosses a label.
+    for (name, px, py) in pending {
+        let font = (FONT_FAMILY, 13)
+            .into_font()
+            .color(&WHITE)
+            .pos(Pos::new(HPos::Right, VPos::Bottom));
+        let (tw, th) = main.estimate_text_size(&name, &font).map_err(es)?;
+        let (tw, th) = (tw as i32, th as i32);
+        main.draw(&Rectangle::new(
+            [(px - tw - 3, py - th - 2), (px + 1, py + 1)],
+            BLACK.mix(0.6).filled(),
+        ))
+        .map_err(es)?;
+        main.draw(&Text::new(name, (px, py), font)).map_err(es)?;
     }
     // Colour bar.
     let mut cb = ChartBuilder::on(&bar)
@@ -689,10 +723,10 @@ fn heat_on<DB: DrawingBackend>(
         )
     }))
     .map_err(es)?;
-    let clab: &dyn Fn(&f64) -> String = if map.log_colour {
-        &log_label
+    let clab: Box<dyn Fn(&f64) -> String> = if map.log_colour {
+        Box::new(log_labels(c0, c1, 6))
     } else {
-        &num_label
+        Box::new(linear_labels(c0, c1, 6))
     };
     cb.configure_mesh()
         .disable_mesh()
@@ -700,7 +734,7 @@ fn heat_on<DB: DrawingBackend>(
         .y_desc(map.colour_label)
         .label_style((FONT_FAMILY, 12))
         .axis_desc_style((FONT_FAMILY, 13))
-        .y_label_formatter(clab)
+        .y_label_formatter(&*clab)
         .y_labels(6)
         .draw()
         .map_err(es)?;
@@ -709,6 +743,49 @@ fn heat_on<DB: DrawingBackend>(
 
 #[cfg(test)]
 mod tests {
+
+    /// The ticks plotters would draw: multiples of a 1-2-5 step, at most `n` over the range.
+    fn ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+        let raw = (hi - lo) / n as f64;
+        let e = 10f64.powf(raw.log10().floor());
+        let step = [1.0, 2.0, 5.0, 10.0]
+            .iter()
+            .map(|m| m * e)
+            .find(|&s| s >= raw)
+            .unwrap();
+        let k0 = (lo / step).ceil() as i64;
+        let k1 = (hi / step).floor() as i64;
+        (k0..=k1).map(|k| k as f64 * step).collect()
+    }
+
+    #[test]
+    fn neighbouring_tick_labels_differ() {
+        // A normal force of 1e5 N varying by 2 %, a narrow log range, a wide one, a tiny span.
+        for (lo, hi, log) in [
+            (98_960.0, 101_060.0, false),
+            (-3.02, -2.97, true),
+            (-15.0, -4.0, true),
+            (4.3, 5.3, false),
+            (1.0e-4, 1.3e-4, false),
+            (2.0e6, 2.2e6, false),
+        ] {
+            let f: Box<dyn Fn(&f64) -> String> = if log {
+                Box::new(log_labels(lo, hi, TICKS))
+            } else {
+                Box::new(linear_labels(lo, hi, TICKS))
+            };
+            let t = ticks(lo, hi, TICKS);
+            assert!(t.len() >= 2, "{lo}..{hi}");
+            let labels: Vec<String> = t.iter().map(f).collect();
+            for w in labels.windows(2) {
+                assert_ne!(w[0], w[1], "{lo}..{hi}: {labels:?}");
+            }
+        }
+        assert_eq!(
+            linear_labels(98_960.0, 101_060.0, TICKS)(&99_200.0),
+            "99200"
+        );
+    }
     use super::*;
 
     fn tmpdir(tag: &str) -> PathBuf {

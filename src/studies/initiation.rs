@@ -12,10 +12,10 @@
 //!    dominant wear wavelength by at most `max_wavelength_deviation` (default 3 %, the
 //!    consistency limit of docs/theory.md §10.2), deviation = `|λ_FL − λ_W| / λ_W`.
 //!
-//! The 1 % threshold is a stated engineering choice, not a published value: it separates
-//! "wear with a visible 20–80 mm ripple" from numerical noise and is to be checked against the
-//! RPM1–RPM5 contrast of docs/theory.md §2.4 once the passage engine runs (change it with
-//! `--min-relative-wear`). A model without a wear or `F_L` peak in the band does not initiate.
+//! The 1 % threshold is a stated engineering choice, not a published value (docs/theory.md
+//! §11.4 says what it rests on and what the shipped models give); it is the model key
+//! `wear.initiation_threshold` (`--min-relative-wear` overrides it for one run). A model
+//! without a wear or `F_L` peak in the band does not initiate.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
@@ -23,9 +23,10 @@ use std::path::Path;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::sweep::{panic_text, progress_bar};
+use super::sweep::panic_text;
 use super::StudiesError;
 use crate::dynamics::{PassageRunner, PassageSummary, WavelengthComponent};
+use crate::progress::{Counter, Progress};
 use crate::report::doc::Document;
 
 /// The stated initiation criterion (module doc).
@@ -39,8 +40,18 @@ pub struct InitiationCriterion {
 }
 
 impl InitiationCriterion {
-    /// Default threshold on the relative band RMS of the wear (1 %).
-    pub const DEFAULT_MIN_RELATIVE_WEAR: f64 = 0.01;
+    /// Default threshold on the relative band RMS of the wear (1 %,
+    /// [`crate::model::Wear::initiation_threshold`]).
+    pub const DEFAULT_MIN_RELATIVE_WEAR: f64 = crate::model::DEFAULT_INITIATION_THRESHOLD;
+
+    /// The criterion of a model: its `wear.initiation_threshold` and the default wavelength
+    /// match tolerance.
+    pub fn from_model(model: &crate::model::Model) -> Self {
+        Self {
+            min_relative_wear: model.wear.initiation_threshold,
+            ..Self::default()
+        }
+    }
     /// Default wavelength match tolerance (3 %, docs/theory.md §10.2).
     pub const DEFAULT_MAX_WAVELENGTH_DEVIATION: f64 = 0.03;
 }
@@ -83,6 +94,9 @@ pub struct InitiationRow {
     pub fn_peaks: Vec<WavelengthComponent>,
     /// `|λ_FL − λ_W| / λ_W` of the two dominant components (−); `None` if either is missing.
     pub fl_wear_deviation: Option<f64>,
+    /// The threshold on `relative_wear` it was judged against (−).
+    #[serde(default)]
+    pub threshold: Option<f64>,
     /// Whether the criterion holds.
     pub initiates: bool,
     /// Why (which condition failed, or that both hold).
@@ -160,6 +174,7 @@ pub fn evaluate(
         fl_peaks: top(&s.fl_components, peaks),
         fn_peaks: top(&s.fn_components, peaks),
         fl_wear_deviation,
+        threshold: Some(criterion.min_relative_wear),
         initiates,
         reason,
     }
@@ -172,9 +187,9 @@ pub fn run_initiation(
     speed_kmh: f64,
     criterion: &InitiationCriterion,
     peaks: usize,
-    progress: bool,
+    progress: &dyn Progress,
 ) -> Result<Vec<InitiationRow>, StudiesError> {
-    let bar = progress_bar(cases.len() as u64, progress, "initiation");
+    let bar = Counter::start(progress, "initiation passages (models)", cases.len() as u64);
     let out: Vec<Result<InitiationRow, String>> = cases
         .par_iter()
         .map(|(name, runner)| {
@@ -183,11 +198,11 @@ pub fn run_initiation(
                 Ok(Err(e)) => Err(format!("{name}: {e}")),
                 Err(p) => Err(format!("{name}: passage panicked: {}", panic_text(&*p))),
             };
-            bar.inc(1);
+            bar.inc();
             r
         })
         .collect();
-    bar.finish_and_clear();
+    bar.finish();
     let mut rows = Vec::new();
     let mut failures = Vec::new();
     for r in out {
@@ -297,6 +312,7 @@ pub fn readable_header() -> Vec<&'static str> {
         "F_L band RMS (N)",
         "F_N band RMS (N)",
         "wear band RMS / mean (%)",
+        "initiation threshold (%)",
         "wear peaks",
         "F_L peaks",
         "F_N peaks",
@@ -313,7 +329,9 @@ pub fn readable_cells(r: &InitiationRow) -> Vec<String> {
         format!("{:.1}", r.fl_band_rms_n),
         format!("{:.1}", r.fn_band_rms_n),
         r.relative_wear
-            .map_or_else(|| "–".into(), |v| format!("{:.3}", 100.0 * v)),
+            .map_or_else(|| "–".into(), |v| crate::growth::verdict::sig(100.0 * v, 3)),
+        r.threshold
+            .map_or_else(|| "–".into(), |v| crate::growth::verdict::sig(100.0 * v, 3)),
         peaks_text(&r.wear_peaks),
         peaks_text(&r.fl_peaks),
         peaks_text(&r.fn_peaks),

@@ -57,10 +57,11 @@ use super::initiation::{
     criterion_text, evaluate, indicator_cells, indicator_header, readable_cells, readable_header,
     write_table_csv, InitiationCriterion, InitiationRow,
 };
-use super::sweep::{panic_text, progress_bar};
+use super::sweep::panic_text;
 use super::{BoxError, StudiesError};
 use crate::dynamics::PassageRunner;
 use crate::model::{load_model, Model, ModelSource};
+use crate::progress::{Counter, Progress};
 use crate::report::doc::Document;
 use crate::report::plot::{line_plot, Series};
 
@@ -514,7 +515,7 @@ pub fn run_study(
     factory: RunnerFactory<'_>,
     growth: Option<GrowthHook<'_>>,
     out: &Path,
-    progress: bool,
+    progress: &dyn Progress,
 ) -> Result<StudyOutcome, StudiesError> {
     if study.growth && growth.is_none() {
         return Err(key_error(
@@ -524,7 +525,7 @@ pub fn run_study(
         ));
     }
     let models = study.case_models()?;
-    let bar = progress_bar(models.len() as u64, progress, "cases");
+    let bar = Counter::start(progress, "study cases", models.len() as u64);
     let mut done = Vec::new();
     let mut failures = Vec::new();
     let (mut computed, mut reused) = (0, 0);
@@ -551,7 +552,7 @@ pub fn run_study(
         if let Some(r) = old {
             reused += 1;
             done.push((case.clone(), r));
-            bar.inc(1);
+            bar.inc();
             continue;
         }
         let run = || -> Result<CaseResult, String> {
@@ -590,9 +591,9 @@ pub fn run_study(
                 panic_text(&*p)
             )),
         }
-        bar.inc(1);
+        bar.inc();
     }
-    bar.finish_and_clear();
+    bar.finish();
     if !failures.is_empty() {
         return Err(StudiesError::Passages { failures });
     }
@@ -636,6 +637,66 @@ const INDICATORS: [Indicator; 5] = [
         r.wear_peaks.first().map(|c| c.frequency_hz)
     }),
 ];
+
+/// The unit of a model key for axis labels ("−" for dimensionless keys), from the naming
+/// conventions of the model file (`models/dutch-base.toml` states each); `None` if unknown.
+pub fn key_unit(key: &str) -> Option<&'static str> {
+    let last = key.rsplit('.').next().unwrap_or(key);
+    let ends = |s: &str| last.ends_with(s);
+    Some(match last {
+        "speed_kmh" => "km/h",
+        "fmax" => "Hz",
+        "wheel_load" => "N",
+        "gravity" => "m/s²",
+        "coefficient" => "m³/J",
+        "time_step" => "s",
+        "structural_damping" => "s",
+        _ if ends("damping_ratio") => "−",
+        _ if ends("stiffness") => "N/m",
+        _ if ends("damping") => "N·s/m",
+        _ if ends("modulus") => "Pa",
+        _ if ends("density") => "kg/m³",
+        _ if ends("ratio")
+            || ends("conicity")
+            || ends("friction")
+            || ends("traction_coefficient")
+            || ends("inclination")
+            || ends("threshold")
+            || ends("safety")
+            || ends("margin")
+            || ends("bays")
+            || ends("rows")
+            || ends("columns")
+            || ends("segments")
+            || ends("grid_nx")
+            || ends("grid_ny") =>
+        {
+            "−"
+        }
+        _ if ends("length")
+            || ends("width")
+            || ends("height")
+            || ends("radius")
+            || ends("spacing")
+            || ends("thickness")
+            || ends("size")
+            || ends("offset")
+            || ends("rail_seat") =>
+        {
+            "m"
+        }
+        _ => return None,
+    })
+}
+
+/// Axis label of a growth column of a study.
+fn growth_label(k: &str) -> String {
+    match k {
+        "limiting_amplitude_um" => "limiting amplitude (2A_max)_l (µm; 0: none)".into(),
+        "consistent_amplitudes" => "trial amplitudes growing consistently (of 4)".into(),
+        _ => k.to_string(),
+    }
+}
 
 fn as_number(v: &toml::Value) -> Option<f64> {
     match v {
@@ -684,7 +745,10 @@ fn write_study(
     let first = &study.parameters[0];
     let numeric = first.values.iter().all(|v| as_number(v).is_some());
     let x_label = if numeric {
-        first.key.clone()
+        match key_unit(&first.key) {
+            Some(u) => format!("{} ({u})", first.key),
+            None => first.key.clone(),
+        }
     } else {
         format!("case ({} not numeric)", first.key)
     };
@@ -705,7 +769,8 @@ fn write_study(
         doc.paragraph(format!("Overrides of every case: {}.", study.set.join(" ")));
     }
     doc.paragraph(criterion_text(&study.criterion));
-    let mut extra: Vec<(String, String)> = gk.iter().map(|k| (k.clone(), k.clone())).collect();
+    let mut extra: Vec<(String, String)> =
+        gk.iter().map(|k| (k.clone(), growth_label(k))).collect();
     let mut plots = Vec::new();
     for (stem, label, f) in INDICATORS {
         plots.push((stem.to_string(), label.to_string(), Some(f), None));
@@ -769,6 +834,23 @@ fn write_study(
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn study_axis_units_follow_the_model_keys() {
+        for (k, u) in [
+            ("fastening.vertical_stiffness", Some("N/m")),
+            ("fastening.vertical_damping", Some("N·s/m")),
+            ("wheel.damping_ratio", Some("−")),
+            ("run.speed_kmh", Some("km/h")),
+            ("rail.youngs_modulus", Some("Pa")),
+            ("fastening.pad_thickness", Some("m")),
+            ("track.bays", Some("−")),
+            ("fastening.model", None),
+        ] {
+            assert_eq!(key_unit(k), u, "{k}");
+        }
+    }
+
     use super::*;
 
     fn parse(text: &str) -> Result<Study, StudiesError> {

@@ -53,6 +53,7 @@ use serde::{Deserialize, Serialize};
 use super::speeds::speed_file_stem;
 use super::StudiesError;
 use crate::dynamics::{PassageRunner, PassageSummary, WavelengthSpectrum};
+use crate::progress::{Counter, Progress};
 use crate::report::doc::Document;
 use crate::report::plot::{heat_map, line_plot, HeatMap, OverlayLine, Series};
 
@@ -211,15 +212,15 @@ pub fn write_summary(path: &Path, s: &PassageSummary) -> Result<(), StudiesError
 }
 
 /// Runs the passages of the speeds that have no complete file in `dir/speeds` yet, in
-/// parallel (rayon), each saved the moment it finishes; a progress bar on stderr when
-/// `progress`. A passage that fails or panics is reported in [`StudiesError::Passages`]
+/// parallel (rayon), each saved the moment it finishes; each finished passage is reported to
+/// `progress` (stage "sweep passages (speeds)"). A passage that fails or panics is reported in [`StudiesError::Passages`]
 /// after all others have finished and been saved.
 pub fn run_passages(
     runner: &dyn PassageRunner,
     speeds_kmh: &[f64],
     dir: &Path,
     run_key: &str,
-    progress: bool,
+    progress: &dyn Progress,
 ) -> Result<PassageStats, StudiesError> {
     check_run_key(dir, run_key)?;
     let mut stats = PassageStats::default();
@@ -231,7 +232,7 @@ pub fn run_passages(
             _ => todo.push(v),
         }
     }
-    let bar = progress_bar(todo.len() as u64, progress, "passages");
+    let bar = Counter::start(progress, "sweep passages (speeds)", todo.len() as u64);
     let results: Vec<Result<f64, String>> = todo
         .par_iter()
         .map(|&v| {
@@ -247,11 +248,11 @@ pub fn run_passages(
                 Ok(Err(e)) => Err(format!("{v} km/h: {e}")),
                 Err(p) => Err(format!("{v} km/h: passage panicked: {}", panic_text(&*p))),
             };
-            bar.inc(1);
+            bar.inc();
             r
         })
         .collect();
-    bar.finish_and_clear();
+    bar.finish();
     let mut failures = Vec::new();
     for r in results {
         match r {
@@ -271,21 +272,6 @@ pub(crate) fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
         .map(|s| s.to_string())
         .or_else(|| p.downcast_ref::<String>().cloned())
         .unwrap_or_else(|| "unknown panic".into())
-}
-
-pub(crate) fn progress_bar(n: u64, show: bool, what: &str) -> indicatif::ProgressBar {
-    if !show {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar =
-        indicatif::ProgressBar::with_draw_target(Some(n), indicatif::ProgressDrawTarget::stderr());
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{msg} [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta})",
-    ) {
-        bar.set_style(style);
-    }
-    bar.set_message(what.to_string());
-    bar
 }
 
 /// File (in `DIR/speeds`) naming what produced the speed files: see [`check_run_key`].
@@ -323,7 +309,7 @@ pub fn sweep(
     dir: &Path,
     opts: &MapOptions,
     run_key: &str,
-    progress: bool,
+    progress: &dyn Progress,
 ) -> Result<SweepOutcome, StudiesError> {
     opts.check()?;
     let stats = run_passages(runner, speeds_kmh, dir, run_key, progress)?;
@@ -682,10 +668,34 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
             dom_l,
         )],
     )?;
-    // Mode lines first, so the dominant frequency is drawn on top of them.
-    let mut fs: Vec<Series> = lines_f
+    // Only the mode lines near the dominant frequencies (within 15 % of their range; at most
+    // eight, nearest first), so that the dominant curve and its legend stay readable; the
+    // maps show all lines. Mode lines first, so the dominant frequency is drawn on top.
+    let df: Vec<f64> = dom_f.iter().copied().filter(|v| v.is_finite()).collect();
+    let (flo, fhi) = df
         .iter()
-        .map(|l| Series::new(l.name.clone(), l.x.clone(), l.y.clone()))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let dist = |f: f64| {
+        if f < flo {
+            (flo - f) / flo
+        } else if f > fhi {
+            (f - fhi) / fhi
+        } else {
+            0.0
+        }
+    };
+    let mut near: Vec<(&OverlayLine, f64)> = lines_f
+        .iter()
+        .filter_map(|l| l.y.first().map(|&f| (l, dist(f))))
+        .filter(|(_, d)| *d <= 0.15)
+        .collect();
+    near.sort_by(|a, b| a.1.total_cmp(&b.1));
+    near.truncate(8);
+    let mut fs: Vec<Series> = near
+        .iter()
+        .map(|(l, _)| Series::new(l.name.clone(), l.x.clone(), l.y.clone()))
         .collect();
     fs.push(Series::new(
         "dominant frequency",
@@ -694,7 +704,7 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
     ));
     line_plot(
         &dir.join("dominant_frequency"),
-        "Dominant wear frequency vs speed (lines: longitudinal compression modes)",
+        "Dominant wear frequency vs speed, with the nearest modes",
         "speed (km/h)",
         "frequency (Hz)",
         &fs,

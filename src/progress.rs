@@ -1,0 +1,95 @@
+//! Progress of long work. The library never prints progress: it reports stages and counts
+//! to a [`Progress`] given by the caller, and a front end (the command-line program) renders
+//! them (a bar on a terminal, plain lines in a log).
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Receives the progress of long work (a sweep's passages, a study's cases, …).
+///
+/// Implementations must be cheap: [`Progress::done`] may be called once per unit of work
+/// from several threads.
+pub trait Progress: Sync {
+    /// A stage named `name` (what is counted, e.g. "sweep passages (speeds)") with `total`
+    /// units of work begins; `total` = 0 when the count is not known.
+    fn stage(&self, name: &str, total: u64);
+    /// `done` units of the current stage are complete (0 ≤ done ≤ total).
+    fn done(&self, done: u64);
+    /// The current stage is over.
+    fn finish(&self) {}
+}
+
+/// Progress that nobody watches (tests, library use without a front end).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Silent;
+
+impl Progress for Silent {
+    fn stage(&self, _: &str, _: u64) {}
+    fn done(&self, _: u64) {}
+}
+
+/// Counts completed units from parallel workers and reports the count to a [`Progress`].
+pub struct Counter<'a> {
+    sink: &'a dyn Progress,
+    count: AtomicU64,
+}
+
+impl<'a> Counter<'a> {
+    /// Starts the stage `name` of `total` units on `sink`.
+    pub fn start(sink: &'a dyn Progress, name: &str, total: u64) -> Self {
+        sink.stage(name, total);
+        Self {
+            sink,
+            count: AtomicU64::new(0),
+        }
+    }
+
+    /// One more unit is complete.
+    pub fn inc(&self) {
+        let k = self.count.fetch_add(1, Ordering::Relaxed) + 1;
+        self.sink.done(k);
+    }
+
+    /// Ends the stage.
+    pub fn finish(self) {
+        self.sink.finish();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Mutex;
+
+    #[derive(Default)]
+    struct Log(Mutex<Vec<String>>);
+
+    impl Progress for Log {
+        fn stage(&self, name: &str, total: u64) {
+            self.0.lock().unwrap().push(format!("stage {name} {total}"));
+        }
+        fn done(&self, done: u64) {
+            self.0.lock().unwrap().push(format!("done {done}"));
+        }
+        fn finish(&self) {
+            self.0.lock().unwrap().push("finish".into());
+        }
+    }
+
+    #[test]
+    fn counter_reports_every_unit_once_from_parallel_workers() {
+        use rayon::prelude::*;
+        let log = Log::default();
+        let c = Counter::start(&log, "units", 50);
+        (0..50).into_par_iter().for_each(|_| c.inc());
+        c.finish();
+        let v = log.0.into_inner().unwrap();
+        assert_eq!(v.first().map(String::as_str), Some("stage units 50"));
+        assert_eq!(v.last().map(String::as_str), Some("finish"));
+        let mut counts: Vec<u64> = v
+            .iter()
+            .filter_map(|s| s.strip_prefix("done ").map(|n| n.parse().unwrap()))
+            .collect();
+        counts.sort_unstable();
+        assert_eq!(counts, (1..=50).collect::<Vec<u64>>());
+    }
+}
