@@ -100,6 +100,7 @@ pub mod classify;
 pub mod factor;
 pub mod lanczos;
 pub mod ordering;
+pub mod substructure;
 mod spmm;
 
 #[cfg(test)]

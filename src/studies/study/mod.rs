@@ -12,6 +12,9 @@
 //! combine = "grid"                         # "grid" (full product, default) or "zip"
 //! growth = false                           # run the growth loop per case (optional)
 //! peaks = 3                                # PSD peaks per signal in the table (optional)
+//! basis = "full"                           # track basis: "full" (Lanczos per distinct track,
+//!                                          # default) or "substructured" (theory §5.6)
+//! # substructure = { cutoff_factor = 1.5, pattern_degree = 3 }  # only with "substructured"
 //!
 //! [criterion]                              # optional, see initiation::InitiationCriterion
 //! min_relative_wear = 0.01
@@ -59,7 +62,11 @@ use super::initiation::{
 };
 use super::sweep::{panic_text, progress_bar};
 use super::{BoxError, StudiesError};
+
+pub mod bases;
+pub use bases::{basis_plan, BasisPlan, CaseRunners, StudyBasis};
 use crate::dynamics::PassageRunner;
+use crate::eigen::substructure::SubstructureOptions;
 use crate::model::{load_model, Model, ModelSource};
 use crate::report::doc::Document;
 use crate::report::plot::{line_plot, Series};
@@ -118,6 +125,10 @@ struct StudyFile {
     peaks: Option<usize>,
     #[serde(default)]
     criterion: Option<InitiationCriterion>,
+    #[serde(default)]
+    basis: StudyBasis,
+    #[serde(default)]
+    substructure: Option<SubstructureOptions>,
     parameter: Vec<ParamFile>,
 }
 
@@ -180,6 +191,10 @@ pub struct Study {
     pub peaks: usize,
     /// The initiation criterion.
     pub criterion: InitiationCriterion,
+    /// The track basis of the cases (default full).
+    pub basis: StudyBasis,
+    /// Options of the component bases when `basis = "substructured"` (defaults otherwise).
+    pub substructure: SubstructureOptions,
     /// The varied parameters.
     pub parameters: Vec<Parameter>,
 }
@@ -383,6 +398,17 @@ impl Study {
         if !(1..=20).contains(&peaks) {
             return Err(key_error(file, "peaks", format!("{peaks}: allowed 1 … 20")));
         }
+        let substructure = raw.substructure.unwrap_or_default();
+        if raw.substructure.is_some() && raw.basis != StudyBasis::Substructured {
+            return Err(key_error(
+                file,
+                "substructure",
+                "only allowed with basis = \"substructured\"",
+            ));
+        }
+        substructure
+            .validate()
+            .map_err(|e| key_error(file, "substructure", e.to_string()))?;
         Ok(Study {
             file: file.to_string(),
             title: raw.title.unwrap_or_else(|| default_title.to_string()),
@@ -393,6 +419,8 @@ impl Study {
             growth: raw.growth,
             peaks,
             criterion,
+            basis: raw.basis,
+            substructure,
             parameters,
         })
     }
