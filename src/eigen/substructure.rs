@@ -106,10 +106,15 @@ pub enum SubstructureError {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SubstructureOptions {
-    /// Component modes are kept below `cutoff_factor × f_max` (−, 1 to 4; default 1.5).
+    /// Rail modes are kept below `cutoff_factor × f_max` (−, 1 to 4; default 1.5).
     pub cutoff_factor: f64,
+    /// Sleeper modes are kept below `sleeper_cutoff_factor × f_max` (−, 1 to 4; default 1:
+    /// the coarse sleeper mesh has a dense spectrum above f_max, and every sleeper mode is
+    /// repeated once per sleeper in the reduced system).
+    pub sleeper_cutoff_factor: f64,
     /// Highest degree per coordinate of the attachment load patterns (−, 0 to 3; default 3:
-    /// 16 patterns per group and direction).
+    /// 16 patterns per group and direction); the ballast's patterns (soft springs under a
+    /// stiff sleeper) are at most bilinear.
     pub pattern_degree: usize,
 }
 
@@ -117,6 +122,7 @@ impl Default for SubstructureOptions {
     fn default() -> Self {
         Self {
             cutoff_factor: 1.5,
+            sleeper_cutoff_factor: 1.0,
             pattern_degree: 3,
         }
     }
@@ -125,12 +131,17 @@ impl Default for SubstructureOptions {
 impl SubstructureOptions {
     /// Checks the ranges.
     pub fn validate(&self) -> Result<(), SubstructureError> {
-        if !(self.cutoff_factor.is_finite() && (1.0..=4.0).contains(&self.cutoff_factor)) {
-            return Err(SubstructureError::Option {
-                name: "cutoff_factor",
-                value: self.cutoff_factor.to_string(),
-                allowed: "1 to 4",
-            });
+        for (name, v) in [
+            ("cutoff_factor", self.cutoff_factor),
+            ("sleeper_cutoff_factor", self.sleeper_cutoff_factor),
+        ] {
+            if !(v.is_finite() && (1.0..=4.0).contains(&v)) {
+                return Err(SubstructureError::Option {
+                    name,
+                    value: v.to_string(),
+                    allowed: "1 to 4",
+                });
+            }
         }
         if self.pattern_degree > 3 {
             return Err(SubstructureError::Option {
@@ -269,10 +280,17 @@ type Group = Vec<(usize, [f64; 2])>;
 
 /// Load patterns over the groups: for each group, the tensor-product polynomials of degree
 /// ≤ `degree` in the coordinates scaled to [−1, 1] over the group's extent.
-fn patterns(groups: &BTreeMap<(u8, usize, usize), Group>, n: usize, degree: usize) -> Mat<f64> {
-    let per = (degree + 1) * (degree + 1);
-    let mut f = Mat::<f64>::zeros(n, groups.len() * per);
-    for (g, pts) in groups.values().enumerate() {
+/// Ballast groups (kind 1) get at most degree 1.
+fn patterns(groups: &BTreeMap<(u8, usize, usize), Group>, n: usize, max_degree: usize) -> Mat<f64> {
+    let degree_of = |kind: u8| if kind == 1 { max_degree.min(1) } else { max_degree };
+    let total: usize = groups
+        .keys()
+        .map(|k| (degree_of(k.0) + 1) * (degree_of(k.0) + 1))
+        .sum();
+    let mut f = Mat::<f64>::zeros(n, total);
+    let mut col0 = 0;
+    for (key, pts) in groups {
+        let degree = degree_of(key.0);
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
         for (_, p) in pts {
@@ -293,10 +311,11 @@ fn patterns(groups: &BTreeMap<(u8, usize, usize), Group>, n: usize, degree: usiz
             let (s, t) = (scaled(&p, 0), scaled(&p, 1));
             for i in 0..=degree {
                 for j in 0..=degree {
-                    f[(dof, g * per + i * (degree + 1) + j)] = s.powi(i as i32) * t.powi(j as i32);
+                    f[(dof, col0 + i * (degree + 1) + j)] = s.powi(i as i32) * t.powi(j as i32);
                 }
             }
         }
+        col0 += (degree + 1) * (degree + 1);
     }
     f
 }
@@ -660,7 +679,7 @@ pub fn build_components(
         &ks,
         &ms,
         patterns(&sleeper_groups, sp.sleeper_dofs, opts.pattern_degree),
-        cutoff,
+        opts.sleeper_cutoff_factor * fmax_hz,
     )?;
     let kr = sparse_block(mats.k.as_ref(), 0, sp.rail_dofs);
     let mr = sparse_block(mats.m.as_ref(), 0, sp.rail_dofs);
@@ -681,7 +700,7 @@ pub fn build_components(
 }
 
 /// Revision of the component construction (bump when the bases of an unchanged model change).
-pub const COMPONENT_REVISION: u64 = 1;
+pub const COMPONENT_REVISION: u64 = 2;
 
 /// The cache key of a track's component `part` (`rail-component` or `sleeper-component`):
 /// the track's key ([`super::basis::structure_key_value`]) without any spring stiffness, but
@@ -722,6 +741,7 @@ pub fn component_key(
         .u64("railpad_directions", active)
         .f64("f_max_hz", fmax_hz)
         .f64("cutoff_factor", opts.cutoff_factor)
+        .f64("sleeper_cutoff_factor", opts.sleeper_cutoff_factor)
         .u64("pattern_degree", opts.pattern_degree as u64)
         .str("substructure", part))
 }
@@ -794,7 +814,7 @@ pub fn track_components(
     let c = build_components(track, fmax_hz, opts)?;
     let cutoff = opts.cutoff_factor * fmax_hz;
     store_component(cache, &rk, &c.rail, cutoff);
-    store_component(cache, &sk, &c.sleeper, cutoff);
+    store_component(cache, &sk, &c.sleeper, opts.sleeper_cutoff_factor * fmax_hz);
     Ok(c)
 }
 
