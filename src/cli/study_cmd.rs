@@ -7,8 +7,8 @@ use std::time::Instant;
 use clap::Args;
 
 use corrugation::dynamics::PassageRunner;
-use corrugation::model::Model;
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
+use corrugation::model::Model;
 use corrugation::studies::study::{basis_plan, run_study, CaseRunners, Study};
 use corrugation::studies::BoxError;
 

@@ -894,8 +894,8 @@ impl PreparedModel {
         let other = |e: &dyn std::fmt::Display| DynamicsError::Other(e.to_string());
         let track = TrackStructure::build(model).map_err(|e| other(&e))?;
         let fmax = model.run.fmax;
-        let tb = crate::eigen::basis::track_basis(model, &track, cache, fmax)
-            .map_err(|e| other(&e))?;
+        let tb =
+            crate::eigen::basis::track_basis(model, &track, cache, fmax).map_err(|e| other(&e))?;
         let key = crate::eigen::basis::cache_key(model, fmax, "track").map_err(|e| other(&e))?;
         Self::with_track_basis(model, &track, tb, cache, Some(&key), opts)
     }

@@ -100,8 +100,8 @@ pub mod classify;
 pub mod factor;
 pub mod lanczos;
 pub mod ordering;
-pub mod substructure;
 mod spmm;
+pub mod substructure;
 
 #[cfg(test)]
 mod tests;

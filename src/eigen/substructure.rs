@@ -1,4 +1,4 @@
-//! Substructured modal model of the track (docs/theory.md §5.6): component bases of the rail
+//! Substructured modal model of the track (docs/theory.md §5.8): component bases of the rail
 //! and of one sleeper, the railpad, ballast and elastic-hold springs as parameters of the
 //! assembled reduced system.
 //!
@@ -220,7 +220,9 @@ fn split(track: &TrackStructure) -> Result<Split, SubstructureError> {
                 return Err(SubstructureError::Layout {
                     index: i,
                     kind: SpringKind::Ballast,
-                    what: format!("sleeper {i}, which has constrained DOFs or a different node count"),
+                    what: format!(
+                        "sleeper {i}, which has constrained DOFs or a different node count"
+                    ),
                 })
             }
         }
@@ -246,7 +248,11 @@ fn solid_matrices(track: &TrackStructure) -> Result<FeMatrices, SubstructureErro
 }
 
 /// The square block `[r0, r0 + n)` of a full-storage sparse matrix.
-fn sparse_block(a: SparseColMatRef<'_, usize, f64>, r0: usize, n: usize) -> SparseColMat<usize, f64> {
+fn sparse_block(
+    a: SparseColMatRef<'_, usize, f64>,
+    r0: usize,
+    n: usize,
+) -> SparseColMat<usize, f64> {
     let mut trip = Vec::new();
     for j in r0..r0 + n {
         let rows = a.symbolic().row_idx_of_col_raw(j);
@@ -282,7 +288,13 @@ type Group = Vec<(usize, [f64; 2])>;
 /// ≤ `degree` in the coordinates scaled to [−1, 1] over the group's extent.
 /// Ballast groups (kind 1) get at most degree 1.
 fn patterns(groups: &BTreeMap<(u8, usize, usize), Group>, n: usize, max_degree: usize) -> Mat<f64> {
-    let degree_of = |kind: u8| if kind == 1 { max_degree.min(1) } else { max_degree };
+    let degree_of = |kind: u8| {
+        if kind == 1 {
+            max_degree.min(1)
+        } else {
+            max_degree
+        }
+    };
     let total: usize = groups
         .keys()
         .map(|k| (degree_of(k.0) + 1) * (degree_of(k.0) + 1))
@@ -414,7 +426,14 @@ fn m_orthogonalise(
     for _ in 0..2 {
         let ma = m(a.as_ref());
         let mut c = Mat::<f64>::zeros(phi.ncols(), a.ncols());
-        matmul(c.as_mut(), Accum::Replace, phi.transpose(), ma.as_ref(), 1.0, Par::rayon(0));
+        matmul(
+            c.as_mut(),
+            Accum::Replace,
+            phi.transpose(),
+            ma.as_ref(),
+            1.0,
+            Par::rayon(0),
+        );
         matmul(a.as_mut(), Accum::Add, phi, c.as_ref(), -1.0, Par::rayon(0));
     }
 }
@@ -435,7 +454,14 @@ fn ritz(
     }
     let gram = |b: Mat<f64>| {
         let mut g = Mat::<f64>::zeros(q, q);
-        matmul(g.as_mut(), Accum::Replace, a.transpose(), b.as_ref(), 1.0, Par::rayon(0));
+        matmul(
+            g.as_mut(),
+            Accum::Replace,
+            a.transpose(),
+            b.as_ref(),
+            1.0,
+            Par::rayon(0),
+        );
         Mat::from_fn(q, q, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]))
     };
     let ma = gram(m(a.as_ref()));
@@ -460,15 +486,45 @@ fn ritz(
         em.U()[(i, keep[j])] / d[keep[j]].sqrt()
     });
     let mut kw = Mat::<f64>::zeros(q, keep.len());
-    matmul(kw.as_mut(), Accum::Replace, ka.as_ref(), w.as_ref(), 1.0, Par::Seq);
+    matmul(
+        kw.as_mut(),
+        Accum::Replace,
+        ka.as_ref(),
+        w.as_ref(),
+        1.0,
+        Par::Seq,
+    );
     let mut kt = Mat::<f64>::zeros(keep.len(), keep.len());
-    matmul(kt.as_mut(), Accum::Replace, w.transpose(), kw.as_ref(), 1.0, Par::Seq);
-    let kt = Mat::from_fn(kt.nrows(), kt.ncols(), |i, j| 0.5 * (kt[(i, j)] + kt[(j, i)]));
+    matmul(
+        kt.as_mut(),
+        Accum::Replace,
+        w.transpose(),
+        kw.as_ref(),
+        1.0,
+        Par::Seq,
+    );
+    let kt = Mat::from_fn(kt.nrows(), kt.ncols(), |i, j| {
+        0.5 * (kt[(i, j)] + kt[(j, i)])
+    });
     let ek = eig(kt.as_ref(), "attachment Ritz problem")?;
     let mut t = Mat::<f64>::zeros(q, keep.len());
-    matmul(t.as_mut(), Accum::Replace, w.as_ref(), ek.U(), 1.0, Par::Seq);
+    matmul(
+        t.as_mut(),
+        Accum::Replace,
+        w.as_ref(),
+        ek.U(),
+        1.0,
+        Par::Seq,
+    );
     let mut v = Mat::<f64>::zeros(a.nrows(), keep.len());
-    matmul(v.as_mut(), Accum::Replace, a.as_ref(), t.as_ref(), 1.0, Par::rayon(0));
+    matmul(
+        v.as_mut(),
+        Accum::Replace,
+        a.as_ref(),
+        t.as_ref(),
+        1.0,
+        Par::rayon(0),
+    );
     let s = ek.S().column_vector();
     Ok((v, (0..keep.len()).map(|i| s[i].max(0.0)).collect()))
 }
@@ -499,11 +555,12 @@ fn rail_basis(
         }
     })?;
     let alpha = attachment_shift(cutoff_hz);
-    let sys = ShiftedSystem::new(k, m, FillOrdering::Auto, Par::rayon(0))
-        .map_err(|source| SubstructureError::Eigen {
+    let sys = ShiftedSystem::new(k, m, FillOrdering::Auto, Par::rayon(0)).map_err(|source| {
+        SubstructureError::Eigen {
             what: "rail attachment factorisation",
             source,
-        })?;
+        }
+    })?;
     let fac = sys
         .factorize(-alpha)
         .map_err(|source| SubstructureError::Eigen {
@@ -875,12 +932,19 @@ pub fn reduced_stiffness(
     let n = g.nrows();
     let gk = Mat::<f64>::from_fn(n, g.ncols(), |i, j| g[(i, j)] * track.springs[j].stiffness);
     let mut k = Mat::<f64>::zeros(n, n);
-    matmul(k.as_mut(), Accum::Replace, gk.as_ref(), g.transpose(), 1.0, Par::rayon(0));
-    let diag = comp
-        .rail
-        .omega2
-        .iter()
-        .chain(comp.sleeper_offsets.iter().flat_map(|_| comp.sleeper.omega2.iter()));
+    matmul(
+        k.as_mut(),
+        Accum::Replace,
+        gk.as_ref(),
+        g.transpose(),
+        1.0,
+        Par::rayon(0),
+    );
+    let diag = comp.rail.omega2.iter().chain(
+        comp.sleeper_offsets
+            .iter()
+            .flat_map(|_| comp.sleeper.omega2.iter()),
+    );
     for (i, &w) in diag.enumerate() {
         k[(i, i)] += w;
     }

@@ -23,9 +23,14 @@ fn small(extra: &[&str]) -> Model {
 
 fn full_frequencies(track: &TrackStructure, fmax: f64) -> Vec<f64> {
     let (mats, _) = track.assemble().unwrap();
-    solve(mats.k.as_ref(), mats.m.as_ref(), &EigenOptions::new(fmax), None)
-        .unwrap()
-        .frequencies_hz
+    solve(
+        mats.k.as_ref(),
+        mats.m.as_ref(),
+        &EigenOptions::new(fmax),
+        None,
+    )
+    .unwrap()
+    .frequencies_hz
 }
 
 /// Largest relative frequency error below `below` Hz, with the Ritz bound checked (a
@@ -34,7 +39,11 @@ fn full_frequencies(track: &TrackStructure, fmax: f64) -> Vec<f64> {
 /// modes shares that error) and equal mode counts.
 fn compare(sub: &[f64], full: &[f64], below: f64) -> f64 {
     let n = full.iter().filter(|&&f| f < below).count();
-    assert!(sub.len() >= n, "{} substructured vs {n} full modes", sub.len());
+    assert!(
+        sub.len() >= n,
+        "{} substructured vs {n} full modes",
+        sub.len()
+    );
     let mut worst: f64 = 0.0;
     for i in 0..n {
         assert!(
@@ -78,4 +87,3 @@ fn substructured_frequencies_match_the_full_solution_across_railpad_stiffness() 
         assert!(worst < 5e-3, "k = {k:e}: {worst}");
     }
 }
-

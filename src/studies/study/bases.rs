@@ -1,7 +1,7 @@
 //! The modal bases of a study's cases: which track basis a study uses (`basis = "full"` or
 //! `"substructured"` in the study file), how many bases it will solve before it starts
 //! ([`basis_plan`]), and the case runners that share the wheel basis and, for a
-//! substructured study, the track's component bases across cases (docs/theory.md §5.6).
+//! substructured study, the track's component bases across cases (docs/theory.md §5.8).
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -59,7 +59,11 @@ impl std::fmt::Display for BasisPlan {
         write!(
             f,
             "{} case(s); bases to solve: {} full track ({} cached), {} wheel ({} cached)",
-            self.cases, self.track_to_solve, self.track_cached, self.wheel_to_solve, self.wheel_cached
+            self.cases,
+            self.track_to_solve,
+            self.track_cached,
+            self.wheel_to_solve,
+            self.wheel_cached
         )?;
         if self.components_to_solve + self.components_cached + self.reduced > 0 {
             write!(
@@ -197,5 +201,74 @@ impl CaseRunners {
                 )?)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn study(basis: &str) -> Study {
+        let text = format!(
+            "model = \"builtin:dutch\"\nbasis = \"{basis}\"\n[[parameter]]\nkey = \"fastening.vertical_stiffness\"\nvalues = [0.6e9, 1.3e9]\n[[parameter]]\nkey = \"fastening.vertical_damping\"\nvalues = [15e3, 45e3]\n"
+        );
+        Study::parse_str(&text, "s.toml", Path::new("/studies"), "s").unwrap()
+    }
+
+    /// A 2 × 2 railpad stiffness × damping study against an empty cache: the full basis
+    /// solves one track basis per stiffness (the damping is not in the key) and one wheel
+    /// basis in all; the substructured basis one component set and a reduced eigenproblem
+    /// per case.
+    #[test]
+    fn the_plan_counts_distinct_bases_per_kind() {
+        let dir = std::env::temp_dir().join(format!("plan-test-{}", std::process::id()));
+        let cache = ModalCache::new(&dir);
+        let s = study("full");
+        let p = basis_plan(&s, &s.case_models().unwrap(), &cache).unwrap();
+        assert_eq!(
+            (p.cases, p.track_to_solve, p.track_cached, p.wheel_to_solve),
+            (4, 2, 0, 1)
+        );
+        assert_eq!((p.components_to_solve, p.reduced), (0, 0));
+        let s = study("substructured");
+        let p = basis_plan(&s, &s.case_models().unwrap(), &cache).unwrap();
+        assert_eq!(
+            (
+                p.track_to_solve,
+                p.wheel_to_solve,
+                p.components_to_solve,
+                p.reduced
+            ),
+            (0, 1, 1, 4)
+        );
+        assert!(p.to_string().contains("1 track component set(s)"), "{p}");
+    }
+
+    /// `substructure` options only with the substructured basis, and in range.
+    #[test]
+    fn substructure_options_are_checked() {
+        let base = "model = \"builtin:dutch\"\n[[parameter]]\nkey = \"fastening.vertical_stiffness\"\nvalues = [1e9]\n";
+        let parse = |extra: &str| {
+            Study::parse_str(
+                &format!("{extra}\n{base}"),
+                "s.toml",
+                Path::new("/studies"),
+                "s",
+            )
+        };
+        let e = parse("substructure = { cutoff_factor = 2.0, sleeper_cutoff_factor = 1.0, pattern_degree = 3 }")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("substructure") && e.contains("substructured"),
+            "{e}"
+        );
+        let e = parse("basis = \"substructured\"\nsubstructure = { cutoff_factor = 9.0, sleeper_cutoff_factor = 1.0, pattern_degree = 3 }")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cutoff_factor") && e.contains("1 to 4"), "{e}");
+        let s = parse("basis = \"substructured\"").unwrap();
+        assert_eq!(s.basis, StudyBasis::Substructured);
+        assert_eq!(s.substructure, SubstructureOptions::default());
     }
 }
