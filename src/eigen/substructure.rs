@@ -408,7 +408,7 @@ fn attachment_groups(
         }
     }
     for g in rail.values_mut().chain(sleeper.values_mut()) {
-        g.sort_by(|a, b| a.0.cmp(&b.0));
+        g.sort_by_key(|a| a.0);
         g.dedup_by(|a, b| a.0 == b.0);
     }
     Ok((rail, sleeper))
