@@ -7,8 +7,9 @@ use std::time::Instant;
 use clap::Args;
 
 use corrugation::dynamics::PassageRunner;
+use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::model::Model;
-use corrugation::studies::study::{run_study, Study};
+use corrugation::studies::study::{basis_plan, run_study, CaseRunners, Study};
 use corrugation::studies::BoxError;
 
 use super::engine;
@@ -36,7 +37,10 @@ impl StudyCmd {
         let t0 = Instant::now();
         let study = Study::load(&self.file)?;
         // Every case's model is checked before any engine work.
-        study.case_models()?;
+        let models = study.case_models()?;
+        let cache_dir = self.cache.clone().unwrap_or_else(default_cache_dir);
+        let plan = basis_plan(&study, &models, &ModalCache::new(&cache_dir))?;
+        eprintln!("study `{}`: {plan}", study.title);
         let out = self.out.clone().unwrap_or_else(|| {
             let stem = self
                 .file
@@ -46,8 +50,9 @@ impl StudyCmd {
             PathBuf::from(format!("corrugation-out/study-{stem}"))
         });
         let cache = self.cache.as_deref();
+        let runners = CaseRunners::new(&study, &cache_dir);
         let factory = |m: &Model| -> Result<Box<dyn PassageRunner>, BoxError> {
-            engine::runner_for(m, cache).map_err(Into::into)
+            Ok(Box::new(runners.prepared(m)?))
         };
         let growth = |m: &Model, r: &dyn PassageRunner| {
             engine::study_growth(m, r, cache).map_err(Into::<BoxError>::into)

@@ -891,18 +891,37 @@ impl PreparedModel {
         cache: &crate::eigen::cache::ModalCache,
         opts: &PassageOptions,
     ) -> Result<Self, DynamicsError> {
-        use crate::eigen::basis::{track_basis, wheel_basis};
         let other = |e: &dyn std::fmt::Display| DynamicsError::Other(e.to_string());
         let track = TrackStructure::build(model).map_err(|e| other(&e))?;
+        let fmax = model.run.fmax;
+        let tb =
+            crate::eigen::basis::track_basis(model, &track, cache, fmax).map_err(|e| other(&e))?;
+        let key = crate::eigen::basis::cache_key(model, fmax, "track").map_err(|e| other(&e))?;
+        Self::with_track_basis(model, &track, tb, cache, Some(&key), opts)
+    }
+
+    /// As [`Self::new`] with the track's modal basis given (e.g. a substructured one,
+    /// [`crate::eigen::substructure`]); the wheel's basis comes from `cache`. The residual
+    /// flexibility (when the model asks for it) is cached with the track entry of
+    /// `residual_key`, or computed without caching when `None`.
+    pub fn with_track_basis(
+        model: &Model,
+        track: &TrackStructure,
+        tb: crate::eigen::basis::ModalBasis<crate::eigen::classify::TrackModeClass>,
+        cache: &crate::eigen::cache::ModalCache,
+        residual_key: Option<&crate::eigen::cache::CacheKey>,
+        opts: &PassageOptions,
+    ) -> Result<Self, DynamicsError> {
+        use crate::eigen::basis::wheel_basis;
+        let other = |e: &dyn std::fmt::Display| DynamicsError::Other(e.to_string());
         let wheel = WheelStructure::build(model).map_err(|e| other(&e))?;
         let fmax = model.run.fmax;
-        let tb = track_basis(model, &track, cache, fmax).map_err(|e| other(&e))?;
         let wb = wheel_basis(model, &wheel, cache, fmax).map_err(|e| other(&e))?;
         let (tm, _) = track.assemble().map_err(|e| other(&e))?;
         let (wm, _) = wheel.assemble().map_err(|e| other(&e))?;
         let mut engine = PassageEngine::new(
             model,
-            &track,
+            track,
             &tb.frequencies_hz,
             &tb.modes,
             tm.c.as_ref(),
@@ -913,19 +932,38 @@ impl PreparedModel {
             opts,
         )?;
         if model.run.residual_flexibility {
-            let key =
-                crate::eigen::basis::cache_key(model, fmax, "track").map_err(|e| other(&e))?;
-            let (r, _) = super::residual::cached_residual(
-                cache,
-                &key,
-                &track,
-                tm.k.as_ref(),
+            let args = (
                 &engine.rail_line,
                 &engine.frame,
                 &engine.track_sys.omega2,
                 engine.hertz_b_m,
                 engine.travel_m(),
-            )?;
+            );
+            let r = match residual_key {
+                Some(key) => {
+                    super::residual::cached_residual(
+                        cache,
+                        key,
+                        track,
+                        tm.k.as_ref(),
+                        args.0,
+                        args.1,
+                        args.2,
+                        args.3,
+                        args.4,
+                    )?
+                    .0
+                }
+                None => super::residual::ResidualFlexibility::compute(
+                    track,
+                    &super::residual::StiffnessFactor::new(tm.k.as_ref())?,
+                    args.0,
+                    args.1,
+                    args.2,
+                    args.4[0],
+                    args.4[1],
+                )?,
+            };
             engine.set_residual_flexibility(Some(r))?;
         }
         Ok(PreparedModel {

@@ -78,6 +78,18 @@ pub const PHYSICS_REVISION: u64 = 2;
 
 /// The cache key of one substructure's modal basis (see the module doc for what it covers).
 pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey, BasisError> {
+    let v = structure_key_value(m, substructure)?;
+    let bytes = serde_json::to_vec(&v).map_err(|e| BasisError::Key(e.to_string()))?;
+    Ok(CacheKey::new()
+        .u64("physics_revision", PHYSICS_REVISION)
+        .bytes("model", &bytes)
+        .f64("f_max_hz", fmax_hz)
+        .str("substructure", substructure))
+}
+
+/// The model's sections that the K and M of `substructure` (`track` or `wheel`) read, as
+/// JSON: the content of [`cache_key`] (see the module doc for what it leaves out).
+pub fn structure_key_value(m: &Model, substructure: &str) -> Result<serde_json::Value, BasisError> {
     let mut v = serde_json::to_value(m).map_err(|e| BasisError::Key(e.to_string()))?;
     if let Some(o) = v.as_object_mut() {
         for k in ["contact", "wear", "explicit"] {
@@ -133,12 +145,7 @@ pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey
             }
         }
     }
-    let bytes = serde_json::to_vec(&v).map_err(|e| BasisError::Key(e.to_string()))?;
-    Ok(CacheKey::new()
-        .u64("physics_revision", PHYSICS_REVISION)
-        .bytes("model", &bytes)
-        .f64("f_max_hz", fmax_hz)
-        .str("substructure", substructure))
+    Ok(v)
 }
 
 /// A progress bar on stderr (hidden when stderr is not a terminal).
@@ -160,6 +167,41 @@ pub fn progress_bar(msg: &str) -> indicatif::ProgressBar {
 
 fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {
     (0..modes.nrows()).map(|i| modes[(i, j)]).collect()
+}
+
+/// Classifies mode shapes (columns of `modes`, frequencies in Hz) in chunks: one pass over
+/// the elements per chunk (element stiffnesses are rebuilt per pass), bounded memory for the
+/// expanded mode shapes; chunks in parallel (rayon keeps their order). 256 modes: the default
+/// track to 5 kHz rebuilds them 3 times, not 12 as with 64, and a chunk's expanded shapes
+/// take about 330 MB (3 n_nodes f64 per mode).
+pub(crate) fn classify_in_chunks<C: Send>(
+    modes: &Mat<f64>,
+    frequencies_hz: &[f64],
+    name: &str,
+    classify: impl Fn(&[&[f64]], &[f64]) -> Result<Vec<C>, BasisError> + Sync,
+) -> Result<Vec<C>, BasisError> {
+    const CHUNK: usize = 256;
+    let pb = progress_bar(&format!("classifying {name} modes"));
+    pb.set_length(frequencies_hz.len() as u64);
+    let nm = frequencies_hz.len();
+    let per_chunk: Vec<Vec<C>> = {
+        use rayon::prelude::*;
+        (0..nm)
+            .step_by(CHUNK)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|c0| {
+                let c1 = (c0 + CHUNK).min(nm);
+                let cols: Vec<Vec<f64>> = (c0..c1).map(|j| column(modes, j)).collect();
+                let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+                let out = classify(&refs, &frequencies_hz[c0..c1]);
+                pb.inc((c1 - c0) as u64);
+                out
+            })
+            .collect::<Result<_, _>>()?
+    };
+    pb.finish_and_clear();
+    Ok(per_chunk.into_iter().flatten().collect())
 }
 
 /// Loads a basis from the cache or solves, classifies and stores it.
@@ -209,32 +251,7 @@ fn basis<C: Serialize + DeserializeOwned + Send>(
         source,
     })?;
     pb.finish_and_clear();
-    let pb = progress_bar(&format!("classifying {name} modes"));
-    pb.set_length(sol.frequencies_hz.len() as u64);
-    // In chunks: one pass over the elements per chunk (element stiffnesses are rebuilt per
-    // pass), bounded memory for the expanded mode shapes; chunks in parallel (rayon keeps
-    // their order). 256 modes: the default track to 5 kHz rebuilds them 3 times, not 12 as
-    // with 64, and a chunk's expanded shapes take about 330 MB (3 n_nodes f64 per mode).
-    const CHUNK: usize = 256;
-    let nm = sol.frequencies_hz.len();
-    let per_chunk: Vec<Vec<C>> = {
-        use rayon::prelude::*;
-        (0..nm)
-            .step_by(CHUNK)
-            .collect::<Vec<_>>()
-            .into_par_iter()
-            .map(|c0| {
-                let c1 = (c0 + CHUNK).min(nm);
-                let cols: Vec<Vec<f64>> = (c0..c1).map(|j| column(&sol.modes, j)).collect();
-                let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-                let out = classify(&refs, &sol.frequencies_hz[c0..c1]);
-                pb.inc((c1 - c0) as u64);
-                out
-            })
-            .collect::<Result<_, _>>()?
-    };
-    let classes: Vec<C> = per_chunk.into_iter().flatten().collect();
-    pb.finish_and_clear();
+    let classes = classify_in_chunks(&sol.modes, &sol.frequencies_hz, name, classify)?;
     let value = serde_json::to_value(&classes).map_err(|e| BasisError::Key(e.to_string()))?;
     let meta = CacheMeta::from_solution(&sol, 0.0, fmax, value.clone());
     if let Err(e) = cache.store(key, &sol.frequencies_hz, &sol.modes, meta) {

@@ -101,6 +101,7 @@ pub mod factor;
 pub mod lanczos;
 pub mod ordering;
 mod spmm;
+pub mod substructure;
 
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,262 @@
+//! The study's table, report and plots.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use super::run::CaseResult;
+use super::{value_text, Case, Study};
+use crate::report::doc::Document;
+use crate::report::plot::{line_plot, Series};
+use crate::studies::initiation::{
+    criterion_text, indicator_cells, indicator_header, readable_cells, readable_header,
+    write_table_csv, InitiationRow,
+};
+use crate::studies::StudiesError;
+
+fn growth_keys(cases: &[(Case, CaseResult)]) -> Vec<String> {
+    let mut k: Vec<String> = cases
+        .iter()
+        .flat_map(|(_, r)| r.growth.keys().cloned())
+        .collect();
+    k.sort();
+    k.dedup();
+    k
+}
+
+/// The indicators plotted against the parameters: (file suffix, label, value).
+type Indicator = (
+    &'static str,
+    &'static str,
+    fn(&InitiationRow) -> Option<f64>,
+);
+
+const INDICATORS: [Indicator; 5] = [
+    ("relative_wear", "wear band RMS / mean (%)", |r| {
+        r.relative_wear.map(|v| 100.0 * v)
+    }),
+    ("fl_band_rms", "F_L band RMS (N)", |r| Some(r.fl_band_rms_n)),
+    ("fn_band_rms", "F_N band RMS (N)", |r| Some(r.fn_band_rms_n)),
+    (
+        "dominant_wavelength",
+        "dominant wear wavelength (mm)",
+        |r| r.wear_peaks.first().map(|c| c.wavelength_mm),
+    ),
+    ("dominant_frequency", "dominant wear frequency (Hz)", |r| {
+        r.wear_peaks.first().map(|c| c.frequency_hz)
+    }),
+];
+
+/// The unit of a model key for axis labels ("−" for dimensionless keys), from the naming
+/// conventions of the model file (`models/dutch-base.toml` states each); `None` if unknown.
+pub fn key_unit(key: &str) -> Option<&'static str> {
+    let last = key.rsplit('.').next().unwrap_or(key);
+    let ends = |s: &str| last.ends_with(s);
+    Some(match last {
+        "speed_kmh" => "km/h",
+        "fmax" => "Hz",
+        "wheel_load" => "N",
+        "gravity" => "m/s²",
+        "coefficient" => "m³/J",
+        "time_step" => "s",
+        "structural_damping" => "s",
+        _ if ends("damping_ratio") => "−",
+        _ if ends("stiffness") => "N/m",
+        _ if ends("damping") => "N·s/m",
+        _ if ends("modulus") => "Pa",
+        _ if ends("density") => "kg/m³",
+        _ if ends("ratio")
+            || ends("conicity")
+            || ends("friction")
+            || ends("traction_coefficient")
+            || ends("inclination")
+            || ends("threshold")
+            || ends("safety")
+            || ends("margin")
+            || ends("bays")
+            || ends("rows")
+            || ends("columns")
+            || ends("segments")
+            || ends("grid_nx")
+            || ends("grid_ny") =>
+        {
+            "−"
+        }
+        _ if ends("length")
+            || ends("width")
+            || ends("height")
+            || ends("radius")
+            || ends("spacing")
+            || ends("thickness")
+            || ends("size")
+            || ends("offset")
+            || ends("rail_seat") =>
+        {
+            "m"
+        }
+        _ => return None,
+    })
+}
+
+/// Axis label of a growth column of a study.
+fn growth_label(k: &str) -> String {
+    match k {
+        "limiting_amplitude_um" => "limiting amplitude (2A_max)_l (µm; 0: none)".into(),
+        "consistent_amplitudes" => "trial amplitudes growing consistently (of 4)".into(),
+        _ => k.to_string(),
+    }
+}
+
+fn as_number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+pub(super) fn write_study(
+    study: &Study,
+    cases: &[(Case, CaseResult)],
+    out: &Path,
+) -> Result<(), StudiesError> {
+    let gk = growth_keys(cases);
+    let mut header = vec!["case".to_string()];
+    header.extend(study.parameters.iter().map(|p| p.key.clone()));
+    header.extend(indicator_header(study.peaks));
+    header.extend(gk.iter().cloned());
+    let mut rows = Vec::new();
+    let mut readable = Vec::new();
+    for (c, r) in cases {
+        for row in &r.rows {
+            let mut cells = vec![c.index.to_string()];
+            cells.extend(c.assignments.iter().map(|(_, v)| value_text(v)));
+            cells.extend(indicator_cells(row, study.peaks));
+            cells.extend(
+                gk.iter()
+                    .map(|k| r.growth.get(k).map(|v| v.to_string()).unwrap_or_default()),
+            );
+            rows.push(cells);
+            let mut rc = vec![c.index.to_string()];
+            rc.extend(readable_cells(row));
+            rc.extend(gk.iter().map(|k| {
+                r.growth
+                    .get(k)
+                    .map(|v| format!("{v:.4}"))
+                    .unwrap_or_default()
+            }));
+            readable.push(rc);
+        }
+    }
+    write_table_csv(&out.join("study.csv"), &header, &rows)?;
+
+    // Plots: indicator vs the first parameter, one curve per (other parameters, speed).
+    let first = &study.parameters[0];
+    let numeric = first.values.iter().all(|v| as_number(v).is_some());
+    let x_label = if numeric {
+        match key_unit(&first.key) {
+            Some(u) => format!("{} ({u})", first.key),
+            None => first.key.clone(),
+        }
+    } else {
+        format!("case ({} not numeric)", first.key)
+    };
+    let mut doc = Document::new(format!("Design study: {}", study.title));
+    doc.paragraph(format!(
+        "Study file {}; base model {}; {} case(s); parameters: {}.",
+        study.file,
+        study.base.display(),
+        cases.len(),
+        study
+            .parameters
+            .iter()
+            .map(|p| p.key.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    if !study.set.is_empty() {
+        doc.paragraph(format!("Overrides of every case: {}.", study.set.join(" ")));
+    }
+    doc.paragraph(criterion_text(&study.criterion));
+    let mut extra: Vec<(String, String)> =
+        gk.iter().map(|k| (k.clone(), growth_label(k))).collect();
+    let mut plots = Vec::new();
+    for (stem, label, f) in INDICATORS {
+        plots.push((stem.to_string(), label.to_string(), Some(f), None));
+    }
+    for (k, l) in extra.drain(..) {
+        plots.push((format!("growth_{k}"), l, None, Some(k)));
+    }
+    doc.heading(2, "Indicators vs parameters");
+    for (stem, label, f, gkey) in plots {
+        let mut series: BTreeMap<String, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
+        for (c, r) in cases {
+            let x = if numeric {
+                as_number(&c.assignments[0].1).unwrap_or(f64::NAN)
+            } else {
+                c.index as f64
+            };
+            let rest: Vec<String> = c.assignments[1..]
+                .iter()
+                .map(|(k, v)| format!("{}={}", k.rsplit('.').next().unwrap_or(k), value_text(v)))
+                .collect();
+            for row in &r.rows {
+                let mut name = rest.join(", ");
+                if r.rows.len() > 1 || study.speeds_kmh.as_ref().is_some_and(|s| s.len() > 1) {
+                    if !name.is_empty() {
+                        name.push_str(", ");
+                    }
+                    name.push_str(&format!("{} km/h", row.speed_kmh));
+                }
+                let y = match (f, &gkey) {
+                    (Some(f), _) => f(row),
+                    (None, Some(k)) => r.growth.get(k).copied(),
+                    _ => None,
+                };
+                let e = series.entry(name).or_default();
+                e.0.push(x);
+                e.1.push(y.unwrap_or(f64::NAN));
+            }
+        }
+        let s: Vec<Series> = series
+            .into_iter()
+            .map(|(n, (x, y))| Series::new(n, x, y))
+            .collect();
+        let file = format!("study_{stem}");
+        line_plot(
+            &out.join(&file),
+            &format!("{label} vs {}", first.key),
+            &x_label,
+            &label,
+            &s,
+        )?;
+        doc.image(format!("{label} vs {}", first.key), format!("{file}.png"));
+    }
+    doc.heading(2, "Cases");
+    let mut rh: Vec<String> = vec!["case".into()];
+    rh.extend(readable_header().iter().map(|s| s.to_string()));
+    rh.extend(gk.iter().cloned());
+    doc.table(&rh, readable);
+    doc.write(&out.join("study"))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod unit_tests {
+    use super::key_unit;
+
+    #[test]
+    fn study_axis_units_follow_the_model_keys() {
+        for (k, u) in [
+            ("fastening.vertical_stiffness", Some("N/m")),
+            ("fastening.vertical_damping", Some("N·s/m")),
+            ("wheel.damping_ratio", Some("−")),
+            ("run.speed_kmh", Some("km/h")),
+            ("rail.youngs_modulus", Some("Pa")),
+            ("fastening.pad_thickness", Some("m")),
+            ("track.bays", Some("−")),
+            ("fastening.model", None),
+        ] {
+            assert_eq!(key_unit(k), u, "{k}");
+        }
+    }
+}
