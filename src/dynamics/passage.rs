@@ -919,6 +919,9 @@ impl PreparedModel {
         let wb = wheel_basis(model, &wheel, cache, fmax).map_err(|e| other(&e))?;
         let (tm, _) = track.assemble().map_err(|e| other(&e))?;
         let (wm, _) = wheel.assemble().map_err(|e| other(&e))?;
+        // The wheel floats: its rigid modes' frequencies from the Rayleigh quotient, which is
+        // 0 to round-off where the eigen-solver's eigenvalue may not be.
+        let wheel_hz = super::reduced::rayleigh_frequencies_hz(wm.k.as_ref(), &wb.modes);
         let mut engine = PassageEngine::new(
             model,
             track,
@@ -926,7 +929,7 @@ impl PreparedModel {
             &tb.modes,
             tm.c.as_ref(),
             &wheel,
-            &wb.frequencies_hz,
+            &wheel_hz,
             &wb.modes,
             &wm,
             opts,
@@ -972,7 +975,7 @@ impl PreparedModel {
             cached: tb.cached && wb.cached,
             track_frequencies_hz: tb.frequencies_hz,
             track_classes: tb.classes,
-            wheel_frequencies_hz: wb.frequencies_hz,
+            wheel_frequencies_hz: wheel_hz,
         })
     }
 

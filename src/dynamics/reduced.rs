@@ -156,6 +156,35 @@ impl ModalSystem {
     }
 }
 
+/// Natural frequencies (Hz) of M-orthonormal `modes` (n × m, `ΦᵀMΦ = I`) from their
+/// Rayleigh quotients `ω² = φᵀKφ` with the stiffness `k` (N/m, full symmetric storage);
+/// negative round-off gives 0. The quotient's error is of the order of the square of the
+/// mode shape's error, so it is accurate where a shift-invert eigen-solver's eigenvalue is
+/// not: a free body's rigid modes, whose shapes it finds to round-off but whose `λ ≈ 0` it
+/// resolves only to the round-off of its shifts (on a coarse wheel mesh with
+/// `run.fmax` ≥ 4.5 kHz, 1.8 Hz in place of 0, above [`super::passage::RIGID_HZ`]).
+pub fn rayleigh_frequencies_hz(k: SparseColMatRef<'_, usize, f64>, modes: &Mat<f64>) -> Vec<f64> {
+    let cols = k.symbolic().col_ptr();
+    let rows = k.symbolic().row_idx();
+    let vals = k.val();
+    (0..modes.ncols())
+        .map(|i| {
+            let phi = modes.col(i);
+            let mut w2 = 0.0;
+            for (j, span) in cols.windows(2).enumerate() {
+                let pj = phi[j];
+                if pj == 0.0 {
+                    continue;
+                }
+                for p in span[0]..span[1] {
+                    w2 += phi[rows[p]] * vals[p] * pj;
+                }
+            }
+            w2.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
+        })
+        .collect()
+}
+
 /// `Φᵀ C Φ` (m × m) over the DOFs that carry damping only. The assembled `C` shares the
 /// sparsity pattern of `K`, but only the discrete dampers' DOFs (rail foot, sleeper faces)
 /// hold nonzero values; the others are stored zeros. Gathering the active rows of `Φ` and the
