@@ -48,6 +48,8 @@ pub struct PassageCmd {
     /// path, minutes per passage).
     #[arg(long, value_enum, default_value = "reduced")]
     engine: super::engine::Engine,
+    #[command(flatten)]
+    reference: super::reference_outputs::ReferenceArgs,
 }
 
 impl PassageCmd {
@@ -63,7 +65,7 @@ impl PassageCmd {
         }
         let cache = ModalCache::new(self.cache.clone().unwrap_or_else(default_cache_dir));
         let opts = PassageOptions::default();
-        let prepared =
+        let mut prepared =
             PreparedModel::new(&m, &cache, &opts).context("preparing the modal model")?;
         let pb = progress_bar("passage");
         let rec = prepared
@@ -77,6 +79,21 @@ impl PassageCmd {
             println!("{}", serde_json::to_string_pretty(&summary)?);
         } else {
             print_summary(&summary, &rec, &self.out);
+        }
+        use super::reference_outputs::{coupled_attribution, nodal_outputs};
+        if !self.reference.no_coupled {
+            coupled_attribution(&prepared, &summary, &self.out, self.json)?;
+        }
+        if !self.reference.no_nodal {
+            let v = m.run.speed();
+            nodal_outputs(
+                &mut prepared,
+                v,
+                profile.as_ref(),
+                &self.reference,
+                &self.out,
+                self.json,
+            )?;
         }
         Ok(())
     }
