@@ -2,6 +2,7 @@
 
 mod compliance_cmd;
 mod contact_cmd;
+pub mod coupled_modes_cmd;
 pub mod engine;
 mod explicit_cmd;
 mod grow_cmd;
@@ -14,6 +15,7 @@ mod passage_cmd;
 mod predict_cmd;
 mod progress;
 mod receptance_cmd;
+pub mod reference_outputs;
 mod study_cmd;
 mod sweep_cmd;
 
@@ -103,6 +105,9 @@ enum Command {
     /// Static longitudinal compliance of RPM1–RPM5, rigid and with elastic x-holds: u_x of
     /// the rail head, web and foot ahead of a wheel load with a longitudinal force.
     Compliance(compliance_cmd::ComplianceCmd),
+    /// Coupled wheel–track modes (contact linearised at the static state): frequency,
+    /// damping, energy shares in wheel, rail (by family) and support.
+    CoupledModes(coupled_modes_cmd::CoupledModesCmd),
 }
 
 /// Runs the parsed command.
@@ -122,5 +127,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Study(c) => c.run(),
         Command::Initiation(c) => c.run(),
         Command::Compliance(c) => c.run(),
+        Command::CoupledModes(c) => c.run(),
     }
 }

@@ -46,6 +46,8 @@ pub struct PassageCmd {
     /// path, minutes per passage).
     #[arg(long, value_enum, default_value = "reduced")]
     engine: super::engine::Engine,
+    #[command(flatten)]
+    reference: super::reference_outputs::ReferenceArgs,
 }
 
 impl PassageCmd {
@@ -60,7 +62,7 @@ impl PassageCmd {
             return super::explicit_cmd::run_explicit(&m, profile.as_ref(), &self.out, self.json);
         }
         let opts = PassageOptions::default();
-        let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
+        let mut prepared = super::engine::prepared(&m, self.cache.as_deref())?;
         let pb = super::progress::bar("passage (time steps)");
         let rec = prepared
             .engine
@@ -73,6 +75,21 @@ impl PassageCmd {
             println!("{}", serde_json::to_string_pretty(&summary)?);
         } else {
             print_summary(&summary, &rec, &self.out);
+        }
+        use super::reference_outputs::{coupled_attribution, nodal_outputs};
+        if !self.reference.no_coupled {
+            coupled_attribution(&prepared, &summary, &self.out, self.json)?;
+        }
+        if !self.reference.no_nodal {
+            let v = m.run.speed();
+            nodal_outputs(
+                &mut prepared,
+                v,
+                profile.as_ref(),
+                &self.reference,
+                &self.out,
+                self.json,
+            )?;
         }
         Ok(())
     }

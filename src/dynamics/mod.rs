@@ -12,6 +12,7 @@
 
 pub mod analysis;
 pub mod compliance;
+pub mod coupled;
 pub mod integrator;
 pub mod moving_load;
 pub mod passage;

@@ -406,6 +406,54 @@ impl PassageEngine {
         &self.track_sys
     }
 
+    /// Records the rail-top point at `x_m` (m along the rail) in the following passages
+    /// (replacing the one chosen at construction): the running-surface contact line at the
+    /// nearest node plane, with the contact's lateral weights across the head, its
+    /// displacements turned from the contact frame into global x, y, z.
+    pub fn set_rail_point_at(&mut self, x_m: f64) -> Result<(), DynamicsError> {
+        let px = &self.rail_line.planes_x_m;
+        let p = (0..px.len())
+            .min_by(|&a, &b| (px[a] - x_m).abs().total_cmp(&(px[b] - x_m).abs()))
+            .ok_or_else(|| DynamicsError::Other("empty contact line".into()))?;
+        let mt = self.track_sys.len();
+        let mut fr = vec![0.0; 3 * mt];
+        self.rail_line.rows_at(px[p], &mut fr)?;
+        let (t, n) = (self.frame.t, self.frame.n);
+        let mut rows = vec![0.0; 3 * mt];
+        for i in 0..mt {
+            rows[i] = fr[i];
+            rows[mt + i] = t[1] * fr[mt + i] + n[1] * fr[2 * mt + i];
+            rows[2 * mt + i] = t[2] * fr[mt + i] + n[2] * fr[2 * mt + i];
+        }
+        let node = self.rail_line.nodes[p]
+            .iter()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(0, |&(k, _)| k);
+        let [yc, zc] = self.rail_line.contact_point_yz_m;
+        self.track_modes_for_point = Some((node, [px[p], yc, zc], rows));
+        Ok(())
+    }
+
+    /// The solution zone `[start, end]` (m).
+    pub fn zone_m(&self) -> [f64; 2] {
+        self.zone_m
+    }
+
+    /// The wheel's modal system.
+    pub fn wheel_system(&self) -> &ModalSystem {
+        &self.wheel_sys
+    }
+
+    /// The wheel's contact rows, `3·m_w` values (x, t, n blocks).
+    pub fn wheel_contact_rows(&self) -> &[f64] {
+        &self.wheel_contact.rows
+    }
+
+    /// Distance of the wheel's tread contact node from the axle (m).
+    pub fn wheel_radius_m(&self) -> f64 {
+        self.wheel_radius_m
+    }
+
     /// The rail's contact line (modal rows of the contact nodes).
     pub fn rail_line(&self) -> &RailContactLine {
         &self.rail_line

@@ -32,6 +32,7 @@
 pub mod correlation;
 pub mod deviation;
 pub mod filter;
+pub mod nodal;
 pub mod psd;
 pub mod signal;
 

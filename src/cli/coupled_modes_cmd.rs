@@ -1,0 +1,152 @@
+//! `corrugation coupled-modes`: the eigenmodes of the reduced wheel + track system coupled
+//! by the contact linearised at the static rolling state (normal Hertz stiffness, creep
+//! force with its lag), at the mid-span and the sleeper nearest the solution-zone centre
+//! (or `--at`), with frequency, damping ratio, the energy shares in wheel, rail (by the
+//! family of the rail's motion) and support, and the motion at the contact
+//! (docs/theory.md §7.10).
+//!
+//! Outputs in `--out DIR` (default `corrugation-out/coupled-modes`), written atomically:
+//! * `coupled_modes.csv` — one row per mode: `position_m, frequency_hz, damping_ratio`, the
+//!   shares (`wheel_elastic, wheel_rigid, rail_<family>…, support, contact`),
+//!   `rail_x_to_n`, `rail_x_m_per_sqrt_j, rail_n_m_per_sqrt_j, wheel_x_m_per_sqrt_j,
+//!   wheel_n_m_per_sqrt_j`, and `dominant` as the index in the share columns;
+//! * `coupled_modes.npy` — the same numbers (rows × columns, column order of the CSV);
+//! * `coupled_modes.json` — the linearisation, positions and modes (the `--json` object).
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+
+use corrugation::dynamics::coupled::{CoupledMode, CoupledModes, ModeShares};
+use corrugation::io::{write_csv, write_npy, write_text};
+
+use super::ModelArgs;
+
+/// Coupled wheel–track modes at the contact (linearised contact at the static state).
+#[derive(Debug, Args)]
+pub struct CoupledModesCmd {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Contact positions (m along the rail); default: the mid-span and the sleeper nearest
+    /// the centre of the solution zone.
+    #[arg(long = "at", value_name = "M")]
+    at_m: Vec<f64>,
+    /// Highest frequency listed on the terminal (Hz; the files hold every mode).
+    #[arg(long, default_value_t = 3000.0, value_name = "HZ")]
+    list_to_hz: f64,
+    /// Output directory.
+    #[arg(
+        long,
+        default_value = "corrugation-out/coupled-modes",
+        value_name = "DIR"
+    )]
+    out: PathBuf,
+    /// Print the result as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
+    #[arg(long, value_name = "DIR")]
+    cache: Option<PathBuf>,
+}
+
+/// The columns of `coupled_modes.csv`.
+pub fn columns() -> Vec<String> {
+    let mut c: Vec<String> = ["position_m", "frequency_hz", "damping_ratio"]
+        .map(String::from)
+        .to_vec();
+    c.extend(ModeShares::labels());
+    c.extend(
+        [
+            "rail_x_to_n",
+            "rail_x_m_per_sqrt_j",
+            "rail_n_m_per_sqrt_j",
+            "wheel_x_m_per_sqrt_j",
+            "wheel_n_m_per_sqrt_j",
+            "dominant",
+        ]
+        .map(String::from),
+    );
+    c
+}
+
+/// One row of `coupled_modes.csv` (see [`columns`]).
+fn row(m: &CoupledMode) -> Vec<f64> {
+    let mut r = vec![m.position_m, m.frequency_hz, m.damping_ratio];
+    let shares = m.shares.values();
+    let dom = shares
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .map_or(0, |(i, _)| i);
+    r.extend(shares);
+    r.push(m.rail_x_to_n);
+    r.extend(m.contact_amplitudes_m_per_sqrt_j);
+    r.push(dom as f64);
+    r
+}
+
+/// Writes `coupled_modes.csv`, `.npy` and `.json` into `out`.
+pub fn write_coupled_modes(out: &std::path::Path, cm: &CoupledModes) -> anyhow::Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let cols = columns();
+    let names: Vec<&str> = cols.iter().map(String::as_str).collect();
+    let rows: Vec<Vec<f64>> = cm.modes.iter().map(row).collect();
+    write_csv(&out.join("coupled_modes.csv"), &names, rows.iter().cloned())?;
+    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
+    write_npy(
+        &out.join("coupled_modes.npy"),
+        &[rows.len(), cols.len()],
+        &flat,
+    )?;
+    let json = serde_json::to_string_pretty(cm)?;
+    write_text(&out.join("coupled_modes.json"), &json)?;
+    Ok(())
+}
+
+impl CoupledModesCmd {
+    pub fn run(self) -> anyhow::Result<()> {
+        let m = self.model.load()?;
+        super::check_out_dir(&self.out)?;
+        let t0 = std::time::Instant::now();
+        let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
+        let cm = prepared
+            .coupled_modes(m.run.speed(), &self.at_m)
+            .context("coupled wheel–track modes")?;
+        write_coupled_modes(&self.out, &cm)?;
+        if self.json {
+            println!("{}", serde_json::to_string_pretty(&cm)?);
+            return Ok(());
+        }
+        let l = &cm.linearisation;
+        println!(
+            "contact at the static state ({:.1} m/s): k_n {:.3e} N/m, creep coefficient x {:.3e} N, t {:.3e} N, relaxation length x {:.2} mm, t {:.2} mm",
+            cm.speed_m_per_s,
+            l.normal_stiffness_n_per_m,
+            l.creep_coefficient_n[0],
+            l.creep_coefficient_n[1],
+            1e3 * l.relaxation_length_m[0],
+            1e3 * l.relaxation_length_m[1]
+        );
+        println!("position_m  frequency_hz  damping_%  rail_x/n  dominant (share)");
+        for md in cm.below(self.list_to_hz) {
+            let (d, v) = md.shares.dominant();
+            println!(
+                "{:>9.3}  {:>12.1}  {:>9.3}  {:>8.3}  {d} ({:.0} %)",
+                md.position_m,
+                md.frequency_hz,
+                100.0 * md.damping_ratio,
+                md.rail_x_to_n,
+                100.0 * v
+            );
+        }
+        println!(
+            "{} modes at {} position(s) in {:.1} s; wrote {}",
+            cm.modes.len(),
+            cm.positions_m.len(),
+            t0.elapsed().as_secs_f64(),
+            self.out.join("coupled_modes.csv").display()
+        );
+        Ok(())
+    }
+}

@@ -1,0 +1,192 @@
+//! Outputs of a passage that relate its frequencies to the structure: the coupled
+//! wheel–track mode each selected frequency belongs to (docs/theory.md §7.10), and the
+//! reference study's own procedure, the nodal spectrum of rail-top points (docs/theory.md
+//! §9.7), beside the longitudinal-compression eigenfrequencies.
+//!
+//! Files in the passage's output directory:
+//! * `coupled_modes.csv/.npy/.json` (see `corrugation coupled-modes`);
+//! * `coupled_attribution.json` — `{wear, fl, fn}`: each component's frequency attributed to
+//!   the nearest coupled mode the contact sees, with its energy shares;
+//! * `nodal_spectrum.json` — per rail-top point (default the sleeper and the mid-span nearest
+//!   the solution-zone centre) the peaks of the longitudinal displacement's spectrum over
+//!   the reference's short record (contact from 0.1 m before to 0.2 m after the point) and
+//!   over the whole solution zone, each with its duration and frequency resolution, and the
+//!   longitudinal-compression eigenfrequencies.
+
+use std::path::Path;
+
+use anyhow::Context;
+use clap::Args;
+use serde::Serialize;
+
+use corrugation::dynamics::coupled::{attribution_text, ModeAttribution};
+use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
+use corrugation::dynamics::summary::PassageSummary;
+use corrugation::dynamics::RailProfile;
+use corrugation::io::write_text;
+use corrugation::spectral::nodal::{nodal_spectrum, short_window_m, NodalHistory, NodalSpectrum};
+
+/// Options of the structural outputs of a passage.
+#[derive(Debug, Clone, Args)]
+pub struct ReferenceArgs {
+    /// Skip the coupled wheel–track modes and the attribution of the selected frequencies.
+    #[arg(long)]
+    pub no_coupled: bool,
+    /// Rail-top points (m along the rail) whose longitudinal displacement spectrum is
+    /// reported ("f_L by the nodal spectrum"); default: the sleeper and the mid-span nearest
+    /// the solution-zone centre. One extra passage per point.
+    #[arg(long = "nodal-at", value_name = "M")]
+    pub nodal_at_m: Vec<f64>,
+    /// Skip the nodal spectra.
+    #[arg(long)]
+    pub no_nodal: bool,
+}
+
+/// Selected frequencies attributed to coupled modes.
+#[derive(Debug, Serialize)]
+pub struct Attribution {
+    /// Wear components.
+    pub wear: Vec<ModeAttribution>,
+    /// F_L components.
+    pub fl: Vec<ModeAttribution>,
+    /// F_N components.
+    pub fn_: Vec<ModeAttribution>,
+}
+
+/// The coupled modes at the passage speed, written to `out`, and the summary's components
+/// attributed to them; prints one line per wear component.
+pub fn coupled_attribution(
+    prepared: &PreparedModel,
+    s: &PassageSummary,
+    out: &Path,
+    quiet: bool,
+) -> anyhow::Result<Attribution> {
+    let v = corrugation::units::kmh_to_ms(s.speed_kmh);
+    let cm = prepared
+        .coupled_modes(v, &[])
+        .context("coupled wheel–track modes")?;
+    super::coupled_modes_cmd::write_coupled_modes(out, &cm)?;
+    let f = |c: &[corrugation::dynamics::WavelengthComponent]| {
+        cm.attribute(&c.iter().map(|c| c.frequency_hz).collect::<Vec<_>>())
+    };
+    let a = Attribution {
+        wear: f(&s.wear_components),
+        fl: f(&s.fl_components),
+        fn_: f(&s.fn_components),
+    };
+    let json = serde_json::json!({ "wear": a.wear, "fl": a.fl, "fn": a.fn_ });
+    let text = serde_json::to_string_pretty(&json)?;
+    write_text(&out.join("coupled_attribution.json"), &text)?;
+    if !quiet {
+        println!("  wear components by coupled mode:");
+        for x in &a.wear {
+            println!("    {}", attribution_text(x));
+        }
+    }
+    Ok(a)
+}
+
+/// The nodal spectra of one rail-top point.
+#[derive(Debug, Serialize)]
+pub struct NodalPoint {
+    /// `sleeper`, `mid_span` or `x<m>`.
+    pub label: String,
+    /// The spectra (short record, solution zone).
+    pub spectra: Vec<NodalSpectrum>,
+}
+
+/// One passage per rail-top point with the point recorded, and the spectra of its
+/// longitudinal displacement; written to `nodal_spectrum.json` with the
+/// longitudinal-compression eigenfrequencies; prints one line per record.
+pub fn nodal_outputs(
+    prepared: &mut PreparedModel,
+    speed_m_per_s: f64,
+    profile: Option<&RailProfile>,
+    args: &ReferenceArgs,
+    out: &Path,
+    quiet: bool,
+) -> anyhow::Result<Vec<NodalPoint>> {
+    let points: Vec<(String, f64)> = if args.nodal_at_m.is_empty() {
+        let [mid, sl] = prepared.engine.midspan_and_sleeper_m();
+        vec![("sleeper".into(), sl), ("mid_span".into(), mid)]
+    } else {
+        args.nodal_at_m
+            .iter()
+            .map(|&x| (format!("x{x}"), x))
+            .collect()
+    };
+    let zone = prepared.engine.zone_m();
+    let band = [100.0, prepared.engine.model().run.fmax];
+    let opts = PassageOptions {
+        energy: false,
+        rail_point_offset_m: Some(0.0),
+    };
+    let mut res = Vec::new();
+    for (label, x) in points {
+        prepared.engine.set_rail_point_at(x)?;
+        let rec = prepared
+            .engine
+            .passage(speed_m_per_s, profile, &opts, None)
+            .with_context(|| format!("passage recording the rail point at {x} m"))?;
+        let rp = rec
+            .rail_point
+            .as_ref()
+            .context("the passage did not record the rail point")?;
+        let ux: Vec<f64> = rp.displacement_m.iter().map(|u| u[0]).collect();
+        let h = NodalHistory {
+            point_x_m: rp.position_m[0],
+            t_s: &rec.histories.t_s,
+            x_contact_m: &rec.histories.x_m,
+            ux_m: &ux,
+        };
+        let spectra = vec![
+            nodal_spectrum(&h, "short", short_window_m(h.point_x_m), band, 6)
+                .with_context(|| format!("nodal spectrum (short record) at {x} m"))?,
+            nodal_spectrum(&h, "zone", zone, band, 6)
+                .with_context(|| format!("nodal spectrum (solution zone) at {x} m"))?,
+        ];
+        res.push(NodalPoint { label, spectra });
+    }
+    let lc = prepared.longitudinal_compression_hz();
+    let json = serde_json::json!({
+        "points": res,
+        "longitudinal_compression_hz": lc,
+    });
+    let text = serde_json::to_string_pretty(&json)?;
+    write_text(&out.join("nodal_spectrum.json"), &text)?;
+    if !quiet {
+        print_nodal(&res, &lc, band[1]);
+    }
+    Ok(res)
+}
+
+fn print_nodal(points: &[NodalPoint], lc_hz: &[f64], fmax: f64) {
+    for p in points {
+        for s in &p.spectra {
+            let peaks: Vec<String> = s
+                .peaks
+                .iter()
+                .map(|k| format!("{:.0}", k.frequency_hz))
+                .collect();
+            println!(
+                "  f_L by the nodal spectrum, {} at x = {:.3} m, {} record ({:.1} ms, resolution {:.0} Hz): {} Hz",
+                p.label,
+                s.point_x_m,
+                s.record,
+                1e3 * s.duration_s,
+                s.resolution_hz,
+                peaks.join(", ")
+            );
+        }
+    }
+    let lc: Vec<String> = lc_hz
+        .iter()
+        .filter(|&&f| f <= fmax)
+        .take(12)
+        .map(|f| format!("{f:.0}"))
+        .collect();
+    println!(
+        "  longitudinal-compression eigenfrequencies: {} Hz",
+        lc.join(", ")
+    );
+}
