@@ -13,6 +13,10 @@ use corrugation::contact::{
 };
 use std::time::Instant;
 
+#[path = "common/mod.rs"]
+mod common;
+use common::cpu_seconds;
+
 /// Roll `steps` steps with constant inputs (two contact lengths ≈ steady) and return the last.
 fn roll(
     eng: &mut TransientRolling,
@@ -24,27 +28,6 @@ fn roll(
         r = eng.step(inp)?;
     }
     Ok(r)
-}
-
-/// CPU time of this process (user + system, s) from `/proc/self/stat` (Linux, 100 Hz clock
-/// ticks; `NaN` elsewhere): the machine is shared, so wall time alone says little.
-fn cpu_seconds() -> f64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
-        return f64::NAN;
-    };
-    // fields after the command name (which is in parentheses): utime and stime are 14 and 15
-    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
-    let f: Vec<f64> = rest
-        .split_whitespace()
-        .skip(11)
-        .take(2)
-        .filter_map(|v| v.parse().ok())
-        .collect();
-    if f.len() == 2 {
-        (f[0] + f[1]) / 100.0
-    } else {
-        f64::NAN
-    }
 }
 
 /// Command-line argument `k` parsed, if given.

@@ -90,7 +90,7 @@ fn study(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
     let factory = |m: &corrugation::model::Model| -> Result<Box<dyn PassageRunner>, BoxError> {
         Ok(Box::new(runners.prepared(m)?))
     };
-    let out = run_study(&study, &factory, None, &dir, false)?;
+    let out = run_study(&study, &factory, None, &dir, &corrugation::progress::Silent)?;
     let (wall, cpu) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
     let csv = std::fs::read(dir.join("study.csv")).context("study.csv")?;
     println!(

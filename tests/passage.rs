@@ -495,3 +495,31 @@ fn grow_and_predict_print_a_verdict_and_plain_progress() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The static start on the smooth rail is computed once per engine and shared by the passages
+/// at every speed: the contact state at steady rolling does not depend on the speed (a step
+/// moves the material by one element whatever Δt). A passage at 120 km/h on an engine that
+/// first ran 80 km/h (start computed there) is bit for bit the passage of a fresh engine,
+/// whose start is computed at 120 km/h.
+#[test]
+fn shared_static_start_gives_the_passage_of_a_fresh_engine() {
+    let m = small_model();
+    let opts = PassageOptions {
+        energy: false,
+        rail_point_offset_m: None,
+    };
+    let v = |kmh: f64| corrugation::units::kmh_to_ms(kmh);
+    let warm = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
+    warm.engine.passage(v(80.0), None, &opts, None).unwrap();
+    let shared = warm.engine.passage(v(120.0), None, &opts, None).unwrap();
+    let fresh = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
+    let own = fresh.engine.passage(v(120.0), None, &opts, None).unwrap();
+    assert_eq!(shared.steps, own.steps);
+    assert_eq!(shared.dt_s, own.dt_s);
+    let (a, b) = (&shared.histories, &own.histories);
+    assert_eq!(a.normal_n, b.normal_n);
+    assert_eq!(a.longitudinal_n, b.longitudinal_n);
+    assert_eq!(a.frictional_power_w, b.frictional_power_w);
+    assert_eq!(shared.wear_j_per_m, own.wear_j_per_m);
+    assert_eq!(shared.static_creepage, own.static_creepage);
+}

@@ -15,9 +15,10 @@
 //! `∬Y²/r³ → X asinh(Y/|X|)`, `∬XY/r³ → −r`.
 //!
 //! The products `Σ_j C(i − j) f_j` are Toeplitz; they are evaluated as cyclic convolutions on a
-//! grid padded to at least `(2nx + 1) × 2ny` (fast FFT lengths; exact linear convolution for
+//! grid padded to at least `2nx × 2ny` (fast FFT lengths; exact linear convolution for
 //! output rows `0..=nx`, which gives also the displacement one cell beyond the leading edge
-//! needed by transient rolling). Tangential products pack `τx + i τy` into one complex FFT.
+//! needed by transient rolling — see [`Convolver`] for the one offset that a period of exactly
+//! `2nx` cannot hold). Tangential products pack `τx + i τy` into one complex FFT.
 
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex64;
@@ -85,6 +86,7 @@ pub fn coefficients(
 
 /// 2D FFT of an `m1 × m2` row-major complex array (rows of length `m2`), with preallocated
 /// transpose buffer and scratch.
+#[derive(Clone)]
 struct Fft2 {
     m1: usize,
     m2: usize,
@@ -168,6 +170,7 @@ impl Fft2 {
 /// on the `h2` kept columns only — about half the work of [`Fft2`] for a real field (the other
 /// half of the spectrum is the conjugate mirror). Spectra are kept in transposed layout
 /// `h2 × m1` (index `k2 · m1 + k1`), the first `h2 m1` entries of [`Fft2`]'s layout.
+#[derive(Clone)]
 struct RealFft2 {
     m1: usize,
     m2: usize,
@@ -292,13 +295,20 @@ pub fn next_fast_len(n: usize) -> usize {
 
 /// FFT-based influence products on an `nx × ny` grid (element index `i * ny + j`, `i` along x).
 ///
-/// The padded FFT grid is `m1 × m2` with `m1 ≥ 2nx + 1`, `m2 ≥ 2ny` of fast lengths
-/// ([`next_fast_len`]): every offset that occurs (rows `−(nx−1)..=nx`, columns
-/// `−(ny−1)..=ny−1`) lies strictly below half the period, so the periodic kernels are exactly
-/// even (zz, xx, yy) or odd–odd (xy) and all four kernel spectra are **real**. Hence a real
+/// The padded FFT grid is `m1 × m2` with `m1 ≥ 2nx`, `m2 ≥ 2ny` of fast lengths
+/// ([`next_fast_len`]; 64 × 48 for the default 32 × 24 grid, where `2nx + 1` would need 72
+/// rows): the offsets that occur (rows `−(nx−1)..=nx`, columns `−(ny−1)..=ny−1`) map to
+/// distinct periodic indices, and the periodic kernels are exactly even (zz, xx, yy) or
+/// odd–odd (xy), so all four kernel spectra are **real**. The row offset `+nx` (from source
+/// row 0 to the extended row `nx` only) sits on the Nyquist index when `m1 = 2nx`: there the
+/// even kernels are exact (`C(+nx) = C(−nx)`) but the odd xy kernel must be 0, so that one
+/// coupling is added directly ([`Convolver::tangential_ext`]; O(ny²), and nothing at all when
+/// row 0 carries no traction, as in rolling contact where the patch never reaches the grid
+/// edge). Hence a real
 /// kernel product of a complex field acts on real and imaginary parts separately (two real
 /// fields per complex FFT), and the tangential product of `Z = FFT(τx + iτy)` is
 /// `W(k) = A(k) Z(k) + B(k) conj Z(−k)` with `A = (K̂xx + K̂yy)/2`, `B = (K̂xx − K̂yy)/2 + i K̂xy`.
+#[derive(Clone)]
 pub struct Convolver {
     nx: usize,
     ny: usize,
@@ -312,6 +322,9 @@ pub struct Convolver {
     kb: Vec<Complex64>,
     buf: Vec<Complex64>,
     work: Vec<Complex64>,
+    /// `C_xy` at row offset `+nx` and column offsets `−(ny−1)..=ny−1` (index `offset + ny − 1`,
+    /// m/Pa) when `m1 = 2nx` (the coupling the periodic xy kernel cannot hold); empty otherwise.
+    xy_edge: Vec<f64>,
     /// Largest eigenvalue bound of the normal operator (m/Pa).
     pub lambda_max_n: f64,
     /// Largest eigenvalue bound of the tangential operator (m/Pa).
@@ -329,7 +342,7 @@ pub struct Convolver {
 impl Convolver {
     /// Build the kernels for element size `dx × dy` (m), moduli `E*`, `G` (Pa) and ν.
     pub fn new(nx: usize, ny: usize, dx: f64, dy: f64, e_star: f64, g: f64, nu: f64) -> Self {
-        let (m1, m2) = (next_fast_len(2 * nx + 1), next_fast_len(2 * ny));
+        let (m1, m2) = (next_fast_len(2 * nx), next_fast_len(2 * ny));
         let mut fft = Fft2::new(m1, m2);
         let zero = Complex64::new(0.0, 0.0);
         let mut kz = vec![zero; m1 * m2];
@@ -387,11 +400,22 @@ impl Convolver {
             let r = (0.25 * (a - d) * (a - d) + b * b).sqrt();
             lambda_max_t = lambda_max_t.max((m + r).abs()).max((m - r).abs());
         }
+        let xy_edge = if m1 == 2 * nx {
+            (0..2 * ny - 1)
+                .map(|k| {
+                    let oy = k as f64 - (ny as f64 - 1.0);
+                    coefficients(nx as f64 * dx, oy * dy, dx, dy, e_star, g, nu).xy
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         Convolver {
             nx,
             ny,
             m1,
             m2,
+            xy_edge,
             fft,
             rfft: RealFft2::new(m1, m2),
             kzz,
@@ -516,12 +540,43 @@ impl Convolver {
             let b = &self.kb[k2 * m1..(k2 + 1) * m1];
             let w = &mut self.work[k2 * m1..(k2 + 1) * m1];
             w[0] = row[0] * a[0] + b[0] * mrow[0].conj();
-            for k1 in 1..m1 {
-                w[k1] = row[k1] * a[k1] + b[k1] * mrow[m1 - k1].conj();
+            // Z(−k1) runs backwards through the row: zipped iterators, no index checks
+            for ((((wv, z), av), bv), zm) in w[1..]
+                .iter_mut()
+                .zip(&row[1..])
+                .zip(&a[1..])
+                .zip(&b[1..])
+                .zip(mrow[1..].iter().rev())
+            {
+                *wv = z * av + bv * zm.conj();
             }
         }
         std::mem::swap(&mut self.fft.tbuf, &mut self.work);
         self.fft.inverse_from_t(&mut self.buf, r0, r1);
+        if r1 > nx && !self.xy_edge.is_empty() {
+            self.add_xy_edge(tx, ty);
+        }
+    }
+
+    /// Adds the xy coupling of source row 0 to the extended row `nx` (padded row `nx` of
+    /// `self.buf`), which a period `m1 = 2nx` cannot hold (type doc).
+    fn add_xy_edge(&mut self, tx: &[f64], ty: &[f64]) {
+        let (nx, ny, m2) = (self.nx, self.ny, self.m2);
+        let (tx0, ty0) = (&tx[..ny], &ty[..ny]);
+        if tx0.iter().chain(ty0).all(|&v| v == 0.0) {
+            return;
+        }
+        for j in 0..ny {
+            let (mut sx, mut sy) = (0.0, 0.0);
+            for l in 0..ny {
+                let c = self.xy_edge[j + ny - 1 - l];
+                sx += c * ty0[l];
+                sy += c * tx0[l];
+            }
+            let v = &mut self.buf[nx * m2 + j];
+            v.re += sx;
+            v.im += sy;
+        }
     }
 }
 
@@ -548,8 +603,16 @@ mod tests {
 
     #[test]
     fn fft_products_equal_dense_products() {
-        // Independent check: dense double sum of the closed-form coefficients.
-        let (nx, ny, dx, dy) = (7, 5, 0.3e-3, 0.45e-3);
+        // Independent check: dense double sum of the closed-form coefficients; nx = 7 pads to
+        // 15 rows (odd), nx = 8 to exactly 2nx = 16 (the extended row's xy coupling from
+        // source row 0 added directly), nx = 12 to 24
+        for nx in [7, 8, 12] {
+            fft_products_equal_dense_products_on(nx);
+        }
+    }
+
+    fn fft_products_equal_dense_products_on(nx: usize) {
+        let (ny, dx, dy) = (5, 0.3e-3, 0.45e-3);
         let (es, g, nu) = (115e9, 80e9, 0.3);
         let mut conv = Convolver::new(nx, ny, dx, dy, es, g, nu);
         let n = nx * ny;

@@ -44,6 +44,7 @@ pub struct NormalOutcome {
 }
 
 /// Scratch of the Polonsky–Keer solver (allocated once).
+#[derive(Clone)]
 pub struct NormalSolver {
     gap: Vec<f64>,
     t: Vec<f64>,

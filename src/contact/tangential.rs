@@ -38,6 +38,7 @@ pub enum TangentialAlgorithm {
 }
 
 /// Scratch for the tangential solver (allocated once).
+#[derive(Clone)]
 pub struct TangentialSolver {
     dx_: Vec<f64>,
     dy_: Vec<f64>,

@@ -300,6 +300,8 @@ pub const STATE_SLIP: u8 = 2;
 
 /// The transient rolling engine: all scratch allocated in [`TransientRolling::new`];
 /// [`TransientRolling::step`] allocates nothing and warm-starts from the previous step.
+/// A clone is an independent engine in the same state (the FFT plans are shared, read-only).
+#[derive(Clone)]
 pub struct TransientRolling {
     cfg: TransientConfig,
     nx: usize,
@@ -421,6 +423,17 @@ impl TransientRolling {
     /// [`TangentialSolver::solve`]); off only to compare.
     pub fn set_tangential_jacobi(&mut self, on: bool) {
         self.tang.jacobi = on;
+    }
+
+    /// Sets the rolling speed `V` (m/s, finite and > 0) from the next step on: it fixes the
+    /// time step `Δt = Δx / V` and converts the slip distances of a step into slip velocities
+    /// (the frictional power). The contact state itself does not depend on `V` — a step moves
+    /// the material by one element whatever the speed — so a state brought to steady rolling
+    /// at one speed is the steady state at any other.
+    pub fn set_speed(&mut self, speed_m_per_s: f64) -> Result<(), ContactError> {
+        check_positive("speed_m_per_s", speed_m_per_s)?;
+        self.cfg.speed_m_per_s = speed_m_per_s;
+        Ok(())
     }
 
     /// The series compliance `(c_x, c_y, c_z)` (m/N) set by [`Self::set_series_compliance`].

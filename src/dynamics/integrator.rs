@@ -33,7 +33,6 @@
 //! Verlet); Hughes, *The Finite Element Method*, §9.1 (Newmark family, β = 0 central
 //! difference).
 
-use faer::linalg::solvers::Solve;
 use faer::Mat;
 
 use super::reduced::ModalSystem;
@@ -80,24 +79,11 @@ impl ModalVerlet {
                 dt_limit_s: 1.9 / w_max,
             });
         }
-        let mut a = Mat::<f64>::identity(m, m);
-        for i in 0..m {
-            for j in 0..m {
-                a[(i, j)] += 0.5 * dt * sys.damping[(i, j)];
-            }
-        }
-        // I + ½ΔtC is symmetric positive definite (C is positive semi-definite).
-        let llt = a.llt(faer::Side::Lower).map_err(|_| {
-            DynamicsError::Other(
-                "I + Δt/2·C is not positive definite: the damping matrix has negative eigenvalues; check the damper inputs".into(),
-            )
-        })?;
-        let full = llt.solve(Mat::<f64>::identity(m, m));
+        let inv = implicit_damping_inverse(&sys.damping, dt)?;
         let mut d_inv = Vec::with_capacity(m * (m + 1) / 2);
         for j in 0..m {
-            d_inv.push(full[(j, j)]);
-            for i in j + 1..m {
-                d_inv.push(0.5 * (full[(i, j)] + full[(j, i)]));
+            for i in j..m {
+                d_inv.push(inv[(i, j)]);
             }
         }
         Ok(ModalVerlet {
@@ -208,6 +194,49 @@ impl ModalVerlet {
     pub fn damper_force(&self) -> &[f64] {
         &self.cv
     }
+}
+
+/// The lower triangle of `(I + ½Δt C)⁻¹` (`C` the m × m damping matrix, symmetric positive
+/// semi-definite, so the matrix is symmetric positive definite): Cholesky factor `L`, `L⁻¹`,
+/// and `L⁻ᵀ L⁻¹` by triangular products (about m³ flops instead of the 2m³ of solving for
+/// the identity). Sequential on purpose: results do not depend on the thread count (a sweep
+/// runs its passages in parallel and must give the same answer on any number of threads).
+fn implicit_damping_inverse(c: &Mat<f64>, dt: f64) -> Result<Mat<f64>, DynamicsError> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::cholesky::llt;
+    let m = c.nrows();
+    let par = faer::Par::Seq;
+    let mut l = Mat::<f64>::from_fn(m, m, |i, j| {
+        if i >= j {
+            f64::from(u8::from(i == j)) + 0.5 * dt * c[(i, j)]
+        } else {
+            0.0
+        }
+    });
+    let mut mem = MemBuffer::new(
+        llt::factor::cholesky_in_place_scratch::<f64>(m, par, Default::default())
+            .or(llt::inverse::inverse_scratch::<f64>(m, par)),
+    );
+    llt::factor::cholesky_in_place(
+        l.as_mut(),
+        Default::default(),
+        par,
+        MemStack::new(&mut mem),
+        Default::default(),
+    )
+    .map_err(|_| {
+        DynamicsError::Other(
+            "I + Δt/2·C is not positive definite: the damping matrix has negative eigenvalues; check the damper inputs".into(),
+        )
+    })?;
+    for j in 1..m {
+        for i in 0..j {
+            l[(i, j)] = 0.0;
+        }
+    }
+    let mut inv = Mat::<f64>::zeros(m, m);
+    llt::inverse::inverse(inv.as_mut(), l.as_ref(), par, MemStack::new(&mut mem));
+    Ok(inv)
 }
 
 /// `y = A x` for a symmetric `m × m` matrix `A` given by its lower triangle packed by columns

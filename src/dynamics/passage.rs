@@ -265,6 +265,9 @@ pub struct PassageEngine {
     residual: Option<ResidualFlexibility>,
     /// The constant series compliance applied, `[c_x, c_t, c_n]` (m/N), from `residual`.
     series_compliance: [f64; 3],
+    /// The static start on the smooth rail (contact at steady rolling, its steady result),
+    /// once computed: it does not depend on the speed ([`Self::started_contact`]).
+    smooth_start: std::sync::Mutex<Option<(TransientRolling, crate::contact::StepResult)>>,
 }
 
 fn global_frame() -> ContactFrame {
@@ -388,6 +391,7 @@ impl PassageEngine {
             track_modes_for_point,
             residual: None,
             series_compliance: [0.0; 3],
+            smooth_start: std::sync::Mutex::new(None),
         })
     }
 
@@ -496,6 +500,11 @@ impl PassageEngine {
             .as_ref()
             .map_or([0.0; 3], |r| r.mean_structural_weighted());
         self.residual = r;
+        // the static start depends on the series compliance
+        *self
+            .smooth_start
+            .get_mut()
+            .unwrap_or_else(|e| e.into_inner()) = None;
         Ok(())
     }
 
@@ -608,6 +617,69 @@ impl PassageEngine {
         contact_config_for(&self.model, speed_m_per_s)
     }
 
+    /// The static loads of the contact: normal force `W / cos α` (N), longitudinal force
+    /// `μ_t W` (N), and the spin of the coned wheel on the inclined rail `−sin α / R` (1/m).
+    fn static_loads(&self) -> (f64, f64, f64) {
+        let w = self.wheel_load_n;
+        (
+            w / self.frame.n[2],
+            self.model.contact.traction_coefficient * w,
+            self.frame.n[1] / self.wheel_radius_m,
+        )
+    }
+
+    /// The contact of a passage at `v` (m/s) over `profile`, brought to steady rolling at the
+    /// static load ([`steady_contact`], with the engine's series compliance), and its steady
+    /// result. On the smooth rail the steady state does not depend on the speed (the contact
+    /// state moves by one element per step whatever the speed: [`TransientRolling::set_speed`]),
+    /// so it is computed once per engine and cloned: a sweep pays for one static start, and
+    /// every passage gets the state bit for bit as if it had computed it itself.
+    fn started_contact(
+        &self,
+        v: f64,
+        profile: Option<&RailProfile>,
+    ) -> Result<(TransientRolling, crate::contact::StepResult), DynamicsError> {
+        let x0 = self.x_start_m;
+        let contact_err = |source| DynamicsError::Contact {
+            t_s: 0.0,
+            x_m: x0,
+            source,
+        };
+        let start = || -> Result<_, DynamicsError> {
+            let mut contact =
+                passage_contact(&self.model, v, profile.map(|p| (p, self.hertz_approach_m)))?;
+            contact
+                .set_series_compliance(self.series_compliance)
+                .map_err(contact_err)?;
+            let heights: Option<Vec<f64>> = profile.map(|p| {
+                contact
+                    .x_m()
+                    .iter()
+                    .map(|&xi| p.height_at(x0 + xi))
+                    .collect()
+            });
+            let (f_n0, f_l0, spin) = self.static_loads();
+            let st = steady_contact(&mut contact, f_n0, f_l0, spin, heights.as_deref(), x0)?;
+            Ok((contact, st))
+        };
+        if profile.is_some() {
+            return start();
+        }
+        check_speed(v)?;
+        let mut cached = self.smooth_start.lock().unwrap_or_else(|e| e.into_inner());
+        let (mut contact, st) = match cached.as_ref() {
+            Some(c) => c.clone(),
+            None => {
+                let c = start()?;
+                *cached = Some(c.clone());
+                c
+            }
+        };
+        drop(cached);
+        contact.set_speed(v).map_err(contact_err)?;
+        Ok((contact, st))
+    }
+
     /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth).
     pub fn passage(
         &self,
@@ -617,19 +689,13 @@ impl PassageEngine {
         progress: Option<&indicatif::ProgressBar>,
     ) -> Result<PassageRecord, DynamicsError> {
         let v = speed_m_per_s;
-        let mut contact =
-            passage_contact(&self.model, v, profile.map(|p| (p, self.hertz_approach_m)))?;
+        let (mut contact, st) = self.started_contact(v, profile)?;
         let dt = contact.time_step_s();
         let dx = v * dt;
         let mut tr = ModalVerlet::new(&self.track_sys, dt)?;
         let mut wh = ModalVerlet::new(&self.wheel_sys, dt)?;
         let (mt, mw) = (tr.len(), wh.len());
-        let frame = self.frame;
-        let cos_a = frame.n[2];
-        let w_load = self.wheel_load_n;
-        let f_l0 = self.model.contact.traction_coefficient * w_load;
-        let f_n0 = w_load / cos_a;
-        let spin = frame.n[1] / self.wheel_radius_m; // −sin α / R
+        let (f_n0, f_l0, spin) = self.static_loads();
         let x0 = self.x_start_m;
         let [z0, z1] = self.zone_m;
         let half_grid = contact.config().grid.half_length_x_m;
@@ -647,23 +713,7 @@ impl PassageEngine {
         };
 
         let series_c = self.series_compliance;
-        contact
-            .set_series_compliance(series_c)
-            .map_err(|source| DynamicsError::Contact {
-                t_s: 0.0,
-                x_m: x0,
-                source,
-            })?;
-        // --- Static start: steady rolling at the static load.
-        fill_heights(x0, &mut heights);
-        let st = steady_contact(
-            &mut contact,
-            f_n0,
-            f_l0,
-            spin,
-            profile.map(|_| &heights[..]),
-            x0,
-        )?;
+        // --- Static start (steady rolling at the static load): `st`, above.
         let (xi0, delta0) = (st.creepage, st.approach_m);
 
         let mut rr = vec![0.0; 3 * mt];
@@ -1287,16 +1337,23 @@ pub fn passage_contact(
     speed_m_per_s: f64,
     profile: Option<(&RailProfile, f64)>,
 ) -> Result<TransientRolling, DynamicsError> {
-    if !(speed_m_per_s > 0.0 && speed_m_per_s.is_finite()) {
-        return Err(DynamicsError::Other(format!(
-            "speed {speed_m_per_s} m/s must be finite and > 0"
-        )));
-    }
+    check_speed(speed_m_per_s)?;
     let mut cfg = contact_config_for(model, speed_m_per_s)?;
     if let Some((p, approach_m)) = profile {
         cfg.grid = grid_for_profile(cfg.grid, cfg.radius_x_m, approach_m, p.peak_to_trough_m());
     }
     TransientRolling::new(cfg).map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))
+}
+
+/// A passage's speed must be finite and > 0 (m/s).
+fn check_speed(speed_m_per_s: f64) -> Result<(), DynamicsError> {
+    if speed_m_per_s > 0.0 && speed_m_per_s.is_finite() {
+        Ok(())
+    } else {
+        Err(DynamicsError::Other(format!(
+            "speed {speed_m_per_s} m/s must be finite and > 0"
+        )))
+    }
 }
 
 /// Brings the contact to steady rolling at the static load (normal force `f_n0`, longitudinal

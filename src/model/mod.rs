@@ -194,7 +194,6 @@ pub enum LoadSpread {
     Node,
 }
 
-
 /// The wheel treatment of the explicit path.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

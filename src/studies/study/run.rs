@@ -10,8 +10,8 @@ use super::report::write_study;
 use super::{Case, Study};
 use crate::dynamics::PassageRunner;
 use crate::model::Model;
-use crate::studies::initiation::{evaluate, InitiationRow};
 use crate::progress::{Counter, Progress};
+use crate::studies::initiation::{evaluate, InitiationRow};
 use crate::studies::sweep::panic_text;
 use crate::studies::{BoxError, StudiesError};
 

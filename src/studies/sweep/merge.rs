@@ -1,0 +1,210 @@
+//! Joining the shard directories of a sweep into the unsharded result.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::run::same_speed;
+use super::{assemble, speed_file, MapOptions, StudiesError, SweepMaps, SweepRecord, RUN_KEY_FILE};
+
+/// Reads `sweep.json` of a sweep directory.
+pub fn read_record(dir: &Path) -> Result<SweepRecord, StudiesError> {
+    let p = dir.join("sweep.json");
+    let text = std::fs::read_to_string(&p).map_err(StudiesError::io(&p))?;
+    serde_json::from_str(&text).map_err(|e| StudiesError::BadFile {
+        path: p,
+        reason: format!("not a sweep record ({e}); rerun the sweep of this shard"),
+    })
+}
+
+/// The shard plan file in `DIR/speeds`: which shard of which sweep the directory holds
+/// ([`ShardPlan`]), written by [`write_shard_plan`] before the passages and checked by
+/// [`merge`].
+pub const SHARD_PLAN_FILE: &str = "shard.json";
+
+/// Which shard of which sweep a sweep directory holds.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShardPlan {
+    /// Shard index `I` (0 … count−1).
+    pub index: usize,
+    /// Shard count `N`.
+    pub count: usize,
+    /// Every speed of the whole sweep (km/h), ascending.
+    pub speeds_kmh: Vec<f64>,
+}
+
+/// Writes `dir/speeds/shard.json`: `dir` holds shard `shard` of the sweep of `all_speeds_kmh`.
+pub fn write_shard_plan(
+    dir: &Path,
+    all_speeds_kmh: &[f64],
+    shard: super::super::speeds::Shard,
+) -> Result<(), StudiesError> {
+    let p = dir.join("speeds").join(SHARD_PLAN_FILE);
+    let plan = ShardPlan {
+        index: shard.index,
+        count: shard.count,
+        speeds_kmh: all_speeds_kmh.to_vec(),
+    };
+    let text =
+        serde_json::to_string_pretty(&plan).map_err(|e| StudiesError::Invalid(e.to_string()))?;
+    if let Some(parent) = p.parent() {
+        std::fs::create_dir_all(parent).map_err(StudiesError::io(parent))?;
+    }
+    crate::io::write_text(&p, &text).map_err(StudiesError::io(&p))
+}
+
+fn read_shard_plan(dir: &Path) -> Result<ShardPlan, StudiesError> {
+    let p = dir.join("speeds").join(SHARD_PLAN_FILE);
+    let text = std::fs::read_to_string(&p).map_err(StudiesError::io(&p))?;
+    serde_json::from_str(&text).map_err(|e| StudiesError::BadFile {
+        path: p,
+        reason: format!("not a shard plan ({e}); rerun the sweep of this shard"),
+    })
+}
+
+/// Checks that the shard directories form one complete sweep: the same sweep (speeds and
+/// shard count) in each, every shard `0 … N−1` exactly once, and each finished with its
+/// shard's speeds (from its `sweep.json`).
+fn check_shards(dirs: &[PathBuf], records: &[SweepRecord]) -> Result<(), StudiesError> {
+    let plans = dirs
+        .iter()
+        .map(|d| read_shard_plan(d))
+        .collect::<Result<Vec<_>, _>>()?;
+    let first = &plans[0];
+    let count = first.count;
+    let mut given: Vec<Option<&PathBuf>> = vec![None; count];
+    for ((d, p), rec) in dirs.iter().zip(&plans).zip(records) {
+        if p.count != count
+            || p.speeds_kmh.len() != first.speeds_kmh.len()
+            || p.speeds_kmh
+                .iter()
+                .zip(&first.speeds_kmh)
+                .any(|(a, b)| !same_speed(*a, *b))
+            || p.index >= count
+        {
+            return Err(StudiesError::ShardsOfDifferentSweeps {
+                first: dirs[0].clone(),
+                second: d.clone(),
+            });
+        }
+        if let Some(prev) = given[p.index] {
+            return Err(StudiesError::ShardTwice {
+                index: p.index,
+                count,
+                first: prev.clone(),
+                second: d.clone(),
+            });
+        }
+        given[p.index] = Some(d);
+        let want = super::super::speeds::Shard {
+            index: p.index,
+            count,
+        }
+        .select(&p.speeds_kmh);
+        let same = want.len() == rec.speeds_kmh.len()
+            && want
+                .iter()
+                .zip(&rec.speeds_kmh)
+                .all(|(a, b)| same_speed(*a, *b));
+        if !same {
+            return Err(StudiesError::ShardUnfinished {
+                dir: d.clone(),
+                index: p.index,
+                count,
+                have: rec.speeds_kmh.len(),
+                want: want.len(),
+            });
+        }
+    }
+    let missing: Vec<usize> = (0..count).filter(|&i| given[i].is_none()).collect();
+    if !missing.is_empty() {
+        return Err(StudiesError::ShardsMissing { count, missing });
+    }
+    Ok(())
+}
+
+/// Joins shard directories (each a finished `sweep` of some speeds, with its `sweep.json`)
+/// into `out`: the speed files are copied byte for byte, then [`assemble`]d over the union of
+/// the speeds — the same files as the unsharded sweep. The shards must have the same map
+/// options; a speed present in two shards must have identical files.
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), StudiesError> {
+    if dirs.is_empty() {
+        return Err(StudiesError::Merge("no shard directories given".into()));
+    }
+    let mut key: Option<(String, &PathBuf)> = None;
+    for d in dirs {
+        let p = d.join("speeds").join(RUN_KEY_FILE);
+        let k = std::fs::read_to_string(&p).map_err(StudiesError::io(&p))?;
+        match &key {
+            None => key = Some((k, d)),
+            Some((k0, first)) if *k0 != k => {
+                return Err(StudiesError::Merge(format!(
+                    "{} and {} hold passages of different models or program versions ({}); \
+                     merge only shards of one sweep",
+                    first.display(),
+                    d.display(),
+                    RUN_KEY_FILE
+                )))
+            }
+            Some(_) => {}
+        }
+    }
+    let (key, _) = key.expect("at least one shard");
+    let kp = out.join("speeds").join(RUN_KEY_FILE);
+    match std::fs::read_to_string(&kp) {
+        Ok(k) if k != key => {
+            return Err(StudiesError::Merge(format!(
+                "{} already holds passages of another model; use an empty --out",
+                out.display()
+            )))
+        }
+        Ok(_) => {}
+        Err(_) => crate::io::write_text(&kp, &key).map_err(StudiesError::io(&kp))?,
+    }
+    let mut opts: Option<(MapOptions, &PathBuf)> = None;
+    let mut files: Vec<(f64, Vec<u8>, PathBuf)> = Vec::new();
+    let records = dirs
+        .iter()
+        .map(|d| read_record(d))
+        .collect::<Result<Vec<_>, _>>()?;
+    for (d, rec) in dirs.iter().zip(&records) {
+        match &opts {
+            None => opts = Some((rec.map.clone(), d)),
+            Some((o, first)) if *o != rec.map => {
+                return Err(StudiesError::Merge(format!(
+                    "{} and {} were made with different map options (grids or eigenfrequency \
+                     lines); rerun the shards with the same model and options",
+                    first.display(),
+                    d.display()
+                )))
+            }
+            Some(_) => {}
+        }
+        for &v in &rec.speeds_kmh {
+            let p = speed_file(d, v);
+            let bytes = std::fs::read(&p).map_err(StudiesError::io(&p))?;
+            files.push((v, bytes, p));
+        }
+    }
+    check_shards(dirs, &records)?;
+    files.sort_by(|a, b| a.0.total_cmp(&b.0));
+    files.dedup_by(|b, a| same_speed(a.0, b.0) && a.1 == b.1);
+    if let Some(w) = files.windows(2).find(|w| same_speed(w[0].0, w[1].0)) {
+        return Err(StudiesError::Merge(format!(
+            "speed {} km/h is in {} and {} with different results; remove one",
+            w[0].0,
+            w[0].2.display(),
+            w[1].2.display()
+        )));
+    }
+    for (v, bytes, _) in &files {
+        let p = speed_file(out, *v);
+        crate::io::write_atomic(&p, |w| w.write_all(bytes)).map_err(StudiesError::io(&p))?;
+    }
+    let speeds: Vec<f64> = files.iter().map(|f| f.0).collect();
+    write_shard_plan(out, &speeds, super::super::speeds::Shard::ALL)?;
+    let (o, _) = opts.expect("at least one shard");
+    assemble(out, &speeds, &o)
+}

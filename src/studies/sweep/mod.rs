@@ -1,0 +1,191 @@
+//! Speed sweeps: passages over many speeds in parallel, resumable, and the frequency-selection
+//! maps (docs/theory.md §2.3 and §11.2).
+//!
+//! # Files of a sweep directory `DIR`
+//! - `speeds/<stem>.json` — the [`PassageSummary`] of each speed ([`speed_file_stem`]), written
+//!   atomically the moment the passage finishes. A rerun reuses every speed whose file parses
+//!   as a complete summary of that speed and recomputes only the others, so a killed sweep
+//!   resumes where it stopped. Temp files (`*.tmp.<pid>`) of a killed run never parse as a
+//!   speed file (other name) and are ignored; a truncated or foreign `<stem>.json` does not
+//!   parse (every field is required) and is recomputed.
+//! - `speeds/run.key` — what produced the speed files (a hash of the resolved model and the
+//!   program version, given by the caller): a rerun with another key is refused
+//!   ([`check_run_key`]), so a resume never mixes models; shards must share it to merge.
+//! - `speeds/shard.json` — [`ShardPlan`]: which shard `I/N` of which speeds the directory
+//!   holds (written by the `sweep` command, `0/1` for an unsharded sweep); [`merge`] takes
+//!   only directories that form every shard of one sweep once, each finished.
+//! - `sweep.json` — [`SweepRecord`]: the speeds, dominant wavelength and frequency per speed,
+//!   the range ratios, `seconds`, the map options. `seconds` is the **sum of the passages'
+//!   own wall times** (`PassageSummary::seconds`, read from the speed files), so the file
+//!   depends only on the speed files and merged shards reproduce it byte for byte; the wall
+//!   time of one invocation is reported by the CLI's `--json` as `wall_seconds`.
+//! - `dominant.csv` (`speed_kmh, dominant_wavelength_mm, dominant_frequency_hz`; `NaN` where
+//!   the wear has no peak in the band) and the plots `dominant_wavelength.{svg,png}`,
+//!   `dominant_frequency.{svg,png}`.
+//! - The maps, as `.npy` (`[n_speeds, n_grid]`, C order) with the axes `speeds_kmh.npy`,
+//!   `wavelength_mm.npy`, `frequency_hz.npy`:
+//!   `map_wear_wavelength`, `map_fl_wavelength` — the one-sided PSD per unit wavenumber of the
+//!   band-passed wear ((J/m)²·m) and of `F_L` (N²·m) interpolated (linearly in wavenumber
+//!   `1/λ`) onto a common wavelength grid; `map_wear_frequency`, `map_fl_frequency` — the
+//!   same spectra per unit frequency, `S_f(f) = S_k(f/v) / v` (`v` in m/s, so
+//!   `∫S_f df = ∫S_k dk`), on a common frequency grid spanning `v_min/λ_max … v_max/λ_min`.
+//!   Outside a speed's band (or its spectrum's range) the map is 0. The same data as long
+//!   CSV tables `map_wavelength.csv` and `map_frequency.csv`, and heat maps
+//!   (`*.svg`, `*.png`, log colour scale) with the given longitudinal-compression
+//!   eigenfrequencies `f_i` drawn as curves `λ = v / f_i` on the wavelength maps and as
+//!   horizontal lines on the frequency maps.
+//! - `report.md`, `report.html` — the ratios, the dominant components and the plots.
+//!
+//! The speed range ratio is `v_max / v_min`, the wavelength range ratio `λ_max / λ_min` over
+//! the dominant wavelengths (speeds without one are left out). Frequency selection shows as a
+//! wavelength range ratio much smaller than the speed range ratio.
+//!
+//! Every output file is a deterministic function of the speed files and the [`MapOptions`],
+//! which is what makes [`merge`] of shard directories equal to the unsharded sweep.
+
+//!
+//! # Code
+//! [`run`] runs and resumes the passages, [`maps`] assembles the maps from the speed files,
+//! [`report`] writes the outputs, [`merge`] joins shard directories.
+
+mod maps;
+mod merge;
+mod report;
+mod run;
+
+pub use maps::{assemble, psd_at_wavenumber};
+pub use merge::{merge, read_record, write_shard_plan, ShardPlan, SHARD_PLAN_FILE};
+pub(crate) use run::panic_text;
+pub use run::{
+    check_run_key, read_summary, run_passages, speed_file, sweep, write_summary, RUN_KEY_FILE,
+};
+
+use serde::{Deserialize, Serialize};
+
+use super::StudiesError;
+
+/// Grids of the frequency-selection maps and the eigenfrequency lines drawn on them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapOptions {
+    /// Shortest wavelength of the map (mm).
+    pub wavelength_min_mm: f64,
+    /// Longest wavelength of the map (mm).
+    pub wavelength_max_mm: f64,
+    /// Points of the wavelength grid (uniform in wavelength).
+    pub wavelength_points: usize,
+    /// Points of the frequency grid (uniform in frequency).
+    pub frequency_points: usize,
+    /// Longitudinal-compression eigenfrequencies drawn on the maps (Hz), labelled `LC`.
+    pub frequency_lines_hz: Vec<f64>,
+    /// Wheel eigenfrequencies with a large modal displacement at the contact point drawn
+    /// on the maps (Hz), labelled `wheel` (see
+    /// [`crate::dynamics::passage::PreparedModel::wheel_contact_modes_hz`]).
+    #[serde(default)]
+    pub wheel_lines_hz: Vec<f64>,
+}
+
+impl Default for MapOptions {
+    /// The 20–80 mm band of docs/theory.md §9.2 at 0.25 mm, 401 frequencies, no lines.
+    fn default() -> Self {
+        Self {
+            wavelength_min_mm: 20.0,
+            wavelength_max_mm: 80.0,
+            wavelength_points: 241,
+            frequency_points: 401,
+            frequency_lines_hz: Vec::new(),
+            wheel_lines_hz: Vec::new(),
+        }
+    }
+}
+
+impl MapOptions {
+    fn check(&self) -> Result<(), StudiesError> {
+        let bad = |r: &str| StudiesError::Invalid(format!("map options: {r}"));
+        let ok = self.wavelength_min_mm > 0.0
+            && self.wavelength_max_mm > self.wavelength_min_mm
+            && self.wavelength_max_mm.is_finite();
+        if !ok {
+            return Err(bad("need 0 < wavelength_min_mm < wavelength_max_mm"));
+        }
+        if self.wavelength_points < 2 || self.frequency_points < 2 {
+            return Err(bad("need at least 2 grid points"));
+        }
+        if self
+            .frequency_lines_hz
+            .iter()
+            .chain(&self.wheel_lines_hz)
+            .any(|f| !f.is_finite() || *f <= 0.0)
+        {
+            return Err(bad("eigenfrequency lines must be positive and finite"));
+        }
+        Ok(())
+    }
+
+    /// The wavelength grid (mm), ascending.
+    pub fn wavelength_grid_mm(&self) -> Vec<f64> {
+        maps::linspace(
+            self.wavelength_min_mm,
+            self.wavelength_max_mm,
+            self.wavelength_points,
+        )
+    }
+}
+
+/// The content of `sweep.json` (and the core of the CLI's `--json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SweepRecord {
+    /// Speeds (km/h), ascending.
+    pub speeds_kmh: Vec<f64>,
+    /// Dominant wear wavelength per speed (mm); `null` without a peak in the band.
+    pub dominant_wavelength_mm: Vec<Option<f64>>,
+    /// Dominant wear frequency per speed (Hz); `null` without a peak in the band.
+    pub dominant_frequency_hz: Vec<Option<f64>>,
+    /// `v_max / v_min` (−).
+    pub speed_range_ratio: f64,
+    /// `λ_max / λ_min` over the dominant wavelengths (−); `null` if no speed has one.
+    pub wavelength_range_ratio: Option<f64>,
+    /// Sum of the passages' wall times (s), see the module doc.
+    pub seconds: f64,
+    /// Grids and eigenfrequency lines of the maps.
+    pub map: MapOptions,
+}
+
+/// Which speeds a run computed and which it reused from earlier runs.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PassageStats {
+    /// Speeds computed by this run (km/h).
+    pub computed: Vec<f64>,
+    /// Speeds whose files were already complete (km/h).
+    pub reused: Vec<f64>,
+}
+
+/// The assembled maps, in memory (the same numbers as the `.npy` files).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepMaps {
+    /// Speeds (km/h), ascending.
+    pub speeds_kmh: Vec<f64>,
+    /// Wavelength grid (mm).
+    pub wavelength_mm: Vec<f64>,
+    /// Frequency grid (Hz).
+    pub frequency_hz: Vec<f64>,
+    /// Wear PSD per wavenumber, `[speed][wavelength]` row-major ((J/m)²·m).
+    pub wear_wavelength: Vec<f64>,
+    /// `F_L` PSD per wavenumber, `[speed][wavelength]` (N²·m).
+    pub fl_wavelength: Vec<f64>,
+    /// Wear PSD per frequency, `[speed][frequency]` ((J/m)²/Hz).
+    pub wear_frequency: Vec<f64>,
+    /// `F_L` PSD per frequency, `[speed][frequency]` (N²/Hz).
+    pub fl_frequency: Vec<f64>,
+}
+
+/// The result of [`sweep`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepOutcome {
+    /// `sweep.json`.
+    pub record: SweepRecord,
+    /// The maps.
+    pub maps: SweepMaps,
+    /// Computed and reused speeds.
+    pub stats: PassageStats,
+}

@@ -1,0 +1,357 @@
+//! The output files of a sweep: maps, tables, plots, report; `sweep.json` last.
+
+use std::io::Write;
+use std::path::Path;
+
+use super::maps::linspace;
+use super::{StudiesError, SweepMaps, SweepRecord};
+use crate::report::doc::Document;
+use crate::report::plot::{heat_map, line_plot, HeatMap, OverlayLine, Series};
+
+fn nan_none(v: Option<f64>) -> f64 {
+    v.unwrap_or(f64::NAN)
+}
+
+/// Writes the assembled outputs. `sweep.json` is the commit marker: it is removed first and
+/// written last, so a run killed in between leaves no complete-looking sweep beside missing
+/// or stale maps; temp files of killed earlier runs are removed first.
+pub(super) fn write_outputs(
+    dir: &Path,
+    r: &SweepRecord,
+    m: &SweepMaps,
+) -> Result<(), StudiesError> {
+    let io = StudiesError::io;
+    for d in [dir.to_path_buf(), dir.join("speeds")] {
+        crate::io::remove_stale_temp_files(&d).map_err(io(&d))?;
+    }
+    let json = dir.join("sweep.json");
+    match std::fs::remove_file(&json) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io(&json)(e)),
+        _ => {}
+    }
+    write_maps(dir, r, m)?;
+    crate::io::write_atomic(&json, |w| {
+        serde_json::to_writer_pretty(&mut *w, r).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    })
+    .map_err(io(&json))
+}
+
+/// Every output of [`write_outputs`] but `sweep.json`.
+fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesError> {
+    let io = StudiesError::io;
+    let p = dir.join("dominant.csv");
+    crate::io::write_csv(
+        &p,
+        &[
+            "speed_kmh",
+            "dominant_wavelength_mm",
+            "dominant_frequency_hz",
+        ],
+        r.speeds_kmh.iter().enumerate().map(|(i, &v)| {
+            vec![
+                v,
+                nan_none(r.dominant_wavelength_mm[i]),
+                nan_none(r.dominant_frequency_hz[i]),
+            ]
+        }),
+    )
+    .map_err(io(&p))?;
+    let (ns, nl, nf) = (
+        m.speeds_kmh.len(),
+        m.wavelength_mm.len(),
+        m.frequency_hz.len(),
+    );
+    for (name, shape, data) in [
+        ("speeds_kmh.npy", vec![ns], &m.speeds_kmh),
+        ("wavelength_mm.npy", vec![nl], &m.wavelength_mm),
+        ("frequency_hz.npy", vec![nf], &m.frequency_hz),
+        ("map_wear_wavelength.npy", vec![ns, nl], &m.wear_wavelength),
+        ("map_fl_wavelength.npy", vec![ns, nl], &m.fl_wavelength),
+        ("map_wear_frequency.npy", vec![ns, nf], &m.wear_frequency),
+        ("map_fl_frequency.npy", vec![ns, nf], &m.fl_frequency),
+    ] {
+        let p = dir.join(name);
+        crate::io::write_npy(&p, &shape, data).map_err(io(&p))?;
+    }
+    let p = dir.join("map_wavelength.csv");
+    crate::io::write_csv(
+        &p,
+        &[
+            "speed_kmh",
+            "wavelength_mm",
+            "wear_psd_j2_per_m",
+            "fl_psd_n2_m",
+        ],
+        (0..ns).flat_map(|i| {
+            (0..nl).map(move |j| {
+                vec![
+                    m.speeds_kmh[i],
+                    m.wavelength_mm[j],
+                    m.wear_wavelength[i * nl + j],
+                    m.fl_wavelength[i * nl + j],
+                ]
+            })
+        }),
+    )
+    .map_err(io(&p))?;
+    let p = dir.join("map_frequency.csv");
+    crate::io::write_csv(
+        &p,
+        &[
+            "speed_kmh",
+            "frequency_hz",
+            "wear_psd_j2_per_m2_hz",
+            "fl_psd_n2_per_hz",
+        ],
+        (0..ns).flat_map(|i| {
+            (0..nf).map(move |j| {
+                vec![
+                    m.speeds_kmh[i],
+                    m.frequency_hz[j],
+                    m.wear_frequency[i * nf + j],
+                    m.fl_frequency[i * nf + j],
+                ]
+            })
+        }),
+    )
+    .map_err(io(&p))?;
+
+    // Heat maps with the eigenfrequency lines.
+    let (v0, v1) = (m.speeds_kmh[0], m.speeds_kmh[ns - 1]);
+    let (vlo, vhi) = if v1 > v0 {
+        (v0, v1)
+    } else {
+        (v0 * 0.95, v0 * 1.05)
+    };
+    let curve_v = linspace(vlo, vhi, 200);
+    // The track's LC lines solid, the wheel's dashed (at 5 kHz there are ~30 wheel lines).
+    let labelled: Vec<(String, f64, bool)> = r
+        .map
+        .frequency_lines_hz
+        .iter()
+        .map(|&f| (format!("LC {f:.0} Hz"), f, false))
+        .chain(
+            r.map
+                .wheel_lines_hz
+                .iter()
+                .map(|&f| (format!("wheel {f:.0} Hz"), f, true)),
+        )
+        .collect();
+    let lines_lambda: Vec<OverlayLine> = labelled
+        .iter()
+        .map(|(name, f, dashed)| OverlayLine {
+            name: name.clone(),
+            x: curve_v.clone(),
+            y: curve_v
+                .iter()
+                .map(|&v| crate::units::kmh_to_ms(v) / f * 1e3)
+                .collect(),
+            dashed: *dashed,
+        })
+        .collect();
+    let lines_f: Vec<OverlayLine> = labelled
+        .iter()
+        .map(|(name, f, dashed)| OverlayLine {
+            dashed: *dashed,
+            ..OverlayLine::horizontal(name.clone(), *f, vlo, vhi)
+        })
+        .collect();
+    // A single speed has no x extent: the map is still drawn, one column wide.
+    for (stem, title, ylab, y, z, lines, unit) in [
+        (
+            "map_wear_wavelength",
+            "Differential wear PSD: speed × wavelength",
+            "wavelength (mm)",
+            &m.wavelength_mm,
+            &m.wear_wavelength,
+            &lines_lambda,
+            "PSD ((J/m)²·m)",
+        ),
+        (
+            "map_fl_wavelength",
+            "F_L PSD: speed × wavelength",
+            "wavelength (mm)",
+            &m.wavelength_mm,
+            &m.fl_wavelength,
+            &lines_lambda,
+            "PSD (N²·m)",
+        ),
+        (
+            "map_wear_frequency",
+            "Differential wear PSD: speed × frequency",
+            "frequency (Hz)",
+            &m.frequency_hz,
+            &m.wear_frequency,
+            &lines_f,
+            "PSD ((J/m)²/Hz)",
+        ),
+        (
+            "map_fl_frequency",
+            "F_L PSD: speed × frequency",
+            "frequency (Hz)",
+            &m.frequency_hz,
+            &m.fl_frequency,
+            &lines_f,
+            "PSD (N²/Hz)",
+        ),
+    ] {
+        heat_map(
+            &dir.join(stem),
+            &HeatMap {
+                title,
+                x_label: "speed (km/h)",
+                y_label: ylab,
+                colour_label: unit,
+                x: &m.speeds_kmh,
+                y,
+                z,
+                lines,
+                log_colour: true,
+            },
+        )?;
+    }
+    let dom_l: Vec<f64> = r
+        .dominant_wavelength_mm
+        .iter()
+        .map(|v| nan_none(*v))
+        .collect();
+    let dom_f: Vec<f64> = r
+        .dominant_frequency_hz
+        .iter()
+        .map(|v| nan_none(*v))
+        .collect();
+    line_plot(
+        &dir.join("dominant_wavelength"),
+        "Dominant wear wavelength vs speed",
+        "speed (km/h)",
+        "wavelength (mm)",
+        &[Series::new(
+            "dominant wavelength",
+            r.speeds_kmh.clone(),
+            dom_l,
+        )],
+    )?;
+    // Only the mode lines near the dominant frequencies (within 15 % of their range; at most
+    // eight, nearest first), so that the dominant curve and its legend stay readable; the
+    // maps show all lines. Mode lines first, so the dominant frequency is drawn on top.
+    let df: Vec<f64> = dom_f.iter().copied().filter(|v| v.is_finite()).collect();
+    let (flo, fhi) = df
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let dist = |f: f64| {
+        if f < flo {
+            (flo - f) / flo
+        } else if f > fhi {
+            (f - fhi) / fhi
+        } else {
+            0.0
+        }
+    };
+    let mut near: Vec<(&OverlayLine, f64)> = lines_f
+        .iter()
+        .filter_map(|l| l.y.first().map(|&f| (l, dist(f))))
+        .filter(|(_, d)| *d <= 0.15)
+        .collect();
+    near.sort_by(|a, b| a.1.total_cmp(&b.1));
+    near.truncate(8);
+    let mut fs: Vec<Series> = near
+        .iter()
+        .map(|(l, _)| Series::new(l.name.clone(), l.x.clone(), l.y.clone()))
+        .collect();
+    fs.push(Series::new(
+        "dominant frequency",
+        r.speeds_kmh.clone(),
+        dom_f,
+    ));
+    line_plot(
+        &dir.join("dominant_frequency"),
+        "Dominant wear frequency vs speed, with the nearest modes",
+        "speed (km/h)",
+        "frequency (Hz)",
+        &fs,
+    )?;
+    write_report(dir, r)?;
+    Ok(())
+}
+
+fn fmt_opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or_else(|| "–".into(), |x| format!("{x:.digits$}"))
+}
+
+fn write_report(dir: &Path, r: &SweepRecord) -> Result<(), StudiesError> {
+    let mut d = Document::new("Speed sweep: frequency selection");
+    d.paragraph(format!(
+        "{} speeds from {} to {} km/h. Speed range ratio {:.3}; wavelength range ratio of the \
+         dominant wear wavelength {}. Frequency selection shows as a wavelength range ratio \
+         much smaller than the speed range ratio (docs/theory.md §2.3).",
+        r.speeds_kmh.len(),
+        r.speeds_kmh[0],
+        r.speeds_kmh[r.speeds_kmh.len() - 1],
+        r.speed_range_ratio,
+        fmt_opt(r.wavelength_range_ratio, 3)
+    ));
+    if !r.map.frequency_lines_hz.is_empty() {
+        let f: Vec<String> = r
+            .map
+            .frequency_lines_hz
+            .iter()
+            .map(|f| format!("{f:.1}"))
+            .collect();
+        d.paragraph(format!(
+            "Longitudinal-compression eigenfrequencies drawn on the maps (Hz, `LC`): {}.",
+            f.join(", ")
+        ));
+    }
+    if !r.map.wheel_lines_hz.is_empty() {
+        let f: Vec<String> = r
+            .map
+            .wheel_lines_hz
+            .iter()
+            .map(|f| format!("{f:.1}"))
+            .collect();
+        d.paragraph(format!(
+            "Wheel eigenfrequencies with a large modal displacement at the contact point drawn \
+             on the maps (Hz, `wheel`): {}. On the default Dutch track the ridges fall on \
+             these, not on the rail's longitudinal-compression modes \
+             (validation/frequency_selection.md in the source tree).",
+            f.join(", ")
+        ));
+    }
+    d.heading(2, "Maps");
+    for (alt, file) in [
+        (
+            "Differential wear PSD, speed × wavelength",
+            "map_wear_wavelength.png",
+        ),
+        (
+            "Differential wear PSD, speed × frequency",
+            "map_wear_frequency.png",
+        ),
+        ("F_L PSD, speed × wavelength", "map_fl_wavelength.png"),
+        ("F_L PSD, speed × frequency", "map_fl_frequency.png"),
+        ("Dominant wavelength vs speed", "dominant_wavelength.png"),
+        ("Dominant frequency vs speed", "dominant_frequency.png"),
+    ] {
+        d.image(alt, file);
+    }
+    d.heading(2, "Dominant wear component per speed");
+    d.table(
+        &["speed (km/h)", "wavelength (mm)", "frequency (Hz)"],
+        r.speeds_kmh
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                vec![
+                    format!("{v}"),
+                    fmt_opt(r.dominant_wavelength_mm[i], 2),
+                    fmt_opt(r.dominant_frequency_hz[i], 1),
+                ]
+            })
+            .collect(),
+    );
+    d.write(&dir.join("report"))?;
+    Ok(())
+}

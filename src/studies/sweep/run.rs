@@ -1,0 +1,150 @@
+//! Running and resuming the passages of a sweep: one summary file per finished speed.
+
+use crate::progress::{Counter, Progress};
+use std::io::Write;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+
+use super::super::speeds::speed_file_stem;
+use super::{assemble, MapOptions, PassageStats, StudiesError, SweepOutcome};
+use crate::dynamics::{PassageRunner, PassageSummary};
+
+/// Path of a speed's summary file in a sweep directory.
+pub fn speed_file(dir: &Path, speed_kmh: f64) -> PathBuf {
+    dir.join("speeds")
+        .join(format!("{}.json", speed_file_stem(speed_kmh)))
+}
+
+/// Reads a summary file; `BadFile` if it does not parse as a complete [`PassageSummary`].
+pub fn read_summary(path: &Path) -> Result<PassageSummary, StudiesError> {
+    let text = std::fs::read_to_string(path).map_err(StudiesError::io(path))?;
+    serde_json::from_str(&text).map_err(|e| StudiesError::BadFile {
+        path: path.to_path_buf(),
+        reason: format!("not a complete passage summary ({e}); delete it to recompute"),
+    })
+}
+
+pub(super) fn same_speed(a: f64, b: f64) -> bool {
+    speed_file_stem(a) == speed_file_stem(b)
+}
+
+/// Writes a summary as pretty JSON, atomically.
+pub fn write_summary(path: &Path, s: &PassageSummary) -> Result<(), StudiesError> {
+    crate::io::write_atomic(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, s).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    })
+    .map_err(StudiesError::io(path))
+}
+
+/// Runs the passages of the speeds that have no complete file in `dir/speeds` yet, in
+/// parallel (rayon), each saved the moment it finishes; each finished passage is reported to
+/// `progress` (stage "sweep passages (speeds)"). A passage that fails or panics is reported in [`StudiesError::Passages`]
+/// after all others have finished and been saved.
+pub fn run_passages(
+    runner: &dyn PassageRunner,
+    speeds_kmh: &[f64],
+    dir: &Path,
+    run_key: &str,
+    progress: &dyn Progress,
+) -> Result<PassageStats, StudiesError> {
+    check_run_key(dir, run_key)?;
+    let mut stats = PassageStats::default();
+    let mut todo = Vec::new();
+    for &v in speeds_kmh {
+        let path = speed_file(dir, v);
+        match path.exists().then(|| read_summary(&path)) {
+            Some(Ok(s)) if same_speed(s.speed_kmh, v) => stats.reused.push(v),
+            _ => todo.push(v),
+        }
+    }
+    let bar = Counter::start(progress, "sweep passages (speeds)", todo.len() as u64);
+    let results: Vec<Result<f64, String>> = todo
+        .par_iter()
+        .map(|&v| {
+            let out = catch_unwind(AssertUnwindSafe(|| runner.run(v, None)));
+            let r = match out {
+                Ok(Ok(s)) if same_speed(s.speed_kmh, v) => write_summary(&speed_file(dir, v), &s)
+                    .map(|_| v)
+                    .map_err(|e| format!("{v} km/h: {e}")),
+                Ok(Ok(s)) => Err(format!(
+                    "{v} km/h: the runner returned a summary for {} km/h",
+                    s.speed_kmh
+                )),
+                Ok(Err(e)) => Err(format!("{v} km/h: {e}")),
+                Err(p) => Err(format!("{v} km/h: passage panicked: {}", panic_text(&*p))),
+            };
+            bar.inc();
+            r
+        })
+        .collect();
+    bar.finish();
+    let mut failures = Vec::new();
+    for r in results {
+        match r {
+            Ok(v) => stats.computed.push(v),
+            Err(e) => failures.push(e),
+        }
+    }
+    if failures.is_empty() {
+        Ok(stats)
+    } else {
+        Err(StudiesError::Passages { failures })
+    }
+}
+
+pub(crate) fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}
+
+/// File (in `DIR/speeds`) naming what produced the speed files: see [`check_run_key`].
+pub const RUN_KEY_FILE: &str = "run.key";
+
+/// Guards resume against mixing models: the first run into `dir` writes `run_key` (e.g. a
+/// hash of the resolved model and the program version) to `dir/speeds/run.key`; a later run
+/// with another key is refused, so speed files of another model are never reused.
+pub fn check_run_key(dir: &Path, run_key: &str) -> Result<(), StudiesError> {
+    let speeds = dir.join("speeds");
+    std::fs::create_dir_all(&speeds).map_err(StudiesError::io(&speeds))?;
+    let p = speeds.join(RUN_KEY_FILE);
+    match std::fs::read_to_string(&p) {
+        Ok(old) if old.trim_end() == run_key => Ok(()),
+        Ok(old) => Err(StudiesError::BadFile {
+            path: p,
+            reason: format!(
+                "this directory holds passages of another model or program version (key {}, \
+                 now {run_key}); use another --out or delete the directory",
+                old.trim_end()
+            ),
+        }),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            crate::io::write_text(&p, &format!("{run_key}\n")).map_err(StudiesError::io(&p))
+        }
+        Err(e) => Err(StudiesError::Io { path: p, source: e }),
+    }
+}
+
+/// Runs the missing passages ([`run_passages`]) and assembles the outputs ([`assemble`]).
+/// `run_key` identifies the model (see [`check_run_key`]).
+pub fn sweep(
+    runner: &dyn PassageRunner,
+    speeds_kmh: &[f64],
+    dir: &Path,
+    opts: &MapOptions,
+    run_key: &str,
+    progress: &dyn Progress,
+) -> Result<SweepOutcome, StudiesError> {
+    opts.check()?;
+    let stats = run_passages(runner, speeds_kmh, dir, run_key, progress)?;
+    let (record, maps) = assemble(dir, speeds_kmh, opts)?;
+    Ok(SweepOutcome {
+        record,
+        maps,
+        stats,
+    })
+}
