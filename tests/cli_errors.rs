@@ -3,18 +3,14 @@
 
 mod common;
 
-use common::{run, SMALL_MODEL};
+use common::{is_one_line_error, run, SMALL_MODEL};
 
 fn assert_clean_error(args: &[&str], must_contain: &[&str]) {
     let (code, _out, err) = run(args);
     assert_ne!(code, 0, "{args:?} must fail");
     assert_ne!(code, 101, "{args:?} panicked: {err}");
     assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
-    assert_eq!(
-        err.trim_end().lines().count(),
-        1,
-        "one-line error expected: {err}"
-    );
+    assert!(is_one_line_error(&err), "one-line error expected: {err}");
     for s in must_contain {
         assert!(err.contains(s), "{args:?}: error `{err}` lacks `{s}`");
     }

@@ -187,7 +187,7 @@ fn bad_overrides_give_a_one_line_error_naming_a_key_or_finite_results() {
                 Ok(v) if all_finite(&v) => {}
                 _ => problems.push(format!("{set}: exit 0 with non-finite output: {out}")),
             }
-        } else if err.trim_end().lines().count() != 1
+        } else if !common::is_one_line_error(&err)
             || !sections.iter().any(|s| err.contains(s.as_str()))
         {
             problems.push(format!("{set}: not a one-line error naming a key: {err}"));

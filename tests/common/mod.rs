@@ -34,3 +34,12 @@ pub fn run(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// Whether `stderr` ends in exactly one error line (`error: …`, the whole cause chain on one
+/// line) and holds no other error line; plain progress lines before it (stderr is not a
+/// terminal in the tests) do not count.
+pub fn is_one_line_error(stderr: &str) -> bool {
+    let lines: Vec<&str> = stderr.trim_end().lines().collect();
+    let errors = lines.iter().filter(|l| l.starts_with("error")).count();
+    errors == 1 && lines.last().is_some_and(|l| l.starts_with("error"))
+}
