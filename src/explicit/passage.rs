@@ -509,9 +509,14 @@ impl ExplicitModel {
             };
             ftrack.iter_mut().for_each(|x| *x = 0.0);
             let neg = [-f[0], -f[1], -f[2]];
-            for (j, wj) in pw.iter() {
-                add_nodes_load(&self.line.nodes[j], dm_t, &frame, wj, neg, &mut ftrack);
-            }
+            add_line_force(
+                &self.line,
+                &self.track_structure,
+                &frame,
+                &pw,
+                neg,
+                &mut ftrack,
+            );
             ledger.before_step(&s_.uw);
             let State { ut, vt, uw, vw } = &mut s_;
             self.track.op.advance(dtt, nt, ut, vt, &ftrack, &mut sc_t);
