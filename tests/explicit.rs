@@ -6,8 +6,8 @@ mod common;
 
 use std::f64::consts::PI;
 
-use corrugation::dynamics::moving_load::line_load_vector;
 use corrugation::dynamics::passage::PassageOptions;
+use corrugation::dynamics::reduced::line_load_vector;
 use corrugation::dynamics::reduced::{ContactFrame, RailContactLine};
 use corrugation::dynamics::residual::StiffnessFactor;
 use corrugation::explicit::passage::Coupling;

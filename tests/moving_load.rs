@@ -11,11 +11,12 @@
 use std::sync::OnceLock;
 
 use corrugation::dynamics::moving_load::{
-    diagonal_damping, direct_response, line_load_vector, modal_response, modal_response_corrected,
-    nearest_plane, truncate_basis, MovingLoad, Probe, ProbeCorrection, ResponseHistory,
-    StaticDirect,
+    diagonal_damping, direct_response, modal_response, modal_response_corrected, nearest_plane,
+    truncate_basis, MovingLoad, Probe, ProbeCorrection, ResponseHistory, StaticDirect,
 };
-use corrugation::dynamics::reduced::{ContactFrame, ModalSystem, RailContactLine};
+use corrugation::dynamics::reduced::{
+    line_load_vector, ContactFrame, ModalSystem, RailContactLine,
+};
 use corrugation::dynamics::residual::StiffnessFactor;
 use corrugation::eigen::basis::track_basis;
 use corrugation::eigen::cache::ModalCache;

@@ -134,9 +134,10 @@ impl PassageRunner for ModeLocked {
             if self.panic {
                 panic!("stand-in killed at {speed_kmh} km/h");
             }
-            return Err(DynamicsError::Other(format!(
-                "stand-in fails at {speed_kmh} km/h"
-            )));
+            return Err(DynamicsError::Engine {
+                engine: "stand-in",
+                source: format!("fails at {speed_kmh} km/h").into(),
+            });
         }
         let f = selected_mode_hz(speed_kmh);
         Ok(summary(speed_kmh, f, f, 2.0 * f, 0.05))

@@ -19,13 +19,12 @@ pub fn zone_signal(rec: &PassageRecord, values: &[f64]) -> Result<Signal, Dynami
     let i0 = h.x_m.partition_point(|&x| x < z0);
     let i1 = h.x_m.partition_point(|&x| x <= z1);
     if i1 <= i0 + 8 {
-        return Err(DynamicsError::Other(
-            "the solution zone holds fewer than 8 steps: lengthen run.solution_zone_length".into(),
-        ));
+        return Err(DynamicsError::SolutionZoneTooShort {
+            steps: i1.saturating_sub(i0),
+        });
     }
     let dx = rec.speed_m_per_s * rec.dt_s;
-    Signal::new(h.x_m[i0], dx, values[i0..i1].to_vec())
-        .map_err(|e| DynamicsError::Other(e.to_string()))
+    Ok(Signal::new(h.x_m[i0], dx, values[i0..i1].to_vec())?)
 }
 
 /// The wear `W_f(x)` of the record as a signal (J/m).
@@ -35,8 +34,7 @@ pub fn wear_signal(rec: &PassageRecord) -> Result<Signal, DynamicsError> {
     } else {
         rec.speed_m_per_s * rec.dt_s
     };
-    Signal::new(rec.wear_x_m[0], dx, rec.wear_j_per_m.clone())
-        .map_err(|e| DynamicsError::Other(e.to_string()))
+    Ok(Signal::new(rec.wear_x_m[0], dx, rec.wear_j_per_m.clone())?)
 }
 
 /// Band-passed signal, its PSD, and its peaks.
@@ -57,13 +55,12 @@ pub struct Analysed {
 
 /// Analyses one signal along the rail at speed `v` (m/s).
 pub fn analyse(sig: &Signal, v: f64) -> Result<Analysed, DynamicsError> {
-    let e = |e: crate::spectral::SpectralError| DynamicsError::Other(e.to_string());
     let mean = sig.values.iter().sum::<f64>() / sig.len() as f64;
-    let band = band_pass(sig, &BandPass::default()).map_err(e)?;
+    let band = band_pass(sig, &BandPass::default())?;
     let band_rms = (band.values.iter().map(|x| x * x).sum::<f64>() / band.len() as f64).sqrt();
-    let psd = Psd::estimate(&band, &PsdOptions::default()).map_err(e)?;
+    let psd = Psd::estimate(&band, &PsdOptions::default())?;
     let raw_peaks = if band_rms > 0.0 {
-        find_peaks(&psd, &PeakOptions::default(), v).map_err(e)?
+        find_peaks(&psd, &PeakOptions::default(), v)?
     } else {
         Vec::new()
     };

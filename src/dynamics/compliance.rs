@@ -24,8 +24,7 @@ use crate::eigen::classify::TrackClassifier;
 use crate::model::Model;
 use crate::structure::TrackStructure;
 
-use super::moving_load::line_load_vector;
-use super::reduced::{ContactFrame, RailContactLine};
+use super::reduced::{line_load_vector, ContactFrame, RailContactLine};
 use super::residual::StiffnessFactor;
 use super::DynamicsError;
 
@@ -81,8 +80,7 @@ pub fn longitudinal_compliance(
     track: &TrackStructure,
     load: &ComplianceLoad,
 ) -> Result<LongitudinalCompliance, DynamicsError> {
-    let other = |e: String| DynamicsError::Other(format!("longitudinal compliance: {e}"));
-    let (mats, _) = track.assemble().map_err(|e| other(e.to_string()))?;
+    let (mats, _) = track.assemble()?;
     let frame = ContactFrame::for_inclination(m.rail.inclination);
     let hertz = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
         radius_x_m: m.wheel.radius,
@@ -91,7 +89,7 @@ pub fn longitudinal_compliance(
         poisson: m.rail.poisson_ratio,
         load_n: load.vertical_n,
     })
-    .map_err(|e| other(format!("static Hertz contact: {e}")))?;
+    .map_err(DynamicsError::StaticHertz)?;
     let n = track.dofmap.n_free();
     let line = RailContactLine::new(track, &Mat::zeros(n, 0), &frame, hertz.b_m)?;
     let length = track.layout.length;
@@ -99,9 +97,11 @@ pub fn longitudinal_compliance(
     let x_probe = x_load + load.ahead_m;
     for (what, x) in [("load", x_load), ("report point", x_probe)] {
         if !(0.0..=length).contains(&x) {
-            return Err(other(format!(
-                "{what} at x = {x} m is off the rail (0 to {length} m)"
-            )));
+            return Err(DynamicsError::ComplianceOffRail {
+                what,
+                x_m: x,
+                length_m: length,
+            });
         }
     }
     // Two load cases on one factorisation: the combined load, and the longitudinal force alone
@@ -115,8 +115,7 @@ pub fn longitudinal_compliance(
     .into_iter()
     .enumerate()
     {
-        let f = line_load_vector(track, &line, &frame, x_load, force)
-            .map_err(|e| other(e.to_string()))?;
+        let f = line_load_vector(track, &line, &frame, x_load, force)?;
         for (i, v) in f.into_iter().enumerate() {
             rhs[(i, col)] = v;
         }
@@ -124,16 +123,12 @@ pub fn longitudinal_compliance(
     let factor = StiffnessFactor::new(mats.k.as_ref())?;
     let mut ws = factor.workspace(2);
     factor.solve_in_place(rhs.as_mut(), &mut ws);
-    let classifier = TrackClassifier::new(track).map_err(|e| other(e.to_string()))?;
+    let classifier = TrackClassifier::new(track)?;
     let mut sections = Vec::with_capacity(2);
     for col in 0..2 {
         let u: Vec<f64> = (0..n).map(|i| rhs[(i, col)]).collect();
-        let u_full = track.dofmap.expand(&u).map_err(|e| other(e.to_string()))?;
-        sections.push(
-            classifier
-                .section_motion(&u_full)
-                .map_err(|e| other(e.to_string()))?,
-        );
+        let u_full = track.dofmap.expand(&u)?;
+        sections.push(classifier.section_motion(&u_full)?);
     }
     let at = |planes: &[crate::eigen::classify::SectionMotion], x: f64| {
         let (p, s) = line.locate(x).expect("checked on the rail");

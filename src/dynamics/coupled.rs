@@ -102,9 +102,9 @@ impl ContactLinearisation {
             && self.speed_m_per_s.is_finite()
             && self.speed_m_per_s > 0.0)
         {
-            return Err(DynamicsError::Other(format!(
-                "coupled modes: the contact linearisation {self:?} needs finite values ≥ 0 and a speed > 0"
-            )));
+            return Err(DynamicsError::ContactLinearisation {
+                reason: "it needs finite stiffness, creep coefficients and relaxation lengths ≥ 0 and a speed > 0",
+            });
         }
         Ok(())
     }
@@ -305,17 +305,17 @@ pub fn coupled_state_modes(
     lin.check()?;
     let (mt, mw) = (sys.track.len(), sys.wheel.len());
     if sys.rail_rows.len() != 3 * mt || sys.wheel_rows.len() != 3 * mw {
-        return Err(DynamicsError::Other(format!(
-            "coupled modes: contact rows of {} and {} values for {mt} track and {mw} wheel modes (need 3× each)",
-            sys.rail_rows.len(),
-            sys.wheel_rows.len()
-        )));
+        return Err(DynamicsError::SizeMismatch {
+            what: "coupled modes: contact rows of the track and the wheel (3 per mode)",
+            found: sys.rail_rows.len() + sys.wheel_rows.len(),
+            expected: 3 * (mt + mw),
+        });
     }
     let m = mt + mw;
     let a = state_matrix(sys, lin);
-    let eig = a
-        .eigen()
-        .map_err(|e| DynamicsError::Other(format!("coupled modes: eigensolver: {e:?}")))?;
+    let eig = a.eigen().map_err(|e| DynamicsError::CoupledEigen {
+        detail: format!("{e:?}"),
+    })?;
     let s = eig.S().column_vector();
     let u = eig.U();
     let lag: Vec<usize> = (0..2)
@@ -624,9 +624,9 @@ impl PassageEngine {
             speed_m_per_s: v,
         };
         if !(kn > 0.0 && lin.creep_coefficient_n.iter().all(|&k| k > 0.0)) {
-            return Err(DynamicsError::Other(format!(
-                "linearising the contact at the static state gave a non-positive stiffness or creep coefficient ({lin:?}): the static state is in full slip (contact.traction_coefficient ≥ contact.friction?)"
-            )));
+            return Err(DynamicsError::ContactLinearisation {
+                reason: "the static state gave a non-positive stiffness or creep coefficient: it is in full slip (contact.traction_coefficient ≥ contact.friction?)",
+            });
         }
         lin.check()?;
         Ok(lin)

@@ -68,9 +68,11 @@ impl ModalVerlet {
         let m = sys.len();
         let w_max = sys.omega2.iter().copied().fold(0.0, f64::max).sqrt();
         if !(dt > 0.0 && dt.is_finite()) {
-            return Err(DynamicsError::Other(format!(
-                "time step {dt} s must be finite and > 0"
-            )));
+            return Err(DynamicsError::OutOfRange {
+                name: "time step (s)",
+                value: dt,
+                expected: "finite and > 0",
+            });
         }
         if dt * w_max >= 1.9 {
             return Err(DynamicsError::UnstableTimeStep {
@@ -224,11 +226,7 @@ fn implicit_damping_inverse(c: &Mat<f64>, dt: f64) -> Result<Mat<f64>, DynamicsE
         MemStack::new(&mut mem),
         Default::default(),
     )
-    .map_err(|_| {
-        DynamicsError::Other(
-            "I + Δt/2·C is not positive definite: the damping matrix has negative eigenvalues; check the damper inputs".into(),
-        )
-    })?;
+    .map_err(|_| DynamicsError::DampingIndefinite)?;
     for j in 1..m {
         for i in 0..j {
             l[(i, j)] = 0.0;

@@ -80,9 +80,198 @@ pub enum DynamicsError {
         /// Steps of the passage.
         steps: usize,
     },
-    /// Any other failure of the passage (message says what to change).
-    #[error("{0}")]
-    Other(String),
+    /// Building the track or the wheel substructure failed.
+    #[error(transparent)]
+    Structure(#[from] crate::structure::StructureError),
+    /// Assembling or expanding the FE matrices and vectors failed.
+    #[error(transparent)]
+    Fe(#[from] crate::fe::FeError),
+    /// The modal basis (eigenmodes, classification, cache) of a substructure failed.
+    #[error(transparent)]
+    Basis(#[from] crate::eigen::basis::BasisError),
+    /// A mode shape or displacement could not be classified.
+    #[error(transparent)]
+    Classify(#[from] crate::eigen::classify::ClassifyError),
+    /// The band-pass, PSD or peak search of a record failed.
+    #[error(transparent)]
+    Spectral(#[from] crate::spectral::SpectralError),
+    /// The static Hertz contact under the wheel load failed.
+    #[error("static Hertz contact: {0}")]
+    StaticHertz(#[source] crate::contact::ContactError),
+    /// The transient contact grid of the passage could not be set up.
+    #[error("contact grid: {0}")]
+    ContactGrid(#[source] crate::contact::ContactError),
+    /// The sparse LDLᵀ of the track stiffness (residual flexibility, static checks) failed.
+    #[error("sparse LDLᵀ of the track stiffness failed: {0}; the track must be supported (ballast stiffness > 0)")]
+    StiffnessFactor(#[source] crate::eigen::EigenError),
+    /// The track stiffness is singular or indefinite.
+    #[error("the track stiffness is not positive definite ({negative_pivots} negative pivots, smallest relative pivot {min_rel_pivot:e}): the track must be supported (ballast stiffness > 0)")]
+    StiffnessIndefinite {
+        /// Negative pivots of the LDLᵀ.
+        negative_pivots: usize,
+        /// Smallest |pivot| relative to the largest (0 for a zero pivot).
+        min_rel_pivot: f64,
+    },
+    /// A numeric argument outside its range.
+    #[error("{name} = {value} is out of range: it must be {expected}")]
+    OutOfRange {
+        /// What the value is (with its unit).
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// The allowed range.
+        expected: &'static str,
+    },
+    /// Two inputs of different sizes that must match.
+    #[error("{what}: {found} given, {expected} expected")]
+    SizeMismatch {
+        /// Which inputs (and what to change).
+        what: &'static str,
+        /// The size given.
+        found: usize,
+        /// The size required.
+        expected: usize,
+    },
+    /// A modal basis whose shape does not fit the model.
+    #[error("modal basis is {rows}×{cols} but there are {frequencies} frequencies and {dofs} DOFs: the cached modes do not belong to this model; clear the cache entry")]
+    BasisShape {
+        /// Rows of the mode matrix.
+        rows: usize,
+        /// Columns of the mode matrix.
+        cols: usize,
+        /// Frequencies given.
+        frequencies: usize,
+        /// Free DOFs of the substructure.
+        dofs: usize,
+    },
+    /// A track mode at zero frequency: the track floats.
+    #[error("track mode {mode} has ω² = {omega2_rad2_s2} rad²/s² (a rigid-body mode): the track must be supported (ballast stiffness > 0)")]
+    TrackNotSupported {
+        /// Index of the mode.
+        mode: usize,
+        /// Its eigenvalue (rad²/s²).
+        omega2_rad2_s2: f64,
+    },
+    /// I + Δt/2·C of the modal integrator is not positive definite.
+    #[error("I + Δt/2·C is not positive definite: the damping matrix has negative eigenvalues; check the damper inputs")]
+    DampingIndefinite,
+    /// The receptance at a frequency is singular.
+    #[error("receptance at {frequency_hz} Hz is singular: the frequency coincides with an undamped (or rigid-body) mode; shift the frequency grid")]
+    SingularReceptance {
+        /// The frequency (Hz).
+        frequency_hz: f64,
+    },
+    /// A point outside the rail's node planes.
+    #[error("{what} x = {x_m:.4} m is off the rail [{start_m:.3}, {end_m:.3}] m: lengthen the track (track.bays)")]
+    OffRail {
+        /// Which point (contact point, wheel start, …).
+        what: &'static str,
+        /// Position (m).
+        x_m: f64,
+        /// First node plane (m).
+        start_m: f64,
+        /// Last node plane (m).
+        end_m: f64,
+    },
+    /// A point outside the rail stretch a residual flexibility was computed for.
+    #[error("residual flexibility: x = {x_m:.4} m is outside the covered part of the rail [{start_m:.3}, {end_m:.3}] m (computed for the passage's travel; recompute for this range)")]
+    OutsideResidual {
+        /// Position (m).
+        x_m: f64,
+        /// First covered plane (m).
+        start_m: f64,
+        /// Last covered plane (m).
+        end_m: f64,
+    },
+    /// A residual flexibility computed for another engine.
+    #[error("residual flexibility of {modes} modes over [{start_m:.3}, {end_m:.3}] m does not fit the engine ({engine_modes} track modes, travel [{travel_start_m:.3}, {travel_end_m:.3}] m): recompute it")]
+    ResidualMismatch {
+        /// Modes it was computed for.
+        modes: usize,
+        /// First covered plane (m).
+        start_m: f64,
+        /// Last covered plane (m).
+        end_m: f64,
+        /// Track modes of the engine.
+        engine_modes: usize,
+        /// Start of the engine's travel (m).
+        travel_start_m: f64,
+        /// End of the engine's travel (m).
+        travel_end_m: f64,
+    },
+    /// A residual flexibility record with inconsistent plane data.
+    #[error("residual flexibility: inconsistent plane data (clear the modal cache entry)")]
+    ResidualPlanes,
+    /// A residual flexibility below its modal part: modes and stiffness do not belong together.
+    #[error("residual flexibility at plane x = {x_m:.4} m, direction {direction}: FE {fe_m_per_n:.4e} m/N < modal {modal_m_per_n:.4e} m/N: the modes do not belong to this stiffness (clear the modal cache entry)")]
+    ResidualBelowModal {
+        /// Plane position (m).
+        x_m: f64,
+        /// Direction (0, 1, 2 = x, t, n of the contact frame).
+        direction: usize,
+        /// The FE flexibility (m/N).
+        fe_m_per_n: f64,
+        /// The modal flexibility (m/N).
+        modal_m_per_n: f64,
+    },
+    /// The residual flexibility record could not be written or read back as JSON.
+    #[error("residual flexibility record: {0}")]
+    ResidualJson(#[from] serde_json::Error),
+    /// A node plane index beyond the rail.
+    #[error("node plane {plane} is out of range ({planes} planes)")]
+    PlaneOutOfRange {
+        /// The plane asked for.
+        plane: usize,
+        /// Planes of the rail.
+        planes: usize,
+    },
+    /// A mesh without the nodes a passage needs (running surface, journals, contact line).
+    #[error("the mesh has no {what}")]
+    MissingNodes {
+        /// Which nodes.
+        what: &'static str,
+    },
+    /// The journal nodes lie on the axle axis: no lever arm for the driving torque.
+    #[error("journal nodes on the axle axis: cannot apply the driving torque")]
+    JournalsOnAxis,
+    /// The solution zone is too short for a spectrum.
+    #[error(
+        "the solution zone holds {steps} steps, fewer than 8: lengthen run.solution_zone_length"
+    )]
+    SolutionZoneTooShort {
+        /// Steps in the zone.
+        steps: usize,
+    },
+    /// A point of the static compliance check off the rail.
+    #[error("longitudinal compliance: {what} at x = {x_m} m is off the rail (0 to {length_m} m)")]
+    ComplianceOffRail {
+        /// Which point (load, report point).
+        what: &'static str,
+        /// Position (m).
+        x_m: f64,
+        /// Track length (m).
+        length_m: f64,
+    },
+    /// The linearised wheel–rail contact of the coupled modes is not usable.
+    #[error("coupled modes: the contact linearisation is not usable: {reason}")]
+    ContactLinearisation {
+        /// Why, and what to change.
+        reason: &'static str,
+    },
+    /// The dense eigensolver of the coupled wheel–track state matrix failed.
+    #[error("coupled modes: the dense eigensolver failed ({detail}); lower run.fmax to shrink the state matrix")]
+    CoupledEigen {
+        /// The solver's own report.
+        detail: String,
+    },
+    /// A passage engine built on this module (the explicit FE path) failed.
+    #[error("{engine} passage: {source}")]
+    Engine {
+        /// Which engine.
+        engine: &'static str,
+        /// Its error.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
 }
 
 /// A rail-top height profile along the rail: `height_m[i]` at `x_m[i]`, ascending `x`

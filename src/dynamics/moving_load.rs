@@ -60,7 +60,7 @@ use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Mat, Par, Side, Spec};
 
 use super::integrator::ModalVerlet;
-use super::reduced::{add_nodes_load, modal_rows, ContactFrame, ModalSystem, RailContactLine};
+use super::reduced::{add_line_load, modal_rows, ContactFrame, ModalSystem, RailContactLine};
 use super::DynamicsError;
 use crate::fe::assembly::FeMatrices;
 use crate::structure::TrackStructure;
@@ -578,46 +578,6 @@ impl ProbeCorrection {
             }
         }
     }
-}
-
-/// Adds the free-DOF load vector of `force` (N, on the rail, components along the frame
-/// axes x, t, n) at `x` (m) on the contact line into `f` (length n_free): the contact-line
-/// weights across the rail times the linear shape functions of the two planes around `x`.
-fn add_line_load(
-    track: &TrackStructure,
-    line: &RailContactLine,
-    frame: &ContactFrame,
-    x: f64,
-    force: [f64; 3],
-    f: &mut [f64],
-) -> Result<(), MovingLoadError> {
-    let px = &line.planes_x_m;
-    let (p, s) = line.locate(x).ok_or(MovingLoadError::OffRail {
-        x_m: x,
-        start_m: px[0],
-        end_m: px[px.len() - 1],
-    })?;
-    for (plane, np) in [(p, 1.0 - s), (p + 1, s)] {
-        if np != 0.0 {
-            add_nodes_load(&line.nodes[plane], &track.dofmap, frame, np, force, f);
-        }
-    }
-    Ok(())
-}
-
-/// The free-DOF load vector (N) of `force` (N, on the rail, contact-frame components x, t, n)
-/// at `x` (m) on the contact line: what the direct path applies. Its projection `Φᵀ f` equals
-/// `Σ_d F_d rows_d(x)` of [`RailContactLine::rows_at`] (tested).
-pub fn line_load_vector(
-    track: &TrackStructure,
-    line: &RailContactLine,
-    frame: &ContactFrame,
-    x: f64,
-    force: [f64; 3],
-) -> Result<Vec<f64>, MovingLoadError> {
-    let mut f = vec![0.0; track.dofmap.n_free()];
-    add_line_load(track, line, frame, x, force, &mut f)?;
-    Ok(f)
 }
 
 /// Sparse `y = A x` (CSC, full storage), no allocation.

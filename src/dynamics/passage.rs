@@ -298,10 +298,10 @@ impl PassageEngine {
         let frame = ContactFrame::for_inclination(model.rail.inclination);
         let track_sys = ModalSystem::new(track_freqs_hz, track_modes, track_c, RIGID_HZ)?;
         if let Some(i) = track_sys.omega2.iter().position(|&w| w == 0.0) {
-            return Err(DynamicsError::Other(format!(
-                "track mode {i} is a rigid-body mode ({:.3} Hz): the track must be supported (ballast stiffness > 0)",
-                track_freqs_hz[i]
-            )));
+            return Err(DynamicsError::TrackNotSupported {
+                mode: i,
+                omega2_rad2_s2: 0.0,
+            });
         }
         let mut wheel_sys =
             ModalSystem::new(wheel_freqs_hz, wheel_modes, wheel_mats.c.as_ref(), RIGID_HZ)?;
@@ -316,7 +316,7 @@ impl PassageEngine {
             poisson: model.rail.poisson_ratio,
             load_n: model.vehicle.wheel_load,
         })
-        .map_err(|e| DynamicsError::Other(format!("static Hertz contact: {e}")))?;
+        .map_err(DynamicsError::StaticHertz)?;
         let rail_line = RailContactLine::new(track, track_modes, &frame, hertz.b_m)?;
         let wheel_contact = WheelContact::new(wheel, wheel_modes, &frame, hertz.b_m)?;
 
@@ -359,7 +359,9 @@ impl PassageEngine {
                     .iter()
                     .copied()
                     .max_by(|a, b| a.1.total_cmp(&b.1))
-                    .ok_or_else(|| DynamicsError::Other("empty contact line".into()))?;
+                    .ok_or(DynamicsError::MissingNodes {
+                        what: "nodes on the contact line",
+                    })?;
                 let mut rows = vec![0.0; 3 * track_modes.ncols()];
                 super::reduced::modal_rows(
                     &[(node, 1.0)],
@@ -418,7 +420,9 @@ impl PassageEngine {
         let px = &self.rail_line.planes_x_m;
         let p = (0..px.len())
             .min_by(|&a, &b| (px[a] - x_m).abs().total_cmp(&(px[b] - x_m).abs()))
-            .ok_or_else(|| DynamicsError::Other("empty contact line".into()))?;
+            .ok_or(DynamicsError::MissingNodes {
+                what: "rail contact line",
+            })?;
         let mt = self.track_sys.len();
         let mut fr = vec![0.0; 3 * mt];
         self.rail_line.rows_at(px[p], &mut fr)?;
@@ -487,13 +491,14 @@ impl PassageEngine {
         if let Some(r) = &r {
             let [a, b] = self.travel_m();
             if r.modes != self.track_sys.len() || !r.covers(a, b) {
-                return Err(DynamicsError::Other(format!(
-                    "residual flexibility of {} modes over [{:.3}, {:.3}] m does not fit the engine ({} track modes, travel [{a:.3}, {b:.3}] m): recompute it",
-                    r.modes,
-                    r.planes_x_m[0],
-                    r.planes_x_m[r.planes_x_m.len() - 1],
-                    self.track_sys.len()
-                )));
+                return Err(DynamicsError::ResidualMismatch {
+                    modes: r.modes,
+                    start_m: r.planes_x_m[0],
+                    end_m: r.planes_x_m[r.planes_x_m.len() - 1],
+                    engine_modes: self.track_sys.len(),
+                    travel_start_m: a,
+                    travel_end_m: b,
+                });
             }
         }
         self.series_compliance = r
@@ -989,12 +994,10 @@ impl PreparedModel {
         cache: &crate::eigen::cache::ModalCache,
         opts: &PassageOptions,
     ) -> Result<Self, DynamicsError> {
-        let other = |e: &dyn std::fmt::Display| DynamicsError::Other(e.to_string());
-        let track = TrackStructure::build(model).map_err(|e| other(&e))?;
+        let track = TrackStructure::build(model)?;
         let fmax = model.run.fmax;
-        let tb =
-            crate::eigen::basis::track_basis(model, &track, cache, fmax).map_err(|e| other(&e))?;
-        let key = crate::eigen::basis::cache_key(model, fmax, "track").map_err(|e| other(&e))?;
+        let tb = crate::eigen::basis::track_basis(model, &track, cache, fmax)?;
+        let key = crate::eigen::basis::cache_key(model, fmax, "track")?;
         Self::with_track_basis(model, &track, tb, cache, Some(&key), opts)
     }
 
@@ -1011,12 +1014,12 @@ impl PreparedModel {
         opts: &PassageOptions,
     ) -> Result<Self, DynamicsError> {
         use crate::eigen::basis::wheel_basis;
-        let other = |e: &dyn std::fmt::Display| DynamicsError::Other(e.to_string());
-        let wheel = WheelStructure::build(model).map_err(|e| other(&e))?;
+
+        let wheel = WheelStructure::build(model)?;
         let fmax = model.run.fmax;
-        let wb = wheel_basis(model, &wheel, cache, fmax).map_err(|e| other(&e))?;
-        let (tm, _) = track.assemble().map_err(|e| other(&e))?;
-        let (wm, _) = wheel.assemble().map_err(|e| other(&e))?;
+        let wb = wheel_basis(model, &wheel, cache, fmax)?;
+        let (tm, _) = track.assemble()?;
+        let (wm, _) = wheel.assemble()?;
         // The wheel floats: its rigid modes' frequencies from the Rayleigh quotient, which is
         // 0 to round-off where the eigen-solver's eigenvalue may not be.
         let wheel_hz = super::reduced::rayleigh_frequencies_hz(wm.k.as_ref(), &wb.modes);
@@ -1260,9 +1263,7 @@ impl WheelLoads {
             })
             .sum();
         if r2 <= 0.0 {
-            return Err(DynamicsError::Other(
-                "journal nodes on the axle axis: cannot apply the driving torque".into(),
-            ));
+            return Err(DynamicsError::JournalsOnAxis);
         }
         let t_y = f_l0 * radius;
         let (mut sx, mut sz) = (0.0, 0.0);
@@ -1324,7 +1325,7 @@ pub fn contact_config_for(
         m.contact.grid_ny,
         m.contact.grid_margin,
     )
-    .map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))?;
+    .map_err(DynamicsError::ContactGrid)?;
     cfg.tangential_tol = PASSAGE_TANGENTIAL_TOL;
     Ok(cfg)
 }
@@ -1342,7 +1343,7 @@ pub fn passage_contact(
     if let Some((p, approach_m)) = profile {
         cfg.grid = grid_for_profile(cfg.grid, cfg.radius_x_m, approach_m, p.peak_to_trough_m());
     }
-    TransientRolling::new(cfg).map_err(|e| DynamicsError::Other(format!("contact grid: {e}")))
+    TransientRolling::new(cfg).map_err(DynamicsError::ContactGrid)
 }
 
 /// A passage's speed must be finite and > 0 (m/s).
@@ -1350,9 +1351,11 @@ fn check_speed(speed_m_per_s: f64) -> Result<(), DynamicsError> {
     if speed_m_per_s > 0.0 && speed_m_per_s.is_finite() {
         Ok(())
     } else {
-        Err(DynamicsError::Other(format!(
-            "speed {speed_m_per_s} m/s must be finite and > 0"
-        )))
+        Err(DynamicsError::OutOfRange {
+            name: "speed (m/s)",
+            value: speed_m_per_s,
+            expected: "finite and > 0",
+        })
     }
 }
 
@@ -1391,7 +1394,9 @@ pub fn steady_contact(
             break;
         }
     }
-    res.ok_or_else(|| DynamicsError::Other("contact grid has no columns".into()))
+    res.ok_or(DynamicsError::MissingNodes {
+        what: "columns in the contact grid",
+    })
 }
 
 /// The least-norm combination of the wheel's rigid modes that meets three observations:

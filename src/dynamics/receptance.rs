@@ -48,18 +48,21 @@ pub fn modal_receptance(
     let m = sys.len();
     let k = rows.len();
     if let Some(r) = rows.iter().find(|r| r.len() != m) {
-        return Err(DynamicsError::Other(format!(
-            "receptance: a modal row has {} entries but the system has {m} modes",
-            r.len()
-        )));
+        return Err(DynamicsError::SizeMismatch {
+            what: "receptance: entries of a modal row vs modes of the system",
+            found: r.len(),
+            expected: m,
+        });
     }
     if let Some(f) = frequencies_hz
         .iter()
         .find(|f| !(f.is_finite() && **f >= 0.0))
     {
-        return Err(DynamicsError::Other(format!(
-            "receptance: frequency {f} Hz is not a finite non-negative number"
-        )));
+        return Err(DynamicsError::OutOfRange {
+            name: "receptance frequency (Hz)",
+            value: *f,
+            expected: "finite and ≥ 0",
+        });
     }
     let rhs = Mat::<c64>::from_fn(m, k, |i, j| c64::new(rows[j][i], 0.0));
     frequencies_hz
@@ -73,9 +76,7 @@ pub fn modal_receptance(
                 (sys.omega2[i] - w * w).abs() <= 1e-12 * scale
                     && w * sys.damping[(i, i)] <= 1e-12 * scale
             }) {
-                return Err(DynamicsError::Other(format!(
-                    "receptance at {f} Hz is singular: the frequency coincides with an undamped (or rigid-body) mode; shift the frequency grid"
-                )));
+                return Err(DynamicsError::SingularReceptance { frequency_hz: f });
             }
             let d = Mat::<c64>::from_fn(m, m, |i, j| {
                 let re = if i == j { sys.omega2[i] - w * w } else { 0.0 };
@@ -89,13 +90,12 @@ pub fn modal_receptance(
                 }
                 s
             });
-            let finite = (0..k).all(|a| (0..k).all(|b| h[(a, b)].re.is_finite() && h[(a, b)].im.is_finite()));
+            let finite = (0..k)
+                .all(|a| (0..k).all(|b| h[(a, b)].re.is_finite() && h[(a, b)].im.is_finite()));
             if finite {
                 Ok(h)
             } else {
-                Err(DynamicsError::Other(format!(
-                    "receptance at {f} Hz is singular: the frequency coincides with an undamped mode; shift the frequency grid"
-                )))
+                Err(DynamicsError::SingularReceptance { frequency_hz: f })
             }
         })
         .collect()

@@ -85,13 +85,12 @@ impl ModalSystem {
     ) -> Result<Self, DynamicsError> {
         let m = frequencies_hz.len();
         if modes.ncols() != m || modes.nrows() != c.nrows() {
-            return Err(DynamicsError::Other(format!(
-                "modal basis is {}×{} but there are {} frequencies and {} DOFs: the cached modes do not belong to this model; clear the cache entry",
-                modes.nrows(),
-                modes.ncols(),
-                m,
-                c.nrows()
-            )));
+            return Err(DynamicsError::BasisShape {
+                rows: modes.nrows(),
+                cols: modes.ncols(),
+                frequencies: m,
+                dofs: c.nrows(),
+            });
         }
         let omega2 = frequencies_hz
             .iter()
@@ -358,9 +357,9 @@ impl RailContactLine {
         let topo = &track.rail;
         let sec = &topo.section;
         if sec.running_surface.is_empty() {
-            return Err(DynamicsError::Other(
-                "the rail section has no running-surface nodes".into(),
-            ));
+            return Err(DynamicsError::MissingNodes {
+                what: "running-surface nodes in the rail section",
+            });
         }
         // Support point in direction n.
         let score = |j: usize| {
@@ -414,6 +413,16 @@ impl RailContactLine {
         })
     }
 
+    /// [`DynamicsError::OffRail`] for `what` at `x` (m), with the rail's extent.
+    pub fn off_rail(&self, what: &'static str, x: f64) -> DynamicsError {
+        DynamicsError::OffRail {
+            what,
+            x_m: x,
+            start_m: self.planes_x_m[0],
+            end_m: self.planes_x_m[self.planes_x_m.len() - 1],
+        }
+    }
+
     /// Interval and linear weight of `x` (m): `(p, s)` with `x = (1−s)·x_p + s·x_{p+1}`;
     /// `None` off the rail.
     pub fn locate(&self, x: f64) -> Option<(usize, f64)> {
@@ -427,13 +436,9 @@ impl RailContactLine {
 
     /// The interpolated rows at `x` (m) into `out` (length 3m). No allocation.
     pub fn rows_at(&self, x: f64, out: &mut [f64]) -> Result<(), DynamicsError> {
-        let (p, s) = self.locate(x).ok_or_else(|| {
-            DynamicsError::Other(format!(
-                "contact point x = {x:.4} m is off the rail [{:.3}, {:.3}] m: lengthen the track (track.bays)",
-                self.planes_x_m[0],
-                self.planes_x_m[self.planes_x_m.len() - 1]
-            ))
-        })?;
+        let (p, s) = self
+            .locate(x)
+            .ok_or_else(|| self.off_rail("contact point", x))?;
         let k = 3 * self.modes;
         let a = &self.rows[p * k..(p + 1) * k];
         let b = &self.rows[(p + 1) * k..(p + 2) * k];
@@ -448,9 +453,9 @@ impl RailContactLine {
     /// Derivative along x of the interpolated rows at `x` (1/m): `(row_{p+1} − row_p)/Δx_p`
     /// for the two planes around x, into `out` (length 3m; d/dx of the linear interpolation).
     pub fn row_slopes_at(&self, x: f64, out: &mut [f64]) -> Result<(), DynamicsError> {
-        let (p, _) = self.locate(x).ok_or_else(|| {
-            DynamicsError::Other(format!("contact point x = {x:.4} m is off the rail"))
-        })?;
+        let (p, _) = self
+            .locate(x)
+            .ok_or_else(|| self.off_rail("contact point", x))?;
         let k = 3 * self.modes;
         let h = self.planes_x_m[p + 1] - self.planes_x_m[p];
         let a = &self.rows[p * k..(p + 1) * k];
@@ -504,9 +509,9 @@ impl WheelContact {
         modal_rows(&nodes, &wheel.dofmap, modes, frame, &mut rows);
         let bearing = topo.bearing_nodes();
         if bearing.is_empty() {
-            return Err(DynamicsError::Other(
-                "the wheel has no journal nodes".into(),
-            ));
+            return Err(DynamicsError::MissingNodes {
+                what: "journal nodes on the wheel",
+            });
         }
         let wb = crate::structure::wheel::balanced_journal_weights(&wheel.mesh, &bearing);
         let bset: Vec<(usize, f64)> = bearing.iter().copied().zip(wb).collect();
@@ -525,6 +530,41 @@ impl WheelContact {
 #[inline]
 pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Adds the free-DOF load vector of `force` (N, on the rail, components along the frame
+/// axes x, t, n) at `x` (m) on the contact line into `f` (length n_free): the contact-line
+/// weights across the rail times the linear shape functions of the two planes around `x`.
+pub fn add_line_load(
+    track: &TrackStructure,
+    line: &RailContactLine,
+    frame: &ContactFrame,
+    x: f64,
+    force: [f64; 3],
+    f: &mut [f64],
+) -> Result<(), DynamicsError> {
+    let (p, s) = line.locate(x).ok_or_else(|| line.off_rail("load", x))?;
+    for (plane, np) in [(p, 1.0 - s), (p + 1, s)] {
+        if np != 0.0 {
+            add_nodes_load(&line.nodes[plane], &track.dofmap, frame, np, force, f);
+        }
+    }
+    Ok(())
+}
+
+/// The free-DOF load vector (N) of `force` (N, on the rail, contact-frame components x, t, n)
+/// at `x` (m) on the contact line: what a direct solution of the full matrices applies. Its projection `Φᵀ f` equals
+/// `Σ_d F_d rows_d(x)` of [`RailContactLine::rows_at`] (tested).
+pub fn line_load_vector(
+    track: &TrackStructure,
+    line: &RailContactLine,
+    frame: &ContactFrame,
+    x: f64,
+    force: [f64; 3],
+) -> Result<Vec<f64>, DynamicsError> {
+    let mut f = vec![0.0; track.dofmap.n_free()];
+    add_line_load(track, line, frame, x, force, &mut f)?;
+    Ok(f)
 }
 
 #[cfg(test)]

@@ -133,23 +133,21 @@ pub struct StiffnessFactor {
 impl StiffnessFactor {
     /// Factorises `K` once.
     pub fn new(k: SparseColMatRef<'_, usize, f64>) -> Result<Self, DynamicsError> {
-        let err = |e: String| {
-            DynamicsError::Other(format!(
-                "residual flexibility: sparse LDLᵀ of the track stiffness failed: {e}; the track must be supported (ballast stiffness > 0)"
-            ))
-        };
         // At σ = 0 the mass matrix does not enter; K stands in for its pattern.
         let sys = ShiftedSystem::new(k, k, FillOrdering::Auto, Par::rayon(0))
-            .map_err(|e| err(e.to_string()))?;
+            .map_err(DynamicsError::StiffnessFactor)?;
         let factor = sys
             .factorize(0.0)
-            .map_err(|e| err(e.to_string()))?
-            .ok_or_else(|| err("zero pivot: K is singular".into()))?;
+            .map_err(DynamicsError::StiffnessFactor)?
+            .ok_or(DynamicsError::StiffnessIndefinite {
+                negative_pivots: 0,
+                min_rel_pivot: 0.0,
+            })?;
         if factor.negative_count > 0 || factor.min_rel_pivot < 1e-14 {
-            return Err(err(format!(
-                "K is not positive definite ({} negative pivots, smallest relative pivot {:e})",
-                factor.negative_count, factor.min_rel_pivot
-            )));
+            return Err(DynamicsError::StiffnessIndefinite {
+                negative_pivots: factor.negative_count,
+                min_rel_pivot: factor.min_rel_pivot,
+            });
         }
         Ok(StiffnessFactor { sys, factor })
     }
@@ -179,13 +177,7 @@ pub(crate) fn plane_range(
     x_lo: f64,
     x_hi: f64,
 ) -> Result<(usize, usize), DynamicsError> {
-    let off = |x: f64| {
-        DynamicsError::Other(format!(
-            "residual flexibility: x = {x:.4} m is off the rail [{:.3}, {:.3}] m: lengthen the track (track.bays)",
-            line.planes_x_m[0],
-            line.planes_x_m[line.planes_x_m.len() - 1]
-        ))
-    };
+    let off = |x: f64| line.off_rail("residual flexibility point", x);
     let (p0, _) = line.locate(x_lo).ok_or_else(|| off(x_lo))?;
     let (p1, _) = line.locate(x_hi).ok_or_else(|| off(x_hi))?;
     Ok((p0, p1 + 1))
@@ -279,23 +271,24 @@ impl ResidualFlexibility {
     ) -> Result<Self, DynamicsError> {
         let m = line.modes;
         if omega2.len() != m {
-            return Err(DynamicsError::Other(format!(
-                "residual flexibility: {} frequencies for a contact line of {m} modes: build both from the same basis",
-                omega2.len()
-            )));
+            return Err(DynamicsError::SizeMismatch {
+                what: "residual flexibility: frequencies vs modes of the contact line (build both from the same basis)",
+                found: omega2.len(),
+                expected: m,
+            });
         }
         if let Some(i) = omega2.iter().position(|&w| w.is_nan() || w <= 0.0) {
-            return Err(DynamicsError::Other(format!(
-                "residual flexibility: track mode {i} has ω² = {} ≤ 0: the track must be supported (ballast stiffness > 0)",
-                omega2[i]
-            )));
+            return Err(DynamicsError::TrackNotSupported {
+                mode: i,
+                omega2_rad2_s2: omega2[i],
+            });
         }
         if factor.n() != track.dofmap.n_free() {
-            return Err(DynamicsError::Other(format!(
-                "residual flexibility: K has {} rows but the track {} free DOFs",
-                factor.n(),
-                track.dofmap.n_free()
-            )));
+            return Err(DynamicsError::SizeMismatch {
+                what: "residual flexibility: rows of K vs free DOFs of the track",
+                found: factor.n(),
+                expected: track.dofmap.n_free(),
+            });
         }
         let (p0, p1) = plane_range(line, x_lo.min(x_hi), x_lo.max(x_hi))?;
         let (g, gc) = static_flexibility(track, factor, line, frame, p0, p1);
@@ -349,10 +342,7 @@ impl ResidualFlexibility {
                 .windows(2)
                 .any(|w| w[1].is_nan() || w[1] <= w[0])
         {
-            return Err(DynamicsError::Other(
-                "residual flexibility: inconsistent plane data (clear the modal cache entry)"
-                    .into(),
-            ));
+            return Err(DynamicsError::ResidualPlanes);
         }
         for (p, (g, md)) in self
             .static_m_per_n
@@ -362,10 +352,12 @@ impl ResidualFlexibility {
         {
             for d in 0..3 {
                 if !(g[d].is_finite() && md[d].is_finite()) || g[d] - md[d] < -1e-9 * g[d].abs() {
-                    return Err(DynamicsError::Other(format!(
-                        "residual flexibility at plane x = {:.4} m, direction {d}: FE {:.4e} m/N < modal {:.4e} m/N: the modes do not belong to this stiffness (clear the modal cache entry)",
-                        self.planes_x_m[p], g[d], md[d]
-                    )));
+                    return Err(DynamicsError::ResidualBelowModal {
+                        x_m: self.planes_x_m[p],
+                        direction: d,
+                        fe_m_per_n: g[d],
+                        modal_m_per_n: md[d],
+                    });
                 }
             }
         }
@@ -392,11 +384,11 @@ impl ResidualFlexibility {
     }
 
     fn off(&self, x: f64) -> DynamicsError {
-        DynamicsError::Other(format!(
-            "residual flexibility: x = {x:.4} m is outside the covered part of the rail [{:.3}, {:.3}] m (computed for the passage's travel; recompute for this range)",
-            self.planes_x_m[0],
-            self.planes_x_m[self.planes_x_m.len() - 1]
-        ))
+        DynamicsError::OutsideResidual {
+            x_m: x,
+            start_m: self.planes_x_m[0],
+            end_m: self.planes_x_m[self.planes_x_m.len() - 1],
+        }
     }
 
     /// True when `[x_lo, x_hi]` (m) lies in the covered planes.
@@ -514,10 +506,10 @@ pub fn lateral_spread_flexibility(
     let empty = Mat::<f64>::zeros(track.dofmap.n_free(), 0);
     let line = RailContactLine::new(track, &empty, frame, half_width_m)?;
     if plane + 1 >= line.planes_x_m.len() {
-        return Err(DynamicsError::Other(format!(
-            "plane {plane} out of range ({} planes)",
-            line.planes_x_m.len()
-        )));
+        return Err(DynamicsError::PlaneOutOfRange {
+            plane,
+            planes: line.planes_x_m.len(),
+        });
     }
     let (g, _) = static_flexibility(track, factor, &line, frame, plane, plane + 1);
     Ok(g[0])
@@ -564,15 +556,13 @@ pub fn cached_residual(
         x_range_m[0],
         x_range_m[1],
     )?;
-    let bytes = serde_json::to_vec(&r)
-        .map_err(|e| DynamicsError::Other(format!("residual flexibility: {e}")))?;
+    let bytes = serde_json::to_vec(&r)?;
     if let Err(e) = cache.store_aux(key, &name, &bytes) {
         eprintln!("warning: could not cache the residual flexibility: {e}");
     }
     // Use the values exactly as a cache hit reads them back (serde_json may parse one ulp
     // off), so a fresh and a cached run give identical results.
-    let r = serde_json::from_slice(&bytes)
-        .map_err(|e| DynamicsError::Other(format!("residual flexibility: {e}")))?;
+    let r = serde_json::from_slice(&bytes)?;
     Ok((r, false))
 }
 

@@ -46,9 +46,10 @@ pub enum BasisError {
     /// A mode could not be classified.
     #[error(transparent)]
     Classify(#[from] ClassifyError),
-    /// The model could not be serialised for the cache key.
-    #[error("modal cache key: {0}")]
-    Key(String),
+    /// The model or the mode classes could not be (de)serialised as JSON (cache key, cache
+    /// record).
+    #[error("modal cache key or record: {0}")]
+    Json(#[from] serde_json::Error),
 }
 
 /// A modal basis with its classification.
@@ -79,7 +80,7 @@ pub const PHYSICS_REVISION: u64 = 2;
 /// The cache key of one substructure's modal basis (see the module doc for what it covers).
 pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey, BasisError> {
     let v = structure_key_value(m, substructure)?;
-    let bytes = serde_json::to_vec(&v).map_err(|e| BasisError::Key(e.to_string()))?;
+    let bytes = serde_json::to_vec(&v).map_err(BasisError::Json)?;
     Ok(CacheKey::new()
         .u64("physics_revision", PHYSICS_REVISION)
         .bytes("model", &bytes)
@@ -90,7 +91,7 @@ pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey
 /// The model's sections that the K and M of `substructure` (`track` or `wheel`) read, as
 /// JSON: the content of [`cache_key`] (see the module doc for what it leaves out).
 pub fn structure_key_value(m: &Model, substructure: &str) -> Result<serde_json::Value, BasisError> {
-    let mut v = serde_json::to_value(m).map_err(|e| BasisError::Key(e.to_string()))?;
+    let mut v = serde_json::to_value(m).map_err(BasisError::Json)?;
     if let Some(o) = v.as_object_mut() {
         for k in ["contact", "wear", "explicit"] {
             o.remove(k);
@@ -252,7 +253,7 @@ fn basis<C: Serialize + DeserializeOwned + Send>(
     })?;
     pb.finish_and_clear();
     let classes = classify_in_chunks(&sol.modes, &sol.frequencies_hz, name, classify)?;
-    let value = serde_json::to_value(&classes).map_err(|e| BasisError::Key(e.to_string()))?;
+    let value = serde_json::to_value(&classes).map_err(BasisError::Json)?;
     let meta = CacheMeta::from_solution(&sol, 0.0, fmax, value.clone());
     if let Err(e) = cache.store(key, &sol.frequencies_hz, &sol.modes, meta) {
         eprintln!("warning: could not store the {name} modes in the cache: {e}");
@@ -261,15 +262,13 @@ fn basis<C: Serialize + DeserializeOwned + Send>(
     // Use the values exactly as a cache hit will read them back from meta.json (print, then
     // parse), so that a fresh run and a cached run give identical results.
     let reparse = |v: &serde_json::Value| -> Result<String, BasisError> {
-        serde_json::to_string(v).map_err(|e| BasisError::Key(e.to_string()))
+        serde_json::to_string(v).map_err(BasisError::Json)
     };
-    let classes: Vec<C> =
-        serde_json::from_str(&reparse(&value)?).map_err(|e| BasisError::Key(e.to_string()))?;
+    let classes: Vec<C> = serde_json::from_str(&reparse(&value)?).map_err(BasisError::Json)?;
     let residuals: Vec<f64> = serde_json::from_str(&reparse(
-        &serde_json::to_value(&sol.relative_residuals)
-            .map_err(|e| BasisError::Key(e.to_string()))?,
+        &serde_json::to_value(&sol.relative_residuals).map_err(BasisError::Json)?,
     )?)
-    .map_err(|e| BasisError::Key(e.to_string()))?;
+    .map_err(BasisError::Json)?;
     Ok(ModalBasis {
         frequencies_hz: sol.frequencies_hz,
         residuals,

@@ -157,12 +157,7 @@ impl ShiftedSystem {
         let (fwd, inv): (Vec<usize>, Vec<usize>) = match ordering {
             FillOrdering::Identity => ((0..n).collect(), (0..n).collect()),
             FillOrdering::Metis => {
-                super::ordering::nested_dissection(n, sym.col_ptr(), sym.row_idx()).map_err(
-                    |e| EigenError::Factorization {
-                        shift_rad2_s2: f64::NAN,
-                        reason: format!("nested-dissection ordering failed: {e}"),
-                    },
-                )?
+                super::ordering::nested_dissection(n, sym.col_ptr(), sym.row_idx())?
             }
             FillOrdering::Amd | FillOrdering::Auto => (Vec::new(), Vec::new()),
         };

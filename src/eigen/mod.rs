@@ -343,6 +343,9 @@ pub enum EigenError {
         /// what is allowed
         reason: &'static str,
     },
+    /// The nested-dissection fill-reducing ordering failed.
+    #[error("nested-dissection ordering failed: {0}")]
+    Ordering(#[from] ordering::OrderingError),
     /// The sparse factorisation failed.
     #[error("factorisation of K − σM failed at σ = {shift_rad2_s2:e} rad²/s²: {reason}")]
     Factorization {

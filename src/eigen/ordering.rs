@@ -15,22 +15,44 @@
 //! checked here. Calls are serialised (METIS keeps its random generator in process-wide
 //! state).
 
+/// Why a nested-dissection ordering could not be computed.
+#[derive(Debug, thiserror::Error)]
+pub enum OrderingError {
+    /// `col_ptr` and `row_idx` do not describe an n × n pattern.
+    #[error("pattern arrays are inconsistent")]
+    InconsistentPattern,
+    /// The graph exceeds METIS' 32-bit indices.
+    #[error("graph with {vertices} vertices and {adjacency} adjacency entries exceeds METIS' 32-bit indices")]
+    TooLarge {
+        /// Vertices (matrix columns).
+        vertices: usize,
+        /// Adjacency entries (off-diagonal entries, both directions).
+        adjacency: usize,
+    },
+    /// METIS_NodeND returned an error status.
+    #[error("METIS_NodeND returned status {0}")]
+    Metis(i64),
+    /// METIS returned something that is not a permutation.
+    #[error("METIS returned an invalid permutation")]
+    InvalidPermutation,
+}
+
 /// Nested-dissection ordering of the symmetric pattern given by its lower triangle in CSC
 /// (`col_ptr`, `row_idx`, rows ≥ column; the diagonal may be present).
 ///
 /// Returns `(fwd, inv)` with `fwd[new] = old` (elimination order) and `inv[old] = new`, the
-/// convention of faer's `PermRef::new_checked(fwd, inv, n)`. Errors (as text) when the graph
-/// is too large for METIS' 32-bit indices or METIS reports a failure.
+/// convention of faer's `PermRef::new_checked(fwd, inv, n)`. Errors when the graph is too
+/// large for METIS' 32-bit indices or METIS reports a failure.
 pub fn nested_dissection(
     n: usize,
     col_ptr: &[usize],
     row_idx: &[usize],
-) -> Result<(Vec<usize>, Vec<usize>), String> {
+) -> Result<(Vec<usize>, Vec<usize>), OrderingError> {
     if n == 0 {
         return Ok((Vec::new(), Vec::new()));
     }
     if col_ptr.len() != n + 1 || *col_ptr.last().unwrap_or(&0) != row_idx.len() {
-        return Err("pattern arrays are inconsistent".into());
+        return Err(OrderingError::InconsistentPattern);
     }
     // Full adjacency without the diagonal (CSR of a symmetric graph: both directions).
     let mut deg = vec![0usize; n];
@@ -44,9 +66,10 @@ pub fn nested_dissection(
     }
     let total: usize = deg.iter().sum();
     if total >= i32::MAX as usize || n >= i32::MAX as usize {
-        return Err(format!(
-            "graph with {n} vertices and {total} adjacency entries exceeds METIS' 32-bit indices"
-        ));
+        return Err(OrderingError::TooLarge {
+            vertices: n,
+            adjacency: total,
+        });
     }
     let mut xadj = vec![0i32; n + 1];
     for v in 0..n {
@@ -87,7 +110,7 @@ pub fn nested_dissection(
         )
     };
     if status != metis_sys::rstatus_et_METIS_OK {
-        return Err(format!("METIS_NodeND returned status {status}"));
+        return Err(OrderingError::Metis(status as i64));
     }
     // METIS: row i of the permuted matrix is row perm[i] of the original (perm[new] = old),
     // iperm[old] = new.
@@ -95,7 +118,7 @@ pub fn nested_dissection(
     let inv: Vec<usize> = iperm.iter().map(|&p| p as usize).collect();
     let ok = fwd.iter().all(|&p| p < n) && (0..n).all(|i| inv[fwd[i]] == i);
     if !ok {
-        return Err("METIS returned an invalid permutation".into());
+        return Err(OrderingError::InvalidPermutation);
     }
     Ok((fwd, inv))
 }

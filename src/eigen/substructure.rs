@@ -790,7 +790,7 @@ pub fn component_key(
         .filter(|&d| k[d] != 0.0 || c[d] != 0.0)
         .map(|d| 1u64 << d)
         .sum();
-    let bytes = serde_json::to_vec(&v).map_err(|e| BasisError::Key(e.to_string()))?;
+    let bytes = serde_json::to_vec(&v).map_err(BasisError::Json)?;
     Ok(CacheKey::new()
         .u64("physics_revision", super::basis::PHYSICS_REVISION)
         .u64("component_revision", COMPONENT_REVISION)

@@ -269,7 +269,7 @@ impl ExplicitModel {
             poisson: model.rail.poisson_ratio,
             load_n: model.vehicle.wheel_load,
         })
-        .map_err(|e| DynamicsError::Other(format!("static Hertz contact: {e}")))?;
+        .map_err(DynamicsError::StaticHertz)?;
         let n_t = track_structure.dofmap.n_free();
         let line = RailContactLine::new(&track_structure, &Mat::zeros(n_t, 0), &frame, hertz.b_m)?;
         let rigid = wheel_rigid_modes(&wheel_structure, &wheel.op)?;
@@ -841,7 +841,10 @@ impl crate::dynamics::PassageRecorder for ExplicitModel {
             .map(|r| r.record)
             .map_err(|e| match e {
                 ExplicitError::Dynamics(d) => d,
-                other => DynamicsError::Other(format!("explicit passage: {other}")),
+                other => DynamicsError::Engine {
+                    engine: "explicit",
+                    source: Box::new(other),
+                },
             })
     }
 

@@ -37,9 +37,59 @@ pub enum StructureError {
     /// Element or assembly failure.
     #[error(transparent)]
     Fe(#[from] crate::fe::FeError),
-    /// Supports (fastenings, holds, ballast) cannot be placed on the mesh.
-    #[error("supports: {0}")]
-    Support(String),
+    /// A fastening footprint cell not fully covered by rail-foot nodes.
+    #[error("supports: fastening cell (row {row}, column {column}) at x = {x_m} m is not covered by rail-foot nodes (covered {covered_m2:e} of {cell_m2:e} m²): the footprint must lie on the rail foot")]
+    CellNotCovered {
+        /// Footprint row.
+        row: usize,
+        /// Footprint column.
+        column: usize,
+        /// Sleeper position (m).
+        x_m: f64,
+        /// Area covered by the rail-foot nodes' tributary strips (m²).
+        covered_m2: f64,
+        /// Area of the cell (m²).
+        cell_m2: f64,
+    },
+    /// A rail-foot node not above the sleeper's top face.
+    #[error("supports: rail-foot node at (x, y) = ({x_m}, {y_m}) m is not above the sleeper top face: check sleeper.width, sleeper.rail_seat and fastening.footprint_length")]
+    FootOffSleeper {
+        /// Node position along the rail (m).
+        x_m: f64,
+        /// Lateral node position (m).
+        y_m: f64,
+    },
+    /// A held strip or grid point of the fastening's hold pattern that meets no rail node.
+    #[error("supports: held {what} {index} at {axis} = {position_m} m contains no rail-foot node {lines}")]
+    HoldMissesNodes {
+        /// `column`, `row`, `grid point of column`, `grid point of row`.
+        what: &'static str,
+        /// Its index.
+        index: usize,
+        /// `x` or `y`.
+        axis: &'static str,
+        /// Its position (m).
+        position_m: f64,
+        /// `plane` or `line`.
+        lines: &'static str,
+    },
+    /// An elastic hold whose patch holds no rail-foot nodes.
+    #[error("supports: elastic hold: {what} contains no rail-foot nodes")]
+    ElasticHoldEmpty {
+        /// Which patch.
+        what: String,
+    },
+    /// A wheel load below the weight of the wheel and half axle (no sprung mass left).
+    #[error("vehicle.wheel_load = {wheel_load_n} N is less than the weight of the wheel and half axle ({unsprung_kg:.0} kg): raise vehicle.wheel_load")]
+    WheelLoadBelowWheelWeight {
+        /// The wheel load (N).
+        wheel_load_n: f64,
+        /// Mass of the wheel and half axle (kg).
+        unsprung_kg: f64,
+    },
+    /// A wheel mesh without journal nodes for the primary suspension.
+    #[error("supports: the wheel mesh has no journal nodes for the primary suspension")]
+    NoJournalNodes,
     /// The model would be too large to build: refused before any allocation.
     #[error("the {part} model would have about {dofs} DOFs (~{gib:.1} GiB to assemble), more than the limit of {MAX_DOFS} DOFs per substructure: {reduce}")]
     TooLarge {

@@ -252,20 +252,22 @@ fn add_railpads(
                 let cell_area = (xb - xa) * (yb - ya);
                 let covered: f64 = lx.iter().sum::<f64>() * ly.iter().sum::<f64>();
                 if (covered - cell_area).abs() > 1e-9 * cell_area.max(1e-12) + 1e-12 {
-                    return Err(StructureError::Support(format!(
-                        "fastening cell (row {row}, column {col}) at x = {xs} m is not covered by rail-foot nodes (covered {covered:e} of {cell_area:e} m²): the footprint must lie on the rail foot"
-                    )));
+                    return Err(StructureError::CellNotCovered {
+                        row,
+                        column: col,
+                        x_m: xs,
+                        covered_m2: covered,
+                        cell_m2: cell_area,
+                    });
                 }
                 for (i, &wx) in lx.iter().enumerate().filter(|(_, &w)| w > 0.0) {
                     for (j, &wy) in ly.iter().enumerate().filter(|(_, &w)| w > 0.0) {
                         let share = wx * wy / cell_area;
                         let node = rail.node(i, rail.section.foot_underside[j]);
                         let [x, y, _] = mesh.nodes[node];
-                        let (q, [xi, eta]) = s.top_quad_at(x, y).ok_or_else(|| {
-                            StructureError::Support(format!(
-                                "rail-foot node at (x, y) = ({x}, {y}) m is not above sleeper top face: check sleeper.width, sleeper.rail_seat and fastening.footprint_length"
-                            ))
-                        })?;
+                        let (q, [xi, eta]) = s
+                            .top_quad_at(x, y)
+                            .ok_or(StructureError::FootOffSleeper { x_m: x, y_m: y })?;
                         let face = s.top_face[q].nodes;
                         let nq = quad_shape(xi, eta);
                         for d in 0..3 {
@@ -359,9 +361,13 @@ pub fn held_dofs(
                             dofs.extend(foot.iter().map(|&j| 3 * rail.node(i, j) + d));
                         }
                         if dofs.len() == before {
-                            return Err(StructureError::Support(format!(
-                                "held column {c} at x = {xc} m contains no rail node plane"
-                            )));
+                            return Err(StructureError::HoldMissesNodes {
+                                what: "column",
+                                index: c,
+                                axis: "x",
+                                position_m: xc,
+                                lines: "plane",
+                            });
                         }
                     }
                 }
@@ -387,9 +393,13 @@ pub fn held_dofs(
                             }
                         }
                         if dofs.len() == before {
-                            return Err(StructureError::Support(format!(
-                                "held row {r} at y = {yr} m contains no rail-foot node line"
-                            )));
+                            return Err(StructureError::HoldMissesNodes {
+                                what: "row",
+                                index: r,
+                                axis: "y",
+                                position_m: yr,
+                                lines: "line",
+                            });
                         }
                     }
                 }
@@ -418,19 +428,23 @@ fn grid_point_nodes(
         let xc = layout.grid_point_x(xs, c);
         let i = nearest(&rail.planes_x_m, xc)
             .filter(|&i| (rail.planes_x_m[i] - xc).abs() <= tol)
-            .ok_or_else(|| {
-                StructureError::Support(format!(
-                    "held grid point of column {c} at x = {xc} m has no rail node plane"
-                ))
+            .ok_or(StructureError::HoldMissesNodes {
+                what: "grid point of column",
+                index: c,
+                axis: "x",
+                position_m: xc,
+                lines: "plane",
             })?;
         for r in 0..layout.rows {
             let yr = layout.row_centre(r);
             let k = nearest(foot_s, yr)
                 .filter(|&k| (foot_s[k] - yr).abs() <= tol)
-                .ok_or_else(|| {
-                    StructureError::Support(format!(
-                        "held grid point of row {r} at y = {yr} m has no rail-foot node line"
-                    ))
+                .ok_or(StructureError::HoldMissesNodes {
+                    what: "grid point of row",
+                    index: r,
+                    axis: "y",
+                    position_m: yr,
+                    lines: "line",
                 })?;
             out.push((share, rail.node(i, foot[k])));
         }
@@ -478,9 +492,9 @@ pub fn add_elastic_holds(
         let lx = tributary_lengths(planes, xa, xb);
         let (sx, sy): (f64, f64) = (lx.iter().sum(), ly.iter().sum());
         if sx <= 0.0 || sy <= 0.0 {
-            return Err(StructureError::Support(format!(
-                "elastic hold: {what} contains no rail-foot nodes"
-            )));
+            return Err(StructureError::ElasticHoldEmpty {
+                what: what.to_string(),
+            });
         }
         let mut v = Vec::new();
         for (i, &wx) in lx.iter().enumerate().filter(|(_, &w)| w > 0.0) {

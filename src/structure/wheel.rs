@@ -123,16 +123,14 @@ impl WheelStructure {
         let unsprung_mass = crate::fe::assembly::mass_per_part(&mesh, &materials)?.get(Part::Wheel);
         let sprung_mass = m.vehicle.wheel_load / m.vehicle.gravity - unsprung_mass;
         if sprung_mass.is_nan() || sprung_mass <= 0.0 {
-            return Err(StructureError::Support(format!(
-                "vehicle.wheel_load = {} N is less than the weight of the wheel and half axle ({:.0} kg): raise vehicle.wheel_load",
-                m.vehicle.wheel_load, unsprung_mass
-            )));
+            return Err(StructureError::WheelLoadBelowWheelWeight {
+                wheel_load_n: m.vehicle.wheel_load,
+                unsprung_kg: unsprung_mass,
+            });
         }
         let bearing = topology.bearing_nodes();
         if bearing.is_empty() {
-            return Err(StructureError::Support(
-                "the wheel mesh has no journal nodes for the primary suspension".into(),
-            ));
+            return Err(StructureError::NoJournalNodes);
         }
         let yj = 0.5 * (params.journal_y_m[0] + params.journal_y_m[1]);
         let sprung_node = mesh.nodes.len();

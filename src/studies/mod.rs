@@ -63,12 +63,60 @@ pub enum StudiesError {
         /// What is wrong and what to change.
         reason: String,
     },
-    /// An input that cannot be used (message says what to change).
-    #[error("{0}")]
-    Invalid(String),
-    /// Shard directories that cannot be merged.
-    #[error("merge: {0}")]
-    Merge(String),
+    /// Map options that cannot be used.
+    #[error("map options: {0}")]
+    MapOptions(&'static str),
+    /// The modal cache key of a study case's basis could not be formed.
+    #[error("modal cache key: {0}")]
+    CacheKey(#[source] crate::eigen::basis::BasisError),
+    /// No speeds were given to assemble into maps.
+    #[error("no speeds to assemble")]
+    NoSpeeds,
+    /// A model or a record that could not be serialised as JSON.
+    #[error("{what}: {source}")]
+    Json {
+        /// What was serialised.
+        what: &'static str,
+        /// The serde error.
+        source: serde_json::Error,
+    },
+    /// A merge without shard directories.
+    #[error("merge: no shard directories given")]
+    NoShards,
+    /// Shards of different models or program versions (their run keys differ).
+    #[error("merge: {} and {} hold passages of different models or program versions ({file}); merge only shards of one sweep", first.display(), second.display())]
+    ShardsOfDifferentModels {
+        /// First directory.
+        first: PathBuf,
+        /// The other directory.
+        second: PathBuf,
+        /// The run-key file compared.
+        file: &'static str,
+    },
+    /// A merge output directory that already holds passages of another model.
+    #[error("merge: {} already holds passages of another model; use an empty --out", out.display())]
+    OutputOfAnotherModel {
+        /// The output directory.
+        out: PathBuf,
+    },
+    /// Shards made with different map options.
+    #[error("merge: {} and {} were made with different map options (grids or eigenfrequency lines); rerun the shards with the same model and options", first.display(), second.display())]
+    ShardsWithDifferentMaps {
+        /// First directory.
+        first: PathBuf,
+        /// The other directory.
+        second: PathBuf,
+    },
+    /// One speed in two shards with different results.
+    #[error("merge: speed {speed_kmh} km/h is in {} and {} with different results; remove one", first.display(), second.display())]
+    SpeedConflict {
+        /// The speed (km/h).
+        speed_kmh: f64,
+        /// First directory.
+        first: PathBuf,
+        /// The other directory.
+        second: PathBuf,
+    },
     /// Shards of a sweep are missing from a merge.
     #[error("merge: incomplete sweep: shard(s) {missing:?} of {count} not given; pass every shard directory of the sweep")]
     ShardsMissing {

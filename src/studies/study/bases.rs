@@ -87,9 +87,8 @@ pub fn basis_plan(
     models: &[(Case, Model)],
     cache: &ModalCache,
 ) -> Result<BasisPlan, StudiesError> {
-    let key = |r: Result<CacheKey, crate::eigen::basis::BasisError>| {
-        r.map_err(|e| StudiesError::Invalid(format!("modal cache key: {e}")))
-    };
+    let key =
+        |r: Result<CacheKey, crate::eigen::basis::BasisError>| r.map_err(StudiesError::CacheKey);
     let (mut track, mut wheel, mut comps) = (BTreeSet::new(), BTreeSet::new(), BTreeSet::new());
     let mut plan = BasisPlan {
         cases: models.len(),

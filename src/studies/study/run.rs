@@ -52,8 +52,10 @@ pub struct StudyOutcome {
 
 /// blake3 of the resolved model (serde_json) and the program version, hex.
 pub fn model_hash(model: &Model) -> Result<String, StudiesError> {
-    let json =
-        serde_json::to_vec(model).map_err(|e| StudiesError::Invalid(format!("model: {e}")))?;
+    let json = serde_json::to_vec(model).map_err(|source| StudiesError::Json {
+        what: "model",
+        source,
+    })?;
     let mut h = blake3::Hasher::new();
     h.update(env!("CARGO_PKG_VERSION").as_bytes());
     h.update(&json);

@@ -56,7 +56,7 @@ pub fn assemble(
     let mut speeds = speeds_kmh.to_vec();
     speeds.sort_by(f64::total_cmp);
     if speeds.is_empty() {
-        return Err(StudiesError::Invalid("no speeds to assemble".into()));
+        return Err(StudiesError::NoSpeeds);
     }
     let summaries = speeds
         .iter()

@@ -47,8 +47,10 @@ pub fn write_shard_plan(
         count: shard.count,
         speeds_kmh: all_speeds_kmh.to_vec(),
     };
-    let text =
-        serde_json::to_string_pretty(&plan).map_err(|e| StudiesError::Invalid(e.to_string()))?;
+    let text = serde_json::to_string_pretty(&plan).map_err(|source| StudiesError::Json {
+        what: "shard plan",
+        source,
+    })?;
     if let Some(parent) = p.parent() {
         std::fs::create_dir_all(parent).map_err(StudiesError::io(parent))?;
     }
@@ -131,7 +133,7 @@ fn check_shards(dirs: &[PathBuf], records: &[SweepRecord]) -> Result<(), Studies
 /// options; a speed present in two shards must have identical files.
 pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), StudiesError> {
     if dirs.is_empty() {
-        return Err(StudiesError::Merge("no shard directories given".into()));
+        return Err(StudiesError::NoShards);
     }
     let mut key: Option<(String, &PathBuf)> = None;
     for d in dirs {
@@ -140,13 +142,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), S
         match &key {
             None => key = Some((k, d)),
             Some((k0, first)) if *k0 != k => {
-                return Err(StudiesError::Merge(format!(
-                    "{} and {} hold passages of different models or program versions ({}); \
-                     merge only shards of one sweep",
-                    first.display(),
-                    d.display(),
-                    RUN_KEY_FILE
-                )))
+                return Err(StudiesError::ShardsOfDifferentModels {
+                    first: (*first).clone(),
+                    second: d.clone(),
+                    file: RUN_KEY_FILE,
+                })
             }
             Some(_) => {}
         }
@@ -155,10 +155,9 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), S
     let kp = out.join("speeds").join(RUN_KEY_FILE);
     match std::fs::read_to_string(&kp) {
         Ok(k) if k != key => {
-            return Err(StudiesError::Merge(format!(
-                "{} already holds passages of another model; use an empty --out",
-                out.display()
-            )))
+            return Err(StudiesError::OutputOfAnotherModel {
+                out: out.to_path_buf(),
+            })
         }
         Ok(_) => {}
         Err(_) => crate::io::write_text(&kp, &key).map_err(StudiesError::io(&kp))?,
@@ -173,12 +172,10 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), S
         match &opts {
             None => opts = Some((rec.map.clone(), d)),
             Some((o, first)) if *o != rec.map => {
-                return Err(StudiesError::Merge(format!(
-                    "{} and {} were made with different map options (grids or eigenfrequency \
-                     lines); rerun the shards with the same model and options",
-                    first.display(),
-                    d.display()
-                )))
+                return Err(StudiesError::ShardsWithDifferentMaps {
+                    first: (*first).clone(),
+                    second: d.clone(),
+                })
             }
             Some(_) => {}
         }
@@ -192,12 +189,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), S
     files.sort_by(|a, b| a.0.total_cmp(&b.0));
     files.dedup_by(|b, a| same_speed(a.0, b.0) && a.1 == b.1);
     if let Some(w) = files.windows(2).find(|w| same_speed(w[0].0, w[1].0)) {
-        return Err(StudiesError::Merge(format!(
-            "speed {} km/h is in {} and {} with different results; remove one",
-            w[0].0,
-            w[0].2.display(),
-            w[1].2.display()
-        )));
+        return Err(StudiesError::SpeedConflict {
+            speed_kmh: w[0].0,
+            first: w[0].2.clone(),
+            second: w[1].2.clone(),
+        });
     }
     for (v, bytes, _) in &files {
         let p = speed_file(out, *v);

@@ -101,7 +101,7 @@ impl Default for MapOptions {
 
 impl MapOptions {
     fn check(&self) -> Result<(), StudiesError> {
-        let bad = |r: &str| StudiesError::Invalid(format!("map options: {r}"));
+        let bad = StudiesError::MapOptions;
         let ok = self.wavelength_min_mm > 0.0
             && self.wavelength_max_mm > self.wavelength_min_mm
             && self.wavelength_max_mm.is_finite();
