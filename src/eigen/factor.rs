@@ -303,8 +303,9 @@ impl ShiftedSystem {
 
     /// Overwrites `rhs` with `(K − σM)⁻¹ rhs`, with the parallelism given at construction.
     ///
-    /// With a parallel `par`, the columns are split into one contiguous group per thread and
-    /// the groups are solved concurrently (each sequentially, with its own workspace).
+    /// The columns are split into [`SOLVE_GROUPS`] contiguous groups, each solved sequentially
+    /// with its own workspace; with a parallel `par` the groups run concurrently. The result
+    /// does not depend on `par` or the thread count.
     pub fn solve_in_place(
         &self,
         f: &ShiftFactor,
@@ -330,13 +331,18 @@ impl ShiftedSystem {
             parts.push(a);
             rest = b;
         }
-        use rayon::prelude::*;
-        parts
-            .into_par_iter()
-            .zip(ws.bufs.par_iter_mut())
-            .for_each(|(part, buf)| {
-                l.solve_in_place_with_conj(Conj::No, part, Par::Seq, MemStack::new(buf));
-            });
+        let solve = |(part, buf): (MatMut<'_, f64>, &mut MemBuffer)| {
+            l.solve_in_place_with_conj(Conj::No, part, Par::Seq, MemStack::new(buf));
+        };
+        if matches!(par, Par::Seq) {
+            parts.into_iter().zip(ws.bufs.iter_mut()).for_each(solve);
+        } else {
+            use rayon::prelude::*;
+            parts
+                .into_par_iter()
+                .zip(ws.bufs.par_iter_mut())
+                .for_each(solve);
+        }
     }
 
     /// [`Self::solve_in_place`] as one column group whatever `par` (at most the parallelism
@@ -358,15 +364,19 @@ impl ShiftedSystem {
     }
 }
 
-/// Number of column groups solved concurrently: one per thread of `par`, at most one per
-/// column. faer's supernodal triangular solves parallelise inside the dense supernode blocks
-/// only, which a block of 8 right-hand sides does not fill; independent column groups, each
-/// solved sequentially, keep every core busy (measured: docs/performance.md §3.1).
-fn column_groups(ncols: usize, par: Par) -> usize {
-    match par {
-        Par::Seq => 1,
-        Par::Rayon(t) => t.get().min(ncols).max(1),
-    }
+/// Column groups of a block solve: independent groups, each solved sequentially, run
+/// concurrently. A constant, not the thread count: a column's solution depends (in its last
+/// bits) on the width of the group it is solved in, and a fixed split keeps the results the
+/// same on every machine.
+pub const SOLVE_GROUPS: usize = 2;
+
+/// Number of column groups of a block of `ncols` right-hand sides: [`SOLVE_GROUPS`], at most
+/// one per column, whatever `par` (which only decides whether they run concurrently). faer's
+/// supernodal triangular solves parallelise inside the dense supernode blocks only, which a
+/// block of 8 right-hand sides does not fill; independent column groups, each solved
+/// sequentially, keep the cores busy (measured: docs/performance.md §3.1).
+fn column_groups(ncols: usize, _par: Par) -> usize {
+    SOLVE_GROUPS.min(ncols).max(1)
 }
 
 /// Scratch memory of [`ShiftedSystem::solve_in_place`]: one buffer per concurrently solved

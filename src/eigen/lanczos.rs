@@ -707,7 +707,7 @@ pub fn solve(
     // with two or more, the count probe of `choose_splits` is factorised alongside the ends.
     let likely_bands = match opts.concurrent_bands {
         Some(b) => b,
-        None if opts.parallel && n >= AUTO_BANDS_MIN_DOFS => rayon::current_num_threads(),
+        None if opts.parallel && n >= AUTO_BANDS_MIN_DOFS => AUTO_BANDS,
         None => 1,
     };
     let probe_x = (likely_bands >= 2).then(|| split_probe_x(likely_bands));
@@ -774,7 +774,7 @@ pub fn solve(
         Some(b) => b,
         // Small models: one band (faster, and exactly M-orthogonal across all slices).
         None if opts.parallel && n >= AUTO_BANDS_MIN_DOFS => {
-            rayon::current_num_threads().min(total / opts.modes_per_slice)
+            AUTO_BANDS.min(total / opts.modes_per_slice)
         }
         None => 1,
     };
@@ -1442,6 +1442,11 @@ fn choose_splits(
 /// Smallest model (free DOFs) that is split into concurrent bands by default: below it the
 /// solves are cheap and not memory-bound, and one band is as fast.
 const AUTO_BANDS_MIN_DOFS: usize = 20_000;
+
+/// Concurrent bands of a model of at least [`AUTO_BANDS_MIN_DOFS`] free DOFs by default. A
+/// constant, not the thread count: the band bounds decide which slice finds which mode, so
+/// they must not depend on the machine for the modes to be bitwise reproducible everywhere.
+const AUTO_BANDS: usize = 2;
 
 /// Largest width of a slice in a band above 0 Hz, as a multiple of its distance from the
 /// band's lower bound (see `run_band`).

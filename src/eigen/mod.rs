@@ -60,8 +60,9 @@
 //!   and is skipped. For `f_min > 0` the first slice is two-sided (see below), so that
 //!   the eigenvalues just below λ_min, which are not deflated, cannot swamp the iteration.
 //! * **Concurrent bands** ([`EigenOptions::concurrent_bands`]). With several threads and a
-//!   model of at least 20,000 DOFs the band is cut into one sub-band per thread, each sliced
-//!   as above on one thread. The sub-band bounds are factorisations shared by the two
+//!   model of at least 20,000 DOFs the band is cut into two sub-bands (a fixed number, not one
+//!   per thread: the modes must not depend on the machine), each sliced as above on one
+//!   thread. The sub-band bounds are factorisations shared by the two
 //!   neighbouring bands, so their Sturm counts make every band find exactly its own
 //!   eigenvalues. Why it pays: the block solves and the re-orthogonalisation are
 //!   memory-bound; a parallel column-group solve reads the whole factor once per group, a
@@ -170,9 +171,10 @@ pub struct EigenOptions {
     pub refine_solves: bool,
     /// Seed of the deterministic random start block.
     pub seed: u64,
-    /// Number of frequency bands solved concurrently, one thread each (`None`: as many as
-    /// rayon has threads, but no more than `count / modes_per_slice`, and one when
-    /// `parallel` is false or the model has fewer than 20,000 free DOFs; `Some(b)` forces
+    /// Number of frequency bands solved concurrently, one thread each (`None`: two, but no
+    /// more than `count / modes_per_slice`, and one when `parallel` is false or the model
+    /// has fewer than 20,000 free DOFs, whatever the number of threads, so that the modes do
+    /// not depend on the machine; `Some(b)` forces
     /// b, run one after the other when `parallel` is false). The band bounds are Sturm-counted factorisations, so every band finds exactly
     /// its eigenvalues; a band above the lowest cannot deflate the modes below it and starts
     /// its first slice below its bound (as for `f_min > 0`).

@@ -8,10 +8,12 @@
 //! is read once per group instead of once per column.
 //!
 //! The dense products `Vᵀ Z` (j × b, a reduction over the n rows) and `Z −= V C` with a tall
-//! `V` (n × j) and a thin `Z` (n × b) are split into one contiguous row range per thread, each
-//! computed by a sequential gemm; the partial `Vᵀ Z` are summed. faer's own parallel gemm
-//! splits these shapes poorly (docs/performance.md §3.2); the row split has one barrier per
-//! product.
+//! `V` (n × j) and a thin `Z` (n × b) are split into [`ROW_PARTS`] contiguous row ranges, each
+//! computed by a sequential gemm and run concurrently; the partial `Vᵀ Z` are summed in range
+//! order. faer's own parallel gemm splits these shapes poorly (docs/performance.md §3.2); the
+//! row split has one barrier per product. The number of ranges is fixed, not the number of
+//! threads, so that the sums, and with them the modes, are bitwise the same whatever the
+//! thread count (shards of a sweep run on different machines can be merged).
 
 use faer::linalg::matmul::matmul;
 use faer::sparse::SparseColMatRef;
@@ -24,8 +26,14 @@ const COLS: usize = 8;
 /// Rows per parallel task of the sparse product.
 const ROW_CHUNK: usize = 2048;
 
-/// Minimum rows per thread for the row-split dense products (below: sequential).
-const MIN_ROWS_PER_THREAD: usize = 8192;
+/// Minimum rows per range of the row-split dense products (below: one range, sequential).
+const MIN_ROWS_PER_PART: usize = 8192;
+
+/// Row ranges of the row-split dense products of a tall block (at most; fewer when a range
+/// would hold fewer than [`MIN_ROWS_PER_PART`] rows). A constant, not the thread count, so
+/// that the order of the reductions does not depend on the machine: more threads than
+/// ranges do not speed these products up.
+pub const ROW_PARTS: usize = 2;
 
 /// `y = A x` for symmetric `A` stored in full (both triangles).
 ///
@@ -107,14 +115,13 @@ pub fn sym_spmm(a: SparseColMatRef<'_, usize, f64>, x: MatRef<'_, f64>, mut y: M
     }
 }
 
-/// Row ranges of the row-split dense products of an n-row block: one per rayon thread (at
-/// least [`MIN_ROWS_PER_THREAD`] rows each) whatever `par`, so that the partial sums of the
-/// reductions, and with them the results, are bitwise the same for every `par`; `par` only
-/// decides whether the ranges run concurrently ([`run_concurrently`]).
-fn row_threads(n: usize) -> usize {
-    rayon::current_num_threads()
-        .min(n / MIN_ROWS_PER_THREAD)
-        .max(1)
+/// Row ranges of the row-split dense products of an n-row block: [`ROW_PARTS`] (at least
+/// [`MIN_ROWS_PER_PART`] rows each) whatever `par` and the thread count, so that the partial
+/// sums of the reductions, and with them the results, are bitwise the same for every `par`
+/// and every machine; `par` only decides whether the ranges run concurrently
+/// ([`run_concurrently`]).
+fn row_parts(n: usize) -> usize {
+    ROW_PARTS.min(n / MIN_ROWS_PER_PART).max(1)
 }
 
 /// Whether the row ranges of a product run concurrently.
@@ -140,7 +147,7 @@ pub fn tall_t_mul(v: MatRef<'_, f64>, z: MatRef<'_, f64>, par: Par) -> Mat<f64> 
     if j == 0 || b == 0 {
         return c;
     }
-    let t = row_threads(n);
+    let t = row_parts(n);
     if t == 1 {
         matmul(c.as_mut(), Accum::Replace, v.transpose(), z, 1.0, Par::Seq);
         return c;
@@ -180,7 +187,7 @@ pub fn tall_mul_add(
     if v.ncols() == 0 || c.ncols() == 0 {
         return;
     }
-    let t = row_threads(n);
+    let t = row_parts(n);
     if t == 1 || !run_concurrently(par) {
         // No reduction over rows: the row split does not change the result.
         matmul(z, Accum::Add, v, c, alpha, Par::Seq);
@@ -224,7 +231,7 @@ pub fn tall_right_mul_in_place(mut v: MatMut<'_, f64>, s: MatRef<'_, f64>, par: 
         matmul(tmp.as_mut(), Accum::Replace, blk.as_ref(), s, 1.0, Par::Seq);
         blk.subcols_mut(0, k).copy_from(&tmp);
     };
-    if row_threads(n) == 1 || !run_concurrently(par) {
+    if row_parts(n) == 1 || !run_concurrently(par) {
         blocks.into_iter().for_each(work);
     } else {
         blocks.into_par_iter().for_each(work);
@@ -251,7 +258,7 @@ pub fn tall_update_then_t_mul(
     if j == 0 || b == 0 {
         return Mat::<f64>::zeros(j, b);
     }
-    let ranges = row_ranges(n, row_threads(n));
+    let ranges = row_ranges(n, row_parts(n));
     let mut views: Vec<(MatMut<'_, f64>, usize)> = Vec::with_capacity(ranges.len());
     let mut rest = z.as_mut();
     for &(r0, len) in &ranges {

@@ -587,21 +587,20 @@ pub fn strain_energy_per_part_many(
     // Per element: U_e (24 × nv, the element's displacements of every vector), W = K_e U_e
     // by a dense product (the quadratic forms are most of the work: 1152 flops per element
     // and vector, e.g. 30 GFlop for the 746 modes of the default track to 5 kHz), then
-    // ½ u_eᵀ w_e per column. Buffers per rayon task, none per element.
-    let empty = || {
-        (
-            vec![PerPart::default(); nv],
-            faer::Mat::<f64>::zeros(24, nv),
-            faer::Mat::<f64>::zeros(24, nv),
-        )
-    };
-    let (out, _, _) = mesh
+    // ½ u_eᵀ w_e per column. The elements are taken in fixed chunks (buffers per chunk, none
+    // per element), each summed in element order, and the chunk sums are added in chunk
+    // order: the result does not depend on the thread count or on rayon's work split.
+    const ENERGY_CHUNK: usize = 2048;
+    let chunk_sums = mesh
         .elements
-        .par_iter()
+        .par_chunks(ENERGY_CHUNK)
         .enumerate()
-        .try_fold(
-            empty,
-            |(mut acc, mut ue, mut w), (e, el)| -> Result<_, FeError> {
+        .map(|(ci, chunk)| -> Result<Vec<PerPart>, FeError> {
+            let mut acc = vec![PerPart::default(); nv];
+            let mut ue = faer::Mat::<f64>::zeros(24, nv);
+            let mut w = faer::Mat::<f64>::zeros(24, nv);
+            for (i, el) in chunk.iter().enumerate() {
+                let e = ci * ENERGY_CHUNK + i;
                 let k = hex8::stiffness(&coords_of(mesh, &el.nodes), &materials[el.material])
                     .map_err(|x| tag_element(e, x))?;
                 let part = part_index(el.part);
@@ -628,17 +627,18 @@ pub fn strain_energy_per_part_many(
                     }
                     a.0[part] += 0.5 * q;
                 }
-                Ok((acc, ue, w))
-            },
-        )
-        .try_reduce(empty, |(mut a, ue, w), (b, _, _)| {
-            for (x, y) in a.iter_mut().zip(&b) {
-                for p in 0..3 {
-                    x.0[p] += y.0[p];
-                }
             }
-            Ok((a, ue, w))
-        })?;
+            Ok(acc)
+        })
+        .collect::<Result<Vec<_>, FeError>>()?;
+    let mut out = vec![PerPart::default(); nv];
+    for sums in &chunk_sums {
+        for (x, y) in out.iter_mut().zip(sums) {
+            for p in 0..3 {
+                x.0[p] += y.0[p];
+            }
+        }
+    }
     Ok(out)
 }
 
