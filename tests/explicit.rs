@@ -3,6 +3,8 @@
 //! Small models only; the default-model comparisons are in validation/explicit.md.
 
 mod common;
+#[path = "support/moving_load.rs"]
+mod moving_load;
 
 use std::f64::consts::PI;
 
@@ -265,13 +267,13 @@ fn stable_at_0_9_and_divergent_at_1_1_of_the_computed_step() {
 /// A moving vertical and a moving longitudinal load on the small track: the explicit path
 /// (the load moving continuously at every FE step) against the direct Newmark
 /// (average-acceleration) integration of the same full matrices
-/// ([`corrugation::dynamics::moving_load::direct_response`], an independent implicit
+/// ([`moving_load::direct_response`], an independent implicit
 /// solver), both from the static deflection: the displacement at the load point agrees
 /// within 1 % of its largest value (the Newmark step of 10 µs has a period error of
 /// (ωΔt)²/12 ≈ 0.3 % at 3 kHz; the response is mostly quasi-static).
 #[test]
 fn moving_load_matches_the_direct_implicit_solution() {
-    use corrugation::dynamics::moving_load::{direct_response, nearest_plane, MovingLoad, Probe};
+    use moving_load::{direct_response, nearest_plane, MovingLoad, Probe};
     let m = small_track(&[]);
     let track = TrackStructure::build(&m).unwrap();
     let (fm, _) = track.assemble().unwrap();

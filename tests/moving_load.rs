@@ -8,12 +8,11 @@
 //! ≈ 40 s on the 2-core machine; later runs load it) and truncated for lower f_max. The expected numbers come from an independent solver (sparse
 //! LLᵀ of the full matrices, Newmark on all DOFs), not from earlier output of the code.
 
+#[path = "support/moving_load.rs"]
+mod moving_load;
+
 use std::sync::OnceLock;
 
-use corrugation::dynamics::moving_load::{
-    diagonal_damping, direct_response, modal_response, modal_response_corrected, nearest_plane,
-    truncate_basis, MovingLoad, Probe, ProbeCorrection, ResponseHistory, StaticDirect,
-};
 use corrugation::dynamics::reduced::{
     line_load_vector, ContactFrame, ModalSystem, RailContactLine,
 };
@@ -24,6 +23,10 @@ use corrugation::fe::assembly::FeMatrices;
 use corrugation::model::{load_model, Model, ModelSource};
 use corrugation::structure::TrackStructure;
 use faer::Mat;
+use moving_load::{
+    diagonal_damping, direct_response, modal_response, modal_response_corrected, nearest_plane,
+    truncate_basis, MovingLoad, Probe, ProbeCorrection, ResponseHistory, StaticDirect,
+};
 
 /// Highest frequency solved (Hz); lower f_max are truncations.
 const F_SOLVE: f64 = 3000.0;

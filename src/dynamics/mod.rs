@@ -14,7 +14,6 @@ pub mod analysis;
 pub mod compliance;
 pub mod coupled;
 pub mod integrator;
-pub mod moving_load;
 pub mod passage;
 pub mod patch;
 pub mod receptance;

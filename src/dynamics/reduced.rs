@@ -278,7 +278,7 @@ pub fn lateral_weights(s: &[f64], b: f64) -> Vec<f64> {
 
 /// Modal rows of a weighted set of nodes: `rows[d·m + i] = Σ_k w_k n_d · φ_i(node_k)` for the
 /// three axes `d` of the frame (x, t, n). Constrained DOFs contribute zero.
-pub(crate) fn modal_rows(
+pub fn modal_rows(
     nodes: &[(usize, f64)],
     dofmap: &DofMap,
     modes: &Mat<f64>,
@@ -307,7 +307,7 @@ pub(crate) fn modal_rows(
 /// Adds `weight · Σ_k w_k (Σ_d force_d · axis_d)` on the nodes `(node, w_k)` into the free-DOF
 /// load vector `f` (constrained DOFs dropped): a contact-frame force (N) spread like the
 /// contact load of one node plane.
-pub(crate) fn add_nodes_load(
+pub fn add_nodes_load(
     nodes: &[(usize, f64)],
     dofmap: &DofMap,
     frame: &ContactFrame,

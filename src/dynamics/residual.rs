@@ -100,7 +100,7 @@ pub struct ResidualFlexibility {
 
 /// `Σ_k w_k a · u(node_k)`: the weighted displacement of a node set along the unit vector `a`
 /// from a free-DOF vector `u` (constrained DOFs are zero).
-pub(crate) fn nodes_dot(
+pub fn nodes_dot(
     nodes: &[(usize, f64)],
     dofmap: &DofMap,
     a: [f64; 3],
@@ -172,7 +172,7 @@ impl StiffnessFactor {
 
 /// Index range of the node planes that a contact travelling over `[x_lo, x_hi]` (m) uses:
 /// the planes around both ends included.
-pub(crate) fn plane_range(
+pub fn plane_range(
     line: &RailContactLine,
     x_lo: f64,
     x_hi: f64,
@@ -189,7 +189,7 @@ pub(crate) type PlaneVisitor<'a> = dyn FnMut(usize, usize, &dyn Fn(usize) -> f64
 /// Solves `K u = b_{p,d}` for the unit contact loads of the planes `p0..=p1` of `line` and
 /// the three frame directions, in blocks of right-hand sides, and hands each solution to
 /// `visit(p − p0, d, u)` with `u(i)` the free DOF `i` of the solution.
-pub(crate) fn for_each_plane_solution(
+pub fn for_each_plane_solution(
     track: &TrackStructure,
     factor: &StiffnessFactor,
     line: &RailContactLine,

@@ -1,3 +1,5 @@
+//! Verification harness of the integration tests (not part of the library).
+//!
 //! Validation of the modal synthesis against the full FE matrices (docs/theory.md §7.9): a
 //! constant load moving along the rail's contact line, solved
 //! (a) by the reduced-order path of the passage and (b) by direct time integration of the
@@ -51,6 +53,8 @@
 //! correction). It is compared by the caller with the linearised Hertz compliance
 //! `dδ/dF = 2δ/(3F)`.
 
+#![allow(dead_code)]
+
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
@@ -59,11 +63,19 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Mat, Par, Side, Spec};
 
-use super::integrator::ModalVerlet;
-use super::reduced::{add_line_load, modal_rows, ContactFrame, ModalSystem, RailContactLine};
-use super::DynamicsError;
-use crate::fe::assembly::FeMatrices;
-use crate::structure::TrackStructure;
+use corrugation::dynamics::integrator::ModalVerlet;
+use corrugation::dynamics::reduced::{
+    add_line_load, modal_rows, ContactFrame, ModalSystem, RailContactLine,
+};
+use corrugation::dynamics::residual::{for_each_plane_solution, nodes_dot, plane_range};
+use corrugation::dynamics::DynamicsError;
+use corrugation::fe::assembly::FeMatrices;
+use corrugation::structure::TrackStructure;
+
+/// `Σ_i a_i b_i`.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
 
 /// Errors of the moving-load validation. Each variant says what to change.
 #[derive(Debug, thiserror::Error)]
@@ -445,11 +457,11 @@ pub fn modal_response_corrected(
         h.t_s.push(n as f64 * load.dt_s);
         h.x_m.push(load.x_at(n));
         h.load_point_m
-            .push([0, 1, 2].map(|d| super::reduced::dot(&rows[d * m..(d + 1) * m], q)));
+            .push([0, 1, 2].map(|d| dot(&rows[d * m..(d + 1) * m], q)));
         for (p, r) in prow.iter().enumerate() {
             let mut u = [0.0; 3];
             for (c, uc) in u.iter_mut().enumerate() {
-                *uc = super::reduced::dot(&r[c * m..(c + 1) * m], q);
+                *uc = dot(&r[c * m..(c + 1) * m], q);
             }
             if let Some(corr) = correction {
                 corr.add(line, load.x_at(n), load.force_n, p, &mut u);
@@ -479,7 +491,7 @@ pub fn modal_response_corrected(
 }
 
 /// Static correction of the probes for the truncated modes (the residual flexibility of
-/// [`super::residual`], extended from the contact point to any probe): for every plane `p`
+/// [`corrugation::dynamics::residual`], extended from the contact point to any probe): for every plane `p`
 /// of the load's path and direction `d` of the frame, the probe's residual displacement
 /// under the unit contact load `b_{p,d}`,
 /// `T_{P,p,d} = e_Pᵀ K⁻¹ b_{p,d} − (e_Pᵀ Φ) Ω⁻² (Φᵀ b_{p,d})` (m/N, global x, y, z).
@@ -499,7 +511,7 @@ impl ProbeCorrection {
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         track: &TrackStructure,
-        factor: &super::residual::StiffnessFactor,
+        factor: &corrugation::dynamics::residual::StiffnessFactor,
         modes: &Mat<f64>,
         sys: &ModalSystem,
         line: &RailContactLine,
@@ -515,29 +527,21 @@ impl ProbeCorrection {
             ));
         }
         let (a, b) = (load.x_at(0), load.x_at(load.steps));
-        let (p0, p1) = super::residual::plane_range(line, a.min(b), a.max(b))?;
+        let (p0, p1) = plane_range(line, a.min(b), a.max(b))?;
         let np = p1 - p0 + 1;
         let mut transfer = vec![vec![[[0.0; 3]; 3]; probes.len()]; np];
         // Static part: e_Pᵀ K⁻¹ b.
-        super::residual::for_each_plane_solution(
-            track,
-            factor,
-            line,
-            frame,
-            p0,
-            p1,
-            &mut |i, d, u| {
-                for (k, pr) in probes.iter().enumerate() {
-                    for &(node, w) in &pr.nodes {
-                        for c in 0..3 {
-                            if let Some(f) = track.dofmap.free_index(3 * node + c) {
-                                transfer[i][k][d][c] += w * u(f);
-                            }
+        for_each_plane_solution(track, factor, line, frame, p0, p1, &mut |i, d, u| {
+            for (k, pr) in probes.iter().enumerate() {
+                for &(node, w) in &pr.nodes {
+                    for c in 0..3 {
+                        if let Some(f) = track.dofmap.free_index(3 * node + c) {
+                            transfer[i][k][d][c] += w * u(f);
                         }
                     }
                 }
-            },
-        );
+            }
+        });
         // Modal part.
         let prow = probe_rows(track, modes, probes);
         let mut rows = vec![0.0; 3 * m];
@@ -731,9 +735,7 @@ pub fn direct_response(
             end_m: line.planes_x_m[line.planes_x_m.len() - 1],
         })?;
         h.load_point_m.push([0, 1, 2].map(|d| {
-            let at = |q: usize| {
-                super::residual::nodes_dot(&line.nodes[q], &track.dofmap, axes[d], |i| u[i])
-            };
+            let at = |q: usize| nodes_dot(&line.nodes[q], &track.dofmap, axes[d], |i| u[i]);
             (1.0 - s) * at(p) + s * at(p + 1)
         }));
         for (p, pr) in probes.iter().enumerate() {
@@ -862,7 +864,7 @@ impl StaticDirect {
         add_line_load(track, line, frame, x, [0.0, 0.0, 1.0], &mut bn)?;
         self.scratch.copy_from_slice(&bn);
         self.llt.solve(&mut self.scratch);
-        let flex_direct = super::reduced::dot(&bn, &self.scratch);
+        let flex_direct = dot(&bn, &self.scratch);
         // Modal: q = Ω⁻² Φᵀ f (Φᵀ f from the contact line's rows, as in the passage).
         let mut rows = vec![0.0; 3 * m];
         line.rows_at(x, &mut rows)?;
@@ -881,9 +883,9 @@ impl StaticDirect {
                 let mut r = vec![0.0; 3 * m];
                 modal_rows(&p.nodes, &track.dofmap, modes, &GLOBAL, &mut r);
                 [
-                    super::reduced::dot(&r[..m], &q),
-                    super::reduced::dot(&r[m..2 * m], &q),
-                    super::reduced::dot(&r[2 * m..], &q),
+                    dot(&r[..m], &q),
+                    dot(&r[m..2 * m], &q),
+                    dot(&r[2 * m..], &q),
                 ]
             })
             .collect();
