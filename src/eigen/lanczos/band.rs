@@ -1,0 +1,462 @@
+//! Spectrum slicing over one band, and the cut of the whole band into concurrent bands by
+//! a work model fitted to a Sturm count probe.
+
+use super::*;
+
+/// What one band `[lower bound of first, top)` found besides its eigenvectors (written into
+/// the band's columns of the solution).
+pub(super) struct BandOut {
+    /// Eigenvalues (rad²/s²) in the order of the band's columns.
+    pub(super) lambdas: Vec<f64>,
+    /// The band's slices, ascending.
+    pub(super) slices: Vec<SliceReport>,
+}
+
+/// Spectrum slicing over one band: from the factorisation `first` at the band's lower bound
+/// (`from_zero`: the negative rigid-body shift σ₀ of a band that starts at 0 Hz, with the
+/// grounded-structure probe if `grounded`, i.e. no eigenvalue below `GROUNDED_TEST · |σ₀|`;
+/// otherwise a bound λ_lo > 0, where the band starts with a two-sided slice) up to
+/// `top = (shift, Sturm count)`. The eigenvectors go into `phi` (n × the band's Sturm count)
+/// in the order of the returned eigenvalues. `lam_max` (rad²/s²) scales the small moves of a
+/// shift that hits a zero pivot.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn run_band(
+    ctx: &mut Ctx<'_>,
+    mut phi: MatMut<'_, f64>,
+    first: ShiftFactor,
+    from_zero: bool,
+    grounded: bool,
+    top: (f64, usize),
+    lam_max: f64,
+    opts: &EigenOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<BandOut, EigenError> {
+    let n = ctx.sys.n();
+    let (top_shift, nu_max) = top;
+    let nu0 = first.negative_count;
+    let total = nu_max.saturating_sub(nu0);
+    let mut reported = 0usize;
+    debug_assert_eq!((phi.nrows(), phi.ncols()), (n, total));
+    let mut lambdas: Vec<f64> = Vec::with_capacity(total);
+    let mut slices: Vec<SliceReport> = Vec::new();
+    let mut cur = first;
+    if from_zero && grounded && total > 0 {
+        // If the structure is grounded, the lowest eigenvalue λ₁ can lie far above the
+        // negative shift σ₀; Lanczos at σ₀ would then see a tightly clustered θ = 1/(λ − σ₀)
+        // and converge slowly. A short probe at σ₀ finds λ₁ (a Ritz value ≥ λ₁); if
+        // 0.9 λ₁ ≫ |σ₀| and the Sturm count at 0.9 λ₁ is still 0, the first slice starts there.
+        // The caller's Sturm count at `GROUNDED_TEST · |σ₀|` has shown that λ₁ lies that
+        // high (`grounded`); otherwise the probe could not move the shift and is skipped.
+        let probe = {
+            let empty = phi.as_ref().subcols(0, 0);
+            // Loose tolerance and one wanted value: any Ritz value bounds λ₁ from above
+            // (θ_Ritz ≤ θ₁), and the Sturm count at 0.9·l1 decides whether the shift moves.
+            let mut popts = opts.clone();
+            popts.tolerance = 1e-4;
+            lanczos_slice(ctx, &cur, empty, 1, None, None, &popts)?
+        };
+        let l1 = probe.lambdas.first().copied().unwrap_or(0.0);
+        let moved = GROUNDED_SHIFT * l1;
+        // (True whenever the probe returned a value: l1 ≥ λ₁ > GROUNDED_TEST · |σ₀|.)
+        if moved > GROUNDED_MOVE * cur.shift.abs() {
+            let f = factorize(ctx, moved, -1.0, lam_max)?;
+            if f.negative_count == 0 {
+                cur = f;
+            }
+        }
+    }
+    // Converged pairs above the last boundary (λ ≥ τ, from the converged prefix of the
+    // previous slice): their vectors sit in phi right after the committed columns, their λ in
+    // `carried`. They are eigenpairs of the next slice already, so it deflates them (with all
+    // modes found so far) and needs that many fewer new ones; discarding them would make the
+    // next slice converge them again. Measured on the default track to 5 kHz with all earlier
+    // slices deflated: 3064 solved vectors with carrying, 3120 without (−2 %, within the
+    // run-to-run spread of the wall time).
+    let mut carried: Vec<f64> = Vec::new();
+    // Lower bound of a band above 0 Hz: the modes below it are never deflated here.
+    let band_lo = (!from_zero).then_some(cur.shift);
+    // Eigenvalues per rad²/s² in the previous slice.
+    let mut last_density: Option<f64> = None;
+    loop {
+        let nu_cur = cur.negative_count;
+        if nu_cur >= nu_max {
+            break;
+        }
+        let remaining = nu_max - nu_cur;
+        let lo = cur.shift;
+        let target = opts.modes_per_slice;
+        // A remainder of up to 1.5 targets is one last slice (default track to 5 kHz: a
+        // 170-mode last slice instead of a 152-mode one and an 18-mode tail costing a
+        // factorisation and ~4 s).
+        let last = remaining <= target + target / 2;
+        let t_slice = Instant::now();
+        // The first slice of a band above 0 Hz cannot deflate the modes below its bound lo
+        // (another band's, or below f_min): with the shift at lo they would converge at the
+        // negative end of θ as unwanted pairs, about as many as the slice wants and denser
+        // in λ (default track to 2 kHz in two bands: 872 solved vectors for the upper band's
+        // first 93 modes, against ~3 per mode otherwise). So that slice is two-sided: it
+        // wants every eigenvalue in [lo, hi) (Sturm count known) with the Lanczos shift at
+        // the midpoint, where the undeflated ones below lo are farther from the shift than
+        // every wanted one.
+        let two_sided = !from_zero && slices.is_empty();
+        let mut sided = two_sided;
+        let col0 = lambdas.len();
+        let nc = carried.len();
+        // Deflated: every mode found so far and the carried pairs (contiguous in phi). The
+        // modes of earlier slices lie below σ at θ = 1/(λ − σ) < 0; left in, the ones of the
+        // slices before the last compete with the far end of the wanted θ and converge as
+        // unwanted Ritz values (default track to 5 kHz, subspace ratio 3: deflating only the
+        // previous slice solved 3592 vectors, deflating all 2880, and the M-orthonormality
+        // error of the whole basis fell from 1.3e-8 to 2.5e-14).
+        let locked_range = (0, col0 + nc);
+        let mut mid: Option<ShiftFactor> = None;
+        // In a band above 0 Hz a slice whose width exceeds CAP_RATIO × its distance from the
+        // band's lower bound would meet the undeflated modes below that bound at the far end
+        // of θ. Such a slice ends at the cap instead, with the Sturm count known there
+        // (default track to 5 kHz in two bands: the upper band's second slice, as wide as
+        // that distance, needed 4 restarts and 5.8 solved vectors per mode). The band's last
+        // slice is two-sided (shift at its midpoint m, half-width h): the same margin,
+        // h ≤ CAP_RATIO · (m − bound), allows it a width of up to
+        // 2·CAP_RATIO/(1 − CAP_RATIO) = 4.7 times that distance (default track to 5 kHz:
+        // a 183-mode last slice of 536 vectors instead of a capped 97-mode one of 464 and
+        // an 86-mode last one of 264).
+        let capped = match (band_lo, last_density) {
+            (Some(b), Some(rho))
+                if !(two_sided || (last && top_shift - lo <= TWO_SIDED_CAP_RATIO * (lo - b))) =>
+            {
+                let cap = lo + CAP_RATIO * (lo - b);
+                if cap < top_shift && rho * (cap - lo) <= (target + target / 4) as f64 {
+                    let f = factorize(ctx, cap, 1.0, lam_max)?;
+                    (f.negative_count > nu_cur && f.negative_count < nu_max && f.shift < top_shift)
+                        .then_some(f)
+                } else {
+                    None
+                }
+            }
+            _ => None,
+        };
+        let mut out;
+        // A slice to a bound whose Sturm count is known: the cap, or the band top.
+        let known_end = match capped {
+            Some(f) => Some((f.shift, f.negative_count, Some(f))),
+            None if last && !two_sided => Some((top_shift, nu_max, None)),
+            None => None,
+        };
+        let (hi, nu_hi, next) = if let Some((hi, nu_hi, next)) = known_end {
+            let carried_below = carried.iter().filter(|&&x| x < hi).count();
+            let need_new = (nu_hi - nu_cur).saturating_sub(carried_below);
+            let want = need_new + opts.block_size.max((nu_hi - nu_cur) / 5);
+            let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
+            // The band's last slice is two-sided (deflating everything below lo): with the
+            // shift midway, its modes near the band top lie half as far from the shift as
+            // with the shift at lo, so they converge sooner and more accurately (default
+            // track to 5 kHz: 416 instead of 536 solved vectors in the upper band's last
+            // slice, and the M-orthogonality across the band bound 5e-8 instead of 2e-7).
+            out = if next.is_none() {
+                let m = factorize(ctx, 0.5 * (lo + hi), 1.0, lam_max)?;
+                let o = lanczos_slice(ctx, &m, locked, want, Some((hi, need_new)), Some(lo), opts)?;
+                mid = Some(m);
+                sided = true;
+                o
+            } else {
+                lanczos_slice(ctx, &cur, locked, want, Some((hi, need_new)), None, opts)?
+            };
+            (hi, nu_hi, next)
+        } else if two_sided {
+            // Width of about `target` modes (count model ν ∝ λ^{3/2} up to the band top),
+            // corrected once if the Sturm count says it holds more than 1.2 targets: this
+            // slice deflates nothing and needs more solves per mode than any other
+            // (default track to 5 kHz: 185 modes, 616 vectors; corrected to 100 modes, 320
+            // vectors, and the band's two-sided last slice, which deflates them, 183 modes
+            // in 536 vectors).
+            let mut w = if last {
+                top_shift - lo
+            } else {
+                (top_shift * ((nu_cur + target) as f64 / nu_max as f64).powf(2.0 / 3.0) - lo)
+                    .max(1e-3 * top_shift)
+            };
+            let mut bound = None;
+            for _ in 0..2 {
+                if lo + w >= top_shift {
+                    bound = None;
+                    break;
+                }
+                let f = factorize(ctx, lo + w, 1.0, lam_max)?;
+                let count = f.negative_count - nu_cur;
+                let too_many = count > target + target / 5;
+                bound = Some(f);
+                if !too_many {
+                    break;
+                }
+                w *= target as f64 / count as f64;
+            }
+            let (hi, nu_hi, next) = match bound {
+                Some(f) if f.negative_count < nu_max && f.shift < top_shift => {
+                    (f.shift, f.negative_count, Some(f))
+                }
+                _ => (top_shift, nu_max, None),
+            };
+            let need = nu_hi - nu_cur;
+            let m = factorize(ctx, 0.5 * (lo + hi), 1.0, lam_max)?;
+            let want = need + opts.block_size.max(need / 5);
+            out = lanczos_slice(
+                ctx,
+                &m,
+                phi.as_ref().subcols(0, 0),
+                want,
+                Some((hi, need)),
+                Some(lo),
+                opts,
+            )?;
+            mid = Some(m);
+            (hi, nu_hi, next)
+        } else {
+            // The slice stops once `want` pairs converged (early convergence checks) and
+            // the boundary below keeps 2/3 or more of them: 1.25 targets keep about one.
+            let want = (target + target / 4).saturating_sub(nc).max(target / 2);
+            out = {
+                let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
+                lanczos_slice(ctx, &cur, locked, want, None, None, opts)?
+            };
+            // Boundary in the widest relative gap of the last third of the converged λ
+            // (carried and new; everything below it has converged; a wide gap keeps K − τM
+            // well conditioned).
+            let mut l: Vec<f64> = out.lambdas.iter().copied().filter(|&x| x >= lo).collect();
+            l.extend_from_slice(&carried);
+            l.sort_by(f64::total_cmp);
+            let tau = if l.len() >= 2 {
+                let k0 = (2 * l.len() / 3).min(l.len() - 2);
+                let kbest = (k0..l.len() - 1)
+                    .max_by(|&a, &b| {
+                        let ga = (l[a + 1] - l[a]) / l[a + 1].abs().max(1e-300);
+                        let gb = (l[b + 1] - l[b]) / l[b + 1].abs().max(1e-300);
+                        ga.total_cmp(&gb)
+                    })
+                    .unwrap_or(k0);
+                0.5 * (l[kbest] + l[kbest + 1])
+            } else {
+                top_shift
+            };
+            if tau >= top_shift {
+                (top_shift, nu_max, None)
+            } else {
+                let f = factorize(ctx, tau, 1.0, lam_max)?;
+                (f.shift, f.negative_count, Some(f))
+            }
+        };
+        let need = nu_hi - nu_cur;
+        let carried_in = carried.iter().filter(|&&x| x < hi).count();
+        let select = |o: &SliceOut| -> Vec<usize> {
+            (0..o.lambdas.len())
+                .filter(|&i| o.lambdas[i] >= lo && o.lambdas[i] < hi)
+                .collect()
+        };
+        let mut keep = select(&out);
+        if keep.len() + carried_in != need {
+            // The Sturm count says the converged prefix skipped an eigenvalue (e.g. a
+            // multiplicity larger than the block): iterate again with the count known.
+            out = {
+                let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
+                let nl = need.saturating_sub(carried_in);
+                let lf = mid.as_ref().unwrap_or(&cur);
+                let wide = if sided { 2 * nl } else { nl };
+                lanczos_slice(
+                    ctx,
+                    lf,
+                    locked,
+                    wide + opts.block_size,
+                    Some((hi, nl)),
+                    sided.then_some(lo),
+                    opts,
+                )?
+            };
+            keep = select(&out);
+            if keep.len() + carried_in != need {
+                return Err(EigenError::MissedModes {
+                    lo_hz: lambda_to_hz(lo),
+                    hi_hz: lambda_to_hz(hi),
+                    expected: need,
+                    found: keep.len() + carried_in,
+                    restarts: out.restarts,
+                });
+            }
+        }
+        drop(mid);
+        // Layout from col0: the slice's modes (carried ones below hi, then the new ones), then
+        // the pairs carried on (carried ones at or above hi, then new converged ones between
+        // hi and λ_max, as many as fit).
+        let old_carried = phi.as_ref().subcols(col0, nc).to_owned();
+        let mut next_carried: Vec<(f64, usize, bool)> = Vec::new(); // (λ, index, from old)
+        let mut c = col0;
+        for (i, &x) in carried.iter().enumerate() {
+            if x < hi {
+                phi.as_mut().col_mut(c).copy_from(old_carried.col(i));
+                lambdas.push(x);
+                c += 1;
+            } else {
+                next_carried.push((x, i, true));
+            }
+        }
+        for &i in &keep {
+            phi.as_mut().col_mut(c).copy_from(out.vecs.col(i));
+            lambdas.push(out.lambdas[i]);
+            c += 1;
+        }
+        if next.is_some() {
+            // Carried: the strictly converged pairs above hi, up to the first that is not
+            // (the next slice must find every eigenvalue above the carried ones itself).
+            for (i, &x) in out.lambdas.iter().enumerate() {
+                if x >= hi && x < top_shift {
+                    if !out.strict[i] {
+                        break;
+                    }
+                    next_carried.push((x, i, false));
+                }
+            }
+        }
+        next_carried.sort_by(|a, b| a.0.total_cmp(&b.0));
+        next_carried.truncate(total.saturating_sub(c));
+        carried.clear();
+        for &(x, i, from_old) in &next_carried {
+            let src = if from_old {
+                old_carried.col(i)
+            } else {
+                out.vecs.col(i)
+            };
+            phi.as_mut().col_mut(c).copy_from(src);
+            carried.push(x);
+            c += 1;
+        }
+        last_density = Some((nu_hi - nu_cur) as f64 / (hi - lo).max(f64::MIN_POSITIVE));
+        slices.push(SliceReport {
+            shift_lo_rad2_s2: lo,
+            shift_hi_rad2_s2: hi,
+            sturm_lo: nu_cur,
+            sturm_hi: nu_hi,
+            modes_found: need,
+            carried: carried_in,
+            restarts: out.restarts,
+            solved_vectors: out.solved,
+            lanczos_s: t_slice.elapsed().as_secs_f64(),
+        });
+        if let Some(pb) = progress {
+            pb.inc((lambdas.len() - reported) as u64);
+            reported = lambdas.len();
+        }
+        match next {
+            Some(f) => cur = f,
+            None => break,
+        }
+    }
+    Ok(BandOut { lambdas, slices })
+}
+
+/// Fraction of the probed λ₁ (an upper bound of it) where the grounded-structure probe of
+/// `run_band` puts the first shift (kept only if the Sturm count there is 0).
+pub(super) const GROUNDED_SHIFT: f64 = 0.9;
+
+/// The probe moves the first shift from σ₀ < 0 up to `GROUNDED_SHIFT` · λ₁ only if that
+/// exceeds `GROUNDED_MOVE` · |σ₀|.
+pub(super) const GROUNDED_MOVE: f64 = 4.0;
+
+/// Where the caller counts eigenvalues before that probe, as a multiple of |σ₀|: no
+/// eigenvalue below it ⇔ λ₁ > GROUNDED_MOVE / GROUNDED_SHIFT · |σ₀|, the condition under
+/// which the probe can move the shift.
+pub(super) const GROUNDED_TEST: f64 = GROUNDED_MOVE / GROUNDED_SHIFT;
+
+/// λ (rad²/s²) at the fraction `x` of the way from `lo` to `hi` in √λ (i.e. in frequency),
+/// `x = (√λ − √λ_lo)/(√λ_hi − √λ_lo)` with a negative `lo` (rigid-body shift) taken as 0.
+pub(super) fn lambda_at(lo: f64, hi: f64, x: f64) -> f64 {
+    let (a, b) = (lo.max(0.0).sqrt(), hi.max(0.0).sqrt());
+    (a + x * (b - a)).powi(2)
+}
+
+/// Work of the modes up to `x` (see [`choose_splits`]) for the count exponent `alpha`.
+pub(super) fn band_work(x: f64, alpha: f64) -> f64 {
+    x.powf(alpha) + 2.0 * alpha / (alpha + 2.0) * x.powf(alpha + 2.0)
+}
+
+/// `x` in [0, 1] where `band_work(x, alpha)` reaches `goal` (bisection; the work increases).
+pub(super) fn work_point(goal: f64, alpha: f64) -> f64 {
+    let (mut x0, mut x1) = (0.0f64, 1.0f64);
+    for _ in 0..60 {
+        let xm = 0.5 * (x0 + x1);
+        if band_work(xm, alpha) < goal {
+            x0 = xm;
+        } else {
+            x1 = xm;
+        }
+    }
+    0.5 * (x0 + x1)
+}
+
+/// Where the count probe of [`choose_splits`] goes, for `bands` bands: the first split of
+/// the prior α = 1 (the default track's exponent), so that on such a model the probe is the
+/// bound itself and no further factorisation is needed. Known before any Sturm count, so the
+/// probe is factorised alongside the band's ends.
+pub(super) fn split_probe_x(bands: usize) -> f64 {
+    work_point(band_work(1.0, 1.0) / bands.max(2) as f64, 1.0)
+}
+
+/// Tolerance in x within which the probe serves as a band bound.
+pub(super) const PROBE_AS_BOUND: f64 = 0.03;
+
+/// Band bounds for `bands` concurrent bands between the factorisations `first` (lower bound)
+/// and `top = (shift, Sturm count)`: factorisations of `K − λ_i M`, ascending, chosen so that
+/// every band has about the same *work*. With `x = (√λ − √λ_lo)/(√λ_top − √λ_lo)` the count
+/// model is `ν(λ) − ν₀ ≈ N·x^α`, fitted to one probe `(x_p, factorisation at x_p)` (the
+/// default track has α ≈ 1: its rail and sleepers are slender; without a probe one is
+/// factorised at x = ½), and a mode at x costs `1 + 2x²` units (the slices near f_max take
+/// longer per mode: denser spectrum in θ, more deflated modes; docs/performance.md §3.3).
+/// Band i then ends where the work `W(x) = x^α + 2α/(α+2)·x^{α+2}` reaches
+/// `i/bands · W(1)`; the probe is that bound if it lies within [`PROBE_AS_BOUND`] of it. A split whose count does not lie
+/// strictly between its neighbours' is dropped (fewer, non-empty bands).
+pub(super) fn choose_splits(
+    ctx: &mut Ctx<'_>,
+    first: &ShiftFactor,
+    top: (f64, usize),
+    bands: usize,
+    lam_max: f64,
+    probe: Option<(f64, ShiftFactor)>,
+) -> Result<Vec<ShiftFactor>, EigenError> {
+    let nu0 = first.negative_count;
+    let total = top.1.saturating_sub(nu0).max(1) as f64;
+    let lam_at = |x: f64| lambda_at(first.shift, top.0, x);
+    let (xp, probe) = match probe {
+        Some(p) => p,
+        None => (0.5, factorize(ctx, lam_at(0.5), 1.0, lam_max)?),
+    };
+    let frac = probe.negative_count.saturating_sub(nu0) as f64 / total;
+    let alpha = if frac <= 0.0 {
+        4.0
+    } else if frac >= 1.0 {
+        0.25
+    } else {
+        (frac.ln() / xp.ln()).clamp(0.25, 4.0)
+    };
+    let mut probe = Some(probe);
+    let mut out: Vec<ShiftFactor> = Vec::new();
+    for i in 1..bands {
+        let x = work_point(i as f64 / bands as f64 * band_work(1.0, alpha), alpha);
+        let f = match probe.take() {
+            Some(p) if (x - xp).abs() <= PROBE_AS_BOUND => p,
+            other => {
+                probe = other;
+                factorize(ctx, lam_at(x), 1.0, lam_max)?
+            }
+        };
+        let above_last = out.last().map_or(nu0, |l| l.negative_count);
+        if f.negative_count > above_last && f.negative_count < top.1 && f.shift < top.0 {
+            out.push(f);
+        }
+    }
+    Ok(out)
+}
+
+/// Largest width of a slice in a band above 0 Hz, as a multiple of its distance from the
+/// band's lower bound (see `run_band`).
+pub(super) const CAP_RATIO: f64 = 0.7;
+
+/// Widest two-sided last slice of a band above 0 Hz, as a multiple of its distance from the
+/// band's lower bound: the margin of [`CAP_RATIO`] for a shift at the slice's midpoint.
+pub(super) const TWO_SIDED_CAP_RATIO: f64 = 2.0 * CAP_RATIO / (1.0 - CAP_RATIO);
