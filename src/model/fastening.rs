@@ -1,0 +1,332 @@
+//! The fastening: railpad spring–dampers over a footprint grid and the hold pattern of the
+//! rail foot — the presets RPM1–RPM5 (docs/theory.md §3.2) or a custom pattern.
+
+use super::*;
+
+/// Named fastening models of docs/theory.md §3.2, or a custom hold pattern.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum FasteningModel {
+    /// V-3-4: railpad springs; longitudinally rigid at all three columns; laterally at four rows.
+    #[serde(rename = "RPM1")]
+    Rpm1,
+    /// V-∞-4: railpad springs; longitudinally rigid at every rail-foot node (continuous).
+    #[serde(rename = "RPM2")]
+    Rpm2,
+    /// V-1-4: railpad springs; longitudinally rigid at the middle column only (degraded).
+    #[serde(rename = "RPM3")]
+    Rpm3,
+    /// ∞-1-4: vertically rigid everywhere (no vertical bending); longitudinally the middle column.
+    #[serde(rename = "RPM4")]
+    Rpm4,
+    /// ∞-∞-4: vertically and longitudinally rigid everywhere (longitudinal shear alone).
+    #[serde(rename = "RPM5")]
+    Rpm5,
+    /// The pattern in `[fastening.custom]`.
+    #[serde(rename = "custom")]
+    Custom,
+}
+
+impl std::fmt::Display for FasteningModel {
+    /// The name used in model files: `RPM1` … `RPM5`, `custom`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FasteningModel {
+    /// Name as in the model file.
+    pub fn name(self) -> &'static str {
+        match self {
+            FasteningModel::Rpm1 => "RPM1",
+            FasteningModel::Rpm2 => "RPM2",
+            FasteningModel::Rpm3 => "RPM3",
+            FasteningModel::Rpm4 => "RPM4",
+            FasteningModel::Rpm5 => "RPM5",
+            FasteningModel::Custom => "custom",
+        }
+    }
+}
+
+/// A rail-foot region held in one direction: rigidly (`rigid = "…"`) or by grounded springs
+/// (`elastic = "…"`). Columns, rows and the continuous region have a physical size, so what
+/// they hold converges under mesh refinement; `grid_points` does not (docs/theory.md §3.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RigidRegion {
+    /// Not held (only the railpad springs act).
+    None,
+    /// The listed columns: strips of width `strip_width` along x, across the whole foot.
+    Columns,
+    /// The listed rows: strips of width `strip_width` across y, over the footprint length.
+    Rows,
+    /// Every node of the rail-foot underside, along the whole rail.
+    Continuous,
+    /// One rail-foot node per railpad grid point (the `rows × columns` cell centres, where the
+    /// railpad springs sit; the mesh gets a node there). A node-like hold: its stiffness grows
+    /// without bound under mesh refinement (docs/theory.md §3.3), so results depend on the mesh.
+    GridPoints,
+}
+
+/// The hold of one direction: `{ rigid = "columns", indices = [1] }` fixes the region's DOFs;
+/// `{ elastic = "columns", indices = [1], stiffness = 1e9, damping = 0.0 }` instead ties them to
+/// the ground by spring-dampers whose stiffness (N/m) and damping (N·s/m) *per fastening* are
+/// spread over the region's nodes by tributary area (evenly over the grid points for
+/// `grid_points`; per bay of one sleeper spacing for `continuous`). Give one of `rigid` and
+/// `elastic`; an absent `rigid` means `"none"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionHold {
+    /// The region held rigidly (`"none"` when the direction is held elastically or not at all).
+    #[serde(default = "region_none")]
+    pub rigid: RigidRegion,
+    /// The region held by springs; absent for a rigid hold.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub elastic: Option<RigidRegion>,
+    /// Column or row indices (0-based; columns counted along +x, rows along +y) for
+    /// `columns`/`rows`; empty otherwise.
+    #[serde(default)]
+    pub indices: Vec<usize>,
+    /// Elastic hold: stiffness per fastening (N/m), greater than 0 and at most
+    /// [`MAX_HOLD_STIFFNESS`]; shared equally by the listed columns/rows or grid points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// Elastic hold: damping per fastening (N·s/m), 0 to 1e12; default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+}
+
+fn region_none() -> RigidRegion {
+    RigidRegion::None
+}
+
+/// Largest stiffness per fastening of an elastic hold (N/m): far above any railpad, so that
+/// "k → ∞" can be approached, yet small enough to keep K well conditioned.
+pub const MAX_HOLD_STIFFNESS: f64 = 1e13;
+
+impl DirectionHold {
+    fn none() -> Self {
+        Self::rigid(RigidRegion::None, vec![])
+    }
+    fn continuous() -> Self {
+        Self::rigid(RigidRegion::Continuous, vec![])
+    }
+    fn columns(indices: Vec<usize>) -> Self {
+        Self::rigid(RigidRegion::Columns, indices)
+    }
+    fn rows(indices: Vec<usize>) -> Self {
+        Self::rigid(RigidRegion::Rows, indices)
+    }
+    fn rigid(region: RigidRegion, indices: Vec<usize>) -> Self {
+        DirectionHold {
+            rigid: region,
+            elastic: None,
+            indices,
+            stiffness: None,
+            damping: None,
+        }
+    }
+
+    /// The held region, rigid or elastic.
+    pub fn region(&self) -> RigidRegion {
+        self.elastic.unwrap_or(self.rigid)
+    }
+
+    /// Stiffness (N/m) and damping (N·s/m) per fastening of an elastic hold; `None` for a
+    /// rigid hold or none.
+    pub fn elastic_stiffness_damping(&self) -> Option<(f64, f64)> {
+        match self.elastic {
+            Some(r) if r != RigidRegion::None => {
+                Some((self.stiffness.unwrap_or(0.0), self.damping.unwrap_or(0.0)))
+            }
+            _ => None,
+        }
+    }
+
+    /// The same region held elastically with `k` (N/m) and `c` (N·s/m) per fastening; a
+    /// direction not held stays so.
+    fn made_elastic(&self, k: f64, c: f64) -> Self {
+        if self.rigid == RigidRegion::None {
+            return self.clone();
+        }
+        DirectionHold {
+            rigid: RigidRegion::None,
+            elastic: Some(self.rigid),
+            indices: self.indices.clone(),
+            stiffness: Some(k),
+            damping: Some(c),
+        }
+    }
+}
+
+/// How the rail foot is held, per direction: the general description of which the RPM models
+/// are instances. Railpad springs act in a direction whenever its stiffness or damping is
+/// non-zero, whatever the hold.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HoldPattern {
+    /// Longitudinal (x).
+    pub x: DirectionHold,
+    /// Lateral (y).
+    pub y: DirectionHold,
+    /// Vertical (z).
+    pub z: DirectionHold,
+}
+
+impl HoldPattern {
+    /// The pattern of a named model for a `rows × columns` fastening grid (docs/theory.md §3.2):
+    /// the first number of the Li et al. code (V-3-4) is the vertical hold (V = springs,
+    /// ∞ = rigid everywhere), the second the longitudinal one (number of rigid columns, ∞ =
+    /// continuous), the third the lateral one (number of rigid rows). `None` for `custom`.
+    pub fn preset(model: FasteningModel, rows: usize, columns: usize) -> Option<HoldPattern> {
+        let all_rows = DirectionHold::rows((0..rows).collect());
+        let middle = DirectionHold::columns(vec![columns / 2]);
+        let all_columns = DirectionHold::columns((0..columns).collect());
+        let (x, z) = match model {
+            FasteningModel::Rpm1 => (all_columns, DirectionHold::none()),
+            FasteningModel::Rpm2 => (DirectionHold::continuous(), DirectionHold::none()),
+            FasteningModel::Rpm3 => (middle, DirectionHold::none()),
+            FasteningModel::Rpm4 => (middle, DirectionHold::continuous()),
+            FasteningModel::Rpm5 => (DirectionHold::continuous(), DirectionHold::continuous()),
+            FasteningModel::Custom => return None,
+        };
+        Some(HoldPattern { x, y: all_rows, z })
+    }
+}
+
+/// Rail fastening: railpad springs on a `rows × columns` grid and rigid holds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fastening {
+    /// RPM1–RPM5 or custom.
+    pub model: FasteningModel,
+    /// The hold pattern when `model = "custom"` (must be absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub custom: Option<HoldPattern>,
+    /// Spring rows across the track (−).
+    pub rows: usize,
+    /// Spring columns along the rail (−).
+    pub columns: usize,
+    /// Footprint length along the rail (m).
+    pub footprint_length: f64,
+    /// Footprint width across the track (m).
+    pub footprint_width: f64,
+    /// Width of a rigidly held column strip (along x) or row strip (along y) (m).
+    pub strip_width: f64,
+    /// Gap between the rail-foot underside and the sleeper top (m).
+    pub pad_thickness: f64,
+    /// Vertical stiffness per fastening (N/m), spread evenly over the grid.
+    pub vertical_stiffness: f64,
+    /// Vertical damping per fastening (N·s/m).
+    pub vertical_damping: f64,
+    /// Lateral stiffness per fastening (N/m).
+    pub lateral_stiffness: f64,
+    /// Lateral damping per fastening (N·s/m).
+    pub lateral_damping: f64,
+    /// Longitudinal stiffness per fastening (N/m).
+    pub longitudinal_stiffness: f64,
+    /// Longitudinal damping per fastening (N·s/m).
+    pub longitudinal_damping: f64,
+    /// How the regions of a preset (RPM1–RPM5) are held: `"rigid"` (default, the models as
+    /// published) or `"elastic"`: every rigidly held region of the directions in
+    /// `hold_directions` becomes grounded springs of `hold_stiffness` and `hold_damping` per
+    /// fastening. Not allowed with `model = "custom"` (give `elastic` regions there).
+    #[serde(default, skip_serializing_if = "HoldKind::is_rigid")]
+    pub hold: HoldKind,
+    /// Stiffness per fastening of the elastic holds of a preset (N/m), greater than 0 and at
+    /// most [`MAX_HOLD_STIFFNESS`]; required with `hold = "elastic"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_stiffness: Option<f64>,
+    /// Damping per fastening of the elastic holds of a preset (N·s/m), 0 to 1e12; default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_damping: Option<f64>,
+    /// Directions whose preset holds become elastic with `hold = "elastic"`, e.g. `["x"]`;
+    /// default all three.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_directions: Option<Vec<Axis>>,
+}
+
+/// Rigid or elastic holds of a preset fastening model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HoldKind {
+    /// Held DOFs are fixed (the published models).
+    #[default]
+    Rigid,
+    /// Held regions are tied to the ground by spring-dampers.
+    Elastic,
+}
+
+impl HoldKind {
+    fn is_rigid(&self) -> bool {
+        *self == HoldKind::Rigid
+    }
+}
+
+/// A global direction, as named in the model file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Axis {
+    /// Longitudinal.
+    X,
+    /// Lateral.
+    Y,
+    /// Vertical.
+    Z,
+}
+
+impl Axis {
+    /// DOF offset within a node (0, 1, 2).
+    pub fn index(self) -> usize {
+        self as usize
+    }
+}
+
+impl Fastening {
+    /// The hold pattern in force: the preset of the named model (its holds made elastic when
+    /// `hold = "elastic"`), or the custom one.
+    pub fn hold_pattern(&self) -> HoldPattern {
+        match HoldPattern::preset(self.model, self.rows, self.columns) {
+            Some(mut p) => {
+                if self.hold == HoldKind::Elastic {
+                    let k = self.hold_stiffness.unwrap_or(0.0);
+                    let c = self.hold_damping.unwrap_or(0.0);
+                    let dirs = self
+                        .hold_directions
+                        .clone()
+                        .unwrap_or_else(|| vec![Axis::X, Axis::Y, Axis::Z]);
+                    for a in dirs {
+                        let h = match a {
+                            Axis::X => &mut p.x,
+                            Axis::Y => &mut p.y,
+                            Axis::Z => &mut p.z,
+                        };
+                        *h = h.made_elastic(k, c);
+                    }
+                }
+                p
+            }
+            None => self
+                .custom
+                .clone()
+                .expect("validated: custom model has a pattern"),
+        }
+    }
+
+    /// Stiffness per fastening in x, y, z (N/m).
+    pub fn stiffness(&self) -> [f64; 3] {
+        [
+            self.longitudinal_stiffness,
+            self.lateral_stiffness,
+            self.vertical_stiffness,
+        ]
+    }
+
+    /// Damping per fastening in x, y, z (N·s/m).
+    pub fn damping(&self) -> [f64; 3] {
+        [
+            self.longitudinal_damping,
+            self.lateral_damping,
+            self.vertical_damping,
+        ]
+    }
+}

@@ -1,0 +1,373 @@
+//! The range checks of a model: every numeric parameter against its stated range, each
+//! error naming the file, the dotted key and what is allowed.
+
+use super::*;
+
+impl Model {
+    /// Checks every value against its allowed range; `file` names the source in the error.
+    pub fn validate(&self, file: &str) -> Result<(), ModelError> {
+        let mut c = Checker { file };
+        let t = &self.track;
+        c.int("track.bays", t.bays, 2, 400)?;
+        c.range("track.sleeper_spacing", t.sleeper_spacing, 0.2, 2.0, "m")?;
+        let r = &self.rail;
+        if r.profile != "uic54" {
+            return Err(ModelError::OutOfRange {
+                file: file.into(),
+                key: "rail.profile".into(),
+                value: format!("{:?}", r.profile),
+                allowed: "\"uic54\"".into(),
+            });
+        }
+        c.range(
+            "rail.inclination",
+            r.inclination,
+            0.0,
+            0.1,
+            "(tan of cant angle)",
+        )?;
+        c.elastic("rail", r.youngs_modulus, r.poisson_ratio, r.density)?;
+        // Only 0 is supported: the reduced model (and the explicit path) has no steel damping
+        // yet, and a value that is accepted but ignored would mislead. The range says so.
+        c.range(
+            "rail.structural_damping",
+            r.structural_damping,
+            0.0,
+            0.0,
+            "s (Rayleigh beta; steel damping is not modelled yet: all damping sits in the discrete dampers, as in the reference)",
+        )?;
+        let s = &self.sleeper;
+        c.range("sleeper.length", s.length, 0.3, 5.0, "m")?;
+        c.range(
+            "sleeper.width",
+            s.width,
+            0.05,
+            t.sleeper_spacing,
+            "m (at most the sleeper spacing)",
+        )?;
+        c.range("sleeper.height", s.height, 0.05, 1.0, "m")?;
+        c.range(
+            "sleeper.rail_seat",
+            s.rail_seat,
+            0.1,
+            s.length - 0.1,
+            "m (inside the sleeper)",
+        )?;
+        c.elastic("sleeper", s.youngs_modulus, s.poisson_ratio, s.density)?;
+        let f = &self.fastening;
+        c.int("fastening.rows", f.rows, 1, 16)?;
+        c.int("fastening.columns", f.columns, 1, 16)?;
+        c.pos(
+            "fastening.footprint_length",
+            f.footprint_length,
+            s.width,
+            "m (within the sleeper width)",
+        )?;
+        c.pos(
+            "fastening.footprint_width",
+            f.footprint_width,
+            0.14,
+            "m (within the 0.14 m rail foot)",
+        )?;
+        let max_strip =
+            (f.footprint_length / f.columns as f64).min(f.footprint_width / f.rows as f64);
+        c.pos(
+            "fastening.strip_width",
+            f.strip_width,
+            max_strip,
+            "m (at most one grid cell)",
+        )?;
+        c.range("fastening.pad_thickness", f.pad_thickness, 0.0, 0.05, "m")?;
+        c.spring_damper("fastening", f.stiffness(), f.damping())?;
+        f.validate_holds(file)?;
+        // The rail floats on the railpads where no rigid hold acts: a direction without a hold
+        // needs a railpad spring, else the rail is a free body in it.
+        let pattern = self.fastening.hold_pattern();
+        for (h, key, k) in [
+            (
+                &pattern.x,
+                "fastening.longitudinal_stiffness",
+                f.longitudinal_stiffness,
+            ),
+            (
+                &pattern.y,
+                "fastening.lateral_stiffness",
+                f.lateral_stiffness,
+            ),
+            (
+                &pattern.z,
+                "fastening.vertical_stiffness",
+                f.vertical_stiffness,
+            ),
+        ] {
+            if h.region() == RigidRegion::None {
+                c.pos(
+                    key,
+                    k,
+                    1e12,
+                    "N/m (> 0: this direction has no rigid hold in the fastening model, so the railpad springs alone support the rail)",
+                )?;
+            }
+        }
+        let b = &self.ballast;
+        c.spring_damper("ballast", b.stiffness(), b.damping())?;
+        // Sleepers float on the ballast: they need a spring in every direction.
+        for (k, v) in [
+            ("vertical_stiffness", b.vertical_stiffness),
+            ("lateral_stiffness", b.lateral_stiffness),
+            ("longitudinal_stiffness", b.longitudinal_stiffness),
+        ] {
+            c.pos(
+                &format!("ballast.{k}"),
+                v,
+                1e12,
+                "N/m (> 0: a sleeper needs support in every direction)",
+            )?;
+        }
+        let w = &self.wheel;
+        c.range("wheel.radius", w.radius, 0.2, 0.8, "m")?;
+        // The wheel mesh needs |c| < 0.2 (the tread must stay above the rim); treads are 1/40
+        // to 1/20, so the model stops well inside.
+        c.range("wheel.conicity", w.conicity, 0.0, 0.1, "(-)")?;
+        c.elastic("wheel", w.youngs_modulus, w.poisson_ratio, w.density)?;
+        c.range("wheel.damping_ratio", w.damping_ratio, 0.0, 0.1, "(-)")?;
+        let v = &self.vehicle;
+        c.pos("vehicle.wheel_load", v.wheel_load, MAX_WHEEL_LOAD_N, "N")?;
+        c.pos(
+            "vehicle.primary_stiffness",
+            v.primary_stiffness,
+            1e10,
+            "N/m",
+        )?;
+        c.range(
+            "vehicle.primary_damping",
+            v.primary_damping,
+            0.0,
+            1e9,
+            "N s/m",
+        )?;
+        // The sprung mass is wheel_load / gravity: near 0 it runs away (0 gives an infinite
+        // mass). Earth's surface: 9.78 to 9.83.
+        c.range("vehicle.gravity", v.gravity, 9.0, 10.5, "m/s^2")?;
+        let k = &self.contact;
+        c.pos(
+            "contact.friction",
+            k.friction,
+            2.0,
+            "(-) (> 0: the driving torque is transmitted by friction)",
+        )?;
+        c.range(
+            "contact.traction_coefficient",
+            k.traction_coefficient,
+            0.0,
+            k.friction,
+            "(-) (below contact.friction)",
+        )?;
+        c.range(
+            "contact.rail_crown_radius",
+            k.rail_crown_radius,
+            0.05,
+            10.0,
+            "m",
+        )?;
+        c.int("contact.grid_nx", k.grid_nx, 8, 256)?;
+        c.int("contact.grid_ny", k.grid_ny, 4, 256)?;
+        // A passage's contact work grows as grid_nx² · grid_ny (grid_nx cells per step and
+        // steps of one cell): refuse grids far beyond the default's time.
+        let work = k.grid_nx * k.grid_nx * k.grid_ny;
+        if work > MAX_GRID_WORK {
+            return c.fail(
+                "contact.grid_nx",
+                format!("{} (with contact.grid_ny = {})", k.grid_nx, k.grid_ny),
+                format!(
+                    "grid_nx^2 * grid_ny at most {MAX_GRID_WORK} (here {work}: {:.0} times the 32 x 24 default's passage time; e.g. 64 x 64 is {:.1} times)",
+                    work as f64 / (32.0 * 32.0 * 24.0),
+                    64.0 * 64.0 * 64.0 / (32.0 * 32.0 * 24.0)
+                ),
+            );
+        }
+        c.range("contact.grid_margin", k.grid_margin, 1.05, 3.0, "(-)")?;
+        let m = &self.mesh;
+        c.pos(
+            "mesh.element_length",
+            m.element_length,
+            t.sleeper_spacing / 4.0,
+            "m (at most a quarter of the sleeper spacing)",
+        )?;
+        c.pos(
+            "mesh.fine_element_length",
+            m.fine_element_length,
+            m.element_length,
+            "m (at most mesh.element_length)",
+        )?;
+        c.range("mesh.section_size", m.section_size, 0.002, 0.05, "m")?;
+        c.range(
+            "mesh.head_size",
+            m.head_size,
+            0.001,
+            m.section_size,
+            "m (at most mesh.section_size)",
+        )?;
+        for (i, n) in m.sleeper_elements.iter().enumerate() {
+            c.int(&format!("mesh.sleeper_elements[{i}]"), *n, 1, 64)?;
+        }
+        c.int("mesh.wheel_segments", m.wheel_segments, 12, 720)?;
+        c.range(
+            "mesh.wheel_element_size",
+            m.wheel_element_size,
+            0.005,
+            0.1,
+            "m",
+        )?;
+        let run = &self.run;
+        c.range(
+            "run.speed_kmh",
+            run.speed_kmh,
+            SPEED_KMH[0],
+            SPEED_KMH[1],
+            "km/h",
+        )?;
+        c.range(
+            "run.solution_zone_offset",
+            run.solution_zone_offset,
+            0.0,
+            10.0,
+            "m",
+        )?;
+        c.range("run.fmax", run.fmax, 100.0, 20000.0, "Hz")?;
+        c.pos("wear.coefficient", self.wear.coefficient, 1e-6, "m^3/J")?;
+        c.range(
+            "wear.initiation_threshold",
+            self.wear.initiation_threshold,
+            0.0,
+            1.0,
+            "-",
+        )?;
+        c.range("explicit.safety", self.explicit.safety, 0.1, 1.0, "-")?;
+        if let Some(dt) = self.explicit.time_step {
+            // The stable limit depends on the assembled matrices and is checked when the
+            // explicit model is built; here only a physical range.
+            c.range("explicit.time_step", dt, 1e-10, 1e-4, "s")?;
+        }
+        let room = self.track_length() - run.solution_zone_offset;
+        c.pos(
+            "run.solution_zone_length",
+            run.solution_zone_length,
+            room,
+            "m (zone must fit on the track)",
+        )?;
+        Ok(())
+    }
+}
+
+/// Allowed train speed (km/h), of `run.speed_kmh` and of every speed a sweep, study or
+/// initiation table runs: the model is not meant beyond 500 km/h.
+pub const SPEED_KMH: [f64; 2] = [1.0, 500.0];
+
+/// Largest static wheel load (N): 50 t per wheel, beyond any railway axle load.
+pub const MAX_WHEEL_LOAD_N: f64 = 500e3;
+
+/// Largest `contact.grid_nx² · contact.grid_ny`: 12 times the default 32 × 24 grid's passage
+/// time (64 × 64 takes 10.7 times; 256 × 256 would take 680 times, hours in place of minutes).
+pub const MAX_GRID_WORK: usize = 12 * 32 * 32 * 24;
+
+/// Allowed Young's modulus of the rail, sleeper and wheel (Pa): the solids a track is made of
+/// (steel 2.1e11, concrete 3.8e10, polymers from 1e9). Far outside it the modal bases and the
+/// contact grid go out of scale (e.g. E = 1e-12 Pa puts thousands of modes below `run.fmax`).
+pub const YOUNGS_MODULUS_PA: [f64; 2] = [1e9, 1e13];
+
+/// Allowed Poisson's ratio of the rail, sleeper and wheel (−). Above 0.45 a solid is nearly
+/// incompressible: its dilatational wave speed, hence the explicit time step, runs away and
+/// the linear hexahedra lock.
+pub const POISSON_RATIO: [f64; 2] = [0.0, 0.45];
+
+/// Allowed density of the rail, sleeper and wheel (kg/m³): steel 7800, concrete 2500.
+pub const DENSITY_KG_M3: [f64; 2] = [1000.0, 20000.0];
+
+struct Checker<'a> {
+    file: &'a str,
+}
+
+impl Checker<'_> {
+    fn fail(&self, key: &str, value: String, allowed: String) -> Result<(), ModelError> {
+        Err(ModelError::OutOfRange {
+            file: self.file.into(),
+            key: key.into(),
+            value,
+            allowed,
+        })
+    }
+    /// lo ≤ v ≤ hi, finite.
+    fn range(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<(), ModelError> {
+        if !(v.is_finite() && v >= lo && v <= hi) {
+            return self.fail(key, v.to_string(), format!("{lo} to {hi} {unit}"));
+        }
+        Ok(())
+    }
+    /// 0 < v ≤ hi, finite.
+    fn pos(&mut self, key: &str, v: f64, hi: f64, unit: &str) -> Result<(), ModelError> {
+        if !(v.is_finite() && v > 0.0 && v <= hi) {
+            return self.fail(
+                key,
+                v.to_string(),
+                format!("greater than 0 and at most {hi} {unit}"),
+            );
+        }
+        Ok(())
+    }
+    /// Stiffness (N/m) and damping (N·s/m) in x, y, z under `prefix`: each 0 to 1e12.
+    fn spring_damper(&mut self, prefix: &str, k: [f64; 3], c: [f64; 3]) -> Result<(), ModelError> {
+        for (d, name) in ["longitudinal", "lateral", "vertical"].iter().enumerate() {
+            self.range(
+                &format!("{prefix}.{name}_stiffness"),
+                k[d],
+                0.0,
+                1e12,
+                "N/m",
+            )?;
+            self.range(
+                &format!("{prefix}.{name}_damping"),
+                c[d],
+                0.0,
+                1e12,
+                "N s/m",
+            )?;
+        }
+        Ok(())
+    }
+
+    fn int(&mut self, key: &str, v: usize, lo: usize, hi: usize) -> Result<(), ModelError> {
+        if v < lo || v > hi {
+            return self.fail(key, v.to_string(), format!("{lo} to {hi}"));
+        }
+        Ok(())
+    }
+    /// Young's modulus, Poisson's ratio and density of a solid part in their physical ranges
+    /// ([`YOUNGS_MODULUS_PA`], [`POISSON_RATIO`], [`DENSITY_KG_M3`]).
+    fn elastic(&mut self, part: &str, e: f64, nu: f64, rho: f64) -> Result<(), ModelError> {
+        let [e_lo, e_hi] = YOUNGS_MODULUS_PA;
+        self.range(
+            &format!("{part}.youngs_modulus"),
+            e,
+            e_lo,
+            e_hi,
+            "Pa (solids of a track: steel 2.1e11, concrete 3.8e10)",
+        )?;
+        let [nu_lo, nu_hi] = POISSON_RATIO;
+        self.range(
+            &format!("{part}.poisson_ratio"),
+            nu,
+            nu_lo,
+            nu_hi,
+            "(-) (nearly incompressible material is not supported)",
+        )?;
+        let [rho_lo, rho_hi] = DENSITY_KG_M3;
+        self.range(
+            &format!("{part}.density"),
+            rho,
+            rho_lo,
+            rho_hi,
+            "kg/m^3 (steel 7800, concrete 2500)",
+        )
+    }
+}
