@@ -12,7 +12,7 @@
 //! `cargo run --release --example contact_line_compliance -- [--cache DIR] [--set k=v]...`
 //! (modes from the cache, computed when absent).
 
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
+use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::model::{load_model, ModelSource};
 

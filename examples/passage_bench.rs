@@ -18,7 +18,7 @@ mod common;
 use common::{bits_digest, cpu_seconds, machine_load, summary_line};
 use corrugation::dynamics::analysis::summarise;
 use corrugation::dynamics::integrator::ModalVerlet;
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
+use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::cache::ModalCache;
 use corrugation::model::{load_model, ModelSource};
 use std::time::Instant;

@@ -17,8 +17,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
 use corrugation::dynamics::PassageRunner;
+use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::basis::track_basis;
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::eigen::substructure::{

@@ -14,7 +14,7 @@
 mod common;
 
 use common::{bits_digest, cpu_seconds, machine_load, summary_values};
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
+use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::cache::ModalCache;
 use corrugation::model::{load_model, ModelSource};
 use corrugation::studies::speeds::parse_speeds;

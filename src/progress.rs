@@ -14,8 +14,14 @@ pub trait Progress: Sync {
     fn stage(&self, name: &str, total: u64);
     /// `done` units of the current stage are complete (0 ≤ done ≤ total).
     fn done(&self, done: u64);
+    /// The total of the current stage became known after it began (e.g. the Sturm count of
+    /// an eigen-solve). Default: ignored.
+    fn total(&self, _total: u64) {}
     /// The current stage is over.
     fn finish(&self) {}
+    /// A warning for the user that does not stop the work (e.g. a cache entry that could not
+    /// be stored). Default: dropped, for work nobody watches.
+    fn warn(&self, _message: &str) {}
 }
 
 /// Progress that nobody watches (tests, library use without a front end).
@@ -43,9 +49,22 @@ impl<'a> Counter<'a> {
         }
     }
 
+    /// Counts into the stage that the caller has already begun on `sink`, from 0.
+    pub fn within(sink: &'a dyn Progress) -> Self {
+        Self {
+            sink,
+            count: AtomicU64::new(0),
+        }
+    }
+
     /// One more unit is complete.
     pub fn inc(&self) {
-        let k = self.count.fetch_add(1, Ordering::Relaxed) + 1;
+        self.add(1);
+    }
+
+    /// `n` more units are complete.
+    pub fn add(&self, n: u64) {
+        let k = self.count.fetch_add(n, Ordering::Relaxed) + n;
         self.sink.done(k);
     }
 

@@ -4,7 +4,10 @@
 
 mod common;
 
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel, RIGID_HZ};
+use corrugation::dynamics::{
+    passage::{PassageOptions, RIGID_HZ},
+    prepared::PreparedModel,
+};
 use corrugation::eigen::cache::ModalCache;
 use corrugation::model::{load_model, ModelSource};
 

@@ -4,7 +4,7 @@
 
 mod common;
 
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
+use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::cache::ModalCache;
 use corrugation::model::{load_model, ModelSource};
 
@@ -28,7 +28,7 @@ fn small_model() -> corrugation::model::Model {
 }
 
 /// One passage of `m` over the smooth rail with the default options.
-fn smooth_passage(m: &corrugation::model::Model) -> corrugation::dynamics::passage::PassageRecord {
+fn smooth_passage(m: &corrugation::model::Model) -> corrugation::dynamics::record::PassageRecord {
     let opts = PassageOptions::default();
     let p = PreparedModel::new(m, &cache(), &opts).expect("modal model");
     p.engine

@@ -3,8 +3,8 @@
 //! validation/substructure.md: band RMS of F_L, F_N and wear within 10 %, dominant wear
 //! wavelength within 2 %.
 
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
 use corrugation::dynamics::PassageRunner;
+use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::basis::track_basis;
 use corrugation::eigen::cache::ModalCache;
 use corrugation::eigen::substructure::{

@@ -1,5 +1,5 @@
 //! The one place where the commands get their passage engine: the reduced-order engine of
-//! [`corrugation::dynamics::passage::PreparedModel`] (modal bases from the cache, built once
+//! [`corrugation::dynamics::prepared::PreparedModel`] (modal bases from the cache, built once
 //! per model), or with `--engine explicit` the full explicit FE path
 //! ([`corrugation::explicit::ExplicitModel`], docs/theory.md §8).
 
@@ -7,8 +7,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use anyhow::Context;
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
 use corrugation::dynamics::PassageRunner;
+use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::explicit::{ExplicitModel, ExplicitOptions, ExplicitRunner};
 use corrugation::growth::procedure::{trial_growth, ModeLines};
@@ -53,13 +53,15 @@ fn cache_of(cache: Option<&Path>) -> ModalCache {
 }
 
 /// The prepared reduced-order model (modal bases loaded from or stored in the cache).
-/// Off a terminal a plain progress line says every interval that the bases are being built.
+/// The eigen-solves and their classification are shown as they run (a bar on a terminal,
+/// plain lines every interval otherwise).
 pub fn prepared(model: &Model, cache: Option<&Path>) -> anyhow::Result<PreparedModel> {
-    let pb = super::progress::background(&format!(
+    let pb = std::sync::Arc::new(super::progress::bar(&format!(
         "modal bases below {} Hz (track and wheel; loaded from the cache or computed)",
         model.run.fmax
-    ));
-    let p = PreparedModel::new(model, &cache_of(cache), &PassageOptions::default())
+    )));
+    let cache = cache_of(cache).with_progress(pb.clone());
+    let p = PreparedModel::new(model, &cache, &PassageOptions::default())
         .context("preparing the modal model")?;
     pb.finish_and_clear();
     Ok(p)

@@ -124,22 +124,17 @@ impl ModesCmd {
         let m = self.model.load()?;
         super::check_out_dir(&self.out)?;
         let cache_dir = self.cache.clone().unwrap_or_else(default_cache_dir);
-        let cache = ModalCache::new(&cache_dir);
+        let pb = std::sync::Arc::new(super::progress::bar(&format!(
+            "track and wheel modes below {} Hz (Lanczos, or the cache)",
+            self.fmax
+        )));
+        let cache = ModalCache::new(&cache_dir).with_progress(pb.clone());
         let track = TrackStructure::build(&m).context("building the track model")?;
         let wheel = WheelStructure::build(&m).context("building the wheel model")?;
-        let pb = super::progress::background(&format!(
-            "track modes below {} Hz (Lanczos, or the cache)",
-            self.fmax
-        ));
         let tb = track_basis(&m, &track, &cache, self.fmax)?;
-        pb.finish_and_clear();
-        drop(pb);
-        let pb = super::progress::background(&format!(
-            "wheel modes below {} Hz (Lanczos, or the cache)",
-            self.fmax
-        ));
         let wb = wheel_basis(&m, &wheel, &cache, self.fmax)?;
         pb.finish_and_clear();
+        drop(cache);
         drop(pb);
 
         std::fs::create_dir_all(&self.out)

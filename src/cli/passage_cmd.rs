@@ -101,7 +101,7 @@ impl PassageCmd {
 /// passing the node planes.
 pub fn write_outputs(
     out: &Path,
-    rec: &corrugation::dynamics::passage::PassageRecord,
+    rec: &corrugation::dynamics::record::PassageRecord,
     s: &PassageSummary,
     element_length_m: f64,
 ) -> anyhow::Result<()> {
@@ -183,7 +183,7 @@ pub fn write_outputs(
 
 pub fn print_summary(
     s: &PassageSummary,
-    rec: &corrugation::dynamics::passage::PassageRecord,
+    rec: &corrugation::dynamics::record::PassageRecord,
     out: &Path,
 ) {
     println!(
@@ -237,7 +237,7 @@ pub fn print_summary(
 /// Plots of F_L, F_N and W_f along the rail (solution zone) and their band PSDs (SVG + PNG).
 fn write_plots(
     out: &Path,
-    rec: &corrugation::dynamics::passage::PassageRecord,
+    rec: &corrugation::dynamics::record::PassageRecord,
     w: &corrugation::dynamics::analysis::Analysed,
     fl: &corrugation::dynamics::analysis::Analysed,
     fnn: &corrugation::dynamics::analysis::Analysed,

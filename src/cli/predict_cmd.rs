@@ -15,7 +15,7 @@ use clap::Args;
 use serde::Serialize;
 
 use corrugation::dynamics::passage::PassageOptions;
-use corrugation::dynamics::passage::PreparedModel;
+use corrugation::dynamics::prepared::PreparedModel;
 use corrugation::dynamics::summary::PassageSummary;
 use corrugation::growth::procedure::{ModeLines, TrialGrowth};
 use corrugation::growth::verdict::{

@@ -84,18 +84,12 @@ fn plain_line(stage: &Stage, bar: &indicatif::ProgressBar) -> String {
 /// (a spinner until the total is known); otherwise a line `name ...` now and a plain
 /// progress line every interval.
 pub fn bar(name: &str) -> Progress {
-    make(name, true)
+    make(name)
 }
 
-/// Like [`bar`], but draws nothing on a terminal: for work whose bars the library still draws
-/// itself (the modal bases); off a terminal the plain lines say that it is running.
-pub fn background(name: &str) -> Progress {
-    make(name, false)
-}
-
-fn make(name: &str, draw_on_tty: bool) -> Progress {
+fn make(name: &str) -> Progress {
     let tty = std::io::stderr().is_terminal();
-    let bar = if tty && draw_on_tty {
+    let bar = if tty {
         let pb = indicatif::ProgressBar::new(0);
         pb.set_style(uncounted_style());
         pb.set_message(name.to_string());
@@ -143,6 +137,11 @@ impl Progress {
         if let Ok(mut s) = self.stage.lock() {
             s.name = msg.to_string();
             s.start = Instant::now();
+        }
+        // A stage after a finished one restarts the bar (and its ticker) on a terminal.
+        if self.bar.is_finished() && !self.bar.is_hidden() {
+            self.bar.reset();
+            self.bar.enable_steady_tick(Duration::from_millis(200));
         }
         self.bar.set_style(uncounted_style());
         self.bar.set_length(0);
@@ -197,6 +196,14 @@ impl corrugation::progress::Progress for Progress {
 
     fn done(&self, done: u64) {
         self.set_position(done);
+    }
+
+    fn total(&self, total: u64) {
+        self.set_length(total);
+    }
+
+    fn warn(&self, message: &str) {
+        self.bar.suspend(|| eprintln!("warning: {message}"));
     }
 
     fn finish(&self) {

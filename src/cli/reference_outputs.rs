@@ -20,9 +20,9 @@ use clap::Args;
 use serde::Serialize;
 
 use corrugation::dynamics::coupled::{attribution_text, ModeAttribution};
-use corrugation::dynamics::passage::{PassageOptions, PreparedModel};
 use corrugation::dynamics::summary::PassageSummary;
 use corrugation::dynamics::RailProfile;
+use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::io::write_text;
 use corrugation::spectral::nodal::{nodal_spectrum, short_window_m, NodalHistory, NodalSpectrum};
 

@@ -6,7 +6,7 @@
 //! Record length L = the solution zone (default 1 m): wavenumber resolution 1/L, i.e. at
 //! 40 mm a wavelength resolution λ²/L = 1.6 mm; peaks are interpolated within a bin.
 
-use super::passage::PassageRecord;
+use super::record::PassageRecord;
 use super::summary::{PassageSummary, WavelengthComponent, WavelengthSpectrum};
 use super::DynamicsError;
 use crate::spectral::{band_pass, find_peaks, BandPass, PeakOptions, Psd, PsdOptions, Signal};
@@ -100,7 +100,7 @@ pub fn band_spectrum(psd: &Psd) -> WavelengthSpectrum {
 
 /// [`DynamicsError::ContactLost`] when the normal force is zero (or not positive) at any step:
 /// a wheel off the rail transmits no force and wears nothing, which is no rolling result.
-pub fn check_contact(h: &crate::dynamics::passage::Histories) -> Result<(), DynamicsError> {
+pub fn check_contact(h: &crate::dynamics::record::Histories) -> Result<(), DynamicsError> {
     let lost: Vec<usize> = (0..h.normal_n.len())
         .filter(|&i| h.normal_n[i].is_nan() || h.normal_n[i] <= 0.0)
         .collect();
@@ -148,7 +148,7 @@ pub fn summarise(rec: &PassageRecord) -> Result<PassageSummary, DynamicsError> {
 #[cfg(test)]
 mod contact_tests {
     use super::*;
-    use crate::dynamics::passage::Histories;
+    use crate::dynamics::record::Histories;
 
     fn histories(normal_n: &[f64]) -> Histories {
         let n = normal_n.len();

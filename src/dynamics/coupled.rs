@@ -53,9 +53,9 @@
 use faer::{c64, Mat};
 use serde::{Deserialize, Serialize};
 
-use super::passage::{steady_contact, PassageEngine, PreparedModel};
 use super::reduced::ModalSystem;
 use super::DynamicsError;
+use super::{passage::PassageEngine, prepared::PreparedModel, setup::steady_contact};
 use crate::contact::{Longitudinal, NormalInput, StepInputs, TransientRolling};
 use crate::eigen::classify::{TrackFamily, TrackModeClass};
 
@@ -533,7 +533,7 @@ fn static_state(
         model.contact.traction_coefficient * w,
         frame.n[1] / engine.wheel_radius_m(),
     ];
-    let mut contact = super::passage::passage_contact(model, v, None)?;
+    let mut contact = super::setup::passage_contact(model, v, None)?;
     contact
         .set_series_compliance(engine.series_compliance())
         .map_err(|source| DynamicsError::Contact {

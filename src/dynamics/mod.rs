@@ -16,9 +16,12 @@ pub mod coupled;
 pub mod integrator;
 pub mod passage;
 pub mod patch;
+pub mod prepared;
 pub mod receptance;
+pub mod record;
 pub mod reduced;
 pub mod residual;
+pub mod setup;
 pub mod summary;
 
 pub use summary::{PassageSummary, WavelengthComponent, WavelengthSpectrum};
@@ -399,7 +402,7 @@ pub trait PassageRecorder: Sync {
         &self,
         speed_m_per_s: f64,
         profile: Option<&RailProfile>,
-    ) -> Result<passage::PassageRecord, DynamicsError>;
+    ) -> Result<record::PassageRecord, DynamicsError>;
 
     /// Hertz semi-axis across the rail at the static load (m): the width the wear is spread
     /// over in the iterative growth.
@@ -411,7 +414,7 @@ impl PassageRecorder for passage::PassageEngine {
         &self,
         speed_m_per_s: f64,
         profile: Option<&RailProfile>,
-    ) -> Result<passage::PassageRecord, DynamicsError> {
+    ) -> Result<record::PassageRecord, DynamicsError> {
         let quiet = passage::PassageOptions {
             energy: false,
             rail_point_offset_m: None,
@@ -437,7 +440,7 @@ pub trait PassageRunner: Sync {
 
     /// The prepared reduced-order model behind this runner, if it is one (lets the growth
     /// procedure reuse the loaded modal bases instead of loading them again).
-    fn prepared(&self) -> Option<&passage::PreparedModel> {
+    fn prepared(&self) -> Option<&prepared::PreparedModel> {
         None
     }
 }

@@ -558,7 +558,9 @@ pub fn cached_residual(
     )?;
     let bytes = serde_json::to_vec(&r)?;
     if let Err(e) = cache.store_aux(key, &name, &bytes) {
-        eprintln!("warning: could not cache the residual flexibility: {e}");
+        cache
+            .progress()
+            .warn(&format!("could not cache the residual flexibility: {e}"));
     }
     // Use the values exactly as a cache hit reads them back (serde_json may parse one ulp
     // off), so a fresh and a cached run give identical results.

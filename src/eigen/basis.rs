@@ -13,7 +13,6 @@
 //! modes, the expensive ones; the wheel's key holds only the wheel, the vehicle and the
 //! wheel's mesh keys, so a fastening, ballast or rail study shares one wheel basis.
 
-use std::io::IsTerminal;
 use std::time::Instant;
 
 use faer::Mat;
@@ -27,6 +26,7 @@ use super::classify::{
 use super::{solve, EigenError, EigenOptions};
 use crate::fe::assembly::FeMatrices;
 use crate::model::Model;
+use crate::progress::{Counter, Progress};
 use crate::structure::{StructureError, TrackStructure, WheelStructure};
 
 /// Errors of [`track_basis`] / [`wheel_basis`].
@@ -149,23 +149,6 @@ pub fn structure_key_value(m: &Model, substructure: &str) -> Result<serde_json::
     Ok(v)
 }
 
-/// A progress bar on stderr (hidden when stderr is not a terminal).
-pub fn progress_bar(msg: &str) -> indicatif::ProgressBar {
-    let pb = if std::io::stderr().is_terminal() {
-        indicatif::ProgressBar::new(0)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    pb.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} {msg} [{elapsed_precise}] {wide_bar} {pos}/{len}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    pb.set_message(msg.to_string());
-    pb
-}
-
 fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {
     (0..modes.nrows()).map(|i| modes[(i, j)]).collect()
 }
@@ -178,13 +161,12 @@ fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {
 pub(crate) fn classify_in_chunks<C: Send>(
     modes: &Mat<f64>,
     frequencies_hz: &[f64],
-    name: &str,
+    progress: &dyn Progress,
     classify: impl Fn(&[&[f64]], &[f64]) -> Result<Vec<C>, BasisError> + Sync,
 ) -> Result<Vec<C>, BasisError> {
     const CHUNK: usize = 256;
-    let pb = progress_bar(&format!("classifying {name} modes"));
-    pb.set_length(frequencies_hz.len() as u64);
     let nm = frequencies_hz.len();
+    let counter = Counter::within(progress);
     let per_chunk: Vec<Vec<C>> = {
         use rayon::prelude::*;
         (0..nm)
@@ -196,12 +178,11 @@ pub(crate) fn classify_in_chunks<C: Send>(
                 let cols: Vec<Vec<f64>> = (c0..c1).map(|j| column(modes, j)).collect();
                 let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
                 let out = classify(&refs, &frequencies_hz[c0..c1]);
-                pb.inc((c1 - c0) as u64);
+                counter.add((c1 - c0) as u64);
                 out
             })
             .collect::<Result<_, _>>()?
     };
-    pb.finish_and_clear();
     Ok(per_chunk.into_iter().flatten().collect())
 }
 
@@ -229,34 +210,42 @@ fn basis<C: Serialize + DeserializeOwned + Send>(
                         seconds: t.elapsed().as_secs_f64(),
                     });
                 }
-                _ => eprintln!(
+                _ => cache.progress().warn(&format!(
                     "modal cache: {name} entry has an incomplete classification; recomputing"
-                ),
+                )),
             }
         }
-        CacheLookup::Corrupt(r) => {
-            eprintln!("modal cache: {name} entry corrupt ({r}); recomputing")
-        }
+        CacheLookup::Corrupt(r) => cache.progress().warn(&format!(
+            "modal cache: {name} entry corrupt ({r}); recomputing"
+        )),
         CacheLookup::Miss => {}
     }
     let mats = mats()?;
-    let pb = progress_bar(&format!("{name} modes"));
+    let progress = cache.progress();
+    progress.stage(&format!("{name} modes below {fmax} Hz (Lanczos)"), 0);
     let sol = solve(
         mats.k.as_ref(),
         mats.m.as_ref(),
         &EigenOptions::new(fmax),
-        Some(&pb),
+        Some(progress),
     )
     .map_err(|source| BasisError::Eigen {
         substructure: name,
         source,
     })?;
-    pb.finish_and_clear();
-    let classes = classify_in_chunks(&sol.modes, &sol.frequencies_hz, name, classify)?;
+    progress.finish();
+    progress.stage(
+        &format!("classifying {name} modes"),
+        sol.frequencies_hz.len() as u64,
+    );
+    let classes = classify_in_chunks(&sol.modes, &sol.frequencies_hz, progress, classify)?;
+    progress.finish();
     let value = serde_json::to_value(&classes).map_err(BasisError::Json)?;
     let meta = CacheMeta::from_solution(&sol, 0.0, fmax, value.clone());
     if let Err(e) = cache.store(key, &sol.frequencies_hz, &sol.modes, meta) {
-        eprintln!("warning: could not store the {name} modes in the cache: {e}");
+        progress.warn(&format!(
+            "could not store the {name} modes in the cache: {e}"
+        ));
     }
     // serde_json (without its `float_roundtrip` feature) may parse a printed f64 one ulp off.
     // Use the values exactly as a cache hit will read them back from meta.json (print, then

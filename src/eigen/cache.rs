@@ -177,10 +177,20 @@ pub enum CacheLookup {
     Corrupt(String),
 }
 
-/// The cache directory.
-#[derive(Clone, Debug)]
+/// The cache directory, and where the work of filling it (eigen-solves, classification,
+/// warnings) is reported.
+#[derive(Clone)]
 pub struct ModalCache {
     dir: PathBuf,
+    progress: std::sync::Arc<dyn crate::progress::Progress + Send>,
+}
+
+impl std::fmt::Debug for ModalCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ModalCache")
+            .field("dir", &self.dir)
+            .finish()
+    }
 }
 
 static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -260,9 +270,28 @@ fn hash_file(path: &Path) -> Result<(String, Vec<u8>), CacheError> {
 }
 
 impl ModalCache {
-    /// A cache rooted at `dir` (created on first store).
+    /// A cache rooted at `dir` (created on first store); its work is reported to nobody
+    /// ([`crate::progress::Silent`]).
     pub fn new(dir: impl Into<PathBuf>) -> Self {
-        Self { dir: dir.into() }
+        Self {
+            dir: dir.into(),
+            progress: std::sync::Arc::new(crate::progress::Silent),
+        }
+    }
+
+    /// This cache, reporting the work of filling it (the stages "track modes", "classifying
+    /// track modes", …, and warnings) to `progress`.
+    pub fn with_progress(
+        mut self,
+        progress: std::sync::Arc<dyn crate::progress::Progress + Send>,
+    ) -> Self {
+        self.progress = progress;
+        self
+    }
+
+    /// Where the work of filling this cache is reported.
+    pub fn progress(&self) -> &dyn crate::progress::Progress {
+        &*self.progress
     }
 
     /// Directory of the entry for `key`.

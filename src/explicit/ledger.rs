@@ -4,7 +4,7 @@
 use super::operator::StepScratch;
 use super::passage::ExplicitModel;
 use super::ExplicitError;
-use crate::dynamics::passage::EnergyBalance;
+use crate::dynamics::record::EnergyBalance;
 
 /// The state of both substructures: displacements (m) and half-step velocities (m/s).
 pub(super) struct State {

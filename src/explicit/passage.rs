@@ -43,13 +43,14 @@ use super::stable::{StableStep, DEFAULT_SAFETY};
 use super::start::{add_line_force, solve_one, wheel_elastic_static, wheel_rigid_modes};
 use super::ExplicitError;
 use crate::contact::{Longitudinal, NormalInput, StepInputs, WearAccumulator};
-use crate::dynamics::passage::{
-    passage_contact, rigid_least_norm, steady_contact, Histories, PassageOptions, PassageRecord,
-    RailPointRecord, WheelLoads,
-};
 use crate::dynamics::patch::{max_planes, plane_weights, PlaneWeights};
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
 use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
+use crate::dynamics::{
+    passage::PassageOptions,
+    record::{Histories, PassageRecord, RailPointRecord},
+    setup::{passage_contact, rigid_least_norm, steady_contact, WheelLoads},
+};
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
 use crate::model::{ExplicitLocalCompliance, ExplicitWheel, LoadSpread, Model};
 use crate::structure::{TrackStructure, WheelStructure};

@@ -26,8 +26,8 @@
 use super::operator::{ExplicitOperator, StepScratch};
 use super::response::UnitResponse;
 use super::ExplicitError;
-use crate::dynamics::passage::WheelLoads;
 use crate::dynamics::reduced::ContactFrame;
+use crate::dynamics::setup::WheelLoads;
 use crate::fe::assembly::DofMap;
 use crate::structure::WheelStructure;
 

@@ -37,7 +37,7 @@ use super::{
     GrowthError, GrowthPhase,
 };
 use crate::dynamics::analysis::{analyse, wear_signal, zone_signal, Analysed};
-use crate::dynamics::passage::PassageRecord;
+use crate::dynamics::record::PassageRecord;
 use crate::dynamics::summary::{PassageSummary, WavelengthComponent};
 use crate::dynamics::PassageRecorder;
 use crate::dynamics::{DynamicsError, RailProfile};
@@ -122,7 +122,7 @@ pub struct ModeLines {
     /// Vertical-bending modes of the track (Hz).
     pub vertical_hz: Vec<f64>,
     /// Wheel modes the contact sees (Hz; e.g.
-    /// [`crate::dynamics::passage::PreparedModel::wheel_contact_modes_hz`]).
+    /// [`crate::dynamics::prepared::PreparedModel::wheel_contact_modes_hz`]).
     pub wheel_hz: Vec<f64>,
 }
 

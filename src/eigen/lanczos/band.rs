@@ -29,7 +29,7 @@ pub(super) fn run_band(
     top: (f64, usize),
     lam_max: f64,
     opts: &EigenOptions,
-    progress: Option<&indicatif::ProgressBar>,
+    progress: Option<&Counter<'_>>,
 ) -> Result<BandOut, EigenError> {
     let n = ctx.sys.n();
     let (top_shift, nu_max) = top;
@@ -339,8 +339,8 @@ pub(super) fn run_band(
             solved_vectors: out.solved,
             lanczos_s: t_slice.elapsed().as_secs_f64(),
         });
-        if let Some(pb) = progress {
-            pb.inc((lambdas.len() - reported) as u64);
+        if let Some(c) = progress {
+            c.add((lambdas.len() - reported) as u64);
             reported = lambdas.len();
         }
         match next {

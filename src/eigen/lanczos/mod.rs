@@ -12,6 +12,7 @@
 //! block Krylov–Rayleigh–Ritz iteration that tolerates the arrow-shaped `H` after a thick
 //! restart without special cases.
 
+use crate::progress::{Counter, Progress};
 use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
 use std::time::Instant;
 
@@ -95,8 +96,8 @@ type BandJob = (ShiftFactor, bool, (f64, usize));
 /// Computes all eigenpairs of `K φ = λ M φ` with `f_min ≤ f < f_max` (see module doc).
 ///
 /// `k`, `m`: n × n, full symmetric storage (both triangles), K PSD, M PD.
-/// `progress`: optional bar; its length is set to the Sturm count and its position to the
-/// modes found so far.
+/// `progress`: optional sink for the caller's current stage; its total is set to the Sturm
+/// count and its count to the modes found so far.
 ///
 /// Phases: the factorisations at the ends of the band ([`factorize_ends`]), the Sturm counts
 /// and the cut into concurrent bands ([`plan_bands`]), the spectrum slicing of every band
@@ -107,7 +108,7 @@ pub fn solve(
     k: SparseColMatRef<'_, usize, f64>,
     m: SparseColMatRef<'_, usize, f64>,
     opts: &EigenOptions,
-    progress: Option<&indicatif::ProgressBar>,
+    progress: Option<&dyn Progress>,
 ) -> Result<EigenSolution, EigenError> {
     let t_total = Instant::now();
     check_problem(k, m, opts)?;
@@ -149,10 +150,11 @@ pub fn solve(
     let nu0 = ends.first.negative_count;
     let first_shift = ends.first.shift;
     let total = nu_max.saturating_sub(nu0);
-    if let Some(pb) = progress {
-        pb.set_length(total as u64);
-        pb.set_position(0);
+    if let Some(p) = progress {
+        p.total(total as u64);
+        p.done(0);
     }
+    let counter = progress.map(Counter::within);
     let grounded = ends.grounded;
     let (jobs, band_bounds) = plan_bands(&mut ctx, ends, opts, n, lam_max)?;
     let mut timing = std::mem::take(&mut ctx.timing);
@@ -163,7 +165,7 @@ pub fn solve(
         grounded,
         lam_max,
         opts,
-        progress,
+        counter.as_ref(),
         &mut timing,
     )?;
     if lambdas.len() != total {
@@ -362,7 +364,7 @@ fn run_bands(
     grounded: bool,
     lam_max: f64,
     opts: &EigenOptions,
-    progress: Option<&indicatif::ProgressBar>,
+    progress: Option<&Counter<'_>>,
     timing: &mut EigenTiming,
 ) -> Result<(Mat<f64>, Vec<f64>, Vec<SliceReport>), EigenError> {
     let n = problem.k.nrows();

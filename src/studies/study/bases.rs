@@ -10,7 +10,7 @@ use std::sync::{Arc, Mutex};
 use serde::{Deserialize, Serialize};
 
 use super::{Case, Study};
-use crate::dynamics::passage::{PassageOptions, PreparedModel};
+use crate::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use crate::eigen::basis::cache_key;
 use crate::eigen::cache::{CacheKey, ModalCache};
 use crate::eigen::substructure::{

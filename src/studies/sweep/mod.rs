@@ -80,7 +80,7 @@ pub struct MapOptions {
     pub frequency_lines_hz: Vec<f64>,
     /// Wheel eigenfrequencies with a large modal displacement at the contact point drawn
     /// on the maps (Hz), labelled `wheel` (see
-    /// [`crate::dynamics::passage::PreparedModel::wheel_contact_modes_hz`]).
+    /// [`crate::dynamics::prepared::PreparedModel::wheel_contact_modes_hz`]).
     #[serde(default)]
     pub wheel_lines_hz: Vec<f64>,
 }

@@ -1,0 +1,98 @@
+//! The modal-cache entries of the component bases: their key (the track's structural key
+//! without the spring stiffnesses) and their storage.
+
+use super::*;
+
+/// Revision of the component construction (bump when the bases of an unchanged model change).
+pub const COMPONENT_REVISION: u64 = 2;
+
+/// The cache key of a track's component `part` (`rail-component` or `sleeper-component`):
+/// the track's key ([`crate::eigen::basis::structure_key_value`]) without any spring stiffness, but
+/// with the railpad directions that have springs at all (a direction with zero stiffness and
+/// zero damping has none, which changes the spring layout), f_max and the options. Hold and
+/// ballast springs exist whatever their stiffness.
+pub fn component_key(
+    m: &Model,
+    fmax_hz: f64,
+    opts: &SubstructureOptions,
+    part: &str,
+) -> Result<CacheKey, BasisError> {
+    let mut v = crate::eigen::basis::structure_key_value(m, "track")?;
+    if let Some(o) = v.as_object_mut() {
+        for p in ["fastening", "ballast"] {
+            if let Some(f) = o.get_mut(p).and_then(|r| r.as_object_mut()) {
+                f.retain(|k, _| !k.ends_with("stiffness"));
+                if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
+                    for h in c.values_mut() {
+                        if let Some(h) = h.as_object_mut() {
+                            h.remove("stiffness");
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let (k, c) = (m.fastening.stiffness(), m.fastening.damping());
+    let active: u64 = (0..3)
+        .filter(|&d| k[d] != 0.0 || c[d] != 0.0)
+        .map(|d| 1u64 << d)
+        .sum();
+    let bytes = serde_json::to_vec(&v).map_err(BasisError::Json)?;
+    Ok(CacheKey::new()
+        .u64("physics_revision", crate::eigen::basis::PHYSICS_REVISION)
+        .u64("component_revision", COMPONENT_REVISION)
+        .bytes("model", &bytes)
+        .u64("railpad_directions", active)
+        .f64("f_max_hz", fmax_hz)
+        .f64("cutoff_factor", opts.cutoff_factor)
+        .f64("sleeper_cutoff_factor", opts.sleeper_cutoff_factor)
+        .u64("pattern_degree", opts.pattern_degree as u64)
+        .str("substructure", part))
+}
+
+pub(super) fn store_component(cache: &ModalCache, key: &CacheKey, c: &ComponentBasis, fmax: f64) {
+    let freqs: Vec<f64> = c
+        .omega2
+        .iter()
+        .map(|&w| w.sqrt() / (2.0 * std::f64::consts::PI))
+        .collect();
+    let meta = CacheMeta {
+        key: String::new(),
+        crate_version: String::new(),
+        n_dofs: c.vectors.nrows(),
+        n_modes: c.vectors.ncols(),
+        f_min_hz: 0.0,
+        f_max_hz: fmax,
+        sturm_count: c.modes,
+        relative_residuals: vec![],
+        m_orthonormality_error: 0.0,
+        frequencies_blake3: String::new(),
+        modes_blake3: String::new(),
+        classification: serde_json::json!({ "component_modes": c.modes, "omega2": c.omega2 }),
+    };
+    if let Err(e) = cache.store(key, &freqs, &c.vectors, meta) {
+        cache.progress().warn(&format!(
+            "could not store a track component basis in the cache: {e}"
+        ));
+    }
+}
+
+pub(super) fn load_component(
+    cache: &ModalCache,
+    key: &CacheKey,
+    n: usize,
+) -> Option<ComponentBasis> {
+    let CacheLookup::Hit(c) = cache.load(key) else {
+        return None;
+    };
+    let modes = c.meta.classification.get("component_modes")?.as_u64()? as usize;
+    let omega2: Vec<f64> =
+        serde_json::from_value(c.meta.classification.get("omega2")?.clone()).ok()?;
+    (c.modes.nrows() == n && omega2.len() == c.modes.ncols() && modes <= omega2.len()).then_some(
+        ComponentBasis {
+            vectors: c.modes,
+            omega2,
+            modes,
+        },
+    )
+}

@@ -1,0 +1,302 @@
+//! Substructured modal model of the track (docs/theory.md §5.8): component bases of the rail
+//! and of one sleeper, the railpad, ballast and elastic-hold springs as parameters of the
+//! assembled reduced system.
+//!
+//! # Components
+//! Without its springs the track falls apart into the rail (with the fastening's rigid holds,
+//! which are constraints to the ground, not interfaces) and the half sleepers, which are
+//! identical: one sleeper's basis serves all. Each component gets a Ritz basis:
+//!
+//! - its **free-interface modes** below the component cutoff `f_c` (= `cutoff_factor` ×
+//!   f_max): shift-invert Lanczos for the rail, a dense eigensolution for the sleeper;
+//! - **residual attachment vectors**: the static response `(K + αM)⁻¹ F` of the component to
+//!   smooth load patterns over each group of spring attachment points (a group = one
+//!   fastening's railpad, one elastic-hold region or one sleeper's ballast, in one direction;
+//!   patterns = the tensor-product polynomials of degree ≤ `pattern_degree` in the points'
+//!   coordinates), with the kept modes' part removed (MacNeal's residual flexibility,
+//!   Craig & Kurdila 2006 §15.4). α > 0 makes `K + αM` definite for a component with
+//!   rigid-body modes.
+//!
+//! A Rayleigh–Ritz step on each component's span makes the basis `Ψ_c` M-orthonormal and
+//! K-orthogonal (`Ψ_cᵀ K_c Ψ_c = diag(ω̃²)`).
+//!
+//! # The assembled reduced system
+//! `Ψ = blockdiag(Ψ_rail, Ψ_sleeper, …, Ψ_sleeper)`. The track's stiffness is the solids'
+//! block-diagonal stiffness plus the springs `Σ_s k_s g_s g_sᵀ` ([`crate::fe::spring`]), so
+//!
+//! ```text
+//! K_red(k) = diag(ω̃²) + Σ_s k_s (Ψᵀ g_s)(Ψᵀ g_s)ᵀ,    M_red = I,
+//! ```
+//!
+//! exact for any spring stiffness on the span of `Ψ`: a new railpad, ballast or elastic-hold
+//! stiffness needs only the dense eigenproblem of `K_red` (a few thousand unknowns), and
+//! the track's modes are `Φ = Ψ Q` for the eigenvectors `Q` below f_max. Damping enters
+//! neither K nor M: the passage projects the assembled C on `Φ` as for the full basis.
+//!
+//! # What it cannot represent
+//! A change of the spring *layout* (which DOFs a spring joins: mesh, footprint, hold regions,
+//! a stiffness switched between zero and non-zero with zero damping) or of a rigid hold is a
+//! new component model (the component key holds the layout); non-identical sleepers are
+//! refused ([`SubstructureError::SleepersDiffer`]). The full Lanczos basis
+//! ([`super::basis::track_basis`]) stays the reference for everything.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use faer::linalg::matmul::matmul;
+use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
+use faer::{Accum, Mat, MatRef, Par, Side};
+
+use super::basis::{classify_in_chunks, BasisError, ModalBasis};
+use super::cache::{CacheKey, CacheLookup, CacheMeta, ModalCache};
+use super::classify::{TrackClassifier, TrackModeClass};
+use super::factor::ShiftedSystem;
+use super::spmm::sym_spmm;
+use super::{solve, EigenError, EigenOptions, FillOrdering};
+use crate::fe::assembly::{assemble, AssemblyOptions, FeMatrices};
+use crate::model::Model;
+use crate::structure::track::SpringKind;
+use crate::structure::TrackStructure;
+
+/// Errors of the substructured track model.
+#[derive(Debug, thiserror::Error)]
+pub enum SubstructureError {
+    /// Building, assembling or caching a basis failed.
+    #[error(transparent)]
+    Basis(#[from] BasisError),
+    /// An eigensolution or factorisation failed.
+    #[error("{what}: {source}")]
+    Eigen {
+        /// Which component or step.
+        what: &'static str,
+        /// The solver error.
+        source: EigenError,
+    },
+    /// The half sleepers' matrices differ, so one sleeper's basis cannot serve all.
+    #[error("sleeper {index} differs from sleeper 0 (max relative difference {difference:e} of its K or M): the substructured basis needs identical sleepers; use basis = \"full\"")]
+    SleepersDiffer {
+        /// The first differing sleeper.
+        index: usize,
+        /// Largest relative entry difference.
+        difference: f64,
+    },
+    /// A spring joins DOFs the component split does not expect.
+    #[error("spring {index} ({kind:?}) joins {what}: the substructured basis cannot represent it; use basis = \"full\"")]
+    Layout {
+        /// Spring index in the track structure.
+        index: usize,
+        /// Its kind.
+        kind: SpringKind,
+        /// What it joins.
+        what: String,
+    },
+    /// Bad options.
+    #[error("substructure option {name} = {value}: {allowed}")]
+    Option {
+        /// The option.
+        name: &'static str,
+        /// The value given.
+        value: String,
+        /// What is allowed.
+        allowed: &'static str,
+    },
+}
+
+/// Options of the component bases.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SubstructureOptions {
+    /// Rail modes are kept below `cutoff_factor × f_max` (−, 1 to 4; default 1.5).
+    pub cutoff_factor: f64,
+    /// Sleeper modes are kept below `sleeper_cutoff_factor × f_max` (−, 1 to 4; default 1:
+    /// the coarse sleeper mesh has a dense spectrum above f_max, and every sleeper mode is
+    /// repeated once per sleeper in the reduced system).
+    pub sleeper_cutoff_factor: f64,
+    /// Highest degree per coordinate of the attachment load patterns (−, 0 to 3; default 3:
+    /// 16 patterns per group and direction); the ballast's patterns (soft springs under a
+    /// stiff sleeper) are at most bilinear.
+    pub pattern_degree: usize,
+}
+
+impl Default for SubstructureOptions {
+    fn default() -> Self {
+        Self {
+            cutoff_factor: 1.5,
+            sleeper_cutoff_factor: 1.0,
+            pattern_degree: 3,
+        }
+    }
+}
+
+impl SubstructureOptions {
+    /// Checks the ranges.
+    pub fn validate(&self) -> Result<(), SubstructureError> {
+        for (name, v) in [
+            ("cutoff_factor", self.cutoff_factor),
+            ("sleeper_cutoff_factor", self.sleeper_cutoff_factor),
+        ] {
+            if !(v.is_finite() && (1.0..=4.0).contains(&v)) {
+                return Err(SubstructureError::Option {
+                    name,
+                    value: v.to_string(),
+                    allowed: "1 to 4",
+                });
+            }
+        }
+        if self.pattern_degree > 3 {
+            return Err(SubstructureError::Option {
+                name: "pattern_degree",
+                value: self.pattern_degree.to_string(),
+                allowed: "0 to 3",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// One component's Ritz basis: M-orthonormal columns with `Ψᵀ K Ψ = diag(omega2)`.
+#[derive(Clone, Debug)]
+pub struct ComponentBasis {
+    /// Basis vectors over the component's free DOFs (n × N; m/√kg).
+    pub vectors: Mat<f64>,
+    /// `ω̃²` per vector (rad²/s²).
+    pub omega2: Vec<f64>,
+    /// How many leading vectors are component modes (the rest are attachment vectors).
+    pub modes: usize,
+}
+
+/// The component bases of one track (see the module doc).
+#[derive(Clone, Debug)]
+pub struct TrackComponents {
+    /// The rail's basis over the rail's free DOFs (the leading free DOFs of the track).
+    pub rail: ComponentBasis,
+    /// One sleeper's basis over its DOFs (node order of the sleeper mesh).
+    pub sleeper: ComponentBasis,
+    /// First free DOF of each sleeper.
+    pub sleeper_offsets: Vec<usize>,
+    /// Wall time to load or build (s).
+    pub seconds: f64,
+    /// True when both bases came from the cache.
+    pub cached: bool,
+}
+
+impl TrackComponents {
+    /// Size of the assembled reduced system.
+    pub fn reduced_size(&self) -> usize {
+        self.rail.omega2.len() + self.sleeper_offsets.len() * self.sleeper.omega2.len()
+    }
+}
+
+/// Builds the component bases of a track (no cache).
+pub fn build_components(
+    track: &TrackStructure,
+    fmax_hz: f64,
+    opts: &SubstructureOptions,
+) -> Result<TrackComponents, SubstructureError> {
+    opts.validate()?;
+    let t = Instant::now();
+    let sp = split(track)?;
+    if sp.sleeper_offsets.is_empty() {
+        return Err(SubstructureError::Layout {
+            index: 0,
+            kind: SpringKind::Ballast,
+            what: "no sleeper".into(),
+        });
+    }
+    let mats = solid_matrices(track)?;
+    let (rail_groups, sleeper_groups) = attachment_groups(track, &sp)?;
+    let cutoff = opts.cutoff_factor * fmax_hz;
+    let (ks, ms) = identical_sleepers(&mats, &sp)?;
+    let sleeper = sleeper_basis(
+        &ks,
+        &ms,
+        patterns(&sleeper_groups, sp.sleeper_dofs, opts.pattern_degree),
+        opts.sleeper_cutoff_factor * fmax_hz,
+    )?;
+    let kr = sparse_block(mats.k.as_ref(), 0, sp.rail_dofs);
+    let mr = sparse_block(mats.m.as_ref(), 0, sp.rail_dofs);
+    drop(mats);
+    let rail = rail_basis(
+        kr.as_ref(),
+        mr.as_ref(),
+        patterns(&rail_groups, sp.rail_dofs, opts.pattern_degree),
+        cutoff,
+    )?;
+    Ok(TrackComponents {
+        rail,
+        sleeper,
+        sleeper_offsets: sp.sleeper_offsets,
+        seconds: t.elapsed().as_secs_f64(),
+        cached: false,
+    })
+}
+
+/// The component bases of a track, loaded from the cache or built and stored.
+pub fn track_components(
+    m: &Model,
+    track: &TrackStructure,
+    cache: &ModalCache,
+    fmax_hz: f64,
+    opts: &SubstructureOptions,
+) -> Result<TrackComponents, SubstructureError> {
+    let t = Instant::now();
+    let sp = split(track)?;
+    let rk = component_key(m, fmax_hz, opts, "rail-component")?;
+    let sk = component_key(m, fmax_hz, opts, "sleeper-component")?;
+    if let (Some(rail), Some(sleeper)) = (
+        load_component(cache, &rk, sp.rail_dofs),
+        load_component(cache, &sk, sp.sleeper_dofs),
+    ) {
+        return Ok(TrackComponents {
+            rail,
+            sleeper,
+            sleeper_offsets: sp.sleeper_offsets,
+            seconds: t.elapsed().as_secs_f64(),
+            cached: true,
+        });
+    }
+    let c = build_components(track, fmax_hz, opts)?;
+    let cutoff = opts.cutoff_factor * fmax_hz;
+    store_component(cache, &rk, &c.rail, cutoff);
+    store_component(cache, &sk, &c.sleeper, opts.sleeper_cutoff_factor * fmax_hz);
+    Ok(c)
+}
+
+/// The track's classified modes below `fmax_hz` from its component bases: the reduced
+/// eigenproblem with the track's current spring stiffnesses, expanded and classified.
+pub fn substructured_track_basis(
+    track: &TrackStructure,
+    comp: &TrackComponents,
+    fmax_hz: f64,
+) -> Result<ModalBasis<TrackModeClass>, SubstructureError> {
+    let t = Instant::now();
+    let k_red = reduced_stiffness(track, comp)?;
+    let (freqs, q) = reduced_modes(&k_red, fmax_hz)?;
+    let modes = expand(comp, track.dofmap.n_free(), &q);
+    let classifier = TrackClassifier::new(track).map_err(BasisError::from)?;
+    let classes = classify_in_chunks(&modes, &freqs, &crate::progress::Silent, |u, _| {
+        Ok(classifier.classify_many(track, u)?)
+    })?;
+    let m = freqs.len();
+    Ok(ModalBasis {
+        frequencies_hz: freqs,
+        modes,
+        residuals: vec![f64::NAN; m],
+        sturm_count: m,
+        classes,
+        cached: false,
+        seconds: t.elapsed().as_secs_f64(),
+    })
+}
+
+mod cache;
+mod components;
+mod reduced;
+
+pub use cache::{component_key, COMPONENT_REVISION};
+use cache::{load_component, store_component};
+use components::*;
+pub use reduced::{expand, reduced_modes, reduced_stiffness};
+
+#[cfg(test)]
+mod tests;
