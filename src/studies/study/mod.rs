@@ -17,8 +17,8 @@
 //! # substructure = { cutoff_factor = 1.5, pattern_degree = 3 }  # only with "substructured"
 //!
 //! [criterion]                              # optional, see initiation::InitiationCriterion
-//! min_relative_wear = 0.01
-//! max_wavelength_deviation = 0.03
+//! min_relative_wear = 0.01                 # default: each case's wear.initiation_threshold
+//! max_wavelength_deviation = 0.03          # default 0.03
 //!
 //! [[parameter]]
 //! key = "fastening.vertical_stiffness"     # a dotted model key, as for --set
@@ -59,6 +59,34 @@ use super::StudiesError;
 use std::path::{Path, PathBuf};
 
 use super::initiation::InitiationCriterion;
+
+/// The initiation criterion of a study (`[criterion]`): what the file sets, the rest from each
+/// case's model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyCriterion {
+    /// Minimum `wear_band_rms / wear_mean` (−), range ≥ 0; default (absent): each case's
+    /// `wear.initiation_threshold`, so a study that varies that key sees its values.
+    #[serde(default)]
+    pub min_relative_wear: Option<f64>,
+    /// Maximum relative deviation of `F_L`'s dominant wavelength from the wear's (−), ≥ 0;
+    /// default [`InitiationCriterion::DEFAULT_MAX_WAVELENGTH_DEVIATION`].
+    #[serde(default)]
+    pub max_wavelength_deviation: Option<f64>,
+}
+
+impl StudyCriterion {
+    /// The criterion applied to the case with model `m`.
+    pub fn for_model(&self, m: &crate::model::Model) -> InitiationCriterion {
+        let base = InitiationCriterion::from_model(m);
+        InitiationCriterion {
+            min_relative_wear: self.min_relative_wear.unwrap_or(base.min_relative_wear),
+            max_wavelength_deviation: self
+                .max_wavelength_deviation
+                .unwrap_or(base.max_wavelength_deviation),
+        }
+    }
+}
 use crate::eigen::substructure::SubstructureOptions;
 use crate::model::ModelSource;
 
@@ -154,8 +182,8 @@ pub struct Study {
     pub growth: bool,
     /// PSD peaks per signal in the table.
     pub peaks: usize,
-    /// The initiation criterion.
-    pub criterion: InitiationCriterion,
+    /// The initiation criterion of the study file's `[criterion]` table.
+    pub criterion: StudyCriterion,
     /// The track basis of the cases (default full).
     pub basis: StudyBasis,
     /// Options of the component bases when `basis = "substructured"` (defaults otherwise).
@@ -293,5 +321,35 @@ mod tests {
             e.contains("s.toml: case 0") && e.contains("vertical_stifness"),
             "{e}"
         );
+    }
+
+    /// Without `min_relative_wear` in `[criterion]`, each case is judged by its own model's
+    /// `wear.initiation_threshold` (here a study parameter); a value in the file wins.
+    #[test]
+    fn the_criterion_defaults_to_each_cases_initiation_threshold() {
+        let s = parse(
+            r#"
+            model = "builtin:dutch"
+            set = ["wear.initiation_threshold=0.2"]
+            [[parameter]]
+            key = "wear.initiation_threshold"
+            values = [0.002, 0.05]
+            "#,
+        )
+        .unwrap();
+        let m = s.case_models().unwrap();
+        let got: Vec<_> = m.iter().map(|(_, m)| s.criterion.for_model(m)).collect();
+        assert_eq!(got[0].min_relative_wear, 0.002);
+        assert_eq!(got[1].min_relative_wear, 0.05);
+        assert_eq!(
+            got[1].max_wavelength_deviation,
+            InitiationCriterion::DEFAULT_MAX_WAVELENGTH_DEVIATION
+        );
+        let fixed = parse(
+            "model = \"builtin:dutch\"\n[criterion]\nmin_relative_wear = 0.3\n[[parameter]]\nkey = \"wear.initiation_threshold\"\nvalues = [0.002]\n",
+        )
+        .unwrap();
+        let m = fixed.case_models().unwrap();
+        assert_eq!(fixed.criterion.for_model(&m[0].1).min_relative_wear, 0.3);
     }
 }

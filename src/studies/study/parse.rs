@@ -4,10 +4,10 @@ use std::path::Path;
 
 use serde::Deserialize;
 
+use super::StudyCriterion;
 use super::{Case, Combine, Parameter, Range, Study, StudyBasis, MAX_CASES};
 use crate::eigen::substructure::SubstructureOptions;
 use crate::model::{load_model, Model, ModelSource};
-use crate::studies::initiation::InitiationCriterion;
 use crate::studies::StudiesError;
 
 #[derive(Debug, Deserialize)]
@@ -37,7 +37,7 @@ struct StudyFile {
     #[serde(default)]
     peaks: Option<usize>,
     #[serde(default)]
-    criterion: Option<InitiationCriterion>,
+    criterion: Option<StudyCriterion>,
     #[serde(default)]
     basis: StudyBasis,
     #[serde(default)]
@@ -228,16 +228,15 @@ impl Study {
             }
         }
         let criterion = raw.criterion.unwrap_or_default();
-        if !(criterion.min_relative_wear >= 0.0 && criterion.min_relative_wear.is_finite()) {
+        let bad = |v: Option<f64>| v.is_some_and(|v| !(v >= 0.0 && v.is_finite()));
+        if bad(criterion.min_relative_wear) {
             return Err(key_error(
                 file,
                 "criterion.min_relative_wear",
                 "must be ≥ 0 and finite",
             ));
         }
-        if !(criterion.max_wavelength_deviation >= 0.0
-            && criterion.max_wavelength_deviation.is_finite())
-        {
+        if bad(criterion.max_wavelength_deviation) {
             return Err(key_error(
                 file,
                 "criterion.max_wavelength_deviation",

@@ -114,6 +114,27 @@ fn as_number(v: &toml::Value) -> Option<f64> {
     }
 }
 
+/// The criterion paragraph of a study: the file's values, or where each case's comes from.
+fn study_criterion_text(c: &super::StudyCriterion) -> String {
+    let dev = c.max_wavelength_deviation.unwrap_or(
+        crate::studies::initiation::InitiationCriterion::DEFAULT_MAX_WAVELENGTH_DEVIATION,
+    );
+    match c.min_relative_wear {
+        Some(w) => criterion_text(&crate::studies::initiation::InitiationCriterion {
+            min_relative_wear: w,
+            max_wavelength_deviation: dev,
+        }),
+        None => format!(
+            "Criterion: a case initiates corrugation when the RMS of the 20–80 mm band-passed \
+             differential wear is at least its model's wear.initiation_threshold (1 % unless \
+             the model or a study parameter sets it) of the mean wear, and the dominant \
+             wavelength of F_L deviates at most {:.1} % from the dominant wear wavelength (the \
+             wear follows F_L, docs/theory.md §2.4 and §11.4).",
+            100.0 * dev
+        ),
+    }
+}
+
 pub(super) fn write_study(
     study: &Study,
     cases: &[(Case, CaseResult)],
@@ -176,7 +197,7 @@ pub(super) fn write_study(
     if !study.set.is_empty() {
         doc.paragraph(format!("Overrides of every case: {}.", study.set.join(" ")));
     }
-    doc.paragraph(criterion_text(&study.criterion));
+    doc.paragraph(study_criterion_text(&study.criterion));
     let mut extra: Vec<(String, String)> =
         gk.iter().map(|k| (k.clone(), growth_label(k))).collect();
     let mut plots = Vec::new();

@@ -121,7 +121,8 @@ pub fn run_study(
             let mut rows = Vec::new();
             for &v in &speeds {
                 let s = runner.run(v, None).map_err(|e| format!("{v} km/h: {e}"))?;
-                rows.push(evaluate(&case.label(), &s, &study.criterion, study.peaks));
+                let criterion = study.criterion.for_model(model);
+                rows.push(evaluate(&case.label(), &s, &criterion, study.peaks));
             }
             let g = match (study.growth, growth) {
                 (true, Some(h)) => h(model, runner.as_ref()).map_err(|e| format!("growth: {e}"))?,
