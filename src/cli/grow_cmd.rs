@@ -6,8 +6,8 @@
 //!   wavelengths (mm), frequencies (Hz), deviations, case, class;
 //! * `phase.csv` — per amplitude: correlation of the new wear with the corrugation, phase,
 //!   growing, consistent growth;
-//! * `eigen_comparison.csv` — every component vs the nearest longitudinal-compression and
-//!   vertical-bending eigenfrequency (relative difference);
+//! * `eigen_comparison.csv` — every component vs the nearest longitudinal-compression,
+//!   vertical-bending and wheel eigenfrequency (relative difference);
 //! * `trial_shape.csv` — `x_m, wear_band_j_per_m, height_per_um`: the band-passed smooth wear
 //!   and the trial corrugation shape for 2A_max = 1 µm (scale by the amplitude);
 //! * `iterative.csv` (with `--rounds`): round, passages, amplitude_um, dominant_wavelength_mm;
@@ -342,6 +342,8 @@ pub fn write_growth_files(out: &std::path::Path, g: &TrialGrowth) -> anyhow::Res
                 opt(e.longitudinal_difference),
                 opt(e.nearest_vertical_hz),
                 opt(e.vertical_difference),
+                opt(e.nearest_wheel_hz),
+                opt(e.wheel_difference),
             ]
         })
         .collect();
@@ -356,6 +358,8 @@ pub fn write_growth_files(out: &std::path::Path, g: &TrialGrowth) -> anyhow::Res
             "longitudinal_difference",
             "nearest_vertical_hz",
             "vertical_difference",
+            "nearest_wheel_hz",
+            "wheel_difference",
         ],
         &rows,
     )?;
@@ -373,6 +377,13 @@ pub fn write_growth_files(out: &std::path::Path, g: &TrialGrowth) -> anyhow::Res
         (0..wb.len()).map(|i| vec![wb.x_m(i), wb.values[i], -wb.values[i] / ptp]),
     )?;
     Ok(())
+}
+
+/// `grow.json` in `out` (the `--json` object), atomically: written last, it marks a complete
+/// run.
+fn write_grow_json(out: &std::path::Path, text: &str) -> anyhow::Result<()> {
+    let p = out.join("grow.json");
+    corrugation::io::write_text(&p, text).with_context(|| format!("writing {}", p.display()))
 }
 
 /// A CSV of text cells, atomically.
@@ -454,10 +465,7 @@ impl GrowCmd {
                 "speed_kmh": m.run.speed_kmh,
                 "verdict": v,
             }))?;
-            write_atomic(&self.out.join("grow.json"), |f| {
-                use std::io::Write;
-                f.write_all(text.as_bytes())
-            })?;
+            write_grow_json(&self.out, &text)?;
             if self.json {
                 println!("{text}");
             } else {
@@ -519,10 +527,7 @@ impl GrowCmd {
             t0.elapsed().as_secs_f64(),
         );
         let text = serde_json::to_string_pretty(&j)?;
-        write_atomic(&self.out.join("grow.json"), |f| {
-            use std::io::Write;
-            f.write_all(text.as_bytes())
-        })?;
+        write_grow_json(&self.out, &text)?;
         if self.json {
             println!("{text}");
         } else {
