@@ -177,7 +177,7 @@ fn main() -> anyhow::Result<()> {
     let (mats, asm) = track.assemble()?;
     println!(
         "model {} | free DOFs {} | build {:.2} s | assembly {:.2} s",
-        model.fastening.model.name(),
+        model.fastening.model().name(),
         track.dofmap.n_free(),
         t.elapsed().as_secs_f64() - asm,
         asm

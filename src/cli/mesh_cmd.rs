@@ -109,7 +109,7 @@ impl MeshCmd {
             track_length_m: track.layout.length,
             rail_node_planes: track.rail.n_planes(),
             section_nodes: track.rail.n_section_nodes(),
-            fastening_model: m.fastening.model.name().to_string(),
+            fastening_model: m.fastening.model().name().to_string(),
             build_seconds,
             assembly_seconds,
             matrix_nonzeros: mats.k.compute_nnz(),

@@ -47,6 +47,89 @@ impl FasteningModel {
     }
 }
 
+/// The published fastening models RPM1–RPM5 (docs/theory.md §3.2): a [`FasteningModel`]
+/// that is not `custom`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Preset {
+    /// V-3-4.
+    Rpm1,
+    /// V-∞-4.
+    Rpm2,
+    /// V-1-4.
+    Rpm3,
+    /// ∞-1-4.
+    Rpm4,
+    /// ∞-∞-4.
+    Rpm5,
+}
+
+impl Preset {
+    /// The model-file name of the preset.
+    pub fn model(self) -> FasteningModel {
+        match self {
+            Preset::Rpm1 => FasteningModel::Rpm1,
+            Preset::Rpm2 => FasteningModel::Rpm2,
+            Preset::Rpm3 => FasteningModel::Rpm3,
+            Preset::Rpm4 => FasteningModel::Rpm4,
+            Preset::Rpm5 => FasteningModel::Rpm5,
+        }
+    }
+}
+
+impl FasteningModel {
+    /// The preset of this name (`None` for `custom`).
+    pub fn preset(self) -> Option<Preset> {
+        match self {
+            FasteningModel::Rpm1 => Some(Preset::Rpm1),
+            FasteningModel::Rpm2 => Some(Preset::Rpm2),
+            FasteningModel::Rpm3 => Some(Preset::Rpm3),
+            FasteningModel::Rpm4 => Some(Preset::Rpm4),
+            FasteningModel::Rpm5 => Some(Preset::Rpm5),
+            FasteningModel::Custom => None,
+        }
+    }
+}
+
+/// The elastic variant of a preset: every region the preset holds rigidly in one of
+/// `directions` is tied to the ground by spring-dampers instead.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ElasticHolds {
+    /// Stiffness per fastening (N/m), greater than 0 and at most [`MAX_HOLD_STIFFNESS`].
+    pub stiffness: f64,
+    /// Damping per fastening (N·s/m), 0 to 1e12; `None` (not given) is 0.
+    pub damping: Option<f64>,
+    /// The directions made elastic, each held by the preset; `None` (not given) is all three.
+    pub directions: Option<Vec<Axis>>,
+}
+
+impl ElasticHolds {
+    /// The damping per fastening (N·s/m).
+    pub fn damping_n_s_per_m(&self) -> f64 {
+        self.damping.unwrap_or(0.0)
+    }
+
+    /// The directions made elastic.
+    pub fn directions(&self) -> Vec<Axis> {
+        self.directions
+            .clone()
+            .unwrap_or_else(|| vec![Axis::X, Axis::Y, Axis::Z])
+    }
+}
+
+/// How the rail foot is held: a preset (rigid as published, or elastic), or a custom pattern.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Holds {
+    /// One of RPM1–RPM5; `elastic` = `None` holds its regions rigidly.
+    Preset {
+        /// The preset.
+        preset: Preset,
+        /// Its elastic variant (`fastening.hold = "elastic"`).
+        elastic: Option<ElasticHolds>,
+    },
+    /// The pattern of `[fastening.custom]` (`fastening.model = "custom"`).
+    Custom(HoldPattern),
+}
+
 /// A rail-foot region held in one direction: rigidly (`rigid = "…"`) or by grounded springs
 /// (`elastic = "…"`). Columns, rows and the continuous region have a physical size, so what
 /// they hold converges under mesh refinement; `grid_points` does not (docs/theory.md §3.3).
@@ -177,31 +260,30 @@ impl HoldPattern {
     /// the first number of the Li et al. code (V-3-4) is the vertical hold (V = springs,
     /// ∞ = rigid everywhere), the second the longitudinal one (number of rigid columns, ∞ =
     /// continuous), the third the lateral one (number of rigid rows). `None` for `custom`.
-    pub fn preset(model: FasteningModel, rows: usize, columns: usize) -> Option<HoldPattern> {
+    pub fn preset(preset: Preset, rows: usize, columns: usize) -> HoldPattern {
         let all_rows = DirectionHold::rows((0..rows).collect());
         let middle = DirectionHold::columns(vec![columns / 2]);
         let all_columns = DirectionHold::columns((0..columns).collect());
-        let (x, z) = match model {
-            FasteningModel::Rpm1 => (all_columns, DirectionHold::none()),
-            FasteningModel::Rpm2 => (DirectionHold::continuous(), DirectionHold::none()),
-            FasteningModel::Rpm3 => (middle, DirectionHold::none()),
-            FasteningModel::Rpm4 => (middle, DirectionHold::continuous()),
-            FasteningModel::Rpm5 => (DirectionHold::continuous(), DirectionHold::continuous()),
-            FasteningModel::Custom => return None,
+        let (x, z) = match preset {
+            Preset::Rpm1 => (all_columns, DirectionHold::none()),
+            Preset::Rpm2 => (DirectionHold::continuous(), DirectionHold::none()),
+            Preset::Rpm3 => (middle, DirectionHold::none()),
+            Preset::Rpm4 => (middle, DirectionHold::continuous()),
+            Preset::Rpm5 => (DirectionHold::continuous(), DirectionHold::continuous()),
         };
-        Some(HoldPattern { x, y: all_rows, z })
+        HoldPattern { x, y: all_rows, z }
     }
 }
 
-/// Rail fastening: railpad springs on a `rows × columns` grid and rigid holds.
+/// Rail fastening: railpad springs on a `rows × columns` grid and the holds of the rail foot.
+/// Read from and written as the `[fastening]` table (keys `model`, `custom`, `hold`,
+/// `hold_stiffness`, `hold_damping`, `hold_directions` for the holds); a table whose holds
+/// contradict each other is refused when it is read.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(try_from = "FasteningFile", into = "FasteningFile")]
 pub struct Fastening {
-    /// RPM1–RPM5 or custom.
-    pub model: FasteningModel,
-    /// The hold pattern when `model = "custom"` (must be absent otherwise).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub custom: Option<HoldPattern>,
+    /// How the rail foot is held (`model`, `custom`, `hold`, … in the file).
+    pub holds: Holds,
     /// Spring rows across the track (−).
     pub rows: usize,
     /// Spring columns along the rail (−).
@@ -226,23 +308,185 @@ pub struct Fastening {
     pub longitudinal_stiffness: f64,
     /// Longitudinal damping per fastening (N·s/m).
     pub longitudinal_damping: f64,
+}
+
+impl TryFrom<FasteningFile> for Fastening {
+    type Error = String;
+
+    /// The holds' keys must agree: `custom` exactly with `model = "custom"`, `hold =
+    /// "elastic"` only with a preset and with `hold_stiffness`, the other hold keys only with
+    /// it. (Value ranges are checked by [`super::Model::validate`].)
+    fn try_from(f: FasteningFile) -> Result<Self, String> {
+        let holds = match (f.model.preset(), f.custom.clone()) {
+            (None, None) => {
+                return Err("fastening.custom: fastening.model = \"custom\" needs a [fastening.custom] table with x, y, z holds".into())
+            }
+            (Some(_), Some(_)) => {
+                return Err(format!(
+                    "fastening.custom: only allowed with fastening.model = \"custom\" (model is {})",
+                    f.model.name()
+                ))
+            }
+            (None, Some(p)) => {
+                if f.hold == HoldKind::Elastic {
+                    return Err("fastening.hold: \"elastic\" applies to the presets RPM1–RPM5; with model = \"custom\" give elastic regions in [fastening.custom], e.g. x = { elastic = \"columns\", indices = [1], stiffness = 1e9 }".into());
+                }
+                Holds::Custom(p)
+            }
+            (Some(preset), None) => Holds::Preset {
+                preset,
+                elastic: elastic_holds(&f)?,
+            },
+        };
+        if matches!(
+            holds,
+            Holds::Custom(_) | Holds::Preset { elastic: None, .. }
+        ) {
+            for (key, given) in [
+                ("fastening.hold_stiffness", f.hold_stiffness.is_some()),
+                ("fastening.hold_damping", f.hold_damping.is_some()),
+                ("fastening.hold_directions", f.hold_directions.is_some()),
+            ] {
+                if given {
+                    return Err(format!(
+                        "{key}: only allowed with fastening.hold = \"elastic\""
+                    ));
+                }
+            }
+        }
+        Ok(Fastening {
+            holds,
+            rows: f.rows,
+            columns: f.columns,
+            footprint_length: f.footprint_length,
+            footprint_width: f.footprint_width,
+            strip_width: f.strip_width,
+            pad_thickness: f.pad_thickness,
+            vertical_stiffness: f.vertical_stiffness,
+            vertical_damping: f.vertical_damping,
+            lateral_stiffness: f.lateral_stiffness,
+            lateral_damping: f.lateral_damping,
+            longitudinal_stiffness: f.longitudinal_stiffness,
+            longitudinal_damping: f.longitudinal_damping,
+        })
+    }
+}
+
+/// The elastic variant of a preset's table (`None` for `hold = "rigid"`).
+fn elastic_holds(f: &FasteningFile) -> Result<Option<ElasticHolds>, String> {
+    if f.hold == HoldKind::Rigid {
+        return Ok(None);
+    }
+    let Some(stiffness) = f.hold_stiffness else {
+        return Err("fastening.hold_stiffness: fastening.hold = \"elastic\" needs hold_stiffness (N/m per fastening)".into());
+    };
+    Ok(Some(ElasticHolds {
+        stiffness,
+        damping: f.hold_damping,
+        directions: f.hold_directions.clone(),
+    }))
+}
+
+impl From<Fastening> for FasteningFile {
+    fn from(f: Fastening) -> Self {
+        let (model, custom, hold, hold_stiffness, hold_damping, hold_directions) = match f.holds {
+            Holds::Custom(p) => (
+                FasteningModel::Custom,
+                Some(p),
+                HoldKind::Rigid,
+                None,
+                None,
+                None,
+            ),
+            Holds::Preset {
+                preset,
+                elastic: None,
+            } => (preset.model(), None, HoldKind::Rigid, None, None, None),
+            Holds::Preset {
+                preset,
+                elastic: Some(e),
+            } => (
+                preset.model(),
+                None,
+                HoldKind::Elastic,
+                Some(e.stiffness),
+                e.damping,
+                e.directions,
+            ),
+        };
+        FasteningFile {
+            model,
+            custom,
+            rows: f.rows,
+            columns: f.columns,
+            footprint_length: f.footprint_length,
+            footprint_width: f.footprint_width,
+            strip_width: f.strip_width,
+            pad_thickness: f.pad_thickness,
+            vertical_stiffness: f.vertical_stiffness,
+            vertical_damping: f.vertical_damping,
+            lateral_stiffness: f.lateral_stiffness,
+            lateral_damping: f.lateral_damping,
+            longitudinal_stiffness: f.longitudinal_stiffness,
+            longitudinal_damping: f.longitudinal_damping,
+            hold,
+            hold_stiffness,
+            hold_damping,
+            hold_directions,
+        }
+    }
+}
+
+/// The `[fastening]` table as written in a model file; [`Fastening`] is its checked form.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FasteningFile {
+    /// RPM1–RPM5 or custom.
+    model: FasteningModel,
+    /// The hold pattern when `model = "custom"` (must be absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    custom: Option<HoldPattern>,
+    /// Spring rows across the track (−).
+    rows: usize,
+    /// Spring columns along the rail (−).
+    columns: usize,
+    /// Footprint length along the rail (m).
+    footprint_length: f64,
+    /// Footprint width across the track (m).
+    footprint_width: f64,
+    /// Width of a rigidly held column strip (along x) or row strip (along y) (m).
+    strip_width: f64,
+    /// Gap between the rail-foot underside and the sleeper top (m).
+    pad_thickness: f64,
+    /// Vertical stiffness per fastening (N/m), spread evenly over the grid.
+    vertical_stiffness: f64,
+    /// Vertical damping per fastening (N·s/m).
+    vertical_damping: f64,
+    /// Lateral stiffness per fastening (N/m).
+    lateral_stiffness: f64,
+    /// Lateral damping per fastening (N·s/m).
+    lateral_damping: f64,
+    /// Longitudinal stiffness per fastening (N/m).
+    longitudinal_stiffness: f64,
+    /// Longitudinal damping per fastening (N·s/m).
+    longitudinal_damping: f64,
     /// How the regions of a preset (RPM1–RPM5) are held: `"rigid"` (default, the models as
     /// published) or `"elastic"`: every rigidly held region of the directions in
     /// `hold_directions` becomes grounded springs of `hold_stiffness` and `hold_damping` per
     /// fastening. Not allowed with `model = "custom"` (give `elastic` regions there).
     #[serde(default, skip_serializing_if = "HoldKind::is_rigid")]
-    pub hold: HoldKind,
+    hold: HoldKind,
     /// Stiffness per fastening of the elastic holds of a preset (N/m), greater than 0 and at
     /// most [`MAX_HOLD_STIFFNESS`]; required with `hold = "elastic"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub hold_stiffness: Option<f64>,
+    hold_stiffness: Option<f64>,
     /// Damping per fastening of the elastic holds of a preset (N·s/m), 0 to 1e12; default 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub hold_damping: Option<f64>,
+    hold_damping: Option<f64>,
     /// Directions whose preset holds become elastic with `hold = "elastic"`, e.g. `["x"]`;
     /// default all three.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub hold_directions: Option<Vec<Axis>>,
+    hold_directions: Option<Vec<Axis>>,
 }
 
 /// Rigid or elastic holds of a preset fastening model.
@@ -282,33 +526,33 @@ impl Axis {
 }
 
 impl Fastening {
-    /// The hold pattern in force: the preset of the named model (its holds made elastic when
-    /// `hold = "elastic"`), or the custom one.
+    /// The model-file name of the fastening (`RPM1` … `RPM5`, `custom`).
+    pub fn model(&self) -> FasteningModel {
+        match &self.holds {
+            Holds::Preset { preset, .. } => preset.model(),
+            Holds::Custom(_) => FasteningModel::Custom,
+        }
+    }
+
+    /// The hold pattern in force: the preset (its holds made elastic in the elastic variant),
+    /// or the custom one.
     pub fn hold_pattern(&self) -> HoldPattern {
-        match HoldPattern::preset(self.model, self.rows, self.columns) {
-            Some(mut p) => {
-                if self.hold == HoldKind::Elastic {
-                    let k = self.hold_stiffness.unwrap_or(0.0);
-                    let c = self.hold_damping.unwrap_or(0.0);
-                    let dirs = self
-                        .hold_directions
-                        .clone()
-                        .unwrap_or_else(|| vec![Axis::X, Axis::Y, Axis::Z]);
-                    for a in dirs {
+        match &self.holds {
+            Holds::Custom(p) => p.clone(),
+            Holds::Preset { preset, elastic } => {
+                let mut p = HoldPattern::preset(*preset, self.rows, self.columns);
+                if let Some(e) = elastic {
+                    for a in &e.directions() {
                         let h = match a {
                             Axis::X => &mut p.x,
                             Axis::Y => &mut p.y,
                             Axis::Z => &mut p.z,
                         };
-                        *h = h.made_elastic(k, c);
+                        *h = h.made_elastic(e.stiffness, e.damping_n_s_per_m());
                     }
                 }
                 p
             }
-            None => self
-                .custom
-                .clone()
-                .expect("validated: custom model has a pattern"),
         }
     }
 

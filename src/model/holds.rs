@@ -2,96 +2,57 @@
 //! variant of the presets. Every error names the dotted key and what is allowed.
 
 use super::{
-    DirectionHold, Fastening, FasteningModel, HoldKind, ModelError, RigidRegion, MAX_HOLD_STIFFNESS,
+    DirectionHold, Fastening, HoldPattern, Holds, ModelError, RigidRegion, MAX_HOLD_STIFFNESS,
 };
 
 /// Largest damping per fastening of an elastic hold (N·s/m), as for the railpad dampers.
 const MAX_HOLD_DAMPING: f64 = 1e12;
 
 impl Fastening {
-    /// Checks `custom`, `hold`, `hold_stiffness`, `hold_damping` and `hold_directions`.
+    /// Checks the values of the holds: each direction of a custom pattern, or the stiffness,
+    /// damping and directions of a preset's elastic variant. (Which keys may appear together
+    /// is checked when the table is read, `TryFrom<FasteningFile>`.)
     pub(super) fn validate_holds(&self, file: &str) -> Result<(), ModelError> {
         let key_err = |key: &str, message: String| ModelError::Key {
             file: file.into(),
             key: key.into(),
             message,
         };
-        match (self.model, &self.custom) {
-            (FasteningModel::Custom, None) => return Err(key_err(
-                "fastening.custom",
-                "fastening.model = \"custom\" needs a [fastening.custom] table with x, y, z holds"
-                    .into(),
-            )),
-            (FasteningModel::Custom, Some(p)) => {
+        let (preset, e) = match &self.holds {
+            Holds::Custom(p) => {
                 for (d, h) in [("x", &p.x), ("y", &p.y), ("z", &p.z)] {
                     self.check_direction(file, &format!("fastening.custom.{d}"), h)?;
                 }
+                return Ok(());
             }
-            (_, Some(_)) => {
-                return Err(key_err(
-                    "fastening.custom",
-                    format!(
-                        "only allowed with fastening.model = \"custom\" (model is {})",
-                        self.model.name()
-                    ),
-                ))
-            }
-            (_, None) => {}
+            Holds::Preset { elastic: None, .. } => return Ok(()),
+            Holds::Preset {
+                preset,
+                elastic: Some(e),
+            } => (*preset, e),
+        };
+        check_stiffness(file, "fastening.hold_stiffness", e.stiffness)?;
+        check_damping(file, "fastening.hold_damping", e.damping)?;
+        if e.directions.as_ref().is_some_and(|d| d.is_empty()) {
+            return Err(key_err(
+                "fastening.hold_directions",
+                "give at least one of \"x\", \"y\", \"z\"".into(),
+            ));
         }
-        match self.hold {
-            HoldKind::Rigid => {
-                for (key, given) in [
-                    ("fastening.hold_stiffness", self.hold_stiffness.is_some()),
-                    ("fastening.hold_damping", self.hold_damping.is_some()),
-                    ("fastening.hold_directions", self.hold_directions.is_some()),
-                ] {
-                    if given {
-                        return Err(key_err(
-                            key,
-                            "only allowed with fastening.hold = \"elastic\"".into(),
-                        ));
-                    }
-                }
-            }
-            HoldKind::Elastic => {
-                if self.model == FasteningModel::Custom {
-                    return Err(key_err(
-                        "fastening.hold",
-                        "\"elastic\" applies to the presets RPM1–RPM5; with model = \"custom\" give elastic regions in [fastening.custom], e.g. x = { elastic = \"columns\", indices = [1], stiffness = 1e9 }".into(),
-                    ));
-                }
-                let Some(k) = self.hold_stiffness else {
-                    return Err(key_err(
-                        "fastening.hold_stiffness",
-                        "fastening.hold = \"elastic\" needs hold_stiffness (N/m per fastening)"
-                            .into(),
-                    ));
-                };
-                check_stiffness(file, "fastening.hold_stiffness", k)?;
-                check_damping(file, "fastening.hold_damping", self.hold_damping)?;
-                if let Some(dirs) = &self.hold_directions {
-                    if dirs.is_empty() {
-                        return Err(key_err(
-                            "fastening.hold_directions",
-                            "give at least one of \"x\", \"y\", \"z\"".into(),
-                        ));
-                    }
-                    // A direction the preset does not hold cannot be made elastic.
-                    let preset = self.hold_pattern();
-                    for a in dirs {
-                        let h = [&preset.x, &preset.y, &preset.z][a.index()];
-                        if h.region() == RigidRegion::None {
-                            return Err(key_err(
-                                "fastening.hold_directions",
-                                format!(
-                                    "{} holds nothing in {:?}: remove it from the list",
-                                    self.model.name(),
-                                    a
-                                ),
-                            ));
-                        }
-                    }
-                }
+        // A direction the preset does not hold cannot be made elastic (when the directions
+        // are not given, those the preset holds are).
+        let rigid = HoldPattern::preset(preset, self.rows, self.columns);
+        for &a in e.directions.iter().flatten() {
+            let h = [&rigid.x, &rigid.y, &rigid.z][a.index()];
+            if h.region() == RigidRegion::None {
+                return Err(key_err(
+                    "fastening.hold_directions",
+                    format!(
+                        "{} holds nothing in {:?}: remove it from the list",
+                        preset.model().name(),
+                        a
+                    ),
+                ));
             }
         }
         Ok(())

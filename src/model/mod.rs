@@ -21,8 +21,8 @@ mod load;
 mod validate;
 
 pub use fastening::{
-    Axis, DirectionHold, Fastening, FasteningModel, HoldKind, HoldPattern, RigidRegion,
-    MAX_HOLD_STIFFNESS,
+    Axis, DirectionHold, ElasticHolds, Fastening, FasteningModel, HoldKind, HoldPattern, Holds,
+    Preset, RigidRegion, MAX_HOLD_STIFFNESS,
 };
 pub use load::{apply_override, load_model, load_model_str, ModelSource, BUILTIN_DUTCH};
 pub use validate::{

@@ -8,7 +8,7 @@ fn dutch_with(overrides: &[&str]) -> Result<Model, ModelError> {
 #[test]
 fn embedded_default_is_dutch_rpm3_with_stated_parameters() {
     let m = Model::default_model();
-    assert_eq!(m.fastening.model, FasteningModel::Rpm3);
+    assert_eq!(m.fastening.model(), FasteningModel::Rpm3);
     // Stated / literature values of docs/theory.md §3.6.
     assert_eq!(m.run.speed_kmh, 140.0);
     assert_eq!(m.wheel.radius, 0.46);
@@ -38,9 +38,9 @@ fn the_five_model_files_load_and_differ_only_in_the_fastening_model() {
     {
         let path = dir.join(format!("dutch-rpm{}.toml", i + 1));
         let m = load_model(&ModelSource::File(path), &[]).unwrap();
-        assert_eq!(m.fastening.model, want);
+        assert_eq!(m.fastening.model(), want);
         let mut m2 = m.clone();
-        m2.fastening.model = base.fastening.model;
+        m2.fastening.holds = base.fastening.holds.clone();
         assert_eq!(
             m2,
             base,
@@ -60,7 +60,7 @@ fn overrides_use_toml_syntax_and_accept_bare_words() {
         "run.speed_kmh=54.8",
     ])
     .unwrap();
-    assert_eq!(m.fastening.model, FasteningModel::Rpm1);
+    assert_eq!(m.fastening.model(), FasteningModel::Rpm1);
     assert_eq!(m.track.bays, 12);
     assert_eq!(m.run.speed_kmh, 54.8);
     let m = dutch_with(&[
@@ -68,7 +68,7 @@ fn overrides_use_toml_syntax_and_accept_bare_words() {
         "mesh.sleeper_elements=[2, 6, 1]",
     ])
     .unwrap();
-    assert_eq!(m.fastening.model, FasteningModel::Rpm5);
+    assert_eq!(m.fastening.model(), FasteningModel::Rpm5);
     assert_eq!(m.mesh.sleeper_elements, [2, 6, 1]);
 }
 
@@ -152,31 +152,31 @@ fn custom_pattern_round_trips_and_is_checked() {
 #[test]
 fn presets_follow_the_method_table() {
     use RigidRegion::*;
-    let p = |m| HoldPattern::preset(m, 4, 3).unwrap();
+    let p = |m| HoldPattern::preset(m, 4, 3);
     // docs/theory.md §3.2 table: vertical / longitudinal / lateral.
-    let r1 = p(FasteningModel::Rpm1);
+    let r1 = p(Preset::Rpm1);
     assert_eq!(
         (r1.z.rigid, r1.x.rigid, &r1.x.indices[..]),
         (None, Columns, &[0, 1, 2][..])
     );
-    let r2 = p(FasteningModel::Rpm2);
+    let r2 = p(Preset::Rpm2);
     assert_eq!((r2.z.rigid, r2.x.rigid), (None, Continuous));
-    let r3 = p(FasteningModel::Rpm3);
+    let r3 = p(Preset::Rpm3);
     assert_eq!(
         (r3.z.rigid, r3.x.rigid, &r3.x.indices[..]),
         (None, Columns, &[1][..])
     );
-    let r4 = p(FasteningModel::Rpm4);
+    let r4 = p(Preset::Rpm4);
     assert_eq!(
         (r4.z.rigid, r4.x.rigid, &r4.x.indices[..]),
         (Continuous, Columns, &[1][..])
     );
-    let r5 = p(FasteningModel::Rpm5);
+    let r5 = p(Preset::Rpm5);
     assert_eq!((r5.z.rigid, r5.x.rigid), (Continuous, Continuous));
     for r in [r1, r2, r3, r4, r5] {
         assert_eq!((r.y.rigid, &r.y.indices[..]), (Rows, &[0, 1, 2, 3][..]));
     }
-    assert!(HoldPattern::preset(FasteningModel::Custom, 4, 3).is_none());
+    assert!(FasteningModel::Custom.preset().is_none());
 }
 
 #[test]

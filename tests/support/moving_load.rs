@@ -53,6 +53,9 @@
 //! correction). It is compared by the caller with the linearised Hertz compliance
 //! `dδ/dF = 2δ/(3F)`.
 
+// Numerical kernels index several parallel arrays with one loop index (as in the library).
+#![allow(clippy::needless_range_loop)]
+
 #![allow(dead_code)]
 
 use faer::dyn_stack::{MemBuffer, MemStack};

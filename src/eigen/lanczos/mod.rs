@@ -354,6 +354,10 @@ fn plan_bands(
     Ok((jobs, band_bounds))
 }
 
+/// The modes of all bands (n × total), their eigenvalues (rad²/s², band by band) and the
+/// slices' reports.
+type BandsOut = (Mat<f64>, Vec<f64>, Vec<SliceReport>);
+
 /// Runs the bands (concurrently with `parallel` and more than one), each writing its modes
 /// into its own columns of one n × total matrix (no copies). Returns the modes, their
 /// eigenvalues (band by band, each ascending) and the slices; the bands' timings are added
@@ -366,7 +370,7 @@ fn run_bands(
     opts: &EigenOptions,
     progress: Option<&Counter<'_>>,
     timing: &mut EigenTiming,
-) -> Result<(Mat<f64>, Vec<f64>, Vec<SliceReport>), EigenError> {
+) -> Result<BandsOut, EigenError> {
     let n = problem.k.nrows();
     let bands = jobs.len();
     let total: usize = jobs
