@@ -519,7 +519,9 @@ fn convergence_table() {
 /// normal value at the mid plane equals [`StaticDirect`]'s independent single-RHS solve.
 #[test]
 fn residual_flexibility_of_the_contact_line() {
-    use corrugation::dynamics::residual::{lateral_spread_flexibility, ResidualFlexibility};
+    use corrugation::dynamics::residual::{
+        lateral_spread_flexibility, LineModes, ResidualFlexibility,
+    };
     let s = setup();
     let x = 0.5 * s.track.layout.length;
     let factor = StiffnessFactor::new(s.mats.k.as_ref()).unwrap();
@@ -533,16 +535,12 @@ fn residual_flexibility_of_the_contact_line() {
     let mut prev = [f64::INFINITY; 3];
     for fmax in [500.0, 1000.0, 2000.0, 3000.0] {
         let (phi, sys, line) = reduced(s, fmax);
-        let r = ResidualFlexibility::compute(
-            &s.track,
-            &factor,
-            &line,
-            &s.frame,
-            &sys.omega2,
-            x - 0.2,
-            x + 0.2,
-        )
-        .unwrap();
+        let lm = LineModes {
+            line: &line,
+            frame: &s.frame,
+            omega2: &sys.omega2,
+        };
+        let r = ResidualFlexibility::compute(&s.track, &factor, lm, [x - 0.2, x + 0.2]).unwrap();
         let [g, md, res] = r.means();
         let ex = r.interpolation_excess();
         eprintln!(
@@ -606,7 +604,9 @@ fn residual_flexibility_of_the_contact_line() {
 #[test]
 #[ignore = "minutes on the default model (one LLᵀ of K and the basis)"]
 fn residual_flexibility_report() {
-    use corrugation::dynamics::residual::{lateral_spread_flexibility, ResidualFlexibility};
+    use corrugation::dynamics::residual::{
+        lateral_spread_flexibility, LineModes, ResidualFlexibility,
+    };
     let sets: Vec<String> = std::env::var("RESIDUAL_SET")
         .ok()
         .map(|v| {
@@ -663,8 +663,12 @@ fn residual_flexibility_report() {
         let sys = ModalSystem::new(&f, &phi, mats.c.as_ref(), 0.5).unwrap();
         let line = RailContactLine::new(&track, &phi, &frame, hertz.b_m).unwrap();
         let t2 = std::time::Instant::now();
-        let r = ResidualFlexibility::compute(&track, &factor, &line, &frame, &sys.omega2, z0, z1)
-            .unwrap();
+        let lm = LineModes {
+            line: &line,
+            frame: &frame,
+            omega2: &sys.omega2,
+        };
+        let r = ResidualFlexibility::compute(&track, &factor, lm, [z0, z1]).unwrap();
         let [g, md, res] = r.means();
         let st = r.mean_structural_weighted();
         let ex = r.interpolation_excess();
@@ -720,7 +724,7 @@ fn residual_flexibility_report() {
 /// 0.02 %); n — 4.9 %, 0.03 %, 2.2 % (local ≤ 0.96 %, structural ≤ 0.56 %).
 #[test]
 fn load_point_response_with_the_constant_residual_compliance() {
-    use corrugation::dynamics::residual::ResidualFlexibility;
+    use corrugation::dynamics::residual::{LineModes, ResidualFlexibility};
     let s = setup();
     let (phi, sys, line) = reduced(s, 2000.0);
     let dx = direct(s, &moving(s, traction_on_rail(s)));
@@ -732,16 +736,12 @@ fn load_point_response_with_the_constant_residual_compliance() {
         let load = moving(s, force);
         let m = modal_response(&s.track, &phi, &sys, &line, &load, &[]).unwrap();
         let (x0, x1) = (load.x_at(0), load.x_at(load.steps));
-        let res = ResidualFlexibility::compute(
-            &s.track,
-            factor(),
-            &line,
-            &s.frame,
-            &sys.omega2,
-            x0.min(x1),
-            x0.max(x1),
-        )
-        .unwrap();
+        let lm = LineModes {
+            line: &line,
+            frame: &s.frame,
+            omega2: &sys.omega2,
+        };
+        let res = ResidualFlexibility::compute(&s.track, factor(), lm, [x0, x1]).unwrap();
         let c_bar = res.mean_structural_weighted()[d];
         let f = force[d];
         let n = dr.load_point_m.len();

@@ -74,36 +74,31 @@ impl PreparedModel {
             opts,
         )?;
         if model.run.residual_flexibility {
-            let args = (
-                &engine.rail_line,
-                &engine.frame,
-                &engine.track_sys.omega2,
-                engine.hertz_b_m,
-                engine.travel_m(),
-            );
+            let lm = super::residual::LineModes {
+                line: &engine.rail_line,
+                frame: &engine.frame,
+                omega2: &engine.track_sys.omega2,
+            };
+            let travel = engine.travel_m();
             let r = match residual_key {
                 Some(key) => {
+                    let k = tm.k.as_ref();
                     super::residual::cached_residual(
                         cache,
                         key,
                         track,
-                        tm.k.as_ref(),
-                        args.0,
-                        args.1,
-                        args.2,
-                        args.3,
-                        args.4,
+                        k,
+                        lm,
+                        engine.hertz_b_m,
+                        travel,
                     )?
                     .0
                 }
                 None => super::residual::ResidualFlexibility::compute(
                     track,
                     &super::residual::StiffnessFactor::new(tm.k.as_ref())?,
-                    args.0,
-                    args.1,
-                    args.2,
-                    args.4[0],
-                    args.4[1],
+                    lm,
+                    travel,
                 )?,
             };
             engine.set_residual_flexibility(Some(r))?;

@@ -255,20 +255,35 @@ fn static_flexibility(
     (g, cross)
 }
 
+/// The kept track modes as the residual flexibility sees them: their rows on the rail's
+/// contact line, the contact frame, and their squared frequencies (rad²/s², all > 0: the
+/// track is supported).
+#[derive(Clone, Copy)]
+pub struct LineModes<'a> {
+    /// The contact line built from the kept modes.
+    pub line: &'a RailContactLine,
+    /// The contact frame (x, t, n).
+    pub frame: &'a ContactFrame,
+    /// The modes' squared angular frequencies (rad²/s²).
+    pub omega2: &'a [f64],
+}
+
 impl ResidualFlexibility {
     /// Computes the residual flexibility of the planes a contact travelling over
-    /// `[x_lo, x_hi]` (m) uses: `line` built from the kept modes with squared frequencies
-    /// `omega2` (rad²/s², all > 0: the track is supported), `factor` the factorised `K`.
-    #[allow(clippy::too_many_arguments)]
+    /// `x_range_m` (m, either order) uses, for the kept modes `lm`; `factor` is the factorised
+    /// `K`.
     pub fn compute(
         track: &TrackStructure,
         factor: &StiffnessFactor,
-        line: &RailContactLine,
-        frame: &ContactFrame,
-        omega2: &[f64],
-        x_lo: f64,
-        x_hi: f64,
+        lm: LineModes<'_>,
+        x_range_m: [f64; 2],
     ) -> Result<Self, DynamicsError> {
+        let LineModes {
+            line,
+            frame,
+            omega2,
+        } = lm;
+        let [x_lo, x_hi] = x_range_m;
         let m = line.modes;
         if omega2.len() != m {
             return Err(DynamicsError::SizeMismatch {
@@ -518,18 +533,16 @@ pub fn lateral_spread_flexibility(
 /// Loads the residual flexibility of the track basis under `key` from the modal cache, or
 /// computes it (factorising `K` once) and stores it there, next to the modes. `tag` names
 /// what else determines it (the lateral weights' semi-width and the covered range).
-#[allow(clippy::too_many_arguments)]
 pub fn cached_residual(
     cache: &crate::eigen::cache::ModalCache,
     key: &crate::eigen::cache::CacheKey,
     track: &TrackStructure,
     k: SparseColMatRef<'_, usize, f64>,
-    line: &RailContactLine,
-    frame: &ContactFrame,
-    omega2: &[f64],
+    lm: LineModes<'_>,
     half_width_m: f64,
     x_range_m: [f64; 2],
 ) -> Result<(ResidualFlexibility, bool), DynamicsError> {
+    let (line, frame) = (lm.line, lm.frame);
     let name = format!(
         "residual-r{RESIDUAL_REVISION}-b{:016x}-n{}.json",
         half_width_m.to_bits(),
@@ -547,15 +560,7 @@ pub fn cached_residual(
         }
     }
     let factor = StiffnessFactor::new(k)?;
-    let r = ResidualFlexibility::compute(
-        track,
-        &factor,
-        line,
-        frame,
-        omega2,
-        x_range_m[0],
-        x_range_m[1],
-    )?;
+    let r = ResidualFlexibility::compute(track, &factor, lm, x_range_m)?;
     let bytes = serde_json::to_vec(&r)?;
     if let Err(e) = cache.store_aux(key, &name, &bytes) {
         cache

@@ -55,7 +55,6 @@
 
 // Numerical kernels index several parallel arrays with one loop index (as in the library).
 #![allow(clippy::needless_range_loop)]
-
 #![allow(dead_code)]
 
 use faer::dyn_stack::{MemBuffer, MemStack};
