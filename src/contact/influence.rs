@@ -552,7 +552,6 @@ impl Convolver {
     /// grid's `m1 × m2`. Elements of rows `r0..r1` outside the columns `c0..c1` get 0; the
     /// other rows of `ux, uy` are left as they are. The kernel spectra of each padded size
     /// are computed the first time the size is met (the only allocation) and kept.
-    #[allow(clippy::too_many_arguments)]
     pub fn tangential_box(
         &mut self,
         tx: &[f64],
