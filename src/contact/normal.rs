@@ -19,6 +19,21 @@
 //! unknowns `f = p ΔA` it reads `c_z 1 1ᵀ`), still symmetric positive definite, so the same CG
 //! solves it in one pass. With the load prescribed the term is a uniform gap shift absorbed
 //! by the Lagrange multiplier: only the reported approach changes, by `+c_z F_N`.
+//!
+//! # Fixed contact set
+//! While the contact set `A = {p > 0}` and the undeformed gap `h` stay the same (a smooth
+//! rail: only the approach, the load or `c_z` change from step to step), the problem is
+//! linear on `A`: `C_A p + c_z ΔA (Σ p) 1 = (δ − h)_A`. With the unit responses
+//! `w = C_A⁻¹ 1` and `z = C_A⁻¹ h_A` (conjugate gradients on `A` to a relative residual of
+//! 1e-12, once per set) the solution is `p = a w − z` with
+//! `a = (δ + c_z ΔA Σz) / (1 + c_z ΔA Σw)` (approach prescribed) or
+//! `a = (P/ΔA + Σz) / Σw = δ` (load prescribed). It is the solution of the contact problem
+//! when every `p_i`, `i ∈ A`, is positive and the gap `h − δ + a C w − C z + c_z F_N` is
+//! non-negative outside `A` (the complementarity problem has one solution, `C` being
+//! positive definite); then the step needs no influence product. Otherwise the set changes:
+//! Polonsky–Keer's CG solves the step, and the unit responses of its new set are computed
+//! for the next steps. The superposed pressure is exact to the 1e-12 of the unit responses,
+//! the CG's to its tolerance ([`NormalSolver::tol`]).
 
 use super::influence::Convolver;
 use super::ContactError;
@@ -67,6 +82,30 @@ pub struct NormalSolver {
     pub tol: f64,
     /// Maximum number of CG iterations.
     pub max_iterations: usize,
+    /// Solve on a fixed contact set by superposition (module doc, "Fixed contact set");
+    /// default on, off only to compare.
+    pub fixed_set: bool,
+    set: FixedSet,
+}
+
+/// Unit responses of a fixed contact set `A` for one undeformed gap `h` (module doc): `w =
+/// C_A⁻¹ 1`, `z = C_A⁻¹ h_A` (Pa per m, Pa; zero outside `A`), their full-grid displacements
+/// `C w`, `C z` and sums.
+#[derive(Clone, Default)]
+struct FixedSet {
+    valid: bool,
+    in_set: Vec<bool>,
+    h: Vec<f64>,
+    w: Vec<f64>,
+    z: Vec<f64>,
+    cw: Vec<f64>,
+    cz: Vec<f64>,
+    sum_w: f64,
+    sum_z: f64,
+    /// CG scratch: residual, direction, product.
+    r: Vec<f64>,
+    d: Vec<f64>,
+    q: Vec<f64>,
 }
 
 impl NormalSolver {
@@ -86,6 +125,19 @@ impl NormalSolver {
             products: 0,
             tol: 1e-10,
             max_iterations: 2000,
+            fixed_set: true,
+            set: FixedSet {
+                in_set: vec![false; n],
+                h: vec![0.0; n],
+                w: vec![0.0; n],
+                z: vec![0.0; n],
+                cw: vec![0.0; n],
+                cz: vec![0.0; n],
+                r: vec![0.0; n],
+                d: vec![0.0; n],
+                q: vec![0.0; n],
+                ..FixedSet::default()
+            },
         }
     }
 
@@ -93,6 +145,7 @@ impl NormalSolver {
     pub fn invalidate(&mut self) {
         self.last = None;
         self.have_prev = false;
+        self.set.valid = false;
     }
 
     /// Solve for `p` (Pa, in/out: warm start) given the undeformed gap `h` (m), the element
@@ -124,6 +177,23 @@ impl NormalSolver {
         }
         let warm = self.last.is_some();
         self.last = None;
+        let same_h = warm && self.last_h[..] == h[..];
+        let positive = !matches!(mode, NormalMode::Load(w) if w <= 0.0);
+        if self.fixed_set && positive && same_h && self.set.valid && self.set.h[..] == h[..] {
+            if let Some((mut out, a)) = self.set.superpose(h, da, c, mode, &mut self.gap) {
+                // accepted: the new pressure, with the extrapolation history kept
+                self.prev_p.copy_from_slice(p);
+                self.set.pressure(a, p);
+                self.have_prev = true;
+                self.products = 0;
+                if let NormalMode::Load(_) = mode {
+                    out.approach_m += c * out.load_n;
+                }
+                self.last_h.copy_from_slice(h);
+                self.last = Some((mode, c, out));
+                return Ok(out);
+            }
+        }
         if self.extrapolate && warm && self.have_prev {
             for (pi, q) in p.iter_mut().zip(self.prev_p.iter_mut()) {
                 let x = (2.0 * *pi - *q).max(0.0);
@@ -135,6 +205,11 @@ impl NormalSolver {
         }
         self.have_prev = warm;
         let mut out = self.solve_inner(conv, h, da, mode, p)?;
+        if self.fixed_set && same_h && out.load_n > 0.0 {
+            // the undeformed gap did not change since the last step (smooth rail): the next
+            // steps can superpose on this contact set
+            self.products += self.set.build(conv, h, &*p)?;
+        }
         if let NormalMode::Load(_) = mode {
             // the uniform displacement c_z F_N only shifts the Lagrange multiplier
             out.approach_m += c * out.load_n;
@@ -370,5 +445,162 @@ impl NormalSolver {
     /// Deformed gap (m) of the last solve, `h − δ + C p`.
     pub fn gap(&self) -> &[f64] {
         &self.gap
+    }
+}
+
+/// Relative residual `‖C_A x − b‖ / ‖b‖` at which the unit responses of a fixed contact set
+/// are accepted: far below the pressure tolerance of the Polonsky–Keer CG (1e-6 in rolling).
+const FIXED_SET_TOL: f64 = 1e-12;
+
+impl FixedSet {
+    /// The unit responses of the contact set `{p > 0}` for the gap `h` (Polonsky–Keer's
+    /// solution `p`). Returns the influence products used.
+    fn build(&mut self, conv: &mut Convolver, h: &[f64], p: &[f64]) -> Result<usize, ContactError> {
+        let was_valid = self.valid;
+        self.valid = false;
+        for (s, &pi) in self.in_set.iter_mut().zip(p) {
+            *s = pi > 0.0;
+        }
+        // warm start from the responses of the previous set (restricted to the new one)
+        if !was_valid {
+            self.w.fill(0.0);
+            self.z.fill(0.0);
+        }
+        let mut products = 0;
+        let mut x = std::mem::take(&mut self.w);
+        products += self.solve_on_set(conv, |_| 1.0, &mut x)?;
+        self.w = x;
+        let mut x = std::mem::take(&mut self.z);
+        products += self.solve_on_set(conv, |i| h[i], &mut x)?;
+        self.z = x;
+        conv.normal(&self.w, &mut self.cw);
+        conv.normal(&self.z, &mut self.cz);
+        self.sum_w = self.w.iter().sum();
+        self.sum_z = self.z.iter().sum();
+        self.h.copy_from_slice(h);
+        self.valid = true;
+        Ok(products + 2)
+    }
+
+    /// Conjugate gradients for `C_A x = b` on the set `A` (`x` zero outside it; in/out: the
+    /// start). Returns the influence products used.
+    fn solve_on_set(
+        &mut self,
+        conv: &mut Convolver,
+        b: impl Fn(usize) -> f64,
+        x: &mut [f64],
+    ) -> Result<usize, ContactError> {
+        let n = x.len();
+        for i in 0..n {
+            if !self.in_set[i] {
+                x[i] = 0.0;
+            }
+        }
+        conv.normal(x, &mut self.q);
+        let (mut rr, mut bb) = (0.0, 0.0);
+        for i in 0..n {
+            let (r, bi) = if self.in_set[i] {
+                let bi = b(i);
+                (bi - self.q[i], bi)
+            } else {
+                (0.0, 0.0)
+            };
+            self.r[i] = r;
+            self.d[i] = r;
+            rr += r * r;
+            bb += bi * bi;
+        }
+        let stop = FIXED_SET_TOL * FIXED_SET_TOL * bb;
+        let mut products = 1;
+        while rr > stop {
+            if products > n + 10 {
+                return Err(ContactError::NotConverged {
+                    solver: "normal unit responses on a fixed contact set (CG)",
+                    iterations: products,
+                    residual: (rr / bb).sqrt(),
+                });
+            }
+            conv.normal(&self.d, &mut self.q);
+            products += 1;
+            let mut dq = 0.0;
+            for i in 0..n {
+                if self.in_set[i] {
+                    dq += self.d[i] * self.q[i];
+                }
+            }
+            let alpha = rr / dq;
+            let mut rr_new = 0.0;
+            for i in 0..n {
+                if self.in_set[i] {
+                    x[i] += alpha * self.d[i];
+                    self.r[i] -= alpha * self.q[i];
+                    rr_new += self.r[i] * self.r[i];
+                }
+            }
+            let beta = rr_new / rr;
+            rr = rr_new;
+            for i in 0..n {
+                self.d[i] = self.r[i] + beta * self.d[i];
+            }
+        }
+        Ok(products)
+    }
+
+    /// The solution on the fixed set for `mode` and the series compliance `c` (m/N), if it is
+    /// the solution of the contact problem (every pressure of the set positive, no overlap
+    /// outside it): the outcome (approach without the series share in load mode, as
+    /// [`NormalSolver::solve_inner`]) and the factor `a` of `p = a w − z`; the deformed gap
+    /// is written to `gap`. `None` (gap unspecified) when the set must change.
+    fn superpose(
+        &self,
+        h: &[f64],
+        da: f64,
+        c: f64,
+        mode: NormalMode,
+        gap: &mut [f64],
+    ) -> Option<(NormalOutcome, f64)> {
+        let (a, delta, c_da) = match mode {
+            NormalMode::Approach(d) => {
+                let c_da = c * da;
+                ((d + c_da * self.sum_z) / (1.0 + c_da * self.sum_w), d, c_da)
+            }
+            NormalMode::Load(f) => {
+                let a = (f / da + self.sum_z) / self.sum_w;
+                (a, a, 0.0)
+            }
+        };
+        let s = a * self.sum_w - self.sum_z;
+        let uniform = c_da * s - delta;
+        for i in 0..h.len() {
+            if self.in_set[i] {
+                if a * self.w[i] - self.z[i] <= 0.0 {
+                    return None;
+                }
+                gap[i] = 0.0;
+            } else {
+                let g = h[i] + a * self.cw[i] - self.cz[i] + uniform;
+                if g < 0.0 {
+                    return None;
+                }
+                gap[i] = g;
+            }
+        }
+        let out = NormalOutcome {
+            load_n: s * da,
+            approach_m: delta,
+            iterations: 0,
+        };
+        Some((out, a))
+    }
+
+    /// `p = a w − z` on the set, 0 outside (Pa).
+    fn pressure(&self, a: f64, p: &mut [f64]) {
+        for i in 0..p.len() {
+            p[i] = if self.in_set[i] {
+                a * self.w[i] - self.z[i]
+            } else {
+                0.0
+            };
+        }
     }
 }

@@ -267,6 +267,14 @@ impl TangentialSolver {
         (self.lo, self.hi) = (lo, hi);
         let ny = conv.dims().1;
         let (row0, row1) = (lo / ny, hi.div_ceil(ny));
+        // the columns of the contact: the CG's products run on a padded grid sized to the box
+        // of rows row0..row1 and these columns
+        let (mut col0, mut col1) = (ny, 0);
+        for (k, _) in g[lo..hi].iter().enumerate().filter(|(_, &v)| v > 0.0) {
+            let j = (lo + k) % ny;
+            col0 = col0.min(j);
+            col1 = col1.max(j + 1);
+        }
         for v in [&mut self.dx_, &mut self.dy_] {
             v[..lo].fill(0.0);
             v[hi..].fill(0.0);
@@ -366,7 +374,14 @@ impl TangentialSolver {
                 (0.01 * rmax).max(0.5 * s_tol)
             };
             while self.products < self.cg_iterations {
-                conv.tangential_rows(&self.dx_, &self.dy_, &mut self.qx, &mut self.qy, row0, row1);
+                conv.tangential_box(
+                    &self.dx_,
+                    &self.dy_,
+                    &mut self.qx,
+                    &mut self.qy,
+                    (row0, row1),
+                    (col0, col1),
+                );
                 let (cux, cuy) = self.uniform(&self.dx_, &self.dy_);
                 if cux != 0.0 || cuy != 0.0 {
                     for i in lo..hi {
@@ -387,24 +402,55 @@ impl TangentialSolver {
                     break;
                 }
                 let alpha = rr / den;
+                // one pass: slip and traction update, and (Newton) the model residual, its
+                // preconditioned copy and the reductions of the next step
                 let mut violated = false;
+                let (mut rr_new, mut rmax) = (0.0, 0.0_f64);
                 for i in lo..hi {
-                    self.sx[i] += alpha * self.qx[i];
-                    self.sy[i] += alpha * self.qy[i];
-                    if g[i] <= 0.0 {
+                    let (qx, qy) = (self.qx[i], self.qy[i]);
+                    self.sx[i] += alpha * qx;
+                    self.sy[i] += alpha * qy;
+                    let (wx, wy) = if g[i] <= 0.0 {
+                        (0.0, 0.0)
+                    } else {
+                        let mut ax = tx[i] + alpha * self.dx_[i];
+                        let mut ay = ty[i] + alpha * self.dy_[i];
+                        if self.slip[i] {
+                            // rotation along the tangent; back onto the circle after the CG
+                        } else if ax * ax + ay * ay > g[i] * g[i] {
+                            project(&mut ax, &mut ay, g[i]);
+                            self.slip[i] = true;
+                            violated = true;
+                        }
+                        tx[i] = ax;
+                        ty[i] = ay;
+                        if self.slip[i] {
+                            let c = qx * self.px[i] + qy * self.py[i];
+                            (
+                                c * self.px[i] + self.kap[i] * self.dx_[i],
+                                c * self.py[i] + self.kap[i] * self.dy_[i],
+                            )
+                        } else {
+                            (qx, qy)
+                        }
+                    };
+                    if norot {
                         continue;
                     }
-                    let mut ax = tx[i] + alpha * self.dx_[i];
-                    let mut ay = ty[i] + alpha * self.dy_[i];
-                    if self.slip[i] {
-                        // rotation along the tangent; back onto the circle after the CG
-                    } else if ax * ax + ay * ay > g[i] * g[i] {
-                        project(&mut ax, &mut ay, g[i]);
-                        self.slip[i] = true;
-                        violated = true;
-                    }
-                    tx[i] = ax;
-                    ty[i] = ay;
+                    let (rx, ry) = (self.rx[i] - alpha * wx, self.ry[i] - alpha * wy);
+                    self.rx[i] = rx;
+                    self.ry[i] = ry;
+                    // qx, qy: the new (preconditioned) residual (the product is no longer
+                    // needed)
+                    let (zx, zy) = if jacobi {
+                        (rx * self.mix[i], ry * self.miy[i])
+                    } else {
+                        (rx, ry)
+                    };
+                    self.qx[i] = zx;
+                    self.qy[i] = zy;
+                    rr_new += rx * zx + ry * zy;
+                    rmax = rmax.max(rx.abs()).max(ry.abs());
                 }
                 if violated {
                     if !norot {
@@ -414,39 +460,9 @@ impl TangentialSolver {
                     exact_now = true;
                     break;
                 }
-                let (rr_new, rmax) = if norot {
-                    self.residual(g, false)
-                } else {
-                    let (mut rr, mut rmax) = (0.0, 0.0_f64);
-                    for i in lo..hi {
-                        let (wx, wy) = if g[i] <= 0.0 {
-                            (0.0, 0.0)
-                        } else if self.slip[i] {
-                            let c = self.qx[i] * self.px[i] + self.qy[i] * self.py[i];
-                            (
-                                c * self.px[i] + self.kap[i] * self.dx_[i],
-                                c * self.py[i] + self.kap[i] * self.dy_[i],
-                            )
-                        } else {
-                            (self.qx[i], self.qy[i])
-                        };
-                        let (rx, ry) = (self.rx[i] - alpha * wx, self.ry[i] - alpha * wy);
-                        self.rx[i] = rx;
-                        self.ry[i] = ry;
-                        // qx, qy: the new (preconditioned) residual (the product is no
-                        // longer needed)
-                        let (zx, zy) = if jacobi {
-                            (rx * self.mix[i], ry * self.miy[i])
-                        } else {
-                            (rx, ry)
-                        };
-                        self.qx[i] = zx;
-                        self.qy[i] = zy;
-                        rr += rx * zx + ry * zy;
-                        rmax = rmax.max(rx.abs()).max(ry.abs());
-                    }
-                    (rr, rmax)
-                };
+                if norot {
+                    (rr_new, rmax) = self.residual(g, false);
+                }
                 if rmax <= stop {
                     break;
                 }
