@@ -318,11 +318,9 @@ pub struct Convolver {
     kb: Vec<Complex64>,
     buf: Vec<Complex64>,
     work: Vec<Complex64>,
-    /// Tangential kernels `(C_xx, C_yy, C_xy)` (m/Pa) at the periodic offsets of the padded
-    /// grid (index `a · m2 + b`), from which the kernel spectra of the smaller padded grids of
-    /// [`Convolver::tangential_box`] are sampled.
-    kernels_t: Vec<[f64; 3]>,
-    /// The padded grids of [`Convolver::tangential_box`] met so far, one per size.
+    /// The padded grids of [`Convolver::tangential_box`], one per size ([`box_grids`]; their
+    /// kernel spectra sampled from the tangential kernels `(C_xx, C_yy, C_xy)` at the whole
+    /// padded grid's periodic offsets).
     boxes: Vec<BoxGrid>,
     /// `C_xy` at row offset `+nx` and column offsets `−(ny−1)..=ny−1` (index `offset + ny − 1`,
     /// m/Pa) when `m1 = 2nx` (the coupling the periodic xy kernel cannot hold); empty otherwise.
@@ -428,8 +426,7 @@ impl Convolver {
             kb,
             buf: vec![zero; m1 * m2],
             work: vec![zero; m1 * m2],
-            kernels_t,
-            boxes: Vec::new(),
+            boxes: box_grids(m1, m2, &kernels_t),
             lambda_max_n,
             lambda_max_t,
             diag_n,
@@ -547,11 +544,11 @@ impl Convolver {
 
     /// Tangential displacement differences `(ux, uy)` (m) from tractions `(tx, ty)` (Pa) that
     /// are zero outside the box of grid rows `r0..r1` and columns `c0..c1`, on that box
-    /// only: a cyclic convolution on a padded grid of `next_fast_len(2 b − 1)` per direction
-    /// (`b` the box's extent), exact for the offsets within the box, instead of the whole
-    /// grid's `m1 × m2`. Elements of rows `r0..r1` outside the columns `c0..c1` get 0; the
-    /// other rows of `ux, uy` are left as they are. The kernel spectra of each padded size
-    /// are computed the first time the size is met (the only allocation) and kept.
+    /// only: a cyclic convolution on a padded grid of the power of two ≥ `2 b − 1` per
+    /// direction (`b` the box's extent), exact for the offsets within the box, instead of the
+    /// whole grid's `m1 × m2`. Elements of rows `r0..r1` outside the columns `c0..c1` get 0;
+    /// the other rows of `ux, uy` are left as they are. The padded grids and their kernel
+    /// spectra are built with the convolver ([`box_grids`]); no allocation here.
     pub fn tangential_box(
         &mut self,
         tx: &[f64],
@@ -566,20 +563,13 @@ impl Convolver {
         let (r0, c0) = (r0.min(r1), c0.min(c1));
         let (bx, by) = (r1 - r0, c1 - c0);
         let (p1, p2) = (
-            next_fast_len((2 * bx).saturating_sub(1)),
-            next_fast_len((2 * by).saturating_sub(1)),
+            (2 * bx).saturating_sub(1).next_power_of_two(),
+            (2 * by).saturating_sub(1).next_power_of_two(),
         );
-        if bx == 0 || by == 0 || p1 * p2 >= self.m1 * self.m2 {
+        let found = self.boxes.iter().position(|b| (b.m1, b.m2) == (p1, p2));
+        let Some(k) = found.filter(|_| bx > 0 && by > 0) else {
             self.tangential_rows(tx, ty, ux, uy, r0, r1);
             return;
-        }
-        let k = match self.boxes.iter().position(|b| (b.m1, b.m2) == (p1, p2)) {
-            Some(k) => k,
-            None => {
-                let b = BoxGrid::new(p1, p2, self.m1, self.m2, &self.kernels_t);
-                self.boxes.push(b);
-                self.boxes.len() - 1
-            }
         };
         let bg = &mut self.boxes[k];
         let zero = Complex64::new(0.0, 0.0);
@@ -661,6 +651,21 @@ fn tangential_kernel_product(
             *wv = z * av + bv * zm.conj();
         }
     }
+}
+
+/// The padded grids of [`Convolver::tangential_box`], built with the convolver so that no
+/// step allocates: every power-of-two size `p1 × p2` with `p1 ≤ m1`, `p2 ≤ m2` and
+/// `p1 p2 < m1 m2` (a box needs `p ≥ 2b − 1` per direction; a larger box uses the whole
+/// grid's rows). For the default 128 × 96 grid: 56 grids, about 2.3 MB.
+fn box_grids(m1: usize, m2: usize, kernels: &[[f64; 3]]) -> Vec<BoxGrid> {
+    let pow2 = |m: usize| (0..).map(|e| 1usize << e).take_while(move |&p| p <= m);
+    let mut out = Vec::new();
+    for p1 in pow2(m1) {
+        for p2 in pow2(m2).filter(|&p2| p1 * p2 < m1 * m2) {
+            out.push(BoxGrid::new(p1, p2, m1, m2, kernels));
+        }
+    }
+    out
 }
 
 /// A padded grid `m1 × m2` smaller than the [`Convolver`]'s, for products confined to a box
