@@ -544,7 +544,7 @@ impl Convolver {
 
     /// Tangential displacement differences `(ux, uy)` (m) from tractions `(tx, ty)` (Pa) that
     /// are zero outside the box of grid rows `r0..r1` and columns `c0..c1`, on that box
-    /// only: a cyclic convolution on a padded grid of the power of two ≥ `2 b − 1` per
+    /// only: a cyclic convolution on a padded grid of the smallest `2^a 3^b` ≥ `2 b − 1` per
     /// direction (`b` the box's extent), exact for the offsets within the box, instead of the
     /// whole grid's `m1 × m2`. Elements of rows `r0..r1` outside the columns `c0..c1` get 0;
     /// the other rows of `ux, uy` are left as they are. The padded grids and their kernel
@@ -563,8 +563,8 @@ impl Convolver {
         let (r0, c0) = (r0.min(r1), c0.min(c1));
         let (bx, by) = (r1 - r0, c1 - c0);
         let (p1, p2) = (
-            (2 * bx).saturating_sub(1).next_power_of_two(),
-            (2 * by).saturating_sub(1).next_power_of_two(),
+            next_smooth3((2 * bx).saturating_sub(1)),
+            next_smooth3((2 * by).saturating_sub(1)),
         );
         let found = self.boxes.iter().position(|b| (b.m1, b.m2) == (p1, p2));
         let Some(k) = found.filter(|_| bx > 0 && by > 0) else {
@@ -653,15 +653,33 @@ fn tangential_kernel_product(
     }
 }
 
+/// The smallest `2^a 3^b` ≥ `n` (≥ 1).
+fn next_smooth3(n: usize) -> usize {
+    let mut m = n.max(1);
+    loop {
+        let mut r = m;
+        for p in [2, 3] {
+            while r % p == 0 {
+                r /= p;
+            }
+        }
+        if r == 1 {
+            return m;
+        }
+        m += 1;
+    }
+}
+
 /// The padded grids of [`Convolver::tangential_box`], built with the convolver so that no
-/// step allocates: every power-of-two size `p1 × p2` with `p1 ≤ m1`, `p2 ≤ m2` and
-/// `p1 p2 < m1 m2` (a box needs `p ≥ 2b − 1` per direction; a larger box uses the whole
-/// grid's rows). For the default 128 × 96 grid: 56 grids, about 2.3 MB.
+/// step allocates: every size `p1 × p2` of the form `2^a 3^b` per direction with `p1 ≤ m1`,
+/// `p2 ≤ m2` and `p1 p2 < m1 m2` (a box needs `p ≥ 2b − 1` per direction, so at most a third
+/// more than that; a larger box uses the whole grid's rows). For the default 64 × 48 grid:
+/// 254 grids, about 6 MB.
 fn box_grids(m1: usize, m2: usize, kernels: &[[f64; 3]]) -> Vec<BoxGrid> {
-    let pow2 = |m: usize| (0..).map(|e| 1usize << e).take_while(move |&p| p <= m);
+    let sizes = |m: usize| (1..=m).filter(move |&p| next_smooth3(p) == p);
     let mut out = Vec::new();
-    for p1 in pow2(m1) {
-        for p2 in pow2(m2).filter(|&p2| p1 * p2 < m1 * m2) {
+    for p1 in sizes(m1) {
+        for p2 in sizes(m2).filter(|&p2| p1 * p2 < m1 * m2) {
             out.push(BoxGrid::new(p1, p2, m1, m2, kernels));
         }
     }
