@@ -56,16 +56,17 @@ pub mod hertz;
 pub mod influence;
 pub mod normal;
 pub mod report;
+pub mod rolling;
 pub mod tangential;
 pub mod transient;
+pub mod wear;
 
 pub use hertz::{HertzContact, HertzInput};
 pub use report::{solve_case, ContactCase, ContactSolution, ContactSummary, TangentialLoading};
+pub use rolling::{GridSpec, Longitudinal, NormalInput, StepInputs, StepResult, TransientConfig};
 pub use tangential::TangentialAlgorithm;
-pub use transient::{
-    load_response_curve, GridSpec, LoadResponsePoint, Longitudinal, NormalInput, StepInputs,
-    StepResult, TransientConfig, TransientRolling, WearAccumulator,
-};
+pub use transient::TransientRolling;
+pub use wear::{load_response_curve, LoadResponsePoint, WearAccumulator};
 
 /// Errors of the contact module. Each variant says what to change.
 #[derive(Debug, thiserror::Error)]
