@@ -1,7 +1,6 @@
 //! The energy ledger of an explicit passage (docs/theory.md §7.8, §8.4): the same terms as the
 //! reduced passage's [`EnergyBalance`], from the state at contact-step boundaries.
 
-use super::operator::StepScratch;
 use super::passage::ExplicitModel;
 use super::ExplicitError;
 use crate::dynamics::record::EnergyBalance;
@@ -47,6 +46,10 @@ pub(super) struct LedgerStep {
     pub(super) forces: [[f64; 3]; 2],
     /// The removed local compliance variation `Δg` at the step's end position (m/N).
     pub(super) dg: [f64; 3],
+    /// Work of the dampers over the predictor's sub-steps (J). The corrector's response
+    /// starts at the contact and does not reach the dampers (pads, ballast, suspension)
+    /// within the step, so this is the step's dissipation.
+    pub(super) damper_j: f64,
 }
 
 /// The energy ledger of an explicit passage (the same terms as the reduced passage's,
@@ -57,7 +60,6 @@ pub(super) struct Ledger<'a> {
     eb: EnergyBalance,
     e_start: f64,
     e_contact_start: f64,
-    p_damp_prev: f64,
     ur_prev: [f64; 3],
     /// The removed normal local compliance variation at the last position (m/N).
     dg_prev: f64,
@@ -73,8 +75,6 @@ impl<'a> Ledger<'a> {
         s: &State,
         st: &crate::contact::StepResult,
         x0: f64,
-        sc_t: &mut StepScratch,
-        sc_w: &mut StepScratch,
     ) -> Result<Self, ExplicitError> {
         let mut l = Ledger {
             m,
@@ -82,7 +82,6 @@ impl<'a> Ledger<'a> {
             eb: EnergyBalance::default(),
             e_start: 0.0,
             e_contact_start: hertz_energy(st.normal_force_n, st.approach_m, 0.0),
-            p_damp_prev: 0.0,
             ur_prev: m.rail_at(&s.ut, x0)?,
             dg_prev: m.local_variation(x0, &m.weights(x0)?)[2],
             before: [0.0; 3],
@@ -94,8 +93,6 @@ impl<'a> Ledger<'a> {
         };
         if on {
             l.e_start = l.stored(s);
-            l.p_damp_prev =
-                m.track.op.damper_power(&s.vt, sc_t) + m.wheel.op.damper_power(&s.vw, sc_w);
         }
         Ok(l)
     }
@@ -128,7 +125,6 @@ impl<'a> Ledger<'a> {
     pub(super) fn after_step(
         &mut self,
         s: &State,
-        [sc_t, sc_w]: [&mut StepScratch; 2],
         k: LedgerStep,
         r: &crate::contact::StepResult,
     ) -> Result<(), ExplicitError> {
@@ -140,9 +136,7 @@ impl<'a> Ledger<'a> {
         eb.external_work_j += dot(&m.wheel_const, &s.uw) - self.before[0];
         eb.torque_work_j += dot(&m.loads.torque, &s.uw) - self.before[1];
         eb.gravity_work_j += dot(&m.loads.gravity, &s.uw) - self.before[2];
-        let p_damp = m.track.op.damper_power(&s.vt, sc_t) + m.wheel.op.damper_power(&s.vw, sc_w);
-        eb.damper_dissipation_j += 0.5 * k.dt_c * (p_damp + self.p_damp_prev);
-        self.p_damp_prev = p_damp;
+        eb.damper_dissipation_j += k.damper_j;
         // Work of the contact force on the two structures, with the corrected end-of-step
         // displacements.
         let ur_end = m.rail_at(&s.ut, k.xc)?;

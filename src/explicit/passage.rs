@@ -13,16 +13,22 @@
 //!    creepages from the predicted relative displacement increments over the step. The
 //!    solver then returns the force `F_{n+1}` that is consistent with the end-of-step
 //!    kinematics.
-//! 3. **Corrector.** Both structures get the response to the change `F_{n+1} − F_n` ramped
-//!    linearly over the step (unit-load response fields: the wheel's once per passage, the
-//!    rail's per node plane of the contact line, interpolated like the load). Since the FE
-//!    is linear, the state is then exactly the one under the force interpolated linearly
-//!    from `F_n` to `F_{n+1}` (first-order hold), whose work matches the contact solver's
-//!    path-mean traction, so the energy balances.
+//! 3. **Corrector.** Both structures get the response to the change `F_{n+1} − F_n`
+//!    applied as the coupling's [`Hold`] (unit-load response fields: the wheel's once per
+//!    passage, the rail's per node plane of the contact line, interpolated like the load).
+//!    Since the FE is linear, the state is then exactly the one under the hold's force
+//!    history. With the default mean hold that is `(F_n + F_{n+1})/2` held over the step:
+//!    its work is exactly that force times the contact-point displacement increment, so the
+//!    energy balances, and the coupling stays stable however stiff the contact is against
+//!    the mass under it (on a contact mass it is the trapezoidal rule).
 //!
-//! The plain alternative, holding `F_n` without the corrector ([`Coupling::HeldForce`]),
-//! is explicit in the contact stiffness: with `k_contact · G` of order one it is at the edge
-//! of stability (kept to show that in a test).
+//! The first-order hold ([`Coupling::RampCorrector`], the force interpolated linearly from
+//! `F_n` to `F_{n+1}`) is Newmark's linear-acceleration method on a contact mass: unstable
+//! once the contact–mass frequency times `Δt_c` exceeds 2√3, within reach of the grams of a
+//! fine mesh under the patch at the default contact step. The plain alternative, holding `F_n`
+//! without the corrector ([`Coupling::HeldForce`]), is explicit in the contact stiffness:
+//! with `k_contact · G` of order one it is at the edge of stability. Both are kept to show
+//! that in tests.
 //!
 //! # Start
 //! As the reduced passage: the contact brought to steady rolling at the static load; the
@@ -37,7 +43,7 @@ use faer::Mat;
 use super::ledger::{Ledger, LedgerStep, State};
 use super::local::LocalCompliance;
 use super::operator::{ExplicitOperator, StepScratch};
-use super::response::{RailResponses, UnitResponse};
+use super::response::{advance_held, Hold, RailResponses, UnitResponse};
 use super::rotating::{RotatingWheel, WheelParts};
 use super::stable::{StableStep, DEFAULT_SAFETY};
 use super::start::{add_line_force, solve_one, wheel_elastic_static, wheel_rigid_modes};
@@ -59,12 +65,42 @@ use crate::structure::{TrackStructure, WheelStructure};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Coupling {
     /// Held-force predictor, contact solved with the one-step compliance, exact linear
-    /// corrector to the linearly interpolated force (the default).
+    /// corrector to the mean force `(F_n + F_{n+1})/2` held over the step (the default).
     #[default]
     PredictorCorrector,
+    /// As [`Coupling::PredictorCorrector`], but the corrector ramps the force linearly from
+    /// `F_n` to `F_{n+1}` (first-order hold; unstable when the contact–mass frequency times
+    /// the contact step exceeds 2√3; for tests).
+    RampCorrector,
     /// The last contact force held over the step, no corrector (unstable when the contact
     /// stiffness times the one-step compliance is of order one; for tests).
     HeldForce,
+}
+
+impl Coupling {
+    /// Whether the contact is solved with the one-step compliance and the state corrected.
+    fn corrected(self) -> bool {
+        self != Coupling::HeldForce
+    }
+
+    /// How the corrector applies the force change over the step's sub-steps.
+    pub(super) fn hold(self) -> Hold {
+        match self {
+            Coupling::RampCorrector => Hold::Ramp,
+            _ => Hold::Mean,
+        }
+    }
+
+    /// The predictor's force (N) in a contact step's first sub-step, with `f` the force held
+    /// over the step and `f_prev` the previous step's ([`Hold::first_load`]; `f` when there
+    /// is no corrector).
+    fn first_load(self, f: [f64; 3], f_prev: [f64; 3]) -> [f64; 3] {
+        if self.corrected() {
+            self.hold().first_load(f, f_prev)
+        } else {
+            f
+        }
+    }
 }
 
 /// Options of the explicit path.
@@ -475,24 +511,28 @@ impl ExplicitModel {
         // --- Unit responses, scratch, records.
         let mut sc_t = self.track.op.scratch();
         let mut sc_w = self.wheel.op.scratch();
-        let corrected = self.opts.coupling == Coupling::PredictorCorrector;
+        let corrected = self.opts.coupling.corrected();
+        let hold = self.opts.coupling.hold();
         let (wheel_resp, g_wheel) = self.wheel_response(dtw, nw, &mut sc_w);
         let slots = max_planes(&self.line.planes_x_m, self.patch_a_m) + 1;
-        let mut rail_resp = RailResponses::new(self.track.op.n(), dtt, nt, slots);
+        let mut rail_resp = RailResponses::new(self.track.op.n(), (dtt, nt, hold), slots);
         let mut h = Histories::default();
         let mut rail_point = self.rail_point(popts, n_steps);
         let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
         let mut wear = WearAccumulator::new(&contact, z0, nbins);
         let keep = popts.energy && rot.is_none();
-        let mut ledger = Ledger::new(self, keep, &s_, &st, x0, &mut sc_t, &mut sc_w)?;
+        let mut ledger = Ledger::new(self, keep, &s_, &st, x0)?;
         // The start's force on the structures is the static one (lateral 0).
         let mut f = [st.fx_n, 0.0, st.normal_force_n];
+        let mut f_prev = f;
         let mut series = [0.0; 3];
         let mut last_delta = st.approach_m;
         let mut clamped = 0usize;
         let mut series_c = [0.0; 3];
         let mut ftrack = vec![0.0; self.track.op.n()];
+        let mut ftrack0 = ftrack.clone();
         let mut fwheel = self.wheel_const.clone();
+        let mut fwheel0 = self.wheel_const.clone();
         let dm_t = &self.track_structure.dofmap;
         let dm_w = &self.wheel_structure.dofmap;
         let t_wall = Instant::now();
@@ -508,22 +548,26 @@ impl ExplicitModel {
                 Some(r) => r.wheel_at(&s_.uw, t - dt_c, t),
                 None => self.wheel_at(&s_.uw),
             };
-            ftrack.iter_mut().for_each(|x| *x = 0.0);
-            let neg = [-f[0], -f[1], -f[2]];
-            add_line_force(
-                &self.line,
-                &self.track_structure,
-                &frame,
-                &pw,
-                neg,
-                &mut ftrack,
-            );
+            // F_n held; the first sub-step also carries the previous step's share.
+            let f0 = self.opts.coupling.first_load(f, f_prev);
+            for (buf, g) in [(&mut ftrack0, f0), (&mut ftrack, f)] {
+                buf.iter_mut().for_each(|x| *x = 0.0);
+                let neg = [-g[0], -g[1], -g[2]];
+                add_line_force(&self.line, &self.track_structure, &frame, &pw, neg, buf);
+            }
             ledger.before_step(&s_.uw);
             let State { ut, vt, uw, vw } = &mut s_;
-            self.track.op.advance(dtt, nt, ut, vt, &ftrack, &mut sc_t);
+            let mut damper_j = advance_held(
+                &self.track.op,
+                (dtt, nt),
+                [&ftrack0, &ftrack],
+                ut,
+                vt,
+                &mut sc_t,
+            );
             let (uw_new, g_wheel) = match rot.as_mut() {
                 Some(r) => {
-                    r.advance(&self.wheel.op, uw, vw, f, t);
+                    r.advance(&self.wheel.op, uw, vw, [f0, f], t);
                     let g = if corrected {
                         r.compliance(&self.wheel.op)
                     } else {
@@ -532,9 +576,18 @@ impl ExplicitModel {
                     (r.wheel_at(uw, t, t), g)
                 }
                 None => {
-                    fwheel.copy_from_slice(&self.wheel_const);
-                    add_nodes_load(&self.wheel_nodes, dm_w, &frame, 1.0, f, &mut fwheel);
-                    self.wheel.op.advance(dtw, nw, uw, vw, &fwheel, &mut sc_w);
+                    for (buf, g) in [(&mut fwheel0, f0), (&mut fwheel, f)] {
+                        buf.copy_from_slice(&self.wheel_const);
+                        add_nodes_load(&self.wheel_nodes, dm_w, &frame, 1.0, g, buf);
+                    }
+                    damper_j += advance_held(
+                        &self.wheel.op,
+                        (dtw, nw),
+                        [&fwheel0, &fwheel],
+                        uw,
+                        vw,
+                        &mut sc_w,
+                    );
                     (self.wheel_at(uw), g_wheel)
                 }
             };
@@ -590,8 +643,8 @@ impl ExplicitModel {
             if xc - half_grid < z1 && xc + half_grid > z0 {
                 wear.add_step(&contact, xc);
             }
-            // With the corrector the force ramps from F_n to F_{n+1} over the step (its mean
-            // does the work); without it F_n is held.
+            // With the corrector the structures carry the mean of F_n and F_{n+1} (exactly, with
+            // the mean hold; as the ramp's mean, with the first-order hold); without it F_n.
             let f_work = if corrected {
                 [0, 1, 2].map(|d| 0.5 * (f[d] + f_new[d]))
             } else {
@@ -599,7 +652,6 @@ impl ExplicitModel {
             };
             ledger.after_step(
                 &s_,
-                [&mut sc_t, &mut sc_w],
                 LedgerStep {
                     xc,
                     dt_c,
@@ -609,9 +661,11 @@ impl ExplicitModel {
                     old: [ur_old, uw_old],
                     forces: [f, f_new],
                     dg,
+                    damper_j,
                 },
                 &r,
             )?;
+            f_prev = f;
             f = f_new;
             last_delta = r.approach_m;
             h.push_step(&contact, &r, [t, xc, xi, delta - series[2] * f[2]], dx);
@@ -693,7 +747,7 @@ impl ExplicitModel {
             wheel_const: &self.wheel_const,
         };
         let omega = self.opts.spin_rate_rad_s.unwrap_or(v / self.wheel_radius_m);
-        RotatingWheel::new(&parts, omega, steps, dt).map(Some)
+        RotatingWheel::new(&parts, omega, (steps, dt, self.opts.coupling.hold())).map(Some)
     }
 
     /// The start: the static deflections, the wheel's rigid modes placed so that the
@@ -734,6 +788,7 @@ impl ExplicitModel {
             &self.wheel.op,
             dt,
             steps,
+            self.opts.coupling.hold(),
             |d, f| {
                 let mut force = [0.0; 3];
                 force[d] = 1.0;

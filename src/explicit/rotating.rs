@@ -24,7 +24,7 @@
 //! of the two angle planes around the contact (computed as the contact reaches a plane).
 
 use super::operator::{ExplicitOperator, StepScratch};
-use super::response::UnitResponse;
+use super::response::{Hold, UnitResponse};
 use super::ExplicitError;
 use crate::dynamics::reduced::ContactFrame;
 use crate::dynamics::setup::WheelLoads;
@@ -268,8 +268,8 @@ pub(super) struct WheelParts<'a> {
 /// A node set of one angle plane: free indices (x, y, z; `usize::MAX` = held) and weight.
 type PlaneNodes = Vec<([usize; 3], f64)>;
 
-/// The unit responses of one angle plane (rest to a unit load ramped over a contact step
-/// in the spinning x, y, z) and the key of the plane (its index counted along the travel).
+/// The unit responses of one angle plane (rest to a unit load change over a contact step,
+/// applied as the coupling's hold, in the spinning x, y, z) and the key of the plane (its index counted along the travel).
 struct PlaneResponse {
     key: Option<i64>,
     r: UnitResponse,
@@ -300,6 +300,8 @@ pub(super) struct RotatingWheel {
     /// Contact-step sub-steps and their length (s).
     steps: usize,
     dt: f64,
+    /// How the corrector applies a force change over the sub-steps.
+    hold: Hold,
     slots: [PlaneResponse; 2],
     f: Vec<f64>,
     fk: Vec<f64>,
@@ -309,12 +311,11 @@ pub(super) struct RotatingWheel {
 
 impl RotatingWheel {
     /// The rotating wheel at `omega` (rad/s) for contact steps of `steps` sub-steps of `dt`
-    /// (s).
+    /// (s), the coupling's corrector applying force changes as `hold` says.
     pub(super) fn new(
         p: &WheelParts<'_>,
         omega: f64,
-        steps: usize,
-        dt: f64,
+        (steps, dt, hold): (usize, f64, Hold),
     ) -> Result<Self, ExplicitError> {
         let w = p.structure;
         let topo = &w.topology;
@@ -368,6 +369,7 @@ impl RotatingWheel {
             suspension: Suspension::new(w)?,
             steps,
             dt,
+            hold,
             slots: [slot(), slot()],
             f: vec![0.0; n],
             fk: vec![0.0; n],
@@ -455,19 +457,19 @@ impl RotatingWheel {
     }
 
     /// Advances the wheel over the contact step ending at `t_end` (s) (`steps` sub-steps)
-    /// under the contact force `fc` (N, contact frame, on the wheel) held at the contact's
-    /// end-of-step place and direction, the rotating ground loads, the torque and the
-    /// suspension.
+    /// under the contact force `fc[1]` (N, contact frame, on the wheel; `fc[0]` in the first
+    /// sub-step, [`Hold::first_load`]) held at the contact's end-of-step place and direction,
+    /// the rotating ground loads, the torque and the suspension.
     pub(super) fn advance(
         &mut self,
         op: &ExplicitOperator,
         u: &mut [f64],
         v: &mut [f64],
-        fc: [f64; 3],
+        fc: [[f64; 3]; 2],
         t_end: f64,
     ) {
         self.at = self.locate(t_end);
-        let fr = to_spinning(self.at.cs, self.ground_of(fc));
+        let frs = fc.map(|g| to_spinning(self.at.cs, self.ground_of(g)));
         let t0 = t_end - self.steps as f64 * self.dt;
         for k in 0..self.steps {
             let a = self.spin.omega * (t0 + k as f64 * self.dt);
@@ -481,7 +483,7 @@ impl RotatingWheel {
                 self.f[iz] += s * gx + cm1 * gz;
             }
             let mut f = std::mem::take(&mut self.f);
-            self.load(self.at, fr, &mut f);
+            self.load(self.at, frs[usize::from(k > 0)], &mut f);
             if let Some(sus) = &self.suspension {
                 sus.correction([c, s], self.spin.omega, u, v, &mut f);
             }
@@ -506,8 +508,8 @@ impl RotatingWheel {
         }
     }
 
-    /// The responses of plane `key` into slot `i`: from rest, a unit spinning-frame load in
-    /// x, y, z ramped from 0 to 1 over a contact step (sub-step `k` applies `k/steps`).
+    /// The responses of plane `key` into slot `i`: from rest, a unit spinning-frame load
+    /// change in x, y, z over a contact step (sub-step `k` applies `hold.share(k, steps)`).
     fn compute_slot(&mut self, op: &ExplicitOperator, i: usize, key: i64) {
         let mut unit = std::mem::take(&mut self.f);
         let mut fk = std::mem::take(&mut self.fk);
@@ -532,7 +534,7 @@ impl RotatingWheel {
             u.iter_mut().for_each(|x| *x = 0.0);
             v.iter_mut().for_each(|x| *x = 0.0);
             for k in 0..self.steps {
-                let a = k as f64 / self.steps as f64;
+                let a = self.hold.share(k, self.steps);
                 fk.iter_mut().zip(&unit).for_each(|(x, y)| *x = a * y);
                 self.spin.step(op, self.dt, u, v, &fk, &mut self.sc);
             }
@@ -578,8 +580,8 @@ impl RotatingWheel {
         })
     }
 
-    /// Adds the response to the contact-force change `df` (N, contact frame) ramped over the
-    /// current step to the state (after [`Self::compliance`]).
+    /// Adds the response to the contact-force change `df` (N, contact frame) applied over the
+    /// current step as the hold says to the state (after [`Self::compliance`]).
     pub(super) fn correct(&self, df: [f64; 3], u: &mut [f64], v: &mut [f64]) {
         let at = self.at;
         let dr = to_spinning(at.cs, self.ground_of(df));
