@@ -75,9 +75,8 @@ impl SweepCmd {
         // Resume only into a directory of the same model and program version.
         // (The explicit engine's results are never mixed with the reduced ones.)
         let run_key = format!(
-            "{} {}{}",
-            env!("CARGO_PKG_VERSION"),
-            blake3::hash(&serde_json::to_vec(&model)?).to_hex(),
+            "{}{}",
+            corrugation::model::identity::run_key(&model)?,
             match self.engine {
                 engine::Engine::Reduced => "",
                 engine::Engine::Explicit => " explicit",

@@ -280,15 +280,10 @@ fn short_sweep(
     dir: &Path,
     progress: &dyn Progress,
 ) -> Result<SweepOutcome, StudiesError> {
-    let json = serde_json::to_vec(m).map_err(|source| StudiesError::Json {
+    let run_key = crate::model::identity::run_key(m).map_err(|source| StudiesError::Json {
         what: "model",
         source,
     })?;
-    let run_key = format!(
-        "{} {}",
-        env!("CARGO_PKG_VERSION"),
-        blake3::hash(&json).to_hex()
-    );
     let map = MapOptions {
         frequency_lines_hz: lines.longitudinal_hz.clone(),
         wheel_lines_hz: lines.wheel_hz.clone(),
