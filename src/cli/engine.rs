@@ -11,7 +11,7 @@ use corrugation::dynamics::PassageRunner;
 use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::explicit::{ExplicitModel, ExplicitOptions, ExplicitRunner};
-use corrugation::growth::procedure::{trial_growth, ModeLines};
+use corrugation::growth::procedure::trial_growth;
 use corrugation::model::Model;
 
 /// Which engine runs the passages (`--engine`).
@@ -67,17 +67,6 @@ pub fn prepared(model: &Model, cache: Option<&Path>) -> anyhow::Result<PreparedM
     Ok(p)
 }
 
-/// The mode families the growth's components are compared with: the track's
-/// longitudinal-compression and vertical-bending modes and the wheel modes the contact sees
-/// (those drawn on the sweep's maps).
-pub fn mode_lines(p: &PreparedModel) -> ModeLines {
-    ModeLines {
-        longitudinal_hz: p.longitudinal_compression_hz(),
-        vertical_hz: p.vertical_bending_hz(),
-        wheel_hz: p.wheel_contact_modes_hz(super::sweep_cmd::WHEEL_LINE_SHARE),
-    }
-}
-
 /// The passage runner of a model: modal basis from the cache in `cache` (default cache
 /// directory when `None`), built once, then any number of passages.
 pub fn runner_for(model: &Model, cache: Option<&Path>) -> anyhow::Result<Box<dyn PassageRunner>> {
@@ -103,11 +92,11 @@ pub fn study_growth(
             &owned
         }
     };
-    let modes = mode_lines(p);
+    let modes = corrugation::studies::grow::mode_lines(p);
     let g = trial_growth(
         &p.engine,
         model.run.speed(),
-        &[10.0, 40.0, 80.0, 160.0],
+        &corrugation::studies::grow::DEFAULT_AMPLITUDES_UM,
         &modes,
         |_| {},
     )?;

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use clap::Args;
 
+use corrugation::studies::grow::WHEEL_LINE_SHARE;
 use corrugation::studies::speeds::{parse_speeds, Shard};
 use corrugation::studies::sweep::{sweep, write_shard_plan, MapOptions};
 
@@ -38,9 +39,6 @@ pub struct SweepCmd {
     #[arg(long, value_enum, default_value = "reduced")]
     engine: super::engine::Engine,
 }
-
-/// Wheel modes drawn on the maps: contact participation ≥ this share of the largest (−).
-pub const WHEEL_LINE_SHARE: f64 = 0.03;
 
 impl SweepCmd {
     /// Runs the command.
@@ -77,9 +75,8 @@ impl SweepCmd {
         // Resume only into a directory of the same model and program version.
         // (The explicit engine's results are never mixed with the reduced ones.)
         let run_key = format!(
-            "{} {}{}",
-            env!("CARGO_PKG_VERSION"),
-            blake3::hash(&serde_json::to_vec(&model)?).to_hex(),
+            "{}{}",
+            corrugation::model::identity::run_key(&model)?,
             match self.engine {
                 engine::Engine::Reduced => "",
                 engine::Engine::Explicit => " explicit",

@@ -25,6 +25,7 @@ use super::classify::{
 };
 use super::{solve, EigenError, EigenOptions};
 use crate::fe::assembly::FeMatrices;
+use crate::model::identity::{model_identity, IdentityScope};
 use crate::model::Model;
 use crate::progress::{Counter, Progress};
 use crate::structure::{StructureError, TrackStructure, WheelStructure};
@@ -77,76 +78,22 @@ pub struct ModalBasis<C> {
 /// 2: journal-node weights of the primary suspension balanced about the axle axis.
 pub const PHYSICS_REVISION: u64 = 2;
 
-/// The cache key of one substructure's modal basis (see the module doc for what it covers).
+/// The cache key of one substructure's modal basis (see the module doc for what it covers):
+/// the model's identity in the substructure's scope ([`IdentityScope::Track`] for `track`,
+/// [`IdentityScope::Wheel`] for `wheel`, [`IdentityScope::Modes`] otherwise), f_max (Hz), the
+/// substructure name and [`PHYSICS_REVISION`].
 pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey, BasisError> {
-    let v = structure_key_value(m, substructure)?;
-    let bytes = serde_json::to_vec(&v).map_err(BasisError::Json)?;
+    let scope = match substructure {
+        "track" => IdentityScope::Track,
+        "wheel" => IdentityScope::Wheel,
+        _ => IdentityScope::Modes,
+    };
+    let bytes = model_identity(m, scope)?;
     Ok(CacheKey::new()
         .u64("physics_revision", PHYSICS_REVISION)
         .bytes("model", &bytes)
         .f64("f_max_hz", fmax_hz)
         .str("substructure", substructure))
-}
-
-/// The model's sections that the K and M of `substructure` (`track` or `wheel`) read, as
-/// JSON: the content of [`cache_key`] (see the module doc for what it leaves out).
-pub fn structure_key_value(m: &Model, substructure: &str) -> Result<serde_json::Value, BasisError> {
-    let mut v = serde_json::to_value(m).map_err(BasisError::Json)?;
-    if let Some(o) = v.as_object_mut() {
-        for k in ["contact", "wear", "explicit"] {
-            o.remove(k);
-        }
-        // The solution zone places the fine mesh (it stays in the key); the speed and the
-        // passage's f_max (keyed separately) and the residual-flexibility switch do not change
-        // the modes.
-        if let Some(run) = o.get_mut("run").and_then(|r| r.as_object_mut()) {
-            run.remove("speed_kmh");
-            run.remove("fmax");
-            run.remove("residual_flexibility");
-            run.remove("residual_variation");
-        }
-        // Dampers enter neither K nor M: the railpad, ballast and elastic-hold damping stay out
-        // of the key (a damping study reuses the modes).
-        for part in ["fastening", "ballast"] {
-            if let Some(f) = o.get_mut(part).and_then(|r| r.as_object_mut()) {
-                f.retain(|k, _| !k.ends_with("damping"));
-                if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
-                    for h in c.values_mut() {
-                        if let Some(h) = h.as_object_mut() {
-                            h.remove("damping");
-                        }
-                    }
-                }
-            }
-        }
-        if let Some(v) = o.get_mut("vehicle").and_then(|r| r.as_object_mut()) {
-            v.remove("primary_damping");
-        }
-        // The wheel's modal damping ratio is added after the modes are found.
-        if let Some(w) = o.get_mut("wheel").and_then(|r| r.as_object_mut()) {
-            w.remove("damping_ratio");
-        }
-        // `WheelStructure::build` reads only the wheel, the vehicle and the wheel's mesh keys:
-        // a fastening, ballast or rail study shares one wheel basis.
-        if substructure == "wheel" {
-            o.retain(|k, _| matches!(k.as_str(), "wheel" | "vehicle" | "mesh"));
-            if let Some(mesh) = o.get_mut("mesh").and_then(|r| r.as_object_mut()) {
-                mesh.retain(|k, _| {
-                    matches!(k.as_str(), "wheel_segments" | "wheel_element_size" | "mass")
-                });
-            }
-        }
-        // `TrackStructure::build` reads none of the wheel's or the vehicle's keys.
-        if substructure == "track" {
-            o.remove("wheel");
-            o.remove("vehicle");
-            if let Some(mesh) = o.get_mut("mesh").and_then(|r| r.as_object_mut()) {
-                mesh.remove("wheel_segments");
-                mesh.remove("wheel_element_size");
-            }
-        }
-    }
-    Ok(v)
 }
 
 fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {

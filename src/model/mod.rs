@@ -17,6 +17,7 @@
 
 mod fastening;
 mod holds;
+pub mod identity;
 mod load;
 mod validate;
 

@@ -7,6 +7,9 @@
 //!   (atomic, resumable), and the assembly of the frequency-selection maps, the dominant
 //!   wavelength / frequency vs speed and the range ratios (docs/theory.md §2.3,
 //!   "frequency selection"); [`sweep::merge`] joins shard directories into the unsharded result.
+//! - [`grow`]: the trial-amplitude growth's run, verdict check and output files, shared by
+//!   `grow` and [`predict`].
+//! - [`predict`]: the prediction product (smooth passage, growth, short sweep, report).
 //! - [`initiation`]: the initiation table of several models on the smooth rail (band RMS, PSD
 //!   peaks, a stated initiation criterion; docs/theory.md §11.4).
 //! - [`study`]: design-study files (TOML): a base model, parameters varied as lists, ranges
@@ -15,7 +18,9 @@
 //!
 //! [`PassageRunner`]: crate::dynamics::PassageRunner
 
+pub mod grow;
 pub mod initiation;
+pub mod predict;
 pub mod speeds;
 pub mod study;
 pub mod sweep;

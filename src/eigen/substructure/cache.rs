@@ -7,7 +7,7 @@ use super::*;
 pub const COMPONENT_REVISION: u64 = 2;
 
 /// The cache key of a track's component `part` (`rail-component` or `sleeper-component`):
-/// the track's key ([`crate::eigen::basis::structure_key_value`]) without any spring stiffness, but
+/// the track's identity ([`crate::model::identity::IdentityScope::Track`]) without any spring stiffness, but
 /// with the railpad directions that have springs at all (a direction with zero stiffness and
 /// zero damping has none, which changes the spring layout), f_max and the options. Hold and
 /// ballast springs exist whatever their stiffness.
@@ -17,7 +17,8 @@ pub fn component_key(
     opts: &SubstructureOptions,
     part: &str,
 ) -> Result<CacheKey, BasisError> {
-    let mut v = crate::eigen::basis::structure_key_value(m, "track")?;
+    let mut v =
+        crate::model::identity::scoped_value(m, crate::model::identity::IdentityScope::Track)?;
     if let Some(o) = v.as_object_mut() {
         for p in ["fastening", "ballast"] {
             if let Some(f) = o.get_mut(p).and_then(|r| r.as_object_mut()) {

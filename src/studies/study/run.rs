@@ -50,12 +50,15 @@ pub struct StudyOutcome {
     pub reused: usize,
 }
 
-/// blake3 of the resolved model (serde_json) and the program version, hex.
+/// blake3 of the program version and the model's whole identity
+/// ([`crate::model::identity::model_identity`], [`IdentityScope::Run`](crate::model::identity::IdentityScope::Run)), hex.
 pub fn model_hash(model: &Model) -> Result<String, StudiesError> {
-    let json = serde_json::to_vec(model).map_err(|source| StudiesError::Json {
-        what: "model",
-        source,
-    })?;
+    let json =
+        crate::model::identity::model_identity(model, crate::model::identity::IdentityScope::Run)
+            .map_err(|source| StudiesError::Json {
+            what: "model",
+            source,
+        })?;
     let mut h = blake3::Hasher::new();
     h.update(env!("CARGO_PKG_VERSION").as_bytes());
     h.update(&json);

@@ -1,0 +1,187 @@
+//! The identity of a model: the one function ([`model_identity`]) that says whether two
+//! models give the same results, for the resume key of a sweep, the case hash of a study and
+//! the modal cache key. A [`IdentityScope`] says what the identity covers:
+//!
+//! - [`IdentityScope::Run`]: every section of the model; any change makes a new run.
+//! - [`IdentityScope::Modes`]: the sections that K and M read. It leaves out the contact,
+//!   wear and explicit sections; the speed, the passage's `run.fmax` (keyed separately by the
+//!   cache) and the residual-flexibility switches; and every damper (railpads, ballast,
+//!   elastic holds, primary suspension, the wheel's modal damping ratio): dampers enter C only,
+//!   so a damping or speed study reuses the modes.
+//! - [`IdentityScope::Track`]: `Modes` without the wheel, the vehicle and the wheel's mesh
+//!   keys (the track is built without them).
+//! - [`IdentityScope::Wheel`]: `Modes` restricted to the wheel, the vehicle and the wheel's
+//!   mesh keys (`WheelStructure::build` reads only these).
+
+use serde_json::Value;
+
+use super::Model;
+
+/// What a model identity covers (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IdentityScope {
+    /// The whole model: results of a passage, a sweep or a study case.
+    Run,
+    /// The sections K and M of the track and the wheel read.
+    Modes,
+    /// The sections the track's K and M read.
+    Track,
+    /// The sections the wheel's K and M read.
+    Wheel,
+}
+
+/// The identity of `m` in `scope`: its JSON, the bytes that are hashed. Equal models give
+/// equal bytes; a change outside the scope leaves them unchanged.
+pub fn model_identity(m: &Model, scope: IdentityScope) -> Result<Vec<u8>, serde_json::Error> {
+    match scope {
+        IdentityScope::Run => serde_json::to_vec(m),
+        _ => serde_json::to_vec(&scoped_value(m, scope)?),
+    }
+}
+
+/// The resume key of a run of `m` into a directory: the program version and the hash of the
+/// whole model ([`IdentityScope::Run`]), `"VERSION HEX"`.
+pub fn run_key(m: &Model) -> Result<String, serde_json::Error> {
+    Ok(format!(
+        "{} {}",
+        env!("CARGO_PKG_VERSION"),
+        blake3::hash(&model_identity(m, IdentityScope::Run)?).to_hex()
+    ))
+}
+
+/// The model's sections in `scope` as JSON (keys sorted); for [`IdentityScope::Run`] the whole
+/// model.
+pub fn scoped_value(m: &Model, scope: IdentityScope) -> Result<Value, serde_json::Error> {
+    let mut v = serde_json::to_value(m)?;
+    if scope == IdentityScope::Run {
+        return Ok(v);
+    }
+    if let Some(o) = v.as_object_mut() {
+        remove_non_structural(o);
+        match scope {
+            IdentityScope::Wheel => keep_wheel(o),
+            IdentityScope::Track => drop_wheel(o),
+            IdentityScope::Modes | IdentityScope::Run => {}
+        }
+    }
+    Ok(v)
+}
+
+type Object = serde_json::Map<String, Value>;
+
+/// Removes what neither K nor M reads: contact, wear, explicit, the passage settings of `run`
+/// (the solution zone stays: it places the fine mesh) and every damper.
+fn remove_non_structural(o: &mut Object) {
+    for k in ["contact", "wear", "explicit"] {
+        o.remove(k);
+    }
+    if let Some(run) = o.get_mut("run").and_then(|r| r.as_object_mut()) {
+        for k in [
+            "speed_kmh",
+            "fmax",
+            "residual_flexibility",
+            "residual_variation",
+        ] {
+            run.remove(k);
+        }
+    }
+    for part in ["fastening", "ballast"] {
+        if let Some(f) = o.get_mut(part).and_then(|r| r.as_object_mut()) {
+            f.retain(|k, _| !k.ends_with("damping"));
+            if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
+                for h in c.values_mut() {
+                    if let Some(h) = h.as_object_mut() {
+                        h.remove("damping");
+                    }
+                }
+            }
+        }
+    }
+    if let Some(v) = o.get_mut("vehicle").and_then(|r| r.as_object_mut()) {
+        v.remove("primary_damping");
+    }
+    if let Some(w) = o.get_mut("wheel").and_then(|r| r.as_object_mut()) {
+        w.remove("damping_ratio");
+    }
+}
+
+/// Keeps the wheel, the vehicle and the wheel's mesh keys only.
+fn keep_wheel(o: &mut Object) {
+    o.retain(|k, _| matches!(k.as_str(), "wheel" | "vehicle" | "mesh"));
+    if let Some(mesh) = o.get_mut("mesh").and_then(|r| r.as_object_mut()) {
+        mesh.retain(|k, _| matches!(k.as_str(), "wheel_segments" | "wheel_element_size" | "mass"));
+    }
+}
+
+/// Removes the wheel, the vehicle and the wheel's mesh keys.
+fn drop_wheel(o: &mut Object) {
+    o.remove("wheel");
+    o.remove("vehicle");
+    if let Some(mesh) = o.get_mut("mesh").and_then(|r| r.as_object_mut()) {
+        mesh.remove("wheel_segments");
+        mesh.remove("wheel_element_size");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with(set: &[&str]) -> Model {
+        let o: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+        crate::model::load_model(&crate::model::ModelSource::Builtin, &o).unwrap()
+    }
+
+    fn same(a: &Model, b: &Model, scope: IdentityScope) -> bool {
+        model_identity(a, scope).unwrap() == model_identity(b, scope).unwrap()
+    }
+
+    const ALL: [IdentityScope; 4] = [
+        IdentityScope::Run,
+        IdentityScope::Modes,
+        IdentityScope::Track,
+        IdentityScope::Wheel,
+    ];
+
+    #[test]
+    fn equal_models_have_equal_identities_in_every_scope() {
+        for s in ALL {
+            assert!(same(&with(&[]), &with(&[]), s), "{s:?}");
+        }
+        assert_eq!(run_key(&with(&[])).unwrap(), run_key(&with(&[])).unwrap());
+    }
+
+    #[test]
+    fn damping_and_speed_change_the_run_but_not_the_modes() {
+        let base = with(&[]);
+        for set in [
+            &["ballast.vertical_damping=99999"][..],
+            &["run.speed_kmh=61"][..],
+            &["wheel.damping_ratio=0.005"][..],
+            &["contact.friction=0.5"][..],
+        ] {
+            let m = with(set);
+            assert!(!same(&base, &m, IdentityScope::Run), "{set:?}");
+            assert_ne!(run_key(&base).unwrap(), run_key(&m).unwrap(), "{set:?}");
+            for s in [
+                IdentityScope::Modes,
+                IdentityScope::Track,
+                IdentityScope::Wheel,
+            ] {
+                assert!(same(&base, &m, s), "{set:?} {s:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_wheel_change_leaves_the_track_identity_and_a_rail_change_the_wheel_identity() {
+        let base = with(&[]);
+        let w = with(&["mesh.wheel_segments=20"]);
+        assert!(!same(&base, &w, IdentityScope::Wheel));
+        assert!(!same(&base, &w, IdentityScope::Run));
+        assert!(same(&base, &w, IdentityScope::Track));
+        let t = with(&["track.bays=5"]);
+        assert!(!same(&base, &t, IdentityScope::Track));
+        assert!(same(&base, &t, IdentityScope::Wheel));
+    }
+}

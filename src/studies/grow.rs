@@ -1,0 +1,408 @@
+//! The outputs of the trial-amplitude growth (docs/theory.md §10.1–§10.4) shared by the
+//! `grow` and `predict` products: the run with its progress, the verdict's initiation check,
+//! the CSV files and the `grow.json` object.
+//!
+//! Files written into a growth directory, atomically:
+//! * `consistency.csv` — per amplitude and reference component: the matched W_f, F_L, F_N
+//!   wavelengths (mm), frequencies (Hz), deviations, case, class;
+//! * `phase.csv` — per amplitude: correlation of the new wear with the corrugation, phase,
+//!   growing, consistent growth;
+//! * `eigen_comparison.csv` — every component vs the nearest longitudinal-compression,
+//!   vertical-bending and wheel eigenfrequency (relative difference);
+//! * `trial_shape.csv` — `x_m, wear_band_j_per_m, height_per_um`: the band-passed smooth wear
+//!   and the trial corrugation shape for 2A_max = 1 µm (scale by the amplitude);
+//! * `grow.json` — [`GrowJson`], written last.
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::initiation::{evaluate, InitiationCriterion};
+use super::StudiesError;
+use crate::dynamics::prepared::PreparedModel;
+use crate::dynamics::summary::PassageSummary;
+use crate::dynamics::PassageRecorder;
+use crate::growth::procedure::{trial_growth, GrowthRound, ModeLines, ProcedureError, TrialGrowth};
+use crate::growth::verdict::{InitiationCheck, Verdict};
+use crate::growth::PhaseRelation;
+use crate::io::{write_atomic, write_csv};
+use crate::model::Model;
+use crate::progress::Progress;
+use crate::units::m_to_mm;
+
+/// Wheel modes drawn on the maps and compared with the components: contact participation
+/// ≥ this share of the largest (−).
+pub const WHEEL_LINE_SHARE: f64 = 0.03;
+
+/// The mode families the growth's components are compared with: the track's
+/// longitudinal-compression and vertical-bending modes and the wheel modes the contact sees
+/// (those drawn on the sweep's maps).
+pub fn mode_lines(p: &PreparedModel) -> ModeLines {
+    ModeLines {
+        longitudinal_hz: p.longitudinal_compression_hz(),
+        vertical_hz: p.vertical_bending_hz(),
+        wheel_hz: p.wheel_contact_modes_hz(WHEEL_LINE_SHARE),
+    }
+}
+
+/// The trial amplitudes 2A_max (peak-to-trough, µm) of `grow`, `predict` and a study's growth
+/// loop when none are given.
+pub const DEFAULT_AMPLITUDES_UM: [f64; 4] = [10.0, 40.0, 80.0, 160.0];
+
+/// One matched component in the JSON.
+#[derive(Serialize)]
+pub struct JsonComponent {
+    /// The reference (smooth-rail) wavelength it was matched to, mm.
+    pub reference_wavelength_mm: f64,
+    /// The matched wavelength, mm; `None` when nothing matched.
+    pub wavelength_mm: Option<f64>,
+    /// Its frequency at the passage speed, Hz.
+    pub frequency_hz: Option<f64>,
+    /// Relative deviation from the reference wavelength (−, 0.03 = 3 %).
+    pub deviation: Option<f64>,
+}
+
+/// Components of one amplitude.
+#[derive(Serialize)]
+pub struct JsonAmplitudeComponents {
+    /// Trial amplitude 2A_max, µm.
+    pub amplitude_um: f64,
+    /// Matched differential-wear components.
+    #[serde(rename = "W_f")]
+    pub wf: Vec<JsonComponent>,
+    /// Matched longitudinal-force components.
+    #[serde(rename = "F_L")]
+    pub fl: Vec<JsonComponent>,
+    /// Matched normal-force components.
+    #[serde(rename = "F_N")]
+    pub fnn: Vec<JsonComponent>,
+}
+
+/// One consistency row in the JSON.
+#[derive(Serialize)]
+pub struct JsonConsistency {
+    /// Trial amplitude 2A_max, µm.
+    pub amplitude_um: f64,
+    /// Reference wavelength, mm.
+    pub reference_wavelength_mm: f64,
+    /// Consistency case (docs/theory.md §10.3).
+    pub case: String,
+    /// Consistency class.
+    pub class: String,
+    /// Which signals match the reference (e.g. "W_f F_L").
+    pub consistent_signals: String,
+}
+
+/// The `grow.json` object (the `--json` output of `grow`; `predict` writes it too).
+#[derive(Serialize)]
+pub struct GrowJson {
+    /// Passage speed, km/h.
+    pub speed_kmh: f64,
+    /// Trial amplitudes 2A_max, µm.
+    pub amplitudes_um: Vec<f64>,
+    /// Reference wavelengths (smooth-rail wear components), mm.
+    pub reference_wavelengths_mm: Vec<f64>,
+    /// Limiting amplitude (2A_max)_l, µm; `None` when the smallest trial does not grow.
+    pub limiting_amplitude_um: Option<f64>,
+    /// Growth phase per amplitude ("anti-phase", "in-phase", "indeterminate").
+    pub phase: Vec<String>,
+    /// Correlation of the new wear with the corrugation per amplitude (−1 … 1).
+    pub correlation: Vec<f64>,
+    /// Whether each amplitude grows consistently.
+    pub grows_consistently: Vec<bool>,
+    /// Matched components per amplitude.
+    pub components: Vec<JsonAmplitudeComponents>,
+    /// Consistency rows of every amplitude.
+    pub consistency: Vec<JsonConsistency>,
+    /// F_L band RMS (20–80 mm) per amplitude, N.
+    pub fl_band_rms_n: Vec<f64>,
+    /// F_N band RMS (20–80 mm) per amplitude, N.
+    pub fn_band_rms_n: Vec<f64>,
+    /// Rounds of the iterative growth (empty when not run).
+    pub iterative: Vec<GrowthRound>,
+    /// The plain-language verdict.
+    pub verdict: Verdict,
+    /// Wall-clock time of the run, s (0 when not measured).
+    pub seconds: f64,
+}
+
+/// The JSON name of a growth phase.
+fn phase_name(p: PhaseRelation) -> &'static str {
+    match p {
+        PhaseRelation::AntiPhase => "anti-phase",
+        PhaseRelation::InPhase => "in-phase",
+        PhaseRelation::Indeterminate => "indeterminate",
+    }
+}
+
+/// The JSON (serde) name of a unit enum variant.
+fn json_name<T: Serialize>(v: &T) -> String {
+    serde_json::to_value(v)
+        .ok()
+        .and_then(|v| v.as_str().map(String::from))
+        .unwrap_or_default()
+}
+
+/// Builds the JSON object of a trial-growth result.
+pub fn grow_json(
+    g: &TrialGrowth,
+    speed_kmh: f64,
+    iterative: Vec<GrowthRound>,
+    verdict: Verdict,
+    seconds: f64,
+) -> GrowJson {
+    let refs_mm: Vec<f64> = g
+        .reference_wavelengths_m
+        .iter()
+        .map(|&l| m_to_mm(l))
+        .collect();
+    let comp = |r: &crate::growth::ConsistencyRow, which: usize| {
+        let (w, f, d) = match which {
+            0 => (r.wf_wavelength_m, r.wf_frequency_hz, r.wf_deviation),
+            1 => (r.fl_wavelength_m, r.fl_frequency_hz, r.fl_deviation),
+            _ => (r.fn_wavelength_m, r.fn_frequency_hz, r.fn_deviation),
+        };
+        JsonComponent {
+            reference_wavelength_mm: m_to_mm(r.reference_wavelength_m),
+            wavelength_mm: w.map(m_to_mm),
+            frequency_hz: f,
+            deviation: d,
+        }
+    };
+    GrowJson {
+        speed_kmh,
+        amplitudes_um: g.amplitudes.iter().map(|a| a.amplitude_um).collect(),
+        reference_wavelengths_mm: refs_mm,
+        limiting_amplitude_um: g.limiting_amplitude_um,
+        phase: g
+            .amplitudes
+            .iter()
+            .map(|a| phase_name(a.phase.relation).to_string())
+            .collect(),
+        correlation: g.amplitudes.iter().map(|a| a.phase.correlation).collect(),
+        grows_consistently: g.amplitudes.iter().map(|a| a.grows_consistently).collect(),
+        components: g
+            .amplitudes
+            .iter()
+            .map(|a| JsonAmplitudeComponents {
+                amplitude_um: a.amplitude_um,
+                wf: a.rows.iter().map(|r| comp(r, 0)).collect(),
+                fl: a.rows.iter().map(|r| comp(r, 1)).collect(),
+                fnn: a.rows.iter().map(|r| comp(r, 2)).collect(),
+            })
+            .collect(),
+        consistency: g
+            .amplitudes
+            .iter()
+            .flat_map(|a| {
+                a.rows.iter().map(move |r| JsonConsistency {
+                    amplitude_um: a.amplitude_um,
+                    reference_wavelength_mm: m_to_mm(r.reference_wavelength_m),
+                    case: json_name(&r.case),
+                    class: json_name(&r.class),
+                    consistent_signals: r.consistent_signals.clone(),
+                })
+            })
+            .collect(),
+        fl_band_rms_n: g
+            .amplitudes
+            .iter()
+            .map(|a| a.summary.fl_band_rms_n)
+            .collect(),
+        fn_band_rms_n: g
+            .amplitudes
+            .iter()
+            .map(|a| a.summary.fn_band_rms_n)
+            .collect(),
+        iterative,
+        verdict,
+        seconds,
+    }
+}
+
+/// The smooth rail's relative wear against the model's initiation threshold
+/// (`wear.initiation_threshold`), for the verdict.
+pub fn initiation_check(m: &Model, smooth: &PassageSummary) -> InitiationCheck {
+    let c = InitiationCriterion::from_model(m);
+    let row = evaluate("model", smooth, &c, 1);
+    InitiationCheck {
+        relative_wear: row.relative_wear,
+        threshold: c.min_relative_wear,
+        initiates: row.initiates,
+    }
+}
+
+/// The trial growth of `recorder` at `speed_m_per_s` (m/s) with the trial amplitudes
+/// `amplitudes_um` (2A_max, µm), each passage counted on `progress`; `None` when the smooth
+/// rail left no wear component to grow (the verdict is then "no initiation").
+pub fn trial_growth_if_any(
+    recorder: &dyn PassageRecorder,
+    speed_m_per_s: f64,
+    amplitudes_um: &[f64],
+    modes: &ModeLines,
+    progress: &dyn Progress,
+) -> Result<Option<TrialGrowth>, ProcedureError> {
+    progress.stage(
+        "trial-amplitude growth (passages: smooth rail + trials)",
+        1 + amplitudes_um.len() as u64,
+    );
+    let r = trial_growth(recorder, speed_m_per_s, amplitudes_um, modes, |k| {
+        progress.done(k as u64 + 1)
+    });
+    progress.finish();
+    match r {
+        Ok(g) => Ok(Some(g)),
+        Err(ProcedureError::NoReference) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// Writes the CSV files of a trial-growth result into `out`.
+pub fn write_growth_files(out: &Path, g: &TrialGrowth) -> Result<(), StudiesError> {
+    std::fs::create_dir_all(out).map_err(StudiesError::io(out))?;
+    let opt = |v: Option<f64>| v.map(|x| format!("{x:e}")).unwrap_or_default();
+    let mut rows: Vec<Vec<String>> = Vec::new();
+    for a in &g.amplitudes {
+        for r in &a.rows {
+            rows.push(vec![
+                format!("{}", a.amplitude_um),
+                format!("{:e}", m_to_mm(r.reference_wavelength_m)),
+                opt(r.wf_wavelength_m.map(m_to_mm)),
+                opt(r.wf_frequency_hz),
+                opt(r.wf_deviation),
+                opt(r.fl_wavelength_m.map(m_to_mm)),
+                opt(r.fl_frequency_hz),
+                opt(r.fl_deviation),
+                opt(r.fn_wavelength_m.map(m_to_mm)),
+                opt(r.fn_frequency_hz),
+                opt(r.fn_deviation),
+                json_name(&r.case),
+                json_name(&r.class),
+                r.consistent_signals.clone(),
+            ]);
+        }
+    }
+    write_text_csv(
+        &out.join("consistency.csv"),
+        &[
+            "amplitude_um",
+            "reference_wavelength_mm",
+            "wf_wavelength_mm",
+            "wf_frequency_hz",
+            "wf_deviation",
+            "fl_wavelength_mm",
+            "fl_frequency_hz",
+            "fl_deviation",
+            "fn_wavelength_mm",
+            "fn_frequency_hz",
+            "fn_deviation",
+            "case",
+            "class",
+            "consistent_signals",
+        ],
+        &rows,
+    )?;
+    let rows: Vec<Vec<String>> = g
+        .amplitudes
+        .iter()
+        .map(|a| {
+            vec![
+                format!("{}", a.amplitude_um),
+                format!("{:e}", a.phase.correlation),
+                phase_name(a.phase.relation).to_string(),
+                format!("{}", a.phase.growing == Some(true)),
+                format!("{}", a.grows_consistently),
+                format!("{:e}", a.summary.fl_band_rms_n),
+                format!("{:e}", a.summary.fn_band_rms_n),
+                format!("{:e}", a.summary.wear_band_rms),
+            ]
+        })
+        .collect();
+    write_text_csv(
+        &out.join("phase.csv"),
+        &[
+            "amplitude_um",
+            "correlation",
+            "phase",
+            "growing",
+            "grows_consistently",
+            "fl_band_rms_n",
+            "fn_band_rms_n",
+            "wear_band_rms_j_per_m",
+        ],
+        &rows,
+    )?;
+    let rows: Vec<Vec<String>> = g
+        .eigen
+        .iter()
+        .map(|e| {
+            vec![
+                e.signal.clone(),
+                format!("{}", e.amplitude_um),
+                format!("{:e}", e.wavelength_mm),
+                format!("{:e}", e.frequency_hz),
+                opt(e.nearest_longitudinal_hz),
+                opt(e.longitudinal_difference),
+                opt(e.nearest_vertical_hz),
+                opt(e.vertical_difference),
+                opt(e.nearest_wheel_hz),
+                opt(e.wheel_difference),
+            ]
+        })
+        .collect();
+    write_text_csv(
+        &out.join("eigen_comparison.csv"),
+        &[
+            "signal",
+            "amplitude_um",
+            "wavelength_mm",
+            "frequency_hz",
+            "nearest_longitudinal_hz",
+            "longitudinal_difference",
+            "nearest_vertical_hz",
+            "vertical_difference",
+            "nearest_wheel_hz",
+            "wheel_difference",
+        ],
+        &rows,
+    )?;
+    let wb = &g.smooth_wear_band;
+    let (lo, hi) = wb
+        .values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), &v| {
+            (l.min(v), u.max(v))
+        });
+    let ptp = (hi - lo).max(f64::MIN_POSITIVE);
+    write_csv(
+        &out.join("trial_shape.csv"),
+        &["x_m", "wear_band_j_per_m", "height_per_um"],
+        (0..wb.len()).map(|i| vec![wb.x_m(i), wb.values[i], -wb.values[i] / ptp]),
+    )
+    .map_err(StudiesError::io(&out.join("trial_shape.csv")))?;
+    Ok(())
+}
+
+/// `grow.json` in `out` (the `--json` object of `grow`), atomically: written last, it marks a
+/// complete run.
+pub fn write_grow_json(out: &Path, text: &str) -> Result<(), StudiesError> {
+    let p = out.join("grow.json");
+    crate::io::write_text(&p, text).map_err(StudiesError::io(&p))
+}
+
+/// A CSV of text cells, atomically.
+pub fn write_text_csv(
+    path: &Path,
+    header: &[&str],
+    rows: &[Vec<String>],
+) -> Result<(), StudiesError> {
+    write_atomic(path, |w| {
+        let mut c = csv::Writer::from_writer(w);
+        c.write_record(header).map_err(std::io::Error::other)?;
+        for r in rows {
+            c.write_record(r).map_err(std::io::Error::other)?;
+        }
+        c.flush()
+    })
+    .map_err(StudiesError::io(path))
+}
