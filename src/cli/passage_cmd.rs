@@ -66,7 +66,7 @@ impl PassageCmd {
         let pb = super::progress::bar("passage (time steps)");
         let rec = prepared
             .engine
-            .passage(m.run.speed(), profile.as_ref(), &opts, Some(pb.handle()))
+            .passage(m.run.speed(), profile.as_ref(), &opts, Some(&pb))
             .context("running the passage")?;
         pb.finish_and_clear();
         let summary = corrugation::dynamics::analysis::summarise(&rec)?;

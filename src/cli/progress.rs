@@ -1,9 +1,8 @@
 //! Renders the progress of long work on stderr: a named bar with an ETA on a terminal, and
 //! plain lines (stage, count, elapsed time, ETA) every few seconds when stderr is not a
 //! terminal (batch jobs, logs). The library reports its progress through
-//! [`corrugation::progress::Progress`] (implemented here) or, for a passage, through the
-//! state of an [`indicatif::ProgressBar`] handle that is drawn only on a terminal; this module
-//! is the only place that prints it.
+//! [`corrugation::progress::Progress`] (implemented here); this module is the only place
+//! that prints it.
 //!
 //! The interval of the plain lines is `CORRUGATION_PROGRESS_SECONDS` (s, default 10, from
 //! 0.1 to 3600).
@@ -127,11 +126,6 @@ fn make(name: &str) -> Progress {
 }
 
 impl Progress {
-    /// The state handle a library passage updates (drawn only on a terminal).
-    pub fn handle(&self) -> &indicatif::ProgressBar {
-        &self.bar
-    }
-
     /// Starts a new stage named `msg` (count and clock restart; total unknown).
     pub fn set_message(&self, msg: &str) {
         if let Ok(mut s) = self.stage.lock() {

@@ -543,7 +543,7 @@ impl PassageEngine {
         speed_m_per_s: f64,
         profile: Option<&RailProfile>,
         opts: &PassageOptions,
-        progress: Option<&indicatif::ProgressBar>,
+        progress: Option<&dyn crate::progress::Progress>,
     ) -> Result<PassageRecord, DynamicsError> {
         let v = speed_m_per_s;
         let (mut contact, st) = self.started_contact(v, profile)?;
@@ -669,9 +669,9 @@ impl PassageEngine {
         let mut qw_prev = wh.q.clone();
         let mut last_delta = st.approach_m;
         let t_wall = Instant::now();
-        if let Some(pb) = progress {
-            pb.set_length(n_steps as u64);
-            pb.set_position(0);
+        if let Some(p) = progress {
+            p.total(n_steps as u64);
+            p.done(0);
         }
         for n in 1..=n_steps {
             let t = n as f64 * dt;
@@ -785,9 +785,9 @@ impl PassageEngine {
                     dot(&rows[2 * mt..], &tr.q),
                 ]);
             }
-            if let Some(pb) = progress {
+            if let Some(p) = progress {
                 if n % 64 == 0 {
-                    pb.set_position(n as u64);
+                    p.done(n as u64);
                 }
             }
         }

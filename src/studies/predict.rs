@@ -218,10 +218,13 @@ fn smooth_passage(
     passage_files: PassageFiles<'_>,
     progress: &dyn Progress,
 ) -> Result<PassageSummary, PredictError> {
-    progress.stage("smooth-rail passage", 0);
-    let rec = prepared
-        .engine
-        .passage(m.run.speed(), None, &PassageOptions::default(), None);
+    progress.stage("smooth-rail passage (time steps)", 0);
+    let rec = prepared.engine.passage(
+        m.run.speed(),
+        None,
+        &PassageOptions::default(),
+        Some(progress),
+    );
     progress.finish();
     let rec = rec?;
     let smooth = crate::dynamics::analysis::summarise(&rec)?;
