@@ -523,3 +523,19 @@ fn shared_static_start_gives_the_passage_of_a_fresh_engine() {
     assert_eq!(shared.wear_j_per_m, own.wear_j_per_m);
     assert_eq!(shared.static_creepage, own.static_creepage);
 }
+
+/// The speed asked for comes back exactly: 60 km/h is 16.666… m/s inside, and the summary of
+/// a runner says 60, not 60.00000000000001 (the round trip through m/s).
+#[test]
+fn a_runner_reports_the_requested_speed_exactly() {
+    use corrugation::dynamics::PassageRunner;
+    let m = small_model();
+    assert_ne!(
+        corrugation::units::ms_to_kmh(corrugation::units::kmh_to_ms(60.0)),
+        60.0,
+        "the round trip this test guards against"
+    );
+    let p = PreparedModel::new(&m, &cache(), &PassageOptions::default()).expect("modal model");
+    let s = p.run(60.0, None).expect("passage runs");
+    assert_eq!(s.speed_kmh, 60.0);
+}

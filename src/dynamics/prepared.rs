@@ -176,6 +176,6 @@ impl super::PassageRunner for PreparedModel {
         let rec = self
             .engine
             .passage(crate::units::kmh_to_ms(speed_kmh), profile, &opts, None)?;
-        super::analysis::summarise(&rec)
+        Ok(super::analysis::summarise(&rec)?.at_requested_speed(speed_kmh))
     }
 }

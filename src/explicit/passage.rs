@@ -926,6 +926,6 @@ impl crate::dynamics::PassageRunner for ExplicitRunner {
         let rec = self
             .model
             .record(crate::units::kmh_to_ms(speed_kmh), profile)?;
-        crate::dynamics::analysis::summarise(&rec)
+        Ok(crate::dynamics::analysis::summarise(&rec)?.at_requested_speed(speed_kmh))
     }
 }
