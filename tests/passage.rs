@@ -465,6 +465,12 @@ fn grow_and_predict_print_a_verdict_and_plain_progress() {
         err.contains("sweep passages (speeds): done (2/2, "),
         "{err}"
     );
+    // A stage ends once: one closing line, and no progress line after it.
+    assert_eq!(
+        err.matches("sweep passages (speeds): done").count(),
+        1,
+        "{err}"
+    );
     assert!(
         err.contains("smooth-rail passage (time steps): done ("),
         "{err}"

@@ -39,6 +39,8 @@ fn interval() -> Duration {
 struct Stage {
     name: String,
     start: Instant,
+    /// Its closing line has been printed (a stage ends once, however often it is finished).
+    ended: bool,
 }
 
 /// A named progress indicator (see the module doc). Dropping it stops the plain lines.
@@ -100,6 +102,7 @@ fn make(name: &str) -> Progress {
     let stage = Arc::new(Mutex::new(Stage {
         name: name.to_string(),
         start: Instant::now(),
+        ended: false,
     }));
     let (stop, ticker) = if tty {
         (None, None)
@@ -110,7 +113,9 @@ fn make(name: &str) -> Progress {
         let h = std::thread::spawn(move || {
             while let Err(mpsc::RecvTimeoutError::Timeout) = rx.recv_timeout(every) {
                 if let Ok(st) = s.lock() {
-                    eprintln!("{}", plain_line(&st, &b));
+                    if !st.ended {
+                        eprintln!("{}", plain_line(&st, &b));
+                    }
                 }
             }
         });
@@ -131,6 +136,7 @@ impl Progress {
         if let Ok(mut s) = self.stage.lock() {
             s.name = msg.to_string();
             s.start = Instant::now();
+            s.ended = false;
         }
         // A stage after a finished one restarts the bar (and its ticker) on a terminal.
         if self.bar.is_finished() && !self.bar.is_hidden() {
@@ -165,7 +171,10 @@ impl Progress {
     pub fn finish_and_clear(&self) {
         self.bar.finish_and_clear();
         if !self.tty {
-            if let Ok(s) = self.stage.lock() {
+            if let Ok(mut s) = self.stage.lock() {
+                if std::mem::replace(&mut s.ended, true) {
+                    return;
+                }
                 let n = self.bar.length().unwrap_or(0);
                 let count = if n > 0 {
                     format!("{n}/{n}, ")
@@ -224,6 +233,7 @@ mod tests {
         let st = Stage {
             name: "sweep passages (speeds)".into(),
             start: Instant::now() - Duration::from_secs(20),
+            ended: false,
         };
         let b = indicatif::ProgressBar::hidden();
         assert_eq!(
