@@ -51,37 +51,6 @@ fn bar() -> FeMatrices {
     .unwrap()
 }
 
-/// Eigenpairs of `M^{-½} K M^{-½}` (dense, nalgebra), with the mode shapes `M^{-½} z`.
-fn dense_modes(op: &ExplicitOperator) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let n = op.n();
-    let mut a = nalgebra::DMatrix::zeros(n, n);
-    let mut e = vec![0.0; n];
-    let mut col = vec![0.0; n];
-    for j in 0..n {
-        e.iter_mut().for_each(|x| *x = 0.0);
-        e[j] = 1.0;
-        op.apply_scaled(&e, &mut col);
-        for i in 0..n {
-            a[(i, j)] = col[i];
-        }
-    }
-    let a = 0.5 * (&a + a.transpose());
-    let eig = nalgebra::SymmetricEigen::new(a);
-    let mut idx: Vec<usize> = (0..n).collect();
-    idx.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
-    let m = op.mass();
-    let vals = idx.iter().map(|&i| eig.eigenvalues[i]).collect();
-    let vecs = idx
-        .iter()
-        .map(|&i| {
-            (0..n)
-                .map(|r| eig.eigenvectors[(r, i)] / m[r].sqrt())
-                .collect()
-        })
-        .collect();
-    (vals, vecs)
-}
-
 /// Frequency (Hz) of a free vibration started in `shape` (m), from the zero crossings of
 /// `probe · u(t)` over `periods` periods of the expected frequency `f_guess` (Hz).
 fn free_vibration_frequency(
@@ -134,7 +103,7 @@ fn free_vibration_frequency(
 fn bar_longitudinal_and_bending_modes_from_free_vibration() {
     let fm = bar();
     let op = ExplicitOperator::new(fm.k.as_ref(), fm.m.as_ref(), fm.c.as_ref()).unwrap();
-    let (vals, vecs) = dense_modes(&op);
+    let (vals, vecs) = common::dense_modes(&op);
     let n = op.n();
     // Shares of the kinetic energy in x (longitudinal) and z (bending in the x–z plane).
     let share = |v: &[f64], d: usize| {
@@ -187,7 +156,7 @@ fn bar_longitudinal_and_bending_modes_from_free_vibration() {
 fn omega_max_estimate_matches_the_dense_solver() {
     let fm = bar();
     let op = ExplicitOperator::new(fm.k.as_ref(), fm.m.as_ref(), fm.c.as_ref()).unwrap();
-    let (vals, _) = dense_modes(&op);
+    let (vals, _) = common::dense_modes(&op);
     let exact = vals[vals.len() - 1].sqrt();
     let est = StableStep::estimate(&op).unwrap();
     eprintln!(

@@ -58,34 +58,6 @@ fn ring() -> (Mesh, usize) {
     (Mesh { nodes, elements }, n)
 }
 
-/// The eigenpairs of `M^{-½} K M^{-½}` (dense), sorted, with M-normalised shapes.
-fn dense_pairs(op: &ExplicitOperator) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let n = op.n();
-    let m = op.mass();
-    let mut e = vec![0.0; n];
-    let mut col = vec![0.0; n];
-    let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
-    for j in 0..n {
-        e.iter_mut().for_each(|x| *x = 0.0);
-        e[j] = 1.0;
-        op.apply_scaled(&e, &mut col);
-        a.set_column(j, &nalgebra::DVector::from_column_slice(&col));
-    }
-    let eig = nalgebra::SymmetricEigen::new(0.5 * (&a + a.transpose()));
-    let mut idx: Vec<usize> = (0..n).collect();
-    idx.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
-    let vals = idx.iter().map(|&i| eig.eigenvalues[i]).collect();
-    let vecs = idx
-        .iter()
-        .map(|&i| {
-            (0..n)
-                .map(|r| eig.eigenvectors[(r, i)] / m[r].sqrt())
-                .collect()
-        })
-        .collect();
-    (vals, vecs)
-}
-
 /// The n = 2 Fourier coefficient `Σ u_r e^{−2iθ}` (re, im) of the radial displacement of
 /// the outer nodes of the ring.
 fn radial_fourier2(mesh: &Mesh, n_around: usize, u: &[f64]) -> (f64, f64) {
@@ -168,7 +140,7 @@ fn thin_ring_pair_splits_as_bryan_says() {
     )
     .unwrap();
     let op = ExplicitOperator::new(fm.k.as_ref(), fm.m.as_ref(), fm.c.as_ref()).unwrap();
-    let (vals, vecs) = dense_pairs(&op);
+    let (vals, vecs) = common::dense_modes(&op);
     // Six rigid modes, then the in-plane n = 2 pair (the out-of-plane pair is stiffer for a
     // ring twice as wide as thick).
     let (w1, w2) = (vals[6].sqrt(), vals[7].sqrt());
