@@ -13,6 +13,10 @@
 //! (frequencies below `--fmax-check`, default 3 kHz) and one passage on each basis (band RMS
 //! of F_L, F_N and wear, dominant wavelength).
 
+mod common;
+
+use common::{cpu_seconds, machine_load};
+
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -28,26 +32,6 @@ use corrugation::model::{load_model, ModelSource};
 use corrugation::structure::TrackStructure;
 use corrugation::studies::study::{basis_plan, run_study, CaseRunners, Study};
 use corrugation::studies::BoxError;
-
-fn cpu_seconds() -> f64 {
-    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let f: Vec<&str> = s
-        .rsplit(')')
-        .next()
-        .unwrap_or("")
-        .split_whitespace()
-        .collect();
-    let t = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-    // Fields 14 and 15 (utime, stime) are at 11 and 12 after the command name.
-    (t(11) + t(12)) / 100.0
-}
-
-fn load() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .unwrap_or_default()
-        .trim()
-        .to_string()
-}
 
 fn arg(args: &[String], name: &str) -> Option<String> {
     args.iter()
@@ -96,7 +80,7 @@ fn study(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
     println!(
         "study: {} cases ({basis} basis), wall {wall:.1} s, CPU {cpu:.1} s, load {}, study.csv blake3 {}",
         out.cases.len(),
-        load(),
+        machine_load(),
         &blake3::hash(&csv).to_hex()[..16]
     );
     for (c, r) in &out.cases {

@@ -6,21 +6,7 @@
 /// CPU time of this process, all threads (user + system, s) from `/proc/self/stat` (Linux,
 /// 100 Hz clock ticks; `NaN` elsewhere): the machine is shared, so wall time alone says little.
 pub fn cpu_seconds() -> f64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
-        return f64::NAN;
-    };
-    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
-    let f: Vec<f64> = rest
-        .split_whitespace()
-        .skip(11)
-        .take(2)
-        .filter_map(|v| v.parse().ok())
-        .collect();
-    if f.len() == 2 {
-        (f[0] + f[1]) / 100.0
-    } else {
-        f64::NAN
-    }
+    corrugation::progress::cpu_seconds().unwrap_or(f64::NAN)
 }
 
 /// The machine's load: `/proc/loadavg`'s 1, 5 and 15 minute averages and the core count, as

@@ -1,7 +1,7 @@
 //! The energy ledger of an explicit passage (docs/theory.md §7.8, §8.4): the same terms as the
 //! reduced passage's [`EnergyBalance`], from the state at contact-step boundaries.
 
-use super::passage::ExplicitModel;
+use super::model::ExplicitModel;
 use super::ExplicitError;
 use crate::dynamics::record::EnergyBalance;
 

@@ -26,6 +26,7 @@
 
 mod ledger;
 mod local;
+pub mod model;
 pub mod operator;
 pub mod passage;
 mod response;
@@ -33,8 +34,9 @@ pub mod rotating;
 pub mod stable;
 mod start;
 
+pub use model::{ExplicitModel, ExplicitOptions};
 pub use operator::ExplicitOperator;
-pub use passage::{ExplicitModel, ExplicitOptions, ExplicitRecord, ExplicitRunner};
+pub use passage::{ExplicitRecord, ExplicitRunner};
 pub use stable::StableStep;
 
 /// Errors of the explicit path. Each variant says what to change.

@@ -38,28 +38,23 @@
 
 use std::time::Instant;
 
-use faer::Mat;
-
 use super::ledger::{Ledger, LedgerStep, State};
-use super::local::LocalCompliance;
-use super::operator::{ExplicitOperator, StepScratch};
+use super::model::ExplicitModel;
+use super::operator::StepScratch;
 use super::response::{advance_held, Hold, RailResponses, UnitResponse};
 use super::rotating::{RotatingWheel, WheelParts};
-use super::stable::{StableStep, DEFAULT_SAFETY};
-use super::start::{add_line_force, solve_one, wheel_elastic_static, wheel_rigid_modes};
+use super::start::add_line_force;
 use super::ExplicitError;
 use crate::contact::{Longitudinal, NormalInput, StepInputs, WearAccumulator};
-use crate::dynamics::patch::{max_planes, plane_weights, PlaneWeights};
-use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
-use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
+use crate::dynamics::patch::{max_planes, PlaneWeights};
+use crate::dynamics::reduced::{add_nodes_load, ContactFrame};
 use crate::dynamics::{
     passage::PassageOptions,
     record::{Histories, PassageRecord, RailPointRecord},
-    setup::{passage_contact, rigid_least_norm, steady_contact, WheelLoads},
+    setup::{passage_contact, rigid_least_norm, steady_contact},
 };
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
-use crate::model::{ExplicitLocalCompliance, ExplicitWheel, LoadSpread, Model};
-use crate::structure::{TrackStructure, WheelStructure};
+use crate::model::{ExplicitWheel, Model};
 
 /// How the contact force couples the structures over a contact step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -99,59 +94,6 @@ impl Coupling {
             self.hold().first_load(f, f_prev)
         } else {
             f
-        }
-    }
-}
-
-/// Options of the explicit path.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ExplicitOptions {
-    /// Safety factor on the computed critical step (−), in (0, 1]; default
-    /// [`DEFAULT_SAFETY`] = 0.9.
-    pub safety: f64,
-    /// A time step for both substructures (s), checked against their stable limits; `None`
-    /// (default) = each substructure at `safety ×` its own limit.
-    pub time_step_s: Option<f64>,
-    /// The coupling scheme (default predictor–corrector).
-    pub coupling: Coupling,
-    /// How the contact force is spread over the rail's node planes (default: over the
-    /// static Hertz patch).
-    pub load_spread: LoadSpread,
-    /// Whether the element-scale variation of the mesh's local compliance is removed from
-    /// the contact (default) or kept.
-    pub local_compliance: ExplicitLocalCompliance,
-    /// The wheel treatment (default fixed, `explicit.wheel`; docs/theory.md §8.7).
-    pub wheel: ExplicitWheel,
-    /// The rotating wheel's spin rate (rad/s); `None` (default) = `V/R` at the contact
-    /// radius, rolling without slip. Another value only isolates the effect of the rotation.
-    pub spin_rate_rad_s: Option<f64>,
-}
-
-impl Default for ExplicitOptions {
-    fn default() -> Self {
-        Self {
-            safety: DEFAULT_SAFETY,
-            time_step_s: None,
-            coupling: Coupling::PredictorCorrector,
-            load_spread: LoadSpread::Patch,
-            local_compliance: ExplicitLocalCompliance::Constant,
-            wheel: ExplicitWheel::Fixed,
-            spin_rate_rad_s: None,
-        }
-    }
-}
-
-impl ExplicitOptions {
-    /// The options of a model's `[explicit]` section.
-    pub fn from_model(model: &Model) -> Self {
-        Self {
-            safety: model.explicit.safety,
-            time_step_s: model.explicit.time_step,
-            coupling: Coupling::PredictorCorrector,
-            load_spread: model.explicit.load_spread,
-            local_compliance: model.explicit.local_compliance,
-            wheel: model.explicit.wheel,
-            spin_rate_rad_s: None,
         }
     }
 }
@@ -208,245 +150,7 @@ pub struct ExplicitRecord {
     pub info: ExplicitInfo,
 }
 
-/// One substructure ready for explicit steps.
-pub(super) struct Part {
-    pub(super) op: ExplicitOperator,
-    step: StableStep,
-    dt_max_s: f64,
-}
-
-impl Part {
-    fn new(
-        mats: &crate::fe::assembly::FeMatrices,
-        opts: &ExplicitOptions,
-        name: &'static str,
-    ) -> Result<Self, ExplicitError> {
-        let op = ExplicitOperator::new(mats.k.as_ref(), mats.m.as_ref(), mats.c.as_ref())?;
-        let step = StableStep::estimate(&op)?;
-        let limit = step.with_safety(opts.safety);
-        let dt_max_s = match opts.time_step_s {
-            Some(dt) if dt > step.critical_s => {
-                return Err(ExplicitError::TimeStepTooLarge {
-                    given_s: dt,
-                    limit_s: step.critical_s,
-                    part: name,
-                    omega_max: step.omega_max_estimate,
-                })
-            }
-            Some(dt) => dt,
-            None => limit,
-        };
-        Ok(Part { op, step, dt_max_s })
-    }
-
-    /// Sub-steps and step length inside a contact step of `dt_c` (s).
-    fn substeps(&self, dt_c: f64) -> (usize, f64) {
-        let n = (dt_c / self.dt_max_s).ceil().max(1.0) as usize;
-        (n, dt_c / n as f64)
-    }
-}
-
-/// The model of the explicit path: the full track and wheel, their operators and stable
-/// steps, and the static start (speed-independent), built once for any number of passages.
-pub struct ExplicitModel {
-    model: Model,
-    frame: ContactFrame,
-    track_structure: TrackStructure,
-    wheel_structure: WheelStructure,
-    pub(super) track: Part,
-    pub(super) wheel: Part,
-    line: RailContactLine,
-    wheel_nodes: Vec<(usize, f64)>,
-    /// Rigid modes of the wheel (M-orthonormal, free DOFs), 3 columns.
-    rigid: Vec<Vec<f64>>,
-    /// (contact x, contact n, axle x) of each rigid mode.
-    rigid_obs: Vec<[f64; 3]>,
-    pub(super) loads: WheelLoads,
-    pub(super) wheel_const: Vec<f64>,
-    /// Static deflection of the track and elastic deflection of the wheel.
-    track_static: Vec<f64>,
-    wheel_static: Vec<f64>,
-    x_start_m: f64,
-    zone_m: [f64; 2],
-    wheel_radius_m: f64,
-    hertz_b_m: f64,
-    /// Half-length of the patch the rail load is spread over (m): the static Hertz `a`,
-    /// or 0 for the node-plane load.
-    patch_a_m: f64,
-    /// The mesh's local compliance under the patch, when its variation is removed.
-    local: Option<LocalCompliance>,
-    /// Static Hertz approach at the wheel load (m).
-    hertz_approach_m: f64,
-    opts: ExplicitOptions,
-    setup_seconds: f64,
-}
-
 impl ExplicitModel {
-    /// Builds the explicit model of `model`: structures, matrices, operators, stable steps
-    /// and the static deflections.
-    pub fn new(model: &Model, opts: ExplicitOptions) -> Result<Self, ExplicitError> {
-        let t0 = Instant::now();
-        if !(opts.safety > 0.0 && opts.safety <= 1.0) {
-            return Err(ExplicitError::Static {
-                part: "model",
-                reason: format!("explicit.safety = {} must be in (0, 1]", opts.safety),
-            });
-        }
-        let frame = ContactFrame::for_inclination(model.rail.inclination);
-        let track_structure = TrackStructure::build(model)?;
-        let wheel_structure = WheelStructure::build(model)?;
-        let (tm, _) = track_structure.assemble()?;
-        let (wm, _) = wheel_structure.assemble()?;
-        let track = Part::new(&tm, &opts, "track")?;
-        let wheel = Part::new(&wm, &opts, "wheel")?;
-        let hertz = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
-            radius_x_m: model.wheel.radius,
-            radius_y_m: model.contact.rail_crown_radius,
-            youngs_pa: model.rail.youngs_modulus,
-            poisson: model.rail.poisson_ratio,
-            load_n: model.vehicle.wheel_load,
-        })
-        .map_err(DynamicsError::StaticHertz)?;
-        let n_t = track_structure.dofmap.n_free();
-        let line = RailContactLine::new(&track_structure, &Mat::zeros(n_t, 0), &frame, hertz.b_m)?;
-        let rigid = wheel_rigid_modes(&wheel_structure, &wheel.op)?;
-        let n_w = wheel_structure.dofmap.n_free();
-        let rigid_mat = Mat::from_fn(n_w, rigid.len(), |i, k| rigid[k][i]);
-        let wc = WheelContact::new(&wheel_structure, &rigid_mat, &frame, hertz.b_m)?;
-        let nr = rigid.len();
-        let rigid_obs: Vec<[f64; 3]> = (0..nr)
-            .map(|k| [wc.rows[k], wc.rows[2 * nr + k], wc.axle_x[k]])
-            .collect();
-        let loads = WheelLoads::new(model, &wheel_structure, &wm)?;
-        let wheel_const = loads.total();
-        let x_start_m = track_structure.layout.wheel_start;
-        let zone_m = track_structure.layout.solution_zone;
-        let patch_a_m = match opts.load_spread {
-            LoadSpread::Patch => hertz.a_m,
-            LoadSpread::Node => 0.0,
-        };
-
-        // Static deflections under the static contact force (x, t, n) = (μ_t W, 0, W/cos α).
-        let f0 = static_contact_force(model, &frame);
-        let mut ft = vec![0.0; n_t];
-        add_line_force(
-            &line,
-            &track_structure,
-            &frame,
-            &plane_weights(&line.planes_x_m, x_start_m, patch_a_m)?,
-            [-f0[0], -f0[1], -f0[2]],
-            &mut ft,
-        );
-        let fac = StiffnessFactor::new(tm.k.as_ref())?;
-        let track_static = solve_one(&fac, &ft);
-        let local = match opts.local_compliance {
-            ExplicitLocalCompliance::Mesh => None,
-            ExplicitLocalCompliance::Constant => {
-                let px = &line.planes_x_m;
-                let x_hi = (zone_m[1] + 0.05).min(px[px.len() - 1] - 2.0 * patch_a_m - 1e-9);
-                Some(LocalCompliance::compute(
-                    &track_structure,
-                    &fac,
-                    &line,
-                    &frame,
-                    patch_a_m,
-                    [x_start_m, x_hi],
-                )?)
-            }
-        };
-        drop(fac);
-        let mut fw = wheel_const.clone();
-        add_nodes_load(&wc.nodes, &wheel_structure.dofmap, &frame, 1.0, f0, &mut fw);
-        let wheel_static =
-            wheel_elastic_static(&wheel_structure, &wm, &wheel.op, &rigid, &wc.nodes, &fw)?;
-        Ok(ExplicitModel {
-            model: model.clone(),
-            frame,
-            track_structure,
-            wheel_structure,
-            track,
-            wheel,
-            line,
-            wheel_nodes: wc.nodes,
-            rigid,
-            rigid_obs,
-            wheel_radius_m: loads.contact_radius_m,
-            hertz_b_m: hertz.b_m,
-            patch_a_m,
-            local,
-            hertz_approach_m: hertz.approach_m,
-            loads,
-            wheel_const,
-            track_static,
-            wheel_static,
-            x_start_m,
-            zone_m,
-            opts,
-            setup_seconds: t0.elapsed().as_secs_f64(),
-        })
-    }
-
-    /// The model.
-    pub fn model(&self) -> &Model {
-        &self.model
-    }
-
-    /// Stable steps of the track and the wheel.
-    pub fn stable_steps(&self) -> [StableStep; 2] {
-        [self.track.step, self.wheel.step]
-    }
-
-    /// Track and wheel DOFs.
-    pub fn dofs(&self) -> [usize; 2] {
-        [self.track.op.n(), self.wheel.op.n()]
-    }
-
-    /// The track structure.
-    pub fn track_structure(&self) -> &TrackStructure {
-        &self.track_structure
-    }
-
-    /// The rail's contact line (node sets and weights per node plane).
-    pub fn rail_line(&self) -> &RailContactLine {
-        &self.line
-    }
-
-    /// Rail displacement at `x` (m) on the contact line, contact-frame components (m).
-    pub(super) fn rail_at(&self, u: &[f64], x: f64) -> Result<[f64; 3], ExplicitError> {
-        Ok(self.rail_under(u, &self.weights(x)?))
-    }
-
-    /// Rail displacement under the patch of plane weights `w`, contact-frame components (m).
-    fn rail_under(&self, u: &[f64], w: &PlaneWeights) -> [f64; 3] {
-        let axes = [self.frame.x, self.frame.t, self.frame.n];
-        let dm = &self.track_structure.dofmap;
-        axes.map(|a| {
-            w.iter()
-                .map(|(j, wj)| wj * nodes_dot(&self.line.nodes[j], dm, a, |i| u[i]))
-                .sum()
-        })
-    }
-
-    pub(super) fn wheel_at(&self, u: &[f64]) -> [f64; 3] {
-        let axes = [self.frame.x, self.frame.t, self.frame.n];
-        let dm = &self.wheel_structure.dofmap;
-        axes.map(|a| nodes_dot(&self.wheel_nodes, dm, a, |i| u[i]))
-    }
-
-    /// The element-scale variation `Δg` (m/N per contact-frame direction) of the mesh's local
-    /// compliance under the patch of weights `w` at `x` (m) that the contact is relieved of;
-    /// zero when it is kept (`explicit.local_compliance = "mesh"`).
-    pub(super) fn local_variation(&self, x: f64, w: &PlaneWeights) -> [f64; 3] {
-        self.local
-            .as_ref()
-            .map_or([0.0; 3], |lc| lc.variation(x, w))
-    }
-
-    /// The node planes' weights of the rail load with the contact at `x` (m).
-    pub(super) fn weights(&self, x: f64) -> Result<PlaneWeights, ExplicitError> {
-        Ok(plane_weights(&self.line.planes_x_m, x, self.patch_a_m)?)
-    }
-
     /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth);
     /// `progress(done, total)` is called every few contact steps.
     pub fn passage(
@@ -536,7 +240,7 @@ impl ExplicitModel {
         let dm_t = &self.track_structure.dofmap;
         let dm_w = &self.wheel_structure.dofmap;
         let t_wall = Instant::now();
-        let cpu0 = cpu_seconds();
+        let cpu0 = crate::progress::cpu_seconds();
         progress(0, n_steps);
         for n in 1..=n_steps {
             let t = n as f64 * dt_c;
@@ -696,7 +400,7 @@ impl ExplicitModel {
             contact_steps: n_steps,
             energy_error: if keep { eb.relative_error() } else { f64::NAN },
             seconds,
-            cpu_seconds: match (cpu0, cpu_seconds()) {
+            cpu_seconds: match (cpu0, crate::progress::cpu_seconds()) {
                 (Some(a), Some(b)) => Some(b - a),
                 _ => None,
             },
@@ -867,20 +571,9 @@ impl ExplicitModel {
 }
 
 /// The static contact force (N, on the wheel, contact frame x, t, n): `(μ_t W, 0, W/cos α)`.
-fn static_contact_force(model: &Model, frame: &ContactFrame) -> [f64; 3] {
+pub(super) fn static_contact_force(model: &Model, frame: &ContactFrame) -> [f64; 3] {
     let w = model.vehicle.wheel_load;
     [model.contact.traction_coefficient * w, 0.0, w / frame.n[2]]
-}
-
-/// CPU time (user + system) of this process (s), from `/proc/self/stat`; `None` elsewhere.
-pub fn cpu_seconds() -> Option<f64> {
-    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
-    let rest = &s[s.rfind(')')? + 2..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let utime: f64 = f.get(11)?.parse().ok()?;
-    let stime: f64 = f.get(12)?.parse().ok()?;
-    // Linux reports clock ticks of 1/100 s (USER_HZ) on every supported architecture.
-    Some((utime + stime) / 100.0)
 }
 
 impl crate::dynamics::PassageRecorder for ExplicitModel {
