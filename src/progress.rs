@@ -74,6 +74,19 @@ impl<'a> Counter<'a> {
     }
 }
 
+/// An error and its chain of sources on one line, `outer: cause: root cause`, for a warning
+/// (the CLI prints returned errors the same way).
+pub fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut src = e.source();
+    while let Some(c) = src {
+        s.push_str(": ");
+        s.push_str(&c.to_string());
+        src = c.source();
+    }
+    s
+}
+
 /// CPU time (user + system) of this process (s), from `/proc/self/stat`; `None` elsewhere.
 pub fn cpu_seconds() -> Option<f64> {
     let s = std::fs::read_to_string("/proc/self/stat").ok()?;

@@ -163,7 +163,8 @@ fn basis<C: Serialize + DeserializeOwned + Send>(
             }
         }
         CacheLookup::Corrupt(r) => cache.progress().warn(&format!(
-            "modal cache: {name} entry corrupt ({r}); recomputing"
+            "modal cache: {name} entry corrupt ({}); recomputing",
+            crate::progress::error_chain(&r)
         )),
         CacheLookup::Miss => {}
     }

@@ -45,9 +45,74 @@ pub enum CacheError {
         /// the OS error
         source: std::io::Error,
     },
-    /// Inconsistent data handed to `store`.
-    #[error("modal cache: invalid data to store: {0}")]
-    InvalidData(String),
+    /// `store` was handed frequencies and mode columns of different counts.
+    #[error("modal cache: {frequencies} frequencies but {columns} mode columns to store")]
+    ShapeMismatch {
+        /// Number of frequencies.
+        frequencies: usize,
+        /// Number of mode columns.
+        columns: usize,
+    },
+    /// The metadata could not be serialised.
+    #[error("modal cache: meta.json could not be written")]
+    Meta(#[from] serde_json::Error),
+    /// An auxiliary file name that is not a plain file name.
+    #[error("modal cache: auxiliary file name `{name}` must be a plain file name")]
+    AuxName {
+        /// The name given.
+        name: String,
+    },
+    /// An auxiliary file for an entry that does not exist (derived data lives and dies with
+    /// its modes).
+    #[error("modal cache: no entry {} to store `{name}` in", dir.display())]
+    NoEntry {
+        /// The entry's directory.
+        dir: PathBuf,
+        /// The auxiliary file's name.
+        name: String,
+    },
+}
+
+/// Why a cache entry failed validation on load (it is then recomputed and stored again).
+#[derive(Debug, thiserror::Error)]
+pub enum CorruptEntry {
+    /// A file of the entry could not be read.
+    #[error(transparent)]
+    Read(#[from] CacheError),
+    /// `meta.json` is not valid metadata.
+    #[error("meta.json")]
+    Meta(#[source] serde_json::Error),
+    /// `meta.json` names another key than its directory.
+    #[error("meta.json key {found} ≠ directory {expected}")]
+    KeyMismatch {
+        /// The key in `meta.json`.
+        found: String,
+        /// The directory's name.
+        expected: String,
+    },
+    /// A data file's blake3 hash differs from the one in `meta.json`.
+    #[error("{file} hash mismatch (truncated or corrupted)")]
+    HashMismatch {
+        /// The file.
+        file: &'static str,
+    },
+    /// A data file is not a readable `.npy` array.
+    #[error("{file}")]
+    Npy {
+        /// The file.
+        file: &'static str,
+        /// The reader's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A data file's shape or order disagrees with `meta.json`.
+    #[error("{file}: shape {shape:?} does not match meta.json")]
+    Shape {
+        /// The file.
+        file: &'static str,
+        /// Its shape.
+        shape: Vec<u64>,
+    },
 }
 
 fn io_err<'a>(op: &'static str, path: &'a Path) -> impl FnOnce(std::io::Error) -> CacheError + 'a {
@@ -174,7 +239,7 @@ pub enum CacheLookup {
     /// No entry for this key.
     Miss,
     /// An entry exists but fails validation (reason given); recompute and store again.
-    Corrupt(String),
+    Corrupt(CorruptEntry),
 }
 
 /// The cache directory, and where the work of filling it (eigen-solves, classification,
@@ -269,6 +334,28 @@ fn hash_file(path: &Path) -> Result<(String, Vec<u8>), CacheError> {
     Ok((blake3::hash(&bytes).to_hex().to_string(), bytes))
 }
 
+/// The C-ordered array `file` of the entry `d`, checked against its blake3 hash and shape.
+fn read_checked(
+    d: &Path,
+    file: &'static str,
+    blake3_hex: &str,
+    shape: &[u64],
+) -> Result<Vec<f64>, CorruptEntry> {
+    let (h, bytes) = hash_file(&d.join(file))?;
+    if h != blake3_hex {
+        return Err(CorruptEntry::HashMismatch { file });
+    }
+    let npy_err = |source| CorruptEntry::Npy { file, source };
+    let npy = npyz::NpyFile::new(&bytes[..]).map_err(npy_err)?;
+    if npy.shape() != shape || npy.order() != npyz::Order::C {
+        return Err(CorruptEntry::Shape {
+            file,
+            shape: npy.shape().to_vec(),
+        });
+    }
+    npy.into_vec().map_err(npy_err)
+}
+
 impl ModalCache {
     /// A cache rooted at `dir` (created on first store); its work is reported to nobody
     /// ([`crate::progress::Silent`]).
@@ -310,11 +397,10 @@ impl ModalCache {
         mut meta: CacheMeta,
     ) -> Result<PathBuf, CacheError> {
         if modes.ncols() != frequencies_hz.len() {
-            return Err(CacheError::InvalidData(format!(
-                "{} frequencies but {} mode columns",
-                frequencies_hz.len(),
-                modes.ncols()
-            )));
+            return Err(CacheError::ShapeMismatch {
+                frequencies: frequencies_hz.len(),
+                columns: modes.ncols(),
+            });
         }
         fs::create_dir_all(&self.dir).map_err(io_err("create dir", &self.dir))?;
         let hex = key.hex();
@@ -337,8 +423,7 @@ impl ModalCache {
             meta.frequencies_blake3 = hash_file(&fp)?.0;
             meta.modes_blake3 = hash_file(&mp)?.0;
             let jp = tmp.join("meta.json");
-            let json = serde_json::to_vec_pretty(&meta)
-                .map_err(|e| CacheError::InvalidData(format!("meta.json: {e}")))?;
+            let json = serde_json::to_vec_pretty(&meta)?;
             write_file(&jp, &json)?;
             let final_dir = self.dir.join(&hex);
             if final_dir.exists() {
@@ -367,16 +452,14 @@ impl ModalCache {
     /// checks the hash.
     pub fn store_aux(&self, key: &CacheKey, name: &str, bytes: &[u8]) -> Result<(), CacheError> {
         if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') {
-            return Err(CacheError::InvalidData(format!(
-                "auxiliary file name `{name}` must be a plain file name"
-            )));
+            return Err(CacheError::AuxName { name: name.into() });
         }
         let d = self.entry_dir(key);
         if !d.is_dir() {
-            return Err(CacheError::InvalidData(format!(
-                "no cache entry {} to store `{name}` in",
-                d.display()
-            )));
+            return Err(CacheError::NoEntry {
+                dir: d,
+                name: name.into(),
+            });
         }
         let tmp = d.join(format!(
             ".tmp-{name}-{}-{}",
@@ -419,36 +502,34 @@ impl ModalCache {
         }
     }
 
-    fn load_dir(d: &Path, hex: &str) -> Result<CachedModes, String> {
-        let meta_bytes = fs::read(d.join("meta.json")).map_err(|e| format!("meta.json: {e}"))?;
-        let meta: CacheMeta =
-            serde_json::from_slice(&meta_bytes).map_err(|e| format!("meta.json: {e}"))?;
+    fn load_dir(d: &Path, hex: &str) -> Result<CachedModes, CorruptEntry> {
+        let meta_path = d.join("meta.json");
+        let meta_bytes = fs::read(&meta_path).map_err(io_err("read", &meta_path))?;
+        let meta: CacheMeta = serde_json::from_slice(&meta_bytes).map_err(CorruptEntry::Meta)?;
         if meta.key != hex {
-            return Err(format!("meta.json key {} ≠ directory {hex}", meta.key));
+            return Err(CorruptEntry::KeyMismatch {
+                found: meta.key,
+                expected: hex.into(),
+            });
         }
-        let (fh, fbytes) = hash_file(&d.join("frequencies_hz.npy")).map_err(|e| e.to_string())?;
-        if fh != meta.frequencies_blake3 {
-            return Err("frequencies_hz.npy hash mismatch (truncated or corrupted)".into());
-        }
-        let (mh, mbytes) = hash_file(&d.join("modes.npy")).map_err(|e| e.to_string())?;
-        if mh != meta.modes_blake3 {
-            return Err("modes.npy hash mismatch (truncated or corrupted)".into());
-        }
-        let fnpy = npyz::NpyFile::new(&fbytes[..]).map_err(|e| format!("frequencies: {e}"))?;
-        if fnpy.shape() != [meta.n_modes as u64] {
-            return Err(format!("frequencies shape {:?}", fnpy.shape()));
-        }
-        let freqs: Vec<f64> = fnpy.into_vec().map_err(|e| format!("frequencies: {e}"))?;
-        let mnpy = npyz::NpyFile::new(&mbytes[..]).map_err(|e| format!("modes: {e}"))?;
-        if mnpy.shape() != [meta.n_dofs as u64, meta.n_modes as u64]
-            || mnpy.order() != npyz::Order::C
-        {
-            return Err(format!("modes shape {:?}", mnpy.shape()));
-        }
-        let flat: Vec<f64> = mnpy.into_vec().map_err(|e| format!("modes: {e}"))?;
+        let freqs: Vec<f64> = read_checked(
+            d,
+            "frequencies_hz.npy",
+            &meta.frequencies_blake3,
+            &[meta.n_modes as u64],
+        )?;
+        let flat: Vec<f64> = read_checked(
+            d,
+            "modes.npy",
+            &meta.modes_blake3,
+            &[meta.n_dofs as u64, meta.n_modes as u64],
+        )?;
         let (n, m) = (meta.n_dofs, meta.n_modes);
         if flat.len() != n * m || freqs.len() != m {
-            return Err("array lengths do not match metadata".into());
+            return Err(CorruptEntry::Shape {
+                file: "modes.npy",
+                shape: vec![flat.len() as u64],
+            });
         }
         let modes = Mat::<f64>::from_fn(n, m, |i, j| flat[i * m + j]);
         Ok(CachedModes {

@@ -114,9 +114,26 @@ pub enum ClassifyError {
     /// The mode shape contains NaN or infinite values.
     #[error("mode shape contains non-finite values")]
     NonFinite,
-    /// The structure cannot be classified (e.g. the rail has fewer than two planes).
-    #[error("classification: {0}")]
-    Structure(String),
+    /// The rail has fewer than two node planes or no meshed section.
+    #[error(
+        "classification: the rail needs at least two node planes and a meshed section \
+         ({planes} planes, {section_nodes} section nodes)"
+    )]
+    TooFewPlanes {
+        /// Node planes of the rail.
+        planes: usize,
+        /// Nodes of the rail's cross-section mesh.
+        section_nodes: usize,
+    },
+    /// A part of the rail section (head, web or foot) has no nodes.
+    #[error(
+        "classification: the rail section has no nodes in its {part}: the section mesh is too \
+         coarse (reduce mesh.section_size)"
+    )]
+    EmptySectionPart {
+        /// "head", "web" or "foot".
+        part: &'static str,
+    },
     /// Element energy evaluation failed.
     #[error(transparent)]
     Fe(#[from] crate::fe::FeError),
@@ -338,9 +355,10 @@ impl TrackClassifier {
         let sec = &rail.section;
         let ns = sec.nodes.len();
         if rail.n_planes() < 2 || ns == 0 {
-            return Err(ClassifyError::Structure(
-                "the rail needs at least two node planes and a meshed section".into(),
-            ));
+            return Err(ClassifyError::TooFewPlanes {
+                planes: rail.n_planes(),
+                section_nodes: ns,
+            });
         }
         let mut area = vec![0.0; ns];
         for (q, quad) in sec.quads.iter().enumerate() {
@@ -381,10 +399,10 @@ impl TrackClassifier {
             group_area[group[j] as usize] += area[j];
             gz[group[j] as usize] += area[j] * sec.nodes[j][1];
         }
-        if group_area.iter().any(|&a| a <= 0.0) {
-            return Err(ClassifyError::Structure(
-                "the rail section has no nodes in head, web or foot: the section mesh is too coarse".into(),
-            ));
+        if let Some(g) = group_area.iter().position(|&a| a <= 0.0) {
+            return Err(ClassifyError::EmptySectionPart {
+                part: ["head", "web", "foot"][g],
+            });
         }
         let dy: Vec<f64> = sec.nodes.iter().map(|p| p[0] - yc).collect();
         let dz: Vec<f64> = sec.nodes.iter().map(|p| p[1] - zc).collect();

@@ -110,8 +110,8 @@ pub enum ExplicitError {
     #[error(transparent)]
     Patch(#[from] crate::dynamics::patch::PatchError),
     /// The rotating wheel cannot be set up.
-    #[error("rotating wheel (explicit.wheel = \"rotating\"): {0}")]
-    Rotating(String),
+    #[error("rotating wheel (explicit.wheel = \"rotating\")")]
+    Rotating(#[from] rotating::SpinError),
     /// An error of the shared passage machinery (contact, profile, structure).
     #[error(transparent)]
     Dynamics(#[from] crate::dynamics::DynamicsError),

@@ -31,6 +31,46 @@ use crate::dynamics::setup::WheelLoads;
 use crate::fe::assembly::DofMap;
 use crate::structure::WheelStructure;
 
+/// Why a spinning frame cannot be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum SpinError {
+    /// The spin rate is NaN or infinite.
+    #[error("spin rate {omega} rad/s is not finite")]
+    NonFiniteRate {
+        /// The spin rate (rad/s).
+        omega: f64,
+    },
+    /// A spinning node has a held x or z DOF.
+    #[error(
+        "node {node} of the spinning wheel has a held x or z DOF: only the lateral DOF may be held"
+    )]
+    HeldInPlane {
+        /// The node.
+        node: usize,
+    },
+    /// A spinning node's lumped masses differ between x and z.
+    #[error(
+        "node {node} has lumped masses {mass_x_kg:e} (x) and {mass_z_kg:e} (z) kg: the Coriolis \
+         term needs equal masses (no point mass on a spinning node)"
+    )]
+    UnequalMasses {
+        /// The node.
+        node: usize,
+        /// Lumped mass of its x DOF (kg).
+        mass_x_kg: f64,
+        /// Lumped mass of its z DOF (kg).
+        mass_z_kg: f64,
+    },
+    /// The wheel's first spring is not the primary suspension this frame expects.
+    #[error(
+        "the primary suspension is not a vertical spring from the sprung mass to the journal nodes"
+    )]
+    Suspension,
+    /// The contact nodes do not lie on the wheel's contact angle plane.
+    #[error("the wheel's contact nodes are not on the contact angle plane")]
+    ContactOffPlane,
+}
+
 /// A substructure spinning at `Ω` (rad/s) about the y axis through the origin: the
 /// spinning nodes' x and z DOFs and their lumped masses, and the gyroscopic central
 /// difference step.
@@ -60,9 +100,7 @@ impl SpinFrame {
         omega: f64,
     ) -> Result<Self, ExplicitError> {
         if !omega.is_finite() {
-            return Err(ExplicitError::Rotating(format!(
-                "spin rate {omega} rad/s is not finite"
-            )));
+            return Err(SpinError::NonFiniteRate { omega }.into());
         }
         let m = op.mass();
         let mut pairs = Vec::new();
@@ -70,15 +108,15 @@ impl SpinFrame {
             let (Some(ix), Some(iz)) =
                 (dofmap.free_index(3 * node), dofmap.free_index(3 * node + 2))
             else {
-                return Err(ExplicitError::Rotating(format!(
-                    "node {node} of the spinning wheel has a held x or z DOF: only the lateral DOF may be held"
-                )));
+                return Err(SpinError::HeldInPlane { node }.into());
             };
             if (m[ix] - m[iz]).abs() > 1e-9 * m[ix] {
-                return Err(ExplicitError::Rotating(format!(
-                    "node {node} has lumped masses {:e} (x) and {:e} (z) kg: the Coriolis term needs equal masses (no point mass on a spinning node)",
-                    m[ix], m[iz]
-                )));
+                return Err(SpinError::UnequalMasses {
+                    node,
+                    mass_x_kg: m[ix],
+                    mass_z_kg: m[iz],
+                }
+                .into());
             }
             pairs.push((ix, iz, m[ix]));
         }
@@ -200,11 +238,7 @@ impl Suspension {
             return Ok(None);
         };
         let dm = &wheel.dofmap;
-        let bad = || {
-            ExplicitError::Rotating(
-                "the primary suspension is not a vertical spring from the sprung mass to the journal nodes".into(),
-            )
-        };
+        let bad = || ExplicitError::from(SpinError::Suspension);
         let sprung = match spring.side_a.as_slice() {
             [(d, w)] if *w == 1.0 && d % 3 == 2 => dm.free_index(*d).ok_or_else(bad)?,
             _ => return Err(bad()),
@@ -334,9 +368,7 @@ impl RotatingWheel {
             .map(|&(node, wt)| (node - topo.node(k0, 0), wt))
             .collect();
         if merid.iter().any(|&(m, _)| m >= nm) {
-            return Err(ExplicitError::Rotating(
-                "the wheel's contact nodes are not on the contact angle plane".into(),
-            ));
+            return Err(SpinError::ContactOffPlane.into());
         }
         let planes = (0..nt)
             .map(|k| {

@@ -126,9 +126,13 @@ pub enum FeError {
         /// Detail from the factorisation.
         detail: String,
     },
-    /// A sparse-matrix operation failed in faer.
-    #[error("sparse matrix operation failed: {0}")]
-    Sparse(String),
+    /// A sparse matrix could not be built from its triplets (index out of bounds, allocation).
+    #[error("sparse matrix could not be built")]
+    SparseCreation(#[from] faer::sparse::CreationError),
+    /// The symbolic analysis of a sparse factorisation failed (index overflow or out of
+    /// memory: the model is too large for this machine; coarsen the mesh).
+    #[error("symbolic analysis of the sparse factorisation failed")]
+    SparseSymbolic(#[from] faer::sparse::FaerError),
     /// An I/O error (Matrix Market files).
     #[error("I/O error on {path}: {message}")]
     Io {

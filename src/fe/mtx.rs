@@ -141,8 +141,7 @@ pub fn read(path: &Path) -> Result<SparseColMat<usize, f64>, FeError> {
             format!("size line says {nnz} entries, file has {expected}"),
         ));
     }
-    SparseColMat::try_new_from_triplets(nr, nc, &trip)
-        .map_err(|e| FeError::Sparse(format!("{e:?}")))
+    Ok(SparseColMat::try_new_from_triplets(nr, nc, &trip)?)
 }
 
 #[cfg(test)]

@@ -30,8 +30,7 @@ pub fn static_solve(k: &SparseColMat<usize, f64>, f: &[f64]) -> Result<Vec<f64>,
             got: f.len(),
         });
     }
-    let symbolic = SymbolicLlt::try_new(k.symbolic(), Side::Lower)
-        .map_err(|e| FeError::Sparse(format!("{e:?}")))?;
+    let symbolic = SymbolicLlt::try_new(k.symbolic(), Side::Lower)?;
     let llt = Llt::try_new_with_symbolic(symbolic, k.as_ref(), Side::Lower).map_err(|e| {
         FeError::NotPositiveDefinite {
             detail: format!("{e:?}"),
