@@ -105,6 +105,24 @@ pub fn write_csv(
     })
 }
 
+/// Writes a CSV file of text cells atomically: a header and rows (each as long as the
+/// header).
+pub fn write_text_csv<R, C>(path: &Path, header: &[&str], rows: R) -> io::Result<()>
+where
+    R: IntoIterator<Item = C>,
+    C: IntoIterator,
+    C::Item: AsRef<[u8]>,
+{
+    write_atomic(path, |w| {
+        let mut c = csv::Writer::from_writer(w);
+        c.write_record(header)?;
+        for row in rows {
+            c.write_record(row)?;
+        }
+        c.flush()
+    })
+}
+
 /// Writes an n-d `f64` array (C order, `data.len()` = product of `shape`) as `.npy`, atomically.
 pub fn write_npy(path: &Path, shape: &[usize], data: &[f64]) -> io::Result<()> {
     let n: usize = shape.iter().product();

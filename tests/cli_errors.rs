@@ -443,3 +443,16 @@ fn explicit_time_step_above_the_computed_limit_is_refused() {
         );
     }
 }
+
+#[test]
+fn trial_amplitudes_are_range_checked_by_grow_and_predict() {
+    for cmd in ["grow", "predict"] {
+        for bad in ["0", "-10", "6000", "NaN"] {
+            let arg = format!("--amplitudes-um={bad}");
+            assert_clean_error(
+                &[cmd, &arg, "--out", "/nonexistent/never-written"],
+                &["--amplitudes-um", bad, "(0, 5000] µm"],
+            );
+        }
+    }
+}

@@ -103,17 +103,7 @@ fn print_growth(j: &GrowJson) {
 impl GrowCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let t0 = Instant::now();
-        if self.amplitudes_um.is_empty()
-            || self
-                .amplitudes_um
-                .iter()
-                .any(|a| !(a.is_finite() && *a > 0.0 && *a <= 5000.0))
-        {
-            anyhow::bail!(
-                "--amplitudes-um must be a list of peak-to-trough amplitudes in (0, 5000] µm (got {:?})",
-                self.amplitudes_um
-            );
-        }
+        super::check_trial_amplitudes(&self.amplitudes_um)?;
         let m = self.model.load()?;
         super::check_out_dir(&self.out)?;
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;

@@ -26,7 +26,7 @@ use serde::Serialize;
 
 use corrugation::eigen::basis::{track_basis, wheel_basis, ModalBasis};
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
-use corrugation::io::{write_atomic, write_vtu, VtuField, VTK_HEXAHEDRON};
+use corrugation::io::{write_vtu, VtuField, VTK_HEXAHEDRON};
 use corrugation::mesh::Mesh;
 use corrugation::structure::{TrackStructure, WheelStructure};
 
@@ -272,15 +272,8 @@ fn write_text_csv(
     header: &[&str],
     rows: impl IntoIterator<Item = Vec<String>>,
 ) -> anyhow::Result<()> {
-    write_atomic(path, |w| {
-        let mut c = csv::Writer::from_writer(w);
-        c.write_record(header)?;
-        for r in rows {
-            c.write_record(&r)?;
-        }
-        c.flush()
-    })
-    .with_context(|| format!("writing {}", path.display()))
+    corrugation::io::write_text_csv(path, header, rows)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 fn num(x: f64) -> String {

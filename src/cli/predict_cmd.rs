@@ -56,6 +56,7 @@ fn fo(v: Option<f64>) -> String {
 
 impl PredictCmd {
     pub fn run(self) -> anyhow::Result<()> {
+        super::check_trial_amplitudes(&self.amplitudes_um)?;
         let m = self.model.load()?;
         super::check_out_dir(&self.out)?;
         let speeds = parse_speeds(&self.speeds)?;

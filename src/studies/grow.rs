@@ -25,7 +25,7 @@ use crate::dynamics::PassageRecorder;
 use crate::growth::procedure::{trial_growth, GrowthRound, ModeLines, ProcedureError, TrialGrowth};
 use crate::growth::verdict::{InitiationCheck, Verdict};
 use crate::growth::PhaseRelation;
-use crate::io::{write_atomic, write_csv};
+use crate::io::write_csv;
 use crate::model::Model;
 use crate::progress::Progress;
 use crate::units::m_to_mm;
@@ -390,19 +390,11 @@ pub fn write_grow_json(out: &Path, text: &str) -> Result<(), StudiesError> {
     crate::io::write_text(&p, text).map_err(StudiesError::io(&p))
 }
 
-/// A CSV of text cells, atomically.
+/// A CSV of text cells, atomically ([`crate::io::write_text_csv`]).
 pub fn write_text_csv(
     path: &Path,
     header: &[&str],
     rows: &[Vec<String>],
 ) -> Result<(), StudiesError> {
-    write_atomic(path, |w| {
-        let mut c = csv::Writer::from_writer(w);
-        c.write_record(header).map_err(std::io::Error::other)?;
-        for r in rows {
-            c.write_record(r).map_err(std::io::Error::other)?;
-        }
-        c.flush()
-    })
-    .map_err(StudiesError::io(path))
+    crate::io::write_text_csv(path, header, rows).map_err(StudiesError::io(path))
 }

@@ -281,15 +281,8 @@ pub fn write_table_csv(
     header: &[String],
     rows: &[Vec<String>],
 ) -> Result<(), StudiesError> {
-    crate::io::write_atomic(path, |w| {
-        let mut c = csv::Writer::from_writer(w);
-        c.write_record(header)?;
-        for r in rows {
-            c.write_record(r)?;
-        }
-        c.flush()
-    })
-    .map_err(StudiesError::io(path))
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    crate::io::write_text_csv(path, &header, rows).map_err(StudiesError::io(path))
 }
 
 fn peaks_text(p: &[WavelengthComponent]) -> String {
