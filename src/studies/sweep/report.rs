@@ -37,8 +37,19 @@ pub(super) fn write_outputs(
     .map_err(io(&json))
 }
 
-/// Every output of [`write_outputs`] but `sweep.json`.
+/// Every output of [`write_outputs`] but `sweep.json`: the tables, the heat maps with the
+/// mode lines, the dominant-wavelength and -frequency plots, the report.
 fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesError> {
+    write_tables(dir, r, m)?;
+    let lines = ModeLines::new(r, m);
+    draw_heat_maps(dir, m, &lines)?;
+    draw_dominant(dir, r, &lines.frequency)?;
+    write_report(dir, r)?;
+    Ok(())
+}
+
+/// `dominant.csv`, the axes and maps as `.npy`, and the two maps as long CSV tables.
+fn write_tables(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesError> {
     let io = StudiesError::io;
     let p = dir.join("dominant.csv");
     crate::io::write_csv(
@@ -74,90 +85,102 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
         let p = dir.join(name);
         crate::io::write_npy(&p, &shape, data).map_err(io(&p))?;
     }
-    let p = dir.join("map_wavelength.csv");
-    crate::io::write_csv(
-        &p,
-        &[
-            "speed_kmh",
-            "wavelength_mm",
-            "wear_psd_j2_per_m",
-            "fl_psd_n2_m",
-        ],
-        (0..ns).flat_map(|i| {
-            (0..nl).map(move |j| {
-                vec![
-                    m.speeds_kmh[i],
-                    m.wavelength_mm[j],
-                    m.wear_wavelength[i * nl + j],
-                    m.fl_wavelength[i * nl + j],
-                ]
-            })
-        }),
+    write_map_csv(
+        &dir.join("map_wavelength.csv"),
+        ["wavelength_mm", "wear_psd_j2_per_m", "fl_psd_n2_m"],
+        &m.speeds_kmh,
+        &m.wavelength_mm,
+        [&m.wear_wavelength, &m.fl_wavelength],
+    )?;
+    write_map_csv(
+        &dir.join("map_frequency.csv"),
+        ["frequency_hz", "wear_psd_j2_per_m2_hz", "fl_psd_n2_per_hz"],
+        &m.speeds_kmh,
+        &m.frequency_hz,
+        [&m.wear_frequency, &m.fl_frequency],
     )
-    .map_err(io(&p))?;
-    let p = dir.join("map_frequency.csv");
-    crate::io::write_csv(
-        &p,
-        &[
-            "speed_kmh",
-            "frequency_hz",
-            "wear_psd_j2_per_m2_hz",
-            "fl_psd_n2_per_hz",
-        ],
-        (0..ns).flat_map(|i| {
-            (0..nf).map(move |j| {
-                vec![
-                    m.speeds_kmh[i],
-                    m.frequency_hz[j],
-                    m.wear_frequency[i * nf + j],
-                    m.fl_frequency[i * nf + j],
-                ]
-            })
-        }),
-    )
-    .map_err(io(&p))?;
+}
 
-    // Heat maps with the eigenfrequency lines.
-    let (v0, v1) = (m.speeds_kmh[0], m.speeds_kmh[ns - 1]);
-    let (vlo, vhi) = if v1 > v0 {
-        (v0, v1)
-    } else {
-        (v0 * 0.95, v0 * 1.05)
-    };
-    let curve_v = linspace(vlo, vhi, 200);
-    // The track's LC lines solid, the wheel's dashed (at 5 kHz there are ~30 wheel lines).
-    let labelled: Vec<(String, f64, bool)> = r
-        .map
-        .frequency_lines_hz
-        .iter()
-        .map(|&f| (format!("LC {f:.0} Hz"), f, false))
-        .chain(
-            r.map
-                .wheel_lines_hz
-                .iter()
-                .map(|&f| (format!("wheel {f:.0} Hz"), f, true)),
-        )
-        .collect();
-    let lines_lambda: Vec<OverlayLine> = labelled
-        .iter()
-        .map(|(name, f, dashed)| OverlayLine {
-            name: name.clone(),
-            x: curve_v.clone(),
-            y: curve_v
-                .iter()
-                .map(|&v| crate::units::kmh_to_ms(v) / f * 1e3)
-                .collect(),
-            dashed: *dashed,
-        })
-        .collect();
-    let lines_f: Vec<OverlayLine> = labelled
-        .iter()
-        .map(|(name, f, dashed)| OverlayLine {
-            dashed: *dashed,
-            ..OverlayLine::horizontal(name.clone(), *f, vlo, vhi)
-        })
-        .collect();
-    // A single speed has no x extent: the map is still drawn, one column wide.
+/// One map as a long table: a row per (speed, axis value) with the wear and F_L PSDs
+/// (`maps` row-major, speeds × axis); `columns` names the axis and the two PSD columns.
+fn write_map_csv(
+    p: &Path,
+    columns: [&str; 3],
+    speeds_kmh: &[f64],
+    axis: &[f64],
+    maps: [&[f64]; 2],
+) -> Result<(), StudiesError> {
+    let n = axis.len();
+    crate::io::write_csv(
+        p,
+        &["speed_kmh", columns[0], columns[1], columns[2]],
+        speeds_kmh.iter().enumerate().flat_map(|(i, &v)| {
+            axis.iter()
+                .enumerate()
+                .map(move |(j, &a)| vec![v, a, maps[0][i * n + j], maps[1][i * n + j]])
+        }),
+    )
+    .map_err(StudiesError::io(p))
+}
+
+/// The mode lines drawn over the maps: the track's LC modes solid, the wheel's dashed (at
+/// 5 kHz there are about 30 wheel lines), as wavelength `V/f` and as frequency against speed.
+struct ModeLines {
+    wavelength: Vec<OverlayLine>,
+    frequency: Vec<OverlayLine>,
+}
+
+impl ModeLines {
+    fn new(r: &SweepRecord, m: &SweepMaps) -> Self {
+        let ns = m.speeds_kmh.len();
+        let (v0, v1) = (m.speeds_kmh[0], m.speeds_kmh[ns - 1]);
+        let (vlo, vhi) = if v1 > v0 {
+            (v0, v1)
+        } else {
+            (v0 * 0.95, v0 * 1.05)
+        };
+        let curve_v = linspace(vlo, vhi, 200);
+        let labelled: Vec<(String, f64, bool)> = r
+            .map
+            .frequency_lines_hz
+            .iter()
+            .map(|&f| (format!("LC {f:.0} Hz"), f, false))
+            .chain(
+                r.map
+                    .wheel_lines_hz
+                    .iter()
+                    .map(|&f| (format!("wheel {f:.0} Hz"), f, true)),
+            )
+            .collect();
+        let wavelength = labelled
+            .iter()
+            .map(|(name, f, dashed)| OverlayLine {
+                name: name.clone(),
+                x: curve_v.clone(),
+                y: curve_v
+                    .iter()
+                    .map(|&v| crate::units::kmh_to_ms(v) / f * 1e3)
+                    .collect(),
+                dashed: *dashed,
+            })
+            .collect();
+        let frequency = labelled
+            .iter()
+            .map(|(name, f, dashed)| OverlayLine {
+                dashed: *dashed,
+                ..OverlayLine::horizontal(name.clone(), *f, vlo, vhi)
+            })
+            .collect();
+        Self {
+            wavelength,
+            frequency,
+        }
+    }
+}
+
+/// The four heat maps (wear and F_L, over wavelength and frequency) with the mode lines. A
+/// single speed has no x extent: the map is still drawn, one column wide.
+fn draw_heat_maps(dir: &Path, m: &SweepMaps, lines: &ModeLines) -> Result<(), StudiesError> {
     for (stem, title, ylab, y, z, lines, unit) in [
         (
             "map_wear_wavelength",
@@ -165,7 +188,7 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
             "wavelength (mm)",
             &m.wavelength_mm,
             &m.wear_wavelength,
-            &lines_lambda,
+            &lines.wavelength,
             "PSD ((J/m)²·m)",
         ),
         (
@@ -174,7 +197,7 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
             "wavelength (mm)",
             &m.wavelength_mm,
             &m.fl_wavelength,
-            &lines_lambda,
+            &lines.wavelength,
             "PSD (N²·m)",
         ),
         (
@@ -183,7 +206,7 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
             "frequency (Hz)",
             &m.frequency_hz,
             &m.wear_frequency,
-            &lines_f,
+            &lines.frequency,
             "PSD ((J/m)²/Hz)",
         ),
         (
@@ -192,7 +215,7 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
             "frequency (Hz)",
             &m.frequency_hz,
             &m.fl_frequency,
-            &lines_f,
+            &lines.frequency,
             "PSD (N²/Hz)",
         ),
     ] {
@@ -211,6 +234,14 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
             },
         )?;
     }
+    Ok(())
+}
+
+/// The dominant wavelength and frequency against speed; the frequency plot with the mode
+/// lines near the dominant frequencies (within 15 % of their range; at most eight, nearest
+/// first), so that the curve and its legend stay readable (the maps show all lines). Mode
+/// lines first, so the dominant frequency is drawn on top.
+fn draw_dominant(dir: &Path, r: &SweepRecord, lines_f: &[OverlayLine]) -> Result<(), StudiesError> {
     let dom_l: Vec<f64> = r
         .dominant_wavelength_mm
         .iter()
@@ -232,12 +263,9 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
             dom_l,
         )],
     )?;
-    // Only the mode lines near the dominant frequencies (within 15 % of their range; at most
-    // eight, nearest first), so that the dominant curve and its legend stay readable; the
-    // maps show all lines. Mode lines first, so the dominant frequency is drawn on top.
-    let df: Vec<f64> = dom_f.iter().copied().filter(|v| v.is_finite()).collect();
-    let (flo, fhi) = df
+    let (flo, fhi) = dom_f
         .iter()
+        .filter(|v| v.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
@@ -273,7 +301,6 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
         "frequency (Hz)",
         &fs,
     )?;
-    write_report(dir, r)?;
     Ok(())
 }
 
