@@ -18,15 +18,7 @@ use corrugation::model::{load_model, ModelSource};
 use corrugation::progress::cpu_seconds;
 
 /// The small test track of the test suite (80 mm elements, 4 bays).
-const SMALL: &[&str] = &[
-    "track.bays=4",
-    "mesh.element_length=0.08",
-    "mesh.fine_element_length=0.08",
-    "mesh.section_size=0.03",
-    "mesh.head_size=0.015",
-    "mesh.wheel_segments=12",
-    "mesh.wheel_element_size=0.1",
-];
+const SMALL: &[&str] = &corrugation::model::test_problems::SMALL_MODEL;
 
 fn load_average() -> String {
     std::fs::read_to_string("/proc/loadavg")

@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --example study_bench -- study [--basis substructured|full] [--key K] [--values a,b,…] [--speed KMH]
-//! cargo run --example study_bench -- validate [--key K] [--value V] [--speed KMH] [--fmax-check HZ]
+//! cargo run --example study_bench -- validate [--key K] [--value V] [--speed KMH] [--fmax-check HZ] [--ballast-degree D]
 //! ```
 //!
 //! `study`: a one-parameter study of the default model (default: ten railpad vertical
@@ -106,7 +106,11 @@ fn validate(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
     let fmax = m.run.fmax;
     let track = TrackStructure::build(&m)?;
     let (t0, c0) = (Instant::now(), cpu_seconds());
-    let opts = SubstructureOptions::default();
+    let mut opts = SubstructureOptions::default();
+    if let Some(d) = arg(args, "--ballast-degree") {
+        opts.ballast_pattern_degree = d.parse()?;
+    }
+    opts.validate()?;
     let comp = track_components(&m, &track, &cache, fmax, &opts)?;
     println!(
         "components: rail {} vectors ({} modes), sleeper {} ({} modes), reduced size {}, {} ({:.1} s wall, {:.1} s CPU)",

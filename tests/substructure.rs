@@ -10,25 +10,16 @@ use corrugation::eigen::cache::ModalCache;
 use corrugation::eigen::substructure::{
     substructured_track_basis, track_components, SubstructureOptions,
 };
-use corrugation::model::{load_model, ModelSource};
+
 use corrugation::structure::TrackStructure;
 
 #[test]
 fn passage_on_the_substructured_basis_matches_the_full_basis() {
-    let sets: Vec<String> = [
-        "track.bays=4",
-        "mesh.element_length=0.08",
-        "mesh.fine_element_length=0.08",
-        "mesh.section_size=0.03",
-        "mesh.head_size=0.015",
-        "mesh.wheel_segments=12",
-        "mesh.wheel_element_size=0.1",
+    let m = corrugation::model::test_problems::small_model(&[
         "run.fmax=3000",
         "fastening.vertical_stiffness=0.8e9",
-    ]
-    .map(String::from)
-    .to_vec();
-    let m = load_model(&ModelSource::Builtin, &sets).unwrap();
+    ])
+    .unwrap();
     let dir = std::env::temp_dir().join(format!("substructure-passage-{}", std::process::id()));
     let cache = ModalCache::new(&dir);
     let track = TrackStructure::build(&m).unwrap();

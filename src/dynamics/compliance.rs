@@ -160,20 +160,9 @@ pub fn longitudinal_compliance(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{load_model, ModelSource};
 
     fn short(extra: &[&str]) -> Model {
-        let mut sets: Vec<String> = [
-            "track.bays=4",
-            "mesh.element_length=0.08",
-            "mesh.fine_element_length=0.08",
-            "mesh.section_size=0.03",
-            "mesh.head_size=0.015",
-        ]
-        .map(String::from)
-        .to_vec();
-        sets.extend(extra.iter().map(|s| s.to_string()));
-        load_model(&ModelSource::Builtin, &sets).unwrap()
+        crate::model::test_problems::small_model(extra).unwrap()
     }
 
     fn check(m: &Model) -> LongitudinalCompliance {

@@ -8,21 +8,13 @@ use super::track::{SpringKind, TrackStructure};
 use crate::eigen::{solve, EigenOptions};
 use crate::fe::assembly::mass_per_part;
 use crate::mesh::Part;
-use crate::model::{load_model, Model, ModelSource};
+use crate::model::Model;
 
 /// A short, coarse track (4 bays): the physics of the holds, fast to build and solve.
 fn short(extra: &[&str]) -> Model {
-    let mut sets: Vec<String> = [
-        "track.bays=4",
-        "mesh.element_length=0.1",
-        "mesh.fine_element_length=0.1",
-        "mesh.section_size=0.04",
-        "mesh.head_size=0.02",
-    ]
-    .map(String::from)
-    .to_vec();
-    sets.extend(extra.iter().map(|s| s.to_string()));
-    load_model(&ModelSource::Builtin, &sets).unwrap()
+    let coarse = ["mesh.section_size=0.04", "mesh.head_size=0.02"];
+    let sets: Vec<&str> = coarse.iter().chain(extra).copied().collect();
+    crate::model::test_problems::small_model_with_elements(0.1, &sets).unwrap()
 }
 
 fn custom_x(x: &str) -> Model {

@@ -4,24 +4,18 @@
 
 use std::process::Command;
 
-/// A small model (4 bays, coarse rail section and wheel) that keeps every part of the physics
-/// and builds in well under a second: `--set` arguments for any command.
-pub const SMALL_MODEL: [&str; 14] = [
-    "--set",
-    "track.bays=4",
-    "--set",
-    "mesh.element_length=0.08",
-    "--set",
-    "mesh.fine_element_length=0.08",
-    "--set",
-    "mesh.section_size=0.03",
-    "--set",
-    "mesh.head_size=0.015",
-    "--set",
-    "mesh.wheel_segments=12",
-    "--set",
-    "mesh.wheel_element_size=0.1",
-];
+/// The small test model ([`corrugation::model::test_problems::SMALL_MODEL`]) as `--set`
+/// arguments for any command.
+pub const SMALL_MODEL: [&str; 14] = {
+    let sets = corrugation::model::test_problems::SMALL_MODEL;
+    let mut a = ["--set"; 14];
+    let mut i = 0;
+    while i < sets.len() {
+        a[2 * i + 1] = sets[i];
+        i += 1;
+    }
+    a
+};
 
 /// Runs the `corrugation` binary; returns (exit code, stdout, stderr).
 pub fn run(args: &[&str]) -> (i32, String, String) {

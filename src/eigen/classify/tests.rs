@@ -5,17 +5,10 @@ use crate::model::{load_model, ModelSource};
 use crate::structure::TrackStructure;
 
 fn small_track() -> TrackStructure {
-    let o: Vec<String> = [
-        "track.bays=4",
-        "mesh.element_length=0.04",
-        "mesh.fine_element_length=0.04",
-        "mesh.section_size=0.03",
-        "mesh.head_size=0.015",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    TrackStructure::build(&load_model(&ModelSource::Builtin, &o).unwrap()).unwrap()
+    TrackStructure::build(
+        &crate::model::test_problems::small_model_with_elements(0.04, &[]).unwrap(),
+    )
+    .unwrap()
 }
 
 /// Full displacement vector with `f(x, y, z) -> [ux, uy, uz]` on the rail nodes, 0 elsewhere.

@@ -48,6 +48,7 @@ pub fn component_key(
         .f64("cutoff_factor", opts.cutoff_factor)
         .f64("sleeper_cutoff_factor", opts.sleeper_cutoff_factor)
         .u64("pattern_degree", opts.pattern_degree as u64)
+        .u64("ballast_pattern_degree", opts.ballast_pattern_degree as u64)
         .str("substructure", part))
 }
 

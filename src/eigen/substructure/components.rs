@@ -103,18 +103,18 @@ pub(super) fn dense_block(a: SparseColMatRef<'_, usize, f64>, r0: usize, n: usiz
 type Group = Vec<(usize, [f64; 2])>;
 
 /// Load patterns over the groups: for each group, the tensor-product polynomials of degree
-/// ≤ `degree` in the coordinates scaled to [−1, 1] over the group's extent.
-/// Ballast groups (kind 1) get at most degree 1.
+/// ≤ `opts.pattern_degree` (ballast groups, kind 1: `opts.ballast_pattern_degree`) in the
+/// coordinates scaled to [−1, 1] over the group's extent.
 pub(super) fn patterns(
     groups: &BTreeMap<(u8, usize, usize), Group>,
     n: usize,
-    max_degree: usize,
+    opts: &super::SubstructureOptions,
 ) -> Mat<f64> {
     let degree_of = |kind: u8| {
         if kind == 1 {
-            max_degree.min(1)
+            opts.ballast_pattern_degree
         } else {
-            max_degree
+            opts.pattern_degree
         }
     };
     let total: usize = groups

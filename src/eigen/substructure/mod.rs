@@ -112,10 +112,17 @@ pub struct SubstructureOptions {
     /// the coarse sleeper mesh has a dense spectrum above f_max, and every sleeper mode is
     /// repeated once per sleeper in the reduced system).
     pub sleeper_cutoff_factor: f64,
-    /// Highest degree per coordinate of the attachment load patterns (−, 0 to 3; default 3:
-    /// 16 patterns per group and direction); the ballast's patterns (soft springs under a
-    /// stiff sleeper) are at most bilinear.
+    /// Highest degree per coordinate of the attachment load patterns of the railpads and
+    /// holds (−, 0 to 3; default 3: 16 patterns per group and direction).
     pub pattern_degree: usize,
+    /// The same for the ballast's springs under each sleeper (−, 0 to 3; default 1,
+    /// bilinear: soft springs under a stiff sleeper).
+    #[serde(default = "default_ballast_pattern_degree")]
+    pub ballast_pattern_degree: usize,
+}
+
+fn default_ballast_pattern_degree() -> usize {
+    SubstructureOptions::default().ballast_pattern_degree
 }
 
 impl Default for SubstructureOptions {
@@ -124,6 +131,7 @@ impl Default for SubstructureOptions {
             cutoff_factor: 1.5,
             sleeper_cutoff_factor: 1.0,
             pattern_degree: 3,
+            ballast_pattern_degree: 1,
         }
     }
 }
@@ -143,12 +151,17 @@ impl SubstructureOptions {
                 });
             }
         }
-        if self.pattern_degree > 3 {
-            return Err(SubstructureError::Option {
-                name: "pattern_degree",
-                value: self.pattern_degree.to_string(),
-                allowed: "0 to 3",
-            });
+        for (name, d) in [
+            ("pattern_degree", self.pattern_degree),
+            ("ballast_pattern_degree", self.ballast_pattern_degree),
+        ] {
+            if d > 3 {
+                return Err(SubstructureError::Option {
+                    name,
+                    value: d.to_string(),
+                    allowed: "0 to 3",
+                });
+            }
         }
         Ok(())
     }
@@ -210,7 +223,7 @@ pub fn build_components(
     let sleeper = sleeper_basis(
         &ks,
         &ms,
-        patterns(&sleeper_groups, sp.sleeper_dofs, opts.pattern_degree),
+        patterns(&sleeper_groups, sp.sleeper_dofs, opts),
         opts.sleeper_cutoff_factor * fmax_hz,
     )?;
     let kr = sparse_block(mats.k.as_ref(), 0, sp.rail_dofs);
@@ -219,7 +232,7 @@ pub fn build_components(
     let rail = rail_basis(
         kr.as_ref(),
         mr.as_ref(),
-        patterns(&rail_groups, sp.rail_dofs, opts.pattern_degree),
+        patterns(&rail_groups, sp.rail_dofs, opts),
         cutoff,
     )?;
     Ok(TrackComponents {

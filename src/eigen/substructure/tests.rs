@@ -2,23 +2,10 @@
 //! the assembled K, M) on a short track.
 
 use super::*;
-use crate::model::{load_model, ModelSource};
 
 /// A 4-bay track with a coarse mesh (the tests' small model).
 fn small(extra: &[&str]) -> Model {
-    let mut sets: Vec<String> = [
-        "track.bays=4",
-        "mesh.element_length=0.08",
-        "mesh.fine_element_length=0.08",
-        "mesh.section_size=0.03",
-        "mesh.head_size=0.015",
-        "mesh.wheel_segments=12",
-        "mesh.wheel_element_size=0.1",
-    ]
-    .map(String::from)
-    .to_vec();
-    sets.extend(extra.iter().map(|s| s.to_string()));
-    load_model(&ModelSource::Builtin, &sets).unwrap()
+    crate::model::test_problems::small_model(extra).unwrap()
 }
 
 fn full_frequencies(track: &TrackStructure, fmax: f64) -> Vec<f64> {

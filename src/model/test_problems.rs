@@ -1,0 +1,61 @@
+//! Small models for the tests, the examples and quick checks: the default track cut to
+//! four bays with a coarse rail section and wheel, which keeps every part of the physics and
+//! builds in well under a second (the default model takes minutes to solve).
+
+use super::{load_model, Model, ModelError, ModelSource};
+
+/// The overrides (`key=value`, as `--set` takes them) that turn the default model into the
+/// small test model: 4 bays, 80 mm elements along the rail, a 30 mm rail section (15 mm in
+/// the head), a wheel of 12 segments and 0.1 m elements.
+pub const SMALL_MODEL: [&str; 7] = [
+    "track.bays=4",
+    "mesh.element_length=0.08",
+    "mesh.fine_element_length=0.08",
+    "mesh.section_size=0.03",
+    "mesh.head_size=0.015",
+    "mesh.wheel_segments=12",
+    "mesh.wheel_element_size=0.1",
+];
+
+/// The small test model with `extra` overrides applied after [`SMALL_MODEL`] (so they win).
+pub fn small_model(extra: &[&str]) -> Result<Model, ModelError> {
+    let sets: Vec<String> = SMALL_MODEL
+        .iter()
+        .chain(extra)
+        .map(|s| s.to_string())
+        .collect();
+    load_model(&ModelSource::Builtin, &sets)
+}
+
+/// The small test model with elements of `element_length_m` (m) along the whole rail, and
+/// `extra` overrides after that.
+pub fn small_model_with_elements(
+    element_length_m: f64,
+    extra: &[&str],
+) -> Result<Model, ModelError> {
+    let lengths = [
+        format!("mesh.element_length={element_length_m}"),
+        format!("mesh.fine_element_length={element_length_m}"),
+    ];
+    let mut all: Vec<&str> = lengths.iter().map(String::as_str).collect();
+    all.extend_from_slice(extra);
+    small_model(&all)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_small_model_is_small_and_extra_overrides_win() {
+        let m = small_model(&["track.bays=3"]).unwrap();
+        assert_eq!(m.track.bays, 3);
+        assert_eq!(m.mesh.element_length, 0.08);
+        let m = small_model_with_elements(0.04, &[]).unwrap();
+        assert_eq!(
+            (m.mesh.element_length, m.mesh.fine_element_length),
+            (0.04, 0.04)
+        );
+        assert_eq!(m.track.bays, 4);
+    }
+}
