@@ -670,13 +670,15 @@ fn study_runs_every_case_writes_table_and_plots_and_resumes() {
     let built = AtomicUsize::new(0);
     let factory = |m: &Model| -> Result<Box<dyn PassageRunner>, BoxError> {
         built.fetch_add(1, Ordering::SeqCst);
-        Ok(Box::new(DampingRunner(m.fastening.vertical_damping)))
+        Ok(Box::new(DampingRunner(
+            m.fastening.springs.vertical_damping,
+        )))
     };
     let growth = |m: &Model, r: &dyn PassageRunner| -> Result<BTreeMap<String, f64>, BoxError> {
         let s = r.run(140.0, None)?;
         Ok(BTreeMap::from([(
             "limiting_amplitude_um".to_string(),
-            m.fastening.vertical_stiffness / 1e7 + s.wear_band_rms,
+            m.fastening.springs.vertical_stiffness / 1e7 + s.wear_band_rms,
         )]))
     };
     // Growth requested but not available: an error naming the key, before anything runs.

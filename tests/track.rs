@@ -59,7 +59,7 @@ fn static_deflection_matches_beam_on_elastic_foundation_and_reactions_balance_th
     // Closed form (Winkler beam, Hetényi): w0 = P β / (2 k), β = (k / 4EI)^(1/4), with k the
     // support stiffness per metre: railpad and ballast in series per sleeper, over the spacing.
     let k_support =
-        1.0 / (1.0 / m.fastening.vertical_stiffness + 1.0 / m.ballast.vertical_stiffness);
+        1.0 / (1.0 / m.fastening.springs.vertical_stiffness + 1.0 / m.ballast.vertical_stiffness);
     let k = k_support / m.track.sleeper_spacing;
     let ei = m.rail.youngs_modulus * t.section_properties.i_vertical_bending_m4;
     let beta = (k / (4.0 * ei)).powf(0.25);
@@ -252,7 +252,7 @@ fn railpad_and_ballast_stiffness_sum_to_the_model_values() {
         .filter(|(_, k)| **k == SpringKind::Fastening)
         .map(|(s, _)| s.stiffness * s.relative_displacement(&u).powi(2))
         .sum();
-    let want = m.fastening.vertical_stiffness * m.track.bays as f64;
+    let want = m.fastening.springs.vertical_stiffness * m.track.bays as f64;
     assert!((total - want).abs() < 1e-9 * want, "{total} vs {want}");
     let ballast_z: f64 = t
         .springs

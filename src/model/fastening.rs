@@ -296,18 +296,9 @@ pub struct Fastening {
     pub strip_width: f64,
     /// Gap between the rail-foot underside and the sleeper top (m).
     pub pad_thickness: f64,
-    /// Vertical stiffness per fastening (N/m), spread evenly over the grid.
-    pub vertical_stiffness: f64,
-    /// Vertical damping per fastening (N·s/m).
-    pub vertical_damping: f64,
-    /// Lateral stiffness per fastening (N/m).
-    pub lateral_stiffness: f64,
-    /// Lateral damping per fastening (N·s/m).
-    pub lateral_damping: f64,
-    /// Longitudinal stiffness per fastening (N/m).
-    pub longitudinal_stiffness: f64,
-    /// Longitudinal damping per fastening (N·s/m).
-    pub longitudinal_damping: f64,
+    /// The railpad's stiffness (N/m) and damping (N·s/m) per fastening, spread evenly over
+    /// the spring grid.
+    pub springs: SpringDampers,
 }
 
 impl TryFrom<FasteningFile> for Fastening {
@@ -362,12 +353,14 @@ impl TryFrom<FasteningFile> for Fastening {
             footprint_width: f.footprint_width,
             strip_width: f.strip_width,
             pad_thickness: f.pad_thickness,
-            vertical_stiffness: f.vertical_stiffness,
-            vertical_damping: f.vertical_damping,
-            lateral_stiffness: f.lateral_stiffness,
-            lateral_damping: f.lateral_damping,
-            longitudinal_stiffness: f.longitudinal_stiffness,
-            longitudinal_damping: f.longitudinal_damping,
+            springs: SpringDampers {
+                vertical_stiffness: f.vertical_stiffness,
+                vertical_damping: f.vertical_damping,
+                lateral_stiffness: f.lateral_stiffness,
+                lateral_damping: f.lateral_damping,
+                longitudinal_stiffness: f.longitudinal_stiffness,
+                longitudinal_damping: f.longitudinal_damping,
+            },
         })
     }
 }
@@ -423,12 +416,12 @@ impl From<Fastening> for FasteningFile {
             footprint_width: f.footprint_width,
             strip_width: f.strip_width,
             pad_thickness: f.pad_thickness,
-            vertical_stiffness: f.vertical_stiffness,
-            vertical_damping: f.vertical_damping,
-            lateral_stiffness: f.lateral_stiffness,
-            lateral_damping: f.lateral_damping,
-            longitudinal_stiffness: f.longitudinal_stiffness,
-            longitudinal_damping: f.longitudinal_damping,
+            vertical_stiffness: f.springs.vertical_stiffness,
+            vertical_damping: f.springs.vertical_damping,
+            lateral_stiffness: f.springs.lateral_stiffness,
+            lateral_damping: f.springs.lateral_damping,
+            longitudinal_stiffness: f.springs.longitudinal_stiffness,
+            longitudinal_damping: f.springs.longitudinal_damping,
             hold,
             hold_stiffness,
             hold_damping,
@@ -554,23 +547,5 @@ impl Fastening {
                 p
             }
         }
-    }
-
-    /// Stiffness per fastening in x, y, z (N/m).
-    pub fn stiffness(&self) -> [f64; 3] {
-        [
-            self.longitudinal_stiffness,
-            self.lateral_stiffness,
-            self.vertical_stiffness,
-        ]
-    }
-
-    /// Damping per fastening in x, y, z (N·s/m).
-    pub fn damping(&self) -> [f64; 3] {
-        [
-            self.longitudinal_damping,
-            self.lateral_damping,
-            self.vertical_damping,
-        ]
     }
 }

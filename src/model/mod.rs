@@ -293,10 +293,11 @@ pub struct Sleeper {
     pub density: f64,
 }
 
-/// Ballast under each half sleeper (spread over its bottom face by area).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// A spring–damper in each direction (x longitudinal, y lateral, z vertical), as the
+/// fastening's railpad and the ballast have: written as six flat keys of their tables.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Ballast {
+pub struct SpringDampers {
     /// Vertical stiffness (N/m).
     pub vertical_stiffness: f64,
     /// Vertical damping (N·s/m).
@@ -311,7 +312,11 @@ pub struct Ballast {
     pub longitudinal_damping: f64,
 }
 
-impl Ballast {
+/// Ballast under each half sleeper, spread over its bottom face by area (the `[ballast]`
+/// table).
+pub type Ballast = SpringDampers;
+
+impl SpringDampers {
     /// Stiffness in x, y, z (N/m).
     pub fn stiffness(&self) -> [f64; 3] {
         [

@@ -15,8 +15,8 @@ fn embedded_default_is_dutch_rpm3_with_stated_parameters() {
     assert_eq!(m.contact.friction, 0.4);
     assert_eq!(m.contact.traction_coefficient, 0.15);
     assert_eq!(m.track.sleeper_spacing, 0.6);
-    assert_eq!(m.fastening.vertical_stiffness, 1.3e9);
-    assert_eq!(m.fastening.vertical_damping, 45e3);
+    assert_eq!(m.fastening.springs.vertical_stiffness, 1.3e9);
+    assert_eq!(m.fastening.springs.vertical_damping, 45e3);
     assert_eq!(m.ballast.vertical_stiffness, 45e6);
     assert_eq!(m.vehicle.primary_stiffness, 1.15e6);
     assert!((m.run.speed() - 38.888_888_888_9).abs() < 1e-9);
@@ -283,7 +283,14 @@ fn zero_railpad_stiffness_without_a_rigid_hold_names_the_fastening() {
     assert!(!e.contains("ballast"), "{e}");
     // RPM4 holds z rigidly everywhere: there k_z = 0 is allowed; x is always held by RPM1-5.
     assert!(dutch_with(&["fastening.model=RPM4", "fastening.vertical_stiffness=0"]).is_ok());
-    assert!(dutch_with(&[]).unwrap().fastening.longitudinal_stiffness == 0.0);
+    assert!(
+        dutch_with(&[])
+            .unwrap()
+            .fastening
+            .springs
+            .longitudinal_stiffness
+            == 0.0
+    );
 }
 
 #[test]

@@ -78,7 +78,7 @@ impl Model {
             "m (at most one grid cell)",
         )?;
         c.range("fastening.pad_thickness", f.pad_thickness, 0.0, 0.05, "m")?;
-        c.spring_damper("fastening", f.stiffness(), f.damping())?;
+        c.spring_damper("fastening", f.springs.stiffness(), f.springs.damping())?;
         f.validate_holds(file)?;
         // The rail floats on the railpads where no rigid hold acts: a direction without a hold
         // needs a railpad spring, else the rail is a free body in it.
@@ -87,17 +87,17 @@ impl Model {
             (
                 &pattern.x,
                 "fastening.longitudinal_stiffness",
-                f.longitudinal_stiffness,
+                f.springs.longitudinal_stiffness,
             ),
             (
                 &pattern.y,
                 "fastening.lateral_stiffness",
-                f.lateral_stiffness,
+                f.springs.lateral_stiffness,
             ),
             (
                 &pattern.z,
                 "fastening.vertical_stiffness",
-                f.vertical_stiffness,
+                f.springs.vertical_stiffness,
             ),
         ] {
             if h.region() == RigidRegion::None {

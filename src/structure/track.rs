@@ -240,7 +240,7 @@ fn add_railpads(
 ) -> Result<(), StructureError> {
     let f = &m.fastening;
     let n_grid = (f.rows * f.columns) as f64;
-    let (k, c) = (f.stiffness(), f.damping());
+    let (k, c) = (f.springs.stiffness(), f.springs.damping());
     let foot_s = &rail.section.foot_underside_s_m;
     for (s, &xs) in sleepers.iter().zip(&layout.sleepers) {
         for col in 0..layout.columns {

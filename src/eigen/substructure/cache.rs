@@ -33,7 +33,10 @@ pub fn component_key(
             }
         }
     }
-    let (k, c) = (m.fastening.stiffness(), m.fastening.damping());
+    let (k, c) = (
+        m.fastening.springs.stiffness(),
+        m.fastening.springs.damping(),
+    );
     let active: u64 = (0..3)
         .filter(|&d| k[d] != 0.0 || c[d] != 0.0)
         .map(|d| 1u64 << d)

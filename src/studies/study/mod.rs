@@ -310,7 +310,7 @@ mod tests {
         )
         .unwrap();
         let m = s.case_models().unwrap();
-        assert_eq!(m[1].1.fastening.vertical_stiffness, 2.0e9);
+        assert_eq!(m[1].1.fastening.springs.vertical_stiffness, 2.0e9);
         assert_eq!(m[0].1.fastening.model().name(), "RPM1");
         let bad = parse(
             "model = \"builtin:dutch\"\n[[parameter]]\nkey = \"fastening.vertical_stifness\"\nvalues = [1e9]\n",
