@@ -178,6 +178,23 @@ fn passage_grow_and_predict_commands_write_their_outputs() {
     assert!(dir.join("predict/report.html").is_file());
     assert!(dir.join("predict/report.md").is_file());
     assert!(dir.join("predict/sweep/sweep.json").is_file());
+    // The growth-rate spectrum beside the trial amplitudes (docs/theory.md §10.6).
+    for d in ["grow", "predict/grow"] {
+        let csv = std::fs::read_to_string(dir.join(d).join("growth_rate.csv")).unwrap();
+        assert!(csv.starts_with(
+            "wavelength_mm,frequency_hz,gain_j_per_m2,phase_deg,growth_rate_per_passage"
+        ));
+        assert_eq!(csv.lines().count(), 242, "header + 241 wavelengths");
+    }
+    assert!(
+        r["growth_rate"]
+            .as_str()
+            .unwrap()
+            .starts_with("Growth-rate spectrum at 140 km/h"),
+        "{r}"
+    );
+    let md = std::fs::read_to_string(dir.join("predict/report.md")).unwrap();
+    assert!(md.contains("## Growth-rate spectrum"), "{md}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -10,6 +10,10 @@
 //!   vertical-bending and wheel eigenfrequency (relative difference);
 //! * `trial_shape.csv` — `x_m, wear_band_j_per_m, height_per_um`: the band-passed smooth wear
 //!   and the trial corrugation shape for 2A_max = 1 µm (scale by the amplitude);
+//! * `growth_rate.csv`, `growth_rate.svg`/`.png` — the growth-rate spectrum (docs/theory.md
+//!   §10.6; `--no-rate` skips it);
+//! * `rate_check.csv` (with `--rate-check`): the spectrum's linear theory against passages over
+//!   1 µm sinusoidal corrugations at the given wavelengths;
 //! * `iterative.csv` (with `--rounds`): round, passages, amplitude_um, dominant_wavelength_mm;
 //! * `grow.json` — the `--json` object.
 
@@ -22,8 +26,8 @@ use corrugation::growth::procedure::{iterative_growth, IterativeOptions};
 use corrugation::growth::verdict::{growth_verdict, no_initiation_verdict, sig, Verdict};
 use corrugation::io::write_csv;
 use corrugation::studies::grow::{
-    grow_json, initiation_check, mode_lines, trial_growth_if_any, write_grow_json,
-    write_growth_files, GrowJson,
+    grow_json, growth_rate, initiation_check, mode_lines, rate_check, trial_growth_if_any,
+    write_grow_json, write_growth_files, write_growth_rate, GrowJson,
 };
 
 use super::ModelArgs;
@@ -47,6 +51,13 @@ pub struct GrowCmd {
     /// Passages per round of the iterative growth.
     #[arg(long, default_value_t = 1000, value_name = "N")]
     passages_per_round: usize,
+    /// Skip the growth-rate spectrum (`growth_rate.csv`).
+    #[arg(long)]
+    no_rate: bool,
+    /// Check the growth-rate spectrum against passages over 1 µm sinusoidal corrugations at
+    /// these wavelengths (mm, within 20–80), comma separated: `rate_check.csv`.
+    #[arg(long, value_delimiter = ',', value_name = "MM,...")]
+    rate_check: Vec<f64>,
     /// Output directory.
     #[arg(long, default_value = "corrugation-out/grow", value_name = "DIR")]
     out: PathBuf,
@@ -104,9 +115,51 @@ impl GrowCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let t0 = Instant::now();
         super::check_trial_amplitudes(&self.amplitudes_um)?;
+        if let Some(l) = self
+            .rate_check
+            .iter()
+            .find(|l| !(l.is_finite() && (20.0..=80.0).contains(*l)))
+        {
+            anyhow::bail!("--rate-check wavelengths must lie in [20, 80] mm (got {l})");
+        }
         let m = self.model.load()?;
         super::check_out_dir(&self.out)?;
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
+        if !self.no_rate {
+            let pb = super::progress::bar("growth-rate spectrum");
+            let s = growth_rate(&m, &prepared, m.run.speed(), &pb)?;
+            pb.finish_and_clear();
+            write_growth_rate(&self.out, &s)?;
+            if !self.json {
+                println!("{}", s.sentence(m.run.speed_kmh));
+            }
+        }
+        if !self.rate_check.is_empty() {
+            let l: Vec<f64> = self
+                .rate_check
+                .iter()
+                .map(|&v| corrugation::units::mm_to_m(v))
+                .collect();
+            let rows = rate_check(
+                &prepared,
+                m.run.speed(),
+                &l,
+                corrugation::units::um_to_m(1.0),
+                &self.out,
+            )?;
+            for r in &rows {
+                println!(
+                    "  rate check {} mm: |G| linear {} passage {} J/m per m (ratio {}), phase linear {}° passage {}° (difference {}°)",
+                    sig(r.wavelength_mm, 3),
+                    sig(r.linear_gain_j_per_m2, 4),
+                    sig(r.passage_gain_j_per_m2, 4),
+                    sig(r.amplitude_ratio, 3),
+                    sig(r.linear_phase_deg, 3),
+                    sig(r.passage_phase_deg, 3),
+                    sig(r.phase_difference_deg, 3)
+                );
+            }
+        }
         let modes = mode_lines(&prepared);
         let explicit = match self.engine {
             super::engine::Engine::Explicit => Some(super::engine::explicit_model(&m)?),

@@ -519,9 +519,10 @@ pub fn attribution_text(a: &ModeAttribution) -> String {
 /// slip, large enough for the solver's tolerance ([`super::passage::PASSAGE_TANGENTIAL_TOL`]).
 pub const LINEARISATION_STEP: f64 = 0.02;
 
-/// The contact of `engine` at `v` (m/s) brought to the static rolling state; the static
-/// inputs `[F_n0 (N), F_l0 (N), spin (1/m)]` and the steady step result.
-fn static_state(
+/// The contact of `engine` at `v` (m/s, smooth rail, the engine's series compliance) brought
+/// to the static rolling state of a passage's start; the static inputs
+/// `[F_n0 (N), F_l0 (N), spin (1/m)]` and the steady step result.
+pub fn static_state(
     engine: &PassageEngine,
     v: f64,
 ) -> Result<(TransientRolling, [f64; 3], crate::contact::StepResult), DynamicsError> {

@@ -7,11 +7,14 @@
 //!   passage to the reference components, the Case 1 / Case 2 / grey classification, and the
 //!   growth phase (sign of the correlation of the new wear with the corrugation).
 //! - [`verdict`]: the plain-language verdict of a trial-amplitude growth.
+//! - [`rate`]: the growth-rate spectrum, the linear wear response to a small sinusoidal
+//!   roughness per wavelength (docs/theory.md §10.6).
 //!
 //! Lengths are metres, frequencies Hz; deviations are dimensionless ratios (0.03 = 3 %).
 
 pub mod consistency;
 pub mod procedure;
+pub mod rate;
 pub mod trial;
 pub mod verdict;
 

@@ -11,6 +11,10 @@
 //!   vertical-bending and wheel eigenfrequency (relative difference);
 //! * `trial_shape.csv` — `x_m, wear_band_j_per_m, height_per_um`: the band-passed smooth wear
 //!   and the trial corrugation shape for 2A_max = 1 µm (scale by the amplitude);
+//! * `growth_rate.csv` — the growth-rate spectrum (docs/theory.md §10.6): per wavelength the
+//!   frequency, the linear wear per unit roughness (amplitude, phase), the growth rate per
+//!   passage, the four parts of the wear response and the same growth rate on a rigid
+//!   structure and with the normal receptance only; `growth_rate.svg`/`.png` its plot;
 //! * `grow.json` — [`GrowJson`], written last.
 
 use std::path::Path;
@@ -23,6 +27,7 @@ use crate::dynamics::prepared::PreparedModel;
 use crate::dynamics::summary::PassageSummary;
 use crate::dynamics::PassageRecorder;
 use crate::growth::procedure::{trial_growth, GrowthRound, ModeLines, ProcedureError, TrialGrowth};
+use crate::growth::rate::{growth_rate_spectrum, GrowthRateSpectrum, RateOptions};
 use crate::growth::verdict::{InitiationCheck, Verdict};
 use crate::growth::PhaseRelation;
 use crate::io::write_csv;
@@ -381,6 +386,197 @@ pub fn write_growth_files(out: &Path, g: &TrialGrowth) -> Result<(), StudiesErro
     )
     .map_err(StudiesError::io(&out.join("trial_shape.csv")))?;
     Ok(())
+}
+
+/// The growth-rate spectrum of `p` at `speed_m_per_s` (m/s), with the model's wear
+/// coefficient and the default settings ([`RateOptions`]), counted as one stage on `progress`.
+pub fn growth_rate(
+    m: &Model,
+    p: &PreparedModel,
+    speed_m_per_s: f64,
+    progress: &dyn Progress,
+) -> Result<GrowthRateSpectrum, crate::dynamics::DynamicsError> {
+    progress.stage("growth-rate spectrum (linear wear response)", 1);
+    let s = growth_rate_spectrum(
+        &p.engine,
+        speed_m_per_s,
+        m.wear.coefficient,
+        &RateOptions::default(),
+    );
+    progress.done(1);
+    progress.finish();
+    s
+}
+
+/// Writes `growth_rate.csv` and its plot (`growth_rate.svg`, `.png`: growth rate per passage
+/// against wavelength, with the rigid-structure and normal-only variants) into `out`.
+pub fn write_growth_rate(out: &Path, s: &GrowthRateSpectrum) -> Result<(), StudiesError> {
+    std::fs::create_dir_all(out).map_err(StudiesError::io(out))?;
+    let path = out.join("growth_rate.csv");
+    let mut header = vec![
+        "wavelength_mm",
+        "frequency_hz",
+        "gain_j_per_m2",
+        "phase_deg",
+        "growth_rate_per_passage",
+    ];
+    let parts = [
+        "wear_roughness_re_j_per_m2",
+        "wear_approach_re_j_per_m2",
+        "wear_creepage_x_re_j_per_m2",
+        "wear_creepage_t_re_j_per_m2",
+    ];
+    header.extend(parts);
+    header.extend([
+        "normal_force_n_per_m",
+        "longitudinal_force_n_per_m",
+        "rigid_phase_deg",
+        "rigid_growth_rate_per_passage",
+        "normal_only_phase_deg",
+        "normal_only_growth_rate_per_passage",
+    ]);
+    let rows = s
+        .points
+        .iter()
+        .zip(s.rigid.iter().zip(&s.normal_only))
+        .map(|(p, (r, n))| {
+            let mut row = vec![
+                m_to_mm(p.wavelength_m),
+                p.frequency_hz,
+                p.gain_j_per_m2,
+                p.phase_deg,
+                p.growth_rate_per_passage,
+            ];
+            row.extend(p.wear_parts_re);
+            row.extend([
+                p.normal_force_n_per_m,
+                p.longitudinal_force_n_per_m,
+                r.phase_deg,
+                r.growth_rate_per_passage,
+                n.phase_deg,
+                n.growth_rate_per_passage,
+            ]);
+            row
+        });
+    write_csv(&path, &header, rows).map_err(StudiesError::io(&path))?;
+    let series = |name: &str, pts: &[crate::growth::rate::RatePoint]| {
+        crate::report::plot::Series::new(
+            name,
+            pts.iter().map(|p| m_to_mm(p.wavelength_m)).collect(),
+            pts.iter().map(|p| p.growth_rate_per_passage).collect(),
+        )
+    };
+    let stem = out.join("growth_rate");
+    crate::report::plot::line_plot(
+        &stem,
+        &format!(
+            "Growth-rate spectrum at {:.0} km/h (> 0 grows)",
+            crate::units::ms_to_kmh(s.speed_m_per_s)
+        ),
+        "wavelength (mm)",
+        "growth rate per passage (-)",
+        &[
+            series("coupled wheel-track", &s.points),
+            series("rigid structure", &s.rigid),
+            series("normal receptance only", &s.normal_only),
+        ],
+    )?;
+    Ok(())
+}
+
+/// One wavelength of the check of the growth-rate spectrum against passages.
+#[derive(Clone, Debug, Serialize)]
+pub struct RateCheck {
+    /// Wavelength (mm).
+    pub wavelength_mm: f64,
+    /// Linear theory: `|G|` (J/m per m) and `arg G` (degrees).
+    pub linear_gain_j_per_m2: f64,
+    /// Linear theory's phase (degrees).
+    pub linear_phase_deg: f64,
+    /// Passages: `|G|` (J/m per m).
+    pub passage_gain_j_per_m2: f64,
+    /// Passages: phase (degrees).
+    pub passage_phase_deg: f64,
+    /// `|G_linear| / |G_passage|` (−).
+    pub amplitude_ratio: f64,
+    /// `arg(G_linear / G_passage)` (degrees).
+    pub phase_difference_deg: f64,
+}
+
+/// The growth-rate spectrum's linear theory against passages over sinusoidal corrugations of
+/// amplitude `amplitude_m` (m) at `wavelengths_m` (m, within 20–80 mm) at `speed_m_per_s`
+/// (docs/theory.md §10.6, validation/growth_rate.md): one smooth passage and one per
+/// wavelength; `rate_check.csv` in `out`.
+pub fn rate_check(
+    p: &PreparedModel,
+    speed_m_per_s: f64,
+    wavelengths_m: &[f64],
+    amplitude_m: f64,
+    out: &Path,
+) -> Result<Vec<RateCheck>, StudiesError> {
+    use crate::dynamics::passage::PassageOptions;
+    use crate::growth::rate::{linear_responses, passage_gain};
+    let opts = PassageOptions {
+        energy: false,
+        rail_point_offset_m: None,
+    };
+    let dynamics = |e: crate::dynamics::DynamicsError| StudiesError::StudyCase {
+        file: "growth-rate check".into(),
+        case: format!("{:?} m", wavelengths_m),
+        message: e.to_string(),
+    };
+    let smooth = p
+        .engine
+        .passage(speed_m_per_s, None, &opts, None)
+        .map_err(dynamics)?;
+    let lin = linear_responses(
+        &p.engine,
+        speed_m_per_s,
+        wavelengths_m,
+        &RateOptions::default(),
+    )
+    .map_err(dynamics)?;
+    let mut rows = Vec::new();
+    for (&l, r) in wavelengths_m.iter().zip(&lin) {
+        let gp = passage_gain(&p.engine, &smooth, l, amplitude_m).map_err(dynamics)?;
+        let gl = r[0].wear;
+        rows.push(RateCheck {
+            wavelength_mm: m_to_mm(l),
+            linear_gain_j_per_m2: gl.norm(),
+            linear_phase_deg: gl.arg().to_degrees(),
+            passage_gain_j_per_m2: gp.norm(),
+            passage_phase_deg: gp.arg().to_degrees(),
+            amplitude_ratio: gl.norm() / gp.norm(),
+            phase_difference_deg: (gl / gp).arg().to_degrees(),
+        });
+    }
+    std::fs::create_dir_all(out).map_err(StudiesError::io(out))?;
+    let path = out.join("rate_check.csv");
+    write_csv(
+        &path,
+        &[
+            "wavelength_mm",
+            "linear_gain_j_per_m2",
+            "linear_phase_deg",
+            "passage_gain_j_per_m2",
+            "passage_phase_deg",
+            "amplitude_ratio",
+            "phase_difference_deg",
+        ],
+        rows.iter().map(|r| {
+            vec![
+                r.wavelength_mm,
+                r.linear_gain_j_per_m2,
+                r.linear_phase_deg,
+                r.passage_gain_j_per_m2,
+                r.passage_phase_deg,
+                r.amplitude_ratio,
+                r.phase_difference_deg,
+            ]
+        }),
+    )
+    .map_err(StudiesError::io(&path))?;
+    Ok(rows)
 }
 
 /// `grow.json` in `out` (the `--json` object of `grow`), atomically: written last, it marks a

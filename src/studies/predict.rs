@@ -96,6 +96,7 @@ struct ReportInput<'a> {
     smooth: &'a PassageSummary,
     growth: Option<(&'a TrialGrowth, &'a GrowJson)>,
     lines: &'a ModeLines,
+    rate: &'a crate::growth::rate::GrowthRateSpectrum,
     sweep: &'a SweepOutcome,
     verdict: &'a Verdict,
     seconds: f64,
@@ -128,6 +129,9 @@ pub struct PredictJson {
     pub limiting_amplitude_um: Option<f64>,
     /// The verdict.
     pub verdict: Verdict,
+    /// Which wavelengths a small roughness grows at (the growth-rate spectrum, one sentence;
+    /// numbers in `grow/growth_rate.csv`).
+    pub growth_rate: String,
     /// Speeds of the short sweep, km/h.
     pub sweep_speeds_kmh: Vec<f64>,
     /// Dominant wavelength per sweep speed, mm.
@@ -170,6 +174,8 @@ pub fn predict(
         Some(g) => growth_verdict(g, m.run.speed_kmh, &lines, Some(check)),
         None => no_initiation_verdict(m.run.speed_kmh, Some(check)),
     };
+    let rate = super::grow::growth_rate(m, prepared, m.run.speed(), progress)?;
+    super::grow::write_growth_rate(&out.join("grow"), &rate)?;
     let gj = match &growth {
         Some(g) => Some(write_growth(&out.join("grow"), g, m, verdict.clone())?),
         None => None,
@@ -188,6 +194,7 @@ pub fn predict(
         smooth: &smooth,
         growth: growth.as_ref().zip(gj.as_ref()),
         lines: &lines,
+        rate: &rate,
         sweep: &sw,
         verdict: &verdict,
         seconds: t0.elapsed().as_secs_f64(),
@@ -249,6 +256,7 @@ fn predict_json(r: &ReportInput<'_>, seconds: f64) -> PredictJson {
         fl_components: s.fl_components.clone(),
         limiting_amplitude_um: r.growth.and_then(|(g, _)| g.limiting_amplitude_um),
         verdict: r.verdict.clone(),
+        growth_rate: r.rate.sentence(r.m.run.speed_kmh),
         sweep_speeds_kmh: sw.speeds_kmh.clone(),
         sweep_dominant_wavelength_mm: sw.dominant_wavelength_mm.clone(),
         wavelength_range_ratio: sw.wavelength_range_ratio,
@@ -325,6 +333,7 @@ fn report(r: &ReportInput<'_>) -> Document {
             d.paragraph("No trial growth: the smooth rail left no wear component in 20–80 mm.");
         }
     }
+    rate_section(&mut d, r);
     sweep_section(&mut d, r.sweep);
     d.paragraph("All numbers: passage/*.csv, grow/*.csv and grow.json, sweep/sweep.json and the .npy maps, predict.json.");
     d
@@ -520,6 +529,21 @@ fn growth_section(d: &mut Document, g: &TrialGrowth, gj: &GrowJson) {
         rows,
     );
     eigen_section(d, g);
+}
+
+/// The growth-rate spectrum beside the trial amplitudes: which wavelengths grow.
+fn rate_section(d: &mut Document, r: &ReportInput<'_>) {
+    d.heading(2, "Growth-rate spectrum (linear, small roughness)");
+    d.paragraph(r.rate.sentence(r.m.run.speed_kmh));
+    d.paragraph(
+        "The new wear of one passage over a small sinusoidal roughness, per unit roughness, \
+         from the coupled receptances and the contact linearised by its own solver \
+         (docs/theory.md §10.6): growth rate σ = −k_w Re(G)/(2b) per passage, > 0 grows. \
+         The trial amplitudes above are large (10–160 µm, nonlinear) and shaped like the \
+         smooth-rail wear; this spectrum is the small-amplitude limit, wavelength by wavelength. \
+         Numbers: grow/growth_rate.csv.",
+    );
+    d.image("growth-rate spectrum", "grow/growth_rate.png");
 }
 
 /// Components vs the nearest eigenfrequencies of the three mode families.
