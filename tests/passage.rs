@@ -6,25 +6,9 @@ mod common;
 
 use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::cache::ModalCache;
-use corrugation::model::{load_model, ModelSource};
 
 fn small_model() -> corrugation::model::Model {
-    let mut sets: Vec<String> = common::SMALL_MODEL
-        .chunks(2)
-        .map(|c| c[1].to_string())
-        .collect();
-    sets.extend(
-        [
-            "track.bays=6",
-            "run.fmax=1500",
-            "run.solution_zone_offset=0.3",
-            "run.solution_zone_length=0.4",
-            "contact.grid_nx=16",
-            "contact.grid_ny=12",
-        ]
-        .map(String::from),
-    );
-    load_model(&ModelSource::Builtin, &sets).expect("valid model")
+    corrugation::model::test_problems::small_passage_model(&[]).expect("valid model")
 }
 
 /// One passage of `m` over the smooth rail with the default options.

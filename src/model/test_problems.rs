@@ -42,6 +42,25 @@ pub fn small_model_with_elements(
     small_model(&all)
 }
 
+/// The overrides, after [`SMALL_MODEL`], of the small passage model: 6 bays so that the
+/// wheel runs up to a 0.4 m solution zone, modes to 1.5 kHz, a 16 × 12 contact grid. A
+/// passage over it takes a fraction of a second.
+pub const SMALL_PASSAGE: [&str; 6] = [
+    "track.bays=6",
+    "run.fmax=1500",
+    "run.solution_zone_offset=0.3",
+    "run.solution_zone_length=0.4",
+    "contact.grid_nx=16",
+    "contact.grid_ny=12",
+];
+
+/// The small passage model ([`SMALL_MODEL`] then [`SMALL_PASSAGE`]) with `extra` overrides
+/// after them.
+pub fn small_passage_model(extra: &[&str]) -> Result<Model, ModelError> {
+    let all: Vec<&str> = SMALL_PASSAGE.iter().chain(extra).copied().collect();
+    small_model(&all)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
