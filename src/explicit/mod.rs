@@ -24,6 +24,7 @@
 // Numerical kernels index several parallel arrays with one loop index.
 #![allow(clippy::needless_range_loop)]
 
+pub mod audit;
 mod ledger;
 mod local;
 pub mod model;
