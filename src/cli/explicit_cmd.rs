@@ -36,6 +36,11 @@ pub struct ExplicitCmd {
     /// point fixed on the wheel) or `rotating` (spinning at V/R, docs/theory.md §8.7).
     #[arg(long, value_enum, value_name = "fixed|rotating")]
     wheel: Option<WheelArg>,
+    /// Also keep the energy audit (every contact step replayed with the forces the
+    /// structures carried, its nodal work summed; twice the structural cost) in
+    /// explicit.json (docs/theory.md §8.8).
+    #[arg(long)]
+    audit: bool,
 }
 
 /// `--wheel`: the explicit path's wheel treatment.
@@ -59,7 +64,11 @@ impl ExplicitCmd {
             Some(p) => Some(RailProfile::read_csv_um(p)?),
             None => None,
         };
-        run_explicit(&m, profile.as_ref(), &self.out, self.json)
+        let opts = ExplicitOptions {
+            audit: self.audit,
+            ..ExplicitOptions::from_model(&m)
+        };
+        run_explicit(&m, opts, profile.as_ref(), &self.out, self.json)
     }
 }
 
@@ -67,14 +76,14 @@ impl ExplicitCmd {
 /// `explicit.json`) and its summary on stdout (`json`: as JSON).
 pub fn run_explicit(
     m: &corrugation::model::Model,
+    opts: ExplicitOptions,
     profile: Option<&RailProfile>,
     out: &Path,
     json: bool,
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let pb = super::progress::bar("explicit: set-up (assembly, static solves, stable step)");
-    let em = ExplicitModel::new(m, ExplicitOptions::from_model(m))
-        .context("building the explicit model")?;
+    let em = ExplicitModel::new(m, opts).context("building the explicit model")?;
     pb.set_message("explicit passage (contact steps)");
     let opts = PassageOptions::default();
     let rec = em

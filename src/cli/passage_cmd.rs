@@ -59,7 +59,13 @@ impl PassageCmd {
         };
         super::check_out_dir(&self.out)?;
         if self.engine == super::engine::Engine::Explicit {
-            return super::explicit_cmd::run_explicit(&m, profile.as_ref(), &self.out, self.json);
+            return super::explicit_cmd::run_explicit(
+                &m,
+                corrugation::explicit::ExplicitOptions::from_model(&m),
+                profile.as_ref(),
+                &self.out,
+                self.json,
+            );
         }
         let opts = PassageOptions::default();
         let mut prepared = super::engine::prepared(&m, self.cache.as_deref())?;

@@ -66,6 +66,11 @@ pub(super) struct Ledger<'a> {
     /// Wheel-load work potentials `f·u` at the step's start: all, torque, gravity.
     before: [f64; 3],
     ku: Vec<f64>,
+    /// Contact work, convective work and series-spring energy per contact-frame direction
+    /// (J), for the audit.
+    pub(super) by_direction: [[f64; 3]; 3],
+    /// The contact work on the rail and on the wheel (J), for the audit.
+    pub(super) rail_wheel: [f64; 2],
 }
 
 impl<'a> Ledger<'a> {
@@ -85,6 +90,8 @@ impl<'a> Ledger<'a> {
             ur_prev: m.rail_at(&s.ut, x0)?,
             dg_prev: m.local_variation(x0, &m.weights(x0)?)[2],
             before: [0.0; 3],
+            by_direction: [[0.0; 3]; 3],
+            rail_wheel: [0.0; 2],
             ku: if on {
                 vec![0.0; m.track.op.n().max(m.wheel.op.n())]
             } else {
@@ -143,7 +150,15 @@ impl<'a> Ledger<'a> {
         let uw_end = m.wheel_at(&s.uw);
         let [ur_old, uw_old] = k.old;
         for d in 0..3 {
-            eb.contact_work_j += k.f_work[d] * ((uw_end[d] - uw_old[d]) - (ur_end[d] - ur_old[d]));
+            let [on_rail, on_wheel] = [
+                -k.f_work[d] * (ur_end[d] - ur_old[d]),
+                k.f_work[d] * (uw_end[d] - uw_old[d]),
+            ];
+            self.rail_wheel[0] += on_rail;
+            self.rail_wheel[1] += on_wheel;
+            let w = on_rail + on_wheel;
+            eb.contact_work_j += w;
+            self.by_direction[0][d] += w;
         }
         eb.frictional_work_j += r.frictional_power_w * k.dt_c;
         eb.spin_work_j -= k.v * k.spin * r.mz_nm * k.dt_c;
@@ -151,7 +166,9 @@ impl<'a> Ledger<'a> {
         // displacement under the contact as the contact moves from x_n to x_{n+1} on the
         // state at t_n (lateral and normal, as the reduced passage).
         for d in [1usize, 2] {
-            eb.convective_work_j += k.f_work[d] * (ur_old[d] - self.ur_prev[d]);
+            let w = k.f_work[d] * (ur_old[d] - self.ur_prev[d]);
+            eb.convective_work_j += w;
+            self.by_direction[1][d] += w;
         }
         self.ur_prev = ur_end;
         // The removed local compliance variation acts as a series spring of compliance
@@ -161,12 +178,15 @@ impl<'a> Ledger<'a> {
         // which the contact chain's balance leaves +½(Δg_{n+1} − Δg_n)F_n² as an input.
         let [fo, fnew] = k.forces;
         for d in 0..2 {
-            eb.residual_spring_energy_change_j -=
-                k.dg[d] * 0.5 * (fo[d] + fnew[d]) * (fnew[d] - fo[d]);
+            let e = k.dg[d] * 0.5 * (fo[d] + fnew[d]) * (fnew[d] - fo[d]);
+            eb.residual_spring_energy_change_j -= e;
+            self.by_direction[2][d] -= e;
         }
-        eb.residual_spring_energy_change_j -=
-            0.5 * (k.dg[2] * fnew[2] * fnew[2] - self.dg_prev * fo[2] * fo[2]);
-        eb.convective_work_j += 0.5 * (k.dg[2] - self.dg_prev) * fo[2] * fo[2];
+        let e = 0.5 * (k.dg[2] * fnew[2] * fnew[2] - self.dg_prev * fo[2] * fo[2]);
+        let roll = 0.5 * (k.dg[2] - self.dg_prev) * fo[2] * fo[2];
+        eb.residual_spring_energy_change_j -= e;
+        eb.convective_work_j += roll;
+        self.by_direction[2][2] -= e + roll;
         self.dg_prev = k.dg[2];
         Ok(())
     }

@@ -14,6 +14,8 @@
 //!   the FE is linear). Same static start, contact, wear accounting and analysis as the
 //!   reduced passage, so the two differ only by what the reduced model approximates.
 //!
+//! - [`audit`]: the energy audit, a replay of every contact step that sums the nodal work as
+//!   the central difference defines it, against which the passage's energy ledger is checked.
 //! - [`rotating`]: the rotating wheel (`explicit.wheel = "rotating"`): its elastic motion in
 //!   a frame spinning at `V/R` with the Coriolis and spin-softening terms, the contact point
 //!   moving around the tread.
@@ -24,6 +26,7 @@
 // Numerical kernels index several parallel arrays with one loop index.
 #![allow(clippy::needless_range_loop)]
 
+pub mod audit;
 mod ledger;
 mod local;
 pub mod model;

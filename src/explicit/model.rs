@@ -43,6 +43,10 @@ pub struct ExplicitOptions {
     /// The rotating wheel's spin rate (rad/s); `None` (default) = `V/R` at the contact
     /// radius, rolling without slip. Another value only isolates the effect of the rotation.
     pub spin_rate_rad_s: Option<f64>,
+    /// Whether a passage also keeps the energy audit (a replay of every contact step with
+    /// the forces the structures carried; twice the structural cost; default off,
+    /// docs/theory.md §8.8).
+    pub audit: bool,
 }
 
 impl Default for ExplicitOptions {
@@ -55,6 +59,7 @@ impl Default for ExplicitOptions {
             local_compliance: ExplicitLocalCompliance::Constant,
             wheel: ExplicitWheel::Fixed,
             spin_rate_rad_s: None,
+            audit: false,
         }
     }
 }
@@ -70,6 +75,7 @@ impl ExplicitOptions {
             local_compliance: model.explicit.local_compliance,
             wheel: model.explicit.wheel,
             spin_rate_rad_s: None,
+            audit: false,
         }
     }
 }

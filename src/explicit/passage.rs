@@ -38,6 +38,7 @@
 
 use std::time::Instant;
 
+use super::audit::{Audit, EnergyAudit, StepForces};
 use super::ledger::{Ledger, LedgerStep, State};
 use super::model::ExplicitModel;
 use super::operator::StepScratch;
@@ -96,6 +97,16 @@ impl Coupling {
             f
         }
     }
+
+    /// [`Self::first_load`] split into the part at the previous contact position and the
+    /// part at this one ([`Hold::boundary_split`]; all at this one without a corrector).
+    pub(super) fn boundary_split(self, f: [f64; 3], f_prev: [f64; 3]) -> [[f64; 3]; 2] {
+        if self.corrected() {
+            self.hold().boundary_split(f, f_prev)
+        } else {
+            [[0.0; 3], f]
+        }
+    }
 }
 
 /// What the explicit path reports besides the passage record.
@@ -139,6 +150,10 @@ pub struct ExplicitInfo {
     pub wheel: &'static str,
     /// The rotating wheel's spin rate (rad/s; 0 for the fixed wheel).
     pub spin_rate_rad_s: f64,
+    /// The energy audit (when [`super::ExplicitOptions::audit`] asks for it and the ledger
+    /// is kept).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub audit: Option<EnergyAudit>,
 }
 
 /// A passage of the explicit path.
@@ -226,9 +241,15 @@ impl ExplicitModel {
         let mut wear = WearAccumulator::new(&contact, z0, nbins);
         let keep = popts.energy && rot.is_none();
         let mut ledger = Ledger::new(self, keep, &s_, &st, x0)?;
+        let mut audit = (keep && self.opts.audit).then(|| Audit::new(self, &s_));
+        if let Some(a) = audit.as_mut() {
+            a.start(self, &s_, [dtt, dtw]);
+        }
         // The start's force on the structures is the static one (lateral 0).
         let mut f = [st.fx_n, 0.0, st.normal_force_n];
         let mut f_prev = f;
+        // The patch of the previous contact step (at the start: the static one).
+        let mut pw_prev = self.weights(x0)?;
         let mut series = [0.0; 3];
         let mut last_delta = st.approach_m;
         let mut clamped = 0usize;
@@ -252,14 +273,36 @@ impl ExplicitModel {
                 Some(r) => r.wheel_at(&s_.uw, t - dt_c, t),
                 None => self.wheel_at(&s_.uw),
             };
-            // F_n held; the first sub-step also carries the previous step's share.
+            // F_n held; the first sub-step also carries the previous step's share, on the
+            // rail where the previous step's force acted.
             let f0 = self.opts.coupling.first_load(f, f_prev);
-            for (buf, g) in [(&mut ftrack0, f0), (&mut ftrack, f)] {
-                buf.iter_mut().for_each(|x| *x = 0.0);
+            let split = self.opts.coupling.boundary_split(f, f_prev);
+            ftrack0.iter_mut().for_each(|x| *x = 0.0);
+            for (g, w) in [(split[0], &pw_prev), (split[1], &pw)] {
                 let neg = [-g[0], -g[1], -g[2]];
-                add_line_force(&self.line, &self.track_structure, &frame, &pw, neg, buf);
+                add_line_force(
+                    &self.line,
+                    &self.track_structure,
+                    &frame,
+                    w,
+                    neg,
+                    &mut ftrack0,
+                );
             }
+            ftrack.iter_mut().for_each(|x| *x = 0.0);
+            let neg = [-f[0], -f[1], -f[2]];
+            add_line_force(
+                &self.line,
+                &self.track_structure,
+                &frame,
+                &pw,
+                neg,
+                &mut ftrack,
+            );
             ledger.before_step(&s_.uw);
+            if let Some(a) = audit.as_mut() {
+                a.save(&s_);
+            }
             let State { ut, vt, uw, vw } = &mut s_;
             let mut damper_j = advance_held(
                 &self.track.op,
@@ -333,8 +376,8 @@ impl ExplicitModel {
                 .map_err(to_contact)?;
             let f_new = [r.fx_n, r.fy_n, r.normal_force_n];
             // Corrector: the response to the force change, ramped over the step.
+            let df = [f_new[0] - f[0], f_new[1] - f[1], f_new[2] - f[2]];
             if corrected {
-                let df = [f_new[0] - f[0], f_new[1] - f[1], f_new[2] - f[2]];
                 for (j, wj) in pw.iter() {
                     rail_resp.response(j).add_to(wj, df, &mut s_.ut, &mut s_.vt);
                 }
@@ -344,6 +387,16 @@ impl ExplicitModel {
                 }
             }
             s_.check_finite(t, xc)?;
+            if let Some(a) = audit.as_mut() {
+                let forces = StepForces {
+                    first: split,
+                    previous: &pw_prev,
+                    held: f,
+                    change: df,
+                    hold: corrected.then_some(hold),
+                };
+                a.replay(self, &pw, &forces, [(nt, dtt), (nw, dtw)], &s_);
+            }
             if xc - half_grid < z1 && xc + half_grid > z0 {
                 wear.add_step(&contact, xc);
             }
@@ -371,6 +424,7 @@ impl ExplicitModel {
             )?;
             f_prev = f;
             f = f_new;
+            pw_prev = pw;
             last_delta = r.approach_m;
             h.push_step(&contact, &r, [t, xc, xi, delta - series[2] * f[2]], dx);
             if let Some((node, rec)) = rail_point.as_mut() {
@@ -383,7 +437,18 @@ impl ExplicitModel {
                 progress(n, n_steps);
             }
         }
+        let (by_direction, rail_wheel) = (ledger.by_direction, ledger.rail_wheel);
         let eb = ledger.finish(&s_, f[2], last_delta, series_c[2]);
+        let audit = audit.map(|a| {
+            let mut r = a.finish(self, &s_, [dtt, dtw]);
+            [
+                r.ledger_contact_work_j,
+                r.ledger_convective_work_j,
+                r.ledger_spring_j,
+            ] = by_direction;
+            [r.ledger_rail_work_j, r.ledger_wheel_work_j] = rail_wheel;
+            r
+        });
         let mut w = vec![0.0; nbins];
         wear.work_x(&mut w);
         let seconds = t_wall.elapsed().as_secs_f64();
@@ -409,6 +474,7 @@ impl ExplicitModel {
             clamped_steps: clamped,
             wheel: self.opts.wheel.as_str(),
             spin_rate_rad_s: rot.as_ref().map_or(0.0, |r| r.omega()),
+            audit,
         };
         Ok(ExplicitRecord {
             record: PassageRecord {
