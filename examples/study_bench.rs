@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --example study_bench -- study [--basis substructured|full] [--key K] [--values a,b,…] [--speed KMH]
-//! cargo run --example study_bench -- validate [--key K] [--value V] [--speed KMH] [--fmax-check HZ] [--ballast-degree D]
+//! cargo run --example study_bench -- validate [--key K] [--value V] [--speed KMH] [--fmax-check HZ] [--ballast-degree D] [--list N]
 //! ```
 //!
 //! `study`: a one-parameter study of the default model (default: ten railpad vertical
@@ -149,6 +149,14 @@ fn validate(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
         full.frequencies_hz.len(),
         sub.frequencies_hz.len()
     );
+    if let Some(k) = arg(args, "--list") {
+        let k: usize = k.parse()?;
+        println!("mode,full_hz,substructured_hz,relative_difference");
+        for i in 0..k.min(n).min(ns) {
+            let (a, b) = (full.frequencies_hz[i], sub.frequencies_hz[i]);
+            println!("{i},{a:.6},{b:.6},{:+.3e}", (b - a) / a);
+        }
+    }
     let popts = PassageOptions::default();
     let t2 = Instant::now();
     let pf = PreparedModel::with_track_basis(&m, &track, full, &cache, None, &popts)?;

@@ -14,7 +14,7 @@
 //! peaks = 3                                # PSD peaks per signal in the table (optional)
 //! basis = "full"                           # track basis: "full" (Lanczos per distinct track,
 //!                                          # default) or "substructured" (theory §5.8)
-//! # substructure = { cutoff_factor = 1.5, pattern_degree = 3 }  # only with "substructured"
+//! # substructure = { cutoff_factor = 1.5, pattern_degree = 3, ballast_pattern_degree = 1 }  # only with "substructured"
 //!
 //! [criterion]                              # optional, see initiation::InitiationCriterion
 //! min_relative_wear = 0.01                 # default: each case's wear.initiation_threshold
