@@ -199,15 +199,15 @@ fn wheel_residual_flexibility_matches_an_independent_shifted_solve() {
         }
         let mut ws = sys.solve_buffer(3);
         sys.solve_in_place(&fac, rhs.as_mut(), &mut ws);
-        for d in 0..3 {
-            f[d][si] = (0..n).map(|i| loads[d][i] * rhs[(i, d)]).sum();
+        for (d, fd) in f.iter_mut().enumerate() {
+            fd[si] = (0..n).map(|i| loads[d][i] * rhs[(i, d)]).sum();
         }
     }
-    for d in 0..3 {
-        let g = 2.0 * f[d][0] - f[d][1];
+    for (d, fd) in f.iter().enumerate() {
+        let g = 2.0 * fd[0] - fd[1];
         eprintln!(
             "direction {d}: inertia relief {:.6e}, shifted solves {g:.6e} m/N (f(σ) {:.6e})",
-            r.static_m_per_n[d], f[d][0]
+            r.static_m_per_n[d], fd[0]
         );
         assert!(
             (r.static_m_per_n[d] - g).abs() < 1e-4 * g,
