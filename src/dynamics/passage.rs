@@ -659,8 +659,12 @@ impl PassageEngine {
         let f0 = [f_l0, 0.0, f_n0];
         let mut ft = vec![0.0; mt];
         let mut fw = vec![0.0; mw];
-        // The torque and the resistance act with weight `drive` (0 before their onset, 1 after).
-        let mut drive = if x0 >= x_torque { 1.0 } else { 0.0 };
+        // The torque and the resistance act with weight `drive`: always for the static start;
+        // from rest, not in the initial state and from the first step at their onset on.
+        let mut drive = match self.model.run.start {
+            StartKind::Static => 1.0,
+            StartKind::Rest => 0.0,
+        };
         let mut fw_const = vec![0.0; mw];
         let set_const = |drive: f64, fw_const: &mut [f64]| {
             for i in 0..mw {
