@@ -73,6 +73,10 @@ pub struct WheelModes<'a> {
     pub half_width_m: f64,
 }
 
+/// Rayleigh quotient `rᵀKr` (rad²/s²) below which a mass-normalised rigid-body mode of the
+/// basis is in the null space of `K` (0.016 Hz; the passage's rigid threshold is 0.5 Hz).
+const NULL_OMEGA2: f64 = 1e-2;
+
 /// `y = A x` for a sparse matrix in full storage.
 fn spmv(a: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64]) {
     let (cp, ri, v) = (a.symbolic().col_ptr(), a.symbolic().row_idx(), a.val());
@@ -180,7 +184,19 @@ pub fn elastic_flexibility(
 ) -> Result<Vec<Vec<f64>>, DynamicsError> {
     let n = body.k.nrows();
     let (rig, mrig) = rigid_modes(body.m, body.modes, body.omega2);
-    let held = determinate_supports(&rig, body.exclude);
+    // The supports hold the null space of K only: a mode the basis counts as rigid but that
+    // K does not (a suspension bounce below the rigid-mode threshold) is projected out by P
+    // like the rigid ones, but holding it too would over-constrain the body.
+    let mut kr = vec![0.0; n];
+    let null: Vec<Vec<f64>> = rig
+        .iter()
+        .filter(|r| {
+            spmv(body.k, r, &mut kr);
+            super::reduced::dot(r, &kr) < NULL_OMEGA2
+        })
+        .cloned()
+        .collect();
+    let held = determinate_supports(&null, body.exclude);
     let factor = held_factor(body.k, &held)?;
     let nl = loads.len();
     let mut rhs = Mat::<f64>::zeros(n, nl);

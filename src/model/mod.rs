@@ -479,10 +479,11 @@ pub enum StartKind {
 }
 
 /// Default of `run.rest_start_distance` (m): the reference study's explicit run starts its
-/// wheel, and applies its torque, 0.3 m before the solution zone (docs/theory.md §3.6); 0.3 m
-/// is also about ten settling lengths `m_eff V²/κ` of the creep force after a torque step
-/// at 140 km/h (docs/theory.md §7.5), so the mean traction is established in the zone
-/// while the elastic modes the step excites still ring.
+/// wheel from a static equilibrium 0.3 m before the solution zone (docs/theory.md §2.5,
+/// §3.6); 0.3 m is also about eight times the distance in which the creep force reaches the
+/// traction after a torque step at 140 km/h (35 mm measured; `m_eff V²/κ`, docs/theory.md
+/// §7.5), so the mean traction is established in the zone while the elastic modes the step
+/// excites still ring.
 pub const DEFAULT_REST_START_DISTANCE_M: f64 = 0.3;
 
 fn default_rest_start_distance() -> f64 {
