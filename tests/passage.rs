@@ -24,6 +24,46 @@ fn cache() -> ModalCache {
     ModalCache::new(std::env::temp_dir().join("corrugation-test-cache-passage"))
 }
 
+/// The passage of a prepared model over the smooth rail with `opts`, and its summary.
+fn run_passage(
+    p: &PreparedModel,
+    m: &corrugation::model::Model,
+    opts: &PassageOptions,
+) -> (
+    corrugation::dynamics::record::PassageRecord,
+    corrugation::dynamics::PassageSummary,
+) {
+    let rec = p
+        .engine
+        .passage(m.run.speed(), None, opts, None)
+        .expect("passage runs");
+    let s = corrugation::dynamics::analysis::summarise(&rec).unwrap();
+    (rec, s)
+}
+
+/// Mean normal force `W / cos α` and mean longitudinal force `μ_t W` in the zone within 1 %,
+/// and the energy ledger balanced within 1 % (docs/theory.md §7.4–§7.8).
+fn assert_load_traction_and_energy(
+    m: &corrugation::model::Model,
+    s: &corrugation::dynamics::PassageSummary,
+    e: &corrugation::dynamics::record::EnergyBalance,
+) {
+    let w = m.vehicle.wheel_load;
+    let cos_a = m.rail.inclination.atan().cos();
+    assert!(
+        (s.mean_fn_n - w / cos_a).abs() / w < 0.01,
+        "{}",
+        s.mean_fn_n
+    );
+    let traction = m.contact.traction_coefficient * w;
+    assert!(
+        (s.mean_fl_n - traction).abs() / traction < 0.01,
+        "{}",
+        s.mean_fl_n
+    );
+    assert!(e.relative_error().abs() < 0.01, "{e:?}");
+}
+
 /// Static equilibrium and the driving torque: in the solution zone the mean normal force is
 /// the static wheel load along the inclined contact normal, W / cos α, and the mean
 /// longitudinal force is the traction coefficient times W, both within 1 % (docs/theory.md §7.4–§7.5).
@@ -195,6 +235,8 @@ fn passage_grow_and_predict_commands_write_their_outputs() {
 #[test]
 fn residual_flexibility_passage_balances_energy() {
     let mut m = small_model();
+    // The rail's correction alone (the wheel's has its own test).
+    m.run.wheel_residual_flexibility = false;
     let opts = PassageOptions::default();
     let mut out = Vec::new();
     for on in [false, true] {
@@ -208,11 +250,7 @@ fn residual_flexibility_passage_balances_energy() {
                 r.modes
             );
         }
-        let rec = p
-            .engine
-            .passage(m.run.speed(), None, &opts, None)
-            .expect("passage runs");
-        let s = corrugation::dynamics::analysis::summarise(&rec).unwrap();
+        let (rec, s) = run_passage(&p, &m, &opts);
         let e = rec.energy;
         eprintln!(
             "residual {on}: mean F_N {:.1} F_L {:.1} N; band RMS F_L {:.2} F_N {:.2} N; dominant wear λ {:?} mm; static approach {:.4e} m; energy error {:.4} % (spring {:.3e} J, friction {:.3e} J)",
@@ -226,15 +264,8 @@ fn residual_flexibility_passage_balances_energy() {
             e.residual_spring_energy_change_j,
             e.frictional_work_j
         );
-        let w = m.vehicle.wheel_load;
-        let cos_a = m.rail.inclination.atan().cos();
-        assert!((s.mean_fn_n - w / cos_a).abs() / w < 0.01);
-        assert!(
-            (s.mean_fl_n - m.contact.traction_coefficient * w).abs()
-                / (m.contact.traction_coefficient * w)
-                < 0.01
-        );
-        assert!(e.relative_error().abs() < 0.01, "{e:?}");
+        assert_load_traction_and_energy(&m, &s, &e);
+        let (w, cos_a) = (m.vehicle.wheel_load, m.rail.inclination.atan().cos());
         out.push((
             rec.static_approach_m,
             e.residual_spring_energy_change_j,
@@ -545,4 +576,111 @@ fn a_runner_reports_the_requested_speed_exactly() {
     let p = PreparedModel::new(&m, &cache(), &PassageOptions::default()).expect("modal model");
     let s = p.run(60.0, None).expect("passage runs");
     assert_eq!(s.speed_kmh, 60.0);
+}
+
+/// The start from rest (`run.start = "rest"`, docs/theory.md §7.5): the wheel starts in free
+/// rolling under its static vertical load (the first step's F_L is below 1 % of the
+/// traction μ_t W: no torque yet), the driving torque and the train's resistance step on
+/// `run.rest_start_distance` before the zone (here at the wheel's start, 0.3 m before it).
+/// Physical expectation: once the torque has acted over the run-in (about ten settling
+/// lengths of the creep force) the zone's mean forces are those of the static start's steady
+/// rolling: mean F_N within 0.5 % and mean F_L within 2 % of the static start's (the
+/// undamped wheel modes the step excites still ring, so not closer). Conservation: the
+/// energy ledger (docs/theory.md §7.8) balances, the torque's work counted from its onset:
+/// within 1 % for the static start, within 2 % from rest. Measured (this model): energy
+/// error 0.070 % static, 1.03 % from rest, where the start transient's force fluctuations
+/// are 18 times larger (F_L band RMS 36.9 → 674 N); that the ledger's error grows with them
+/// (the contact's time discretisation) is a presumption, not shown here. Mean F_L 14991 →
+/// 15227 N, F_N 100641 → 100651 N.
+#[test]
+fn start_from_rest_reaches_the_static_starts_mean_forces_and_balances_energy() {
+    let mut m = small_model();
+    let opts = PassageOptions::default();
+    let mut runs = Vec::new();
+    for start in [
+        corrugation::model::StartKind::Static,
+        corrugation::model::StartKind::Rest,
+    ] {
+        m.run.start = start;
+        let p = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
+        let (rec, s) = run_passage(&p, &m, &opts);
+        let e = rec.energy;
+        eprintln!(
+            "{start:?}: first F_L {:.1} N; zone mean F_N {:.2} F_L {:.2} N; band RMS F_L {:.2} F_N {:.2} N; wear {:.4e}; dominant λ {:?} mm; energy error {:.4} % (torque work {:.4e} J)",
+            rec.histories.longitudinal_n[0],
+            s.mean_fn_n,
+            s.mean_fl_n,
+            s.fl_band_rms_n,
+            s.fn_band_rms_n,
+            s.wear_band_rms,
+            s.dominant_wavelength_mm,
+            100.0 * e.relative_error(),
+            e.torque_work_j
+        );
+        eprintln!("{e:?}");
+        let tol = match start {
+            corrugation::model::StartKind::Static => 0.01,
+            corrugation::model::StartKind::Rest => 0.02,
+        };
+        assert!(e.relative_error().abs() < tol, "{start:?}: {e:?}");
+        runs.push((rec.histories.longitudinal_n[0], s, e));
+    }
+    let traction = m.contact.traction_coefficient * m.vehicle.wheel_load;
+    let (st, rest) = (&runs[0], &runs[1]);
+    assert!(
+        (st.0 - traction).abs() < 0.01 * traction,
+        "static start F_L {}",
+        st.0
+    );
+    assert!(rest.0.abs() < 0.01 * traction, "rest start F_L {}", rest.0);
+    assert!(
+        (rest.1.mean_fn_n - st.1.mean_fn_n).abs() < 0.005 * st.1.mean_fn_n,
+        "mean F_N {} vs {}",
+        rest.1.mean_fn_n,
+        st.1.mean_fn_n
+    );
+    assert!(
+        (rest.1.mean_fl_n - st.1.mean_fl_n).abs() < 0.02 * st.1.mean_fl_n,
+        "mean F_L {} vs {}",
+        rest.1.mean_fl_n,
+        st.1.mean_fl_n
+    );
+    // The torque did work from its onset in both runs.
+    assert!(rest.2.torque_work_j > 0.0 && st.2.torque_work_j > 0.0);
+}
+
+/// The wheel's residual flexibility (`run.wheel_residual_flexibility`, default on) adds to the
+/// contact's series compliance: the static approach grows by exactly its normal part times
+/// F_N (the half-space part is the same Hertz contact), the passage still holds the static
+/// load and the traction within 1 %, and its energy balances within 1 % with the series
+/// spring's energy counted.
+#[test]
+fn wheel_residual_flexibility_adds_to_the_series_compliance_and_balances_energy() {
+    let mut m = small_model();
+    let opts = PassageOptions::default();
+    let mut out = Vec::new();
+    for on in [false, true] {
+        m.run.wheel_residual_flexibility = on;
+        let p = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
+        assert_eq!(p.engine.wheel_residual().is_some(), on);
+        let wc = p.engine.wheel_residual().map(|w| {
+            eprintln!("wheel residual: {w:?}");
+            w.structural_m_per_n
+        });
+        let (rec, s) = run_passage(&p, &m, &opts);
+        let e = rec.energy;
+        eprintln!(
+            "wheel residual {on}: band RMS F_L {:.2} F_N {:.2} N; dominant λ {:?} mm; static approach {:.4e} m; energy error {:.4} %",
+            s.fl_band_rms_n,
+            s.fn_band_rms_n,
+            s.dominant_wavelength_mm,
+            rec.static_approach_m,
+            100.0 * e.relative_error()
+        );
+        assert_load_traction_and_energy(&m, &s, &e);
+        let (w, cos_a) = (m.vehicle.wheel_load, m.rail.inclination.atan().cos());
+        out.push((rec.static_approach_m, wc.map_or(0.0, |c| c[2] * w / cos_a)));
+    }
+    let (d_approach, cf) = (out[1].0 - out[0].0, out[1].1);
+    assert!(cf > 0.0 && (d_approach - cf).abs() < 0.01 * cf, "{out:?}");
 }

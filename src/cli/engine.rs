@@ -26,6 +26,7 @@ pub enum Engine {
 
 /// The explicit FE model of `model` (its `[explicit]` options).
 pub fn explicit_model(model: &Model) -> anyhow::Result<ExplicitModel> {
+    corrugation::dynamics::setup::require_static_start(model, "explicit")?;
     ExplicitModel::new(model, ExplicitOptions::from_model(model))
         .context("building the explicit FE model")
 }

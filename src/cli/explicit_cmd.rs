@@ -83,6 +83,7 @@ pub fn run_explicit(
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let pb = super::progress::bar("explicit: set-up (assembly, static solves, stable step)");
+    corrugation::dynamics::setup::require_static_start(m, "explicit")?;
     let em = ExplicitModel::new(m, opts).context("building the explicit model")?;
     pb.set_message("explicit passage (contact steps)");
     let opts = PassageOptions::default();

@@ -82,6 +82,8 @@ struct Summary {
     frequencies: [f64; 3],
     hertz_compliance_m_per_n: f64,
     series_compliance_m_per_n: [f64; 3],
+    /// The wheel's flexibility at the contact (static, modal, residual; m/N), when used.
+    wheel_residual: Option<corrugation::dynamics::wheel_residual::WheelResidual>,
     rail: Vec<RailPeaks>,
     wheel_longitudinal: Vec<Peak>,
     wheel_normal: Vec<Peak>,
@@ -212,6 +214,7 @@ impl ReceptanceCmd {
             frequencies: [self.from_hz, to_hz, self.step_hz],
             hertz_compliance_m_per_n: r.hertz_compliance_m_per_n,
             series_compliance_m_per_n: eng.series_compliance(),
+            wheel_residual: eng.wheel_residual().cloned(),
             rail,
             wheel_longitudinal: to_peaks(&freqs, &r.wheel_abs(0)),
             wheel_normal: to_peaks(&freqs, &r.wheel_abs(2)),

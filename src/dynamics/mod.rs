@@ -23,6 +23,7 @@ pub mod reduced;
 pub mod residual;
 pub mod setup;
 pub mod summary;
+pub mod wheel_residual;
 
 pub use summary::{PassageSummary, WavelengthComponent, WavelengthSpectrum};
 
@@ -214,6 +215,16 @@ pub enum DynamicsError {
         /// The FE flexibility (m/N).
         fe_m_per_n: f64,
         /// The modal flexibility (m/N).
+        modal_m_per_n: f64,
+    },
+    /// The wheel's elastic static flexibility at the contact is not above its modal part.
+    #[error("wheel residual flexibility, direction {direction}: FE {fe_m_per_n:.4e} m/N is not above the modal {modal_m_per_n:.4e} m/N: the wheel modes do not belong to this stiffness (clear the modal cache entry) or run.wheel_residual_flexibility = false")]
+    WheelResidualBelowModal {
+        /// Direction (0, 1, 2 = x, t, n of the contact frame).
+        direction: usize,
+        /// The FE (elastic, inertia-relief) flexibility (m/N).
+        fe_m_per_n: f64,
+        /// The modal flexibility of the kept elastic modes (m/N).
         modal_m_per_n: f64,
     },
     /// The residual flexibility record could not be written or read back as JSON.

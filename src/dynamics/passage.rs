@@ -31,13 +31,17 @@
 //! vehicle's inertia keeps the speed). The wheel's three rigid modes (x, z, rotation) are
 //! free: their mean motion is balanced by these loads and the contact.
 //!
-//! # Static start
+//! # Start (`run.start`, docs/theory.md §7.5)
 //! The contact is first brought to steady rolling at the static load (normal force
 //! `W / cos α`, longitudinal force `μ_t W`), which gives the steady creepage ξ₀ and approach
 //! δ₀; the track and the wheel's elastic modes take their static deflection under these
 //! forces (exact modal static solution), the wheel's rigid modes are placed so that the
 //! approach is δ₀ and turned so that the creepage is ξ₀. Results are read in the solution
-//! zone, from `run.solution_zone_offset` after the start.
+//! zone, from `run.solution_zone_offset` after the start. The start from rest
+//! (`run.start = "rest"`) does the same with no longitudinal force (free rolling under the
+//! static vertical load, no driving torque, no train resistance); the torque and the
+//! resistance come on as a step when the contact reaches `run.rest_start_distance` before
+//! the zone.
 
 use std::time::Instant;
 
@@ -50,10 +54,11 @@ use super::residual::ResidualFlexibility;
 use super::setup::{
     check_speed, contact_config_for, passage_contact, rigid_least_norm, steady_contact, WheelLoads,
 };
+use super::wheel_residual::WheelResidual;
 use super::{DynamicsError, RailProfile};
 use crate::contact::WearAccumulator;
 use crate::contact::{Longitudinal, NormalInput, StepInputs, TransientConfig, TransientRolling};
-use crate::model::{Model, ResidualVariation};
+use crate::model::{Model, ResidualVariation, StartKind};
 use crate::structure::{TrackStructure, WheelStructure};
 
 /// Frequencies below this are rigid-body modes (Hz).
@@ -115,7 +120,10 @@ pub struct PassageEngine {
     /// Residual flexibility of the truncated track modes at the contact (static correction),
     /// `None` = modal flexibility only.
     residual: Option<ResidualFlexibility>,
-    /// The constant series compliance applied, `[c_x, c_t, c_n]` (m/N), from `residual`.
+    /// The wheel's residual flexibility at the contact, `None` = modal flexibility only.
+    wheel_residual: Option<WheelResidual>,
+    /// The constant series compliance applied, `[c_x, c_t, c_n]` (m/N): the rail's from
+    /// `residual` plus the wheel's structural residual from `wheel_residual`.
     series_compliance: [f64; 3],
     /// The static start on the smooth rail (contact at steady rolling, its steady result),
     /// once computed: it does not depend on the speed ([`Self::started_contact`]).
@@ -244,6 +252,7 @@ impl PassageEngine {
             hertz_approach_m: hertz.approach_m,
             track_modes_for_point,
             residual: None,
+            wheel_residual: None,
             series_compliance: [0.0; 3],
             smooth_start: std::sync::Mutex::new(None),
         })
@@ -353,16 +362,56 @@ impl PassageEngine {
                 });
             }
         }
-        self.series_compliance = r
-            .as_ref()
-            .map_or([0.0; 3], |r| r.mean_structural_weighted());
         self.residual = r;
+        self.update_series_compliance();
+        Ok(())
+    }
+
+    /// Sets (or clears) the wheel's residual flexibility at the contact: when set, its
+    /// structural part ([`WheelResidual::structural_m_per_n`]) adds to the contact's series
+    /// compliance. It must belong to this engine's wheel modes.
+    pub fn set_wheel_residual(&mut self, r: Option<WheelResidual>) -> Result<(), DynamicsError> {
+        if let Some(r) = &r {
+            if r.modes != self.wheel_sys.len() {
+                return Err(DynamicsError::SizeMismatch {
+                    what: "wheel residual flexibility: modes it was computed for vs the engine's wheel modes (recompute it)",
+                    found: r.modes,
+                    expected: self.wheel_sys.len(),
+                });
+            }
+        }
+        self.wheel_residual = r;
+        self.update_series_compliance();
+        Ok(())
+    }
+
+    /// The wheel's residual flexibility in use, if any.
+    pub fn wheel_residual(&self) -> Option<&WheelResidual> {
+        self.wheel_residual.as_ref()
+    }
+
+    /// The rail's part of the series compliance `[c_x, c_t, c_n]` (m/N).
+    fn rail_compliance(&self) -> [f64; 3] {
+        self.residual
+            .as_ref()
+            .map_or([0.0; 3], |r| r.mean_structural_weighted())
+    }
+
+    /// The wheel's part of the series compliance `[c_x, c_t, c_n]` (m/N).
+    fn wheel_compliance(&self) -> [f64; 3] {
+        self.wheel_residual
+            .as_ref()
+            .map_or([0.0; 3], |w| w.structural_m_per_n)
+    }
+
+    fn update_series_compliance(&mut self) {
+        let (r, w) = (self.rail_compliance(), self.wheel_compliance());
+        self.series_compliance = [0, 1, 2].map(|d| r[d] + w[d]);
         // the static start depends on the series compliance
         *self
             .smooth_start
             .get_mut()
             .unwrap_or_else(|e| e.into_inner()) = None;
-        Ok(())
     }
 
     /// The residual flexibility in use, if any.
@@ -371,17 +420,19 @@ impl PassageEngine {
     }
 
     /// Series compliance of the contact `[c_x, c_y, c_z]` (m/N) in the contact solver's axes
-    /// (rolling, lateral tangent t, normal n), zero without a residual: the length-weighted
-    /// mean of the structural residual along the travel, the same at every position
-    /// ([`ResidualFlexibility::mean_structural_weighted`] says why).
+    /// (rolling, lateral tangent t, normal n), zero without residuals: the rail's
+    /// length-weighted mean of the structural residual along the travel, the same at every
+    /// position ([`ResidualFlexibility::mean_structural_weighted`] says why), plus the wheel's
+    /// structural residual ([`WheelResidual`]).
     pub fn series_compliance(&self) -> [f64; 3] {
         self.series_compliance
     }
 
     /// Receptances of the reduced model at the contact (see [`super::receptance`]): the rail
     /// at `positions_m` (m along the rail; the contact line's rows, the constant residual
-    /// compliance of the truncated modes added), the wheel at its contact point, and the
-    /// linearised Hertz compliance, at `frequencies_hz` (Hz).
+    /// compliance of the truncated modes added), the wheel at its contact point (its
+    /// structural residual compliance added), and the linearised Hertz compliance, at
+    /// `frequencies_hz` (Hz).
     pub fn contact_receptance(
         &self,
         positions_m: &[f64],
@@ -409,12 +460,13 @@ impl PassageEngine {
         }
         let r: Vec<&[f64]> = rows.chunks_exact(m).collect();
         let h = modal_receptance(&self.track_sys, &r, frequencies_hz)?;
+        let (rail_c, wheel_c) = (self.rail_compliance(), self.wheel_compliance());
         let rail = (0..np)
             .map(|p| {
                 h.iter()
                     .map(|h| {
                         let block = h.submatrix(3 * p, 3 * p, 3, 3).to_owned();
-                        to3(&block, self.series_compliance)
+                        to3(&block, rail_c)
                     })
                     .collect()
             })
@@ -423,7 +475,7 @@ impl PassageEngine {
         let wr: Vec<&[f64]> = self.wheel_contact.rows.chunks_exact(mw).collect();
         let wheel = modal_receptance(&self.wheel_sys, &wr, frequencies_hz)?
             .iter()
-            .map(|h| to3(h, [0.0; 3]))
+            .map(|h| to3(h, wheel_c))
             .collect();
         Ok(super::receptance::ContactReceptance {
             frequencies_hz: frequencies_hz.to_vec(),
@@ -474,15 +526,40 @@ impl PassageEngine {
         contact_config_for(&self.model, speed_m_per_s)
     }
 
-    /// The static loads of the contact: normal force `W / cos α` (N), longitudinal force
-    /// `μ_t W` (N), and the spin of the coned wheel on the inclined rail `−sin α / R` (1/m).
+    /// The static loads of the contact at the start: normal force `W / cos α` (N),
+    /// longitudinal force (N: `μ_t W` for the static start, 0 for the start from rest), and
+    /// the spin of the coned wheel on the inclined rail `−sin α / R` (1/m).
     fn static_loads(&self) -> (f64, f64, f64) {
         let w = self.wheel_load_n;
+        let f_l = match self.model.run.start {
+            StartKind::Static => self.model.contact.traction_coefficient * w,
+            StartKind::Rest => 0.0,
+        };
         (
             w / self.frame.n[2],
-            self.model.contact.traction_coefficient * w,
+            f_l,
             self.frame.n[1] / self.wheel_radius_m,
         )
+    }
+
+    /// Position along the rail (m) from which the driving torque and the train's resistance
+    /// act: −∞ for the static start (always), `zone start − run.rest_start_distance` for the
+    /// start from rest (not before the wheel's start: [`crate::model::Model::run_in_m`]).
+    pub fn torque_onset_m(&self) -> Result<f64, DynamicsError> {
+        match self.model.run.start {
+            StartKind::Static => Ok(f64::NEG_INFINITY),
+            StartKind::Rest => {
+                let x = self.zone_m[0] - self.model.run.rest_start_distance;
+                if x < self.x_start_m - 1e-9 {
+                    return Err(DynamicsError::OutOfRange {
+                        name: "run.rest_start_distance (m)",
+                        value: self.model.run.rest_start_distance,
+                        expected: "at most the run-in, the distance from the wheel's start to the solution zone (raise run.solution_zone_offset, and track.bays if the track is too short)",
+                    });
+                }
+                Ok(x)
+            }
+        }
     }
 
     /// The contact of a passage at `v` (m/s) over `profile`, brought to steady rolling at the
@@ -553,6 +630,7 @@ impl PassageEngine {
         let mut wh = ModalVerlet::new(&self.wheel_sys, dt)?;
         let (mt, mw) = (tr.len(), wh.len());
         let (f_n0, f_l0, spin) = self.static_loads();
+        let x_torque = self.torque_onset_m()?;
         let x0 = self.x_start_m;
         let [z0, z1] = self.zone_m;
         let half_grid = contact.config().grid.half_length_x_m;
@@ -581,19 +659,30 @@ impl PassageEngine {
         let f0 = [f_l0, 0.0, f_n0];
         let mut ft = vec![0.0; mt];
         let mut fw = vec![0.0; mw];
+        // The torque and the resistance act with weight `drive`: always for the static start;
+        // from rest, not in the initial state and from the first step at their onset on.
+        let mut drive = match self.model.run.start {
+            StartKind::Static => 1.0,
+            StartKind::Rest => 0.0,
+        };
         let mut fw_const = vec![0.0; mw];
-        for i in 0..mw {
-            fw_const[i] = self.wheel_gravity[i] + self.wheel_torque[i] + self.wheel_drawbar[i];
-        }
-        let gen_forces = |f: &[f64; 3], rr: &[f64], ft: &mut [f64], fw: &mut [f64]| {
-            for i in 0..mt {
-                ft[i] = -(f[0] * rr[i] + f[1] * rr[mt + i] + f[2] * rr[2 * mt + i]);
-            }
+        let set_const = |drive: f64, fw_const: &mut [f64]| {
             for i in 0..mw {
-                fw[i] = fw_const[i] + f[0] * wr[i] + f[1] * wr[mw + i] + f[2] * wr[2 * mw + i];
+                fw_const[i] =
+                    self.wheel_gravity[i] + drive * (self.wheel_torque[i] + self.wheel_drawbar[i]);
             }
         };
-        gen_forces(&f0, &rr, &mut ft, &mut fw);
+        set_const(drive, &mut fw_const);
+        let gen_forces =
+            |f: &[f64; 3], fw_const: &[f64], rr: &[f64], ft: &mut [f64], fw: &mut [f64]| {
+                for i in 0..mt {
+                    ft[i] = -(f[0] * rr[i] + f[1] * rr[mt + i] + f[2] * rr[2 * mt + i]);
+                }
+                for i in 0..mw {
+                    fw[i] = fw_const[i] + f[0] * wr[i] + f[1] * wr[mw + i] + f[2] * wr[2 * mw + i];
+                }
+            };
+        gen_forces(&f0, &fw_const, &rr, &mut ft, &mut fw);
         let qt0: Vec<f64> = (0..mt).map(|i| ft[i] / self.track_sys.omega2[i]).collect();
         let mut qw0 = vec![0.0; mw];
         for i in 0..mw {
@@ -664,7 +753,7 @@ impl PassageEngine {
         let mut p_contact_prev = {
             // Contact power at the start: F · (v_w − v_r).
             let vw_x = dot(&wr[..mw], &wh.v);
-            f_l0 * vw_x
+            f0[0] * vw_x
         };
         let mut qw_prev = wh.q.clone();
         let mut last_delta = st.approach_m;
@@ -706,8 +795,9 @@ impl PassageEngine {
             if let (Some(r), ResidualVariation::Consistent) =
                 (&self.residual, self.model.run.residual_variation)
             {
+                let (c, w) = (r.consistent_at(xc)?, self.wheel_compliance());
                 contact
-                    .set_series_compliance(r.consistent_at(xc)?)
+                    .set_series_compliance([0, 1, 2].map(|d| c[d] + w[d]))
                     .map_err(|source| DynamicsError::Contact {
                         t_s: t,
                         x_m: xc,
@@ -736,7 +826,13 @@ impl PassageEngine {
             }
             let f = [r.fx_n, r.fy_n, r.normal_force_n];
             f_end = f;
-            gen_forces(&f, &rr, &mut ft, &mut fw);
+            // The driving torque and the resistance come on as a step at their onset.
+            let drive_prev = drive;
+            if drive == 0.0 && xc >= x_torque {
+                drive = 1.0;
+                set_const(drive, &mut fw_const);
+            }
+            gen_forces(&f, &fw_const, &rr, &mut ft, &mut fw);
             tr.complete(&ft);
             wh.complete(&fw);
             if !(tr.q.iter().all(|x| x.is_finite()) && wh.q.iter().all(|x| x.is_finite())) {
@@ -747,12 +843,16 @@ impl PassageEngine {
                 });
             }
             if opts.energy {
-                // Constant wheel loads: exact work g · Δq.
+                // Constant wheel loads: work g · Δq (exact); a load switched on in this step
+                // counts by the trapezoidal rule of the integrator, ½(g_n + g_{n+1}) · Δq.
+                let d_mean = 0.5 * (drive + drive_prev);
                 for i in 0..mw {
                     let dq = wh.q[i] - qw_prev[i];
                     eb.gravity_work_j += self.wheel_gravity[i] * dq;
-                    eb.torque_work_j += self.wheel_torque[i] * dq;
-                    eb.external_work_j += fw_const[i] * dq;
+                    eb.torque_work_j += d_mean * self.wheel_torque[i] * dq;
+                    eb.external_work_j += (self.wheel_gravity[i]
+                        + d_mean * (self.wheel_torque[i] + self.wheel_drawbar[i]))
+                        * dq;
                 }
                 qw_prev.copy_from_slice(&wh.q);
                 let p_damp = tr.damping_power() + wh.damping_power();

@@ -103,6 +103,19 @@ impl PreparedModel {
             };
             engine.set_residual_flexibility(Some(r))?;
         }
+        if model.run.wheel_residual_flexibility {
+            let w =
+                super::wheel_residual::WheelResidual::compute(super::wheel_residual::WheelModes {
+                    wheel: &wheel,
+                    k: wm.k.as_ref(),
+                    m: wm.m.as_ref(),
+                    modes: &wb.modes,
+                    omega2: &engine.wheel_system().omega2,
+                    frame: &engine.frame,
+                    half_width_m: engine.hertz_b_m,
+                })?;
+            engine.set_wheel_residual(Some(w))?;
+        }
         Ok(PreparedModel {
             engine,
             modal_seconds: tb.seconds + wb.seconds,

@@ -481,15 +481,11 @@ pub struct WheelContact {
 }
 
 impl WheelContact {
-    /// Builds the wheel contact rows for the wheel's modes; `half_width_m` as for the rail.
-    pub fn new(
-        wheel: &WheelStructure,
-        modes: &Mat<f64>,
-        frame: &ContactFrame,
-        half_width_m: f64,
-    ) -> Result<Self, DynamicsError> {
+    /// The tread nodes of the ring at angle index `k` with the lateral weights of the Hertz
+    /// pressure of semi-width `half_width_m` (m) ([`lateral_weights`]); the contact load sits
+    /// on the ring at θ = 0.
+    pub fn ring_nodes(wheel: &WheelStructure, k: usize, half_width_m: f64) -> Vec<(usize, f64)> {
         let topo = &wheel.topology;
-        let k = topo.contact_angle_index();
         let mut lat: Vec<(f64, usize)> = topo
             .tread_meridian
             .iter()
@@ -498,12 +494,22 @@ impl WheelContact {
         lat.sort_by(|a, b| a.0.total_cmp(&b.0));
         let s: Vec<f64> = lat.iter().map(|v| v.0).collect();
         let w = lateral_weights(&s, half_width_m);
-        let nodes: Vec<(usize, f64)> = lat
-            .iter()
+        lat.iter()
             .zip(&w)
             .filter(|(_, &wk)| wk > 0.0)
             .map(|(&(_, nd), &wk)| (nd, wk))
-            .collect();
+            .collect()
+    }
+
+    /// Builds the wheel contact rows for the wheel's modes; `half_width_m` as for the rail.
+    pub fn new(
+        wheel: &WheelStructure,
+        modes: &Mat<f64>,
+        frame: &ContactFrame,
+        half_width_m: f64,
+    ) -> Result<Self, DynamicsError> {
+        let topo = &wheel.topology;
+        let nodes = Self::ring_nodes(wheel, topo.contact_angle_index(), half_width_m);
         let m = modes.ncols();
         let mut rows = vec![0.0; 3 * m];
         modal_rows(&nodes, &wheel.dofmap, modes, frame, &mut rows);

@@ -210,6 +210,18 @@ pub fn passage_contact(
     TransientRolling::new(cfg).map_err(DynamicsError::ContactGrid)
 }
 
+/// Refuses a model whose `run.start` an engine does not implement: `engine` (e.g. the
+/// explicit FE path) starts from the static solve only.
+pub fn require_static_start(model: &Model, engine: &'static str) -> Result<(), DynamicsError> {
+    if model.run.start == crate::model::StartKind::Static {
+        return Ok(());
+    }
+    Err(DynamicsError::Engine {
+        engine,
+        source: "run.start = \"rest\" is implemented by the reduced passage only; use run.start = \"static\" with this engine".into(),
+    })
+}
+
 /// A passage's speed must be finite and > 0 (m/s).
 pub(super) fn check_speed(speed_m_per_s: f64) -> Result<(), DynamicsError> {
     if speed_m_per_s > 0.0 && speed_m_per_s.is_finite() {

@@ -81,6 +81,9 @@ fn remove_non_structural(o: &mut Object) {
             "fmax",
             "residual_flexibility",
             "residual_variation",
+            "wheel_residual_flexibility",
+            "start",
+            "rest_start_distance",
         ] {
             run.remove(k);
         }
@@ -159,6 +162,9 @@ mod tests {
             &["run.speed_kmh=61"][..],
             &["wheel.damping_ratio=0.005"][..],
             &["contact.friction=0.5"][..],
+            &["run.start=rest"][..],
+            &["run.rest_start_distance=0.2"][..],
+            &["run.wheel_residual_flexibility=false"][..],
         ] {
             let m = with(set);
             assert!(!same(&base, &m, IdentityScope::Run), "{set:?}");

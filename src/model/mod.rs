@@ -451,6 +451,49 @@ pub struct Run {
     /// with the explicit path, docs/theory.md §8.6).
     #[serde(default)]
     pub residual_variation: ResidualVariation,
+    /// Static correction of the truncated wheel modes at the contact: the wheel's residual
+    /// flexibility (free wheel, inertia relief; [`crate::dynamics::wheel_residual`]) in series
+    /// with the contact, added to the rail's (default true: a truncated basis is too stiff at
+    /// the contact; `false` = the wheel's modal flexibility only).
+    #[serde(default = "default_true")]
+    pub wheel_residual_flexibility: bool,
+    /// How a passage starts (docs/theory.md §7.5): `"static"` (default: steady rolling at
+    /// the static load, traction included, from a static solve) or `"rest"` (the wheel
+    /// placed on the rail under its static vertical load in free rolling, no traction; the
+    /// driving torque and the train's resistance come on as a step `run.rest_start_distance`
+    /// before the solution zone).
+    #[serde(default)]
+    pub start: StartKind,
+    /// With `start = "rest"`: distance before the solution zone at which the driving torque
+    /// comes on (m), default [`DEFAULT_REST_START_DISTANCE_M`], greater than 0 and at most the
+    /// run-in (the distance from the wheel's start to the zone, `run.solution_zone_offset`
+    /// when the track is long enough).
+    #[serde(default = "default_rest_start_distance")]
+    pub rest_start_distance: f64,
+}
+
+/// How a passage starts (docs/theory.md §7.5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StartKind {
+    /// Steady rolling at the static load, traction included (a static solve).
+    #[default]
+    Static,
+    /// Free rolling under the static vertical load; the driving torque steps on before the
+    /// solution zone, as an explicit FE run starts from rest.
+    Rest,
+}
+
+/// Default of `run.rest_start_distance` (m): the reference study's explicit run starts its
+/// wheel from a static equilibrium 0.3 m before the solution zone (docs/theory.md §2.5,
+/// §3.6); 0.3 m is also about eight times the distance in which the creep force reaches the
+/// traction after a torque step at 140 km/h (35 mm measured; `m_eff V²/κ`, docs/theory.md
+/// §7.5), so the mean traction is established in the zone while the elastic modes the step
+/// excites still ring.
+pub const DEFAULT_REST_START_DISTANCE_M: f64 = 0.3;
+
+fn default_rest_start_distance() -> f64 {
+    DEFAULT_REST_START_DISTANCE_M
 }
 
 /// How the residual flexibility of the truncated track modes varies along the rail.

@@ -460,3 +460,58 @@ fn initiation_threshold_is_read_defaulted_and_range_checked() {
         "{e}"
     );
 }
+
+/// `run.start`, `run.rest_start_distance` and `run.wheel_residual_flexibility`: defaults
+/// when absent, read when given, and nonsense is an error naming the file, the key and the
+/// allowed values or range.
+#[test]
+fn start_keys_are_read_defaulted_and_range_checked() {
+    let text = BUILTIN_DUTCH
+        .lines()
+        .filter(|l| {
+            !(l.starts_with("start =")
+                || l.starts_with("rest_start_distance =")
+                || l.starts_with("wheel_residual_flexibility ="))
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let m = load_model_str(&text, "no-start.toml", &[]).unwrap();
+    assert_eq!(m.run.start, StartKind::Static);
+    assert_eq!(m.run.rest_start_distance, DEFAULT_REST_START_DISTANCE_M);
+    assert!(m.run.wheel_residual_flexibility);
+    let m = dutch_with(&["run.start=rest", "run.rest_start_distance=0.2"]).unwrap();
+    assert_eq!(m.run.start, StartKind::Rest);
+    assert_eq!(m.run.rest_start_distance, 0.2);
+    let e = err_text(dutch_with(&["run.start=moving"]));
+    assert!(e.contains("run.start") || e.contains("start"), "{e}");
+    assert!(e.contains("static") && e.contains("rest"), "{e}");
+    for bad in ["0", "-0.1", "nan", "11"] {
+        let e = err_text(dutch_with(&[&format!("run.rest_start_distance={bad}")]));
+        assert!(
+            e.contains("run.rest_start_distance") && e.contains("at most 10"),
+            "{bad}: {e}"
+        );
+    }
+    // Beyond the run-in (0.3 m): an error with the start from rest, naming the keys to change.
+    let e = err_text(dutch_with(&[
+        "run.start=rest",
+        "run.rest_start_distance=0.5",
+    ]));
+    assert!(
+        e.contains("run.rest_start_distance")
+            && e.contains("run-in 0.300 m")
+            && e.contains("run.solution_zone_offset")
+            && e.contains("track.bays")
+            && e.contains("builtin:dutch"),
+        "{e}"
+    );
+    // ... but not with the static start, which does not read it.
+    assert!(dutch_with(&["run.rest_start_distance=0.5"]).is_ok());
+    // A short track leaves less run-in than the offset: 4 bays (2.4 m), zone 2 m → 0.2 m.
+    let e = err_text(dutch_with(&[
+        "track.bays=4",
+        "run.solution_zone_length=2.0",
+        "run.start=rest",
+    ]));
+    assert!(e.contains("run-in 0.200 m"), "{e}");
+}

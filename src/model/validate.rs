@@ -249,6 +249,7 @@ impl Model {
             // explicit model is built; here only a physical range.
             c.range("explicit.time_step", dt, 1e-10, 1e-4, "s")?;
         }
+        self.validate_start(&mut c)?;
         let room = self.track_length() - run.solution_zone_offset;
         c.pos(
             "run.solution_zone_length",
@@ -257,6 +258,40 @@ impl Model {
             "m (zone must fit on the track)",
         )?;
         Ok(())
+    }
+}
+
+impl Model {
+    /// The start of a passage: `run.rest_start_distance` in its range, and with
+    /// `run.start = "rest"` inside the run-in (the torque comes on after the wheel's start).
+    fn validate_start(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
+        let run = &self.run;
+        c.pos(
+            "run.rest_start_distance",
+            run.rest_start_distance,
+            10.0,
+            "m (distance before the solution zone at which the driving torque comes on)",
+        )?;
+        if run.start == StartKind::Rest {
+            let run_in = self.run_in_m();
+            if run.rest_start_distance > run_in + 1e-12 {
+                return c.fail(
+                    "run.rest_start_distance",
+                    run.rest_start_distance.to_string(),
+                    format!(
+                        "greater than 0 and at most the run-in {run_in:.3} m with run.start = \"rest\" (the wheel starts min(run.solution_zone_offset, (track length - run.solution_zone_length)/2) before the zone; to apply the torque earlier raise run.solution_zone_offset, and track.bays if the track is too short)"
+                    ),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The run-in (m): the distance from the wheel's start to the solution zone,
+    /// `run.solution_zone_offset` unless the zone, centred on the track, leaves less room.
+    pub fn run_in_m(&self) -> f64 {
+        let zone_start = 0.5 * (self.track_length() - self.run.solution_zone_length);
+        self.run.solution_zone_offset.min(zone_start).max(0.0)
     }
 }
 

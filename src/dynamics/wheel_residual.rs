@@ -1,0 +1,429 @@
+//! Residual (static) flexibility of the wheel at the contact (docs/theory.md §7.7).
+//!
+//! # What it is
+//! The wheel's modes below f_max miss the quasi-static response of its higher modes, as the
+//! track's do ([`super::residual`]). The wheel floats: its modal basis (and the passage) has
+//! three rigid-body modes (x, z with the sprung mass, rotation about the axle), so `K` is
+//! singular and its static flexibility is the **elastic** one of the free body, by inertia
+//! relief (Craig & Kurdila 2006; Géradin & Rixen 2015):
+//!
+//! ```text
+//! P   = I − M Φ_r Φ_rᵀ                       removes the rigid part of a load (Φ_rᵀ M Φ_r = I)
+//! G_e = Pᵀ K_c⁻¹ P = Σ_{elastic i} φ_i φ_iᵀ / ω_i²    elastic flexibility (m/N)
+//! G_d = b_dᵀ G_e b_d,   M_d = Σ_{kept elastic} r_{d,i}² / ω_i²,   R_d = G_d − M_d ≥ 0
+//! ```
+//!
+//! `K_c` is `K` held at as many DOFs as there are rigid modes, chosen so that they fix the
+//! rigid motion in a statically determinate way; a balanced load `P b` has no reactions there,
+//! so the holding springs' size does not matter and `K_c⁻¹ P b` differs from the free body's
+//! elastic deflection by a rigid motion only, which `Pᵀ` removes. The same constraints as the
+//! modes (the symmetry plane held laterally, the sprung mass on the primary suspension).
+//!
+//! # Which load
+//! The contact load of the passage sits on the tread ring at θ = 0 with the lateral weights
+//! of [`super::reduced::WheelContact`]. As for the rail, the flexibility of a load on one
+//! node ring contains the mesh's local indentation under it, which the contact's half-space
+//! already supplies (docs/theory.md §7.7, "do not count local flexibility twice"); the
+//! passage uses the **structural** residual: the load shared equally by the contact ring and
+//! a neighbour ring (θ = ±Δθ), the mean of the two, `¼(R_00 + R_jj + 2R_0j)`.
+
+use faer::sparse::SparseColMatRef;
+use faer::Mat;
+use serde::{Deserialize, Serialize};
+
+use super::reduced::{add_nodes_load, ContactFrame, WheelContact};
+use super::residual::StiffnessFactor;
+use super::DynamicsError;
+use crate::structure::WheelStructure;
+
+/// The wheel's flexibility at the contact in the contact frame `[x, t, n]` (m/N).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WheelResidual {
+    /// Elastic static flexibility `b_dᵀ G_e b_d` of the contact ring's load (m/N).
+    pub static_m_per_n: [f64; 3],
+    /// Modal part of the kept elastic modes, `Σ r_d² / ω²` (m/N).
+    pub modal_m_per_n: [f64; 3],
+    /// Residual of the contact ring's load, `G − modal` (m/N): contains local indentation.
+    pub point_residual_m_per_n: [f64; 3],
+    /// Structural residual (m/N): the load shared by the contact ring and a neighbour ring,
+    /// mean over the two neighbours; the series compliance the passage applies.
+    pub structural_m_per_n: [f64; 3],
+    /// Kept modes (−), of which rigid (−).
+    pub modes: usize,
+    /// Rigid-body modes among them (−).
+    pub rigid_modes: usize,
+}
+
+/// What the wheel's residual flexibility is computed from.
+#[derive(Clone, Copy)]
+pub struct WheelModes<'a> {
+    /// The wheel substructure.
+    pub wheel: &'a WheelStructure,
+    /// Stiffness over the free DOFs (N/m, full symmetric storage).
+    pub k: SparseColMatRef<'a, usize, f64>,
+    /// Mass over the free DOFs (kg, full symmetric storage).
+    pub m: SparseColMatRef<'a, usize, f64>,
+    /// Kept mass-normalised modes (free DOFs × modes).
+    pub modes: &'a Mat<f64>,
+    /// Their ω² (rad²/s²); exactly 0 for the rigid-body modes.
+    pub omega2: &'a [f64],
+    /// The contact frame.
+    pub frame: &'a ContactFrame,
+    /// Hertz semi-axis across the rail (m): the lateral spread of the load.
+    pub half_width_m: f64,
+}
+
+/// Rayleigh quotient `rᵀKr` (rad²/s²) below which a mass-normalised rigid-body mode of the
+/// basis is in the null space of `K` (0.016 Hz; the passage's rigid threshold is 0.5 Hz).
+const NULL_OMEGA2: f64 = 1e-2;
+
+/// `y = A x` for a sparse matrix in full storage.
+fn spmv(a: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64]) {
+    let (cp, ri, v) = (a.symbolic().col_ptr(), a.symbolic().row_idx(), a.val());
+    y.iter_mut().for_each(|e| *e = 0.0);
+    for j in 0..a.ncols() {
+        let xj = x[j];
+        if xj != 0.0 {
+            for p in cp[j]..cp[j + 1] {
+                y[ri[p]] += v[p] * xj;
+            }
+        }
+    }
+}
+
+/// The rigid-body columns of `modes` (ω² = 0), M-orthonormalised (Gram–Schmidt), with `M Φ_r`.
+fn rigid_modes(
+    m: SparseColMatRef<'_, usize, f64>,
+    modes: &Mat<f64>,
+    omega2: &[f64],
+) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let n = modes.nrows();
+    let mut rig: Vec<Vec<f64>> = Vec::new();
+    let mut mrig: Vec<Vec<f64>> = Vec::new();
+    let mut mr = vec![0.0; n];
+    for i in (0..omega2.len()).filter(|&i| omega2[i] == 0.0) {
+        let mut r: Vec<f64> = (0..n).map(|d| modes[(d, i)]).collect();
+        for (q, mq) in rig.iter().zip(&mrig) {
+            let c = super::reduced::dot(mq, &r);
+            r.iter_mut().zip(q).for_each(|(x, y)| *x -= c * y);
+        }
+        spmv(m, &r, &mut mr);
+        let nn = super::reduced::dot(&mr, &r).sqrt();
+        if nn > 0.0 {
+            r.iter_mut().for_each(|x| *x /= nn);
+            mrig.push(mr.iter().map(|x| x / nn).collect());
+            rig.push(r);
+        }
+    }
+    (rig, mrig)
+}
+
+/// DOFs that hold the rigid modes in a statically determinate way: pivoted Gram–Schmidt on
+/// the rows of `Φ_r` (the DOF whose row is largest after removing the span of those already
+/// chosen), over the DOFs not in `exclude`.
+fn determinate_supports(rig: &[Vec<f64>], exclude: &[usize]) -> Vec<usize> {
+    let nr = rig.len();
+    let n = rig.first().map_or(0, Vec::len);
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let mut chosen = Vec::new();
+    for _ in 0..nr {
+        let residual = |d: usize| -> Vec<f64> {
+            let mut row: Vec<f64> = rig.iter().map(|r| r[d]).collect();
+            for b in &basis {
+                let c = super::reduced::dot(b, &row);
+                row.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
+            }
+            row
+        };
+        let best = (0..n)
+            .filter(|d| !exclude.contains(d) && !chosen.contains(d))
+            .map(|d| (d, super::reduced::dot(&residual(d), &residual(d))))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((d, norm2)) = best else { break };
+        if norm2 <= 0.0 {
+            break;
+        }
+        let mut row = residual(d);
+        let nn = norm2.sqrt();
+        row.iter_mut().for_each(|x| *x /= nn);
+        basis.push(row);
+        chosen.push(d);
+    }
+    chosen
+}
+
+/// The nodes and lateral weights of the tread ring at angle index `k`, as the passage's
+/// contact load ([`WheelContact::ring_nodes`]).
+fn ring(wm: &WheelModes<'_>, k: usize) -> Vec<(usize, f64)> {
+    WheelContact::ring_nodes(wm.wheel, k, wm.half_width_m)
+}
+
+/// A free (floating) structure: stiffness and mass over its free DOFs, and a modal basis
+/// whose rigid-body modes (ω² = 0) span the null space of `K`.
+#[derive(Clone, Copy)]
+pub struct FreeBody<'a> {
+    /// Stiffness (N/m, full symmetric storage).
+    pub k: SparseColMatRef<'a, usize, f64>,
+    /// Mass (kg, full symmetric storage).
+    pub m: SparseColMatRef<'a, usize, f64>,
+    /// Mass-normalised modes (DOFs × modes), the rigid-body ones among them.
+    pub modes: &'a Mat<f64>,
+    /// Their ω² (rad²/s²), exactly 0 for the rigid-body modes.
+    pub omega2: &'a [f64],
+    /// DOFs not to hold (e.g. a mass on a soft spring).
+    pub exclude: &'a [usize],
+}
+
+/// The elastic static flexibility `G_ab = b_aᵀ Pᵀ K_c⁻¹ P b_b` (m/N) between the `loads`
+/// (free-DOF vectors) of a free body, by inertia relief (module doc): one sparse LDLᵀ of `K`
+/// held at statically determinate DOFs. Equals `Σ_{elastic} (φᵀb_a)(φᵀb_b)/ω²` over all the
+/// body's modes.
+pub fn elastic_flexibility(
+    body: FreeBody<'_>,
+    loads: &[Vec<f64>],
+) -> Result<Vec<Vec<f64>>, DynamicsError> {
+    let n = body.k.nrows();
+    let (rig, mrig) = rigid_modes(body.m, body.modes, body.omega2);
+    // The supports hold the null space of K only: a mode the basis counts as rigid but that
+    // K does not (a suspension bounce below the rigid-mode threshold) is projected out by P
+    // like the rigid ones, but holding it too would over-constrain the body.
+    let mut kr = vec![0.0; n];
+    let null: Vec<Vec<f64>> = rig
+        .iter()
+        .filter(|r| {
+            spmv(body.k, r, &mut kr);
+            super::reduced::dot(r, &kr) < NULL_OMEGA2
+        })
+        .cloned()
+        .collect();
+    let held = determinate_supports(&null, body.exclude);
+    let factor = held_factor(body.k, &held)?;
+    let nl = loads.len();
+    let mut rhs = Mat::<f64>::zeros(n, nl);
+    let mut balanced = Vec::with_capacity(nl);
+    for (j, b) in loads.iter().enumerate() {
+        let mut pb = b.clone();
+        for (r, mr) in rig.iter().zip(&mrig) {
+            let c = super::reduced::dot(r, b);
+            pb.iter_mut().zip(mr).for_each(|(x, y)| *x -= c * y);
+        }
+        for (i, &v) in pb.iter().enumerate() {
+            rhs[(i, j)] = v;
+        }
+        balanced.push(pb);
+    }
+    let mut ws = factor.workspace(nl.max(1));
+    factor.solve_in_place(rhs.as_mut(), &mut ws);
+    Ok((0..nl)
+        .map(|a| {
+            (0..nl)
+                .map(|b| (0..n).map(|i| balanced[a][i] * rhs[(i, b)]).sum())
+                .collect()
+        })
+        .collect())
+}
+
+impl WheelResidual {
+    /// Computes the wheel's elastic static flexibility at the contact by one sparse LDLᵀ of
+    /// the held stiffness, and its residual over the kept modes `wm`.
+    pub fn compute(wm: WheelModes<'_>) -> Result<Self, DynamicsError> {
+        let n = wm.modes.nrows();
+        let nm = wm.modes.ncols();
+        if wm.omega2.len() != nm || wm.k.nrows() != n || wm.m.nrows() != n {
+            return Err(DynamicsError::SizeMismatch {
+                what: "wheel residual flexibility: modes, frequencies and matrices (build them from the same wheel)",
+                found: wm.omega2.len(),
+                expected: nm,
+            });
+        }
+        // The wheel body's DOFs hold the rigid motion, not the sprung mass (it hangs on the
+        // soft primary suspension).
+        let dm = &wm.wheel.dofmap;
+        let sprung: Vec<usize> = (0..3)
+            .filter_map(|c| dm.free_index(3 * wm.wheel.sprung_node + c))
+            .collect();
+        let topo = &wm.wheel.topology;
+        let nk = topo.thetas.len();
+        let k0 = topo.contact_angle_index();
+        let rings = [k0, (k0 + nk - 1) % nk, (k0 + 1) % nk].map(|k| ring(&wm, k));
+        // Loads of the three rings × three directions.
+        let mut loads = Vec::with_capacity(9);
+        for nodes in &rings {
+            for d in 0..3 {
+                let mut force = [0.0; 3];
+                force[d] = 1.0;
+                let mut b = vec![0.0; n];
+                add_nodes_load(nodes, dm, wm.frame, 1.0, force, &mut b);
+                loads.push(b);
+            }
+        }
+        let gm = elastic_flexibility(
+            FreeBody {
+                k: wm.k,
+                m: wm.m,
+                modes: wm.modes,
+                omega2: wm.omega2,
+                exclude: &sprung,
+            },
+            &loads,
+        )?;
+        let g = |a: usize, b: usize, d: usize| gm[3 * a + d][3 * b + d];
+        let rigid_modes = wm.omega2.iter().filter(|&&w| w == 0.0).count();
+        // Modal rows of the rings and the kept elastic modes' part.
+        let rows: Vec<Vec<f64>> = rings
+            .iter()
+            .map(|nodes| {
+                let mut r = vec![0.0; 3 * nm];
+                super::reduced::modal_rows(nodes, &wm.wheel.dofmap, wm.modes, wm.frame, &mut r);
+                r
+            })
+            .collect();
+        let modal = |a: usize, b: usize, d: usize| -> f64 {
+            (0..nm)
+                .filter(|&i| wm.omega2[i] > 0.0)
+                .map(|i| rows[a][d * nm + i] * rows[b][d * nm + i] / wm.omega2[i])
+                .sum()
+        };
+        let res = |a: usize, b: usize, d: usize| g(a, b, d) - modal(a, b, d);
+        let mut out = WheelResidual {
+            static_m_per_n: [0.0; 3],
+            modal_m_per_n: [0.0; 3],
+            point_residual_m_per_n: [0.0; 3],
+            structural_m_per_n: [0.0; 3],
+            modes: nm,
+            rigid_modes,
+        };
+        for d in 0..3 {
+            out.static_m_per_n[d] = g(0, 0, d);
+            out.modal_m_per_n[d] = modal(0, 0, d);
+            out.point_residual_m_per_n[d] = res(0, 0, d);
+            let mid = |j: usize| 0.25 * (res(0, 0, d) + res(j, j, d) + 2.0 * res(0, j, d));
+            out.structural_m_per_n[d] = 0.5 * (mid(1) + mid(2));
+            let gd = out.static_m_per_n[d];
+            if !(gd.is_finite() && gd > 0.0) || out.point_residual_m_per_n[d] < -1e-6 * gd {
+                return Err(DynamicsError::WheelResidualBelowModal {
+                    direction: d,
+                    fe_m_per_n: gd,
+                    modal_m_per_n: out.modal_m_per_n[d],
+                });
+            }
+            out.point_residual_m_per_n[d] = out.point_residual_m_per_n[d].max(0.0);
+            out.structural_m_per_n[d] = out.structural_m_per_n[d].max(0.0);
+        }
+        Ok(out)
+    }
+}
+
+/// The sparse LDLᵀ of `K` with stiff springs (the mean diagonal of K) at the `held` DOFs.
+fn held_factor(
+    k: SparseColMatRef<'_, usize, f64>,
+    held: &[usize],
+) -> Result<StiffnessFactor, DynamicsError> {
+    let (cp, ri) = (k.symbolic().col_ptr(), k.symbolic().row_idx());
+    let diag: Vec<usize> = (0..k.ncols())
+        .filter_map(|j| (cp[j]..cp[j + 1]).find(|&p| ri[p] == j))
+        .collect();
+    if diag.len() != k.ncols() {
+        return Err(DynamicsError::MissingNodes {
+            what: "diagonal entry in every column of the wheel's stiffness",
+        });
+    }
+    let mean = diag.iter().map(|&p| k.val()[p]).sum::<f64>() / diag.len() as f64;
+    let sym = k
+        .symbolic()
+        .to_owned()
+        .map_err(|_| DynamicsError::MissingNodes {
+            what: "memory for the wheel's held stiffness",
+        })?;
+    let mut vals = k.val().to_vec();
+    for &d in held {
+        vals[diag[d]] += mean;
+    }
+    let ks = faer::sparse::SparseColMat::new(sym, vals);
+    StiffnessFactor::new(ks.as_ref())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::sparse::{SparseColMat, Triplet};
+
+    /// A free body with a known spectrum: `K = M Φ Λ Φᵀ M` with `Φ = M^{-½} Q` (Q orthogonal,
+    /// so `ΦᵀMΦ = I`) and three zero eigenvalues. The elastic flexibility between two loads is
+    /// then the closed form `Σ_{λ>0} (φᵀb_a)(φᵀb_b)/λ`; inertia relief must give it from the
+    /// truncated basis' rigid modes alone, and with every mode kept the residual vanishes.
+    #[test]
+    fn inertia_relief_gives_the_closed_form_elastic_flexibility() {
+        let n = 24;
+        let mass: Vec<f64> = (0..n).map(|i| 1.0 + 0.37 * ((i * 7) % 5) as f64).collect();
+        let a = nalgebra::DMatrix::<f64>::from_fn(n, n, |i, j| {
+            (((i * 31 + j * 17) % 13) as f64 - 6.0) / 7.0 + if i == j { 3.0 } else { 0.0 }
+        });
+        let q = a.qr().q();
+        let phi = nalgebra::DMatrix::<f64>::from_fn(n, n, |i, j| q[(i, j)] / mass[i].sqrt());
+        let lam: Vec<f64> = (0..n)
+            .map(|j| if j < 3 { 0.0 } else { 1e4 * (j as f64).powi(2) })
+            .collect();
+        let mut k = nalgebra::DMatrix::<f64>::zeros(n, n);
+        for j in 0..n {
+            let mp: Vec<f64> = (0..n).map(|i| mass[i] * phi[(i, j)]).collect();
+            for r in 0..n {
+                for c in 0..n {
+                    k[(r, c)] += lam[j] * mp[r] * mp[c];
+                }
+            }
+        }
+        let trip_k: Vec<Triplet<usize, usize, f64>> = (0..n)
+            .flat_map(|c| (0..n).map(move |r| (r, c)))
+            .map(|(r, c)| Triplet::new(r, c, 0.5 * (k[(r, c)] + k[(c, r)])))
+            .collect();
+        let trip_m: Vec<Triplet<usize, usize, f64>> = (0..n)
+            .flat_map(|c| (0..n).map(move |r| (r, c)))
+            .map(|(r, c)| Triplet::new(r, c, if r == c { mass[r] } else { 0.0 }))
+            .collect();
+        let ks = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip_k).unwrap();
+        let ms = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip_m).unwrap();
+        let loads: Vec<Vec<f64>> = (0..2)
+            .map(|l| (0..n).map(|i| ((i * (l + 3)) % 7) as f64 - 2.5).collect())
+            .collect();
+        let proj = |j: usize, b: &[f64]| (0..n).map(|i| phi[(i, j)] * b[i]).sum::<f64>();
+        let closed = |a: usize, b: usize, from: usize| -> f64 {
+            (from.max(3)..n)
+                .map(|j| proj(j, &loads[a]) * proj(j, &loads[b]) / lam[j])
+                .sum()
+        };
+        for kept in [3, 10, n] {
+            let modes = Mat::<f64>::from_fn(n, kept, |i, j| phi[(i, j)]);
+            let g = elastic_flexibility(
+                FreeBody {
+                    k: ks.as_ref(),
+                    m: ms.as_ref(),
+                    modes: &modes,
+                    omega2: &lam[..kept],
+                    exclude: &[],
+                },
+                &loads,
+            )
+            .unwrap();
+            for a in 0..2 {
+                for b in 0..2 {
+                    let want = closed(a, b, 0);
+                    assert!(
+                        (g[a][b] - want).abs() < 1e-9 * closed(a, a, 0),
+                        "{kept} modes, G[{a}][{b}] {} vs {want}",
+                        g[a][b]
+                    );
+                    // residual = G − kept modes' part = the truncated modes' part
+                    let modal: f64 = (3..kept)
+                        .map(|j| proj(j, &loads[a]) * proj(j, &loads[b]) / lam[j])
+                        .sum();
+                    let resid = closed(a, b, kept);
+                    assert!((g[a][b] - modal - resid).abs() < 1e-9 * closed(a, a, 0));
+                    if kept == n {
+                        assert!((g[a][b] - modal).abs() < 1e-9 * closed(a, a, 0));
+                    }
+                }
+            }
+        }
+    }
+}
