@@ -166,7 +166,7 @@ fn validate(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
         t2.elapsed().as_secs_f64()
     );
     for (name, p) in [("full", &pf), ("substructured", &ps)] {
-        let s = p.run(speed, None)?;
+        let s = p.run(corrugation::units::Speed::from_kmh(speed), None)?;
         println!(
             "passage {speed} km/h, {name}: F_L band {:.3} N, F_N band {:.3} N, wear band/mean {:.5}, dominant {:?} mm ({:?} Hz)",
             s.fl_band_rms_n,

@@ -21,6 +21,50 @@ pub fn ms_to_kmh(ms: f64) -> f64 {
     ms * 3.6
 }
 
+/// A train speed, built from the value the user gave (km/h at the input boundary, m/s inside
+/// the library) and carrying that value unchanged: [`Speed::kmh`] of a speed built with
+/// [`Speed::from_kmh`] is exactly the number given (60 km/h reads 60, not the
+/// 60.00000000000001 of a round trip through m/s), and [`Speed::m_per_s`] of one built with
+/// [`Speed::from_m_per_s`] is exactly its m/s. The other unit is converted once, here.
+///
+/// Valid range: finite and positive; the model and the sweeps accept 1 to 500 km/h
+/// (`crate::model::SPEED_KMH`) and check it where the speed is read.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Speed {
+    /// Speed (km/h).
+    kmh: f64,
+    /// Speed (m/s).
+    m_per_s: f64,
+}
+
+impl Speed {
+    /// The speed `kmh` (km/h); [`Speed::kmh`] returns `kmh` exactly.
+    pub fn from_kmh(kmh: f64) -> Self {
+        Speed {
+            kmh,
+            m_per_s: kmh_to_ms(kmh),
+        }
+    }
+
+    /// The speed `m_per_s` (m/s); [`Speed::m_per_s`] returns `m_per_s` exactly.
+    pub fn from_m_per_s(m_per_s: f64) -> Self {
+        Speed {
+            kmh: ms_to_kmh(m_per_s),
+            m_per_s,
+        }
+    }
+
+    /// The speed in m/s, for the physics.
+    pub fn m_per_s(self) -> f64 {
+        self.m_per_s
+    }
+
+    /// The speed in km/h, for reports and file names.
+    pub fn kmh(self) -> f64 {
+        self.kmh
+    }
+}
+
 /// Length in mm → m.
 pub fn mm_to_m(mm: f64) -> f64 {
     mm * M_PER_MM
@@ -55,6 +99,27 @@ mod tests {
         // docs/theory.md §1.2: 140 km/h = 38.89 m/s.
         assert!((kmh_to_ms(140.0) - 38.888_888_9).abs() < 1e-6);
         assert!((ms_to_kmh(kmh_to_ms(54.8)) - 54.8).abs() < 1e-12);
+    }
+
+    #[test]
+    fn speed_from_kmh_keeps_the_kmh_exactly_and_converts_to_m_per_s() {
+        // 60 km/h through m/s and back is 60.00000000000001; the Speed keeps the given value.
+        assert_ne!(ms_to_kmh(kmh_to_ms(60.0)), 60.0);
+        for kmh in [54.8, 60.0, 100.0, 140.0, 219.0] {
+            assert_eq!(Speed::from_kmh(kmh).kmh(), kmh);
+        }
+        // Closed form: 140 km/h = 140 000 m / 3600 s = 38.888… m/s.
+        let v = Speed::from_kmh(140.0).m_per_s();
+        assert!((v - 140_000.0 / 3600.0).abs() < 1e-12, "{v}");
+        assert!((v - 38.888_888_888_888_9).abs() < 1e-12, "{v}");
+    }
+
+    #[test]
+    fn speed_from_m_per_s_keeps_the_m_per_s_exactly() {
+        let s = Speed::from_m_per_s(38.9);
+        assert_eq!(s.m_per_s(), 38.9);
+        // Closed form: 38.9 m/s × 3600 s/h / 1000 m/km = 140.04 km/h.
+        assert!((s.kmh() - 140.04).abs() < 1e-12, "{}", s.kmh());
     }
 
     #[test]

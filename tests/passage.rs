@@ -574,7 +574,9 @@ fn a_runner_reports_the_requested_speed_exactly() {
         "the round trip this test guards against"
     );
     let p = PreparedModel::new(&m, &cache(), &PassageOptions::default()).expect("modal model");
-    let s = p.run(60.0, None).expect("passage runs");
+    let s = p
+        .run(corrugation::units::Speed::from_kmh(60.0), None)
+        .expect("passage runs");
     assert_eq!(s.speed_kmh, 60.0);
 }
 

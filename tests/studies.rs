@@ -125,9 +125,10 @@ struct ModeLocked {
 impl PassageRunner for ModeLocked {
     fn run(
         &self,
-        speed_kmh: f64,
+        speed: corrugation::units::Speed,
         _p: Option<&RailProfile>,
     ) -> Result<PassageSummary, DynamicsError> {
+        let speed_kmh = speed.kmh();
         self.calls.fetch_add(1, Ordering::SeqCst);
         self.speeds_run.lock().unwrap().push(speed_kmh);
         if self.fail.contains(&speed_kmh) {
@@ -601,11 +602,11 @@ fn initiation_table_applies_the_stated_criterion() {
     impl PassageRunner for Fixed {
         fn run(
             &self,
-            speed_kmh: f64,
+            speed: corrugation::units::Speed,
             _: Option<&RailProfile>,
         ) -> Result<PassageSummary, DynamicsError> {
             Ok(PassageSummary {
-                speed_kmh,
+                speed_kmh: speed.kmh(),
                 ..self.0.clone()
             })
         }
@@ -637,9 +638,10 @@ struct DampingRunner(f64);
 impl PassageRunner for DampingRunner {
     fn run(
         &self,
-        speed_kmh: f64,
+        speed: corrugation::units::Speed,
         _: Option<&RailProfile>,
     ) -> Result<PassageSummary, DynamicsError> {
+        let speed_kmh = speed.kmh();
         let f = selected_mode_hz(speed_kmh);
         Ok(summary(speed_kmh, f, f, 2.0 * f, self.0 / 1e6))
     }
@@ -675,7 +677,7 @@ fn study_runs_every_case_writes_table_and_plots_and_resumes() {
         )))
     };
     let growth = |m: &Model, r: &dyn PassageRunner| -> Result<BTreeMap<String, f64>, BoxError> {
-        let s = r.run(140.0, None)?;
+        let s = r.run(corrugation::units::Speed::from_kmh(140.0), None)?;
         Ok(BTreeMap::from([(
             "limiting_amplitude_um".to_string(),
             m.fastening.springs.vertical_stiffness / 1e7 + s.wear_band_rms,

@@ -31,7 +31,7 @@ fn passage_on_the_substructured_basis_matches_the_full_basis() {
     let run = |tb| {
         PreparedModel::with_track_basis(&m, &track, tb, &cache, None, &opts)
             .unwrap()
-            .run(140.0, None)
+            .run(corrugation::units::Speed::from_kmh(140.0), None)
             .unwrap()
     };
     let (a, b) = (run(full), run(sub));

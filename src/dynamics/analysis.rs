@@ -10,7 +10,7 @@ use super::record::PassageRecord;
 use super::summary::{PassageSummary, WavelengthComponent, WavelengthSpectrum};
 use super::DynamicsError;
 use crate::spectral::{band_pass, find_peaks, BandPass, PeakOptions, Psd, PsdOptions, Signal};
-use crate::units::{m_to_mm, ms_to_kmh};
+use crate::units::{m_to_mm, Speed};
 
 /// A signal of the record restricted to the solution zone.
 pub fn zone_signal(rec: &PassageRecord, values: &[f64]) -> Result<Signal, DynamicsError> {
@@ -115,17 +115,23 @@ pub fn check_contact(h: &crate::dynamics::record::Histories) -> Result<(), Dynam
     }
 }
 
-/// The summary of a passage record.
+/// The summary of a passage record, at the record's speed (m/s) converted to km/h.
 pub fn summarise(rec: &PassageRecord) -> Result<PassageSummary, DynamicsError> {
+    summarise_at(rec, Speed::from_m_per_s(rec.speed_m_per_s))
+}
+
+/// The summary of a passage record run at `speed` (`speed.m_per_s()` is the record's
+/// `speed_m_per_s`): its `speed_kmh` is `speed.kmh()` exactly, the speed as the caller gave it.
+pub fn summarise_at(rec: &PassageRecord, speed: Speed) -> Result<PassageSummary, DynamicsError> {
     check_contact(&rec.histories)?;
-    let v = rec.speed_m_per_s;
+    let v = speed.m_per_s();
     let h = &rec.histories;
     let fl = analyse(&zone_signal(rec, &h.longitudinal_n)?, v)?;
     let fnn = analyse(&zone_signal(rec, &h.normal_n)?, v)?;
     let w = analyse(&wear_signal(rec)?, v)?;
     let dom = w.peaks.first().cloned();
     Ok(PassageSummary {
-        speed_kmh: ms_to_kmh(v),
+        speed_kmh: speed.kmh(),
         mean_fn_n: fnn.mean,
         mean_fl_n: fl.mean,
         fl_band_rms_n: fl.band_rms,

@@ -442,10 +442,11 @@ impl PassageRecorder for passage::PassageEngine {
 /// profile. The reduced-order engine implements it; the sweeps and studies take it so that
 /// their logic is tested with cheap stand-ins.
 pub trait PassageRunner: Sync {
-    /// One passage at `speed_kmh` (km/h) over the rail profile (`None` = smooth rail).
+    /// One passage at `speed` over the rail profile (`None` = smooth rail); the summary's
+    /// `speed_kmh` is `speed.kmh()` exactly.
     fn run(
         &self,
-        speed_kmh: f64,
+        speed: crate::units::Speed,
         profile: Option<&RailProfile>,
     ) -> Result<PassageSummary, DynamicsError>;
 

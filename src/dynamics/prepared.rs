@@ -179,16 +179,14 @@ impl super::PassageRunner for PreparedModel {
 
     fn run(
         &self,
-        speed_kmh: f64,
+        speed: crate::units::Speed,
         profile: Option<&RailProfile>,
     ) -> Result<super::PassageSummary, DynamicsError> {
         let opts = PassageOptions {
             energy: false,
             rail_point_offset_m: None,
         };
-        let rec = self
-            .engine
-            .passage(crate::units::kmh_to_ms(speed_kmh), profile, &opts, None)?;
-        Ok(super::analysis::summarise(&rec)?.at_requested_speed(speed_kmh))
+        let rec = self.engine.passage(speed.m_per_s(), profile, &opts, None)?;
+        super::analysis::summarise_at(&rec, speed)
     }
 }

@@ -71,13 +71,3 @@ pub struct PassageSummary {
     /// Wall time of the passage (s), excluding the modal basis.
     pub seconds: f64,
 }
-
-impl PassageSummary {
-    /// This summary with `speed_kmh` set to the speed the caller asked for (km/h), exactly as
-    /// given: converted to m/s for the passage and back, 60 km/h would read
-    /// 60.00000000000001.
-    pub fn at_requested_speed(mut self, speed_kmh: f64) -> Self {
-        self.speed_kmh = speed_kmh;
-        self
-    }
-}

@@ -678,13 +678,11 @@ pub struct ExplicitRunner {
 impl crate::dynamics::PassageRunner for ExplicitRunner {
     fn run(
         &self,
-        speed_kmh: f64,
+        speed: crate::units::Speed,
         profile: Option<&RailProfile>,
     ) -> Result<PassageSummary, DynamicsError> {
         use crate::dynamics::PassageRecorder;
-        let rec = self
-            .model
-            .record(crate::units::kmh_to_ms(speed_kmh), profile)?;
-        Ok(crate::dynamics::analysis::summarise(&rec)?.at_requested_speed(speed_kmh))
+        let rec = self.model.record(speed.m_per_s(), profile)?;
+        crate::dynamics::analysis::summarise_at(&rec, speed)
     }
 }

@@ -28,6 +28,7 @@ use super::StudiesError;
 use crate::dynamics::{PassageRunner, PassageSummary, WavelengthComponent};
 use crate::progress::{Counter, Progress};
 use crate::report::doc::Document;
+use crate::units::Speed;
 
 /// The stated initiation criterion (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -193,7 +194,9 @@ pub fn run_initiation(
     let out: Vec<Result<InitiationRow, String>> = cases
         .par_iter()
         .map(|(name, runner)| {
-            let r = match catch_unwind(AssertUnwindSafe(|| runner.run(speed_kmh, None))) {
+            let r = match catch_unwind(AssertUnwindSafe(|| {
+                runner.run(Speed::from_kmh(speed_kmh), None)
+            })) {
                 Ok(Ok(s)) => Ok(evaluate(name, &s, criterion, peaks)),
                 Ok(Err(e)) => Err(format!("{name}: {e}")),
                 Err(p) => Err(format!("{name}: passage panicked: {}", panic_text(&*p))),

@@ -123,7 +123,9 @@ pub fn run_study(
             let runner = factory(model).map_err(|e| e.to_string())?;
             let mut rows = Vec::new();
             for &v in &speeds {
-                let s = runner.run(v, None).map_err(|e| format!("{v} km/h: {e}"))?;
+                let s = runner
+                    .run(crate::units::Speed::from_kmh(v), None)
+                    .map_err(|e| format!("{v} km/h: {e}"))?;
                 let criterion = study.criterion.for_model(model);
                 rows.push(evaluate(&case.label(), &s, &criterion, study.peaks));
             }

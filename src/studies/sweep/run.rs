@@ -64,7 +64,9 @@ pub fn run_passages(
     let results: Vec<Result<f64, String>> = todo
         .par_iter()
         .map(|&v| {
-            let out = catch_unwind(AssertUnwindSafe(|| runner.run(v, None)));
+            let out = catch_unwind(AssertUnwindSafe(|| {
+                runner.run(crate::units::Speed::from_kmh(v), None)
+            }));
             let r = match out {
                 Ok(Ok(s)) if same_speed(s.speed_kmh, v) => write_summary(&speed_file(dir, v), &s)
                     .map(|_| v)
