@@ -39,32 +39,11 @@ pub(super) fn run_band(
     debug_assert_eq!((phi.nrows(), phi.ncols()), (n, total));
     let mut lambdas: Vec<f64> = Vec::with_capacity(total);
     let mut slices: Vec<SliceReport> = Vec::new();
-    let mut cur = first;
-    if from_zero && grounded && total > 0 {
-        // If the structure is grounded, the lowest eigenvalue λ₁ can lie far above the
-        // negative shift σ₀; Lanczos at σ₀ would then see a tightly clustered θ = 1/(λ − σ₀)
-        // and converge slowly. A short probe at σ₀ finds λ₁ (a Ritz value ≥ λ₁); if
-        // 0.9 λ₁ ≫ |σ₀| and the Sturm count at 0.9 λ₁ is still 0, the first slice starts there.
-        // The caller's Sturm count at `GROUNDED_TEST · |σ₀|` has shown that λ₁ lies that
-        // high (`grounded`); otherwise the probe could not move the shift and is skipped.
-        let probe = {
-            let empty = phi.as_ref().subcols(0, 0);
-            // Loose tolerance and one wanted value: any Ritz value bounds λ₁ from above
-            // (θ_Ritz ≤ θ₁), and the Sturm count at 0.9·l1 decides whether the shift moves.
-            let mut popts = opts.clone();
-            popts.tolerance = 1e-4;
-            lanczos_slice(ctx, &cur, empty, 1, None, None, &popts)?
-        };
-        let l1 = probe.lambdas.first().copied().unwrap_or(0.0);
-        let moved = GROUNDED_SHIFT * l1;
-        // (True whenever the probe returned a value: l1 ≥ λ₁ > GROUNDED_TEST · |σ₀|.)
-        if moved > GROUNDED_MOVE * cur.shift.abs() {
-            let f = factorize(ctx, moved, -1.0, lam_max)?;
-            if f.negative_count == 0 {
-                cur = f;
-            }
-        }
-    }
+    let mut cur = if from_zero && grounded && total > 0 {
+        grounded_first_shift(ctx, phi.as_ref(), first, lam_max, opts)?
+    } else {
+        first
+    };
     // Converged pairs above the last boundary (λ ≥ τ, from the converged prefix of the
     // previous slice): their vectors sit in phi right after the committed columns, their λ in
     // `carried`. They are eigenpairs of the next slice already, so it deflates them (with all
@@ -124,14 +103,15 @@ pub(super) fn run_band(
             (Some(b), Some(rho))
                 if !(two_sided || (last && top_shift - lo <= TWO_SIDED_CAP_RATIO * (lo - b))) =>
             {
-                let cap = lo + CAP_RATIO * (lo - b);
-                if cap < top_shift && rho * (cap - lo) <= (target + target / 4) as f64 {
-                    let f = factorize(ctx, cap, 1.0, lam_max)?;
-                    (f.negative_count > nu_cur && f.negative_count < nu_max && f.shift < top_shift)
-                        .then_some(f)
-                } else {
-                    None
-                }
+                cap_factor(
+                    ctx,
+                    (lo, b),
+                    rho,
+                    (nu_cur, nu_max),
+                    top_shift,
+                    target,
+                    lam_max,
+                )?
             }
             _ => None,
         };
@@ -163,39 +143,9 @@ pub(super) fn run_band(
             };
             (hi, nu_hi, next)
         } else if two_sided {
-            // Width of about `target` modes (count model ν ∝ λ^{3/2} up to the band top),
-            // corrected once if the Sturm count says it holds more than 1.2 targets: this
-            // slice deflates nothing and needs more solves per mode than any other
-            // (default track to 5 kHz: 185 modes, 616 vectors; corrected to 100 modes, 320
-            // vectors, and the band's two-sided last slice, which deflates them, 183 modes
-            // in 536 vectors).
-            let mut w = if last {
-                top_shift - lo
-            } else {
-                (top_shift * ((nu_cur + target) as f64 / nu_max as f64).powf(2.0 / 3.0) - lo)
-                    .max(1e-3 * top_shift)
-            };
-            let mut bound = None;
-            for _ in 0..2 {
-                if lo + w >= top_shift {
-                    bound = None;
-                    break;
-                }
-                let f = factorize(ctx, lo + w, 1.0, lam_max)?;
-                let count = f.negative_count - nu_cur;
-                let too_many = count > target + target / 5;
-                bound = Some(f);
-                if !too_many {
-                    break;
-                }
-                w *= target as f64 / count as f64;
-            }
-            let (hi, nu_hi, next) = match bound {
-                Some(f) if f.negative_count < nu_max && f.shift < top_shift => {
-                    (f.shift, f.negative_count, Some(f))
-                }
-                _ => (top_shift, nu_max, None),
-            };
+            // Width of about `target` modes, corrected once by the Sturm count.
+            let (hi, nu_hi, next) =
+                two_sided_upper(ctx, lo, (nu_cur, nu_max), top_shift, target, last, lam_max)?;
             let need = nu_hi - nu_cur;
             let m = factorize(ctx, 0.5 * (lo + hi), 1.0, lam_max)?;
             let want = need + opts.block_size.max(need / 5);
@@ -221,22 +171,7 @@ pub(super) fn run_band(
             // Boundary in the widest relative gap of the last third of the converged λ
             // (carried and new; everything below it has converged; a wide gap keeps K − τM
             // well conditioned).
-            let mut l: Vec<f64> = out.lambdas.iter().copied().filter(|&x| x >= lo).collect();
-            l.extend_from_slice(&carried);
-            l.sort_by(f64::total_cmp);
-            let tau = if l.len() >= 2 {
-                let k0 = (2 * l.len() / 3).min(l.len() - 2);
-                let kbest = (k0..l.len() - 1)
-                    .max_by(|&a, &b| {
-                        let ga = (l[a + 1] - l[a]) / l[a + 1].abs().max(1e-300);
-                        let gb = (l[b + 1] - l[b]) / l[b + 1].abs().max(1e-300);
-                        ga.total_cmp(&gb)
-                    })
-                    .unwrap_or(k0);
-                0.5 * (l[kbest] + l[kbest + 1])
-            } else {
-                top_shift
-            };
+            let tau = gap_boundary(&out.lambdas, lo, &carried, top_shift);
             if tau >= top_shift {
                 (top_shift, nu_max, None)
             } else {
@@ -285,48 +220,16 @@ pub(super) fn run_band(
         // Layout from col0: the slice's modes (carried ones below hi, then the new ones), then
         // the pairs carried on (carried ones at or above hi, then new converged ones between
         // hi and λ_max, as many as fit).
-        let old_carried = phi.as_ref().subcols(col0, nc).to_owned();
-        let mut next_carried: Vec<(f64, usize, bool)> = Vec::new(); // (λ, index, from old)
-        let mut c = col0;
-        for (i, &x) in carried.iter().enumerate() {
-            if x < hi {
-                phi.as_mut().col_mut(c).copy_from(old_carried.col(i));
-                lambdas.push(x);
-                c += 1;
-            } else {
-                next_carried.push((x, i, true));
-            }
-        }
-        for &i in &keep {
-            phi.as_mut().col_mut(c).copy_from(out.vecs.col(i));
-            lambdas.push(out.lambdas[i]);
-            c += 1;
-        }
-        if next.is_some() {
-            // Carried: the strictly converged pairs above hi, up to the first that is not
-            // (the next slice must find every eigenvalue above the carried ones itself).
-            for (i, &x) in out.lambdas.iter().enumerate() {
-                if x >= hi && x < top_shift {
-                    if !out.strict[i] {
-                        break;
-                    }
-                    next_carried.push((x, i, false));
-                }
-            }
-        }
-        next_carried.sort_by(|a, b| a.0.total_cmp(&b.0));
-        next_carried.truncate(total.saturating_sub(c));
-        carried.clear();
-        for &(x, i, from_old) in &next_carried {
-            let src = if from_old {
-                old_carried.col(i)
-            } else {
-                out.vecs.col(i)
-            };
-            phi.as_mut().col_mut(c).copy_from(src);
-            carried.push(x);
-            c += 1;
-        }
+        commit_slice(
+            phi.as_mut(),
+            col0,
+            &mut carried,
+            &mut lambdas,
+            (&out, &keep),
+            hi,
+            (top_shift, next.is_some()),
+            total,
+        );
         last_density = Some((nu_hi - nu_cur) as f64 / (hi - lo).max(f64::MIN_POSITIVE));
         slices.push(SliceReport {
             shift_lo_rad2_s2: lo,
@@ -349,6 +252,201 @@ pub(super) fn run_band(
         }
     }
     Ok(BandOut { lambdas, slices })
+}
+
+/// The grounded-structure probe at the start of a band from 0 Hz: a short, loose Lanczos run
+/// at the negative shift σ₀ of `first` finds an upper bound l₁ of the lowest eigenvalue λ₁
+/// (rad²/s²); if `GROUNDED_SHIFT · l₁` exceeds `GROUNDED_MOVE · |σ₀|` and the Sturm count
+/// there is 0, the band's first shift moves up to it (else `first` is returned).
+///
+/// If the structure is grounded, λ₁ can lie far above σ₀; Lanczos at σ₀ would then see a
+/// tightly clustered θ = 1/(λ − σ₀) and converge slowly. The caller's Sturm count at
+/// `GROUNDED_TEST · |σ₀|` has shown that λ₁ lies that high; otherwise the probe could not
+/// move the shift and is not run.
+fn grounded_first_shift(
+    ctx: &mut Ctx<'_>,
+    phi: MatRef<'_, f64>,
+    first: ShiftFactor,
+    lam_max: f64,
+    opts: &EigenOptions,
+) -> Result<ShiftFactor, EigenError> {
+    let probe = {
+        let empty = phi.subcols(0, 0);
+        // Loose tolerance and one wanted value: any Ritz value bounds λ₁ from above
+        // (θ_Ritz ≤ θ₁), and the Sturm count at 0.9·l1 decides whether the shift moves.
+        let mut popts = opts.clone();
+        popts.tolerance = 1e-4;
+        lanczos_slice(ctx, &first, empty, 1, None, None, &popts)?
+    };
+    let l1 = probe.lambdas.first().copied().unwrap_or(0.0);
+    let moved = GROUNDED_SHIFT * l1;
+    // (True whenever the probe returned a value: l1 ≥ λ₁ > GROUNDED_TEST · |σ₀|.)
+    if moved > GROUNDED_MOVE * first.shift.abs() {
+        let f = factorize(ctx, moved, -1.0, lam_max)?;
+        if f.negative_count == 0 {
+            return Ok(f);
+        }
+    }
+    Ok(first)
+}
+
+/// The cap of a slice in a band above 0 Hz: the factorisation at
+/// `lo + CAP_RATIO · (lo − b)` (rad²/s²; `(lo, b)` = the slice's lower shift and the band's
+/// lower bound), if it lies below `top_shift`, the previous slice's density `rho`
+/// (eigenvalues per rad²/s²) puts at most 1.25 `target` modes below it, and its Sturm count
+/// lies strictly between the Sturm counts `nu_cur` at `lo` and `nu_max` at the band top. `None`: the slice is not capped.
+fn cap_factor(
+    ctx: &mut Ctx<'_>,
+    (lo, b): (f64, f64),
+    rho: f64,
+    (nu_cur, nu_max): (usize, usize),
+    top_shift: f64,
+    target: usize,
+    lam_max: f64,
+) -> Result<Option<ShiftFactor>, EigenError> {
+    let cap = lo + CAP_RATIO * (lo - b);
+    if cap < top_shift && rho * (cap - lo) <= (target + target / 4) as f64 {
+        let f = factorize(ctx, cap, 1.0, lam_max)?;
+        Ok(
+            (f.negative_count > nu_cur && f.negative_count < nu_max && f.shift < top_shift)
+                .then_some(f),
+        )
+    } else {
+        Ok(None)
+    }
+}
+
+/// Upper bound `(hi, Sturm count at hi, its factorisation)` of the two-sided first slice of
+/// a band above 0 Hz starting at `lo` (rad²/s²): a width of about `target` modes by the
+/// count model ν ∝ λ^{3/2} up to `top_shift`, corrected once if the Sturm count says it
+/// holds more than 1.2 targets; the band top `(top_shift, nu_max, None)` if the bound
+/// reaches it (`last`: the slice is the band's last). `nu_cur`, `nu_max`: the Sturm counts
+/// at `lo` and at the band top.
+///
+/// This slice deflates nothing and needs more solves per mode than any other (default
+/// track to 5 kHz: 185 modes, 616 vectors; corrected to 100 modes, 320 vectors, and the
+/// band's two-sided last slice, which deflates them, 183 modes in 536 vectors).
+fn two_sided_upper(
+    ctx: &mut Ctx<'_>,
+    lo: f64,
+    (nu_cur, nu_max): (usize, usize),
+    top_shift: f64,
+    target: usize,
+    last: bool,
+    lam_max: f64,
+) -> Result<(f64, usize, Option<ShiftFactor>), EigenError> {
+    let mut w = if last {
+        top_shift - lo
+    } else {
+        (top_shift * ((nu_cur + target) as f64 / nu_max as f64).powf(2.0 / 3.0) - lo)
+            .max(1e-3 * top_shift)
+    };
+    let mut bound = None;
+    for _ in 0..2 {
+        if lo + w >= top_shift {
+            bound = None;
+            break;
+        }
+        let f = factorize(ctx, lo + w, 1.0, lam_max)?;
+        let count = f.negative_count - nu_cur;
+        let too_many = count > target + target / 5;
+        bound = Some(f);
+        if !too_many {
+            break;
+        }
+        w *= target as f64 / count as f64;
+    }
+    Ok(match bound {
+        Some(f) if f.negative_count < nu_max && f.shift < top_shift => {
+            (f.shift, f.negative_count, Some(f))
+        }
+        _ => (top_shift, nu_max, None),
+    })
+}
+
+/// Boundary τ (rad²/s²) of an open-ended slice at shift `lo`: the middle of the widest
+/// relative gap in the last third of the converged eigenvalues at or above `lo`
+/// (`lambdas`, with the `carried` ones; everything below τ has converged, and a wide gap
+/// keeps K − τM well conditioned). `top_shift` if fewer than two are known.
+fn gap_boundary(lambdas: &[f64], lo: f64, carried: &[f64], top_shift: f64) -> f64 {
+    let mut l: Vec<f64> = lambdas.iter().copied().filter(|&x| x >= lo).collect();
+    l.extend_from_slice(carried);
+    l.sort_by(f64::total_cmp);
+    if l.len() >= 2 {
+        let k0 = (2 * l.len() / 3).min(l.len() - 2);
+        let kbest = (k0..l.len() - 1)
+            .max_by(|&a, &b| {
+                let ga = (l[a + 1] - l[a]) / l[a + 1].abs().max(1e-300);
+                let gb = (l[b + 1] - l[b]) / l[b + 1].abs().max(1e-300);
+                ga.total_cmp(&gb)
+            })
+            .unwrap_or(k0);
+        0.5 * (l[kbest] + l[kbest + 1])
+    } else {
+        top_shift
+    }
+}
+
+/// Writes a finished slice into `phi` from column `col0`: first the slice's modes (the
+/// `carried` pairs below `hi`, then the new ones `out.vecs[keep]`, their eigenvalues
+/// appended to `lambdas`), then the pairs carried on to the next slice (carried ones at or
+/// above `hi`, then, if there is a next slice (`more`), the strictly converged new ones
+/// between `hi` and `top_shift` up to the first that is not), as many as fit in `total`
+/// columns. `carried` is replaced by the eigenvalues carried on (rad²/s²).
+#[allow(clippy::too_many_arguments)]
+fn commit_slice(
+    mut phi: MatMut<'_, f64>,
+    col0: usize,
+    carried: &mut Vec<f64>,
+    lambdas: &mut Vec<f64>,
+    (out, keep): (&SliceOut, &[usize]),
+    hi: f64,
+    (top_shift, more): (f64, bool),
+    total: usize,
+) {
+    let nc = carried.len();
+    let old_carried = phi.as_ref().subcols(col0, nc).to_owned();
+    let mut next_carried: Vec<(f64, usize, bool)> = Vec::new(); // (λ, index, from old)
+    let mut c = col0;
+    for (i, &x) in carried.iter().enumerate() {
+        if x < hi {
+            phi.as_mut().col_mut(c).copy_from(old_carried.col(i));
+            lambdas.push(x);
+            c += 1;
+        } else {
+            next_carried.push((x, i, true));
+        }
+    }
+    for &i in keep {
+        phi.as_mut().col_mut(c).copy_from(out.vecs.col(i));
+        lambdas.push(out.lambdas[i]);
+        c += 1;
+    }
+    if more {
+        // Carried: the strictly converged pairs above hi, up to the first that is not
+        // (the next slice must find every eigenvalue above the carried ones itself).
+        for (i, &x) in out.lambdas.iter().enumerate() {
+            if x >= hi && x < top_shift {
+                if !out.strict[i] {
+                    break;
+                }
+                next_carried.push((x, i, false));
+            }
+        }
+    }
+    next_carried.sort_by(|a, b| a.0.total_cmp(&b.0));
+    next_carried.truncate(total.saturating_sub(c));
+    carried.clear();
+    for &(x, i, from_old) in &next_carried {
+        let src = if from_old {
+            old_carried.col(i)
+        } else {
+            out.vecs.col(i)
+        };
+        phi.as_mut().col_mut(c).copy_from(src);
+        carried.push(x);
+        c += 1;
+    }
 }
 
 /// Fraction of the probed λ₁ (an upper bound of it) where the grounded-structure probe of

@@ -36,24 +36,9 @@ pub(super) fn lanczos_slice(
     let n = ctx.sys.n();
     let p = locked.ncols();
     let sigma = fac.shift;
-    let avail = n.saturating_sub(p);
     let need = known.map_or(0, |k| k.1);
-    let mut want = want.max(need).max(1);
-    let b = opts.block_size.min(avail.saturating_sub(want) / 2).max(1);
+    let (b, want, m_max) = subspace_size(n, p, want, need, opts)?;
     let round_up = |x: usize| x.div_ceil(b) * b;
-    let cap = (avail.saturating_sub(b) / b) * b;
-    let m_max =
-        round_up(((opts.subspace_ratio * want as f64).ceil() as usize).max(want + 4 * b)).min(cap);
-    if m_max < want + b {
-        want = m_max.saturating_sub(b);
-    }
-    if want == 0 || want < need {
-        return Err(EigenError::InvalidOption {
-            name: "block_size / modes_per_slice",
-            value: format!("block {b}, {need} modes in slice, {n} DOFs"),
-            reason: "the Krylov subspace does not fit in the problem: lower block_size or modes_per_slice",
-        });
-    }
     // Convergence is checked when the subspace is full and, from half of it (and at least
     // `want` + 2 blocks) on, every EARLY_CHECK_BLOCKS blocks.
     let early_from = round_up((want + 2 * b).max(m_max / 2));
@@ -150,6 +135,12 @@ pub(super) fn lanczos_slice(
         let e = h.as_ref().submatrix(j, 0, b, j);
         let es = mm(e, s.as_ref(), Par::Seq);
         ctx.timing.rayleigh_ritz_s += t_rr.elapsed().as_secs_f64();
+        let ritz = Ritz {
+            sigma,
+            theta: &theta,
+            s: s.as_ref(),
+            es: es.as_ref(),
+        };
         // Indices by descending θ (wanted = largest θ = λ just above σ), or by descending |θ|
         // for a two-sided slice.
         let mut order: Vec<usize> = (0..j).rev().collect();
@@ -166,7 +157,7 @@ pub(super) fn lanczos_slice(
             (theta[idx] > 0.0 || two_sided.is_some())
                 && res <= opts.tolerance * theta[idx].abs().max(1e-2 * theta_abs_max)
         };
-        let lambda_of = |idx: usize| sigma + 1.0 / theta[idx];
+        let lambda_of = |idx: usize| ritz.lambda(idx);
         let prefix = order.iter().take_while(|&&i| converged(i)).count();
         let done = match known {
             None => prefix >= want,
@@ -182,30 +173,14 @@ pub(super) fn lanczos_slice(
             }
         };
         if done {
-            let t_x = Instant::now();
-            let mut sel: Vec<usize> = order[..prefix].to_vec();
-            // Ascending λ (for a one-sided slice the prefix is in that order already).
-            sel.sort_by(|&a, &b| lambda_of(a).total_cmp(&lambda_of(b)));
-            let s_sel = Mat::<f64>::from_fn(j, prefix, |r, c| s[(r, sel[c])]);
-            let mut vecs = mm(v.as_ref().subcols(0, j), s_sel.as_ref(), ctx.par());
-            // One free inverse-iteration step: x' = Op x / θ = x + Q (E s)/θ (Op V = V T + Q E).
-            // Then K x' − λ M x' = −M r/θ² with r = Op x − θx: the high-frequency content
-            // of r is no longer amplified by K − σM (Ericsson & Ruhe 1980, §3).
-            let es_sel = Mat::<f64>::from_fn(b, prefix, |r, c| es[(r, sel[c])] / theta[sel[c]]);
-            matmul(
-                vecs.as_mut(),
-                Accum::Add,
+            let (lambdas, strict, vecs) = ritz_pairs(
+                ctx,
+                &ritz,
+                &order[..prefix],
+                v.as_ref().subcols(0, j),
                 q.as_ref(),
-                es_sel.as_ref(),
-                1.0,
-                ctx.par(),
+                opts.tolerance,
             );
-            let lambdas = sel.iter().map(|&i| lambda_of(i)).collect();
-            let strict = sel
-                .iter()
-                .map(|&i| es.as_ref().col(i).norm_l2() <= opts.tolerance * theta[i].abs())
-                .collect();
-            ctx.timing.restart_s += t_x.elapsed().as_secs_f64();
             return Ok(SliceOut {
                 lambdas,
                 strict,
@@ -228,37 +203,157 @@ pub(super) fn lanczos_slice(
                 restarts,
             });
         }
-        // Thick restart: keep the Ritz vectors with the largest θ, plus those at the other
-        // end (θ < 0: eigenvalues below σ that are not deflated) whose |θ| exceeds the
-        // smallest wanted θ. Purging the latter would let them grow back every cycle and
-        // pollute the wanted ones; keeping them acts as a soft deflation.
-        let t_x = Instant::now();
-        // Thick restart keeps the wanted Ritz vectors plus a fraction of the rest of the
-        // subspace (measured on the track: keeping 30 % instead of half gives every cycle a
-        // longer Krylov sequence and needs ~20 % fewer solves in all).
-        let extra = ((m_max - want) as f64 * opts.restart_keep) as usize;
-        let kkeep = (want + extra).min(j - b);
-        let theta_thr = theta[order[want.min(j) - 1]].max(0.0);
-        // (A two-sided slice keeps both ends through its |θ| order already.)
-        let neg: Vec<usize> = (0..j)
-            .take_while(|&i| two_sided.is_none() && theta[i] < 0.0 && -theta[i] >= theta_thr)
-            .take((kkeep - want.min(kkeep)) / 2)
-            .collect();
-        let mut sel: Vec<usize> = order[..kkeep - neg.len()].to_vec();
-        sel.extend_from_slice(&neg);
-        let s_sel = Mat::<f64>::from_fn(j, kkeep, |r, c| s[(r, sel[c])]);
-        tall_right_mul_in_place(v.as_mut(), s_sel.as_ref(), ctx.par());
-        if !lumped {
-            tall_right_mul_in_place(mv.as_mut(), s_sel.as_ref(), ctx.par());
-        }
-        let ek = Mat::<f64>::from_fn(b, kkeep, |r, c| es[(r, sel[c])]);
-        h.fill(0.0);
-        for (i, &idx) in sel.iter().enumerate() {
-            h[(i, i)] = theta[idx];
-        }
-        h.as_mut().submatrix_mut(kkeep, 0, b, kkeep).copy_from(&ek);
-        j = kkeep;
+        j = thick_restart(
+            ctx,
+            &ritz,
+            &order,
+            (want, m_max, b),
+            two_sided.is_some(),
+            opts.restart_keep,
+            (v.as_mut(), mv.as_mut(), h.as_mut()),
+        );
         restarts += 1;
-        ctx.timing.restart_s += t_x.elapsed().as_secs_f64();
     }
+}
+
+/// Block size `b`, number of wanted pairs and Krylov subspace size `m_max` (a multiple of
+/// `b`) of a slice in an `n`-DOF problem with `p` deflated vectors: `want` raised to the
+/// Sturm-known `need` (and at least 1), the subspace `subspace_ratio · want` (at least
+/// `want + 4b`), both cut to what fits beside the deflated vectors.
+fn subspace_size(
+    n: usize,
+    p: usize,
+    want: usize,
+    need: usize,
+    opts: &EigenOptions,
+) -> Result<(usize, usize, usize), EigenError> {
+    let avail = n.saturating_sub(p);
+    let mut want = want.max(need).max(1);
+    let b = opts.block_size.min(avail.saturating_sub(want) / 2).max(1);
+    let round_up = |x: usize| x.div_ceil(b) * b;
+    let cap = (avail.saturating_sub(b) / b) * b;
+    let m_max =
+        round_up(((opts.subspace_ratio * want as f64).ceil() as usize).max(want + 4 * b)).min(cap);
+    if m_max < want + b {
+        want = m_max.saturating_sub(b);
+    }
+    if want == 0 || want < need {
+        return Err(EigenError::InvalidOption {
+            name: "block_size / modes_per_slice",
+            value: format!("block {b}, {need} modes in slice, {n} DOFs"),
+            reason: "the Krylov subspace does not fit in the problem: lower block_size or modes_per_slice",
+        });
+    }
+    Ok((b, want, m_max))
+}
+
+/// The Rayleigh–Ritz solution of one Lanczos cycle at shift `sigma` (rad²/s²): Ritz values
+/// `theta` (ascending; θ = 1/(λ − σ), s²/rad²), their eigenvectors `s` in the Krylov basis,
+/// and `es` = E·s, whose column norms are the Ritz residuals (E: the last block row of H).
+struct Ritz<'a> {
+    sigma: f64,
+    theta: &'a [f64],
+    s: MatRef<'a, f64>,
+    es: MatRef<'a, f64>,
+}
+
+impl Ritz<'_> {
+    /// Eigenvalue λ = σ + 1/θ (rad²/s²) of Ritz pair `idx`.
+    fn lambda(&self, idx: usize) -> f64 {
+        self.sigma + 1.0 / self.theta[idx]
+    }
+}
+
+/// The converged Ritz pairs `prefix` (indices into `ritz`) as eigenpairs in ascending λ:
+/// eigenvalues (rad²/s²), whether each meets `tol · θ` without the floor (strict), and the
+/// eigenvectors (n × prefix) after one free inverse-iteration step with the next block `q`
+/// of the Krylov basis `v`.
+fn ritz_pairs(
+    ctx: &mut Ctx<'_>,
+    ritz: &Ritz<'_>,
+    prefix: &[usize],
+    v: MatRef<'_, f64>,
+    q: MatRef<'_, f64>,
+    tol: f64,
+) -> (Vec<f64>, Vec<bool>, Mat<f64>) {
+    let t_x = Instant::now();
+    let (theta, s, es) = (ritz.theta, ritz.s, ritz.es);
+    let j = v.ncols();
+    let b = q.ncols();
+    let lambda_of = |idx: usize| ritz.lambda(idx);
+    let mut sel: Vec<usize> = prefix.to_vec();
+    // Ascending λ (for a one-sided slice the prefix is in that order already).
+    sel.sort_by(|&a, &b| lambda_of(a).total_cmp(&lambda_of(b)));
+    let s_sel = Mat::<f64>::from_fn(j, sel.len(), |r, c| s[(r, sel[c])]);
+    let mut vecs = mm(v, s_sel.as_ref(), ctx.par());
+    // One free inverse-iteration step: x' = Op x / θ = x + Q (E s)/θ (Op V = V T + Q E).
+    // Then K x' − λ M x' = −M r/θ² with r = Op x − θx: the high-frequency content
+    // of r is no longer amplified by K − σM (Ericsson & Ruhe 1980, §3).
+    let es_sel = Mat::<f64>::from_fn(b, sel.len(), |r, c| es[(r, sel[c])] / theta[sel[c]]);
+    matmul(
+        vecs.as_mut(),
+        Accum::Add,
+        q,
+        es_sel.as_ref(),
+        1.0,
+        ctx.par(),
+    );
+    let lambdas: Vec<f64> = sel.iter().map(|&i| lambda_of(i)).collect();
+    let strict: Vec<bool> = sel
+        .iter()
+        .map(|&i| es.col(i).norm_l2() <= tol * theta[i].abs())
+        .collect();
+    ctx.timing.restart_s += t_x.elapsed().as_secs_f64();
+    (lambdas, strict, vecs)
+}
+
+/// Thick restart of a slice's Krylov basis after a full cycle: keeps the `want` Ritz vectors
+/// first in `order` plus a fraction `restart_keep` of the rest of the `m_max`-column subspace
+/// (block size `b`), among them, for a one-sided slice, the Ritz vectors of undeflated
+/// eigenvalues below σ (θ < 0) whose |θ| exceeds the smallest wanted θ. Rewrites V, M·V
+/// (`mv`, not kept for a diagonal M) and H (the Ritz values on the diagonal, E·s below) and
+/// returns the kept size.
+fn thick_restart(
+    ctx: &mut Ctx<'_>,
+    ritz: &Ritz<'_>,
+    order: &[usize],
+    (want, m_max, b): (usize, usize, usize),
+    two_sided: bool,
+    restart_keep: f64,
+    (mut v, mut mv, mut h): (MatMut<'_, f64>, MatMut<'_, f64>, MatMut<'_, f64>),
+) -> usize {
+    let (theta, s, es) = (ritz.theta, ritz.s, ritz.es);
+    let j = theta.len();
+    let lumped = ctx.m_diag.is_some();
+    // Thick restart: keep the Ritz vectors with the largest θ, plus those at the other
+    // end (θ < 0: eigenvalues below σ that are not deflated) whose |θ| exceeds the
+    // smallest wanted θ. Purging the latter would let them grow back every cycle and
+    // pollute the wanted ones; keeping them acts as a soft deflation.
+    let t_x = Instant::now();
+    // Thick restart keeps the wanted Ritz vectors plus a fraction of the rest of the
+    // subspace (measured on the track: keeping 30 % instead of half gives every cycle a
+    // longer Krylov sequence and needs ~20 % fewer solves in all).
+    let extra = ((m_max - want) as f64 * restart_keep) as usize;
+    let kkeep = (want + extra).min(j - b);
+    let theta_thr = theta[order[want.min(j) - 1]].max(0.0);
+    // (A two-sided slice keeps both ends through its |θ| order already.)
+    let neg: Vec<usize> = (0..j)
+        .take_while(|&i| !two_sided && theta[i] < 0.0 && -theta[i] >= theta_thr)
+        .take((kkeep - want.min(kkeep)) / 2)
+        .collect();
+    let mut sel: Vec<usize> = order[..kkeep - neg.len()].to_vec();
+    sel.extend_from_slice(&neg);
+    let s_sel = Mat::<f64>::from_fn(j, kkeep, |r, c| s[(r, sel[c])]);
+    tall_right_mul_in_place(v.as_mut(), s_sel.as_ref(), ctx.par());
+    if !lumped {
+        tall_right_mul_in_place(mv.as_mut(), s_sel.as_ref(), ctx.par());
+    }
+    let ek = Mat::<f64>::from_fn(b, kkeep, |r, c| es[(r, sel[c])]);
+    h.fill(0.0);
+    for (i, &idx) in sel.iter().enumerate() {
+        h[(i, i)] = theta[idx];
+    }
+    h.as_mut().submatrix_mut(kkeep, 0, b, kkeep).copy_from(&ek);
+    ctx.timing.restart_s += t_x.elapsed().as_secs_f64();
+    kkeep
 }
