@@ -86,6 +86,11 @@ pub fn polygon_properties(poly: &[[f64; 2]]) -> SectionProperties {
     )
 }
 
+/// Foot width of the embedded UIC54 profile (m), for checks that need it without parsing the
+/// profile (the test `uic54_dimensions` holds it equal to [`RailProfile::foot_width_m`] of
+/// [`RailProfile::uic54`]).
+pub const UIC54_FOOT_WIDTH_M: f64 = 0.140;
+
 /// The rail profile in the model frame (m): y lateral, z up, z = 0 at the foot underside.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RailProfile {
@@ -327,6 +332,7 @@ mod tests {
         let p = RailProfile::uic54().unwrap();
         assert!((p.height_m() - 0.159).abs() < 1e-12);
         assert!((p.foot_width_m() - 0.140).abs() < 1e-12);
+        assert_eq!(p.foot_width_m(), UIC54_FOOT_WIDTH_M);
         assert!((p.head_width_m() - 0.070).abs() < 1e-12);
         assert!((p.web_thickness_m() - 0.016).abs() < 1e-12);
         let top = p.head_top();

@@ -66,8 +66,8 @@ impl Model {
         c.pos(
             "fastening.footprint_width",
             f.footprint_width,
-            0.14,
-            "m (within the 0.14 m rail foot)",
+            crate::mesh::profile::UIC54_FOOT_WIDTH_M,
+            "m (within the 0.14 m foot of the UIC54 rail)",
         )?;
         let max_strip =
             (f.footprint_length / f.columns as f64).min(f.footprint_width / f.rows as f64);

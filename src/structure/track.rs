@@ -85,7 +85,12 @@ impl TrackStructure {
             .y_foot_lines(&hold)
             .into_iter()
             .filter(|&y| {
-                y > GEOMETRY_TOLERANCE && y < 0.5 * m.fastening.footprint_width.min(0.14) - 1e-6
+                y > GEOMETRY_TOLERANCE
+                    && y < 0.5
+                        * m.fastening
+                            .footprint_width
+                            .min(crate::mesh::profile::UIC54_FOOT_WIDTH_M)
+                        - 1e-6
             })
             .collect();
         let mut params = SectionParams {
