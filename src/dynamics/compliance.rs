@@ -82,14 +82,7 @@ pub fn longitudinal_compliance(
 ) -> Result<LongitudinalCompliance, DynamicsError> {
     let (mats, _) = track.assemble()?;
     let frame = ContactFrame::for_inclination(m.rail.inclination);
-    let hertz = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
-        radius_x_m: m.wheel.radius,
-        radius_y_m: m.contact.rail_crown_radius,
-        youngs_pa: m.rail.youngs_modulus,
-        poisson: m.rail.poisson_ratio,
-        load_n: load.vertical_n,
-    })
-    .map_err(DynamicsError::StaticHertz)?;
+    let hertz = super::setup::static_hertz(m, load.vertical_n)?;
     let n = track.dofmap.n_free();
     let line = RailContactLine::new(track, &Mat::zeros(n, 0), &frame, hertz.b_m)?;
     let length = track.layout.length;

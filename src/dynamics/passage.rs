@@ -169,14 +169,7 @@ impl PassageEngine {
         let rigid: Vec<usize> = (0..wheel_sys.len())
             .filter(|&i| wheel_sys.omega2[i] == 0.0)
             .collect();
-        let hertz = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
-            radius_x_m: model.wheel.radius,
-            radius_y_m: model.contact.rail_crown_radius,
-            youngs_pa: model.rail.youngs_modulus,
-            poisson: model.rail.poisson_ratio,
-            load_n: model.vehicle.wheel_load,
-        })
-        .map_err(DynamicsError::StaticHertz)?;
+        let hertz = super::setup::static_hertz(model, model.vehicle.wheel_load)?;
         let rail_line = RailContactLine::new(track, track_modes, &frame, hertz.b_m)?;
         let wheel_contact = WheelContact::new(wheel, wheel_modes, &frame, hertz.b_m)?;
 

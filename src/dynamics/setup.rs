@@ -210,6 +210,23 @@ pub fn passage_contact(
     TransientRolling::new(cfg).map_err(DynamicsError::ContactGrid)
 }
 
+/// The static Hertz patch of the model's wheel on its rail crown under a vertical load
+/// `load_n` (N): the patch every passage, the explicit path and the compliance check build
+/// their contact line from.
+pub fn static_hertz(
+    model: &Model,
+    load_n: f64,
+) -> Result<crate::contact::HertzContact, DynamicsError> {
+    crate::contact::HertzContact::solve(&crate::contact::HertzInput {
+        radius_x_m: model.wheel.radius,
+        radius_y_m: model.contact.rail_crown_radius,
+        youngs_pa: model.rail.youngs_modulus,
+        poisson: model.rail.poisson_ratio,
+        load_n,
+    })
+    .map_err(DynamicsError::StaticHertz)
+}
+
 /// Refuses a model whose `run.start` an engine does not implement: `engine` (e.g. the
 /// explicit FE path) starts from the static solve only.
 pub fn require_static_start(model: &Model, engine: &'static str) -> Result<(), DynamicsError> {

@@ -17,7 +17,6 @@ use crate::dynamics::patch::{plane_weights, PlaneWeights};
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
 use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
 use crate::dynamics::setup::WheelLoads;
-use crate::dynamics::DynamicsError;
 use crate::model::{ExplicitLocalCompliance, ExplicitWheel, LoadSpread, Model};
 use crate::structure::{TrackStructure, WheelStructure};
 
@@ -171,14 +170,7 @@ impl ExplicitModel {
         let (wm, _) = wheel_structure.assemble()?;
         let track = Part::new(&tm, &opts, "track")?;
         let wheel = Part::new(&wm, &opts, "wheel")?;
-        let hertz = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
-            radius_x_m: model.wheel.radius,
-            radius_y_m: model.contact.rail_crown_radius,
-            youngs_pa: model.rail.youngs_modulus,
-            poisson: model.rail.poisson_ratio,
-            load_n: model.vehicle.wheel_load,
-        })
-        .map_err(DynamicsError::StaticHertz)?;
+        let hertz = crate::dynamics::setup::static_hertz(model, model.vehicle.wheel_load)?;
         let n_t = track_structure.dofmap.n_free();
         let line = RailContactLine::new(&track_structure, &Mat::zeros(n_t, 0), &frame, hertz.b_m)?;
         let rigid = wheel_rigid_modes(&wheel_structure, &wheel.op)?;
