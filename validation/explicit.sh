@@ -7,6 +7,9 @@
 #                                          #   rpm3-118 rpm3-heavy-wheel rpm3-trial10
 #                                          # convergence checks: rpm3-140-dtc-half (half the
 #                                          #   contact step), rpm3-140-node (node-line load)
+# EXTRA adds --set pairs to every engine of every case, e.g. the converged contact grid:
+#   EXTRA="--set contact.grid_nx=128 --set contact.grid_ny=16" OUT=validation/out/explicit128 \
+#     bash validation/explicit.sh rpm1-140
 # Outputs: validation/out/explicit/CASE/{explicit,reduced,reduced-consistent}/ and
 # CASE/table.md (explicit_compare's side-by-side table, the misses listed under it).
 set -euo pipefail
@@ -17,8 +20,9 @@ PROFILE=${PROFILE:-release}
 DIR=$PROFILE
 [ "$PROFILE" = dev ] && DIR=debug
 cargo build --profile "$PROFILE" --quiet --bin corrugation --example explicit_compare
-BIN=target/$DIR/corrugation
-CMP=target/$DIR/examples/explicit_compare
+# BIN and CMP may name copies of the binaries (so that a rebuild cannot swap them mid-run).
+BIN=${BIN:-target/$DIR/corrugation}
+CMP=${CMP:-target/$DIR/examples/explicit_compare}
 OUT=${OUT:-validation/out/explicit}
 
 case_sets() {
@@ -38,7 +42,7 @@ case_sets() {
 
 run_case() {
   local c=$1 dir=$OUT/$1 sets prof=()
-  sets=$(case_sets "$c")
+  sets="$(case_sets "$c") ${EXTRA:-}"
   mkdir -p "$dir"
   if [ "$c" = rpm3-trial10 ]; then
     # The reduced model's 10 µm trial corrugation: −c·W_band of its smooth passage.
