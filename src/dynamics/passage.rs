@@ -622,6 +622,7 @@ impl PassageEngine {
         let mut tr = ModalVerlet::new(&self.track_sys, dt)?;
         let mut wh = ModalVerlet::new(&self.wheel_sys, dt)?;
         let (mt, mw) = (tr.len(), wh.len());
+        let substepped = tr.substeps() > 1 || wh.substeps() > 1;
         let (f_n0, f_l0, spin) = self.static_loads();
         let x_torque = self.torque_onset_m()?;
         let x0 = self.x_start_m;
@@ -849,7 +850,11 @@ impl PassageEngine {
                 }
                 qw_prev.copy_from_slice(&wh.q);
                 let p_damp = tr.damping_power() + wh.damping_power();
-                eb.damper_dissipation_j += 0.5 * dt * (p_damp + p_damp_prev);
+                eb.damper_dissipation_j += if substepped {
+                    tr.step_damper_work() + wh.step_damper_work()
+                } else {
+                    0.5 * dt * (p_damp + p_damp_prev)
+                };
                 p_damp_prev = p_damp;
                 // Contact power with the corrected velocities.
                 let mut p_c = 0.0;
@@ -899,6 +904,7 @@ impl PassageEngine {
         Ok(PassageRecord {
             speed_m_per_s: v,
             dt_s: dt,
+            substeps: [tr.substeps(), wh.substeps()],
             x_start_m: x0,
             zone_m: self.zone_m,
             histories: h,
