@@ -4,7 +4,8 @@
 //! Track modes `q_t` and wheel modes `q_w` (see [`super::reduced`]) each obey
 //! `q̈ + C_q q̇ + Ω² q = Φᵀ f`, integrated by [`super::integrator::ModalVerlet`] with the
 //! time step of the contact grid, `Δt = Δx / V` (docs/theory.md §6.5: material moves one grid
-//! element per step in Kalker's transient theory). At each step:
+//! element per step in Kalker's transient theory), in sub-steps when that step is too long
+//! for the highest mode kept (the contact force of `t_n` held over them, §7.2). At each step:
 //!
 //! 1. both substructures advance their displacements to `t_{n+1}`;
 //! 2. the contact point moves to `x_c = x_0 + V t_{n+1}` on the rail; the rail's
