@@ -193,8 +193,8 @@ pub fn print_summary(
     out: &Path,
 ) {
     println!(
-        "passage at {:.1} km/h: {} steps of {:.3e} s in {:.2} s",
-        s.speed_kmh, s.steps, rec.dt_s, s.seconds
+        "passage at {:.1} km/h: {} steps of {:.3e} s (sub-steps: track {}, wheel {}) in {:.2} s",
+        s.speed_kmh, s.steps, rec.dt_s, rec.substeps[0], rec.substeps[1], s.seconds
     );
     println!(
         "  mean F_N {:.0} N, mean F_L {:.0} N (F_L/F_N {:.4}); static creepage {:.3e}",

@@ -4,7 +4,8 @@
 //! Track modes `q_t` and wheel modes `q_w` (see [`super::reduced`]) each obey
 //! `q̈ + C_q q̇ + Ω² q = Φᵀ f`, integrated by [`super::integrator::ModalVerlet`] with the
 //! time step of the contact grid, `Δt = Δx / V` (docs/theory.md §6.5: material moves one grid
-//! element per step in Kalker's transient theory). At each step:
+//! element per step in Kalker's transient theory), in sub-steps when that step is too long
+//! for the highest mode kept (the contact force of `t_n` held over them, §7.2). At each step:
 //!
 //! 1. both substructures advance their displacements to `t_{n+1}`;
 //! 2. the contact point moves to `x_c = x_0 + V t_{n+1}` on the rail; the rail's
@@ -622,6 +623,7 @@ impl PassageEngine {
         let mut tr = ModalVerlet::new(&self.track_sys, dt)?;
         let mut wh = ModalVerlet::new(&self.wheel_sys, dt)?;
         let (mt, mw) = (tr.len(), wh.len());
+        let substepped = tr.substeps() > 1 || wh.substeps() > 1;
         let (f_n0, f_l0, spin) = self.static_loads();
         let x_torque = self.torque_onset_m()?;
         let x0 = self.x_start_m;
@@ -849,7 +851,11 @@ impl PassageEngine {
                 }
                 qw_prev.copy_from_slice(&wh.q);
                 let p_damp = tr.damping_power() + wh.damping_power();
-                eb.damper_dissipation_j += 0.5 * dt * (p_damp + p_damp_prev);
+                eb.damper_dissipation_j += if substepped {
+                    tr.step_damper_work() + wh.step_damper_work()
+                } else {
+                    0.5 * dt * (p_damp + p_damp_prev)
+                };
                 p_damp_prev = p_damp;
                 // Contact power with the corrected velocities.
                 let mut p_c = 0.0;
@@ -899,6 +905,7 @@ impl PassageEngine {
         Ok(PassageRecord {
             speed_m_per_s: v,
             dt_s: dt,
+            substeps: [tr.substeps(), wh.substeps()],
             x_start_m: x0,
             zone_m: self.zone_m,
             histories: h,

@@ -127,8 +127,11 @@ impl EnergyBalance {
 pub struct PassageRecord {
     /// Speed (m/s).
     pub speed_m_per_s: f64,
-    /// Time step (s).
+    /// Time step: the contact step `Δx / V` (s).
     pub dt_s: f64,
+    /// Structural sub-steps per contact step, `[track, wheel]` (−; 1 = none): the reduced
+    /// passage's modal sub-steps, the explicit path's central-difference steps.
+    pub substeps: [usize; 2],
     /// Wheel start position (m).
     pub x_start_m: f64,
     /// Solution zone [start, end] (m).

@@ -480,6 +480,7 @@ impl ExplicitModel {
             record: PassageRecord {
                 speed_m_per_s: v,
                 dt_s: dt_c,
+                substeps: [nt, nw],
                 x_start_m: x0,
                 zone_m: self.zone_m,
                 histories: h,
