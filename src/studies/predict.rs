@@ -656,7 +656,7 @@ fn sweep_section(d: &mut Document, sw: &SweepOutcome) {
             .collect(),
     );
     d.paragraph(format!(
-        "Speed range ratio {}; wavelength range ratio {} (frequency selection shows as a wavelength range ratio much smaller than the speed range ratio).",
+        "Speed range ratio {}; wavelength range ratio {} (frequency selection shows as a wavelength range ratio much smaller than the speed range ratio). The coupled wheel–track mode each speed's dominant frequency is attributed to, and the speed ranges each selects over: sweep/report.md, sweep/dominant.csv; red dotted lines on the maps: the coupled modes the contact sees.",
         sig(sw.record.speed_range_ratio, 3),
         sw.record
             .wavelength_range_ratio

@@ -158,6 +158,29 @@ impl MapOptions {
         Ok(())
     }
 
+    /// Whether two shards' options describe the same maps: equal grids and lines, and the
+    /// same coupled modes to within 1e-9 relative (a dense eigensolver run on another
+    /// machine or thread count may differ in the last bits); the merge uses the first
+    /// shard's.
+    pub fn same_as(&self, other: &Self) -> bool {
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+        let strip = |o: &Self| Self {
+            coupled_modes: Vec::new(),
+            ..o.clone()
+        };
+        strip(self) == strip(other)
+            && self.coupled_modes.len() == other.coupled_modes.len()
+            && self
+                .coupled_modes
+                .iter()
+                .zip(&other.coupled_modes)
+                .all(|(a, b)| {
+                    close(a.frequency_hz, b.frequency_hz)
+                        && close(a.position_m, b.position_m)
+                        && a.dominant == b.dominant
+                })
+    }
+
     /// The wavelength grid (mm), ascending.
     pub fn wavelength_grid_mm(&self) -> Vec<f64> {
         maps::linspace(
@@ -234,4 +257,47 @@ pub struct SweepOutcome {
     pub maps: SweepMaps,
     /// Computed and reused speeds.
     pub stats: PassageStats,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::coupled::ModeShares;
+
+    fn mode(f: f64) -> CoupledMode {
+        CoupledMode {
+            position_m: 0.5,
+            frequency_hz: f,
+            damping_ratio: 0.01,
+            shares: ModeShares::default(),
+            dominant: "support".into(),
+            contact_amplitudes_m_per_sqrt_j: [1.0, 0.0, 0.0, 0.0],
+            rail_x_to_n: 1.0,
+        }
+    }
+
+    /// Shards whose coupled modes differ in the last bits merge; other modes or lines do not.
+    #[test]
+    fn shards_agree_on_coupled_modes_to_rounding_only() {
+        let a = MapOptions {
+            coupled_speed_kmh: Some(140.0),
+            coupled_modes: vec![mode(1000.0), mode(1400.0)],
+            ..MapOptions::default()
+        };
+        let mut b = a.clone();
+        b.coupled_modes[0].frequency_hz *= 1.0 + 1e-13;
+        b.coupled_modes[1].damping_ratio += 1e-15;
+        assert!(a.same_as(&b));
+        let mut c = a.clone();
+        c.coupled_modes[1].frequency_hz = 1401.0;
+        assert!(!a.same_as(&c));
+        let mut d = a.clone();
+        d.wheel_lines_hz.push(1065.0);
+        assert!(!a.same_as(&d));
+        let e = MapOptions {
+            coupled_speed_kmh: Some(100.0),
+            ..a.clone()
+        };
+        assert!(!a.same_as(&e));
+    }
 }
