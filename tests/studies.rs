@@ -792,3 +792,113 @@ fn cli_reports_bad_models_speeds_and_study_keys() {
     );
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// The small passage model as `--set` arguments, with the cache and output directory.
+fn small_cli_args(cmd: &[&str], out: &Path) -> Vec<String> {
+    let mut a: Vec<String> = cmd.iter().map(|s| s.to_string()).collect();
+    a.extend(common::SMALL_MODEL.iter().map(|s| s.to_string()));
+    for s in corrugation::model::test_problems::SMALL_PASSAGE {
+        a.extend(["--set".to_string(), s.to_string()]);
+    }
+    let cache = std::env::temp_dir().join("corrugation-test-cache-passage-cli");
+    a.extend([
+        "--cache".into(),
+        cache.display().to_string(),
+        "--out".into(),
+        out.display().to_string(),
+    ]);
+    a
+}
+
+fn run_small(cmd: &[&str], out: &Path) {
+    let args = small_cli_args(cmd, out);
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (code, _, stderr) = common::run(&refs);
+    assert_eq!(code, 0, "{cmd:?} failed: {stderr}");
+}
+
+/// On the small test model a sweep attributes every speed's dominant wear and F_L frequency
+/// to a coupled wheel–track mode: `dominant.csv` has the attribution columns, finite where the
+/// speed has a dominant frequency, each mode within reach of its frequency and the shares
+/// summing to 1; `grow.json` carries the growth-rate spectrum's summary and the attribution of
+/// every passage's dominant wear frequency.
+#[test]
+fn sweep_and_grow_attribute_the_selected_frequencies_to_coupled_modes() {
+    let dir = tmpdir("coupled");
+    run_small(&["sweep", "--speeds", "100,140,180"], &dir.join("sweep"));
+    let text = std::fs::read_to_string(dir.join("sweep/dominant.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 3);
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|c| *c == name)
+            .unwrap_or_else(|| panic!("dominant.csv lacks {name}: {header:?}"))
+    };
+    for p in ["", "fl_"] {
+        let signal = if p.is_empty() {
+            "dominant_frequency_hz".to_string()
+        } else {
+            "fl_dominant_frequency_hz".to_string()
+        };
+        let shares: Vec<usize> = [
+            "coupled_wheel_share",
+            "coupled_rail_share",
+            "coupled_support_share",
+            "coupled_contact_share",
+        ]
+        .iter()
+        .map(|c| col(&format!("{p}{c}")))
+        .collect();
+        for r in &rows {
+            let f = r[col(&signal)];
+            if !f.is_finite() {
+                continue;
+            }
+            let fm = r[col(&format!("{p}coupled_mode_hz"))];
+            assert!(fm.is_finite() && fm > 0.0, "{p}: {r:?}");
+            assert!(
+                (fm - f).abs() < 0.5 * f,
+                "{p}: {f} Hz attributed to {fm} Hz"
+            );
+            let total: f64 = shares.iter().map(|&i| r[i]).sum();
+            assert!((total - 1.0).abs() < 1e-9, "{p}: shares sum to {total}");
+            let zeta = r[col(&format!("{p}coupled_damping_ratio"))];
+            let xn = r[col(&format!("{p}coupled_rail_x_to_n"))];
+            assert!(zeta.is_finite() && xn.is_finite() && xn >= 0.0, "{r:?}");
+        }
+    }
+    assert!(rows.iter().any(|r| r[col("coupled_mode_hz")].is_finite()));
+    let rec: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("sweep/sweep.json")).unwrap())
+            .unwrap();
+    assert_eq!(rec["map"]["coupled_speed_kmh"], 140.0);
+    assert!(!rec["map"]["coupled_modes"].as_array().unwrap().is_empty());
+    let report = std::fs::read_to_string(dir.join("sweep/report.md")).unwrap();
+    assert!(
+        report.contains("Wear: coupled mode by speed range"),
+        "{report}"
+    );
+
+    run_small(&["grow", "--amplitudes-um", "10"], &dir.join("grow"));
+    let g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("grow/grow.json")).unwrap())
+            .unwrap();
+    let r = &g["growth_rate"];
+    let lam = r["fastest_wavelength_mm"].as_f64().unwrap();
+    assert!((20.0..=80.0).contains(&lam), "{r}");
+    assert!(r["max_rate_per_passage"].as_f64().unwrap().is_finite());
+    let n = r["wavelengths"].as_u64().unwrap();
+    assert!(
+        r["growing_wavelengths"].as_u64().unwrap() <= n && n > 0,
+        "{r}"
+    );
+    assert!(r["fastest_mode"]["mode_frequency_hz"].as_f64().unwrap() > 0.0);
+    let c = g["coupled"].as_array().unwrap();
+    assert_eq!(c.len(), 2, "smooth rail and one trial amplitude: {g}");
+    assert!(dir.join("grow/coupled_modes.csv").is_file());
+}

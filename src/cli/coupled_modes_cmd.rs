@@ -6,20 +6,15 @@
 //! (docs/theory.md §7.10).
 //!
 //! Outputs in `--out DIR` (default `corrugation-out/coupled-modes`), written atomically:
-//! * `coupled_modes.csv` — one row per mode: `position_m, frequency_hz, damping_ratio`, the
-//!   shares (`wheel_elastic, wheel_rigid, rail_<family>…, support, contact`),
-//!   `rail_x_to_n`, `rail_x_m_per_sqrt_j, rail_n_m_per_sqrt_j, wheel_x_m_per_sqrt_j,
-//!   wheel_n_m_per_sqrt_j`, and `dominant` as the index in the share columns;
-//! * `coupled_modes.npy` — the same numbers (rows × columns, column order of the CSV);
-//! * `coupled_modes.json` — the linearisation, positions and modes (the `--json` object).
+//! `coupled_modes.csv`, `coupled_modes.npy` (same columns) and `coupled_modes.json` (the
+//! `--json` object); see [`corrugation::studies::coupled`].
 
 use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
 
-use corrugation::dynamics::coupled::{CoupledMode, CoupledModes, ModeShares};
-use corrugation::io::{write_csv, write_npy, write_text};
+use corrugation::studies::coupled::write_coupled_modes;
 
 use super::ModelArgs;
 
@@ -48,60 +43,6 @@ pub struct CoupledModesCmd {
     /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
-}
-
-/// The columns of `coupled_modes.csv`.
-pub fn columns() -> Vec<String> {
-    let mut c: Vec<String> = ["position_m", "frequency_hz", "damping_ratio"]
-        .map(String::from)
-        .to_vec();
-    c.extend(ModeShares::labels());
-    c.extend(
-        [
-            "rail_x_to_n",
-            "rail_x_m_per_sqrt_j",
-            "rail_n_m_per_sqrt_j",
-            "wheel_x_m_per_sqrt_j",
-            "wheel_n_m_per_sqrt_j",
-            "dominant",
-        ]
-        .map(String::from),
-    );
-    c
-}
-
-/// One row of `coupled_modes.csv` (see [`columns`]).
-fn row(m: &CoupledMode) -> Vec<f64> {
-    let mut r = vec![m.position_m, m.frequency_hz, m.damping_ratio];
-    let shares = m.shares.values();
-    let dom = shares
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .map_or(0, |(i, _)| i);
-    r.extend(shares);
-    r.push(m.rail_x_to_n);
-    r.extend(m.contact_amplitudes_m_per_sqrt_j);
-    r.push(dom as f64);
-    r
-}
-
-/// Writes `coupled_modes.csv`, `.npy` and `.json` into `out`.
-pub fn write_coupled_modes(out: &std::path::Path, cm: &CoupledModes) -> anyhow::Result<()> {
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let cols = columns();
-    let names: Vec<&str> = cols.iter().map(String::as_str).collect();
-    let rows: Vec<Vec<f64>> = cm.modes.iter().map(row).collect();
-    write_csv(&out.join("coupled_modes.csv"), &names, rows.iter().cloned())?;
-    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
-    write_npy(
-        &out.join("coupled_modes.npy"),
-        &[rows.len(), cols.len()],
-        &flat,
-    )?;
-    let json = serde_json::to_string_pretty(cm)?;
-    write_text(&out.join("coupled_modes.json"), &json)?;
-    Ok(())
 }
 
 impl CoupledModesCmd {

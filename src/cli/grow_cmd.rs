@@ -15,19 +15,27 @@
 //! * `rate_check.csv` (with `--rate-check`): the spectrum's linear theory against passages over
 //!   1 µm sinusoidal corrugations at the given wavelengths;
 //! * `iterative.csv` (with `--rounds`): round, passages, amplitude_um, dominant_wavelength_mm;
-//! * `grow.json` — the `--json` object.
+//! * `coupled_modes.csv/.npy/.json` — the coupled wheel–track modes at the speed
+//!   (`--no-coupled` skips them and the attribution);
+//! * `grow.json` — the `--json` object, with the dominant wear frequency of every passage
+//!   and the growth-rate spectrum's fastest wavelength attributed to coupled modes, and the
+//!   spectrum's summary (`growth_rate`: fastest wavelength, its rate per passage, the count
+//!   of growing wavelengths).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
 
+use corrugation::dynamics::coupled::attribution_text;
 use corrugation::growth::procedure::{iterative_growth, IterativeOptions};
 use corrugation::growth::verdict::{growth_verdict, no_initiation_verdict, sig, Verdict};
 use corrugation::io::write_csv;
+use corrugation::studies::coupled::write_coupled_modes;
 use corrugation::studies::grow::{
-    grow_json, growth_rate, initiation_check, mode_lines, rate_check, trial_growth_if_any,
-    write_grow_json, write_growth_files, write_growth_rate, GrowJson,
+    grow_json, growth_attribution, growth_rate, initiation_check, mode_lines, rate_check,
+    rate_summary, trial_growth_if_any, write_grow_json, write_growth_files, write_growth_rate,
+    GrowJson,
 };
 
 use super::ModelArgs;
@@ -58,6 +66,9 @@ pub struct GrowCmd {
     /// these wavelengths (mm, within 20–80), comma separated: `rate_check.csv`.
     #[arg(long, value_delimiter = ',', value_name = "MM,...")]
     rate_check: Vec<f64>,
+    /// Skip the coupled wheel–track modes and the attribution of the selected frequencies.
+    #[arg(long)]
+    no_coupled: bool,
     /// Output directory.
     #[arg(long, default_value = "corrugation-out/grow", value_name = "DIR")]
     out: PathBuf,
@@ -125,6 +136,14 @@ impl GrowCmd {
         let m = self.model.load()?;
         super::check_out_dir(&self.out)?;
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
+        let coupled = if self.no_coupled {
+            Vec::new()
+        } else {
+            let cm = prepared.coupled_modes(m.run.speed(), &[])?;
+            write_coupled_modes(&self.out, &cm)?;
+            cm.modes
+        };
+        let mut rate = None;
         if !self.no_rate {
             let pb = super::progress::bar("growth-rate spectrum");
             let s = growth_rate(&m, &prepared, m.run.speed(), &pb)?;
@@ -132,6 +151,15 @@ impl GrowCmd {
             write_growth_rate(&self.out, &s)?;
             if !self.json {
                 println!("{}", s.sentence(m.run.speed_kmh));
+            }
+            rate = rate_summary(&s, &coupled);
+            if let Some(a) = rate.as_ref().and_then(|r| r.fastest_mode.as_ref()) {
+                if !self.json {
+                    println!(
+                        "  fastest wavelength by coupled mode: {}",
+                        attribution_text(a)
+                    );
+                }
             }
         }
         if !self.rate_check.is_empty() {
@@ -178,6 +206,7 @@ impl GrowCmd {
             let text = serde_json::to_string_pretty(&serde_json::json!({
                 "speed_kmh": m.run.speed_kmh,
                 "verdict": v,
+                "growth_rate": rate,
             }))?;
             write_grow_json(&self.out, &text)?;
             if self.json {
@@ -233,19 +262,30 @@ impl GrowCmd {
             )?;
             rounds = r;
         }
-        let j = grow_json(
+        let mut j = grow_json(
             &g,
             m.run.speed_kmh,
             rounds,
             verdict,
             t0.elapsed().as_secs_f64(),
         );
+        j.coupled = growth_attribution(&g, &coupled);
+        j.growth_rate = rate;
         let text = serde_json::to_string_pretty(&j)?;
         write_grow_json(&self.out, &text)?;
         if self.json {
             println!("{text}");
         } else {
             print_growth(&j);
+            for a in &j.coupled {
+                if let Some(x) = &a.mode {
+                    println!(
+                        "  2A_max {} µm: {}",
+                        sig(a.amplitude_um, 4),
+                        attribution_text(x)
+                    );
+                }
+            }
             println!("  outputs in {}", self.out.display());
             print_verdict(&j.verdict);
         }

@@ -35,6 +35,8 @@ impl MergeCmd {
         );
         if self.json {
             let mut j = serde_json::to_value(&record)?;
+            // The coupled modes are in sweep.json; only their count here.
+            j["map"]["coupled_modes"] = record.map.coupled_modes.len().into();
             j["wall_seconds"] = t0.elapsed().as_secs_f64().into();
             println!("{}", serde_json::to_string_pretty(&j)?);
         }

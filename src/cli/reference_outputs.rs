@@ -19,12 +19,13 @@ use anyhow::Context;
 use clap::Args;
 use serde::Serialize;
 
-use corrugation::dynamics::coupled::{attribution_text, ModeAttribution};
+use corrugation::dynamics::coupled::attribution_text;
 use corrugation::dynamics::summary::PassageSummary;
 use corrugation::dynamics::RailProfile;
 use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::io::write_text;
 use corrugation::spectral::nodal::{nodal_spectrum, short_window_m, NodalHistory, NodalSpectrum};
+use corrugation::studies::coupled::{passage_attribution, SummaryAttribution};
 
 /// Options of the structural outputs of a passage.
 #[derive(Debug, Clone, Args)]
@@ -42,41 +43,15 @@ pub struct ReferenceArgs {
     pub no_nodal: bool,
 }
 
-/// Selected frequencies attributed to coupled modes.
-#[derive(Debug, Serialize)]
-pub struct Attribution {
-    /// Wear components.
-    pub wear: Vec<ModeAttribution>,
-    /// F_L components.
-    pub fl: Vec<ModeAttribution>,
-    /// F_N components.
-    pub fn_: Vec<ModeAttribution>,
-}
-
 /// The coupled modes at the passage speed, written to `out`, and the summary's components
-/// attributed to them; prints one line per wear component.
+/// attributed to them ([`passage_attribution`]); prints one line per wear component.
 pub fn coupled_attribution(
     prepared: &PreparedModel,
     s: &PassageSummary,
     out: &Path,
     quiet: bool,
-) -> anyhow::Result<Attribution> {
-    let v = corrugation::units::kmh_to_ms(s.speed_kmh);
-    let cm = prepared
-        .coupled_modes(v, &[])
-        .context("coupled wheel–track modes")?;
-    super::coupled_modes_cmd::write_coupled_modes(out, &cm)?;
-    let f = |c: &[corrugation::dynamics::WavelengthComponent]| {
-        cm.attribute(&c.iter().map(|c| c.frequency_hz).collect::<Vec<_>>())
-    };
-    let a = Attribution {
-        wear: f(&s.wear_components),
-        fl: f(&s.fl_components),
-        fn_: f(&s.fn_components),
-    };
-    let json = serde_json::json!({ "wear": a.wear, "fl": a.fl, "fn": a.fn_ });
-    let text = serde_json::to_string_pretty(&json)?;
-    write_text(&out.join("coupled_attribution.json"), &text)?;
+) -> anyhow::Result<SummaryAttribution> {
+    let (_, a) = passage_attribution(prepared, s, out)?;
     if !quiet {
         println!("  wear components by coupled mode:");
         for x in &a.wear {

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use clap::Args;
 
+use corrugation::studies::coupled::sweep_reference_speed_kmh;
 use corrugation::studies::grow::WHEEL_LINE_SHARE;
 use corrugation::studies::speeds::{parse_speeds, Shard};
 use corrugation::studies::sweep::{sweep, write_shard_plan, MapOptions};
@@ -63,9 +64,19 @@ impl SweepCmd {
         let cache = self.cache.as_deref();
         // One modal model for both the mode lines and the passages.
         let prepared = engine::prepared(&model, cache)?;
+        // The coupled modes once, at a speed fixed by the whole sweep (shards agree).
+        let t_c = Instant::now();
+        let v_c = sweep_reference_speed_kmh(model.run.speed_kmh, &all);
+        let coupled = prepared.coupled_modes(corrugation::units::kmh_to_ms(v_c), &[])?;
+        eprintln!(
+            "sweep: coupled wheel–track modes at {v_c} km/h in {:.1} s",
+            t_c.elapsed().as_secs_f64()
+        );
         let opts = MapOptions {
             frequency_lines_hz: prepared.longitudinal_compression_hz(),
             wheel_lines_hz: prepared.wheel_contact_modes_hz(WHEEL_LINE_SHARE),
+            coupled_speed_kmh: Some(v_c),
+            coupled_modes: coupled.visible(),
             ..MapOptions::default()
         };
         let runner: Box<dyn corrugation::dynamics::PassageRunner> = match self.engine {
@@ -100,6 +111,8 @@ impl SweepCmd {
         );
         if self.json {
             let mut j = serde_json::to_value(&out.record)?;
+            // The coupled modes are in sweep.json; only their count here.
+            j["map"]["coupled_modes"] = out.record.map.coupled_modes.len().into();
             j["wall_seconds"] = t0.elapsed().as_secs_f64().into();
             j["computed"] = out.stats.computed.len().into();
             j["reused"] = out.stats.reused.len().into();

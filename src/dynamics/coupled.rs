@@ -184,6 +184,41 @@ impl ModeShares {
     pub fn rail_total(&self) -> f64 {
         self.rail.iter().sum()
     }
+
+    /// The wheel's total share (elastic and rigid).
+    pub fn wheel_total(&self) -> f64 {
+        self.wheel_elastic + self.wheel_rigid
+    }
+
+    /// The part of the system holding the largest share, with the wheel's two parts taken
+    /// together: `wheel`, `rail LC`, `rail LS`, `rail VB`, `rail LB`, `rail torsion`,
+    /// `rail sleeper`, `rail local`, `rail other`, `support` or `contact` (a label of the
+    /// lines on the sweep maps).
+    pub fn family_label(&self) -> String {
+        let mut best = ("wheel".to_string(), self.wheel_total());
+        for (f, &v) in TrackFamily::ALL.iter().zip(&self.rail) {
+            if v > best.1 {
+                best = (format!("rail {}", short_family(*f)), v);
+            }
+        }
+        for (l, v) in [("support", self.support), ("contact", self.contact)] {
+            if v > best.1 {
+                best = (l.to_string(), v);
+            }
+        }
+        best.0
+    }
+}
+
+/// Short name of a track family on plots: `LC`, `LS`, `VB`, `LB`, or the family's name.
+fn short_family(f: TrackFamily) -> &'static str {
+    match f {
+        TrackFamily::LongitudinalCompression => "LC",
+        TrackFamily::LongitudinalShear => "LS",
+        TrackFamily::VerticalBending => "VB",
+        TrackFamily::LateralBending => "LB",
+        other => other.name(),
+    }
 }
 
 /// One coupled wheel–track mode as the outputs report it.
@@ -205,6 +240,70 @@ pub struct CoupledMode {
     /// The rail's longitudinal motion at the contact relative to its normal motion,
     /// `|u_rail,x| / |u_rail,n|` (−).
     pub rail_x_to_n: f64,
+}
+
+impl CoupledMode {
+    /// Largest contact amplitude per √energy (m/√J): rail or wheel, x or n.
+    pub fn visibility(&self) -> f64 {
+        self.contact_amplitudes_m_per_sqrt_j
+            .iter()
+            .fold(0.0f64, |a, &b| a.max(b))
+    }
+
+    /// The mode's weight in the receptance at the contact, `φ_c² = 2 ω² a²` (1/kg), with
+    /// `a` the [`Self::visibility`] and `ω = 2πf`: a mode normalised to unit modal mass has
+    /// the energy measure `|λ|² + ω² ≈ 2ω²` per unit coordinate, so its contact displacement
+    /// per unit coordinate is `φ_c = √2 ω a`, and `φ_c²` is its residue in the receptance
+    /// `Σ φ_c² / (ω_r² − ω²)` at the contact (the largest of rail and wheel, x and n).
+    pub fn contact_residue_per_kg(&self) -> f64 {
+        let w = 2.0 * std::f64::consts::PI * self.frequency_hz;
+        2.0 * (w * self.visibility()).powi(2)
+    }
+}
+
+/// Share of the largest contact residue ([`CoupledMode::contact_residue_per_kg`]) at or
+/// above which the contact "sees" a coupled mode (−): such a mode adds at least 3 % of the
+/// strongest mode's peak to the receptance at the contact for the same damping, and is drawn
+/// on the sweep maps. The same share as the wheel lines' contact participation
+/// (`studies::grow::WHEEL_LINE_SHARE`).
+pub const SEEN_SHARE: f64 = 0.03;
+
+/// Most lines of coupled modes drawn on one sweep map: the strongest by contact residue.
+pub const MAX_SEEN_LINES: usize = 16;
+
+/// The coupled modes the contact sees (contact residue at least [`SEEN_SHARE`] of the
+/// largest among `modes`) with a frequency in `band_hz` (Hz), at most [`MAX_SEEN_LINES`]
+/// (the strongest), ascending in frequency. Modes within 0.5 % of each other in frequency
+/// (the same mode at two contact positions, or a sine–cosine pair of the wheel) are one:
+/// the one with the larger residue.
+pub fn seen_by_contact(modes: &[CoupledMode], band_hz: [f64; 2]) -> Vec<CoupledMode> {
+    let top = modes
+        .iter()
+        .map(CoupledMode::contact_residue_per_kg)
+        .fold(0.0, f64::max);
+    let mut seen: Vec<&CoupledMode> = modes
+        .iter()
+        .filter(|m| {
+            (band_hz[0]..=band_hz[1]).contains(&m.frequency_hz)
+                && top > 0.0
+                && m.contact_residue_per_kg() >= SEEN_SHARE * top
+        })
+        .collect();
+    seen.sort_by(|a, b| {
+        b.contact_residue_per_kg()
+            .total_cmp(&a.contact_residue_per_kg())
+    });
+    let mut out: Vec<CoupledMode> = Vec::new();
+    for m in seen {
+        let dup = out
+            .iter()
+            .any(|o| (o.frequency_hz - m.frequency_hz).abs() <= 0.005 * m.frequency_hz);
+        if !dup && out.len() < MAX_SEEN_LINES {
+            out.push(m.clone());
+        }
+    }
+    out.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    out
 }
 
 /// Labels of the substructures' coordinates: what each track mode's energy counts as.
@@ -455,11 +554,7 @@ pub fn attribute(
     modes: &[CoupledMode],
     window: f64,
 ) -> Vec<ModeAttribution> {
-    let vis = |m: &CoupledMode| {
-        m.contact_amplitudes_m_per_sqrt_j
-            .iter()
-            .fold(0.0f64, |a, &b| a.max(b))
-    };
+    let vis = CoupledMode::visibility;
     let top = modes.iter().map(vis).fold(0.0, f64::max);
     frequencies_hz
         .iter()
@@ -675,6 +770,23 @@ impl CoupledModes {
     /// [`ATTRIBUTION_WINDOW`]).
     pub fn attribute(&self, frequencies_hz: &[f64]) -> Vec<ModeAttribution> {
         attribute(frequencies_hz, &self.modes, ATTRIBUTION_WINDOW)
+    }
+
+    /// The modes [`attribute`] can choose: those whose contact amplitude is at least
+    /// [`MIN_VISIBILITY`] of the largest. Attributing to these alone gives the same result
+    /// as attributing to all modes, except where every mode within the window is below that
+    /// visibility (then the nearest visible mode is taken instead of an invisible one).
+    pub fn visible(&self) -> Vec<CoupledMode> {
+        let top = self
+            .modes
+            .iter()
+            .map(CoupledMode::visibility)
+            .fold(0.0, f64::max);
+        self.modes
+            .iter()
+            .filter(|m| m.visibility() >= MIN_VISIBILITY * top)
+            .cloned()
+            .collect()
     }
 }
 

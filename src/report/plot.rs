@@ -72,9 +72,21 @@ pub struct OverlayLine {
     pub x: Vec<f64>,
     /// Ordinates (plot unit).
     pub y: Vec<f64>,
-    /// Drawn dashed and thinner (1 px instead of 2 px): a secondary family of lines (e.g. the
-    /// wheel's modes beside the track's longitudinal-compression modes).
-    pub dashed: bool,
+    /// How the line is drawn: one style per family of lines.
+    pub style: LineStyle,
+}
+
+/// The drawing style of an [`OverlayLine`]. Labels of solid lines are placed first, then
+/// those of dotted and dashed lines (a label too close to one already placed is left out).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LineStyle {
+    /// White, 2 px: the primary family (e.g. the track's longitudinal-compression modes).
+    #[default]
+    Solid,
+    /// White, 1 px, long dashes: a secondary family (e.g. the wheel's modes).
+    Dashed,
+    /// Light red, 2 px, short dashes: a third family (e.g. the coupled wheel–track modes).
+    Dotted,
 }
 
 impl OverlayLine {
@@ -84,7 +96,7 @@ impl OverlayLine {
             name: name.into(),
             x: vec![x0, x1],
             y: vec![y, y],
-            dashed: false,
+            style: LineStyle::Solid,
         }
     }
 }
@@ -652,11 +664,9 @@ fn heat_on<DB: DrawingBackend>(
     // Pixel anchors of the labels drawn so far (solid lines first: their labels win).
     let mut labels: Vec<(i32, i32)> = Vec::new();
     let mut pending: Vec<(String, i32, i32)> = Vec::new();
-    let ordered = map
-        .lines
-        .iter()
-        .filter(|l| !l.dashed)
-        .chain(map.lines.iter().filter(|l| l.dashed));
+    let ordered = [LineStyle::Solid, LineStyle::Dotted, LineStyle::Dashed]
+        .into_iter()
+        .flat_map(|st| map.lines.iter().filter(move |l| l.style == st));
     for l in ordered {
         let pts =
             l.x.iter()
@@ -664,20 +674,28 @@ fn heat_on<DB: DrawingBackend>(
                 .map(|(&x, &y)| inside(x, y).then_some((x, y)));
         let segs = runs(pts);
         for seg in &segs {
-            if l.dashed {
-                chart
+            match l.style {
+                LineStyle::Dashed => chart
                     .draw_series(DashedLineSeries::new(
                         seg.clone(),
                         6,
                         5,
                         WHITE.mix(0.85).stroke_width(1),
                     ))
-                    .map_err(es)?;
-            } else {
-                chart
+                    .map(|_| ()),
+                LineStyle::Dotted => chart
+                    .draw_series(DashedLineSeries::new(
+                        seg.clone(),
+                        3,
+                        4,
+                        RGBColor(255, 120, 120).stroke_width(2),
+                    ))
+                    .map(|_| ()),
+                LineStyle::Solid => chart
                     .draw_series(LineSeries::new(seg.clone(), WHITE.stroke_width(2)))
-                    .map_err(es)?;
+                    .map(|_| ()),
             }
+            .map_err(es)?;
         }
         if let Some(&(x, y)) = segs.last().and_then(|s| s.last()) {
             let (px, py) = chart.backend_coord(&(x, y));
@@ -898,7 +916,7 @@ mod tests {
                 name: "curve".into(),
                 x: x.clone(),
                 y: x.iter().map(|a| a / 2.0).collect(),
-                dashed: true,
+                style: LineStyle::Dashed,
             },
         ];
         let mut map = HeatMap {
@@ -932,9 +950,9 @@ mod tests {
         let y: Vec<f64> = (0..30).map(|j| 20.0 + 2.0 * j as f64).collect();
         let z = vec![1.0; x.len() * y.len()];
         let mut near = OverlayLine::horizontal("wheel_near", 40.5, 50.0, 145.0);
-        near.dashed = true;
+        near.style = LineStyle::Dashed;
         let mut far = OverlayLine::horizontal("wheel_far", 70.0, 50.0, 145.0);
-        far.dashed = true;
+        far.style = LineStyle::Dashed;
         // The dashed line comes first in the list: the solid line's label must still win.
         let lines = [
             near,

@@ -15,14 +15,20 @@
 //!   frequency, the linear wear per unit roughness (amplitude, phase), the growth rate per
 //!   passage, the four parts of the wear response and the same growth rate on a rigid
 //!   structure and with the normal receptance only; `growth_rate.svg`/`.png` its plot;
-//! * `grow.json` — [`GrowJson`], written last.
+//! * `coupled_modes.csv/.npy/.json` — the coupled wheel–track modes at the speed
+//!   ([`super::coupled`]), whose attribution of the dominant wear frequency of every passage
+//!   and of the growth-rate spectrum's fastest wavelength is in `grow.json`;
+//! * `grow.json` — [`GrowJson`] (with the growth-rate spectrum's summary, [`RateSummary`]),
+//!   written last.
 
 use std::path::Path;
 
 use serde::Serialize;
 
+use super::coupled::attribute_one;
 use super::initiation::{evaluate, InitiationCriterion};
 use super::StudiesError;
+use crate::dynamics::coupled::{CoupledMode, ModeAttribution};
 use crate::dynamics::prepared::PreparedModel;
 use crate::dynamics::summary::PassageSummary;
 use crate::dynamics::PassageRecorder;
@@ -127,8 +133,85 @@ pub struct GrowJson {
     pub iterative: Vec<GrowthRound>,
     /// The plain-language verdict.
     pub verdict: Verdict,
+    /// The dominant wear frequency of the smooth rail and of each trial amplitude attributed
+    /// to a coupled wheel–track mode (docs/theory.md §7.10); empty when the coupled modes
+    /// were not computed.
+    pub coupled: Vec<AmplitudeAttribution>,
+    /// The growth-rate spectrum in brief; `None` when it was not computed.
+    pub growth_rate: Option<RateSummary>,
     /// Wall-clock time of the run, s (0 when not measured).
     pub seconds: f64,
+}
+
+/// The selected (dominant) wear frequency of one passage of the growth attributed to a
+/// coupled mode.
+#[derive(Clone, Debug, Serialize)]
+pub struct AmplitudeAttribution {
+    /// Trial amplitude 2A_max (µm); 0 for the smooth rail.
+    pub amplitude_um: f64,
+    /// The dominant wear frequency (Hz); `None` without a wear peak in the band.
+    pub frequency_hz: Option<f64>,
+    /// The coupled mode it is attributed to; `None` without a frequency.
+    pub mode: Option<ModeAttribution>,
+}
+
+/// The smooth rail's and every trial amplitude's dominant wear frequency attributed to the
+/// coupled modes `modes`.
+pub fn growth_attribution(g: &TrialGrowth, modes: &[CoupledMode]) -> Vec<AmplitudeAttribution> {
+    std::iter::once((0.0, &g.smooth))
+        .chain(g.amplitudes.iter().map(|a| (a.amplitude_um, &a.summary)))
+        .map(|(amplitude_um, s)| AmplitudeAttribution {
+            amplitude_um,
+            frequency_hz: s.dominant_frequency_hz,
+            mode: attribute_one(modes, s.dominant_frequency_hz),
+        })
+        .collect()
+}
+
+/// The growth-rate spectrum (docs/theory.md §10.6) in brief, for `grow.json` and the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct RateSummary {
+    /// Speed (km/h).
+    pub speed_kmh: f64,
+    /// Wavelength of the largest growth rate (the fastest-growing, or the least-decaying,
+    /// wavelength), mm.
+    pub fastest_wavelength_mm: f64,
+    /// Its frequency at the speed, Hz.
+    pub fastest_frequency_hz: f64,
+    /// The largest growth rate, per passage (> 0 grows).
+    pub max_rate_per_passage: f64,
+    /// Its wear phase against the roughness, degrees (±180 grows fastest).
+    pub fastest_phase_deg: f64,
+    /// How many of the spectrum's wavelengths grow.
+    pub growing_wavelengths: usize,
+    /// How many wavelengths the spectrum has.
+    pub wavelengths: usize,
+    /// The wavelength ranges that grow, `[from, to]` mm.
+    pub growing_ranges_mm: Vec<[f64; 2]>,
+    /// The fastest wavelength's frequency attributed to a coupled mode; `None` without
+    /// coupled modes.
+    pub fastest_mode: Option<ModeAttribution>,
+}
+
+/// The summary of `s`, its fastest wavelength attributed to `modes`; `None` for an empty
+/// spectrum.
+pub fn rate_summary(s: &GrowthRateSpectrum, modes: &[CoupledMode]) -> Option<RateSummary> {
+    let p = s.fastest()?;
+    Some(RateSummary {
+        speed_kmh: crate::units::ms_to_kmh(s.speed_m_per_s),
+        fastest_wavelength_mm: m_to_mm(p.wavelength_m),
+        fastest_frequency_hz: p.frequency_hz,
+        max_rate_per_passage: p.growth_rate_per_passage,
+        fastest_phase_deg: p.phase_deg,
+        growing_wavelengths: s.points.iter().filter(|p| p.grows()).count(),
+        wavelengths: s.points.len(),
+        growing_ranges_mm: s
+            .growing_ranges_m()
+            .iter()
+            .map(|r| r.map(m_to_mm))
+            .collect(),
+        fastest_mode: attribute_one(modes, Some(p.frequency_hz)),
+    })
 }
 
 /// The JSON name of a growth phase.
@@ -221,6 +304,8 @@ pub fn grow_json(
             .collect(),
         iterative,
         verdict,
+        coupled: Vec::new(),
+        growth_rate: None,
         seconds,
     }
 }

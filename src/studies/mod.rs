@@ -7,6 +7,8 @@
 //!   (atomic, resumable), and the assembly of the frequency-selection maps, the dominant
 //!   wavelength / frequency vs speed and the range ratios (docs/theory.md §2.3,
 //!   "frequency selection"); [`sweep::merge`] joins shard directories into the unsharded result.
+//! - [`coupled`]: the selected frequencies attributed to the coupled wheel–track modes, and
+//!   the coupled-mode files.
 //! - [`grow`]: the trial-amplitude growth's run, verdict check and output files, shared by
 //!   `grow` and [`predict`].
 //! - [`predict`]: the prediction product (smooth passage, growth, short sweep, report).
@@ -18,6 +20,7 @@
 //!
 //! [`PassageRunner`]: crate::dynamics::PassageRunner
 
+pub mod coupled;
 pub mod grow;
 pub mod initiation;
 pub mod predict;
@@ -187,6 +190,9 @@ pub enum StudiesError {
     /// A plot or document could not be written.
     #[error(transparent)]
     Report(#[from] crate::report::ReportError),
+    /// The coupled wheel–track modes could not be computed.
+    #[error("coupled wheel–track modes: {0}")]
+    Coupled(#[from] crate::dynamics::DynamicsError),
 }
 
 /// The first three failures, and how many more.

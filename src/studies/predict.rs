@@ -13,9 +13,14 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::grow::{grow_json, initiation_check, trial_growth_if_any, write_growth_files, GrowJson};
+use super::coupled::{write_passage_attribution, SummaryAttribution};
+use super::grow::{
+    grow_json, growth_attribution, initiation_check, trial_growth_if_any, write_growth_files,
+    GrowJson, RateSummary,
+};
 use super::sweep::{sweep, MapOptions, SweepOutcome};
 use super::{BoxError, StudiesError};
+use crate::dynamics::coupled::{attribution_text, CoupledMode, CoupledModes, ModeAttribution};
 use crate::dynamics::passage::PassageOptions;
 use crate::dynamics::prepared::PreparedModel;
 use crate::dynamics::record::PassageRecord;
@@ -97,6 +102,8 @@ struct ReportInput<'a> {
     growth: Option<(&'a TrialGrowth, &'a GrowJson)>,
     lines: &'a ModeLines,
     rate: &'a crate::growth::rate::GrowthRateSpectrum,
+    rate_brief: Option<&'a RateSummary>,
+    attribution: &'a SummaryAttribution,
     sweep: &'a SweepOutcome,
     verdict: &'a Verdict,
     seconds: f64,
@@ -132,6 +139,11 @@ pub struct PredictJson {
     /// Which wavelengths a small roughness grows at (the growth-rate spectrum, one sentence;
     /// numbers in `grow/growth_rate.csv`).
     pub growth_rate: String,
+    /// The growth-rate spectrum in brief (fastest wavelength and its coupled mode).
+    pub growth_rate_summary: Option<RateSummary>,
+    /// The smooth passage's wear components attributed to coupled wheel–track modes
+    /// (all signals in `passage/coupled_attribution.json`).
+    pub wear_coupled: Vec<ModeAttribution>,
     /// Speeds of the short sweep, km/h.
     pub sweep_speeds_kmh: Vec<f64>,
     /// Dominant wavelength per sweep speed, mm.
@@ -162,6 +174,11 @@ pub fn predict(
     })?;
     let lines = super::grow::mode_lines(prepared);
     let smooth = smooth_passage(m, prepared, &out.join("passage"), passage_files, progress)?;
+    progress.stage("coupled wheel–track modes", 1);
+    let coupled = prepared.coupled_modes(m.run.speed(), &[]);
+    progress.finish();
+    let coupled = coupled.map_err(StudiesError::from)?;
+    let attribution = write_passage_attribution(&out.join("passage"), &coupled, &smooth)?;
     let check = initiation_check(m, &smooth);
     let growth = trial_growth_if_any(
         &prepared.engine,
@@ -176,14 +193,23 @@ pub fn predict(
     };
     let rate = super::grow::growth_rate(m, prepared, m.run.speed(), progress)?;
     super::grow::write_growth_rate(&out.join("grow"), &rate)?;
+    let rate_brief = super::grow::rate_summary(&rate, &coupled.modes);
     let gj = match &growth {
-        Some(g) => Some(write_growth(&out.join("grow"), g, m, verdict.clone())?),
+        Some(g) => Some(write_growth(
+            &out.join("grow"),
+            g,
+            m,
+            verdict.clone(),
+            &coupled.modes,
+            rate_brief.clone(),
+        )?),
         None => None,
     };
     let sw = short_sweep(
         m,
         prepared,
         &lines,
+        &coupled,
         &opts.sweep_speeds_kmh,
         &out.join("sweep"),
         progress,
@@ -195,6 +221,8 @@ pub fn predict(
         growth: growth.as_ref().zip(gj.as_ref()),
         lines: &lines,
         rate: &rate,
+        rate_brief: rate_brief.as_ref(),
+        attribution: &attribution,
         sweep: &sw,
         verdict: &verdict,
         seconds: t0.elapsed().as_secs_f64(),
@@ -257,6 +285,8 @@ fn predict_json(r: &ReportInput<'_>, seconds: f64) -> PredictJson {
         limiting_amplitude_um: r.growth.and_then(|(g, _)| g.limiting_amplitude_um),
         verdict: r.verdict.clone(),
         growth_rate: r.rate.sentence(r.m.run.speed_kmh),
+        growth_rate_summary: r.rate_brief.cloned(),
+        wear_coupled: r.attribution.wear.clone(),
         sweep_speeds_kmh: sw.speeds_kmh.clone(),
         sweep_dominant_wavelength_mm: sw.dominant_wavelength_mm.clone(),
         wavelength_range_ratio: sw.wavelength_range_ratio,
@@ -271,9 +301,13 @@ fn write_growth(
     g: &TrialGrowth,
     m: &Model,
     verdict: Verdict,
+    coupled: &[CoupledMode],
+    rate: Option<RateSummary>,
 ) -> Result<GrowJson, StudiesError> {
     write_growth_files(dir, g)?;
-    let gj = grow_json(g, m.run.speed_kmh, Vec::new(), verdict, 0.0);
+    let mut gj = grow_json(g, m.run.speed_kmh, Vec::new(), verdict, 0.0);
+    gj.coupled = growth_attribution(g, coupled);
+    gj.growth_rate = rate;
     let text = serde_json::to_string_pretty(&gj).map_err(|source| StudiesError::Json {
         what: "grow.json",
         source,
@@ -287,10 +321,20 @@ fn short_sweep(
     m: &Model,
     prepared: &PreparedModel,
     lines: &ModeLines,
+    coupled: &CoupledModes,
     speeds_kmh: &[f64],
     dir: &Path,
     progress: &dyn Progress,
 ) -> Result<SweepOutcome, StudiesError> {
+    // The modes at the prediction's speed serve the sweep when it lies in the swept range.
+    let v_c = super::coupled::sweep_reference_speed_kmh(m.run.speed_kmh, speeds_kmh);
+    let other;
+    let coupled = if v_c == m.run.speed_kmh {
+        coupled
+    } else {
+        other = prepared.coupled_modes(crate::units::kmh_to_ms(v_c), &[])?;
+        &other
+    };
     let run_key = crate::model::identity::run_key(m).map_err(|source| StudiesError::Json {
         what: "model",
         source,
@@ -298,6 +342,8 @@ fn short_sweep(
     let map = MapOptions {
         frequency_lines_hz: lines.longitudinal_hz.clone(),
         wheel_lines_hz: lines.wheel_hz.clone(),
+        coupled_speed_kmh: Some(v_c),
+        coupled_modes: coupled.visible(),
         ..MapOptions::default()
     };
     sweep(prepared, speeds_kmh, dir, &map, &run_key, progress)
@@ -334,6 +380,7 @@ fn report(r: &ReportInput<'_>) -> Document {
         }
     }
     rate_section(&mut d, r);
+    coupled_section(&mut d, r);
     sweep_section(&mut d, r.sweep);
     d.paragraph("All numbers: passage/*.csv, grow/*.csv and grow.json, sweep/sweep.json and the .npy maps, predict.json.");
     d
@@ -609,7 +656,7 @@ fn sweep_section(d: &mut Document, sw: &SweepOutcome) {
             .collect(),
     );
     d.paragraph(format!(
-        "Speed range ratio {}; wavelength range ratio {} (frequency selection shows as a wavelength range ratio much smaller than the speed range ratio).",
+        "Speed range ratio {}; wavelength range ratio {} (frequency selection shows as a wavelength range ratio much smaller than the speed range ratio). The coupled wheel–track mode each speed's dominant frequency is attributed to, and the speed ranges each selects over: sweep/report.md, sweep/dominant.csv; red dotted lines on the maps: the coupled modes the contact sees.",
         sig(sw.record.speed_range_ratio, 3),
         sw.record
             .wavelength_range_ratio
@@ -629,4 +676,52 @@ fn sweep_section(d: &mut Document, sw: &SweepOutcome) {
     ] {
         d.image(alt, p);
     }
+}
+
+/// The selected frequencies of the prediction attributed to coupled wheel–track modes: the
+/// smooth passage's wear components, each trial amplitude's dominant wear frequency, the
+/// growth-rate spectrum's fastest wavelength.
+fn coupled_section(d: &mut Document, r: &ReportInput<'_>) {
+    d.heading(2, "Coupled wheel–track modes of the selected frequencies");
+    d.paragraph(
+        "Each selected frequency attributed to a coupled wheel–track mode (docs/theory.md \
+         §7.10: the eigenmodes of wheel and track joined by the contact linearised at the \
+         static state; among the modes within 3 % the one that moves the contact most), with \
+         the mode's energy shares in wheel, rail (by family) and support. Numbers: \
+         passage/coupled_modes.csv, passage/coupled_attribution.json, grow/grow.json, \
+         sweep/dominant.csv.",
+    );
+    let mut rows: Vec<Vec<String>> = r
+        .attribution
+        .wear
+        .iter()
+        .map(|a| vec!["smooth-rail wear component".into(), attribution_text(a)])
+        .collect();
+    if let Some((_, gj)) = r.growth {
+        rows.extend(gj.coupled.iter().filter(|a| a.amplitude_um > 0.0).map(|a| {
+            vec![
+                format!("dominant wear, 2A_max {} µm", f(a.amplitude_um)),
+                a.mode
+                    .as_ref()
+                    .map(attribution_text)
+                    .unwrap_or_else(|| "no wear peak in the band".into()),
+            ]
+        }));
+    }
+    if let Some(b) = r.rate_brief {
+        rows.push(vec![
+            format!(
+                "growth-rate spectrum: fastest {} mm (σ {} per passage; {} of {} wavelengths grow)",
+                sig(b.fastest_wavelength_mm, 3),
+                sig(b.max_rate_per_passage, 3),
+                b.growing_wavelengths,
+                b.wavelengths
+            ),
+            b.fastest_mode
+                .as_ref()
+                .map(attribution_text)
+                .unwrap_or_else(|| "–".into()),
+        ]);
+    }
+    d.table(&["selected frequency of", "coupled mode"], rows);
 }

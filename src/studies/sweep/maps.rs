@@ -81,11 +81,23 @@ pub fn assemble(
     let wavelength_range_ratio = (!lam.is_empty()).then(|| {
         lam.iter().copied().fold(f64::MIN, f64::max) / lam.iter().copied().fold(f64::MAX, f64::min)
     });
+    let fl_dominant_frequency_hz: Vec<Option<f64>> = summaries
+        .iter()
+        .map(|s| s.fl_components.first().map(|c| c.frequency_hz))
+        .collect();
+    let attribute = |f: &[Option<f64>]| -> Vec<_> {
+        f.iter()
+            .map(|&f| crate::studies::coupled::attribute_one(&opts.coupled_modes, f))
+            .collect()
+    };
     let record = SweepRecord {
         speed_range_ratio: speeds[speeds.len() - 1] / speeds[0],
         speeds_kmh: speeds,
+        wear_coupled: attribute(&dominant_frequency_hz),
+        fl_coupled: attribute(&fl_dominant_frequency_hz),
         dominant_wavelength_mm,
         dominant_frequency_hz,
+        fl_dominant_frequency_hz,
         wavelength_range_ratio,
         seconds: summaries.iter().map(|s| s.seconds).sum(),
         map: opts.clone(),

@@ -171,7 +171,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(SweepRecord, SweepMaps), S
     for (d, rec) in dirs.iter().zip(&records) {
         match &opts {
             None => opts = Some((rec.map.clone(), d)),
-            Some((o, first)) if *o != rec.map => {
+            Some((o, first)) if !o.same_as(&rec.map) => {
                 return Err(StudiesError::ShardsWithDifferentMaps {
                     first: (*first).clone(),
                     second: d.clone(),

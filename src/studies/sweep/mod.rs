@@ -19,8 +19,12 @@
 //!   own wall times** (`PassageSummary::seconds`, read from the speed files), so the file
 //!   depends only on the speed files and merged shards reproduce it byte for byte; the wall
 //!   time of one invocation is reported by the CLI's `--json` as `wall_seconds`.
-//! - `dominant.csv` (`speed_kmh, dominant_wavelength_mm, dominant_frequency_hz`; `NaN` where
-//!   the wear has no peak in the band) and the plots `dominant_wavelength.{svg,png}`,
+//! - `dominant.csv` (`speed_kmh, dominant_wavelength_mm, dominant_frequency_hz,
+//!   fl_dominant_frequency_hz`, then the coupled mode each speed's dominant wear frequency is
+//!   attributed to, [`crate::studies::coupled::attribution_columns`]: `coupled_mode_hz,
+//!   coupled_damping_ratio, coupled_wheel_share, …, coupled_rail_x_to_n`, and the same for
+//!   F_L prefixed `fl_`; `NaN` where the signal has no peak in the band or the map options
+//!   hold no coupled modes) and the plots `dominant_wavelength.{svg,png}`,
 //!   `dominant_frequency.{svg,png}`.
 //! - The maps, as `.npy` (`[n_speeds, n_grid]`, C order) with the axes `speeds_kmh.npy`,
 //!   `wavelength_mm.npy`, `frequency_hz.npy`:
@@ -33,8 +37,10 @@
 //!   CSV tables `map_wavelength.csv` and `map_frequency.csv`, and heat maps
 //!   (`*.svg`, `*.png`, log colour scale) with the given longitudinal-compression
 //!   eigenfrequencies `f_i` drawn as curves `λ = v / f_i` on the wavelength maps and as
-//!   horizontal lines on the frequency maps.
-//! - `report.md`, `report.html` — the ratios, the dominant components and the plots.
+//!   horizontal lines on the frequency maps (solid), the wheel modes at the contact
+//!   (dashed) and the coupled modes the contact sees (short dashes, red, `coupled <part>`).
+//! - `report.md`, `report.html` — the ratios, the dominant components, the plots and which
+//!   coupled modes select over which speed ranges.
 //!
 //! The speed range ratio is `v_max / v_min`, the wavelength range ratio `λ_max / λ_min` over
 //! the dominant wavelengths (speeds without one are left out). Frequency selection shows as a
@@ -63,6 +69,7 @@ pub use run::{
 use serde::{Deserialize, Serialize};
 
 use super::StudiesError;
+use crate::dynamics::coupled::{CoupledMode, ModeAttribution};
 
 /// Grids of the frequency-selection maps and the eigenfrequency lines drawn on them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -83,6 +90,18 @@ pub struct MapOptions {
     /// [`crate::dynamics::prepared::PreparedModel::wheel_contact_modes_hz`]).
     #[serde(default)]
     pub wheel_lines_hz: Vec<f64>,
+    /// Speed at which [`Self::coupled_modes`] were computed (km/h); `None` without them.
+    #[serde(default)]
+    pub coupled_speed_kmh: Option<f64>,
+    /// The coupled wheel–track modes (docs/theory.md §7.10) the dominant frequencies are
+    /// attributed to: those the contact moves ([`CoupledModes::visible`]), computed once
+    /// at [`Self::coupled_speed_kmh`]. The ones the contact sees
+    /// ([`crate::dynamics::coupled::seen_by_contact`]) are drawn on the maps, labelled
+    /// `coupled` with the part that holds most of their energy. Empty: no attribution.
+    ///
+    /// [`CoupledModes::visible`]: crate::dynamics::coupled::CoupledModes::visible
+    #[serde(default)]
+    pub coupled_modes: Vec<CoupledMode>,
 }
 
 impl Default for MapOptions {
@@ -95,6 +114,8 @@ impl Default for MapOptions {
             frequency_points: 401,
             frequency_lines_hz: Vec::new(),
             wheel_lines_hz: Vec::new(),
+            coupled_speed_kmh: None,
+            coupled_modes: Vec::new(),
         }
     }
 }
@@ -119,7 +140,45 @@ impl MapOptions {
         {
             return Err(bad("eigenfrequency lines must be positive and finite"));
         }
+        let ok_speed = self
+            .coupled_speed_kmh
+            .is_none_or(|v| v.is_finite() && v > 0.0);
+        if !ok_speed || (self.coupled_speed_kmh.is_none() && !self.coupled_modes.is_empty()) {
+            return Err(bad(
+                "coupled modes need the positive, finite speed they were computed at",
+            ));
+        }
+        if self
+            .coupled_modes
+            .iter()
+            .any(|m| !(m.frequency_hz.is_finite() && m.frequency_hz > 0.0))
+        {
+            return Err(bad("coupled-mode frequencies must be positive and finite"));
+        }
         Ok(())
+    }
+
+    /// Whether two shards' options describe the same maps: equal grids and lines, and the
+    /// same coupled modes to within 1e-9 relative (a dense eigensolver run on another
+    /// machine or thread count may differ in the last bits); the merge uses the first
+    /// shard's.
+    pub fn same_as(&self, other: &Self) -> bool {
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+        let strip = |o: &Self| Self {
+            coupled_modes: Vec::new(),
+            ..o.clone()
+        };
+        strip(self) == strip(other)
+            && self.coupled_modes.len() == other.coupled_modes.len()
+            && self
+                .coupled_modes
+                .iter()
+                .zip(&other.coupled_modes)
+                .all(|(a, b)| {
+                    close(a.frequency_hz, b.frequency_hz)
+                        && close(a.position_m, b.position_m)
+                        && a.dominant == b.dominant
+                })
     }
 
     /// The wavelength grid (mm), ascending.
@@ -141,6 +200,16 @@ pub struct SweepRecord {
     pub dominant_wavelength_mm: Vec<Option<f64>>,
     /// Dominant wear frequency per speed (Hz); `null` without a peak in the band.
     pub dominant_frequency_hz: Vec<Option<f64>>,
+    /// Frequency of the strongest F_L component per speed (Hz); `null` without one.
+    #[serde(default)]
+    pub fl_dominant_frequency_hz: Vec<Option<f64>>,
+    /// The dominant wear frequency of each speed attributed to a coupled mode of
+    /// [`MapOptions::coupled_modes`]; `null` without a frequency or without coupled modes.
+    #[serde(default)]
+    pub wear_coupled: Vec<Option<ModeAttribution>>,
+    /// The same for the strongest F_L component.
+    #[serde(default)]
+    pub fl_coupled: Vec<Option<ModeAttribution>>,
     /// `v_max / v_min` (−).
     pub speed_range_ratio: f64,
     /// `λ_max / λ_min` over the dominant wavelengths (−); `null` if no speed has one.
@@ -188,4 +257,47 @@ pub struct SweepOutcome {
     pub maps: SweepMaps,
     /// Computed and reused speeds.
     pub stats: PassageStats,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::coupled::ModeShares;
+
+    fn mode(f: f64) -> CoupledMode {
+        CoupledMode {
+            position_m: 0.5,
+            frequency_hz: f,
+            damping_ratio: 0.01,
+            shares: ModeShares::default(),
+            dominant: "support".into(),
+            contact_amplitudes_m_per_sqrt_j: [1.0, 0.0, 0.0, 0.0],
+            rail_x_to_n: 1.0,
+        }
+    }
+
+    /// Shards whose coupled modes differ in the last bits merge; other modes or lines do not.
+    #[test]
+    fn shards_agree_on_coupled_modes_to_rounding_only() {
+        let a = MapOptions {
+            coupled_speed_kmh: Some(140.0),
+            coupled_modes: vec![mode(1000.0), mode(1400.0)],
+            ..MapOptions::default()
+        };
+        let mut b = a.clone();
+        b.coupled_modes[0].frequency_hz *= 1.0 + 1e-13;
+        b.coupled_modes[1].damping_ratio += 1e-15;
+        assert!(a.same_as(&b));
+        let mut c = a.clone();
+        c.coupled_modes[1].frequency_hz = 1401.0;
+        assert!(!a.same_as(&c));
+        let mut d = a.clone();
+        d.wheel_lines_hz.push(1065.0);
+        assert!(!a.same_as(&d));
+        let e = MapOptions {
+            coupled_speed_kmh: Some(100.0),
+            ..a.clone()
+        };
+        assert!(!a.same_as(&e));
+    }
 }

@@ -5,8 +5,10 @@ use std::path::Path;
 
 use super::maps::linspace;
 use super::{StudiesError, SweepMaps, SweepRecord};
+use crate::dynamics::coupled::{seen_by_contact, ModeAttribution};
 use crate::report::doc::Document;
-use crate::report::plot::{heat_map, line_plot, HeatMap, OverlayLine, Series};
+use crate::report::plot::{heat_map, line_plot, HeatMap, LineStyle, OverlayLine, Series};
+use crate::studies::coupled::{attribution_columns, attribution_values};
 
 fn nan_none(v: Option<f64>) -> f64 {
     v.unwrap_or(f64::NAN)
@@ -52,19 +54,33 @@ fn write_maps(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesE
 fn write_tables(dir: &Path, r: &SweepRecord, m: &SweepMaps) -> Result<(), StudiesError> {
     let io = StudiesError::io;
     let p = dir.join("dominant.csv");
+    let mut cols: Vec<String> = [
+        "speed_kmh",
+        "dominant_wavelength_mm",
+        "dominant_frequency_hz",
+        "fl_dominant_frequency_hz",
+    ]
+    .map(String::from)
+    .to_vec();
+    cols.extend(attribution_columns(""));
+    cols.extend(attribution_columns("fl_"));
+    let names: Vec<&str> = cols.iter().map(String::as_str).collect();
+    let at = |v: &[Option<ModeAttribution>], i: usize| {
+        attribution_values(v.get(i).and_then(Option::as_ref))
+    };
     crate::io::write_csv(
         &p,
-        &[
-            "speed_kmh",
-            "dominant_wavelength_mm",
-            "dominant_frequency_hz",
-        ],
+        &names,
         r.speeds_kmh.iter().enumerate().map(|(i, &v)| {
-            vec![
+            let mut row = vec![
                 v,
                 nan_none(r.dominant_wavelength_mm[i]),
                 nan_none(r.dominant_frequency_hz[i]),
-            ]
+                nan_none(r.fl_dominant_frequency_hz.get(i).copied().flatten()),
+            ];
+            row.extend(at(&r.wear_coupled, i));
+            row.extend(at(&r.fl_coupled, i));
+            row
         }),
     )
     .map_err(io(&p))?;
@@ -124,7 +140,9 @@ fn write_map_csv(
 }
 
 /// The mode lines drawn over the maps: the track's LC modes solid, the wheel's dashed (at
-/// 5 kHz there are about 30 wheel lines), as wavelength `V/f` and as frequency against speed.
+/// 5 kHz there are about 30 wheel lines), the coupled modes the contact sees in the map's
+/// frequency range dotted ([`seen_by_contact`]), as wavelength `V/f` and as frequency
+/// against speed.
 struct ModeLines {
     wavelength: Vec<OverlayLine>,
     frequency: Vec<OverlayLine>,
@@ -140,34 +158,46 @@ impl ModeLines {
             (v0 * 0.95, v0 * 1.05)
         };
         let curve_v = linspace(vlo, vhi, 200);
-        let labelled: Vec<(String, f64, bool)> = r
+        let band = [m.frequency_hz[0], m.frequency_hz[m.frequency_hz.len() - 1]];
+        let labelled: Vec<(String, f64, LineStyle)> = r
             .map
             .frequency_lines_hz
             .iter()
-            .map(|&f| (format!("LC {f:.0} Hz"), f, false))
+            .map(|&f| (format!("LC {f:.0} Hz"), f, LineStyle::Solid))
             .chain(
                 r.map
                     .wheel_lines_hz
                     .iter()
-                    .map(|&f| (format!("wheel {f:.0} Hz"), f, true)),
+                    .map(|&f| (format!("wheel {f:.0} Hz"), f, LineStyle::Dashed)),
             )
+            .chain(seen_by_contact(&r.map.coupled_modes, band).iter().map(|c| {
+                (
+                    format!(
+                        "coupled {} {:.0} Hz",
+                        c.shares.family_label(),
+                        c.frequency_hz
+                    ),
+                    c.frequency_hz,
+                    LineStyle::Dotted,
+                )
+            }))
             .collect();
         let wavelength = labelled
             .iter()
-            .map(|(name, f, dashed)| OverlayLine {
+            .map(|(name, f, style)| OverlayLine {
                 name: name.clone(),
                 x: curve_v.clone(),
                 y: curve_v
                     .iter()
                     .map(|&v| crate::units::kmh_to_ms(v) / f * 1e3)
                     .collect(),
-                dashed: *dashed,
+                style: *style,
             })
             .collect();
         let frequency = labelled
             .iter()
-            .map(|(name, f, dashed)| OverlayLine {
-                dashed: *dashed,
+            .map(|(name, f, style)| OverlayLine {
+                style: *style,
                 ..OverlayLine::horizontal(name.clone(), *f, vlo, vhi)
             })
             .collect();
@@ -347,6 +377,7 @@ fn write_report(dir: &Path, r: &SweepRecord) -> Result<(), StudiesError> {
             f.join(", ")
         ));
     }
+    coupled_section(&mut d, r);
     d.heading(2, "Maps");
     for (alt, file) in [
         (
@@ -381,4 +412,97 @@ fn write_report(dir: &Path, r: &SweepRecord) -> Result<(), StudiesError> {
     );
     d.write(&dir.join("report"))?;
     Ok(())
+}
+
+/// Consecutive speeds whose frequency is attributed to the same coupled mode (same frequency
+/// and contact position): `(first index, last index, attribution of the first)`.
+fn speed_ranges(a: &[Option<ModeAttribution>]) -> Vec<(usize, usize, &ModeAttribution)> {
+    let mut out: Vec<(usize, usize, &ModeAttribution)> = Vec::new();
+    for (i, x) in a.iter().enumerate() {
+        let Some(x) = x else { continue };
+        match out.last_mut() {
+            Some((_, last, m))
+                if *last + 1 == i
+                    && m.mode_frequency_hz == x.mode_frequency_hz
+                    && m.position_m == x.position_m =>
+            {
+                *last = i
+            }
+            _ => out.push((i, i, x)),
+        }
+    }
+    out
+}
+
+/// The tables of which coupled modes select the wear's and F_L's dominant frequency over which
+/// speed ranges (nothing without coupled modes).
+fn coupled_section(d: &mut Document, r: &SweepRecord) {
+    let Some(v) = r.map.coupled_speed_kmh else {
+        return;
+    };
+    d.heading(2, "Coupled wheel–track modes that select");
+    d.paragraph(format!(
+        "Each speed's strongest wear and F_L component attributed to a coupled wheel–track mode \
+         (docs/theory.md §7.10: among the modes within 3 % the one that moves the contact most, \
+         else the nearest one the contact moves), with the modes computed once at {v} km/h \
+         (the creep terms of the linearised contact depend on the speed; see docs/theory.md \
+         §11.2 for how far that moves them). Shares: energy of the mode in the wheel, the rail \
+         by family, the support. Per-speed numbers: dominant.csv. Red dotted lines on the maps: \
+         the coupled modes the contact sees (contact residue ≥ 3 % of the largest)."
+    ));
+    for (title, freq, att) in [
+        ("Wear", &r.dominant_frequency_hz, &r.wear_coupled),
+        ("F_L", &r.fl_dominant_frequency_hz, &r.fl_coupled),
+    ] {
+        let rows: Vec<Vec<String>> = speed_ranges(att)
+            .into_iter()
+            .map(|(i, j, a)| {
+                let fs: Vec<f64> = (i..=j)
+                    .filter_map(|k| freq.get(k).copied().flatten())
+                    .collect();
+                let (flo, fhi) = fs
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), &f| {
+                        (l.min(f), u.max(f))
+                    });
+                let mut shares: Vec<(String, f64)> = crate::dynamics::coupled::ModeShares::labels()
+                    .into_iter()
+                    .zip(a.shares.values())
+                    .filter(|(_, v)| *v >= 0.05)
+                    .collect();
+                shares.sort_by(|x, y| y.1.total_cmp(&x.1));
+                vec![
+                    format!("{}–{}", r.speeds_kmh[i], r.speeds_kmh[j]),
+                    format!("{flo:.0}–{fhi:.0}"),
+                    format!("{:.1}", a.mode_frequency_hz),
+                    a.shares.family_label(),
+                    shares
+                        .iter()
+                        .map(|(l, v)| format!("{l} {:.0} %", 100.0 * v))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    format!("{:.2}", 100.0 * a.damping_ratio),
+                    crate::growth::verdict::sig(a.rail_x_to_n, 3),
+                    format!("{:.3}", a.position_m),
+                ]
+            })
+            .collect();
+        if rows.is_empty() {
+            continue;
+        }
+        d.heading(3, format!("{title}: coupled mode by speed range"));
+        d.table(
+            &[
+                "speeds (km/h)",
+                "selected (Hz)",
+                "coupled mode (Hz)",
+                "part",
+                "energy shares",
+                "ζ (%)",
+                "rail x/n at contact",
+                "contact at x (m)",
+            ],
+            rows,
+        );
+    }
 }
