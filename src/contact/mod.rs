@@ -63,7 +63,9 @@ pub mod wear;
 
 pub use hertz::{HertzContact, HertzInput};
 pub use report::{solve_case, ContactCase, ContactSolution, ContactSummary, TangentialLoading};
-pub use rolling::{GridSpec, Longitudinal, NormalInput, StepInputs, StepResult, TransientConfig};
+pub use rolling::{
+    GridSpec, HertzGridParams, Longitudinal, NormalInput, StepInputs, StepResult, TransientConfig,
+};
 pub use tangential::TangentialAlgorithm;
 pub use transient::TransientRolling;
 pub use wear::{load_response_curve, LoadResponsePoint, WearAccumulator};

@@ -229,6 +229,13 @@ impl NormalSolver {
         }
     }
 
+    /// Polonsky & Keer's constrained CG from the pressure `p` (Pa, in/out).
+    ///
+    /// Phases: the separation and zero-load shortcuts, the initial iterate, then per
+    /// iteration the gap centred on its mean over the contact set (load mode) or on the
+    /// approach, the conjugate direction, the step length, the pressure update (clipped at
+    /// 0, overlapping elements entering the set), the scaling to the load and the
+    /// displacement `C p` (by recurrence while the set holds).
     fn solve_inner(
         &mut self,
         conv: &mut Convolver,
@@ -237,109 +244,25 @@ impl NormalSolver {
         mode: NormalMode,
         p: &mut [f64],
     ) -> Result<NormalOutcome, ContactError> {
-        let n = p.len();
         self.products = 0;
         let c_da = match mode {
             NormalMode::Approach(_) => self.series_compliance_m_per_n * da,
             NormalMode::Load(_) => 0.0,
         };
-        // separation / zero-load shortcuts
-        match mode {
-            NormalMode::Load(w) if w <= 0.0 => {
-                p.fill(0.0);
-                let hmin = h.iter().cloned().fold(f64::INFINITY, f64::min);
-                for (g, hv) in self.gap.iter_mut().zip(h) {
-                    *g = hv - hmin;
-                }
-                return Ok(NormalOutcome {
-                    load_n: 0.0,
-                    approach_m: hmin,
-                    iterations: 0,
-                });
-            }
-            NormalMode::Approach(d) if h.iter().all(|&hv| hv - d >= 0.0) => {
-                p.fill(0.0);
-                for (g, hv) in self.gap.iter_mut().zip(h) {
-                    *g = hv - d;
-                }
-                return Ok(NormalOutcome {
-                    load_n: 0.0,
-                    approach_m: d,
-                    iterations: 0,
-                });
-            }
-            _ => {}
+        if let Some(out) = self.separated(h, mode, p) {
+            return Ok(out);
         }
-        // initial iterate
-        let mut total: f64 = p.iter().sum::<f64>() * da;
-        let cold = total <= 0.0 || !total.is_finite();
-        if cold {
-            // start from where the undeformed bodies would overlap (or the lowest point)
-            let hmin = h.iter().cloned().fold(f64::INFINITY, f64::min);
-            let hmax = h.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-            let thr = match mode {
-                NormalMode::Approach(d) => d,
-                NormalMode::Load(_) => hmin + 0.3 * (hmax - hmin) + 1e-15,
-            };
-            for (pi, &hv) in p.iter_mut().zip(h) {
-                *pi = (thr - hv).max(0.0);
-            }
-            total = p.iter().sum::<f64>() * da;
-        }
-        if let NormalMode::Load(w) = mode {
-            let s = w / total;
-            p.iter_mut().for_each(|v| *v *= s);
-        } else if cold {
-            // scale to a plausible magnitude: mean overlap / self-influence (a warm start,
-            // the previous pressure, is kept as it is)
-            let d = match mode {
-                NormalMode::Approach(d) => d,
-                _ => 0.0,
-            };
-            let s = h.iter().map(|hv| (d - hv).max(0.0)).fold(0.0, f64::max)
-                / conv.diag_n.max(1e-300)
-                / p.iter().cloned().fold(0.0, f64::max).max(1e-300);
-            p.iter_mut().for_each(|v| *v *= s * 0.3);
-        }
+        Self::initial_iterate(conv, h, da, mode, p);
         let mut g_old = 1.0;
         let mut reuse_dir = false;
         self.t.fill(0.0);
-        let mut delta: f64;
         let mut last_change = 1.0;
         Self::product(conv, c_da, p, &mut self.up);
         self.products += 1;
         for it in 1..=self.max_iterations {
-            for ((g, hv), u) in self.gap.iter_mut().zip(h).zip(&self.up) {
-                *g = hv + u;
-            }
-            // gbar: mean gap over the contact set (load mode) or the approach
-            let (mut sum, mut cnt) = (0.0, 0usize);
-            for (g, pi) in self.gap.iter().zip(p.iter()) {
-                if *pi > 0.0 {
-                    sum += g;
-                    cnt += 1;
-                }
-            }
-            let gbar = match mode {
-                NormalMode::Load(_) => {
-                    if cnt == 0 {
-                        0.0
-                    } else {
-                        sum / cnt as f64
-                    }
-                }
-                NormalMode::Approach(d) => d,
-            };
-            delta = gbar;
-            let mut gg = 0.0;
-            for (g, pi) in self.gap.iter_mut().zip(p.iter()) {
-                *g -= gbar;
-                if *pi > 0.0 {
-                    gg += *g * *g;
-                }
-            }
+            let (delta, cnt, gg) = self.centred_gap(h, mode, p);
             let beta = if reuse_dir { gg / g_old } else { 0.0 };
-            for i in 0..n {
+            for i in 0..p.len() {
                 self.t[i] = if p[i] > 0.0 {
                     self.gap[i] + beta * self.t[i]
                 } else {
@@ -349,63 +272,10 @@ impl NormalSolver {
             g_old = gg;
             Self::product(conv, c_da, &self.t, &mut self.r);
             self.products += 1;
-            let rbar = match mode {
-                NormalMode::Load(_) => {
-                    let mut s = 0.0;
-                    for i in 0..n {
-                        if p[i] > 0.0 {
-                            s += self.r[i];
-                        }
-                    }
-                    if cnt == 0 {
-                        0.0
-                    } else {
-                        s / cnt as f64
-                    }
-                }
-                NormalMode::Approach(_) => 0.0,
-            };
-            let (mut num, mut den) = (0.0, 0.0);
-            for i in 0..n {
-                if p[i] > 0.0 {
-                    num += self.gap[i] * self.t[i];
-                    den += (self.r[i] - rbar) * self.t[i];
-                }
-            }
-            let tau = if den > 0.0 {
-                num / den
-            } else {
-                1.0 / conv.diag_n
-            };
-            let mut change = 0.0;
-            let mut any_overlap = false;
-            let mut clipped = false;
-            for i in 0..n {
-                let old = p[i];
-                if old > 0.0 {
-                    let v = old - tau * self.t[i];
-                    if v < 0.0 {
-                        clipped = true;
-                    }
-                    p[i] = v.max(0.0);
-                } else if self.gap[i] < 0.0 {
-                    p[i] = old - tau * self.gap[i];
-                    any_overlap = true;
-                }
-                change += (p[i] - old).abs();
-            }
+            let tau = self.step_length(conv, mode, p, cnt);
+            let (change, any_overlap, clipped) = self.update_pressure(p, tau);
             reuse_dir = !any_overlap;
-            let mut tot = p.iter().sum::<f64>() * da;
-            let mut s_load = 1.0;
-            if let NormalMode::Load(w) = mode {
-                if tot > 0.0 {
-                    s_load = w / tot;
-                    for v in p.iter_mut() {
-                        *v *= s_load;
-                    }
-                    tot = w;
-                }
-            }
+            let (tot, s_load) = scale_to_load(mode, da, p);
             if clipped || any_overlap {
                 Self::product(conv, c_da, p, &mut self.up);
                 self.products += 1;
@@ -442,10 +312,178 @@ impl NormalSolver {
         })
     }
 
+    /// The shortcuts without contact: zero load (the bodies touch at the lowest point of `h`)
+    /// or an approach that leaves every gap open. Sets `p = 0` and the gap.
+    fn separated(&mut self, h: &[f64], mode: NormalMode, p: &mut [f64]) -> Option<NormalOutcome> {
+        let (approach_m, gap_shift) = match mode {
+            NormalMode::Load(w) if w <= 0.0 => {
+                let hmin = h.iter().cloned().fold(f64::INFINITY, f64::min);
+                (hmin, hmin)
+            }
+            NormalMode::Approach(d) if h.iter().all(|&hv| hv - d >= 0.0) => (d, d),
+            _ => return None,
+        };
+        p.fill(0.0);
+        for (g, hv) in self.gap.iter_mut().zip(h) {
+            *g = hv - gap_shift;
+        }
+        Some(NormalOutcome {
+            load_n: 0.0,
+            approach_m,
+            iterations: 0,
+        })
+    }
+
+    /// The initial iterate: the warm start `p` as it is (scaled to the load in load mode),
+    /// or from rest the overlap of the undeformed bodies (below the approach, or the lowest
+    /// 30 % of `h` in load mode) scaled to the load or to a plausible magnitude.
+    fn initial_iterate(conv: &Convolver, h: &[f64], da: f64, mode: NormalMode, p: &mut [f64]) {
+        let mut total: f64 = p.iter().sum::<f64>() * da;
+        let cold = total <= 0.0 || !total.is_finite();
+        if cold {
+            // start from where the undeformed bodies would overlap (or the lowest point)
+            let hmin = h.iter().cloned().fold(f64::INFINITY, f64::min);
+            let hmax = h.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+            let thr = match mode {
+                NormalMode::Approach(d) => d,
+                NormalMode::Load(_) => hmin + 0.3 * (hmax - hmin) + 1e-15,
+            };
+            for (pi, &hv) in p.iter_mut().zip(h) {
+                *pi = (thr - hv).max(0.0);
+            }
+            total = p.iter().sum::<f64>() * da;
+        }
+        if let NormalMode::Load(w) = mode {
+            let s = w / total;
+            p.iter_mut().for_each(|v| *v *= s);
+        } else if cold {
+            // scale to a plausible magnitude: mean overlap / self-influence (a warm start,
+            // the previous pressure, is kept as it is)
+            let d = match mode {
+                NormalMode::Approach(d) => d,
+                _ => 0.0,
+            };
+            let s = h.iter().map(|hv| (d - hv).max(0.0)).fold(0.0, f64::max)
+                / conv.diag_n.max(1e-300)
+                / p.iter().cloned().fold(0.0, f64::max).max(1e-300);
+            p.iter_mut().for_each(|v| *v *= s * 0.3);
+        }
+    }
+
+    /// The gap `h + C p` centred on `ḡ`: its mean over the contact set (load mode) or the
+    /// approach. Returns `ḡ` (the approach of the iterate, m), the contact elements and the
+    /// squared norm of the centred gap over the contact set.
+    fn centred_gap(&mut self, h: &[f64], mode: NormalMode, p: &[f64]) -> (f64, usize, f64) {
+        for ((g, hv), u) in self.gap.iter_mut().zip(h).zip(&self.up) {
+            *g = hv + u;
+        }
+        let (mut sum, mut cnt) = (0.0, 0usize);
+        for (g, pi) in self.gap.iter().zip(p.iter()) {
+            if *pi > 0.0 {
+                sum += g;
+                cnt += 1;
+            }
+        }
+        let gbar = match mode {
+            NormalMode::Load(_) => {
+                if cnt == 0 {
+                    0.0
+                } else {
+                    sum / cnt as f64
+                }
+            }
+            NormalMode::Approach(d) => d,
+        };
+        let mut gg = 0.0;
+        for (g, pi) in self.gap.iter_mut().zip(p.iter()) {
+            *g -= gbar;
+            if *pi > 0.0 {
+                gg += *g * *g;
+            }
+        }
+        (gbar, cnt, gg)
+    }
+
+    /// The step length `τ` along the direction `t` with its product `r = C t` (its mean
+    /// over the `cnt` contact elements removed in load mode); `1/C_ii` when the curvature
+    /// is not positive.
+    fn step_length(&self, conv: &Convolver, mode: NormalMode, p: &[f64], cnt: usize) -> f64 {
+        let n = p.len();
+        let rbar = match mode {
+            NormalMode::Load(_) => {
+                let mut s = 0.0;
+                for i in 0..n {
+                    if p[i] > 0.0 {
+                        s += self.r[i];
+                    }
+                }
+                if cnt == 0 {
+                    0.0
+                } else {
+                    s / cnt as f64
+                }
+            }
+            NormalMode::Approach(_) => 0.0,
+        };
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..n {
+            if p[i] > 0.0 {
+                num += self.gap[i] * self.t[i];
+                den += (self.r[i] - rbar) * self.t[i];
+            }
+        }
+        if den > 0.0 {
+            num / den
+        } else {
+            1.0 / conv.diag_n
+        }
+    }
+
+    /// The pressure update `p − τ t` on the contact set, clipped at 0, and `−τ g` where an
+    /// element outside the set overlaps. Returns `Σ|Δp|` (Pa), whether an element entered
+    /// the set and whether one was clipped.
+    fn update_pressure(&self, p: &mut [f64], tau: f64) -> (f64, bool, bool) {
+        let mut change = 0.0;
+        let mut any_overlap = false;
+        let mut clipped = false;
+        for i in 0..p.len() {
+            let old = p[i];
+            if old > 0.0 {
+                let v = old - tau * self.t[i];
+                if v < 0.0 {
+                    clipped = true;
+                }
+                p[i] = v.max(0.0);
+            } else if self.gap[i] < 0.0 {
+                p[i] = old - tau * self.gap[i];
+                any_overlap = true;
+            }
+            change += (p[i] - old).abs();
+        }
+        (change, any_overlap, clipped)
+    }
+
     /// Deformed gap (m) of the last solve, `h − δ + C p`.
     pub fn gap(&self) -> &[f64] {
         &self.gap
     }
+}
+
+/// The total force of `p` (Pa) on elements of area `da` (m²) and, in load mode with a
+/// positive total, `p` scaled to the load. Returns the total (N) and the scale (−).
+fn scale_to_load(mode: NormalMode, da: f64, p: &mut [f64]) -> (f64, f64) {
+    let mut tot = p.iter().sum::<f64>() * da;
+    let mut s_load = 1.0;
+    if let NormalMode::Load(w) = mode {
+        if tot > 0.0 {
+            s_load = w / tot;
+            for v in p.iter_mut() {
+                *v *= s_load;
+            }
+            tot = w;
+        }
+    }
+    (tot, s_load)
 }
 
 /// Relative residual `‖C_A x − b‖ / ‖b‖` at which the unit responses of a fixed contact set

@@ -8,7 +8,8 @@
 
 use super::hertz::{HertzContact, HertzInput};
 use super::transient::{
-    GridSpec, Longitudinal, NormalInput, StepInputs, StepResult, TransientConfig, TransientRolling,
+    GridSpec, HertzGridParams, Longitudinal, NormalInput, StepInputs, StepResult, TransientConfig,
+    TransientRolling,
 };
 use super::ContactError;
 use crate::units;
@@ -197,18 +198,18 @@ pub fn solve_case(case: &ContactCase) -> Result<ContactSolution, ContactError> {
     let hertz = case.hertz()?;
     // size the grid on the Hertz patch (or on a nominal 1 kN patch if unloaded)
     let sizing_load = case.normal_load_n.max(1e3);
-    let cfg = TransientConfig::around_hertz(
-        case.wheel_radius_m,
-        case.relative_lateral_radius_m(),
-        case.youngs_pa,
-        case.poisson,
-        case.friction,
-        case.speed_m_per_s,
-        sizing_load,
-        case.grid_nx,
-        case.grid_ny,
-        case.grid_margin,
-    )?;
+    let cfg = TransientConfig::around_hertz(&HertzGridParams {
+        radius_x_m: case.wheel_radius_m,
+        radius_y_m: case.relative_lateral_radius_m(),
+        youngs_pa: case.youngs_pa,
+        poisson: case.poisson,
+        friction: case.friction,
+        speed_m_per_s: case.speed_m_per_s,
+        load_n: sizing_load,
+        nx: case.grid_nx,
+        ny: case.grid_ny,
+        margin: case.grid_margin,
+    })?;
     let mut eng = TransientRolling::new(cfg)?;
     let longitudinal = match case.tangential {
         TangentialLoading::Creepage(x) => Longitudinal::Creepage(x),

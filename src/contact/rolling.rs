@@ -38,6 +38,53 @@ impl GridSpec {
     }
 }
 
+/// What a contact grid around the Hertz patch is made from
+/// ([`TransientConfig::around_hertz`]). The default is the reference case: wheel R 0.46 m
+/// flat laterally on the R300 crown, steel, µ 0.4, 140 km/h, 100 kN, a 40 × 32 grid with
+/// margin 1.2.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HertzGridParams {
+    /// Relative radius of curvature along x (m, > 0; the wheel rolling radius on a straight
+    /// rail).
+    pub radius_x_m: f64,
+    /// Relative radius of curvature along y (m, > 0).
+    pub radius_y_m: f64,
+    /// Young's modulus of wheel and rail (Pa, > 0).
+    pub youngs_pa: f64,
+    /// Poisson's ratio (−, 0 to 0.5).
+    pub poisson: f64,
+    /// Coulomb friction coefficient µ (−, ≥ 0).
+    pub friction: f64,
+    /// Rolling speed V (m/s, > 0).
+    pub speed_m_per_s: f64,
+    /// Normal load that sizes the patch (N, > 0).
+    pub load_n: f64,
+    /// Elements along x (rolling direction).
+    pub nx: usize,
+    /// Elements along y (lateral).
+    pub ny: usize,
+    /// Grid half lengths over the Hertz semi-axes (−; about 1.15–1.4, larger if the load
+    /// varies).
+    pub margin: f64,
+}
+
+impl Default for HertzGridParams {
+    fn default() -> Self {
+        HertzGridParams {
+            radius_x_m: 0.46,
+            radius_y_m: 0.3,
+            youngs_pa: 210e9,
+            poisson: 0.3,
+            friction: 0.4,
+            speed_m_per_s: 140.0 / 3.6,
+            load_n: 100e3,
+            nx: 40,
+            ny: 32,
+            margin: 1.2,
+        }
+    }
+}
+
 /// Configuration of the transient rolling engine (SI).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TransientConfig {
@@ -62,21 +109,21 @@ pub struct TransientConfig {
 }
 
 impl TransientConfig {
-    /// Grid sized around the Hertz patch for `load_n`: `nx × ny` elements covering
-    /// `margin · a` by `margin · b` (use `margin` ≈ 1.15–1.4; larger if the load varies).
-    #[allow(clippy::too_many_arguments)]
-    pub fn around_hertz(
-        radius_x_m: f64,
-        radius_y_m: f64,
-        youngs_pa: f64,
-        poisson: f64,
-        friction: f64,
-        speed_m_per_s: f64,
-        load_n: f64,
-        nx: usize,
-        ny: usize,
-        margin: f64,
-    ) -> Result<Self, ContactError> {
+    /// Grid sized around the Hertz patch of `p.load_n`: `nx × ny` elements covering
+    /// `margin · a` by `margin · b`, the solver tolerances 1e-6.
+    pub fn around_hertz(p: &HertzGridParams) -> Result<Self, ContactError> {
+        let HertzGridParams {
+            radius_x_m,
+            radius_y_m,
+            youngs_pa,
+            poisson,
+            friction,
+            speed_m_per_s,
+            load_n,
+            nx,
+            ny,
+            margin,
+        } = *p;
         check_positive("load_n", load_n)?;
         let h = HertzContact::solve(&HertzInput {
             radius_x_m,
@@ -105,11 +152,9 @@ impl TransientConfig {
         })
     }
 
-    /// The reference case (wheel R 0.46 m flat laterally on the R300 crown, steel, µ 0.4,
-    /// 140 km/h) at 100 kN on a 40 × 32 grid with margin 1.2.
+    /// The reference case ([`HertzGridParams::default`]).
     pub fn reference() -> Self {
-        Self::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 140.0 / 3.6, 100e3, 40, 32, 1.2)
-            .expect("reference parameters are valid")
+        Self::around_hertz(&HertzGridParams::default()).expect("reference parameters are valid")
     }
 
     pub(super) fn validate(&self) -> Result<(), ContactError> {

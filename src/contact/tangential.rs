@@ -37,6 +37,14 @@ pub enum TangentialAlgorithm {
     ElementTest,
 }
 
+/// The data of one tangential problem: the traction bound `g` (Pa) and the shift `(ex, ey)`
+/// (m) per element.
+struct Problem<'a> {
+    g: &'a [f64],
+    ex: &'a [f64],
+    ey: &'a [f64],
+}
+
 /// Scratch for the tangential solver (allocated once).
 #[derive(Clone)]
 pub struct TangentialSolver {
@@ -57,6 +65,12 @@ pub struct TangentialSolver {
     /// the CG loops run over them only.
     lo: usize,
     hi: usize,
+    /// Rows and columns of the contact's box, on which the CG's products run.
+    rows: (usize, usize),
+    cols: (usize, usize),
+    /// Whether `sx, sy` are the exact product of the current traction (not the CG's
+    /// recurrence).
+    exact_now: bool,
     /// The algorithm for the slip directions.
     pub algorithm: TangentialAlgorithm,
     /// Jacobi-precondition the inner CG of [`TangentialAlgorithm::Newton`] (default `true`;
@@ -107,6 +121,9 @@ impl TangentialSolver {
             miy: vec![0.0; n],
             lo: 0,
             hi: n,
+            rows: (0, 0),
+            cols: (0, 0),
+            exact_now: false,
             algorithm: TangentialAlgorithm::Newton,
             jacobi: true,
             sx: vec![0.0; n],
@@ -148,6 +165,7 @@ impl TangentialSolver {
             self.sy[i] = self.uy_ext[i] + ey[i] + cuy;
         }
         self.products += 1;
+        self.exact_now = true;
     }
 
     /// Slip tractions back onto their circles `|τ_i| = g_i` (after turns along the tangent).
@@ -233,6 +251,10 @@ impl TangentialSolver {
     /// The outer loop ends when the adhesion residual is below tolerance, no element changes
     /// state and the slip directions are converged. If it has not ended after
     /// `cg_iterations` products, the monotone accelerated projected gradient (FISTA) finishes.
+    ///
+    /// Phases: `start` (the warm start projected, the slip set and the contact's box), then
+    /// per outer iteration `element_test`, the projected residual and the convergence test,
+    /// the CG model (`curvature`, `precondition`) and `inner_cg`; the FISTA fallback last.
     pub fn solve(
         &mut self,
         conv: &mut Convolver,
@@ -242,7 +264,6 @@ impl TangentialSolver {
         tx: &mut [f64],
         ty: &mut [f64],
     ) -> Result<usize, ContactError> {
-        let n = g.len();
         self.products = 0;
         let gmax = g.iter().cloned().fold(0.0, f64::max);
         if gmax <= 0.0 {
@@ -254,83 +275,26 @@ impl TangentialSolver {
             self.uy_ext.fill(0.0);
             return Ok(0);
         }
-        for i in 0..n {
-            project(&mut tx[i], &mut ty[i], g[i]);
-            self.slip[i] =
-                g[i] > 0.0 && tx[i] * tx[i] + ty[i] * ty[i] >= g[i] * g[i] * (1.0 - 1e-12);
-        }
-        // the range of the contact: outside it g = 0, so τ, the residual and the search
-        // direction are zero, and the CG needs neither its slip nor its displacement (every
-        // solve ends with an exact product over the whole grid)
-        let lo = g.iter().position(|&v| v > 0.0).unwrap_or(0);
-        let hi = g.iter().rposition(|&v| v > 0.0).map_or(lo, |k| k + 1);
-        (self.lo, self.hi) = (lo, hi);
-        let ny = conv.dims().1;
-        let (row0, row1) = (lo / ny, hi.div_ceil(ny));
-        // the columns of the contact: the CG's products run on a padded grid sized to the box
-        // of rows row0..row1 and these columns
-        let (mut col0, mut col1) = (ny, 0);
-        for (k, _) in g[lo..hi].iter().enumerate().filter(|(_, &v)| v > 0.0) {
-            let j = (lo + k) % ny;
-            col0 = col0.min(j);
-            col1 = col1.max(j + 1);
-        }
-        for v in [&mut self.dx_, &mut self.dy_] {
-            v[..lo].fill(0.0);
-            v[hi..].fill(0.0);
-        }
+        self.start(conv, g, tx, ty);
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
-        let (cdx, cdy) = (conv.diag_xx, conv.diag_yy);
         let s_tol = self.tol * gmax * conv.diag_t;
         self.exact(conv, ex, ey, tx, ty);
-        let mut exact_now = true;
+        let pb = Problem { g, ex, ey };
         while self.products < self.cg_iterations {
             // 1. element test of the slip elements: release to adhesion, tangent directions
-            let mut changed = false;
-            let mut dmax = 0.0_f64;
-            for i in lo..hi {
-                if !self.slip[i] {
-                    continue;
-                }
-                let trx = tx[i] - self.sx[i] / cdx;
-                let try_ = ty[i] - self.sy[i] / cdy;
-                if trx * trx + try_ * try_ < g[i] * g[i] {
-                    self.slip[i] = false;
-                    changed = true;
-                } else {
-                    let tm = (trx * trx + try_ * try_).sqrt();
-                    let (nx, ny) = (g[i] * trx / tm, g[i] * try_ / tm);
-                    let d = (nx - tx[i]).abs().max((ny - ty[i]).abs());
-                    // large turns by the element test, small ones by the CG rotation
-                    let thr = if norot {
-                        0.1 * self.tol * gmax
-                    } else {
-                        0.05 * g[i]
-                    };
-                    if d > thr {
-                        dmax = dmax.max(d);
-                        tx[i] = nx;
-                        ty[i] = ny;
-                    }
-                    let m = (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
-                    self.px[i] = -ty[i] / m;
-                    self.py[i] = tx[i] / m;
-                }
-            }
+            let (changed, dmax) = self.element_test(conv, g, gmax, tx, ty);
             if dmax > 0.0 {
                 self.exact(conv, ex, ey, tx, ty);
-                exact_now = true;
             }
             // 2. projected residual r = −P S (adhesion: both components; slip: the component
             //    along the circle's tangent, which rotates τ towards −S)
             let (mut rr, rmax) = self.residual(g, true);
             if rmax <= s_tol && !changed && (dmax <= self.tol * gmax || !norot) {
-                if exact_now {
+                if self.exact_now {
                     return Ok(self.products);
                 }
                 // confirm with an exact residual (the recurrence drifts)
                 self.exact(conv, ex, ey, tx, ty);
-                exact_now = true;
                 continue;
             }
             // 3. inner CG on adhesion (2 dof) + slip (1 dof) elements: the model residual
@@ -338,34 +302,10 @@ impl TangentialSolver {
             self.rx.copy_from_slice(&self.dx_);
             self.ry.copy_from_slice(&self.dy_);
             if !norot {
-                for i in lo..hi {
-                    self.kap[i] = if self.slip[i] && g[i] > 0.0 {
-                        let m = (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
-                        (-(self.sx[i] * tx[i] + self.sy[i] * ty[i]) / m).max(0.0) / g[i]
-                    } else {
-                        0.0
-                    };
-                }
+                self.curvature(g, tx, ty);
             }
-            let jacobi = self.jacobi && !norot;
-            if jacobi {
-                // inverse diagonal of the model Hessian; z = M⁻¹ r is the search direction
-                let (hx, hy) = (cdx + self.uniform_x_m_per_pa, cdy + self.uniform_y_m_per_pa);
-                rr = 0.0;
-                for i in lo..hi {
-                    let (mx, my) = if self.slip[i] {
-                        let (px, py) = (self.px[i], self.py[i]);
-                        let d = 1.0 / (px * px * hx + py * py * hy + self.kap[i]);
-                        (d, d)
-                    } else {
-                        (1.0 / hx, 1.0 / hy)
-                    };
-                    self.mix[i] = mx;
-                    self.miy[i] = my;
-                    self.dx_[i] *= mx;
-                    self.dy_[i] *= my;
-                    rr += self.rx[i] * self.dx_[i] + self.ry[i] * self.dy_[i];
-                }
+            if self.jacobi && !norot {
+                rr = self.precondition(conv);
             }
             // settled active set and directions: one CG sequence to the tolerance
             let stop = if norot || (!changed && dmax == 0.0) {
@@ -373,111 +313,11 @@ impl TangentialSolver {
             } else {
                 (0.01 * rmax).max(0.5 * s_tol)
             };
-            while self.products < self.cg_iterations {
-                conv.tangential_box(
-                    &self.dx_,
-                    &self.dy_,
-                    &mut self.qx,
-                    &mut self.qy,
-                    (row0, row1),
-                    (col0, col1),
-                );
-                let (cux, cuy) = self.uniform(&self.dx_, &self.dy_);
-                if cux != 0.0 || cuy != 0.0 {
-                    for i in lo..hi {
-                        self.qx[i] += cux;
-                        self.qy[i] += cuy;
-                    }
-                }
-                self.products += 1;
-                exact_now = false;
-                // model product w = C d on adhesion, P C d + κ d on slip (d ∥ tangent there)
-                let mut den = 0.0;
-                for i in lo..hi {
-                    den += self.qx[i] * self.dx_[i]
-                        + self.qy[i] * self.dy_[i]
-                        + self.kap[i] * (self.dx_[i] * self.dx_[i] + self.dy_[i] * self.dy_[i]);
-                }
-                if den <= 0.0 || rr == 0.0 {
-                    break;
-                }
-                let alpha = rr / den;
-                // one pass: slip and traction update, and (Newton) the model residual, its
-                // preconditioned copy and the reductions of the next step
-                let mut violated = false;
-                let (mut rr_new, mut rmax) = (0.0, 0.0_f64);
-                for i in lo..hi {
-                    let (qx, qy) = (self.qx[i], self.qy[i]);
-                    self.sx[i] += alpha * qx;
-                    self.sy[i] += alpha * qy;
-                    let (wx, wy) = if g[i] <= 0.0 {
-                        (0.0, 0.0)
-                    } else {
-                        let mut ax = tx[i] + alpha * self.dx_[i];
-                        let mut ay = ty[i] + alpha * self.dy_[i];
-                        if self.slip[i] {
-                            // rotation along the tangent; back onto the circle after the CG
-                        } else if ax * ax + ay * ay > g[i] * g[i] {
-                            project(&mut ax, &mut ay, g[i]);
-                            self.slip[i] = true;
-                            violated = true;
-                        }
-                        tx[i] = ax;
-                        ty[i] = ay;
-                        if self.slip[i] {
-                            let c = qx * self.px[i] + qy * self.py[i];
-                            (
-                                c * self.px[i] + self.kap[i] * self.dx_[i],
-                                c * self.py[i] + self.kap[i] * self.dy_[i],
-                            )
-                        } else {
-                            (qx, qy)
-                        }
-                    };
-                    if norot {
-                        continue;
-                    }
-                    let (rx, ry) = (self.rx[i] - alpha * wx, self.ry[i] - alpha * wy);
-                    self.rx[i] = rx;
-                    self.ry[i] = ry;
-                    // qx, qy: the new (preconditioned) residual (the product is no longer
-                    // needed)
-                    let (zx, zy) = if jacobi {
-                        (rx * self.mix[i], ry * self.miy[i])
-                    } else {
-                        (rx, ry)
-                    };
-                    self.qx[i] = zx;
-                    self.qy[i] = zy;
-                    rr_new += rx * zx + ry * zy;
-                    rmax = rmax.max(rx.abs()).max(ry.abs());
-                }
-                if violated {
-                    if !norot {
-                        self.to_circles(g, tx, ty);
-                    }
-                    self.exact(conv, ex, ey, tx, ty);
-                    exact_now = true;
-                    break;
-                }
-                if norot {
-                    (rr_new, rmax) = self.residual(g, false);
-                }
-                if rmax <= stop {
-                    break;
-                }
-                let beta = rr_new / rr;
-                rr = rr_new;
-                for i in lo..hi {
-                    self.dx_[i] = self.qx[i] + beta * self.dx_[i];
-                    self.dy_[i] = self.qy[i] + beta * self.dy_[i];
-                }
-            }
-            if !norot && !exact_now {
+            self.inner_cg(conv, &pb, tx, ty, rr, stop);
+            if !norot && !self.exact_now {
                 // radial correction of the turned slip tractions, exact residual
                 self.to_circles(g, tx, ty);
                 self.exact(conv, ex, ey, tx, ty);
-                exact_now = true;
             }
         }
         // active sets cycled: fall back to the (slower, monotone) accelerated projected gradient
@@ -485,6 +325,249 @@ impl TangentialSolver {
         self.exact(conv, ex, ey, tx, ty);
         self.products += its;
         Ok(self.products)
+    }
+
+    /// The start of a solve: the warm-start traction projected onto the discs, the slip set
+    /// (tractions on their circle), the range `lo..hi` of the contact (outside it g = 0, so τ,
+    /// the residual and the search direction are zero, and the CG needs neither its slip nor
+    /// its displacement: every solve ends with an exact product over the whole grid) and the
+    /// box of its rows and columns on which the CG's products run (a padded grid).
+    fn start(&mut self, conv: &Convolver, g: &[f64], tx: &mut [f64], ty: &mut [f64]) {
+        for i in 0..g.len() {
+            project(&mut tx[i], &mut ty[i], g[i]);
+            self.slip[i] =
+                g[i] > 0.0 && tx[i] * tx[i] + ty[i] * ty[i] >= g[i] * g[i] * (1.0 - 1e-12);
+        }
+        let lo = g.iter().position(|&v| v > 0.0).unwrap_or(0);
+        let hi = g.iter().rposition(|&v| v > 0.0).map_or(lo, |k| k + 1);
+        (self.lo, self.hi) = (lo, hi);
+        let ny = conv.dims().1;
+        self.rows = (lo / ny, hi.div_ceil(ny));
+        let (mut col0, mut col1) = (ny, 0);
+        for (k, _) in g[lo..hi].iter().enumerate().filter(|(_, &v)| v > 0.0) {
+            let j = (lo + k) % ny;
+            col0 = col0.min(j);
+            col1 = col1.max(j + 1);
+        }
+        self.cols = (col0, col1);
+        for v in [&mut self.dx_, &mut self.dy_] {
+            v[..lo].fill(0.0);
+            v[hi..].fill(0.0);
+        }
+    }
+
+    /// Kalker's element test of the slip elements: the trial traction `τ − S/C_ii` inside the
+    /// disc ⇒ release to adhesion; outside ⇒ turned onto its circle opposite to the slip when
+    /// the turn is large (small turns are left to the CG rotation, except with
+    /// [`TangentialAlgorithm::ElementTest`]). Sets the tangents `(px, py)` of the slip
+    /// elements. Returns whether an element was released and the largest turn (Pa).
+    fn element_test(
+        &mut self,
+        conv: &Convolver,
+        g: &[f64],
+        gmax: f64,
+        tx: &mut [f64],
+        ty: &mut [f64],
+    ) -> (bool, f64) {
+        let norot = self.algorithm == TangentialAlgorithm::ElementTest;
+        let (cdx, cdy) = (conv.diag_xx, conv.diag_yy);
+        let mut changed = false;
+        let mut dmax = 0.0_f64;
+        for i in self.lo..self.hi {
+            if !self.slip[i] {
+                continue;
+            }
+            let trx = tx[i] - self.sx[i] / cdx;
+            let try_ = ty[i] - self.sy[i] / cdy;
+            if trx * trx + try_ * try_ < g[i] * g[i] {
+                self.slip[i] = false;
+                changed = true;
+            } else {
+                let tm = (trx * trx + try_ * try_).sqrt();
+                let (nx, ny) = (g[i] * trx / tm, g[i] * try_ / tm);
+                let d = (nx - tx[i]).abs().max((ny - ty[i]).abs());
+                // large turns by the element test, small ones by the CG rotation
+                let thr = if norot {
+                    0.1 * self.tol * gmax
+                } else {
+                    0.05 * g[i]
+                };
+                if d > thr {
+                    dmax = dmax.max(d);
+                    tx[i] = nx;
+                    ty[i] = ny;
+                }
+                let m = (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
+                self.px[i] = -ty[i] / m;
+                self.py[i] = tx[i] / m;
+            }
+        }
+        (changed, dmax)
+    }
+
+    /// The curvature `κ_i = |S_i|/g_i` of the slip elements' circles (the radial slip over
+    /// the radius; 0 on adhesion elements), the diagonal term of the CG's model Hessian.
+    fn curvature(&mut self, g: &[f64], tx: &[f64], ty: &[f64]) {
+        for i in self.lo..self.hi {
+            self.kap[i] = if self.slip[i] && g[i] > 0.0 {
+                let m = (tx[i] * tx[i] + ty[i] * ty[i]).sqrt();
+                (-(self.sx[i] * tx[i] + self.sy[i] * ty[i]) / m).max(0.0) / g[i]
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// The Jacobi preconditioner: the inverse diagonal of the model Hessian into
+    /// `(mix, miy)`, the search direction scaled by it (`z = M⁻¹ r`). Returns `r·z`.
+    fn precondition(&mut self, conv: &Convolver) -> f64 {
+        let (cdx, cdy) = (conv.diag_xx, conv.diag_yy);
+        let (hx, hy) = (cdx + self.uniform_x_m_per_pa, cdy + self.uniform_y_m_per_pa);
+        let mut rr = 0.0;
+        for i in self.lo..self.hi {
+            let (mx, my) = if self.slip[i] {
+                let (px, py) = (self.px[i], self.py[i]);
+                let d = 1.0 / (px * px * hx + py * py * hy + self.kap[i]);
+                (d, d)
+            } else {
+                (1.0 / hx, 1.0 / hy)
+            };
+            self.mix[i] = mx;
+            self.miy[i] = my;
+            self.dx_[i] *= mx;
+            self.dy_[i] *= my;
+            rr += self.rx[i] * self.dx_[i] + self.ry[i] * self.dy_[i];
+        }
+        rr
+    }
+
+    /// The inner conjugate gradients from the search direction `(dx_, dy_)` with `r·z = rr`
+    /// until the model residual is below `stop` (m), an adhesion element leaves its disc
+    /// (it joins the slip set; an exact product follows) or the products run out.
+    fn inner_cg(
+        &mut self,
+        conv: &mut Convolver,
+        pb: &Problem<'_>,
+        tx: &mut [f64],
+        ty: &mut [f64],
+        mut rr: f64,
+        stop: f64,
+    ) {
+        let norot = self.algorithm == TangentialAlgorithm::ElementTest;
+        let (lo, hi) = (self.lo, self.hi);
+        while self.products < self.cg_iterations {
+            conv.tangential_box(
+                &self.dx_,
+                &self.dy_,
+                &mut self.qx,
+                &mut self.qy,
+                self.rows,
+                self.cols,
+            );
+            let (cux, cuy) = self.uniform(&self.dx_, &self.dy_);
+            if cux != 0.0 || cuy != 0.0 {
+                for i in lo..hi {
+                    self.qx[i] += cux;
+                    self.qy[i] += cuy;
+                }
+            }
+            self.products += 1;
+            self.exact_now = false;
+            // model product w = C d on adhesion, P C d + κ d on slip (d ∥ tangent there)
+            let mut den = 0.0;
+            for i in lo..hi {
+                den += self.qx[i] * self.dx_[i]
+                    + self.qy[i] * self.dy_[i]
+                    + self.kap[i] * (self.dx_[i] * self.dx_[i] + self.dy_[i] * self.dy_[i]);
+            }
+            if den <= 0.0 || rr == 0.0 {
+                break;
+            }
+            let alpha = rr / den;
+            let (violated, mut rr_new, mut rmax) = self.cg_update(pb.g, tx, ty, alpha);
+            if violated {
+                if !norot {
+                    self.to_circles(pb.g, tx, ty);
+                }
+                self.exact(conv, pb.ex, pb.ey, tx, ty);
+                break;
+            }
+            if norot {
+                (rr_new, rmax) = self.residual(pb.g, false);
+            }
+            if rmax <= stop {
+                break;
+            }
+            let beta = rr_new / rr;
+            rr = rr_new;
+            for i in lo..hi {
+                self.dx_[i] = self.qx[i] + beta * self.dx_[i];
+                self.dy_[i] = self.qy[i] + beta * self.dy_[i];
+            }
+        }
+    }
+
+    /// One pass of a CG step of length `alpha`: the slip and traction update (an adhesion
+    /// element leaving its disc is projected onto it and joins the slip set) and, with
+    /// [`TangentialAlgorithm::Newton`], the model residual, its preconditioned copy (into
+    /// `qx, qy`; the product is no longer needed) and the reductions of the next step.
+    /// Returns whether an element left its disc, `r·z` and `max |r|`.
+    fn cg_update(
+        &mut self,
+        g: &[f64],
+        tx: &mut [f64],
+        ty: &mut [f64],
+        alpha: f64,
+    ) -> (bool, f64, f64) {
+        let norot = self.algorithm == TangentialAlgorithm::ElementTest;
+        let jacobi = self.jacobi && !norot;
+        let mut violated = false;
+        let (mut rr_new, mut rmax) = (0.0, 0.0_f64);
+        for i in self.lo..self.hi {
+            let (qx, qy) = (self.qx[i], self.qy[i]);
+            self.sx[i] += alpha * qx;
+            self.sy[i] += alpha * qy;
+            let (wx, wy) = if g[i] <= 0.0 {
+                (0.0, 0.0)
+            } else {
+                let mut ax = tx[i] + alpha * self.dx_[i];
+                let mut ay = ty[i] + alpha * self.dy_[i];
+                if self.slip[i] {
+                    // rotation along the tangent; back onto the circle after the CG
+                } else if ax * ax + ay * ay > g[i] * g[i] {
+                    project(&mut ax, &mut ay, g[i]);
+                    self.slip[i] = true;
+                    violated = true;
+                }
+                tx[i] = ax;
+                ty[i] = ay;
+                if self.slip[i] {
+                    let c = qx * self.px[i] + qy * self.py[i];
+                    (
+                        c * self.px[i] + self.kap[i] * self.dx_[i],
+                        c * self.py[i] + self.kap[i] * self.dy_[i],
+                    )
+                } else {
+                    (qx, qy)
+                }
+            };
+            if norot {
+                continue;
+            }
+            let (rx, ry) = (self.rx[i] - alpha * wx, self.ry[i] - alpha * wy);
+            self.rx[i] = rx;
+            self.ry[i] = ry;
+            let (zx, zy) = if jacobi {
+                (rx * self.mix[i], ry * self.miy[i])
+            } else {
+                (rx, ry)
+            };
+            self.qx[i] = zx;
+            self.qy[i] = zy;
+            rr_new += rx * zx + ry * zy;
+            rmax = rmax.max(rx.abs()).max(ry.abs());
+        }
+        (violated, rr_new, rmax)
     }
 
     /// FISTA (Beck & Teboulle 2009) with gradient restart (O'Donoghue & Candès 2015): the

@@ -17,10 +17,21 @@ fn reference_hertz() -> HertzContact {
     .unwrap()
 }
 
+/// The reference case's grid configuration at 38.9 m/s with `nx × ny` elements and the
+/// given margin.
+fn rolling_config(nx: usize, ny: usize, margin: f64) -> TransientConfig {
+    TransientConfig::around_hertz(&HertzGridParams {
+        speed_m_per_s: 38.9,
+        nx,
+        ny,
+        margin,
+        ..HertzGridParams::default()
+    })
+    .unwrap()
+}
+
 fn normal_only(nx: usize, ny: usize, margin: f64) -> (StepResult, f64, f64, f64) {
-    let cfg =
-        TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, nx, ny, margin)
-            .unwrap();
+    let cfg = rolling_config(nx, ny, margin);
     let mut eng = TransientRolling::new(cfg).unwrap();
     let r = eng.step(&StepInputs::force_creepage(100e3, 0.0)).unwrap();
     let (a, b) = report::equivalent_semi_axes(eng.x_m(), eng.y_m(), eng.pressure_pa());
@@ -128,7 +139,19 @@ fn cattaneo_mindlin_stick_radius() {
         load_n: load,
     })
     .unwrap();
-    let cfg = TransientConfig::around_hertz(r, r, 210e9, 0.0, mu, 10.0, load, 40, 40, 1.1).unwrap();
+    let cfg = TransientConfig::around_hertz(&HertzGridParams {
+        radius_x_m: r,
+        radius_y_m: r,
+        poisson: 0.0,
+        friction: mu,
+        speed_m_per_s: 10.0,
+        load_n: load,
+        nx: 40,
+        ny: 40,
+        margin: 1.1,
+        ..HertzGridParams::default()
+    })
+    .unwrap();
     let mut eng = TransientRolling::new(cfg).unwrap();
     for q in [0.3, 0.6] {
         eng.reset();
@@ -158,8 +181,7 @@ fn cattaneo_mindlin_stick_radius() {
 
 #[test]
 fn saturation_and_separation() {
-    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 20, 16, 1.2)
-        .unwrap();
+    let cfg = rolling_config(20, 16, 1.2);
     let mut eng = TransientRolling::new(cfg).unwrap();
     let r = eng
         .solve_steady(&StepInputs::force_creepage(100e3, 0.05), 1e-8, 500)
@@ -198,9 +220,7 @@ fn frictional_power_matches_global_power_balance() {
     // lost (V/Δx) τᵀ(C − C̄)τ, C̄ the one-cell-shifted operator: −41.5 %, −24.2 %, −16.5 %
     // on the same grids (first order in Δx; ≈ Δx µp0 / (G a ξ)).
     for (nx, ny) in [(16usize, 12usize), (32, 24)] {
-        let cfg =
-            TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, nx, ny, 1.2)
-                .unwrap();
+        let cfg = rolling_config(nx, ny, 1.2);
         let mut eng = TransientRolling::new(cfg).unwrap();
         let xi = -1.0e-3;
         let st = eng
@@ -225,8 +245,7 @@ fn frictional_power_matches_global_power_balance() {
 fn transient_rise_within_one_contact_length() {
     // Kalker (1990 §2.2 / ch. 5): from rest with constant creepage the force reaches its
     // steady value after about one contact length of rolling.
-    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 24, 18, 1.2)
-        .unwrap();
+    let cfg = rolling_config(24, 18, 1.2);
     let h = reference_hertz();
     let mut eng = TransientRolling::new(cfg).unwrap();
     let xi = -1.0e-3;
@@ -253,8 +272,7 @@ fn transient_rise_within_one_contact_length() {
 
 #[test]
 fn load_response_long_wavelength_is_quasi_steady() {
-    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 16, 12, 1.35)
-        .unwrap();
+    let cfg = rolling_config(16, 12, 1.35);
     let h = reference_hertz();
     let lams: Vec<f64> = [1.5, 3.0, 6.0, 30.0, 100.0]
         .iter()
@@ -286,8 +304,7 @@ fn load_response_long_wavelength_is_quasi_steady() {
 #[test]
 fn wear_accumulator_conserves_work() {
     // Conservation: Σ_bins W_f ΔxΔy = Σ_steps P Δt when the patch stays inside the bins.
-    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 16, 12, 1.2)
-        .unwrap();
+    let cfg = rolling_config(16, 12, 1.2);
     let mut eng = TransientRolling::new(cfg).unwrap();
     let mut acc = WearAccumulator::new(&eng, -0.02, 400);
     let mut total = 0.0;
@@ -309,8 +326,7 @@ fn wear_accumulator_conserves_work() {
 fn corrugated_rail_changes_patch_and_pressure() {
     // A rail bump under the contact (approach fixed) raises the force and the peak pressure and
     // shifts the patch centroid toward the bump: the profile enters the gap, not just the force.
-    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 24, 18, 1.4)
-        .unwrap();
+    let cfg = rolling_config(24, 18, 1.4);
     let mut eng = TransientRolling::new(cfg).unwrap();
     let mut inp = StepInputs::force_creepage(100e3, 0.0);
     let r0 = eng.step(&inp).unwrap();
@@ -385,8 +401,19 @@ fn solve_case_reference_and_fields() {
 /// radii rx, ry (no slip: µ = 1000, ξ = 1e-4).
 fn creep_coefficients(rx: f64, ry: f64, nu: f64, n: usize) -> (f64, f64, f64, f64, usize) {
     let load = 100e3;
-    let mut cfg =
-        TransientConfig::around_hertz(rx, ry, 210e9, nu, 1e3, 38.9, load, n, n, 1.1).unwrap();
+    let mut cfg = TransientConfig::around_hertz(&HertzGridParams {
+        radius_x_m: rx,
+        radius_y_m: ry,
+        poisson: nu,
+        friction: 1e3,
+        speed_m_per_s: 38.9,
+        load_n: load,
+        nx: n,
+        ny: n,
+        margin: 1.1,
+        ..HertzGridParams::default()
+    })
+    .unwrap();
     cfg.tangential_tol = 1e-8;
     let h = HertzContact::solve(&HertzInput {
         radius_x_m: rx,
@@ -481,7 +508,19 @@ fn series_compliance_normal_matches_hertz_in_series() {
     let es = combined_modulus(e, nu);
     let delta_h = (9.0 * load * load / (16.0 * es * es * re)).cbrt();
     let cz = 0.5e-9; // m/N: c_z F = 50 µm, comparable to δ_H
-    let cfg = TransientConfig::around_hertz(re, re, e, nu, 0.4, 38.9, load, 40, 40, 1.2).unwrap();
+    let cfg = TransientConfig::around_hertz(&HertzGridParams {
+        radius_x_m: re,
+        radius_y_m: re,
+        youngs_pa: e,
+        poisson: nu,
+        speed_m_per_s: 38.9,
+        load_n: load,
+        nx: 40,
+        ny: 40,
+        margin: 1.2,
+        ..HertzGridParams::default()
+    })
+    .unwrap();
     let mut eng = TransientRolling::new(cfg).unwrap();
     eng.set_series_compliance([0.0, 0.0, cz]).unwrap();
     let mut inp = StepInputs::force_creepage(load, 0.0);
@@ -514,8 +553,7 @@ fn series_compliance_normal_matches_hertz_in_series() {
 #[test]
 fn series_compliance_leaves_steady_rolling_unchanged() {
     // Steady state: F(t) = F(t − Δt), the uniform slip term vanishes.
-    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 16, 12, 1.2)
-        .unwrap();
+    let cfg = rolling_config(16, 12, 1.2);
     let mut eng = TransientRolling::new(cfg).unwrap();
     let mut inp = StepInputs::force_creepage(100e3, -1e-3);
     inp.lateral_creepage = 0.5e-3;
@@ -541,9 +579,15 @@ fn series_compliance_transient_rise_matches_series_spring_model() {
     // ξ_eff(m) = ξ + c_x (F(m) − F(m−1)) / Δx, so
     //   F(n) = Σ_k R_k ξ_eff(n − k),
     // solved step by step for the implicit F(n) (the spring k_t in series with 1/c_x).
-    let mut cfg =
-        TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 1e3, 38.9, 100e3, 20, 16, 1.2)
-            .unwrap();
+    let mut cfg = TransientConfig::around_hertz(&HertzGridParams {
+        friction: 1e3,
+        speed_m_per_s: 38.9,
+        nx: 20,
+        ny: 16,
+        margin: 1.2,
+        ..HertzGridParams::default()
+    })
+    .unwrap();
     // the tolerance is relative to µ p_max: tight, since µ = 1000
     cfg.tangential_tol = 1e-11;
     let mut eng = TransientRolling::new(cfg).unwrap();
@@ -593,8 +637,7 @@ fn series_compliance_transient_rise_matches_series_spring_model() {
 
 #[test]
 fn series_compliance_rejects_invalid_values() {
-    let cfg =
-        TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 8, 6, 1.2).unwrap();
+    let cfg = rolling_config(8, 6, 1.2);
     let mut eng = TransientRolling::new(cfg).unwrap();
     for bad in [
         [-1e-9, 0.0, 0.0],
@@ -617,8 +660,7 @@ fn newton_tangential_solver_matches_element_test_solver() {
     // Independent solver: the former active-set method (slip directions by Kalker's element
     // test only) on the same transient sequence, with varying load, corrugated rail, lateral
     // creepage and spin (slip directions far from the rolling direction).
-    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 20, 16, 1.3)
-        .unwrap();
+    let cfg = rolling_config(20, 16, 1.3);
     let dx = cfg.grid.dx();
     let mut runs = Vec::new();
     // the third run, Newton at a 1000× tighter tolerance, is the reference
@@ -656,8 +698,7 @@ fn jacobi_preconditioned_tangential_solver_matches_the_plain_one() {
     // The same transient sequence (varying load, corrugated rail, lateral creepage, spin) with
     // the inner CG preconditioned and plain, and the reference: the plain CG at a 1000×
     // tighter tolerance. The preconditioner changes the path, not the solution.
-    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 24, 18, 1.4)
-        .unwrap();
+    let cfg = rolling_config(24, 18, 1.4);
     let dx = cfg.grid.dx();
     let mut runs = Vec::new();
     for (jacobi, tol) in [
@@ -780,8 +821,7 @@ fn fixed_set_normal_solve_equals_polonsky_keer() {
     // Independent solver: Polonsky–Keer's CG to 1e-12 (no superposition). The superposed
     // solution must agree to far better than the rolling tolerance (1e-6) and need no
     // product while the set stays.
-    let cfg = TransientConfig::around_hertz(0.46, 0.3, 210e9, 0.3, 0.4, 38.9, 100e3, 24, 18, 1.4)
-        .unwrap();
+    let cfg = rolling_config(24, 18, 1.4);
     let (nx, ny, g) = (cfg.grid.nx, cfg.grid.ny, cfg.grid);
     let es = combined_modulus(210e9, 0.3);
     let gm = shear_modulus(210e9, 0.3);

@@ -278,14 +278,71 @@ impl TransientRolling {
     }
 
     /// One transient step (no allocation). Forces and fields refer to the end of the step.
+    ///
+    /// Phases: the inputs checked, the undeformed gap, the normal problem (and the check
+    /// that the patch stays inside the grid), the traction bound `µ p`, the previous
+    /// displacement at the upstream material positions and the warm start, the tangential
+    /// problem at the given creepage or force, and the outputs (forces, states, frictional
+    /// power).
     pub fn step(&mut self, inp: &StepInputs) -> Result<StepResult, ContactError> {
-        let (nx, ny) = (self.nx, self.ny);
+        self.check_inputs(inp)?;
+        self.undeformed_gap(inp.rail_height_m);
+        let mode = normal_mode(inp.normal)?;
+        let nres = self
+            .normal
+            .solve(&mut self.conv, &self.h, self.da, mode, &mut self.p)?;
+        let contact = self.contact_elements()?;
+        let mu = self.cfg.friction;
+        for (g, p) in self.g.iter_mut().zip(&self.p) {
+            *g = mu * p;
+        }
+        self.upstream_displacement();
+        self.warm_start();
+        let (xi, tang_its) = self.solve_longitudinal(inp, nres.load_n, contact)?;
+        self.xi_last = xi;
+        let sums = self.outputs(contact);
+        if !(sums.fx.is_finite()
+            && sums.fy.is_finite()
+            && sums.power.is_finite()
+            && nres.load_n.is_finite())
+        {
+            return Err(ContactError::NotConverged {
+                solver: "contact step (non-finite result; refine the grid or loosen the load)",
+                iterations: tang_its,
+                residual: 1.0,
+            });
+        }
+        std::mem::swap(&mut self.tx_pp, &mut self.tx_prev);
+        std::mem::swap(&mut self.ty_pp, &mut self.ty_prev);
+        self.tx_prev.copy_from_slice(&self.tx);
+        self.ty_prev.copy_from_slice(&self.ty);
+        self.steps += 1;
+        Ok(StepResult {
+            normal_force_n: nres.load_n,
+            approach_m: nres.approach_m,
+            fx_n: sums.fx * self.da,
+            fy_n: sums.fy * self.da,
+            mz_nm: sums.mz * self.da,
+            creepage: xi,
+            contact_elements: contact,
+            slip_elements: sums.slip_elements,
+            area_m2: contact as f64 * self.da,
+            frictional_power_w: sums.power * self.da,
+            normal_iterations: nres.iterations,
+            tangential_iterations: tang_its,
+            influence_products: tang_its + self.normal.products,
+        })
+    }
+
+    /// The step's inputs: the rail heights one per grid column, the lateral creepage and the
+    /// spin finite.
+    fn check_inputs(&self, inp: &StepInputs) -> Result<(), ContactError> {
         if let Some(r) = inp.rail_height_m {
-            if r.len() != nx {
+            if r.len() != self.nx {
                 return Err(ContactError::WrongLength {
                     name: "rail_height_m",
                     got: r.len(),
-                    expected: nx,
+                    expected: self.nx,
                     per: "column (x)",
                 });
             }
@@ -302,36 +359,26 @@ impl TransientRolling {
                 });
             }
         }
-        // undeformed gap
+        Ok(())
+    }
+
+    /// The undeformed gap `h` (m): the wheel's and the rail crown's curvatures less the rail
+    /// heights per column (m; `None` = smooth).
+    fn undeformed_gap(&mut self, rail_height_m: Option<&[f64]>) {
+        let (nx, ny) = (self.nx, self.ny);
         let (cx, cy) = (0.5 / self.cfg.radius_x_m, 0.5 / self.cfg.radius_y_m);
         for i in 0..nx {
-            let hx = cx * self.xs[i] * self.xs[i] - inp.rail_height_m.map_or(0.0, |r| r[i]);
+            let hx = cx * self.xs[i] * self.xs[i] - rail_height_m.map_or(0.0, |r| r[i]);
             for j in 0..ny {
                 self.h[i * ny + j] = hx + cy * self.ys[j] * self.ys[j];
             }
         }
-        let mode = match inp.normal {
-            NormalInput::Approach(d) if d.is_finite() => NormalMode::Approach(d),
-            NormalInput::Force(f) if f.is_finite() && f >= 0.0 => NormalMode::Load(f),
-            NormalInput::Approach(d) => {
-                return Err(ContactError::InvalidParameter {
-                    name: "approach",
-                    value: d,
-                    reason: "must be finite",
-                })
-            }
-            NormalInput::Force(f) => {
-                return Err(ContactError::InvalidParameter {
-                    name: "normal force",
-                    value: f,
-                    reason: "must be finite and ≥ 0",
-                })
-            }
-        };
-        let nres = self
-            .normal
-            .solve(&mut self.conv, &self.h, self.da, mode, &mut self.p)?;
-        // edge check
+    }
+
+    /// The number of elements in contact after the normal solve; an error when the patch
+    /// touches the edge of the grid.
+    fn contact_elements(&self) -> Result<usize, ContactError> {
+        let (nx, ny) = (self.nx, self.ny);
         let mut contact = 0usize;
         for i in 0..nx {
             for j in 0..ny {
@@ -346,40 +393,55 @@ impl TransientRolling {
                 }
             }
         }
-        let mu = self.cfg.friction;
-        for (g, p) in self.g.iter_mut().zip(&self.p) {
-            *g = mu * p;
-        }
-        // previous displacement at the upstream material positions: rows 1..=nx of the
-        // extended product of the previous step's final traction
+        Ok(contact)
+    }
+
+    /// The previous displacement at the upstream material positions: rows `1..=nx` of the
+    /// extended product of the previous step's final traction (zero from rest).
+    fn upstream_displacement(&mut self) {
         if self.steps > 0 {
-            let n = nx * ny;
+            let (ny, n) = (self.ny, self.nx * self.ny);
             self.upx.copy_from_slice(&self.tang.ux_ext[ny..ny + n]);
             self.upy.copy_from_slice(&self.tang.uy_ext[ny..ny + n]);
         } else {
             self.upx.fill(0.0);
             self.upy.fill(0.0);
         }
-        // warm start: the traction extrapolated linearly in time from the last two steps
-        // (the solver projects it onto the new traction bound) where it changed by more than
-        // the solver tolerance; elsewhere the last traction (so that steady rolling stays an
-        // exact fixed point of the step)
-        if self.steps >= 2 {
-            let thr = self.cfg.tangential_tol * self.g.iter().cloned().fold(0.0, f64::max);
-            for e in 0..nx * ny {
-                let (dx, dy) = (
-                    self.tx_prev[e] - self.tx_pp[e],
-                    self.ty_prev[e] - self.ty_pp[e],
-                );
-                if dx.abs().max(dy.abs()) > thr {
-                    self.tx[e] = self.tx_prev[e] + dx;
-                    self.ty[e] = self.ty_prev[e] + dy;
-                } else {
-                    self.tx[e] = self.tx_prev[e];
-                    self.ty[e] = self.ty_prev[e];
-                }
+    }
+
+    /// The warm start of the tangential solve: the traction extrapolated linearly in time
+    /// from the last two steps (the solver projects it onto the new traction bound) where it
+    /// changed by more than the solver tolerance; elsewhere the last traction (so that steady
+    /// rolling stays an exact fixed point of the step).
+    fn warm_start(&mut self) {
+        if self.steps < 2 {
+            return;
+        }
+        let thr = self.cfg.tangential_tol * self.g.iter().cloned().fold(0.0, f64::max);
+        for e in 0..self.nx * self.ny {
+            let (dx, dy) = (
+                self.tx_prev[e] - self.tx_pp[e],
+                self.ty_prev[e] - self.ty_pp[e],
+            );
+            if dx.abs().max(dy.abs()) > thr {
+                self.tx[e] = self.tx_prev[e] + dx;
+                self.ty[e] = self.ty_prev[e] + dy;
+            } else {
+                self.tx[e] = self.tx_prev[e];
+                self.ty[e] = self.ty_prev[e];
             }
         }
+    }
+
+    /// The tangential problem at the prescribed creepage, or at the creepage that gives the
+    /// prescribed longitudinal force (with the normal load `load_n`, N, and `contact`
+    /// elements in contact). Returns the creepage (−) and the influence products used.
+    fn solve_longitudinal(
+        &mut self,
+        inp: &StepInputs,
+        load_n: f64,
+        contact: usize,
+    ) -> Result<(f64, usize), ContactError> {
         let (eta, phi) = (inp.lateral_creepage, inp.spin_per_m);
         let mut tang_its = 0usize;
         let xi = match inp.longitudinal {
@@ -395,14 +457,14 @@ impl TransientRolling {
                 xi
             }
             Longitudinal::Force(fx) => {
-                let limit = mu * nres.load_n;
+                let limit = self.cfg.friction * load_n;
                 if !fx.is_finite() || fx.abs() >= limit * (1.0 - 1e-9) && fx != 0.0 {
                     return Err(ContactError::TractionExceedsFriction {
                         fx_n: fx,
                         limit_n: limit,
                     });
                 }
-                if nres.load_n == 0.0 {
+                if load_n == 0.0 {
                     self.tangential(0.0, eta, phi)?;
                     0.0
                 } else {
@@ -410,8 +472,13 @@ impl TransientRolling {
                 }
             }
         };
-        self.xi_last = xi;
-        // outputs
+        Ok((xi, tang_its))
+    }
+
+    /// The outputs of the step: element states, slip velocities and frictional power
+    /// densities (stored), and the sums of traction, moment and power over the grid.
+    fn outputs(&mut self, contact: usize) -> StepSums {
+        let (nx, ny) = (self.nx, self.ny);
         let v_over_dx = self.cfg.speed_m_per_s / self.dx;
         let (mut fx, mut fy, mut mz, mut pw) = (0.0, 0.0, 0.0, 0.0);
         let mut nslip = 0usize;
@@ -462,33 +529,13 @@ impl TransientRolling {
                 }
             }
         }
-        if !(fx.is_finite() && fy.is_finite() && pw.is_finite() && nres.load_n.is_finite()) {
-            return Err(ContactError::NotConverged {
-                solver: "contact step (non-finite result; refine the grid or loosen the load)",
-                iterations: tang_its,
-                residual: 1.0,
-            });
-        }
-        std::mem::swap(&mut self.tx_pp, &mut self.tx_prev);
-        std::mem::swap(&mut self.ty_pp, &mut self.ty_prev);
-        self.tx_prev.copy_from_slice(&self.tx);
-        self.ty_prev.copy_from_slice(&self.ty);
-        self.steps += 1;
-        Ok(StepResult {
-            normal_force_n: nres.load_n,
-            approach_m: nres.approach_m,
-            fx_n: fx * self.da,
-            fy_n: fy * self.da,
-            mz_nm: mz * self.da,
-            creepage: xi,
-            contact_elements: contact,
+        StepSums {
+            fx,
+            fy,
+            mz,
+            power: pw,
             slip_elements: nslip,
-            area_m2: contact as f64 * self.da,
-            frictional_power_w: pw * self.da,
-            normal_iterations: nres.iterations,
-            tangential_iterations: tang_its,
-            influence_products: tang_its + self.normal.products,
-        })
+        }
     }
 
     fn tangential(&mut self, xi: f64, eta: f64, phi: f64) -> Result<usize, ContactError> {
@@ -623,5 +670,33 @@ impl TransientRolling {
             iterations: max_steps,
             residual: 1.0,
         })
+    }
+}
+
+/// Sums over the grid of one step: tractions (Pa), moment (Pa·m) and frictional power
+/// density (W/m²), each to be multiplied by the element area; slip elements.
+struct StepSums {
+    fx: f64,
+    fy: f64,
+    mz: f64,
+    power: f64,
+    slip_elements: usize,
+}
+
+/// The normal problem of a step: the approach (finite) or the force (finite, ≥ 0).
+fn normal_mode(normal: NormalInput) -> Result<NormalMode, ContactError> {
+    match normal {
+        NormalInput::Approach(d) if d.is_finite() => Ok(NormalMode::Approach(d)),
+        NormalInput::Force(f) if f.is_finite() && f >= 0.0 => Ok(NormalMode::Load(f)),
+        NormalInput::Approach(d) => Err(ContactError::InvalidParameter {
+            name: "approach",
+            value: d,
+            reason: "must be finite",
+        }),
+        NormalInput::Force(f) => Err(ContactError::InvalidParameter {
+            name: "normal force",
+            value: f,
+            reason: "must be finite and ≥ 0",
+        }),
     }
 }

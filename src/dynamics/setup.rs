@@ -6,7 +6,8 @@
 use super::passage::PASSAGE_TANGENTIAL_TOL;
 use super::{DynamicsError, RailProfile};
 use crate::contact::{
-    GridSpec, Longitudinal, NormalInput, StepInputs, TransientConfig, TransientRolling,
+    GridSpec, HertzGridParams, Longitudinal, NormalInput, StepInputs, TransientConfig,
+    TransientRolling,
 };
 use crate::model::Model;
 use crate::structure::WheelStructure;
@@ -177,18 +178,18 @@ pub fn contact_config_for(
     speed_m_per_s: f64,
 ) -> Result<TransientConfig, DynamicsError> {
     let m = model;
-    let mut cfg = TransientConfig::around_hertz(
-        m.wheel.radius,
-        m.contact.rail_crown_radius,
-        m.rail.youngs_modulus,
-        m.rail.poisson_ratio,
-        m.contact.friction,
+    let mut cfg = TransientConfig::around_hertz(&HertzGridParams {
+        radius_x_m: m.wheel.radius,
+        radius_y_m: m.contact.rail_crown_radius,
+        youngs_pa: m.rail.youngs_modulus,
+        poisson: m.rail.poisson_ratio,
+        friction: m.contact.friction,
         speed_m_per_s,
-        m.vehicle.wheel_load,
-        m.contact.grid_nx,
-        m.contact.grid_ny,
-        m.contact.grid_margin,
-    )
+        load_n: m.vehicle.wheel_load,
+        nx: m.contact.grid_nx,
+        ny: m.contact.grid_ny,
+        margin: m.contact.grid_margin,
+    })
     .map_err(DynamicsError::ContactGrid)?;
     cfg.tangential_tol = PASSAGE_TANGENTIAL_TOL;
     Ok(cfg)

@@ -36,23 +36,25 @@
 //! static contact force and the wheel loads (no dynamic relaxation); the wheel's rigid
 //! modes placed so that the approach is the steady one and turned so that the creepage is.
 
+mod stepper;
+
 use std::time::Instant;
 
-use super::audit::{Audit, EnergyAudit, StepForces};
-use super::ledger::{Ledger, LedgerStep, State};
+use stepper::{RailHeights, Stepper};
+
+use super::audit::EnergyAudit;
+use super::ledger::State;
 use super::model::ExplicitModel;
 use super::operator::StepScratch;
-use super::response::{advance_held, Hold, RailResponses, UnitResponse};
+use super::response::{Hold, RailResponses, UnitResponse};
 use super::rotating::{RotatingWheel, WheelParts};
-use super::start::add_line_force;
 use super::ExplicitError;
-use crate::contact::{Longitudinal, NormalInput, StepInputs, WearAccumulator};
-use crate::dynamics::patch::{max_planes, PlaneWeights};
+use crate::dynamics::patch::PlaneWeights;
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame};
 use crate::dynamics::{
     passage::PassageOptions,
-    record::{Histories, PassageRecord, RailPointRecord},
-    setup::{passage_contact, rigid_least_norm, steady_contact},
+    record::{PassageRecord, RailPointRecord},
+    setup::{passage_contact, rigid_least_norm},
 };
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
 use crate::model::{ExplicitWheel, Model};
@@ -168,6 +170,10 @@ pub struct ExplicitRecord {
 impl ExplicitModel {
     /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth);
     /// `progress(done, total)` is called every few contact steps.
+    ///
+    /// Phases: the plan (steps and range), the static start, the set-up of the step loop
+    /// (unit responses, scratch, energy ledger, recorder), the contact steps (predictor,
+    /// contact, corrector, ledger, records) and the record.
     pub fn passage(
         &self,
         speed_m_per_s: f64,
@@ -175,326 +181,25 @@ impl ExplicitModel {
         popts: &PassageOptions,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<ExplicitRecord, ExplicitError> {
-        let v = speed_m_per_s;
-        let mut contact =
-            passage_contact(&self.model, v, profile.map(|p| (p, self.hertz_approach_m)))?;
-        let dt_c = contact.time_step_s();
-        let dx = v * dt_c;
-        let (nt, dtt) = self.track.substeps(dt_c);
-        let (nw, dtw) = self.wheel.substeps(dt_c);
-        let frame = self.frame;
-        let w_load = self.model.vehicle.wheel_load;
-        let f_l0 = self.model.contact.traction_coefficient * w_load;
-        let f_n0 = w_load / frame.n[2];
-        let spin = frame.n[1] / self.wheel_radius_m;
-        let x0 = self.x_start_m;
-        let [z0, z1] = self.zone_m;
-        let half_grid = contact.config().grid.half_length_x_m;
-        let x_end = z1 + half_grid + 2.0 * dx;
-        let n_steps = ((x_end - x0) / dx).ceil() as usize;
-        let nx = contact.config().grid.nx;
-        let xs: Vec<f64> = contact.x_m().to_vec();
-        let mut heights = vec![0.0; nx];
-        let fill_heights = |xc: f64, h: &mut [f64]| {
-            if let Some(p) = profile {
-                for (hi, &xi) in h.iter_mut().zip(&xs) {
-                    *hi = p.height_at(xc + xi);
-                }
-            }
-        };
-
-        // --- Static start.
-        fill_heights(x0, &mut heights);
-        let st = steady_contact(
-            &mut contact,
-            f_n0,
-            f_l0,
-            spin,
-            profile.map(|_| &heights[..]),
-            x0,
+        let mut contact = passage_contact(
+            &self.model,
+            speed_m_per_s,
+            profile.map(|p| (p, self.hertz_approach_m)),
         )?;
-        let (xi0, delta0) = (st.creepage, st.approach_m);
-        let mut s_ = self.start_state(v, xi0, delta0)?;
-        // The rotating wheel (rotating.rs); `None` for the fixed wheel.
-        let mut rot = self.rotating_wheel(v, nw, dtw)?;
-        if let Some(r) = &rot {
-            r.add_rolling_velocity(&self.wheel_structure, &s_.uw, &mut s_.vw);
-            // The wheel's material velocity at the contact back to the steady creepage's.
-            let dv = xi0 * v - r.contact_velocity_x(&s_.uw, &s_.vw);
-            let c = rigid_least_norm(&self.rigid_obs, [dv, 0.0, 0.0]);
-            for (k, m) in self.rigid.iter().enumerate() {
-                s_.vw.iter_mut().zip(m).for_each(|(x, y)| *x += c[k] * y);
-            }
-        }
-
-        // --- Unit responses, scratch, records.
-        let mut sc_t = self.track.op.scratch();
-        let mut sc_w = self.wheel.op.scratch();
-        let corrected = self.opts.coupling.corrected();
-        let hold = self.opts.coupling.hold();
-        let (wheel_resp, g_wheel) = self.wheel_response(dtw, nw, &mut sc_w);
-        let slots = max_planes(&self.line.planes_x_m, self.patch_a_m) + 1;
-        let mut rail_resp = RailResponses::new(self.track.op.n(), (dtt, nt, hold), slots);
-        let mut h = Histories::default();
-        let mut rail_point = self.rail_point(popts, n_steps);
-        let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
-        let mut wear = WearAccumulator::new(&contact, z0, nbins);
-        let keep = popts.energy && rot.is_none();
-        let mut ledger = Ledger::new(self, keep, &s_, &st, x0)?;
-        let mut audit = (keep && self.opts.audit).then(|| Audit::new(self, &s_));
-        if let Some(a) = audit.as_mut() {
-            a.start(self, &s_, [dtt, dtw]);
-        }
-        // The start's force on the structures is the static one (lateral 0).
-        let mut f = [st.fx_n, 0.0, st.normal_force_n];
-        let mut f_prev = f;
-        // The patch of the previous contact step (at the start: the static one).
-        let mut pw_prev = self.weights(x0)?;
-        let mut series = [0.0; 3];
-        let mut last_delta = st.approach_m;
-        let mut clamped = 0usize;
-        let mut series_c = [0.0; 3];
-        let mut ftrack = vec![0.0; self.track.op.n()];
-        let mut ftrack0 = ftrack.clone();
-        let mut fwheel = self.wheel_const.clone();
-        let mut fwheel0 = self.wheel_const.clone();
-        let dm_t = &self.track_structure.dofmap;
-        let dm_w = &self.wheel_structure.dofmap;
+        let plan = self.plan(speed_m_per_s, &contact);
+        let mut heights = RailHeights::new(profile, &contact);
+        let start = self.static_start(&plan, &mut contact, &mut heights)?;
+        let mut run = Stepper::new(self, plan, contact, heights, start, popts)?;
         let t_wall = Instant::now();
         let cpu0 = crate::progress::cpu_seconds();
-        progress(0, n_steps);
-        for n in 1..=n_steps {
-            let t = n as f64 * dt_c;
-            let xc = x0 + v * t;
-            let pw = self.weights(xc)?;
-            // Predictor: F_n held at x_{n+1}.
-            let ur_old = self.rail_under(&s_.ut, &pw);
-            let uw_old = match &rot {
-                Some(r) => r.wheel_at(&s_.uw, t - dt_c, t),
-                None => self.wheel_at(&s_.uw),
-            };
-            // F_n held; the first sub-step also carries the previous step's share, on the
-            // rail where the previous step's force acted.
-            let f0 = self.opts.coupling.first_load(f, f_prev);
-            let split = self.opts.coupling.boundary_split(f, f_prev);
-            ftrack0.iter_mut().for_each(|x| *x = 0.0);
-            for (g, w) in [(split[0], &pw_prev), (split[1], &pw)] {
-                let neg = [-g[0], -g[1], -g[2]];
-                add_line_force(
-                    &self.line,
-                    &self.track_structure,
-                    &frame,
-                    w,
-                    neg,
-                    &mut ftrack0,
-                );
-            }
-            ftrack.iter_mut().for_each(|x| *x = 0.0);
-            let neg = [-f[0], -f[1], -f[2]];
-            add_line_force(
-                &self.line,
-                &self.track_structure,
-                &frame,
-                &pw,
-                neg,
-                &mut ftrack,
-            );
-            ledger.before_step(&s_.uw);
-            if let Some(a) = audit.as_mut() {
-                a.save(&s_);
-            }
-            let State { ut, vt, uw, vw } = &mut s_;
-            let mut damper_j = advance_held(
-                &self.track.op,
-                (dtt, nt),
-                [&ftrack0, &ftrack],
-                ut,
-                vt,
-                &mut sc_t,
-            );
-            let (uw_new, g_wheel) = match rot.as_mut() {
-                Some(r) => {
-                    r.advance(&self.wheel.op, uw, vw, [f0, f], t);
-                    let g = if corrected {
-                        r.compliance(&self.wheel.op)
-                    } else {
-                        g_wheel
-                    };
-                    (r.wheel_at(uw, t, t), g)
-                }
-                None => {
-                    for (buf, g) in [(&mut fwheel0, f0), (&mut fwheel, f)] {
-                        buf.copy_from_slice(&self.wheel_const);
-                        add_nodes_load(&self.wheel_nodes, dm_w, &frame, 1.0, g, buf);
-                    }
-                    damper_j += advance_held(
-                        &self.wheel.op,
-                        (dtw, nw),
-                        [&fwheel0, &fwheel],
-                        uw,
-                        vw,
-                        &mut sc_w,
-                    );
-                    (self.wheel_at(uw), g_wheel)
-                }
-            };
-            let ur_new = self.rail_under(&s_.ut, &pw);
-            // Contact at x_{n+1} with the one-step compliance as the series compliance.
-            if corrected {
-                series = self.one_step_compliance(&mut rail_resp, &mut sc_t, &pw, g_wheel);
-            }
-            let to_contact = |source| DynamicsError::Contact {
-                t_s: t,
-                x_m: xc,
-                source,
-            };
-            // The contact's series compliance: the one-step compliance, less the mesh's
-            // element-scale local compliance variation when that is removed.
-            let dg = self.local_variation(xc, &pw);
-            for d in 0..3 {
-                series_c[d] = series[d] - dg[d];
-                if series_c[d] < 0.0 {
-                    series_c[d] = 0.0;
-                    clamped += 1;
-                }
-            }
-            contact
-                .set_series_compliance(series_c)
-                .map_err(to_contact)?;
-            let delta = ur_new[2] - uw_new[2] + series[2] * f[2];
-            let xi = ((uw_new[0] - uw_old[0]) - (ur_new[0] - ur_old[0])) / (v * dt_c);
-            let eta = ((uw_new[1] - uw_old[1]) - (ur_new[1] - ur_old[1])) / (v * dt_c);
-            fill_heights(xc, &mut heights);
-            let r = contact
-                .step(&StepInputs {
-                    normal: NormalInput::Approach(delta),
-                    longitudinal: Longitudinal::Creepage(xi),
-                    lateral_creepage: eta,
-                    spin_per_m: spin,
-                    rail_height_m: profile.map(|_| &heights[..]),
-                })
-                .map_err(to_contact)?;
-            let f_new = [r.fx_n, r.fy_n, r.normal_force_n];
-            // Corrector: the response to the force change, ramped over the step.
-            let df = [f_new[0] - f[0], f_new[1] - f[1], f_new[2] - f[2]];
-            if corrected {
-                for (j, wj) in pw.iter() {
-                    rail_resp.response(j).add_to(wj, df, &mut s_.ut, &mut s_.vt);
-                }
-                match &rot {
-                    Some(r) => r.correct(df, &mut s_.uw, &mut s_.vw),
-                    None => wheel_resp.add_to(1.0, df, &mut s_.uw, &mut s_.vw),
-                }
-            }
-            s_.check_finite(t, xc)?;
-            if let Some(a) = audit.as_mut() {
-                let forces = StepForces {
-                    first: split,
-                    previous: &pw_prev,
-                    held: f,
-                    change: df,
-                    hold: corrected.then_some(hold),
-                };
-                a.replay(self, &pw, &forces, [(nt, dtt), (nw, dtw)], &s_);
-            }
-            if xc - half_grid < z1 && xc + half_grid > z0 {
-                wear.add_step(&contact, xc);
-            }
-            // With the corrector the structures carry the mean of F_n and F_{n+1} (exactly, with
-            // the mean hold; as the ramp's mean, with the first-order hold); without it F_n.
-            let f_work = if corrected {
-                [0, 1, 2].map(|d| 0.5 * (f[d] + f_new[d]))
-            } else {
-                f
-            };
-            ledger.after_step(
-                &s_,
-                LedgerStep {
-                    xc,
-                    dt_c,
-                    v,
-                    spin,
-                    f_work,
-                    old: [ur_old, uw_old],
-                    forces: [f, f_new],
-                    dg,
-                    damper_j,
-                },
-                &r,
-            )?;
-            f_prev = f;
-            f = f_new;
-            pw_prev = pw;
-            last_delta = r.approach_m;
-            h.push_step(&contact, &r, [t, xc, xi, delta - series[2] * f[2]], dx);
-            if let Some((node, rec)) = rail_point.as_mut() {
-                let node = *node;
-                rec.displacement_m.push(
-                    [0, 1, 2].map(|c| dm_t.free_index(3 * node + c).map_or(0.0, |i| s_.ut[i])),
-                );
-            }
-            if n % 16 == 0 || n == n_steps {
-                progress(n, n_steps);
+        progress(0, plan.n_steps);
+        for n in 1..=plan.n_steps {
+            run.step(n)?;
+            if n % 16 == 0 || n == plan.n_steps {
+                progress(n, plan.n_steps);
             }
         }
-        let (by_direction, rail_wheel) = (ledger.by_direction, ledger.rail_wheel);
-        let eb = ledger.finish(&s_, f[2], last_delta, series_c[2]);
-        let audit = audit.map(|a| {
-            let mut r = a.finish(self, &s_, [dtt, dtw]);
-            [
-                r.ledger_contact_work_j,
-                r.ledger_convective_work_j,
-                r.ledger_spring_j,
-            ] = by_direction;
-            [r.ledger_rail_work_j, r.ledger_wheel_work_j] = rail_wheel;
-            r
-        });
-        let mut w = vec![0.0; nbins];
-        wear.work_x(&mut w);
-        let seconds = t_wall.elapsed().as_secs_f64();
-        let info = ExplicitInfo {
-            dt_s: dtt,
-            dt_wheel_s: dtw,
-            contact_dt_s: dt_c,
-            track_substeps: nt,
-            wheel_substeps: nw,
-            omega_max_estimate: self.track.step.omega_max_estimate,
-            omega_max_wheel_estimate: self.wheel.step.omega_max_estimate,
-            omega_max_bound: self.track.step.omega_max_bound,
-            steps: n_steps * nt,
-            contact_steps: n_steps,
-            energy_error: if keep { eb.relative_error() } else { f64::NAN },
-            seconds,
-            cpu_seconds: match (cpu0, crate::progress::cpu_seconds()) {
-                (Some(a), Some(b)) => Some(b - a),
-                _ => None,
-            },
-            dofs: self.dofs(),
-            setup_seconds: self.setup_seconds,
-            clamped_steps: clamped,
-            wheel: self.opts.wheel.as_str(),
-            spin_rate_rad_s: rot.as_ref().map_or(0.0, |r| r.omega()),
-            audit,
-        };
-        Ok(ExplicitRecord {
-            record: PassageRecord {
-                speed_m_per_s: v,
-                dt_s: dt_c,
-                substeps: [nt, nw],
-                x_start_m: x0,
-                zone_m: self.zone_m,
-                histories: h,
-                wear_x_m: wear.x_m(),
-                wear_j_per_m: w,
-                rail_point: rail_point.map(|(_, r)| r),
-                energy: eb,
-                static_creepage: xi0,
-                static_approach_m: delta0,
-                steps: n_steps,
-                seconds,
-            },
-            info,
-        })
+        Ok(run.finish(t_wall, cpu0))
     }
 
     /// The rotating wheel of a passage at `v` (m/s) with `steps` wheel sub-steps of `dt` (s)

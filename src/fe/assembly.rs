@@ -424,9 +424,14 @@ pub fn assemble(
             .zip(mslices.par_iter_mut())
             .enumerate()
             .for_each(|(t, (ks, ms))| {
-                let (c0, c1) = (bounds[t], bounds[t + 1]);
+                let slab = ColumnSlab {
+                    col_ptr: &col_ptr,
+                    row_idx: &row_idx,
+                    c0: bounds[t],
+                    c1: bounds[t + 1],
+                };
                 for (b, lf) in bufs.iter().zip(lfs) {
-                    scatter_element(b, lf, &col_ptr, &row_idx, c0, c1, ks, ms);
+                    scatter_element(b, lf, &slab, ks, ms);
                 }
             });
     }
@@ -466,21 +471,33 @@ pub fn assemble(
     })
 }
 
-/// Scatters one element's K and M into the value slices `ks`, `ms` of columns `c0..c1`
-/// (whose first value sits at `col_ptr[c0]`). Uses that all free columns of one node share
+/// The columns `c0..c1` of a compressed-column sparsity pattern (`col_ptr`, `row_idx`) that
+/// one thread fills.
+#[derive(Clone, Copy)]
+struct ColumnSlab<'a> {
+    col_ptr: &'a [usize],
+    row_idx: &'a [usize],
+    c0: usize,
+    c1: usize,
+}
+
+/// Scatters one element's K and M into the value slices `ks`, `ms` of the slab's columns
+/// `c0..c1` (whose first value sits at `col_ptr[c0]`). Uses that all free columns of one node share
 /// the same row list and that the free rows of one node are contiguous in it: one binary
 /// search per (row node, column node) pair.
-#[allow(clippy::too_many_arguments)]
 fn scatter_element(
     b: &ElemBuf,
     lf: &[usize; 24],
-    col_ptr: &[usize],
-    row_idx: &[usize],
-    c0: usize,
-    c1: usize,
+    slab: &ColumnSlab<'_>,
     ks: &mut [f64],
     ms: &mut [f64],
 ) {
+    let ColumnSlab {
+        col_ptr,
+        row_idx,
+        c0,
+        c1,
+    } = *slab;
     let off = col_ptr[c0];
     // First free row of each local node (NONE if the node is fully constrained).
     let first: [usize; 8] = std::array::from_fn(|a| {

@@ -33,7 +33,10 @@
 //! for area, first and second moments of bilinear quads (the integrands are of degree ≤ 3 in
 //! each natural coordinate).
 
-use super::grading::{grade, FineZone, GradingSpec};
+mod blocks;
+
+use blocks::{check_params, foot_lines, Blocks, Outline};
+
 use super::profile::{RailProfile, SectionProperties};
 use super::MeshError;
 use std::collections::HashMap;
@@ -324,257 +327,40 @@ impl SectionMesh {
 
     /// Meshes a UIC54-topology profile (it must contain the UIC54 key points: foot edge,
     /// fishing-face ends, fillet ends, head corners).
+    ///
+    /// Phases: the parameters checked, the profile's outline cut into the blocks' boundary
+    /// pieces, the required foot node lines and the web half thickness, then the blocks in
+    /// the order foot arms, foot centre, web, cap, head centre and head arms (each sharing
+    /// its edges with the blocks meshed before), and last the foot underside and the
+    /// inclination.
     pub fn build(profile: &RailProfile, params: &SectionParams) -> Result<Self, MeshError> {
+        check_params(params)?;
+        let o = Outline::new(profile)?;
         let h = params.size_m;
-        let hr = params.running_surface_size_m;
-        if !(h > 0.0 && h <= 0.05) {
-            return Err(invalid("size_m", h, "must be in (0, 0.05] m"));
-        }
-        if !(hr > 0.0 && hr <= h) {
-            return Err(invalid(
-                "running_surface_size_m",
-                hr,
-                "must be in (0, size_m]",
-            ));
-        }
-        let hw = params.running_surface_half_width_m;
-        if !(0.0..0.035).contains(&hw) {
-            return Err(invalid(
-                "running_surface_half_width_m",
-                hw,
-                "must be in [0, 0.035) m",
-            ));
-        }
-        let hd = params.running_surface_depth_m;
-        if !(0.0..0.015).contains(&hd) {
-            return Err(invalid(
-                "running_surface_depth_m",
-                hd,
-                "must be in [0, 0.015) m",
-            ));
-        }
-        let inc = params.inclination_rad;
-        if !(-0.2..0.2).contains(&inc) {
-            return Err(invalid("inclination_rad", inc, "must be |angle| < 0.2 rad"));
-        }
-        let half = &profile.half;
-        let foot_half_w = half[1][0];
-        let i_c = vertex(half, 70.0, 11.0)?;
-        let i_d = vertex(half, 45.46, 13.669)?;
-        let i_e = vertex(half, 18.532, 23.461)?;
-        let i_f = vertex(half, 8.0, 38.498)?;
-        let i_g = vertex(half, 8.0, 97.1)?;
-        let i_h = vertex(half, 22.482, 117.775)?;
-        let i_i = vertex(half, 35.0, 122.327)?;
-        let i_j = vertex(half, 34.942, 146.127)?;
-        let i_k = half.len() - 1;
-        let (pc, pd, pe, pf) = (half[i_c], half[i_d], half[i_e], half[i_f]);
-        let (pi, pj) = (half[i_i], half[i_j]);
-
-        // Required foot node lines (upright frame), mirrored and deduplicated.
-        let mut lines: Vec<f64> = Vec::new();
-        for &y in &params.foot_node_lines_m {
-            if !y.is_finite() || y.abs() > foot_half_w {
-                return Err(MeshError::BreakpointOutside {
-                    x: y,
-                    lo: -foot_half_w,
-                    hi: foot_half_w,
-                });
-            }
-            lines.push(y.abs());
-        }
-        lines.sort_by(f64::total_cmp);
-        lines.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-
+        let lines = foot_lines(params, o.foot_half_w)?;
         // y_c: web half thickness, snapped to a required line within h/2.
-        let mut yc = pf[0];
+        let mut yc = o.pf[0];
         if let Some(&y) = lines
             .iter()
-            .filter(|&&y| y > 0.0 && (y - pf[0]).abs() <= 0.5 * h)
-            .min_by(|a, b| (*a - pf[0]).abs().total_cmp(&(*b - pf[0]).abs()))
+            .filter(|&&y| y > 0.0 && (y - o.pf[0]).abs() <= 0.5 * h)
+            .min_by(|a, b| (*a - o.pf[0]).abs().total_cmp(&(*b - o.pf[0]).abs()))
         {
             yc = y;
         }
-
-        // Profile pieces.
-        let fil16 = Polyline::new(half[i_e..=i_f].to_vec()); // E → F
-        let s_m = fil16.len() * (1.0 - FILLET_SPLIT_FROM_WEB);
-        let pm = fil16.at(s_m);
-        let fil16_lower = fil16.sub(0.0, s_m); // E → M
-        let fil16_upper = fil16.sub(s_m, fil16.len()); // M → F
-        let fil22 = Polyline::new(half[i_g..=i_h].to_vec()); // G → H
-        let s_n = fil22.len() * FILLET_SPLIT_FROM_WEB;
-        let pn = fil22.at(s_n);
-        let web_side = fil16_upper
-            .join(&Polyline::new(vec![pf, half[i_g]]))
-            .join(&fil22.sub(0.0, s_n)); // M → N
-        let head_under = fil22
-            .sub(s_n, fil22.len())
-            .join(&Polyline::new(half[i_h..=i_i].to_vec())); // N → I
-        let foot_top = Polyline::new(half[i_c..=i_e].to_vec()); // C → D → E (graph over y)
-        let head_top = Polyline::new(half[i_j..=i_k].to_vec()).reversed(); // K → J
-
-        let mut b = Builder::default();
-        let grade_with =
-            |lo: f64, hi: f64, size: f64, bps: Vec<f64>| -> Result<Vec<f64>, MeshError> {
-                let mut spec = GradingSpec::new(lo, hi, size);
-                spec.breakpoints_m = bps;
-                spec.max_ratio = 1.5;
-                grade(&spec)
-            };
-
-        // ---- foot arm (right) ----
-        let mut bps: Vec<f64> = lines
-            .iter()
-            .copied()
-            .filter(|&y| y > yc && y < foot_half_w)
-            .collect();
-        for special in [pe[0], pd[0]] {
-            if bps.iter().all(|&y| (y - special).abs() > 0.3 * h) {
-                bps.push(special);
-            }
-        }
-        let ys = grade_with(yc, foot_half_w, h, bps)?;
-        let arm_bottom: Vec<[f64; 2]> = ys.iter().map(|&y| [y, 0.0]).collect();
-        let arm_top: Vec<[f64; 2]> = ys
-            .iter()
-            .map(|&y| {
-                if y >= pe[0] {
-                    foot_top.at_y(y)
-                } else {
-                    let t = (pe[0] - y) / (pe[0] - yc);
-                    fil16_lower.at(t * fil16_lower.len())
-                }
-            })
-            .collect();
-        let m_a = ((0.5 * (pc[1] + dist([yc, 0.0], pm)) / h).round() as usize).max(2);
-        let arm_left = straight([yc, 0.0], pm, m_a);
-        let arm_right = straight([foot_half_w, 0.0], pc, m_a);
-        let arm = tfi(&arm_bottom, &arm_right, &arm_top, &arm_left);
-        b.add(&arm, false);
-        b.add(
-            &Grid {
-                pts: mirror(&arm.pts),
-                ..arm
-            },
-            true,
-        );
-
-        // ---- foot centre ----
-        let bps: Vec<f64> = lines
-            .iter()
-            .copied()
-            .filter(|&y| y > 0.0 && y < yc)
-            .collect();
-        let yh = grade_with(0.0, yc, h, bps)?;
-        let mut centre_y: Vec<f64> = yh.iter().rev().map(|y| -y).collect();
-        centre_y.extend_from_slice(&yh[1..]);
-        let n_w = centre_y.len() - 1;
-        let centre_bottom: Vec<[f64; 2]> = centre_y.iter().map(|&y| [y, 0.0]).collect();
-        let pm_l = [-pm[0], pm[1]];
-        let web_bottom = straight(pm_l, pm, n_w);
-        b.add(
-            &tfi(&centre_bottom, &arm_left, &web_bottom, &mirror(&arm_left)),
-            false,
-        );
-
-        // ---- web ----
-        let m_w = ((web_side.len() / h).ceil() as usize).max(2);
-        let web_right = web_side.uniform(m_w);
-        let pn_l = [-pn[0], pn[1]];
-        let web_top = straight(pn_l, pn, n_w);
-        b.add(
-            &tfi(&web_bottom, &web_right, &web_top, &mirror(&web_right)),
-            false,
-        );
-
-        // ---- running surface and cap columns ----
-        let mut h_run = hr;
-        let mut h_top = h;
-        let s_top = loop {
-            let mut spec = GradingSpec::new(0.0, head_top.len(), h_top);
-            spec.zones.push(FineZone {
-                start_m: 0.0,
-                end_m: hw,
-                size_m: h_run,
-            });
-            let s = grade(&spec)?;
-            if s.len() > n_w / 2 + 2 {
-                break s;
-            }
-            h_run *= 0.8;
-            h_top *= 0.8;
+        let mut blocks = Blocks {
+            o: &o,
+            params,
+            h,
+            yc,
+            lines: &lines,
+            b: Builder::default(),
         };
-        let n_half = s_top.len() - 1;
-        let zc = pi[1] + 0.6 * (pj[1] - pi[1]);
-        let head_side = Polyline::new(vec![pi, pj]);
-        let ps = head_side.at((zc - pi[1]) / (pj[1] - pi[1]) * head_side.len());
-        // Right-half columns k = 0 (centre) … n_half (head side): top and bottom points.
-        let col_top: Vec<[f64; 2]> = s_top.iter().map(|&s| head_top.at(s)).collect();
-        let mut col_bot: Vec<[f64; 2]> = col_top.iter().map(|p| [p[0], zc]).collect();
-        col_top_fix(&mut col_bot, ps);
-        // Layer fractions from the centre column (depth graded from the running surface).
-        let depth_c = col_top[0][1] - zc;
-        let mut spec = GradingSpec::new(0.0, depth_c, h);
-        spec.zones.push(FineZone {
-            start_m: 0.0,
-            end_m: hd,
-            size_m: hr,
-        });
-        let depths = grade(&spec)?;
-        let m_cap = depths.len() - 1;
-        // Full-width columns from −J to +J.
-        let mut tops: Vec<[f64; 2]> = mirror(&col_top[1..]);
-        tops.reverse();
-        tops.extend_from_slice(&col_top);
-        let mut bots: Vec<[f64; 2]> = mirror(&col_bot[1..]);
-        bots.reverse();
-        bots.extend_from_slice(&col_bot);
-        let ncol = tops.len();
-        let mut cap = Grid {
-            n: ncol - 1,
-            m: m_cap,
-            pts: vec![[0.0; 2]; ncol * (m_cap + 1)],
-        };
-        for j in 0..=m_cap {
-            // j = 0 at the bottom: depth fraction from the top is 1 − …
-            let f = depths[m_cap - j] / depth_c;
-            for k in 0..ncol {
-                cap.pts[j * ncol + k] = if j == 0 {
-                    bots[k]
-                } else if j == m_cap {
-                    tops[k]
-                } else {
-                    lerp(tops[k], bots[k], f)
-                };
-            }
-        }
-        b.add(&cap, false);
-        let running: Vec<usize> = tops.iter().map(|&p| b.node(p)).collect();
-
-        // ---- head centre and head arms ----
-        let i_t = n_w / 2;
-        let pt = col_bot[i_t];
-        let m_h = ((0.5 * (dist(pn, pt) + dist(pi, ps)) / h).round() as usize).max(2);
-        let head_if = straight(pn, pt, m_h); // N → T
-        let centre_top: Vec<[f64; 2]> = bots[n_half - i_t..=n_half + i_t].to_vec();
-        b.add(
-            &tfi(&web_top, &head_if, &centre_top, &mirror(&head_if)),
-            false,
-        );
-        let n_ha = n_half - i_t;
-        let ha_bottom = head_under.uniform(n_ha);
-        let ha_right = straight(pi, ps, m_h);
-        let ha_top: Vec<[f64; 2]> = col_bot[i_t..=n_half].to_vec();
-        let ha = tfi(&ha_bottom, &ha_right, &ha_top, &head_if);
-        b.add(&ha, false);
-        b.add(
-            &Grid {
-                pts: mirror(&ha.pts),
-                ..ha
-            },
-            true,
-        );
+        let arm_left = blocks.foot_arms()?;
+        let (web_bottom, n_w) = blocks.foot_centre(&arm_left)?;
+        let web_top = blocks.web(&web_bottom, n_w);
+        let cap = blocks.cap(n_w)?;
+        blocks.head(&cap, &web_top, n_w);
+        let mut b = blocks.b;
 
         // ---- foot underside ----
         let mut foot: Vec<(f64, usize)> = b
@@ -586,6 +372,7 @@ impl SectionMesh {
             .collect();
         foot.sort_by(|a, b| a.0.total_cmp(&b.0));
 
+        let inc = params.inclination_rad;
         let (c, s) = (inc.cos(), inc.sin());
         let nodes: Vec<[f64; 2]> = b
             .nodes
@@ -594,10 +381,10 @@ impl SectionMesh {
             .collect();
         let mesh = SectionMesh {
             nodes,
-            quads: b.quads,
+            quads: std::mem::take(&mut b.quads),
             foot_underside: foot.iter().map(|f| f.1).collect(),
             foot_underside_s_m: foot.iter().map(|f| f.0).collect(),
-            running_surface: running,
+            running_surface: cap.running,
             inclination_rad: inc,
         };
         mesh.check_quads()?;

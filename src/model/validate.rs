@@ -5,15 +5,47 @@ use super::*;
 
 impl Model {
     /// Checks every value against its allowed range; `file` names the source in the error.
+    /// One check per TOML section, in the order of the file; the first error is returned.
     pub fn validate(&self, file: &str) -> Result<(), ModelError> {
         let mut c = Checker { file };
+        self.validate_track(&mut c)?;
+        self.validate_rail(&mut c)?;
+        self.validate_sleeper(&mut c)?;
+        self.validate_fastening(&mut c)?;
+        self.validate_ballast(&mut c)?;
+        self.validate_wheel(&mut c)?;
+        self.validate_vehicle(&mut c)?;
+        self.validate_contact(&mut c)?;
+        self.validate_mesh(&mut c)?;
+        self.validate_run(&mut c)?;
+        self.validate_wear(&mut c)?;
+        self.validate_explicit(&mut c)?;
+        self.validate_start(&mut c)?;
+        let run = &self.run;
+        let room = self.track_length() - run.solution_zone_offset;
+        c.pos(
+            "run.solution_zone_length",
+            run.solution_zone_length,
+            room,
+            "m (zone must fit on the track)",
+        )?;
+        Ok(())
+    }
+
+    /// `[track]`: bays and sleeper spacing.
+    fn validate_track(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         let t = &self.track;
         c.int("track.bays", t.bays, 2, 400)?;
         c.range("track.sleeper_spacing", t.sleeper_spacing, 0.2, 2.0, "m")?;
+        Ok(())
+    }
+
+    /// `[rail]`: profile, inclination, material and (zero) structural damping.
+    fn validate_rail(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         let r = &self.rail;
         if r.profile != "uic54" {
             return Err(ModelError::OutOfRange {
-                file: file.into(),
+                file: c.file.into(),
                 key: "rail.profile".into(),
                 value: format!("{:?}", r.profile),
                 allowed: "\"uic54\"".into(),
@@ -36,6 +68,13 @@ impl Model {
             0.0,
             "s (Rayleigh beta; steel damping is not modelled yet: all damping sits in the discrete dampers, as in the reference)",
         )?;
+        Ok(())
+    }
+
+    /// `[sleeper]`: dimensions (the width within the sleeper spacing, the rail seat inside
+    /// the sleeper) and material.
+    fn validate_sleeper(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
+        let t = &self.track;
         let s = &self.sleeper;
         c.range("sleeper.length", s.length, 0.3, 5.0, "m")?;
         c.range(
@@ -54,6 +93,13 @@ impl Model {
             "m (inside the sleeper)",
         )?;
         c.elastic("sleeper", s.youngs_modulus, s.poisson_ratio, s.density)?;
+        Ok(())
+    }
+
+    /// `[fastening]`: the grid of the footprint, the pad, the springs and dampers, the holds,
+    /// and a railpad spring in every direction without a rigid hold.
+    fn validate_fastening(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
+        let s = &self.sleeper;
         let f = &self.fastening;
         c.int("fastening.rows", f.rows, 1, 16)?;
         c.int("fastening.columns", f.columns, 1, 16)?;
@@ -79,7 +125,7 @@ impl Model {
         )?;
         c.range("fastening.pad_thickness", f.pad_thickness, 0.0, 0.05, "m")?;
         c.spring_damper("fastening", f.springs.stiffness(), f.springs.damping())?;
-        f.validate_holds(file)?;
+        f.validate_holds(c.file)?;
         // The rail floats on the railpads where no rigid hold acts: a direction without a hold
         // needs a railpad spring, else the rail is a free body in it.
         let pattern = self.fastening.hold_pattern();
@@ -109,6 +155,11 @@ impl Model {
                 )?;
             }
         }
+        Ok(())
+    }
+
+    /// `[ballast]`: springs and dampers, a spring in every direction.
+    fn validate_ballast(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         let b = &self.ballast;
         c.spring_damper("ballast", b.stiffness(), b.damping())?;
         // Sleepers float on the ballast: they need a spring in every direction.
@@ -124,6 +175,11 @@ impl Model {
                 "N/m (> 0: a sleeper needs support in every direction)",
             )?;
         }
+        Ok(())
+    }
+
+    /// `[wheel]`: radius, conicity, material and damping ratio.
+    fn validate_wheel(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         let w = &self.wheel;
         c.range("wheel.radius", w.radius, 0.2, 0.8, "m")?;
         // The wheel mesh needs |c| < 0.2 (the tread must stay above the rim); treads are 1/40
@@ -131,6 +187,11 @@ impl Model {
         c.range("wheel.conicity", w.conicity, 0.0, 0.1, "(-)")?;
         c.elastic("wheel", w.youngs_modulus, w.poisson_ratio, w.density)?;
         c.range("wheel.damping_ratio", w.damping_ratio, 0.0, 0.1, "(-)")?;
+        Ok(())
+    }
+
+    /// `[vehicle]`: wheel load, primary suspension and gravity.
+    fn validate_vehicle(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         let v = &self.vehicle;
         c.pos("vehicle.wheel_load", v.wheel_load, MAX_WHEEL_LOAD_N, "N")?;
         c.pos(
@@ -149,6 +210,11 @@ impl Model {
         // The sprung mass is wheel_load / gravity: near 0 it runs away (0 gives an infinite
         // mass). Earth's surface: 9.78 to 9.83.
         c.range("vehicle.gravity", v.gravity, 9.0, 10.5, "m/s^2")?;
+        Ok(())
+    }
+
+    /// `[contact]`: friction, traction, crown radius and the contact grid (its work bounded).
+    fn validate_contact(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         let k = &self.contact;
         c.pos(
             "contact.friction",
@@ -187,6 +253,12 @@ impl Model {
             );
         }
         c.range("contact.grid_margin", k.grid_margin, 1.05, 3.0, "(-)")?;
+        Ok(())
+    }
+
+    /// `[mesh]`: element sizes of the track, the section, the sleepers and the wheel.
+    fn validate_mesh(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
+        let t = &self.track;
         let m = &self.mesh;
         c.pos(
             "mesh.element_length",
@@ -219,6 +291,12 @@ impl Model {
             0.1,
             "m",
         )?;
+        Ok(())
+    }
+
+    /// `[run]`: speed, solution-zone offset and frequency limit (the zone length is checked
+    /// last, against the track length).
+    fn validate_run(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         let run = &self.run;
         c.range(
             "run.speed_kmh",
@@ -235,6 +313,11 @@ impl Model {
             "m",
         )?;
         c.range("run.fmax", run.fmax, 100.0, 20000.0, "Hz")?;
+        Ok(())
+    }
+
+    /// `[wear]`: coefficient and initiation threshold.
+    fn validate_wear(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         c.pos("wear.coefficient", self.wear.coefficient, 1e-6, "m^3/J")?;
         c.range(
             "wear.initiation_threshold",
@@ -243,20 +326,17 @@ impl Model {
             1.0,
             "-",
         )?;
+        Ok(())
+    }
+
+    /// `[explicit]`: safety factor and the time step's physical range.
+    fn validate_explicit(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         c.range("explicit.safety", self.explicit.safety, 0.1, 1.0, "-")?;
         if let Some(dt) = self.explicit.time_step {
             // The stable limit depends on the assembled matrices and is checked when the
             // explicit model is built; here only a physical range.
             c.range("explicit.time_step", dt, 1e-10, 1e-4, "s")?;
         }
-        self.validate_start(&mut c)?;
-        let room = self.track_length() - run.solution_zone_offset;
-        c.pos(
-            "run.solution_zone_length",
-            run.solution_zone_length,
-            room,
-            "m (zone must fit on the track)",
-        )?;
         Ok(())
     }
 }

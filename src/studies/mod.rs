@@ -24,6 +24,7 @@ pub mod coupled;
 pub mod grow;
 pub mod initiation;
 pub mod predict;
+pub mod receptance;
 pub mod speeds;
 pub mod study;
 pub mod sweep;
