@@ -608,6 +608,102 @@ impl PassageEngine {
         Ok((contact, st))
     }
 
+    /// The wheel's constant generalised loads (N per modal coordinate): gravity, and the
+    /// driving torque and the train's resistance with the weight `drive` (0 to 1).
+    fn wheel_constant_loads(&self, drive: f64, out: &mut [f64]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.wheel_gravity[i] + drive * (self.wheel_torque[i] + self.wheel_drawbar[i]);
+        }
+    }
+
+    /// Generalised forces of the contact force `f` on the wheel (frame x, t, n; N), the rail
+    /// taking `−f`: `ft` on the track modes through the rail's contact rows `rr`, `fw` on the
+    /// wheel modes through its contact rows plus the constant loads `fw_const`.
+    fn generalised_forces(
+        &self,
+        f: &[f64; 3],
+        fw_const: &[f64],
+        rr: &[f64],
+        (ft, fw): (&mut [f64], &mut [f64]),
+    ) {
+        let (mt, mw) = (ft.len(), fw.len());
+        let wr = &self.wheel_contact.rows;
+        for i in 0..mt {
+            ft[i] = -(f[0] * rr[i] + f[1] * rr[mt + i] + f[2] * rr[2 * mt + i]);
+        }
+        for i in 0..mw {
+            fw[i] = fw_const[i] + f[0] * wr[i] + f[1] * wr[mw + i] + f[2] * wr[2 * mw + i];
+        }
+    }
+
+    /// With `run.residual_variation = "consistent"`, sets the contact's series compliance to
+    /// the position-dependent residual flexibility at `xc` (m) plus the wheel's; otherwise
+    /// nothing. `t` (s) names the step in an error.
+    fn follow_consistent_compliance(
+        &self,
+        contact: &mut TransientRolling,
+        t: f64,
+        xc: f64,
+    ) -> Result<(), DynamicsError> {
+        if let (Some(r), ResidualVariation::Consistent) =
+            (&self.residual, self.model.run.residual_variation)
+        {
+            let (c, w) = (r.consistent_at(xc)?, self.wheel_compliance());
+            contact
+                .set_series_compliance([0, 1, 2].map(|d| c[d] + w[d]))
+                .map_err(|source| DynamicsError::Contact {
+                    t_s: t,
+                    x_m: xc,
+                    source,
+                })?;
+        }
+        Ok(())
+    }
+
+    /// Places both modal systems at the static start: the static deflections under the
+    /// generalised static loads `(ft, fw)`, the wheel's rigid modes moved so that the
+    /// contact approach is the steady state's `delta0` (m) and the wheel's contact point
+    /// slides at the steady creepage `xi0` (−) times the speed `v` (m/s); `rr` the rail's
+    /// contact rows at the start.
+    fn place_at_static_start(
+        &self,
+        v: f64,
+        (xi0, delta0): (f64, f64),
+        rr: &[f64],
+        (ft, fw): (&[f64], &[f64]),
+        (tr, wh): (&mut ModalVerlet, &mut ModalVerlet),
+    ) {
+        let (mt, mw) = (tr.len(), wh.len());
+        let wr = &self.wheel_contact.rows;
+        let qt0: Vec<f64> = (0..mt).map(|i| ft[i] / self.track_sys.omega2[i]).collect();
+        let mut qw0 = vec![0.0; mw];
+        for i in 0..mw {
+            if self.wheel_sys.omega2[i] > 0.0 {
+                qw0[i] = fw[i] / self.wheel_sys.omega2[i];
+            }
+        }
+        // Rigid placement: observations (contact x, contact n, axle x) of the rigid modes.
+        let nr = self.rigid.len();
+        let obs = |i: usize| -> [f64; 3] { [wr[i], wr[2 * mw + i], self.wheel_contact.axle_x[i]] };
+        let u_rail_n = dot(&rr[2 * mt..], &qt0);
+        let u_wheel_n_el = dot(&wr[2 * mw..], &qw0);
+        let target_n = u_rail_n - delta0 - u_wheel_n_el;
+        let mut vw0 = vec![0.0; mw];
+        if nr > 0 {
+            let o: Vec<[f64; 3]> = self.rigid.iter().map(|&i| obs(i)).collect();
+            let c = rigid_least_norm(&o, [0.0, target_n, 0.0]);
+            for (k, &i) in self.rigid.iter().enumerate() {
+                qw0[i] = c[k];
+            }
+            let c = rigid_least_norm(&o, [xi0 * v, 0.0, 0.0]);
+            for (k, &i) in self.rigid.iter().enumerate() {
+                vw0[i] = c[k];
+            }
+        }
+        tr.set_state(&qt0, &vec![0.0; mt], ft);
+        wh.set_state(&qw0, &vw0, fw);
+    }
+
     /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth).
     pub fn passage(
         &self,
@@ -642,7 +738,6 @@ impl PassageEngine {
             }
         };
 
-        let series_c = self.series_compliance;
         // --- Static start (steady rolling at the static load): `st`, above.
         let (xi0, delta0) = (st.creepage, st.approach_m);
 
@@ -661,67 +756,12 @@ impl PassageEngine {
             StartKind::Rest => 0.0,
         };
         let mut fw_const = vec![0.0; mw];
-        let set_const = |drive: f64, fw_const: &mut [f64]| {
-            for i in 0..mw {
-                fw_const[i] =
-                    self.wheel_gravity[i] + drive * (self.wheel_torque[i] + self.wheel_drawbar[i]);
-            }
-        };
-        set_const(drive, &mut fw_const);
-        let gen_forces =
-            |f: &[f64; 3], fw_const: &[f64], rr: &[f64], ft: &mut [f64], fw: &mut [f64]| {
-                for i in 0..mt {
-                    ft[i] = -(f[0] * rr[i] + f[1] * rr[mt + i] + f[2] * rr[2 * mt + i]);
-                }
-                for i in 0..mw {
-                    fw[i] = fw_const[i] + f[0] * wr[i] + f[1] * wr[mw + i] + f[2] * wr[2 * mw + i];
-                }
-            };
-        gen_forces(&f0, &fw_const, &rr, &mut ft, &mut fw);
-        let qt0: Vec<f64> = (0..mt).map(|i| ft[i] / self.track_sys.omega2[i]).collect();
-        let mut qw0 = vec![0.0; mw];
-        for i in 0..mw {
-            if self.wheel_sys.omega2[i] > 0.0 {
-                qw0[i] = fw[i] / self.wheel_sys.omega2[i];
-            }
-        }
-        // Rigid placement: observations (contact x, contact n, axle x) of the rigid modes.
-        let nr = self.rigid.len();
-        let obs = |i: usize| -> [f64; 3] { [wr[i], wr[2 * mw + i], self.wheel_contact.axle_x[i]] };
-        let u_rail_n = dot(&rr[2 * mt..], &qt0);
-        let u_wheel_n_el = dot(&wr[2 * mw..], &qw0);
-        let target_n = u_rail_n - delta0 - u_wheel_n_el;
-        let mut vw0 = vec![0.0; mw];
-        if nr > 0 {
-            let o: Vec<[f64; 3]> = self.rigid.iter().map(|&i| obs(i)).collect();
-            let c = rigid_least_norm(&o, [0.0, target_n, 0.0]);
-            for (k, &i) in self.rigid.iter().enumerate() {
-                qw0[i] = c[k];
-            }
-            let c = rigid_least_norm(&o, [xi0 * v, 0.0, 0.0]);
-            for (k, &i) in self.rigid.iter().enumerate() {
-                vw0[i] = c[k];
-            }
-        }
-        tr.set_state(&qt0, &vec![0.0; mt], &ft);
-        wh.set_state(&qw0, &vw0, &fw);
+        self.wheel_constant_loads(drive, &mut fw_const);
+        self.generalised_forces(&f0, &fw_const, &rr, (&mut ft, &mut fw));
+        self.place_at_static_start(v, (xi0, delta0), &rr, (&ft, &fw), (&mut tr, &mut wh));
 
         // --- Records.
-        let mut h = Histories::default();
-        for vct in [
-            &mut h.t_s,
-            &mut h.x_m,
-            &mut h.normal_n,
-            &mut h.longitudinal_n,
-            &mut h.lateral_n,
-            &mut h.creepage,
-            &mut h.approach_m,
-            &mut h.contact_length_m,
-            &mut h.slip_fraction,
-            &mut h.frictional_power_w,
-        ] {
-            vct.reserve(n_steps);
-        }
+        let mut h = Histories::with_capacity(n_steps);
         let mut rail_point =
             self.track_modes_for_point
                 .as_ref()
@@ -731,26 +771,8 @@ impl PassageEngine {
                 });
         let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
         let mut wear = WearAccumulator::new(&contact, z0, nbins);
-        let mut eb = EnergyBalance::default();
-        let e_start =
-            tr.kinetic_energy() + tr.strain_energy() + wh.kinetic_energy() + wh.strain_energy();
-        // Elastic energy of the half-space (Hertz estimate) on the approach without the
-        // residual spring's share c_z F_N.
-        let hertz_energy = |f: f64, d: f64, cz: f64| 0.4 * f * (d - cz * f).max(0.0);
-        let e_contact_start = hertz_energy(st.normal_force_n, st.approach_m, series_c[2]);
-        let f_start = [st.fx_n, st.fy_n, st.normal_force_n];
-        let mut f_end = f_start;
-        let mut p_damp_prev = if opts.energy {
-            tr.damping_power() + wh.damping_power()
-        } else {
-            0.0
-        };
-        let mut p_contact_prev = {
-            // Contact power at the start: F · (v_w − v_r).
-            let vw_x = dot(&wr[..mw], &wh.v);
-            f0[0] * vw_x
-        };
-        let mut qw_prev = wh.q.clone();
+        let mut ledger = Ledger::start(self, (&tr, &wh), &st, opts.energy, f0[0]);
+        let mut f_end = ledger.f_start;
         let mut last_delta = st.approach_m;
         let t_wall = Instant::now();
         if let Some(p) = progress {
@@ -763,42 +785,9 @@ impl PassageEngine {
             tr.advance_displacement();
             wh.advance_displacement();
             self.rail_line.rows_at(xc, &mut rr)?;
-            let mut u_r = [0.0; 3];
-            let mut v_r = [0.0; 3];
-            let mut u_w = [0.0; 3];
-            let mut v_w = [0.0; 3];
-            for d in 0..3 {
-                let r = &rr[d * mt..(d + 1) * mt];
-                let mut su = 0.0;
-                let mut sv = 0.0;
-                for i in 0..mt {
-                    su += r[i] * tr.q[i];
-                    sv += r[i] * tr.predicted_velocity(i);
-                }
-                u_r[d] = su;
-                v_r[d] = sv;
-                let r = &wr[d * mw..(d + 1) * mw];
-                let mut su = 0.0;
-                let mut sv = 0.0;
-                for i in 0..mw {
-                    su += r[i] * wh.q[i];
-                    sv += r[i] * wh.predicted_velocity(i);
-                }
-                u_w[d] = su;
-                v_w[d] = sv;
-            }
-            if let (Some(r), ResidualVariation::Consistent) =
-                (&self.residual, self.model.run.residual_variation)
-            {
-                let (c, w) = (r.consistent_at(xc)?, self.wheel_compliance());
-                contact
-                    .set_series_compliance([0, 1, 2].map(|d| c[d] + w[d]))
-                    .map_err(|source| DynamicsError::Contact {
-                        t_s: t,
-                        x_m: xc,
-                        source,
-                    })?;
-            }
+            let (u_r, v_r) = contact_motion(&rr, &tr);
+            let (u_w, v_w) = contact_motion(wr, &wh);
+            self.follow_consistent_compliance(&mut contact, t, xc)?;
             let delta = u_r[2] - u_w[2];
             let xi = (v_w[0] - v_r[0]) / v;
             let eta = (v_w[1] - v_r[1]) / v;
@@ -825,9 +814,9 @@ impl PassageEngine {
             let drive_prev = drive;
             if drive == 0.0 && xc >= x_torque {
                 drive = 1.0;
-                set_const(drive, &mut fw_const);
+                self.wheel_constant_loads(drive, &mut fw_const);
             }
-            gen_forces(&f, &fw_const, &rr, &mut ft, &mut fw);
+            self.generalised_forces(&f, &fw_const, &rr, (&mut ft, &mut fw));
             tr.complete(&ft);
             wh.complete(&fw);
             if !(tr.q.iter().all(|x| x.is_finite()) && wh.q.iter().all(|x| x.is_finite())) {
@@ -838,40 +827,23 @@ impl PassageEngine {
                 });
             }
             if opts.energy {
-                // Constant wheel loads: work g · Δq (exact); a load switched on in this step
-                // counts by the trapezoidal rule of the integrator, ½(g_n + g_{n+1}) · Δq.
-                let d_mean = 0.5 * (drive + drive_prev);
-                for i in 0..mw {
-                    let dq = wh.q[i] - qw_prev[i];
-                    eb.gravity_work_j += self.wheel_gravity[i] * dq;
-                    eb.torque_work_j += d_mean * self.wheel_torque[i] * dq;
-                    eb.external_work_j += (self.wheel_gravity[i]
-                        + d_mean * (self.wheel_torque[i] + self.wheel_drawbar[i]))
-                        * dq;
-                }
-                qw_prev.copy_from_slice(&wh.q);
-                let p_damp = tr.damping_power() + wh.damping_power();
-                eb.damper_dissipation_j += if substepped {
-                    tr.step_damper_work() + wh.step_damper_work()
-                } else {
-                    0.5 * dt * (p_damp + p_damp_prev)
-                };
-                p_damp_prev = p_damp;
-                // Contact power with the corrected velocities.
-                let mut p_c = 0.0;
-                for d in 0..3 {
-                    let vr = dot(&rr[d * mt..(d + 1) * mt], &tr.v);
-                    let vw = dot(&wr[d * mw..(d + 1) * mw], &wh.v);
-                    p_c += f[d] * (vw - vr);
-                }
-                eb.contact_work_j += 0.5 * dt * (p_c + p_contact_prev);
-                p_contact_prev = p_c;
-                eb.frictional_work_j += r.frictional_power_w * dt;
-                eb.spin_work_j -= v * spin * r.mz_nm * dt;
-                self.rail_line.row_slopes_at(xc, &mut slopes)?;
-                let dun = dot(&slopes[2 * mt..], &tr.q);
-                let dut = dot(&slopes[mt..2 * mt], &tr.q);
-                eb.convective_work_j += v * (f[2] * dun + f[1] * dut) * dt;
+                ledger.add_step(
+                    self,
+                    (&tr, &wh),
+                    &LedgerStep {
+                        dt,
+                        v,
+                        spin,
+                        xc,
+                        d_mean: 0.5 * (drive + drive_prev),
+                        f,
+                        frictional_power_w: r.frictional_power_w,
+                        mz_nm: r.mz_nm,
+                        substepped,
+                    },
+                    &rr,
+                    &mut slopes,
+                )?;
             }
             last_delta = r.approach_m;
             h.push_step(&contact, &r, [t, xc, xi, delta], dx);
@@ -890,16 +862,11 @@ impl PassageEngine {
                 }
             }
         }
-        if opts.energy {
-            let e_end =
-                tr.kinetic_energy() + tr.strain_energy() + wh.kinetic_energy() + wh.strain_energy();
-            eb.stored_change_j = e_end - e_start;
-            eb.contact_energy_change_j =
-                hertz_energy(f_end[2], last_delta, series_c[2]) - e_contact_start;
-            eb.residual_spring_energy_change_j = (0..3)
-                .map(|d| 0.5 * series_c[d] * (f_end[d] * f_end[d] - f_start[d] * f_start[d]))
-                .sum();
-        }
+        let eb = if opts.energy {
+            ledger.finish((&tr, &wh), f_end, last_delta)
+        } else {
+            ledger.eb
+        };
         let mut w = vec![0.0; nbins];
         wear.work_x(&mut w);
         Ok(PassageRecord {
@@ -918,5 +885,166 @@ impl PassageEngine {
             steps: n_steps,
             seconds: t_wall.elapsed().as_secs_f64(),
         })
+    }
+}
+
+/// The displacement and the predicted velocity at the contact (frame components x, t, n; m
+/// and m/s) of a modal system whose contact rows are `rows` (3 × the mode count, by
+/// direction).
+fn contact_motion(rows: &[f64], it: &ModalVerlet) -> ([f64; 3], [f64; 3]) {
+    let m = it.len();
+    let mut u = [0.0; 3];
+    let mut vel = [0.0; 3];
+    for d in 0..3 {
+        let r = &rows[d * m..(d + 1) * m];
+        let mut su = 0.0;
+        let mut sv = 0.0;
+        for i in 0..m {
+            su += r[i] * it.q[i];
+            sv += r[i] * it.predicted_velocity(i);
+        }
+        u[d] = su;
+        vel[d] = sv;
+    }
+    (u, vel)
+}
+
+/// What one contact step hands to the energy ledger.
+struct LedgerStep {
+    /// Contact step (s).
+    dt: f64,
+    /// Speed (m/s).
+    v: f64,
+    /// Spin creepage per metre (1/m).
+    spin: f64,
+    /// Contact position (m).
+    xc: f64,
+    /// Mean weight of the torque and resistance over the step (0 to 1).
+    d_mean: f64,
+    /// Contact force on the wheel (x, t, n; N).
+    f: [f64; 3],
+    /// Frictional power of the step (W).
+    frictional_power_w: f64,
+    /// Spin moment (N·m).
+    mz_nm: f64,
+    /// True when either modal system sub-steps.
+    substepped: bool,
+}
+
+/// The passage's energy balance (docs/theory.md §7.8), advanced once per contact step.
+struct Ledger {
+    eb: EnergyBalance,
+    e_start: f64,
+    e_contact_start: f64,
+    f_start: [f64; 3],
+    series_c: [f64; 3],
+    p_damp_prev: f64,
+    p_contact_prev: f64,
+    qw_prev: Vec<f64>,
+}
+
+/// Elastic energy of the half-space (Hertz estimate, J) at the load `f` (N) on the approach
+/// `d` (m) without the residual spring's share `cz f`.
+fn hertz_energy(f: f64, d: f64, cz: f64) -> f64 {
+    0.4 * f * (d - cz * f).max(0.0)
+}
+
+impl Ledger {
+    /// The ledger at the static start `st`; `f_l0` (N) the static longitudinal force.
+    fn start(
+        e: &PassageEngine,
+        (tr, wh): (&ModalVerlet, &ModalVerlet),
+        st: &crate::contact::StepResult,
+        energy: bool,
+        f_l0: f64,
+    ) -> Self {
+        let series_c = e.series_compliance;
+        let mw = wh.len();
+        Ledger {
+            eb: EnergyBalance::default(),
+            e_start: tr.kinetic_energy()
+                + tr.strain_energy()
+                + wh.kinetic_energy()
+                + wh.strain_energy(),
+            e_contact_start: hertz_energy(st.normal_force_n, st.approach_m, series_c[2]),
+            f_start: [st.fx_n, st.fy_n, st.normal_force_n],
+            series_c,
+            p_damp_prev: if energy {
+                tr.damping_power() + wh.damping_power()
+            } else {
+                0.0
+            },
+            // contact power at the start: F · (v_w − v_r)
+            p_contact_prev: f_l0 * dot(&e.wheel_contact.rows[..mw], &wh.v),
+            qw_prev: wh.q.clone(),
+        }
+    }
+
+    /// Adds the work of one contact step (after both systems completed it).
+    fn add_step(
+        &mut self,
+        e: &PassageEngine,
+        (tr, wh): (&ModalVerlet, &ModalVerlet),
+        s: &LedgerStep,
+        rr: &[f64],
+        slopes: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let (mt, mw) = (tr.len(), wh.len());
+        let wr = &e.wheel_contact.rows;
+        let eb = &mut self.eb;
+        // Constant wheel loads: work g · Δq (exact); a load switched on in this step
+        // counts by the trapezoidal rule of the integrator, ½(g_n + g_{n+1}) · Δq.
+        for i in 0..mw {
+            let dq = wh.q[i] - self.qw_prev[i];
+            eb.gravity_work_j += e.wheel_gravity[i] * dq;
+            eb.torque_work_j += s.d_mean * e.wheel_torque[i] * dq;
+            eb.external_work_j +=
+                (e.wheel_gravity[i] + s.d_mean * (e.wheel_torque[i] + e.wheel_drawbar[i])) * dq;
+        }
+        self.qw_prev.copy_from_slice(&wh.q);
+        let p_damp = tr.damping_power() + wh.damping_power();
+        eb.damper_dissipation_j += if s.substepped {
+            tr.step_damper_work() + wh.step_damper_work()
+        } else {
+            0.5 * s.dt * (p_damp + self.p_damp_prev)
+        };
+        self.p_damp_prev = p_damp;
+        // Contact power with the corrected velocities.
+        let mut p_c = 0.0;
+        for d in 0..3 {
+            let vr = dot(&rr[d * mt..(d + 1) * mt], &tr.v);
+            let vw = dot(&wr[d * mw..(d + 1) * mw], &wh.v);
+            p_c += s.f[d] * (vw - vr);
+        }
+        eb.contact_work_j += 0.5 * s.dt * (p_c + self.p_contact_prev);
+        self.p_contact_prev = p_c;
+        eb.frictional_work_j += s.frictional_power_w * s.dt;
+        eb.spin_work_j -= s.v * s.spin * s.mz_nm * s.dt;
+        e.rail_line.row_slopes_at(s.xc, slopes)?;
+        let dun = dot(&slopes[2 * mt..], &tr.q);
+        let dut = dot(&slopes[mt..2 * mt], &tr.q);
+        eb.convective_work_j += s.v * (s.f[2] * dun + s.f[1] * dut) * s.dt;
+        Ok(())
+    }
+
+    /// The balance at the end: the stored, contact and residual-spring energy changes from
+    /// the final state, force `f_end` (N) and approach `last_delta` (m).
+    fn finish(
+        mut self,
+        (tr, wh): (&ModalVerlet, &ModalVerlet),
+        f_end: [f64; 3],
+        last_delta: f64,
+    ) -> EnergyBalance {
+        let e_end =
+            tr.kinetic_energy() + tr.strain_energy() + wh.kinetic_energy() + wh.strain_energy();
+        let c = self.series_c;
+        let f0 = self.f_start;
+        self.eb.stored_change_j = e_end - self.e_start;
+        self.eb.contact_energy_change_j =
+            hertz_energy(f_end[2], last_delta, c[2]) - self.e_contact_start;
+        self.eb.residual_spring_energy_change_j = (0..3)
+            .map(|d| 0.5 * c[d] * (f_end[d] * f_end[d] - f0[d] * f0[d]))
+            .sum();
+        self.eb
     }
 }

@@ -31,6 +31,26 @@ pub struct Histories {
 }
 
 impl Histories {
+    /// Empty histories with room for `n` steps in each series.
+    pub fn with_capacity(n: usize) -> Self {
+        let mut h = Histories::default();
+        for vct in [
+            &mut h.t_s,
+            &mut h.x_m,
+            &mut h.normal_n,
+            &mut h.longitudinal_n,
+            &mut h.lateral_n,
+            &mut h.creepage,
+            &mut h.approach_m,
+            &mut h.contact_length_m,
+            &mut h.slip_fraction,
+            &mut h.frictional_power_w,
+        ] {
+            vct.reserve(n);
+        }
+        h
+    }
+
     /// Appends one contact step: `[t (s), x_c (m), ξ (−), approach (m)]`, the contact
     /// result, and the contact length (grid columns along x with any pressure × `dx`, m).
     pub fn push_step(
