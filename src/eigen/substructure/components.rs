@@ -260,6 +260,22 @@ pub(super) fn m_orthogonalise(
     }
 }
 
+/// The dense symmetric eigen-decomposition of `a` (lower triangle), its failure named by
+/// `what`.
+pub(super) fn dense_symmetric_eigen(
+    a: MatRef<'_, f64>,
+    what: &'static str,
+) -> Result<faer::linalg::solvers::SelfAdjointEigen<f64>, SubstructureError> {
+    a.self_adjoint_eigen(Side::Lower)
+        .map_err(|e| SubstructureError::Eigen {
+            what,
+            source: EigenError::Factorization {
+                shift_rad2_s2: f64::NAN,
+                reason: format!("dense symmetric eigensolver failed: {e:?}"),
+            },
+        })
+}
+
 /// Relative size below which a direction of the attachment span is dropped as dependent.
 pub(super) const DEPENDENCE_TOLERANCE: f64 = 1e-10;
 
@@ -288,16 +304,7 @@ pub(super) fn ritz(
     };
     let ma = gram(m(a.as_ref()));
     let ka = gram(k(a.as_ref()));
-    let eig = |x: MatRef<'_, f64>, what: &'static str| {
-        x.self_adjoint_eigen(Side::Lower)
-            .map_err(|e| SubstructureError::Eigen {
-                what,
-                source: EigenError::Factorization {
-                    shift_rad2_s2: f64::NAN,
-                    reason: format!("dense symmetric eigensolver failed: {e:?}"),
-                },
-            })
-    };
+    let eig = dense_symmetric_eigen;
     let em = eig(ma.as_ref(), "attachment Gram matrix")?;
     let d = em.S().column_vector();
     let dmax = (0..q).map(|i| d[i]).fold(0.0, f64::max);

@@ -109,16 +109,7 @@ pub fn reduced_modes(
     k_red: &Mat<f64>,
     fmax_hz: f64,
 ) -> Result<(Vec<f64>, Mat<f64>), SubstructureError> {
-    let dense_eigen = |a: MatRef<'_, f64>, what: &'static str| {
-        a.self_adjoint_eigen(Side::Lower)
-            .map_err(|e| SubstructureError::Eigen {
-                what,
-                source: EigenError::Factorization {
-                    shift_rad2_s2: f64::NAN,
-                    reason: format!("dense symmetric eigensolver failed: {e:?}"),
-                },
-            })
-    };
+    let dense_eigen = dense_symmetric_eigen;
     let n = k_red.nrows();
     let e = dense_eigen(k_red.as_ref(), "reduced track eigenproblem")?;
     let s = e.S().column_vector();
