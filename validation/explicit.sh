@@ -19,10 +19,13 @@ cd "$(dirname "$0")/.."
 PROFILE=${PROFILE:-release}
 DIR=$PROFILE
 [ "$PROFILE" = dev ] && DIR=debug
-cargo build --profile "$PROFILE" --quiet --bin corrugation --example explicit_compare
 # SKIP_CONSISTENT=1 leaves out the reduced passage with the position-dependent residual
 # flexibility (about 5 minutes of CPU at contact.grid_nx 128).
-# BIN and CMP may name copies of the binaries (so that a rebuild cannot swap them mid-run).
+# BIN and CMP may name copies of the binaries (so that a rebuild cannot swap them mid-run);
+# when both are given nothing is built.
+if [ -z "${BIN:-}" ] || [ -z "${CMP:-}" ]; then
+  cargo build --profile "$PROFILE" --quiet --bin corrugation --example explicit_compare
+fi
 BIN=${BIN:-target/$DIR/corrugation}
 CMP=${CMP:-target/$DIR/examples/explicit_compare}
 OUT=${OUT:-validation/out/explicit}
