@@ -90,6 +90,31 @@ pub fn pa_to_mpa(pa: f64) -> f64 {
     pa / PA_PER_MPA
 }
 
+/// Bytes per GB (decimal, as disk sizes are quoted).
+pub const BYTES_PER_GB: f64 = 1.0e9;
+/// Seconds per day.
+pub const S_PER_DAY: f64 = 86_400.0;
+
+/// Size in B → GB (10⁹ B).
+pub fn bytes_to_gb(bytes: u64) -> f64 {
+    bytes as f64 / BYTES_PER_GB
+}
+
+/// Size in GB (10⁹ B) → B, rounded down; `gb` ≥ 0.
+pub fn gb_to_bytes(gb: f64) -> u64 {
+    (gb * BYTES_PER_GB) as u64
+}
+
+/// Duration in days → s.
+pub fn days_to_s(days: f64) -> f64 {
+    days * S_PER_DAY
+}
+
+/// Duration in s → days.
+pub fn s_to_days(s: f64) -> f64 {
+    s / S_PER_DAY
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -16,12 +16,16 @@ fn assert_clean_error(args: &[&str], must_contain: &[&str]) {
     }
 }
 
-fn tmp_file(name: &str, text: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("corrugation-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join(name);
+/// A file `name` holding `text` in a fresh temporary directory, removed when the returned
+/// guard drops.
+fn tmp_file(name: &str, text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let d = tempfile::Builder::new()
+        .prefix("corrugation-cli-")
+        .tempdir()
+        .unwrap();
+    let p = d.path().join(name);
     std::fs::write(&p, text).unwrap();
-    p
+    (d, p)
 }
 
 #[test]
@@ -34,7 +38,7 @@ fn missing_file() {
 
 #[test]
 fn toml_syntax_error() {
-    let p = tmp_file(
+    let (_dir, p) = tmp_file(
         "syntax.toml",
         "extends = \"builtin:dutch\"\n[track\nbays = 3\n",
     );
@@ -46,7 +50,7 @@ fn toml_syntax_error() {
 
 #[test]
 fn unknown_key() {
-    let p = tmp_file(
+    let (_dir, p) = tmp_file(
         "unknown.toml",
         "extends = \"builtin:dutch\"\n[rail]\nyoungs_modulos = 2e11\n",
     );
@@ -91,7 +95,7 @@ fn resolved_model_round_trips_as_a_model_file() {
         "track.bays=12",
     ]);
     assert_eq!(code, 0, "{err}");
-    let p = tmp_file("resolved.toml", &out);
+    let (_dir, p) = tmp_file("resolved.toml", &out);
     let (code, out2, err) = run(&["model", "--model", p.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(out, out2);
@@ -100,7 +104,11 @@ fn resolved_model_round_trips_as_a_model_file() {
 
 #[test]
 fn mesh_command_json_vtu_and_matrix_market() {
-    let dir = std::env::temp_dir().join(format!("corrugation-cli-mesh-{}", std::process::id()));
+    let tmp = tempfile::Builder::new()
+        .prefix("corrugation-cli-mesh-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let vtu = dir.join("mesh.vtu");
     let mtx = dir.join("mtx");
     let mut args = vec![
@@ -147,7 +155,6 @@ fn mesh_command_json_vtu_and_matrix_market() {
             && text.contains("held_xyz")
             && text.trim_end().ends_with("</VTKFile>")
     );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -356,7 +363,11 @@ fn a_mesh_beyond_the_size_limit_is_refused_with_its_estimate_and_keys() {
 fn a_wheel_that_leaves_the_rail_is_an_error_not_zero_forces() {
     // A primary suspension of 1e3 N/m let the wheel leave the rail; the passage exited 0
     // with every force zero.
-    let dir = std::env::temp_dir().join(format!("corrugation-cli-lost-{}", std::process::id()));
+    let tmp = tempfile::Builder::new()
+        .prefix("corrugation-cli-lost-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let out = dir.join("out");
     let cache = dir.join("cache");
     let mut args = vec![
@@ -373,7 +384,6 @@ fn a_wheel_that_leaves_the_rail_is_an_error_not_zero_forces() {
     args.extend(SMALL_MODEL);
     assert_clean_error(&args, &["lost contact", "vehicle.primary_stiffness"]);
     assert!(!out.join("forces.csv").exists());
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -394,7 +404,7 @@ fn a_sweep_beyond_the_model_speed_limit_is_refused() {
 #[test]
 fn a_corrugation_csv_without_a_header_is_refused_not_shortened() {
     // A numeric first line is data, not a header: refusing it keeps the first row from being lost.
-    let p = tmp_file("no_header.csv", "1.0,0.0\n1.01,5.0\n1.02,0.0\n");
+    let (_dir, p) = tmp_file("no_header.csv", "1.0,0.0\n1.01,5.0\n1.02,0.0\n");
     assert_clean_error(
         &[
             "passage",
@@ -410,7 +420,7 @@ fn a_corrugation_csv_without_a_header_is_refused_not_shortened() {
 #[test]
 fn an_unwritable_out_directory_is_refused_before_the_computation() {
     // `passage` found out only after the whole passage. A regular file cannot hold outputs.
-    let f = tmp_file("not_a_dir", "x");
+    let (_dir, f) = tmp_file("not_a_dir", "x");
     let out = f.join("sub");
     for cmd in ["passage", "sweep", "grow", "predict", "modes"] {
         let t = std::time::Instant::now();
@@ -428,8 +438,8 @@ fn an_unwritable_out_directory_is_refused_before_the_computation() {
 #[test]
 fn explicit_time_step_above_the_computed_limit_is_refused() {
     for cmd in [&["explicit"][..], &["passage", "--engine", "explicit"][..]] {
-        let out = std::env::temp_dir().join(format!("corrugation-explicit-dt-{}", cmd.len()));
-        let out = out.to_string_lossy().into_owned();
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("out").to_string_lossy().into_owned();
         let mut args: Vec<&str> = cmd.to_vec();
         args.extend(SMALL_MODEL);
         args.extend(["--set", "explicit.time_step=1e-5", "--out", &out]);
@@ -455,4 +465,17 @@ fn trial_amplitudes_are_range_checked_by_grow_and_predict() {
             );
         }
     }
+}
+
+#[test]
+fn cache_limits_are_range_checked_and_an_empty_cache_lists_nothing() {
+    assert_clean_error(&["cache", "--max-size-gb", "-1"], &["--max-size-gb", "≥ 0"]);
+    assert_clean_error(&["cache", "--max-idle-days", "NaN"], &["--max-idle-days"]);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("cache");
+    let (code, out, err) = run(&["cache", "--cache", dir.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["entries"].as_array().map(Vec::len), Some(0), "{out}");
+    assert_eq!(v["total_bytes"], 0);
 }

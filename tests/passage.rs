@@ -452,7 +452,11 @@ fn verdict_lines(stdout: &str) -> Vec<&str> {
 /// `k/n` and the end), never "0/0".
 #[test]
 fn grow_and_predict_print_a_verdict_and_plain_progress() {
-    let dir = std::env::temp_dir().join(format!("corrugation-test-verdict-{}", std::process::id()));
+    let tmp = tempfile::Builder::new()
+        .prefix("corrugation-test-verdict-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let heads = [
         "No consistent growth on this track at 140 km/h: ",
         "Corrugation grows consistently on this track at 140 km/h ",
@@ -531,7 +535,7 @@ fn grow_and_predict_print_a_verdict_and_plain_progress() {
     ] {
         assert!(md.contains(s), "report lacks {s:?}");
     }
-    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// The static start on the smooth rail is computed once per engine and shared by the passages

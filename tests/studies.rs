@@ -34,11 +34,12 @@ const PREFERRED_WAVELENGTH_M: f64 = 0.04;
 /// Half-width of the Gaussian resonance peak in frequency (Hz).
 const PEAK_WIDTH_HZ: f64 = 20.0;
 
-fn tmpdir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("corrugation-studies-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh temporary directory for the test `tag`, removed when the guard drops.
+fn tmpdir(tag: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("corrugation-studies-{tag}-"))
+        .tempdir()
+        .unwrap()
 }
 
 /// The mode selected at a speed (km/h): nearest (in log) to the preferred wavelength.
@@ -221,7 +222,8 @@ fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
 /// with speed (wavelength range ratio well below the speed range ratio).
 #[test]
 fn map_ridges_lie_on_the_mode_lines() {
-    let dir = tmpdir("ridges");
+    let tmp = tmpdir("ridges");
+    let dir = tmp.path().to_path_buf();
     let speeds = parse_speeds("54.8:219:8").unwrap();
     let runner = ModeLocked::default();
     let out = sweep(&runner, &speeds, &dir, &opts(), KEY, &Silent).unwrap();
@@ -329,7 +331,8 @@ fn map_ridges_lie_on_the_mode_lines() {
 /// sweep, byte for byte, sweep.json included.
 #[test]
 fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
-    let base = tmpdir("merge");
+    let tmp = tmpdir("merge");
+    let base = tmp.path().to_path_buf();
     let speeds = parse_speeds("60:200:10").unwrap();
     let runner = ModeLocked::default();
     let whole = base.join("whole");
@@ -461,7 +464,8 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
 /// the rerun computes only the missing speeds.
 #[test]
 fn interrupted_sweep_resumes_without_recomputing() {
-    let dir = tmpdir("resume");
+    let tmp = tmpdir("resume");
+    let dir = tmp.path().to_path_buf();
     let speeds = parse_speeds("60:150:10").unwrap(); // 10 speeds
     let fail: Vec<f64> = speeds[6..].to_vec();
     for panic in [false, true] {
@@ -618,7 +622,8 @@ fn initiation_table_applies_the_stated_criterion() {
         rows.iter().map(|r| r.initiates).collect::<Vec<_>>(),
         vec![true, false]
     );
-    let dir = tmpdir("initiation");
+    let tmp = tmpdir("initiation");
+    let dir = tmp.path().to_path_buf();
     write_initiation(&dir, &rows, &c, 3).unwrap();
     let csv = std::fs::read_to_string(dir.join("initiation.csv")).unwrap();
     assert_eq!(csv.lines().count(), 3);
@@ -649,7 +654,8 @@ impl PassageRunner for DampingRunner {
 
 #[test]
 fn study_runs_every_case_writes_table_and_plots_and_resumes() {
-    let dir = tmpdir("study");
+    let tmp = tmpdir("study");
+    let dir = tmp.path().to_path_buf();
     let file = dir.join("s.toml");
     std::fs::write(
         &file,
@@ -763,7 +769,8 @@ fn shipped_studies_are_valid() {
 /// speed range and a bad study file are named too.
 #[test]
 fn cli_reports_bad_models_speeds_and_study_keys() {
-    let dir = tmpdir("cli");
+    let tmp = tmpdir("cli");
+    let dir = tmp.path().to_path_buf();
     let (code, _, err) = common::run(&[
         "sweep",
         "--set",
@@ -824,7 +831,8 @@ fn run_small(cmd: &[&str], out: &Path) {
 /// every passage's dominant wear frequency.
 #[test]
 fn sweep_and_grow_attribute_the_selected_frequencies_to_coupled_modes() {
-    let dir = tmpdir("coupled");
+    let tmp = tmpdir("coupled");
+    let dir = tmp.path().to_path_buf();
     run_small(&["sweep", "--speeds", "100,140,180"], &dir.join("sweep"));
     let text = std::fs::read_to_string(dir.join("sweep/dominant.csv")).unwrap();
     let mut lines = text.lines();

@@ -1,5 +1,6 @@
 //! Command definitions (clap) and dispatch. Each command lives in its own file.
 
+mod cache_cmd;
 mod compliance_cmd;
 mod contact_cmd;
 pub mod coupled_modes_cmd;
@@ -126,6 +127,9 @@ enum Command {
     /// Coupled wheel–track modes (contact linearised at the static state): frequency,
     /// damping, energy shares in wheel, rail (by family) and support.
     CoupledModes(coupled_modes_cmd::CoupledModesCmd),
+    /// The modal cache: its entries (size, basis, last use); --max-size-gb or --max-idle-days
+    /// remove the least recently used.
+    Cache(cache_cmd::CacheCmd),
 }
 
 /// Runs the parsed command.
@@ -145,6 +149,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Study(c) => c.run(),
         Command::Initiation(c) => c.run(),
         Command::Compliance(c) => c.run(),
+        Command::Cache(c) => c.run(),
         Command::CoupledModes(c) => c.run(),
     }
 }

@@ -19,6 +19,10 @@
 //! the residual flexibility, [`ModalCache::store_aux`]) carry the blake3 hash of their content
 //! on their first line, checked on load: a mismatch is a miss, recomputed.
 //!
+//! **Size.** [`ModalCache::entries`] lists the entries with their sizes and last use, and
+//! [`ModalCache::prune`] removes the least recently used ones (`corrugation cache`); a hit
+//! marks its entry used.
+//!
 //! The key ([`CacheKey`]) is a blake3 hash of labelled parts supplied by the caller (model
 //! parameters, mesh, f_max, …) plus the crate version (`CARGO_PKG_VERSION`), so any change of
 //! input or program version misses the cache.
@@ -30,6 +34,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use faer::Mat;
 use npyz::WriterBuilder;
+
+mod admin;
+pub use admin::{CacheEntryInfo, PrunePolicy, PruneReport, LEFTOVER_AGE_S};
 use serde::{Deserialize, Serialize};
 
 /// Errors of the modal cache.
@@ -381,6 +388,11 @@ impl ModalCache {
         &*self.progress
     }
 
+    /// The cache's root directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
     /// Directory of the entry for `key`.
     pub fn entry_dir(&self, key: &CacheKey) -> PathBuf {
         self.dir.join(key.hex())
@@ -489,7 +501,8 @@ impl ModalCache {
         (hex == blake3::hash(payload).to_hex().as_bytes()).then(|| payload.to_vec())
     }
 
-    /// Looks up `key`; validates hashes, shapes and metadata.
+    /// Looks up `key`; validates hashes, shapes and metadata. A hit marks the entry used
+    /// (for [`Self::prune`]).
     pub fn load(&self, key: &CacheKey) -> CacheLookup {
         let hex = key.hex();
         let d = self.dir.join(&hex);
@@ -497,7 +510,10 @@ impl ModalCache {
             return CacheLookup::Miss;
         }
         match Self::load_dir(&d, &hex) {
-            Ok(c) => CacheLookup::Hit(Box::new(c)),
+            Ok(c) => {
+                admin::touch(&d);
+                CacheLookup::Hit(Box::new(c))
+            }
             Err(reason) => CacheLookup::Corrupt(reason),
         }
     }
@@ -579,7 +595,7 @@ mod tests {
         d
     }
 
-    fn sample() -> (Vec<f64>, Mat<f64>, CacheMeta) {
+    pub(super) fn sample() -> (Vec<f64>, Mat<f64>, CacheMeta) {
         let f = vec![0.0, 12.5, 1.0 / 3.0];
         let m = Mat::<f64>::from_fn(5, 3, |i, j| (i as f64 + 1.0) * 0.1 - j as f64 / 7.0);
         let meta = CacheMeta {

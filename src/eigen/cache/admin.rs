@@ -1,0 +1,327 @@
+//! Keeping the modal cache's size in hand: listing its entries and removing the least
+//! recently used ones.
+//!
+//! A 5 kHz track basis of the default model is about 1 GB on disk, and every change of a
+//! parameter that enters K or M adds an entry, so a cache that is never pruned grows without
+//! bound. An entry's *last use* is the modification time of its `meta.json`, which
+//! [`ModalCache::load`] refreshes on every hit (a read-only cache simply keeps the time of
+//! the store). Removal renames the entry to a hidden `.old-*` directory first and deletes
+//! that, so a concurrent reader sees either the whole entry or a miss, never a partial one.
+//! Hidden `.tmp-*`/`.old-*` directories are the leftovers of interrupted writes or removals;
+//! they are never read and are removed by [`ModalCache::prune`] once older than a day.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, SystemTime};
+
+use super::{io_err, CacheError, CacheMeta, ModalCache, TMP_COUNTER};
+
+/// Age after which a hidden `.tmp-*`/`.old-*` leftover is removed by [`ModalCache::prune`]
+/// (s): one day, far longer than any write of an entry takes.
+pub const LEFTOVER_AGE_S: u64 = 86_400;
+
+/// One entry of the cache, as listed by [`ModalCache::entries`].
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CacheEntryInfo {
+    /// The entry's key (hex), its directory's name.
+    pub key: String,
+    /// The entry's directory.
+    pub dir: PathBuf,
+    /// Bytes on disk of all the entry's files (B).
+    pub bytes: u64,
+    /// The metadata, when `meta.json` is readable (`None` marks a broken entry, which a
+    /// lookup would report corrupt and recompute).
+    #[serde(skip)]
+    pub meta: Option<CacheMeta>,
+    /// Number of DOFs of the basis (0 when the metadata is unreadable).
+    pub n_dofs: usize,
+    /// Number of modes (0 when the metadata is unreadable).
+    pub n_modes: usize,
+    /// Upper band edge (Hz; NaN when the metadata is unreadable).
+    pub f_max_hz: f64,
+    /// Time since the entry was last stored or loaded (s).
+    pub idle_s: f64,
+}
+
+/// What [`ModalCache::prune`] removes. An entry goes when either limit asks for it; the
+/// least recently used go first.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PrunePolicy {
+    /// Keep the entries' total size at or below this (B); `None`: no size limit.
+    pub max_bytes: Option<u64>,
+    /// Remove entries not used for longer than this; `None`: no age limit.
+    pub max_idle: Option<Duration>,
+    /// Only report what would be removed.
+    pub dry_run: bool,
+}
+
+/// What [`ModalCache::prune`] did (or, with `dry_run`, would do).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct PruneReport {
+    /// Keys of the removed entries, least recently used first.
+    pub removed: Vec<String>,
+    /// Bytes freed by them (B).
+    pub freed_bytes: u64,
+    /// Bytes of the entries kept (B).
+    pub kept_bytes: u64,
+    /// Hidden leftovers of interrupted writes removed (older than [`LEFTOVER_AGE_S`]).
+    pub leftovers_removed: usize,
+}
+
+fn dir_bytes(d: &Path) -> Result<u64, CacheError> {
+    let mut total = 0;
+    for e in fs::read_dir(d).map_err(io_err("read dir", d))? {
+        let e = e.map_err(io_err("read dir", d))?;
+        let md = e.metadata().map_err(io_err("stat", &e.path()))?;
+        total += if md.is_dir() {
+            dir_bytes(&e.path())?
+        } else {
+            md.len()
+        };
+    }
+    Ok(total)
+}
+
+fn age_s(path: &Path, now: SystemTime) -> f64 {
+    fs::metadata(path)
+        .and_then(|m| m.modified())
+        .ok()
+        .and_then(|t| now.duration_since(t).ok())
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
+impl ModalCache {
+    /// Every entry of the cache, least recently used first. A cache directory that does not
+    /// exist is empty; hidden leftovers are not entries.
+    pub fn entries(&self) -> Result<Vec<CacheEntryInfo>, CacheError> {
+        let now = SystemTime::now();
+        let mut out = Vec::new();
+        let rd = match fs::read_dir(self.dir()) {
+            Ok(rd) => rd,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(out),
+            Err(e) => return Err(io_err("read dir", self.dir())(e)),
+        };
+        for e in rd {
+            let e = e.map_err(io_err("read dir", self.dir()))?;
+            let name = e.file_name().to_string_lossy().into_owned();
+            let dir = e.path();
+            if name.starts_with('.') || !dir.is_dir() {
+                continue;
+            }
+            let meta_path = dir.join("meta.json");
+            let meta: Option<CacheMeta> = fs::read(&meta_path)
+                .ok()
+                .and_then(|b| serde_json::from_slice(&b).ok());
+            let idle_s = age_s(if meta.is_some() { &meta_path } else { &dir }, now);
+            out.push(CacheEntryInfo {
+                key: name,
+                bytes: dir_bytes(&dir)?,
+                n_dofs: meta.as_ref().map_or(0, |m| m.n_dofs),
+                n_modes: meta.as_ref().map_or(0, |m| m.n_modes),
+                f_max_hz: meta.as_ref().map_or(f64::NAN, |m| m.f_max_hz),
+                meta,
+                dir,
+                idle_s,
+            });
+        }
+        out.sort_by(|a, b| b.idle_s.total_cmp(&a.idle_s).then(a.key.cmp(&b.key)));
+        Ok(out)
+    }
+
+    /// Removes the least recently used entries until the policy holds, and hidden leftovers
+    /// older than [`LEFTOVER_AGE_S`]. Each entry is renamed aside before it is deleted.
+    pub fn prune(&self, policy: PrunePolicy) -> Result<PruneReport, CacheError> {
+        let entries = self.entries()?;
+        let mut total: u64 = entries.iter().map(|e| e.bytes).sum();
+        let mut report = PruneReport::default();
+        for e in &entries {
+            let too_big = policy.max_bytes.is_some_and(|m| total > m);
+            let too_old = policy.max_idle.is_some_and(|d| e.idle_s > d.as_secs_f64());
+            if !(too_big || too_old) {
+                continue;
+            }
+            if !policy.dry_run {
+                self.remove_dir(&e.dir, &e.key)?;
+            }
+            total -= e.bytes;
+            report.freed_bytes += e.bytes;
+            report.removed.push(e.key.clone());
+        }
+        report.kept_bytes = total;
+        if !policy.dry_run {
+            report.leftovers_removed = self.remove_leftovers()?;
+        }
+        Ok(report)
+    }
+
+    fn remove_dir(&self, dir: &Path, key: &str) -> Result<(), CacheError> {
+        let aside = self.dir().join(format!(
+            ".old-{key}-{}-{}",
+            std::process::id(),
+            TMP_COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+        ));
+        fs::rename(dir, &aside).map_err(io_err("rename", dir))?;
+        fs::remove_dir_all(&aside).map_err(io_err("remove", &aside))
+    }
+
+    fn remove_leftovers(&self) -> Result<usize, CacheError> {
+        let now = SystemTime::now();
+        let Ok(rd) = fs::read_dir(self.dir()) else {
+            return Ok(0);
+        };
+        let mut n = 0;
+        for e in rd.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let p = e.path();
+            let hidden = name.starts_with(".tmp-") || name.starts_with(".old-");
+            if hidden && p.is_dir() && age_s(&p, now) > LEFTOVER_AGE_S as f64 {
+                fs::remove_dir_all(&p).map_err(io_err("remove", &p))?;
+                n += 1;
+            }
+        }
+        Ok(n)
+    }
+}
+
+/// Marks the entry `dir` as used now (its `meta.json`'s modification time). Failures are
+/// ignored: a read-only cache keeps the time of the store.
+pub(super) fn touch(dir: &Path) {
+    if let Ok(f) = fs::File::options().append(true).open(dir.join("meta.json")) {
+        let _ = f.set_modified(SystemTime::now());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eigen::cache::CacheKey;
+    use faer::Mat;
+
+    fn cache(name: &str) -> (ModalCache, PathBuf) {
+        let d = std::env::temp_dir().join(format!(
+            "corrugation-cache-admin-{name}-{}",
+            std::process::id()
+        ));
+        let _ = fs::remove_dir_all(&d);
+        (ModalCache::new(&d), d)
+    }
+
+    /// Stores a basis of `n` DOFs and 3 modes (the cache's sample metadata) under `label`.
+    fn store(c: &ModalCache, label: &str, n: usize) -> CacheKey {
+        let key = CacheKey::new().str("entry", label);
+        let (f, _, meta) = crate::eigen::cache::tests::sample();
+        let m = Mat::<f64>::from_fn(n, f.len(), |i, j| (i + j) as f64);
+        c.store(&key, &f, &m, meta).unwrap();
+        key
+    }
+
+    fn set_age(c: &ModalCache, key: &CacheKey, age_s: u64) {
+        let t = SystemTime::now() - Duration::from_secs(age_s);
+        let f = fs::File::options()
+            .append(true)
+            .open(c.entry_dir(key).join("meta.json"))
+            .unwrap();
+        f.set_modified(t).unwrap();
+    }
+
+    #[test]
+    fn entries_are_listed_least_recently_used_first_with_their_sizes() {
+        let (c, d) = cache("list");
+        assert!(
+            c.entries().unwrap().is_empty(),
+            "a missing directory is empty"
+        );
+        let a = store(&c, "a", 10);
+        let b = store(&c, "b", 1000);
+        set_age(&c, &a, 100);
+        set_age(&c, &b, 3600);
+        let e = c.entries().unwrap();
+        assert_eq!(e.len(), 2);
+        assert_eq!(e[0].key, b.hex(), "b was used longest ago");
+        assert_eq!((e[0].n_dofs, e[0].n_modes, e[0].f_max_hz), (1000, 3, 100.0));
+        // b's modes alone are 1000 × 3 f64 = 24,000 B of data.
+        assert!(e[0].bytes > 24_000 && e[0].bytes < 28_000, "{}", e[0].bytes);
+        assert!((e[0].idle_s - 3600.0).abs() < 60.0 && (e[1].idle_s - 100.0).abs() < 60.0);
+        fs::remove_dir_all(d).ok();
+    }
+
+    #[test]
+    fn a_load_marks_the_entry_used() {
+        let (c, d) = cache("touch");
+        let a = store(&c, "a", 10);
+        set_age(&c, &a, 7200);
+        assert!(c.entries().unwrap()[0].idle_s > 7000.0);
+        assert!(matches!(
+            c.load(&a),
+            crate::eigen::cache::CacheLookup::Hit(_)
+        ));
+        assert!(c.entries().unwrap()[0].idle_s < 60.0);
+        fs::remove_dir_all(d).ok();
+    }
+
+    #[test]
+    fn prune_removes_the_least_recently_used_until_the_size_limit_holds() {
+        let (c, d) = cache("size");
+        let keys: Vec<_> = (0..3).map(|i| store(&c, &format!("{i}"), 1000)).collect();
+        for (i, k) in keys.iter().enumerate() {
+            set_age(&c, k, 1000 * (3 - i as u64)); // key 0 oldest
+        }
+        let each = c.entries().unwrap()[0].bytes;
+        let policy = PrunePolicy {
+            max_bytes: Some(2 * each),
+            ..Default::default()
+        };
+        let dry = c
+            .prune(PrunePolicy {
+                dry_run: true,
+                ..policy
+            })
+            .unwrap();
+        assert_eq!(dry.removed, vec![keys[0].hex()]);
+        assert_eq!(c.entries().unwrap().len(), 3, "a dry run removes nothing");
+        let r = c.prune(policy).unwrap();
+        assert_eq!(r.removed, vec![keys[0].hex()]);
+        assert_eq!((r.freed_bytes, r.kept_bytes), (each, 2 * each));
+        assert!(matches!(
+            c.load(&keys[0]),
+            crate::eigen::cache::CacheLookup::Miss
+        ));
+        assert!(matches!(
+            c.load(&keys[2]),
+            crate::eigen::cache::CacheLookup::Hit(_)
+        ));
+        fs::remove_dir_all(d).ok();
+    }
+
+    #[test]
+    fn prune_by_age_removes_idle_entries_broken_ones_and_old_leftovers() {
+        let (c, d) = cache("age");
+        let old = store(&c, "old", 10);
+        let new = store(&c, "new", 10);
+        set_age(&c, &old, 10 * 86_400);
+        // A broken entry (no meta.json) and an interrupted write's leftover, both old.
+        let broken = d.join("00ff");
+        fs::create_dir_all(&broken).unwrap();
+        let leftover = d.join(".tmp-00ff-1-1");
+        fs::create_dir_all(&leftover).unwrap();
+        let t = SystemTime::now() - Duration::from_secs(3 * 86_400);
+        for p in [&broken, &leftover] {
+            fs::File::open(p).unwrap().set_modified(t).unwrap();
+        }
+        let r = c
+            .prune(PrunePolicy {
+                max_idle: Some(Duration::from_secs(86_400)),
+                ..Default::default()
+            })
+            .unwrap();
+        assert_eq!(r.removed.len(), 2, "{r:?}");
+        assert!(r.removed.contains(&old.hex()) && r.removed.contains(&"00ff".to_string()));
+        assert_eq!(r.leftovers_removed, 1);
+        assert!(!leftover.exists() && !broken.exists());
+        assert!(matches!(
+            c.load(&new),
+            crate::eigen::cache::CacheLookup::Hit(_)
+        ));
+        fs::remove_dir_all(d).ok();
+    }
+}
