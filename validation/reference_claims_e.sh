@@ -3,7 +3,8 @@
 # pre-registered map of the reference study's claims (validation/reference_claims.md), hold
 # H0 (the presets' rigid strips). E0 (static start) is run by reference_claims.sh.
 # Usage: bash validation/reference_claims_e.sh [OUT] [EXCITATIONS]
-#   (default OUT validation/out/claims, EXCITATIONS "1 2"). Finished passages are reused.
+#   (default OUT validation/out/claims, EXCITATIONS "1 2"; ZETAS="0" runs only the undamped
+#   wheel). Finished passages are reused.
 # Cells: RPM1-RPM5 x wheel damping 0, 1e-3 x 130, 140, 150 km/h; E2 for roughness seeds
 # 1, 2, 3 (profiles by `reference_claims.py roughness`). Each passage is one
 # `corrugation passage --json` (about 20 s wall on the default model once its modes are
@@ -13,6 +14,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-validation/out/claims}
 EXC=${2:-"1 2"}
+# ZETAS: the wheel damping ratios to run (default both registered values).
+ZETAS=${ZETAS:-"0 0.001"}
 BIN=${CORRUGATION:-target/release/corrugation}
 mkdir -p "$OUT"
 run() { # run DEST.json ARGS...: one passage, skipped when its JSON exists
@@ -29,7 +32,7 @@ for e in $EXC; do
     python3 validation/reference_claims.py roughness "$OUT/e2"
   fi
   for rpm in RPM1 RPM2 RPM3 RPM4 RPM5; do
-    for z in 0 0.001; do
+    for z in $ZETAS; do
       for v in 130 140 150; do
         sets=(--set "fastening.model=$rpm" --set "wheel.damping_ratio=$z" --set "run.speed_kmh=$v")
         if [ "$e" = 1 ]; then
