@@ -542,6 +542,21 @@ pub struct ModeAttribution {
     pub rail_x_to_n: f64,
 }
 
+impl ModeAttribution {
+    /// The mode's offset from the selected frequency, `(f_mode − f)/f` (−).
+    pub fn relative_offset(&self) -> f64 {
+        (self.mode_frequency_hz - self.frequency_hz) / self.frequency_hz
+    }
+
+    /// Whether the mode lies outside [`ATTRIBUTION_WINDOW`] of the frequency: no visible
+    /// coupled mode is that close, the nearest visible one was taken, and the frequency is
+    /// not explained by a single coupled mode (a forced response between modes, or a mode of
+    /// another contact position or speed).
+    pub fn is_distant(&self) -> bool {
+        self.relative_offset().abs() > ATTRIBUTION_WINDOW
+    }
+}
+
 /// Attributes each frequency `f` of `frequencies_hz` to a coupled mode (over all positions
 /// in `modes`): among the modes within `window` (relative, e.g. 0.03) of `f`, the one the
 /// contact sees most (largest contact amplitude per √energy, rail or wheel, x or n); when
@@ -599,8 +614,17 @@ pub fn attribution_text(a: &ModeAttribution) -> String {
         .iter()
         .map(|(l, v)| format!("{l} {:.0} %", 100.0 * v))
         .collect();
+    let distant = if a.is_distant() {
+        format!(
+            " [no coupled mode within {:.0} %: the nearest visible one is {:+.0} % away]",
+            100.0 * ATTRIBUTION_WINDOW,
+            100.0 * a.relative_offset()
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "{:.0} Hz → coupled mode {:.0} Hz (ζ {:.2} %, at x = {:.3} m): {}",
+        "{:.0} Hz → coupled mode {:.0} Hz (ζ {:.2} %, at x = {:.3} m): {}{distant}",
         a.frequency_hz,
         a.mode_frequency_hz,
         100.0 * a.damping_ratio,

@@ -149,11 +149,14 @@ pub fn write_coupled_modes(out: &Path, cm: &CoupledModes) -> Result<(), StudiesE
 
 /// Columns of an attribution in a per-speed table, each prefixed by `prefix` (e.g. `""` for
 /// the wear, `"fl_"` for F_L): the mode's frequency (Hz) and damping ratio (−), its energy
+/// offset from the selected frequency `(f_mode − f)/f` (−; beyond ±0.03 no coupled mode is
+/// within the attribution window and the nearest visible one was taken), its energy
 /// shares (−) in the wheel (total and elastic), the rail (total and by family), the support
 /// and the contact, and the rail's longitudinal-to-normal motion at the contact (−).
 pub fn attribution_columns(prefix: &str) -> Vec<String> {
     let mut c = vec![
         "coupled_mode_hz".to_string(),
+        "coupled_offset".into(),
         "coupled_damping_ratio".into(),
         "coupled_wheel_share".into(),
         "coupled_wheel_elastic_share".into(),
@@ -181,6 +184,7 @@ pub fn attribution_values(a: Option<&ModeAttribution>) -> Vec<f64> {
     let s = &a.shares;
     let mut v = vec![
         a.mode_frequency_hz,
+        a.relative_offset(),
         a.damping_ratio,
         s.wheel_total(),
         s.wheel_elastic,
@@ -251,6 +255,19 @@ mod tests {
         assert!((at("fl_coupled_wheel_share") - 0.2).abs() < 1e-12);
         assert!((at("fl_coupled_rail_longitudinal_compression_share") - 0.8).abs() < 1e-12);
         assert_eq!(at("fl_coupled_rail_x_to_n"), 2.0);
+        assert!((at("fl_coupled_offset") - 0.02).abs() < 1e-12);
+        assert!(!b.is_distant());
+        // 1300 Hz has no mode within 3 %: the nearest visible (1500 Hz, +15.4 %) is taken
+        // and flagged as distant, in the row and in the text.
+        let c = attribute_one(&modes, Some(1300.0)).unwrap();
+        assert_eq!(c.mode_frequency_hz, 1500.0);
+        assert!(c.is_distant() && (c.relative_offset() - 200.0 / 1300.0).abs() < 1e-12);
+        let text = crate::dynamics::coupled::attribution_text(&c);
+        assert!(
+            text.contains("no coupled mode within 3 %") && text.contains("+15 %"),
+            "{text}"
+        );
+        assert!(!crate::dynamics::coupled::attribution_text(&b).contains("no coupled mode"));
         assert!(attribution_values(None).iter().all(|v| v.is_nan()));
         assert_eq!(b.shares.family_label(), "rail LC");
         assert_eq!(a.shares.family_label(), "wheel");

@@ -471,10 +471,18 @@ fn coupled_section(d: &mut Document, r: &SweepRecord) {
                     .filter(|(_, v)| *v >= 0.05)
                     .collect();
                 shares.sort_by(|x, y| y.1.total_cmp(&x.1));
+                let window = crate::dynamics::coupled::ATTRIBUTION_WINDOW;
+                let distant = fs
+                    .iter()
+                    .any(|f| ((a.mode_frequency_hz - f) / f).abs() > window);
                 vec![
                     format!("{}–{}", r.speeds_kmh[i], r.speeds_kmh[j]),
                     format!("{flo:.0}–{fhi:.0}"),
-                    format!("{:.1}", a.mode_frequency_hz),
+                    format!(
+                        "{:.1}{}",
+                        a.mode_frequency_hz,
+                        if distant { " †" } else { "" }
+                    ),
                     a.shares.family_label(),
                     shares
                         .iter()
@@ -490,6 +498,7 @@ fn coupled_section(d: &mut Document, r: &SweepRecord) {
         if rows.is_empty() {
             continue;
         }
+        let any_distant = rows.iter().any(|row| row[2].ends_with('†'));
         d.heading(3, format!("{title}: coupled mode by speed range"));
         d.table(
             &[
@@ -504,5 +513,13 @@ fn coupled_section(d: &mut Document, r: &SweepRecord) {
             ],
             rows,
         );
+        if any_distant {
+            d.paragraph(
+                "† No coupled mode lies within 3 % of some of the range's selected frequencies: \
+                 the nearest mode the contact sees is shown, and those frequencies are not \
+                 explained by a single coupled mode (a forced response between modes, or modes \
+                 moved by the speed's creep terms).",
+            );
+        }
     }
 }
