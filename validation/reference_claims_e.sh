@@ -31,17 +31,20 @@ for e in $EXC; do
   if [ "$e" = 2 ]; then
     python3 validation/reference_claims.py roughness "$OUT/e2"
   fi
-  for rpm in RPM1 RPM2 RPM3 RPM4 RPM5; do
-    for z in $ZETAS; do
-      for v in 130 140 150; do
-        sets=(--set "fastening.model=$rpm" --set "wheel.damping_ratio=$z" --set "run.speed_kmh=$v")
-        if [ "$e" = 1 ]; then
-          run "$OUT/e1/$rpm-z$z-v$v.json" "${sets[@]}" --set 'run.start="rest"'
-        else
-          for s in 1 2 3; do
+  # E2's seeds outermost, so that an interrupted run has whole seeds (all five models).
+  seeds="-"
+  [ "$e" = 2 ] && seeds="1 2 3"
+  for s in $seeds; do
+    for rpm in RPM1 RPM2 RPM3 RPM4 RPM5; do
+      for z in $ZETAS; do
+        for v in 130 140 150; do
+          sets=(--set "fastening.model=$rpm" --set "wheel.damping_ratio=$z" --set "run.speed_kmh=$v")
+          if [ "$e" = 1 ]; then
+            run "$OUT/e1/$rpm-z$z-v$v.json" "${sets[@]}" --set 'run.start="rest"'
+          else
             run "$OUT/e2/$rpm-z$z-v$v-s$s.json" "${sets[@]}" --corrugation "$OUT/e2/roughness-seed$s.csv"
-          done
-        fi
+          fi
+        done
       done
     done
   done
