@@ -9,7 +9,7 @@ use clap::Args;
 use serde::Serialize;
 
 use corrugation::dynamics::compliance::{longitudinal_compliance, ComplianceLoad};
-use corrugation::model::load_model;
+use corrugation::model::{load_model, Model};
 use corrugation::structure::TrackStructure;
 
 use super::ModelArgs;
@@ -77,54 +77,11 @@ struct Row {
 }
 
 impl ComplianceCmd {
-    /// Runs the command.
+    /// Runs the command: the arguments, every model variant (all loaded before any solve,
+    /// so that a bad name or key stops early), their compliances, the files, the table.
     pub fn run(self) -> anyhow::Result<()> {
-        for (name, v) in [
-            ("--vertical", self.vertical),
-            ("--longitudinal", self.longitudinal),
-        ] {
-            if !v.is_finite() || v.abs() > 1e7 {
-                anyhow::bail!("{name} must be a finite force up to 1e7 N (got {v})");
-            }
-        }
-        if !(self.ahead.is_finite() && self.ahead >= 0.0) {
-            anyhow::bail!(
-                "--ahead must be a finite distance ≥ 0 m (got {})",
-                self.ahead
-            );
-        }
-        let mut stiffnesses = Vec::new();
-        for s in &self.elastic {
-            if s == "none" {
-                continue;
-            }
-            let k: f64 = s
-                .parse()
-                .with_context(|| format!("--elastic {s}: not a number (N/m) or \"none\""))?;
-            stiffnesses.push(k);
-        }
-        // All models first, so a bad name or key stops before any solve.
-        let mut cases = Vec::new();
-        for v in &self.variants {
-            let mut sets = self.model.set.clone();
-            sets.push(format!("fastening.model={v}"));
-            cases.push((v.clone(), None, sets.clone()));
-            for &k in &stiffnesses {
-                let mut s = sets.clone();
-                s.extend([
-                    "fastening.hold=elastic".to_string(),
-                    format!("fastening.hold_stiffness={k:e}"),
-                    "fastening.hold_directions=[\"x\"]".to_string(),
-                ]);
-                cases.push((v.clone(), Some(k), s));
-            }
-        }
-        let mut models = Vec::new();
-        for (name, k, sets) in &cases {
-            let m =
-                load_model(&self.model.source(), sets).with_context(|| format!("model {name}"))?;
-            models.push((name.clone(), *k, m));
-        }
+        let stiffnesses = self.check_args()?;
+        let models = self.models(&stiffnesses)?;
         let load = ComplianceLoad {
             vertical_n: self.vertical,
             longitudinal_n: self.longitudinal,
@@ -152,10 +109,83 @@ impl ComplianceCmd {
                 foot_longitudinal_only_m: r.longitudinal_only_m[2],
             });
         }
+        let (csv_path, json) = self.write_files(&load, &rows)?;
+        if self.json {
+            println!("{json}");
+        } else {
+            self.print_table(&rows);
+            println!("wrote {} and compliance.json", csv_path.display());
+        }
+        Ok(())
+    }
+
+    /// Checks the forces and the distance; returns the elastic hold stiffnesses (N/m).
+    fn check_args(&self) -> anyhow::Result<Vec<f64>> {
+        for (name, v) in [
+            ("--vertical", self.vertical),
+            ("--longitudinal", self.longitudinal),
+        ] {
+            if !v.is_finite() || v.abs() > 1e7 {
+                anyhow::bail!("{name} must be a finite force up to 1e7 N (got {v})");
+            }
+        }
+        if !(self.ahead.is_finite() && self.ahead >= 0.0) {
+            anyhow::bail!(
+                "--ahead must be a finite distance ≥ 0 m (got {})",
+                self.ahead
+            );
+        }
+        let mut stiffnesses = Vec::new();
+        for s in &self.elastic {
+            if s == "none" {
+                continue;
+            }
+            let k: f64 = s
+                .parse()
+                .with_context(|| format!("--elastic {s}: not a number (N/m) or \"none\""))?;
+            stiffnesses.push(k);
+        }
+        Ok(stiffnesses)
+    }
+
+    /// Every variant with rigid holds and with each elastic hold stiffness (N/m):
+    /// `(fastening model, hold stiffness, model)`.
+    fn models(&self, stiffnesses: &[f64]) -> anyhow::Result<Vec<(String, Option<f64>, Model)>> {
+        let mut cases = Vec::new();
+        for v in &self.variants {
+            let mut sets = self.model.set.clone();
+            sets.push(format!("fastening.model={v}"));
+            cases.push((v.clone(), None, sets.clone()));
+            for &k in stiffnesses {
+                let mut s = sets.clone();
+                s.extend([
+                    "fastening.hold=elastic".to_string(),
+                    format!("fastening.hold_stiffness={k:e}"),
+                    "fastening.hold_directions=[\"x\"]".to_string(),
+                ]);
+                cases.push((v.clone(), Some(k), s));
+            }
+        }
+        let mut models = Vec::new();
+        for (name, k, sets) in &cases {
+            let m =
+                load_model(&self.model.source(), sets).with_context(|| format!("model {name}"))?;
+            models.push((name.clone(), *k, m));
+        }
+        Ok(models)
+    }
+
+    /// Writes `compliance.csv` and `compliance.json` into `--out` (atomically); returns the CSV's path and
+    /// the JSON.
+    fn write_files(
+        &self,
+        load: &ComplianceLoad,
+        rows: &[Row],
+    ) -> anyhow::Result<(PathBuf, serde_json::Value)> {
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("creating {}", self.out.display()))?;
         let mut csv = String::from("model,hold,hold_stiffness_n_per_m,x_load_m,x_probe_m,head_m,web_m,foot_m,mean_at_load_m,vertical_at_load_m,head_longitudinal_only_m,web_longitudinal_only_m,foot_longitudinal_only_m\n");
-        for r in &rows {
+        for r in rows {
             let k = r.hold_stiffness_n_per_m.map(|k| format!("{k:e}"));
             writeln!(
                 csv,
@@ -176,44 +206,43 @@ impl ComplianceCmd {
             )?;
         }
         let csv_path = self.out.join("compliance.csv");
-        std::fs::write(&csv_path, csv)
+        corrugation::io::write_text(&csv_path, &csv)
             .with_context(|| format!("writing {}", csv_path.display()))?;
         let json = serde_json::json!({ "load": load, "rows": rows });
         let json_path = self.out.join("compliance.json");
-        std::fs::write(&json_path, serde_json::to_string_pretty(&json)?)
+        corrugation::io::write_text(&json_path, &serde_json::to_string_pretty(&json)?)
             .with_context(|| format!("writing {}", json_path.display()))?;
-        if self.json {
-            println!("{json}");
-        } else {
+        Ok((csv_path, json))
+    }
+
+    /// The table on stdout (µm).
+    fn print_table(&self, rows: &[Row]) {
+        println!(
+            "u_x {} m ahead of {} kN down + {} kN along x (µm; in brackets the longitudinal force alone; w at the load in µm)",
+            self.ahead,
+            self.vertical / 1e3,
+            self.longitudinal / 1e3
+        );
+        println!(
+            "{:<6} {:<8} {:>10} {:>20} {:>20} {:>20} {:>8}",
+            "model", "hold", "k (N/m)", "head", "web", "foot", "w"
+        );
+        for r in rows {
+            let k = r
+                .hold_stiffness_n_per_m
+                .map(|k| format!("{k:.1e}"))
+                .unwrap_or_else(|| "rigid".into());
+            let pair = |a: f64, b: f64| format!("{:.3} ({:.3})", a * 1e6, b * 1e6);
             println!(
-                "u_x {} m ahead of {} kN down + {} kN along x (µm; in brackets the longitudinal force alone; w at the load in µm)",
-                self.ahead,
-                self.vertical / 1e3,
-                self.longitudinal / 1e3
+                "{:<6} {:<8} {:>10} {:>20} {:>20} {:>20} {:>8.1}",
+                r.model,
+                r.hold,
+                k,
+                pair(r.head_m, r.head_longitudinal_only_m),
+                pair(r.web_m, r.web_longitudinal_only_m),
+                pair(r.foot_m, r.foot_longitudinal_only_m),
+                r.vertical_at_load_m * 1e6
             );
-            println!(
-                "{:<6} {:<8} {:>10} {:>20} {:>20} {:>20} {:>8}",
-                "model", "hold", "k (N/m)", "head", "web", "foot", "w"
-            );
-            for r in &rows {
-                let k = r
-                    .hold_stiffness_n_per_m
-                    .map(|k| format!("{k:.1e}"))
-                    .unwrap_or_else(|| "rigid".into());
-                let pair = |a: f64, b: f64| format!("{:.3} ({:.3})", a * 1e6, b * 1e6);
-                println!(
-                    "{:<6} {:<8} {:>10} {:>20} {:>20} {:>20} {:>8.1}",
-                    r.model,
-                    r.hold,
-                    k,
-                    pair(r.head_m, r.head_longitudinal_only_m),
-                    pair(r.web_m, r.web_longitudinal_only_m),
-                    pair(r.foot_m, r.foot_longitudinal_only_m),
-                    r.vertical_at_load_m * 1e6
-                );
-            }
-            println!("wrote {} and compliance.json", csv_path.display());
         }
-        Ok(())
     }
 }

@@ -27,15 +27,17 @@ use std::time::Instant;
 
 use clap::Args;
 
-use corrugation::dynamics::coupled::attribution_text;
-use corrugation::growth::procedure::{iterative_growth, IterativeOptions};
+use corrugation::dynamics::coupled::{attribution_text, CoupledMode};
+use corrugation::dynamics::prepared::PreparedModel;
+use corrugation::growth::procedure::{iterative_growth, GrowthRound, IterativeOptions};
 use corrugation::growth::verdict::{growth_verdict, no_initiation_verdict, sig, Verdict};
 use corrugation::io::write_csv;
+use corrugation::model::Model;
 use corrugation::studies::coupled::write_coupled_modes;
 use corrugation::studies::grow::{
     grow_json, growth_attribution, growth_rate, initiation_check, mode_lines, rate_check,
     rate_summary, trial_growth_if_any, write_grow_json, write_growth_files, write_growth_rate,
-    GrowJson,
+    GrowJson, RateSummary,
 };
 
 use super::ModelArgs;
@@ -123,16 +125,11 @@ fn print_growth(j: &GrowJson) {
 }
 
 impl GrowCmd {
+    /// Runs the command: the coupled modes, the growth-rate spectrum and its check, the
+    /// trial-amplitude growth, the iterative rounds, then `grow.json` and the summary.
     pub fn run(self) -> anyhow::Result<()> {
         let t0 = Instant::now();
-        super::check_trial_amplitudes(&self.amplitudes_um)?;
-        if let Some(l) = self
-            .rate_check
-            .iter()
-            .find(|l| !(l.is_finite() && (20.0..=80.0).contains(*l)))
-        {
-            anyhow::bail!("--rate-check wavelengths must lie in [20, 80] mm (got {l})");
-        }
+        self.check_args()?;
         let m = self.model.load()?;
         super::check_out_dir(&self.out)?;
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
@@ -143,50 +140,13 @@ impl GrowCmd {
             write_coupled_modes(&self.out, &cm)?;
             cm.modes
         };
-        let mut rate = None;
-        if !self.no_rate {
-            let pb = super::progress::bar("growth-rate spectrum");
-            let s = growth_rate(&m, &prepared, m.run.speed(), &pb)?;
-            pb.finish_and_clear();
-            write_growth_rate(&self.out, &s)?;
-            if !self.json {
-                println!("{}", s.sentence(m.run.speed_kmh));
-            }
-            rate = rate_summary(&s, &coupled);
-            if let Some(a) = rate.as_ref().and_then(|r| r.fastest_mode.as_ref()) {
-                if !self.json {
-                    println!(
-                        "  fastest wavelength by coupled mode: {}",
-                        attribution_text(a)
-                    );
-                }
-            }
-        }
+        let rate = if self.no_rate {
+            None
+        } else {
+            self.rate_spectrum(&m, &prepared, &coupled)?
+        };
         if !self.rate_check.is_empty() {
-            let l: Vec<f64> = self
-                .rate_check
-                .iter()
-                .map(|&v| corrugation::units::mm_to_m(v))
-                .collect();
-            let rows = rate_check(
-                &prepared,
-                m.run.speed(),
-                &l,
-                corrugation::units::um_to_m(1.0),
-                &self.out,
-            )?;
-            for r in &rows {
-                println!(
-                    "  rate check {} mm: |G| linear {} passage {} J/m per m (ratio {}), phase linear {}° passage {}° (difference {}°)",
-                    sig(r.wavelength_mm, 3),
-                    sig(r.linear_gain_j_per_m2, 4),
-                    sig(r.passage_gain_j_per_m2, 4),
-                    sig(r.amplitude_ratio, 3),
-                    sig(r.linear_phase_deg, 3),
-                    sig(r.passage_phase_deg, 3),
-                    sig(r.phase_difference_deg, 3)
-                );
-            }
+            self.check_rate(&prepared, m.run.speed())?;
         }
         let modes = mode_lines(&prepared);
         let explicit = match self.engine {
@@ -202,19 +162,7 @@ impl GrowCmd {
         pb.finish_and_clear();
         drop(pb);
         let Some(g) = g else {
-            let v = no_initiation_verdict(m.run.speed_kmh, None);
-            let text = serde_json::to_string_pretty(&serde_json::json!({
-                "speed_kmh": m.run.speed_kmh,
-                "verdict": v,
-                "growth_rate": rate,
-            }))?;
-            write_grow_json(&self.out, &text)?;
-            if self.json {
-                println!("{text}");
-            } else {
-                print_verdict(&v);
-            }
-            return Ok(());
+            return self.no_initiation(m.run.speed_kmh, rate);
         };
         let verdict = growth_verdict(
             &g,
@@ -223,45 +171,11 @@ impl GrowCmd {
             Some(initiation_check(&m, &g.smooth)),
         );
         write_growth_files(&self.out, &g)?;
-        let mut rounds = Vec::new();
-        if self.rounds > 0 {
-            let pb = super::progress::bar("iterative growth (rounds)");
-            pb.set_length(self.rounds as u64);
-            let (r, _) = iterative_growth(
-                recorder,
-                m.run.speed(),
-                &IterativeOptions {
-                    passages_per_round: self.passages_per_round,
-                    max_rounds: self.rounds,
-                    saturation: 0.01,
-                    wear_coefficient_m3_per_j: m.wear.coefficient,
-                },
-                |r| pb.set_position(r.round as u64),
-            )?;
-            pb.finish_and_clear();
-            let rows: Vec<Vec<f64>> = r
-                .iter()
-                .map(|r| {
-                    vec![
-                        r.round as f64,
-                        r.passages as f64,
-                        r.amplitude_um,
-                        r.dominant_wavelength_mm.unwrap_or(f64::NAN),
-                    ]
-                })
-                .collect();
-            write_csv(
-                &self.out.join("iterative.csv"),
-                &[
-                    "round",
-                    "passages",
-                    "amplitude_um",
-                    "dominant_wavelength_mm",
-                ],
-                rows,
-            )?;
-            rounds = r;
-        }
+        let rounds = if self.rounds > 0 {
+            self.iterative(recorder, m.run.speed(), m.wear.coefficient)?
+        } else {
+            Vec::new()
+        };
         let mut j = grow_json(
             &g,
             m.run.speed_kmh,
@@ -290,5 +204,138 @@ impl GrowCmd {
             print_verdict(&j.verdict);
         }
         Ok(())
+    }
+
+    /// The trial amplitudes and the rate-check wavelengths.
+    fn check_args(&self) -> anyhow::Result<()> {
+        super::check_trial_amplitudes(&self.amplitudes_um)?;
+        if let Some(l) = self
+            .rate_check
+            .iter()
+            .find(|l| !(l.is_finite() && (20.0..=80.0).contains(*l)))
+        {
+            anyhow::bail!("--rate-check wavelengths must lie in [20, 80] mm (got {l})");
+        }
+        Ok(())
+    }
+
+    /// The growth-rate spectrum (written, and its sentence printed) and its summary with the
+    /// fastest wavelength attributed to a `coupled` mode.
+    fn rate_spectrum(
+        &self,
+        m: &Model,
+        prepared: &PreparedModel,
+        coupled: &[CoupledMode],
+    ) -> anyhow::Result<Option<RateSummary>> {
+        let pb = super::progress::bar("growth-rate spectrum");
+        let s = growth_rate(m, prepared, m.run.speed(), &pb)?;
+        pb.finish_and_clear();
+        write_growth_rate(&self.out, &s)?;
+        if !self.json {
+            println!("{}", s.sentence(m.run.speed_kmh));
+        }
+        let rate = rate_summary(&s, coupled);
+        if let Some(a) = rate.as_ref().and_then(|r| r.fastest_mode.as_ref()) {
+            if !self.json {
+                println!(
+                    "  fastest wavelength by coupled mode: {}",
+                    attribution_text(a)
+                );
+            }
+        }
+        Ok(rate)
+    }
+
+    /// The spectrum's linear theory against passages over 1 µm sinusoidal corrugations at
+    /// the `--rate-check` wavelengths (`rate_check.csv`), printed.
+    fn check_rate(&self, prepared: &PreparedModel, speed_m_per_s: f64) -> anyhow::Result<()> {
+        let l: Vec<f64> = self
+            .rate_check
+            .iter()
+            .map(|&v| corrugation::units::mm_to_m(v))
+            .collect();
+        let rows = rate_check(
+            prepared,
+            speed_m_per_s,
+            &l,
+            corrugation::units::um_to_m(1.0),
+            &self.out,
+        )?;
+        for r in &rows {
+            println!(
+                "  rate check {} mm: |G| linear {} passage {} J/m per m (ratio {}), phase linear {}° passage {}° (difference {}°)",
+                sig(r.wavelength_mm, 3),
+                sig(r.linear_gain_j_per_m2, 4),
+                sig(r.passage_gain_j_per_m2, 4),
+                sig(r.amplitude_ratio, 3),
+                sig(r.linear_phase_deg, 3),
+                sig(r.passage_phase_deg, 3),
+                sig(r.phase_difference_deg, 3)
+            );
+        }
+        Ok(())
+    }
+
+    /// No trial grows from a smooth rail without initiation: `grow.json` with the verdict
+    /// and the rate summary, printed.
+    fn no_initiation(&self, speed_kmh: f64, rate: Option<RateSummary>) -> anyhow::Result<()> {
+        let v = no_initiation_verdict(speed_kmh, None);
+        let text = serde_json::to_string_pretty(&serde_json::json!({
+            "speed_kmh": speed_kmh,
+            "verdict": v,
+            "growth_rate": rate,
+        }))?;
+        write_grow_json(&self.out, &text)?;
+        if self.json {
+            println!("{text}");
+        } else {
+            print_verdict(&v);
+        }
+        Ok(())
+    }
+
+    /// `--rounds` rounds of iterative growth (`iterative.csv`).
+    fn iterative(
+        &self,
+        recorder: &dyn corrugation::dynamics::PassageRecorder,
+        speed_m_per_s: f64,
+        wear_coefficient_m3_per_j: f64,
+    ) -> anyhow::Result<Vec<GrowthRound>> {
+        let pb = super::progress::bar("iterative growth (rounds)");
+        pb.set_length(self.rounds as u64);
+        let (r, _) = iterative_growth(
+            recorder,
+            speed_m_per_s,
+            &IterativeOptions {
+                passages_per_round: self.passages_per_round,
+                max_rounds: self.rounds,
+                saturation: 0.01,
+                wear_coefficient_m3_per_j,
+            },
+            |r| pb.set_position(r.round as u64),
+        )?;
+        pb.finish_and_clear();
+        let rows: Vec<Vec<f64>> = r
+            .iter()
+            .map(|r| {
+                vec![
+                    r.round as f64,
+                    r.passages as f64,
+                    r.amplitude_um,
+                    r.dominant_wavelength_mm.unwrap_or(f64::NAN),
+                ]
+            })
+            .collect();
+        write_csv(
+            &self.out.join("iterative.csv"),
+            &[
+                "round",
+                "passages",
+                "amplitude_um",
+                "dominant_wavelength_mm",
+            ],
+            rows,
+        )?;
+        Ok(r)
     }
 }

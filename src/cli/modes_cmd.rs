@@ -26,6 +26,7 @@ use serde::Serialize;
 
 use corrugation::eigen::basis::{track_basis, wheel_basis, ModalBasis};
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
+use corrugation::eigen::classify::{TrackModeClass, WheelModeClass};
 use corrugation::io::{write_vtu, VtuField, VTK_HEXAHEDRON};
 use corrugation::mesh::Mesh;
 use corrugation::structure::{TrackStructure, WheelStructure};
@@ -117,6 +118,8 @@ pub struct ModesSummary {
 }
 
 impl ModesCmd {
+    /// Runs the command: the track and wheel bases (Lanczos or the cache), the CSV files,
+    /// the optional VTU files, the summary.
     pub fn run(self) -> anyhow::Result<()> {
         if !(self.fmax.is_finite() && self.fmax > 0.0) {
             anyhow::bail!("--fmax must be a positive number of Hz (got {})", self.fmax);
@@ -139,51 +142,8 @@ impl ModesCmd {
 
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("creating {}", self.out.display()))?;
-        write_text_csv(
-            &self.out.join("modes.csv"),
-            &TRACK_HEADER,
-            tb.classes.iter().enumerate().map(|(i, c)| {
-                let mut r = vec![
-                    i.to_string(),
-                    num(tb.frequencies_hz[i]),
-                    c.family.name().to_string(),
-                    num(c.rail_x_head),
-                    num(c.rail_x_web),
-                    num(c.rail_x_foot),
-                    c.wavelength_m.map(num).unwrap_or_default(),
-                    num(c.energy.rail),
-                    num(c.energy.sleepers),
-                    num(c.energy.fastening),
-                    num(c.energy.ballast),
-                    tb.residuals.get(i).copied().map(num).unwrap_or_default(),
-                ];
-                r.extend(c.amplitudes.map(num));
-                r.extend([
-                    num(c.sleeper_kinetic_share),
-                    num(c.section_fit),
-                    (c.pinned_pinned as u8).to_string(),
-                    c.rail_family.unwrap_or(c.family).name().to_string(),
-                ]);
-                r
-            }),
-        )?;
-        write_text_csv(
-            &self.out.join("wheel_modes.csv"),
-            &WHEEL_HEADER,
-            wb.classes.iter().enumerate().map(|(i, c)| {
-                vec![
-                    i.to_string(),
-                    num(wb.frequencies_hz[i]),
-                    c.family.name().to_string(),
-                    (c.rigid as u8).to_string(),
-                    num(c.energy_wheel),
-                    num(c.energy_suspension),
-                    num(c.rim_shares[0]),
-                    num(c.rim_shares[1]),
-                    num(c.rim_shares[2]),
-                ]
-            }),
-        )?;
+        write_track_csv(&self.out.join("modes.csv"), &tb)?;
+        write_wheel_csv(&self.out.join("wheel_modes.csv"), &wb)?;
         if self.vtu {
             write_mode_vtus(
                 &self.out,
@@ -202,41 +162,9 @@ impl ModesCmd {
                 self.vtu_modes,
             )?;
         }
-
-        let mut tf = BTreeMap::new();
-        for c in &tb.classes {
-            *tf.entry(c.family.name().to_string()).or_insert(0) += 1;
-        }
-        let mut wf = BTreeMap::new();
-        for c in &wb.classes {
-            *wf.entry(c.family.name().to_string()).or_insert(0) += 1;
-        }
-        let sub = |b_count, fam, sturm, res: &[f64], secs, cached| SubSummary {
-            count: b_count,
-            fmax_hz: self.fmax,
-            sturm_count: sturm,
-            max_residual: res.iter().copied().fold(0.0, f64::max),
-            seconds: secs,
-            cached,
-            families: fam,
-        };
         let s = ModesSummary {
-            track: sub(
-                tb.frequencies_hz.len(),
-                tf,
-                tb.sturm_count,
-                &tb.residuals,
-                tb.seconds,
-                tb.cached,
-            ),
-            wheel: sub(
-                wb.frequencies_hz.len(),
-                wf,
-                wb.sturm_count,
-                &wb.residuals,
-                wb.seconds,
-                wb.cached,
-            ),
+            track: sub_summary(&tb, tb.classes.iter().map(|c| c.family.name()), self.fmax),
+            wheel: sub_summary(&wb, wb.classes.iter().map(|c| c.family.name()), self.fmax),
             cache_dir: cache_dir.display().to_string(),
         };
         if self.json {
@@ -246,6 +174,80 @@ impl ModesCmd {
         }
         Ok(())
     }
+}
+
+/// The summary of basis `b` below `fmax_hz` whose modes have the family names `families`.
+fn sub_summary<'a, C>(
+    b: &ModalBasis<C>,
+    families: impl Iterator<Item = &'a str>,
+    fmax_hz: f64,
+) -> SubSummary {
+    let mut counts = BTreeMap::new();
+    for f in families {
+        *counts.entry(f.to_string()).or_insert(0) += 1;
+    }
+    SubSummary {
+        count: b.frequencies_hz.len(),
+        fmax_hz,
+        sturm_count: b.sturm_count,
+        max_residual: b.residuals.iter().copied().fold(0.0, f64::max),
+        seconds: b.seconds,
+        cached: b.cached,
+        families: counts,
+    }
+}
+
+/// `modes.csv`: one row per track mode ([`TRACK_HEADER`]).
+fn write_track_csv(path: &Path, tb: &ModalBasis<TrackModeClass>) -> anyhow::Result<()> {
+    write_text_csv(
+        path,
+        &TRACK_HEADER,
+        tb.classes.iter().enumerate().map(|(i, c)| {
+            let mut r = vec![
+                i.to_string(),
+                num(tb.frequencies_hz[i]),
+                c.family.name().to_string(),
+                num(c.rail_x_head),
+                num(c.rail_x_web),
+                num(c.rail_x_foot),
+                c.wavelength_m.map(num).unwrap_or_default(),
+                num(c.energy.rail),
+                num(c.energy.sleepers),
+                num(c.energy.fastening),
+                num(c.energy.ballast),
+                tb.residuals.get(i).copied().map(num).unwrap_or_default(),
+            ];
+            r.extend(c.amplitudes.map(num));
+            r.extend([
+                num(c.sleeper_kinetic_share),
+                num(c.section_fit),
+                (c.pinned_pinned as u8).to_string(),
+                c.rail_family.unwrap_or(c.family).name().to_string(),
+            ]);
+            r
+        }),
+    )
+}
+
+/// `wheel_modes.csv`: one row per wheel mode ([`WHEEL_HEADER`]).
+fn write_wheel_csv(path: &Path, wb: &ModalBasis<WheelModeClass>) -> anyhow::Result<()> {
+    write_text_csv(
+        path,
+        &WHEEL_HEADER,
+        wb.classes.iter().enumerate().map(|(i, c)| {
+            vec![
+                i.to_string(),
+                num(wb.frequencies_hz[i]),
+                c.family.name().to_string(),
+                (c.rigid as u8).to_string(),
+                num(c.energy_wheel),
+                num(c.energy_suspension),
+                num(c.rim_shares[0]),
+                num(c.rim_shares[1]),
+                num(c.rim_shares[2]),
+            ]
+        }),
+    )
 }
 
 fn print_summary(s: &ModesSummary, out: &Path) {

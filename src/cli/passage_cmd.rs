@@ -18,10 +18,11 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 
-use corrugation::dynamics::analysis::{analyse, wear_signal, zone_signal};
+use corrugation::dynamics::analysis::{analyse, wear_signal, zone_signal, Analysed};
 use corrugation::dynamics::passage::PassageOptions;
 use corrugation::dynamics::{summary::PassageSummary, RailProfile};
 use corrugation::io::{write_atomic, write_csv};
+use corrugation::report::plot::{line_plot, line_plot_log_y, Series};
 
 use super::ModelArgs;
 
@@ -244,12 +245,33 @@ pub fn print_summary(
 fn write_plots(
     out: &Path,
     rec: &corrugation::dynamics::record::PassageRecord,
-    w: &corrugation::dynamics::analysis::Analysed,
-    fl: &corrugation::dynamics::analysis::Analysed,
-    fnn: &corrugation::dynamics::analysis::Analysed,
+    w: &Analysed,
+    fl: &Analysed,
+    fnn: &Analysed,
     element_length_m: f64,
 ) -> anyhow::Result<()> {
-    use corrugation::report::plot::{line_plot, line_plot_log_y, Series};
+    write_zone_plots(out, rec, element_length_m)?;
+    write_band_plot(out, w, fl, fnn)?;
+    line_plot(
+        &out.join("wear_x"),
+        "Frictional work along the rail",
+        "x (m)",
+        "W_f (J/m)",
+        &[Series::new(
+            "W_f",
+            rec.wear_x_m.clone(),
+            rec.wear_j_per_m.clone(),
+        )],
+    )?;
+    write_psd_plots(out, w, fl, fnn)
+}
+
+/// `forces_x` and `normal_force_x`: the raw F_L and F_N in the solution zone.
+fn write_zone_plots(
+    out: &Path,
+    rec: &corrugation::dynamics::record::PassageRecord,
+    element_length_m: f64,
+) -> anyhow::Result<()> {
     let h = &rec.histories;
     let [z0, z1] = rec.zone_m;
     let idx: Vec<usize> = (0..h.x_m.len())
@@ -284,8 +306,21 @@ fn write_plots(
             idx.iter().map(|&i| h.normal_n[i]).collect(),
         )],
     )?;
-    let band_x = |a: &corrugation::dynamics::analysis::Analysed| -> Vec<f64> {
-        (0..a.band.len()).map(|i| a.band.x_m(i)).collect()
+    Ok(())
+}
+
+/// `band_x`: the band-passed W_f, F_L and F_N along the rail, each divided by its band RMS.
+fn write_band_plot(out: &Path, w: &Analysed, fl: &Analysed, fnn: &Analysed) -> anyhow::Result<()> {
+    let normalised = |name: &str, a: &Analysed| {
+        Series::new(
+            name,
+            (0..a.band.len()).map(|i| a.band.x_m(i)).collect(),
+            a.band
+                .values
+                .iter()
+                .map(|v| v / a.band_rms.max(f64::MIN_POSITIVE))
+                .collect(),
+        )
     };
     line_plot(
         &out.join("band_x"),
@@ -293,47 +328,18 @@ fn write_plots(
         "x (m)",
         "signal / band RMS (-)",
         &[
-            Series::new(
-                "W_f",
-                band_x(w),
-                w.band
-                    .values
-                    .iter()
-                    .map(|v| v / w.band_rms.max(f64::MIN_POSITIVE))
-                    .collect(),
-            ),
-            Series::new(
-                "F_L",
-                band_x(fl),
-                fl.band
-                    .values
-                    .iter()
-                    .map(|v| v / fl.band_rms.max(f64::MIN_POSITIVE))
-                    .collect(),
-            ),
-            Series::new(
-                "F_N",
-                band_x(fnn),
-                fnn.band
-                    .values
-                    .iter()
-                    .map(|v| v / fnn.band_rms.max(f64::MIN_POSITIVE))
-                    .collect(),
-            ),
+            normalised("W_f", w),
+            normalised("F_L", fl),
+            normalised("F_N", fnn),
         ],
     )?;
-    line_plot(
-        &out.join("wear_x"),
-        "Frictional work along the rail",
-        "x (m)",
-        "W_f (J/m)",
-        &[Series::new(
-            "W_f",
-            rec.wear_x_m.clone(),
-            rec.wear_j_per_m.clone(),
-        )],
-    )?;
-    let psd_series = |name: &str, a: &corrugation::dynamics::analysis::Analysed| {
+    Ok(())
+}
+
+/// `psd_wear`, `psd_fl`, `psd_fn`: the PSDs of the band-passed signals over wavelengths of
+/// 15 to 100 mm.
+fn write_psd_plots(out: &Path, w: &Analysed, fl: &Analysed, fnn: &Analysed) -> anyhow::Result<()> {
+    let psd_series = |name: &str, a: &Analysed| {
         let mut x = Vec::new();
         let mut y = Vec::new();
         for (k, p) in a.psd.wavenumber_per_m.iter().zip(&a.psd.psd) {

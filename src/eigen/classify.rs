@@ -565,71 +565,21 @@ impl TrackClassifier {
 
     /// Classifies by shape only, from a full displacement vector, with given energy shares
     /// (used by [`Self::classify`]; handy for synthetic fields).
+    ///
+    /// Phases: the sleepers' kinetic share, the rail's RMS displacement and the fit of the
+    /// section resultants ([`Self::rail_fit`]), the five resultant series along the rail
+    /// ([`Self::motion_series`]), the family of the largest one, its wavelength and the
+    /// pinned–pinned test ([`Self::is_pinned_pinned`]).
     pub fn classify_shape(
         &self,
         u_full: &[f64],
         energy: TrackEnergyShares,
     ) -> Result<TrackModeClass, ClassifyError> {
         let sm = self.section_motion(u_full)?;
-        let np = sm.len();
         let wl = &self.plane_len;
-        // Kinetic share of the sleepers.
-        let (mut ks, mut kt) = (0.0, 0.0);
-        for (n, &m) in self.node_mass.iter().enumerate() {
-            let u2 = u_full[3 * n].powi(2) + u_full[3 * n + 1].powi(2) + u_full[3 * n + 2].powi(2);
-            kt += m * u2;
-            if self.is_sleeper[n] {
-                ks += m * u2;
-            }
-        }
-        let sleeper_kinetic_share = if kt > 0.0 { ks / kt } else { 0.0 };
-        // Rail norm and the section-resultant fit.
-        let (mut norm, mut resid) = (0.0, 0.0);
-        for (i, nodes) in self.plane_nodes.iter().enumerate() {
-            let s = &sm[i];
-            let gx = [s.x_head, s.x_web, s.x_foot];
-            for (j, &n) in nodes.iter().enumerate() {
-                let wa = self.area[j] * wl[i];
-                let u = &u_full[3 * n..3 * n + 3];
-                let fit = [
-                    gx[self.group[j] as usize],
-                    s.v - s.theta * self.dz[j],
-                    s.w + s.theta * self.dy[j],
-                ];
-                norm += wa * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-                resid += wa
-                    * ((u[0] - fit[0]).powi(2) + (u[1] - fit[1]).powi(2) + (u[2] - fit[2]).powi(2));
-            }
-        }
-        let ltot: f64 = wl.iter().sum();
-        let rail_rms = if ltot > 0.0 {
-            (norm / (ltot * self.group_area.iter().sum::<f64>())).sqrt()
-        } else {
-            0.0
-        };
-        let section_fit = if norm > 0.0 { 1.0 - resid / norm } else { 0.0 };
-        // w' by (non-uniform) central differences.
-        let x = &self.planes_x_m;
-        let dw: Vec<f64> = (0..np)
-            .map(|i| {
-                let (a, b) = (i.saturating_sub(1), (i + 1).min(np - 1));
-                (sm[b].w - sm[a].w) / (x[b] - x[a])
-            })
-            .collect();
-        let dzhf = self.z_head_m - self.z_foot_m;
-        let series: [Vec<f64>; 5] = [
-            sm.iter().map(|s| s.x_mean).collect(),
-            sm.iter()
-                .zip(&dw)
-                .map(|(s, d)| {
-                    let diff = s.x_head - s.x_foot;
-                    0.5 * diff.signum() * (diff.abs() - (d * dzhf).abs()).max(0.0)
-                })
-                .collect(),
-            sm.iter().map(|s| s.w).collect(),
-            sm.iter().map(|s| s.v).collect(),
-            sm.iter().map(|s| s.theta * self.r_polar_m).collect(),
-        ];
+        let sleeper_kinetic_share = self.sleeper_kinetic_share(u_full);
+        let (rail_rms, section_fit) = self.rail_fit(u_full, &sm);
+        let series = self.motion_series(&sm);
         let scale = if rail_rms > 0.0 { 1.0 / rail_rms } else { 0.0 };
         let mut amplitudes = [0.0; 5];
         for (a, s) in amplitudes.iter_mut().zip(&series) {
@@ -659,23 +609,14 @@ impl TrackClassifier {
         } else {
             rail_family
         };
-        let wavelength_m = wavelength_from_crossings(x, &series[imax]);
+        let wavelength_m = wavelength_from_crossings(&self.planes_x_m, &series[imax]);
         let pinned_pinned = family == TrackFamily::VerticalBending
             && self.spacing_m > 0.0
             && wavelength_m.is_some_and(|l| {
                 (l - 2.0 * self.spacing_m).abs()
                     <= PINNED_PINNED_WAVELENGTH_TOL * 2.0 * self.spacing_m
             })
-            && {
-                let w = &series[2];
-                let at: Vec<f64> = self
-                    .sleepers_x_m
-                    .iter()
-                    .map(|&xs| interp(x, w, xs))
-                    .collect();
-                let r_s = (at.iter().map(|a| a * a).sum::<f64>() / at.len().max(1) as f64).sqrt();
-                r_s < PINNED_PINNED_NODE_RATIO * rms(w.iter().copied(), wl)
-            };
+            && self.is_pinned_pinned(&series[2]);
         Ok(TrackModeClass {
             family,
             rail_x_head: rms(sm.iter().map(|s| s.x_head), wl) * scale,
@@ -689,6 +630,98 @@ impl TrackClassifier {
             pinned_pinned,
             rail_family: Some(rail_family),
         })
+    }
+
+    /// The sleepers' share of Σ m|u|² over all nodes of `u_full` (0 if there is no motion).
+    fn sleeper_kinetic_share(&self, u_full: &[f64]) -> f64 {
+        let (mut ks, mut kt) = (0.0, 0.0);
+        for (n, &m) in self.node_mass.iter().enumerate() {
+            let u2 = u_full[3 * n].powi(2) + u_full[3 * n + 1].powi(2) + u_full[3 * n + 2].powi(2);
+            kt += m * u2;
+            if self.is_sleeper[n] {
+                ks += m * u2;
+            }
+        }
+        if kt > 0.0 {
+            ks / kt
+        } else {
+            0.0
+        }
+    }
+
+    /// The rail's RMS displacement (unit of `u_full`, area- and length-weighted)
+    /// and the fraction of its squared norm that the section resultants `sm` explain (the
+    /// section fit, 1 for a rigid-section motion).
+    fn rail_fit(&self, u_full: &[f64], sm: &[SectionMotion]) -> (f64, f64) {
+        let wl = &self.plane_len;
+        let (mut norm, mut resid) = (0.0, 0.0);
+        for (i, nodes) in self.plane_nodes.iter().enumerate() {
+            let s = &sm[i];
+            let gx = [s.x_head, s.x_web, s.x_foot];
+            for (j, &n) in nodes.iter().enumerate() {
+                let wa = self.area[j] * wl[i];
+                let u = &u_full[3 * n..3 * n + 3];
+                let fit = [
+                    gx[self.group[j] as usize],
+                    s.v - s.theta * self.dz[j],
+                    s.w + s.theta * self.dy[j],
+                ];
+                norm += wa * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+                resid += wa
+                    * ((u[0] - fit[0]).powi(2) + (u[1] - fit[1]).powi(2) + (u[2] - fit[2]).powi(2));
+            }
+        }
+        let ltot: f64 = wl.iter().sum();
+        let rail_rms = if ltot > 0.0 {
+            (norm / (ltot * self.group_area.iter().sum::<f64>())).sqrt()
+        } else {
+            0.0
+        };
+        let section_fit = if norm > 0.0 { 1.0 - resid / norm } else { 0.0 };
+        (rail_rms, section_fit)
+    }
+
+    /// The five motion series along the rail, one value per node plane (unit of the
+    /// displacements): mean
+    /// longitudinal displacement (compression), half the head–foot difference beyond the
+    /// bending rotation w'·(z_head − z_foot) (shear), vertical w, lateral v, and the twist
+    /// θ times the polar radius (torsion). w' by (non-uniform) central differences.
+    fn motion_series(&self, sm: &[SectionMotion]) -> [Vec<f64>; 5] {
+        let np = sm.len();
+        let x = &self.planes_x_m;
+        let dw: Vec<f64> = (0..np)
+            .map(|i| {
+                let (a, b) = (i.saturating_sub(1), (i + 1).min(np - 1));
+                (sm[b].w - sm[a].w) / (x[b] - x[a])
+            })
+            .collect();
+        let dzhf = self.z_head_m - self.z_foot_m;
+        [
+            sm.iter().map(|s| s.x_mean).collect(),
+            sm.iter()
+                .zip(&dw)
+                .map(|(s, d)| {
+                    let diff = s.x_head - s.x_foot;
+                    0.5 * diff.signum() * (diff.abs() - (d * dzhf).abs()).max(0.0)
+                })
+                .collect(),
+            sm.iter().map(|s| s.w).collect(),
+            sm.iter().map(|s| s.v).collect(),
+            sm.iter().map(|s| s.theta * self.r_polar_m).collect(),
+        ]
+    }
+
+    /// Whether the vertical motion `w` (one value per node plane) has nodes at the
+    /// sleepers: its RMS there below `PINNED_PINNED_NODE_RATIO` of its RMS along the rail.
+    fn is_pinned_pinned(&self, w: &[f64]) -> bool {
+        let (x, wl) = (&self.planes_x_m, &self.plane_len);
+        let at: Vec<f64> = self
+            .sleepers_x_m
+            .iter()
+            .map(|&xs| interp(x, w, xs))
+            .collect();
+        let r_s = (at.iter().map(|a| a * a).sum::<f64>() / at.len().max(1) as f64).sqrt();
+        r_s < PINNED_PINNED_NODE_RATIO * rms(w.iter().copied(), wl)
     }
 }
 

@@ -326,6 +326,10 @@ struct ElemBuf {
 /// `materials[e.material]` gives each element's material; springs and point masses refer
 /// to global node/DOF indices. Fails on inconsistent indices, inadmissible materials or
 /// springs, and inverted elements (the error names the element).
+///
+/// Phases: the checks, the sparsity pattern ([`build_pattern`]), the elements' matrices
+/// scattered in parallel by column range ([`scatter_elements`]), then the springs and
+/// point masses ([`add_springs_and_masses`]).
 pub fn assemble(
     mesh: &Mesh,
     materials: &[IsotropicElastic],
@@ -340,6 +344,44 @@ pub fn assemble(
         mesh.nodes.len(),
         dofmap.n_nodes(),
     )?;
+    check_point_masses(mesh, point_masses)?;
+    let nf = dofmap.n_free();
+    let (col_ptr, row_idx) = build_pattern(mesh, springs, dofmap);
+    let nnz = row_idx.len();
+    let mut kv = vec![0.0f64; nnz];
+    let mut mv = vec![0.0f64; nnz];
+    let mut cv = vec![0.0f64; nnz];
+    let pattern = ColumnSlab {
+        col_ptr: &col_ptr,
+        row_idx: &row_idx,
+        c0: 0,
+        c1: nf,
+    };
+    scatter_elements(
+        mesh,
+        materials,
+        dofmap,
+        opts.mass == MassKind::Lumped,
+        &pattern,
+        (&mut kv, &mut mv),
+    )?;
+    add_springs_and_masses(
+        springs,
+        point_masses,
+        dofmap,
+        &pattern,
+        (&mut kv, &mut mv, &mut cv),
+    );
+    let symbolic = SymbolicSparseColMat::new_checked(nf, nf, col_ptr, None, row_idx);
+    Ok(FeMatrices {
+        k: SparseColMat::new(symbolic.clone(), kv),
+        m: SparseColMat::new(symbolic.clone(), mv),
+        c: SparseColMat::new(symbolic, cv),
+    })
+}
+
+/// Every point mass on an existing node, with a finite mass ≥ 0 (kg).
+fn check_point_masses(mesh: &Mesh, point_masses: &[PointMass]) -> Result<(), FeError> {
     for (i, p) in point_masses.iter().enumerate() {
         if p.node >= mesh.nodes.len() {
             return Err(FeError::IndexOutOfRange {
@@ -355,14 +397,23 @@ pub fn assemble(
             });
         }
     }
+    Ok(())
+}
 
-    let nf = dofmap.n_free();
-    let (col_ptr, row_idx) = build_pattern(mesh, springs, dofmap);
+/// The element stiffness and mass matrices (`lumped` or consistent mass) added into the
+/// values `kv`, `mv` of the `pattern` (all its columns): element matrices computed in
+/// parallel in chunks, then scattered in parallel by column ranges balanced by nnz.
+fn scatter_elements(
+    mesh: &Mesh,
+    materials: &[IsotropicElastic],
+    dofmap: &DofMap,
+    lumped: bool,
+    pattern: &ColumnSlab<'_>,
+    (kv, mv): (&mut [f64], &mut [f64]),
+) -> Result<(), FeError> {
+    let (col_ptr, row_idx) = (pattern.col_ptr, pattern.row_idx);
+    let nf = pattern.c1;
     let nnz = row_idx.len();
-    let mut kv = vec![0.0f64; nnz];
-    let mut mv = vec![0.0f64; nnz];
-    let mut cv = vec![0.0f64; nnz];
-
     // Column ranges owned by the scatter tasks: balanced by nnz.
     let n_tasks = (4 * rayon::current_num_threads()).clamp(1, nf.max(1));
     let mut bounds = vec![0usize];
@@ -378,7 +429,6 @@ pub fn assemble(
     }
 
     const CHUNK: usize = 4096;
-    let lumped = opts.mass == MassKind::Lumped;
     let mut buf = vec![
         ElemBuf {
             k: Mat24::zeros(),
@@ -417,16 +467,16 @@ pub fn assemble(
         // Parallel scatter by column range.
         let bufs = &buf[..nb];
         let lfs = &lfree[..nb];
-        let mut kslices = split_by_bounds(&mut kv, &col_ptr, &bounds);
-        let mut mslices = split_by_bounds(&mut mv, &col_ptr, &bounds);
+        let mut kslices = split_by_bounds(&mut *kv, col_ptr, &bounds);
+        let mut mslices = split_by_bounds(&mut *mv, col_ptr, &bounds);
         kslices
             .par_iter_mut()
             .zip(mslices.par_iter_mut())
             .enumerate()
             .for_each(|(t, (ks, ms))| {
                 let slab = ColumnSlab {
-                    col_ptr: &col_ptr,
-                    row_idx: &row_idx,
+                    col_ptr,
+                    row_idx,
                     c0: bounds[t],
                     c1: bounds[t + 1],
                 };
@@ -435,8 +485,19 @@ pub fn assemble(
                 }
             });
     }
+    Ok(())
+}
 
-    // Springs (serial, small).
+/// The springs (stiffness into `kv`, damping into `cv`) and the point masses (into `mv`)
+/// added into the values of the `pattern` (serial: they are few).
+fn add_springs_and_masses(
+    springs: &[Spring],
+    point_masses: &[PointMass],
+    dofmap: &DofMap,
+    pattern: &ColumnSlab<'_>,
+    (kv, mv, cv): (&mut [f64], &mut [f64], &mut [f64]),
+) {
+    let (col_ptr, row_idx) = (pattern.col_ptr, pattern.row_idx);
     let find = |row: usize, col: usize| -> usize {
         let (s, e) = (col_ptr[col], col_ptr[col + 1]);
         s + row_idx[s..e].binary_search(&row).unwrap_or(0)
@@ -462,13 +523,6 @@ pub fn assemble(
             }
         }
     }
-
-    let symbolic = SymbolicSparseColMat::new_checked(nf, nf, col_ptr, None, row_idx);
-    Ok(FeMatrices {
-        k: SparseColMat::new(symbolic.clone(), kv),
-        m: SparseColMat::new(symbolic.clone(), mv),
-        c: SparseColMat::new(symbolic, cv),
-    })
 }
 
 /// The columns `c0..c1` of a compressed-column sparsity pattern (`col_ptr`, `row_idx`) that

@@ -153,11 +153,34 @@ fn check_pos(name: &'static str, v: f64) -> Result<(), MeshError> {
     }
 }
 
-/// Meshes a half sleeper (elements of [`Part::Sleeper`] with material index `material`).
+/// Meshes a half sleeper (elements of [`Part::Sleeper`] with material index `material`):
+/// the checked parameters, the grid lines ([`sleeper_grid`]), the hexahedra
+/// ([`sleeper_hexes`]) and the top and bottom faces ([`sleeper_faces`]).
 pub fn half_sleeper(
     p: &SleeperParams,
     material: usize,
 ) -> Result<(Mesh, SleeperTopology), MeshError> {
+    check_sleeper(p)?;
+    let [xs, ys, zs] = sleeper_grid(p)?;
+    let grid = [xs.as_slice(), ys.as_slice(), zs.as_slice()];
+    let mesh = sleeper_hexes(grid, material);
+    let (top_face, bottom_face) = sleeper_faces(grid);
+    Ok((
+        mesh,
+        SleeperTopology {
+            xs,
+            ys,
+            zs,
+            top_face,
+            bottom_face,
+            node_offset: 0,
+        },
+    ))
+}
+
+/// Dimensions finite and positive, pad thickness ≥ 0, offsets finite, at least one
+/// element in each direction.
+fn check_sleeper(p: &SleeperParams) -> Result<(), MeshError> {
     check_pos("length_m", p.length_m)?;
     check_pos("width_m", p.width_m)?;
     check_pos("height_m", p.height_m)?;
@@ -188,6 +211,12 @@ pub fn half_sleeper(
             });
         }
     }
+    Ok(())
+}
+
+/// The grid lines x (across the sleeper, uniform), y (along it, graded through the node
+/// lines when given, else uniform) and z (uniform, top at the pad's underside), all in m.
+fn sleeper_grid(p: &SleeperParams) -> Result<[Vec<f64>; 3], MeshError> {
     let uniform = |a: f64, b: f64, n: usize| -> Vec<f64> {
         (0..=n)
             .map(|k| {
@@ -213,16 +242,26 @@ pub fn half_sleeper(
     };
     let z1 = -p.pad_thickness_m;
     let zs = uniform(z1 - p.height_m, z1, p.n_height);
+    Ok([xs, ys, zs])
+}
+
+/// Index of node (i, j, k) of the grid with `nx × ny` nodes per layer.
+fn grid_node(nx: usize, ny: usize) -> impl Fn(usize, usize, usize) -> usize {
+    move |i, j, k| (k * ny + j) * nx + i
+}
+
+/// The nodes (x fastest, then y, then z) and hexahedra of the grid `[xs, ys, zs]`.
+fn sleeper_hexes([xs, ys, zs]: [&[f64]; 3], material: usize) -> Mesh {
     let (nx, ny, nz) = (xs.len(), ys.len(), zs.len());
     let mut mesh = Mesh::default();
-    for &z in &zs {
-        for &y in &ys {
-            for &x in &xs {
+    for &z in zs {
+        for &y in ys {
+            for &x in xs {
                 mesh.nodes.push([x, y, z]);
             }
         }
     }
-    let id = |i: usize, j: usize, k: usize| (k * ny + j) * nx + i;
+    let id = grid_node(nx, ny);
     for k in 0..nz - 1 {
         for j in 0..ny - 1 {
             for i in 0..nx - 1 {
@@ -243,6 +282,14 @@ pub fn half_sleeper(
             }
         }
     }
+    mesh
+}
+
+/// The top (pad side) and bottom (ballast side, outward normal down) faces of the grid
+/// `[xs, ys, zs]`, with their areas (m²).
+fn sleeper_faces([xs, ys, zs]: [&[f64]; 3]) -> (Vec<FaceQuad>, Vec<FaceQuad>) {
+    let (nx, ny, nz) = (xs.len(), ys.len(), zs.len());
+    let id = grid_node(nx, ny);
     let mut top_face = Vec::with_capacity((nx - 1) * (ny - 1));
     let mut bottom_face = Vec::with_capacity((nx - 1) * (ny - 1));
     for j in 0..ny - 1 {
@@ -269,17 +316,7 @@ pub fn half_sleeper(
             });
         }
     }
-    Ok((
-        mesh,
-        SleeperTopology {
-            xs,
-            ys,
-            zs,
-            top_face,
-            bottom_face,
-            node_offset: 0,
-        },
-    ))
+    (top_face, bottom_face)
 }
 
 #[cfg(test)]

@@ -368,12 +368,36 @@ impl WheelParams {
 }
 
 /// Meshes the wheel and half axle (elements of [`Part::Wheel`], material index `material`).
+///
+/// Phases: the graded axial and radial grid lines ([`meridian_grid`]), the meridian cells
+/// inside the blocks ([`meridian_cells`]), the graded angles ([`wheel_angles`]), the sweep
+/// of the meridian around the axle ([`sweep_meridian`]) and the surfaces
+/// ([`wheel_topology`]).
 pub fn wheel(p: &WheelParams, material: usize) -> Result<(Mesh, WheelTopology), MeshError> {
     p.validate()?;
     let blocks = p.blocks();
+    let (ys, rs) = meridian_grid(p, &blocks)?;
+    let (meridian, quads) = meridian_cells(p, &blocks, &ys, &rs);
+    let thetas = wheel_angles(p)?;
+    let (nt, nm) = (thetas.len(), meridian.len());
+    if nt.saturating_mul(nm) > p.max_nodes {
+        return Err(MeshError::TooLarge {
+            nodes: nt.saturating_mul(nm),
+            layers: nt,
+            per_layer: nm,
+            limit: p.max_nodes,
+        });
+    }
+    let mesh = sweep_meridian(&meridian, &quads, &thetas, material);
+    Ok((mesh, wheel_topology(p, meridian, thetas)))
+}
+
+/// The tensor grid lines of the meridian: axial `y` (m, from the symmetry plane to the
+/// journal's end) and radial `r` (m, from the bore to the tread), graded through the blocks'
+/// bounds, fine at the contact and through the web.
+fn meridian_grid(p: &WheelParams, blocks: &[Block]) -> Result<(Vec<f64>, Vec<f64>), MeshError> {
     let cw = p.contact_half_width_m;
     let hc = p.contact_size_m;
-    // Tensor grid lines.
     let mut y_bps: Vec<f64> = blocks.iter().flat_map(|b| b.y).collect();
     y_bps.push(0.0);
     let y_sym = -p.symmetry_plane_distance_m;
@@ -401,13 +425,24 @@ pub fn wheel(p: &WheelParams, material: usize) -> Result<(Mesh, WheelTopology), 
         size_m: hc,
     });
     let rs = grade(&spec)?;
+    Ok((ys, rs))
+}
+
+/// The meridian's used nodes `(y, r)` (m; rim nodes mapped radially onto the conical
+/// tread) and its cells (four node indices each): the grid cells `(ys, rs)` whose centres
+/// lie inside a block.
+fn meridian_cells(
+    p: &WheelParams,
+    blocks: &[Block],
+    ys: &[f64],
+    rs: &[f64],
+) -> (Vec<[f64; 2]>, Vec<[usize; 4]>) {
     let (ny, nr) = (ys.len(), rs.len());
     let inside = |yc: f64, rc: f64| {
         blocks
             .iter()
             .any(|b| yc > b.y[0] && yc < b.y[1] && rc > b.r[0] && rc < b.r[1])
     };
-    // Included cells and used nodes.
     let mut used = vec![usize::MAX; ny * nr];
     let mut meridian: Vec<[f64; 2]> = Vec::new();
     let mut quads: Vec<[usize; 4]> = Vec::new();
@@ -439,7 +474,13 @@ pub fn wheel(p: &WheelParams, material: usize) -> Result<(Mesh, WheelTopology), 
             quads.push(q);
         }
     }
-    // Angles: arc length at R graded, fine near s = 0.
+    (meridian, quads)
+}
+
+/// The node angles θ (rad) in (−π, π]: arc length at the radius graded, fine near the
+/// contact point θ = 0.
+fn wheel_angles(p: &WheelParams) -> Result<Vec<f64>, MeshError> {
+    let cw = p.contact_half_width_m;
     let circ = 2.0 * std::f64::consts::PI * p.radius_m;
     let mut spec = GradingSpec::new(
         -0.5 * circ,
@@ -450,33 +491,34 @@ pub fn wheel(p: &WheelParams, material: usize) -> Result<(Mesh, WheelTopology), 
     spec.zones.push(FineZone {
         start_m: -cw,
         end_m: cw,
-        size_m: hc,
+        size_m: p.contact_size_m,
     });
     let s = grade(&spec)?;
     // Drop −πR (it coincides with +πR).
-    let thetas: Vec<f64> = s[1..].iter().map(|v| v / p.radius_m).collect();
-    let nt = thetas.len();
-    let nm = meridian.len();
-    if nt.saturating_mul(nm) > p.max_nodes {
-        return Err(MeshError::TooLarge {
-            nodes: nt.saturating_mul(nm),
-            layers: nt,
-            per_layer: nm,
-            limit: p.max_nodes,
-        });
-    }
+    Ok(s[1..].iter().map(|v| v / p.radius_m).collect())
+}
+
+/// The meridian swept around the axle: one layer of nodes per angle in `thetas` and one
+/// ring of hexahedra per meridian cell (material index `material`).
+fn sweep_meridian(
+    meridian: &[[f64; 2]],
+    quads: &[[usize; 4]],
+    thetas: &[f64],
+    material: usize,
+) -> Mesh {
+    let (nt, nm) = (thetas.len(), meridian.len());
     let mut mesh = Mesh {
         nodes: Vec::with_capacity(nt * nm),
         elements: Vec::with_capacity(nt * quads.len()),
     };
-    for &t in &thetas {
+    for &t in thetas {
         let (sn, cs) = t.sin_cos();
         mesh.nodes
             .extend(meridian.iter().map(|&[y, r]| [r * sn, y, -r * cs]));
     }
     for k in 0..nt {
         let (o0, o1) = (k * nm, ((k + 1) % nt) * nm);
-        for q in &quads {
+        for q in quads {
             // ζ runs towards decreasing θ so that det J > 0 (see the module docs).
             mesh.elements.push(Hex8 {
                 nodes: [
@@ -494,7 +536,14 @@ pub fn wheel(p: &WheelParams, material: usize) -> Result<(Mesh, WheelTopology), 
             });
         }
     }
-    // Surfaces.
+    mesh
+}
+
+/// The wheel's topology: the meridian, the angles and the meridian nodes of the tread
+/// (sorted by y), the symmetry plane and the bearing seat.
+fn wheel_topology(p: &WheelParams, meridian: Vec<[f64; 2]>, thetas: Vec<f64>) -> WheelTopology {
+    let nm = meridian.len();
+    let y_sym = -p.symmetry_plane_distance_m;
     let r_top = |y: f64| p.radius_m - p.conicity * y;
     let mut tread: Vec<usize> = (0..nm)
         .filter(|&m| {
@@ -510,17 +559,14 @@ pub fn wheel(p: &WheelParams, material: usize) -> Result<(Mesh, WheelTopology), 
             y >= p.journal_y_m[0] && y <= p.journal_y_m[1] && r == p.journal_radius_m
         })
         .collect();
-    Ok((
-        mesh,
-        WheelTopology {
-            meridian,
-            thetas,
-            tread_meridian: tread,
-            symmetry_meridian: symmetry,
-            bearing_meridian: bearing,
-            node_offset: 0,
-        },
-    ))
+    WheelTopology {
+        meridian,
+        thetas,
+        tread_meridian: tread,
+        symmetry_meridian: symmetry,
+        bearing_meridian: bearing,
+        node_offset: 0,
+    }
 }
 
 #[cfg(test)]

@@ -19,6 +19,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Once;
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -604,6 +605,8 @@ fn edges(v: &[f64]) -> Vec<f64> {
     e
 }
 
+/// Draws `map` on `root`: the cells and axes, the overlay lines with their labels, and the
+/// colour bar on the right.
 fn heat_on<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     map: &HeatMap<'_>,
@@ -612,20 +615,40 @@ fn heat_on<DB: DrawingBackend>(
     root.fill(&WHITE).map_err(es)?;
     let (w, _) = root.dim_in_pixel();
     let (main, bar) = root.split_horizontally(w.saturating_sub(130));
-    let tz = |z: f64| -> Option<f64> {
-        if map.log_colour {
-            (z > 0.0 && z.is_finite()).then(|| z.log10())
-        } else {
-            z.is_finite().then_some(z)
-        }
-    };
-    let (mut c0, c1) = finite_range(map.z.iter().filter_map(|&z| tz(z))).unwrap_or((0.0, 1.0));
+    let (mut c0, c1) =
+        finite_range(map.z.iter().filter_map(|&z| colour_coordinate(map, z))).unwrap_or((0.0, 1.0));
     if map.log_colour {
         c0 = c0.max(c1 - LOG_DECADES);
     }
-    let xe = edges(map.x);
-    let ye = edges(map.y);
-    let mut chart = ChartBuilder::on(&main)
+    let (xe, ye) = (edges(map.x), edges(map.y));
+    let mut chart = heat_cells(&main, map, (&xe, &ye), (c0, c1))?;
+    overlay_lines(&main, &mut chart, map, (&xe, &ye))?;
+    colour_bar(&bar, map, (c0, c1))
+}
+
+/// The chart of a heat map's cells and lines (linear axes in data coordinates).
+type HeatChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// Where `z` lies on the colour scale of `map`: `log10 z` on a logarithmic scale, `z`
+/// itself on a linear one; `None` for no data.
+fn colour_coordinate(map: &HeatMap<'_>, z: f64) -> Option<f64> {
+    if map.log_colour {
+        (z > 0.0 && z.is_finite()).then(|| z.log10())
+    } else {
+        z.is_finite().then_some(z)
+    }
+}
+
+/// The map's chart on `main` with the cells between the edges `(xe, ye)`, coloured over the
+/// colour range `(c0, c1)`, and the axes.
+fn heat_cells<'a, DB: DrawingBackend>(
+    main: &'a DrawingArea<DB, Shift>,
+    map: &HeatMap<'_>,
+    (xe, ye): (&[f64], &[f64]),
+    (c0, c1): (f64, f64),
+) -> Result<HeatChart<'a, DB>, String> {
+    let es = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let mut chart = ChartBuilder::on(main)
         .caption(map.title, (FONT_FAMILY, 22))
         .margin(15)
         .x_label_area_size(50)
@@ -636,9 +659,8 @@ fn heat_on<DB: DrawingBackend>(
     let nodata = RGBColor(225, 225, 225);
     chart
         .draw_series((0..map.x.len()).flat_map(|i| {
-            let (xe, ye) = (&xe, &ye);
             (0..ny).map(move |j| {
-                let colour = match tz(map.z[i * ny + j]) {
+                let colour = match colour_coordinate(map, map.z[i * ny + j]) {
                     Some(c) => colour_map((c - c0) / (c1 - c0)),
                     None => nodata,
                 };
@@ -657,6 +679,19 @@ fn heat_on<DB: DrawingBackend>(
         .y_label_formatter(&linear_labels(ye[0], ye[ye.len() - 1], TICKS))
         .draw()
         .map_err(es)?;
+    Ok(chart)
+}
+
+/// The map's overlay lines on `chart` (solid, then dotted, then dashed; clipped to the
+/// edges `(xe, ye)`), each labelled at its last point unless a label already stands there,
+/// the labels drawn last on dark boxes so that no line crosses them.
+fn overlay_lines<DB: DrawingBackend>(
+    main: &DrawingArea<DB, Shift>,
+    chart: &mut HeatChart<'_, DB>,
+    map: &HeatMap<'_>,
+    (xe, ye): (&[f64], &[f64]),
+) -> Result<(), String> {
+    let es = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     let (xa, xb, ya, yb) = (xe[0], xe[xe.len() - 1], ye[0], ye[ye.len() - 1]);
     let inside = |x: f64, y: f64| {
         x.is_finite() && y.is_finite() && (xa..=xb).contains(&x) && (ya..=yb).contains(&y)
@@ -723,8 +758,17 @@ fn heat_on<DB: DrawingBackend>(
         .map_err(es)?;
         main.draw(&Text::new(name, (px, py), font)).map_err(es)?;
     }
-    // Colour bar.
-    let mut cb = ChartBuilder::on(&bar)
+    Ok(())
+}
+
+/// The colour bar over the colour range `(c0, c1)` on `bar`.
+fn colour_bar<DB: DrawingBackend>(
+    bar: &DrawingArea<DB, Shift>,
+    map: &HeatMap<'_>,
+    (c0, c1): (f64, f64),
+) -> Result<(), String> {
+    let es = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let mut cb = ChartBuilder::on(bar)
         .margin_top(50)
         .margin_bottom(65)
         .margin_right(10)

@@ -77,100 +77,16 @@ pub struct TrackStructure {
 }
 
 impl TrackStructure {
-    /// Builds the track substructure of a model.
+    /// Builds the track substructure of a model: the rail section ([`rail_section`]),
+    /// extruded over the graded node planes ([`rail_planes`]), the half sleepers
+    /// ([`add_sleepers`]), the railpad, ballast and elastic-hold springs, and the held DOFs.
     pub fn build(m: &Model) -> Result<TrackStructure, StructureError> {
         let layout = Layout::new(m);
         let hold = m.fastening.hold_pattern();
-        let foot_lines: Vec<f64> = layout
-            .y_foot_lines(&hold)
-            .into_iter()
-            .filter(|&y| {
-                y > GEOMETRY_TOLERANCE
-                    && y < 0.5
-                        * m.fastening
-                            .footprint_width
-                            .min(crate::mesh::profile::UIC54_FOOT_WIDTH_M)
-                        - 1e-6
-            })
-            .collect();
-        let mut params = SectionParams {
-            size_m: m.mesh.section_size,
-            running_surface_size_m: m.mesh.head_size,
-            foot_node_lines_m: foot_lines,
-            inclination_rad: 0.0,
-            ..SectionParams::default()
-        };
-        let upright = SectionMesh::uic54(&params)?;
-        let section_properties = upright.properties();
-        params.inclination_rad = m.rail.inclination.atan();
-        let section = SectionMesh::uic54(&params)?;
-
-        let [f0, f1] = layout.fine_zone;
-        // Refuse a model too large to build before grading or allocating it: the node planes
-        // along the rail are about the fine zone over its element length plus the track over
-        // the coarse one; a half sleeper has (nx+1)(ny+3)(nz+1) nodes (two extra y lines at
-        // the rail foot edges).
-        let [sx, sy, sz] = m.mesh.sleeper_elements;
-        let sleeper_nodes = ((sx + 1) * (sy + 3) * (sz + 1) * layout.sleepers.len()) as f64;
-        let section_nodes = section.nodes.len() as f64;
-        let size_hint = |planes: f64| {
-            move || {
-                format!(
-                    "rail {planes:.0} node planes (mesh.fine_element_length = {} m, mesh.element_length = {} m) x {section_nodes} section nodes (mesh.section_size = {} m, mesh.head_size = {} m), sleepers {sleeper_nodes} nodes (mesh.sleeper_elements = {:?}); coarsen these",
-                    m.mesh.fine_element_length,
-                    m.mesh.element_length,
-                    m.mesh.section_size,
-                    m.mesh.head_size,
-                    m.mesh.sleeper_elements
-                )
-            }
-        };
-        let planes_estimate =
-            (f1 - f0) / m.mesh.fine_element_length + layout.length / m.mesh.element_length;
-        super::check_size(
-            "track",
-            planes_estimate * section_nodes + sleeper_nodes,
-            size_hint(planes_estimate),
-        )?;
-        let planes = grade(&GradingSpec {
-            zones: vec![FineZone {
-                start_m: f0,
-                end_m: f1,
-                size_m: m.mesh.fine_element_length,
-            }],
-            breakpoints_m: layout.x_breakpoints(&hold),
-            ..GradingSpec::new(0.0, layout.length, m.mesh.element_length)
-        })?;
-        let planes_n = planes.len() as f64;
-        super::check_size(
-            "track",
-            planes_n * section_nodes + sleeper_nodes,
-            size_hint(planes_n),
-        )?;
+        let (section, section_properties) = rail_section(m, &layout, &hold)?;
+        let planes = rail_planes(m, &layout, &hold, &section)?;
         let (mut mesh, rail) = extrude_rail(&section, &planes, RAIL_MATERIAL)?;
-
-        let mut sleepers = Vec::with_capacity(layout.sleepers.len());
-        for &xs in &layout.sleepers {
-            let [nx, ny, nz] = m.mesh.sleeper_elements;
-            let half_foot = 0.5 * m.fastening.footprint_width;
-            let (smesh, topo) = half_sleeper(
-                &SleeperParams {
-                    length_m: m.sleeper.length,
-                    width_m: m.sleeper.width,
-                    height_m: m.sleeper.height,
-                    rail_seat_offset_m: m.sleeper.rail_seat,
-                    pad_thickness_m: m.fastening.pad_thickness,
-                    centre_x_m: xs,
-                    n_length: ny,
-                    n_width: nx,
-                    n_height: nz,
-                    y_node_lines_m: vec![-half_foot, half_foot],
-                },
-                SLEEPER_MATERIAL,
-            )?;
-            let offset = mesh.append(&smesh);
-            sleepers.push(topo.shifted(offset));
-        }
+        let sleepers = add_sleepers(m, &layout, &mut mesh)?;
 
         let mut springs = Vec::new();
         let mut spring_kinds = Vec::new();
@@ -222,6 +138,124 @@ impl TrackStructure {
         )?;
         Ok((mats, t.elapsed().as_secs_f64()))
     }
+}
+
+/// The inclined rail section (foot node lines at the fastenings' holds, within the
+/// footprint and the rail foot) and the properties of the upright one.
+fn rail_section(
+    m: &Model,
+    layout: &Layout,
+    hold: &HoldPattern,
+) -> Result<(SectionMesh, SectionProperties), StructureError> {
+    let foot_lines: Vec<f64> = layout
+        .y_foot_lines(hold)
+        .into_iter()
+        .filter(|&y| {
+            y > GEOMETRY_TOLERANCE
+                && y < 0.5
+                    * m.fastening
+                        .footprint_width
+                        .min(crate::mesh::profile::UIC54_FOOT_WIDTH_M)
+                    - 1e-6
+        })
+        .collect();
+    let mut params = SectionParams {
+        size_m: m.mesh.section_size,
+        running_surface_size_m: m.mesh.head_size,
+        foot_node_lines_m: foot_lines,
+        inclination_rad: 0.0,
+        ..SectionParams::default()
+    };
+    let upright = SectionMesh::uic54(&params)?;
+    let section_properties = upright.properties();
+    params.inclination_rad = m.rail.inclination.atan();
+    let section = SectionMesh::uic54(&params)?;
+    Ok((section, section_properties))
+}
+
+/// The rail's node planes along x (m): graded, fine in the fine zone, through the
+/// breakpoints of the holds. A model too large to build is refused before grading or
+/// allocating it, and again once the planes are known.
+fn rail_planes(
+    m: &Model,
+    layout: &Layout,
+    hold: &HoldPattern,
+    section: &SectionMesh,
+) -> Result<Vec<f64>, StructureError> {
+    let [f0, f1] = layout.fine_zone;
+    // The node planes along the rail are about the fine zone over its element length plus
+    // the track over the coarse one; a half sleeper has (nx+1)(ny+3)(nz+1) nodes (two extra
+    // y lines at the rail foot edges).
+    let [sx, sy, sz] = m.mesh.sleeper_elements;
+    let sleeper_nodes = ((sx + 1) * (sy + 3) * (sz + 1) * layout.sleepers.len()) as f64;
+    let section_nodes = section.nodes.len() as f64;
+    let size_hint = |planes: f64| {
+        move || {
+            format!(
+                "rail {planes:.0} node planes (mesh.fine_element_length = {} m, mesh.element_length = {} m) x {section_nodes} section nodes (mesh.section_size = {} m, mesh.head_size = {} m), sleepers {sleeper_nodes} nodes (mesh.sleeper_elements = {:?}); coarsen these",
+                m.mesh.fine_element_length,
+                m.mesh.element_length,
+                m.mesh.section_size,
+                m.mesh.head_size,
+                m.mesh.sleeper_elements
+            )
+        }
+    };
+    let planes_estimate =
+        (f1 - f0) / m.mesh.fine_element_length + layout.length / m.mesh.element_length;
+    super::check_size(
+        "track",
+        planes_estimate * section_nodes + sleeper_nodes,
+        size_hint(planes_estimate),
+    )?;
+    let planes = grade(&GradingSpec {
+        zones: vec![FineZone {
+            start_m: f0,
+            end_m: f1,
+            size_m: m.mesh.fine_element_length,
+        }],
+        breakpoints_m: layout.x_breakpoints(hold),
+        ..GradingSpec::new(0.0, layout.length, m.mesh.element_length)
+    })?;
+    let planes_n = planes.len() as f64;
+    super::check_size(
+        "track",
+        planes_n * section_nodes + sleeper_nodes,
+        size_hint(planes_n),
+    )?;
+    Ok(planes)
+}
+
+/// Meshes the half sleepers of the layout (node lines at the rail seat's footprint edges)
+/// and appends them to `mesh`; returns their topologies in `mesh`'s numbering.
+fn add_sleepers(
+    m: &Model,
+    layout: &Layout,
+    mesh: &mut Mesh,
+) -> Result<Vec<SleeperTopology>, StructureError> {
+    let mut sleepers = Vec::with_capacity(layout.sleepers.len());
+    for &xs in &layout.sleepers {
+        let [nx, ny, nz] = m.mesh.sleeper_elements;
+        let half_foot = 0.5 * m.fastening.footprint_width;
+        let (smesh, topo) = half_sleeper(
+            &SleeperParams {
+                length_m: m.sleeper.length,
+                width_m: m.sleeper.width,
+                height_m: m.sleeper.height,
+                rail_seat_offset_m: m.sleeper.rail_seat,
+                pad_thickness_m: m.fastening.pad_thickness,
+                centre_x_m: xs,
+                n_length: ny,
+                n_width: nx,
+                n_height: nz,
+                y_node_lines_m: vec![-half_foot, half_foot],
+            },
+            SLEEPER_MATERIAL,
+        )?;
+        let offset = mesh.append(&smesh);
+        sleepers.push(topo.shifted(offset));
+    }
+    Ok(sleepers)
 }
 
 /// Bilinear shape functions of a quad face at (ξ, η), node order (−1,−1), (1,−1), (1,1), (−1,1).

@@ -347,9 +347,19 @@ pub fn trial_growth_if_any(
     }
 }
 
-/// Writes the CSV files of a trial-growth result into `out`.
+/// Writes the CSV files of a trial-growth result into `out`: `consistency.csv`,
+/// `phase.csv`, `eigen_comparison.csv` and `trial_shape.csv`.
 pub fn write_growth_files(out: &Path, g: &TrialGrowth) -> Result<(), StudiesError> {
     std::fs::create_dir_all(out).map_err(StudiesError::io(out))?;
+    write_consistency_csv(out, g)?;
+    write_phase_csv(out, g)?;
+    write_eigen_comparison_csv(out, g)?;
+    write_trial_shape_csv(out, g)
+}
+
+/// `consistency.csv`: per amplitude and reference component, the matched W_f, F_L and F_N
+/// wavelengths (mm), frequencies (Hz) and deviations, the case and the class.
+fn write_consistency_csv(out: &Path, g: &TrialGrowth) -> Result<(), StudiesError> {
     let opt = |v: Option<f64>| v.map(|x| format!("{x:e}")).unwrap_or_default();
     let mut rows: Vec<Vec<String>> = Vec::new();
     for a in &g.amplitudes {
@@ -392,6 +402,12 @@ pub fn write_growth_files(out: &Path, g: &TrialGrowth) -> Result<(), StudiesErro
         ],
         &rows,
     )?;
+    Ok(())
+}
+
+/// `phase.csv`: per amplitude, the correlation of the new wear with the corrugation, the
+/// phase, growth, and the band RMS of F_L, F_N (N) and the wear (J/m).
+fn write_phase_csv(out: &Path, g: &TrialGrowth) -> Result<(), StudiesError> {
     let rows: Vec<Vec<String>> = g
         .amplitudes
         .iter()
@@ -422,6 +438,13 @@ pub fn write_growth_files(out: &Path, g: &TrialGrowth) -> Result<(), StudiesErro
         ],
         &rows,
     )?;
+    Ok(())
+}
+
+/// `eigen_comparison.csv`: every component against the nearest longitudinal-compression,
+/// vertical-bending and wheel eigenfrequency (Hz, relative difference).
+fn write_eigen_comparison_csv(out: &Path, g: &TrialGrowth) -> Result<(), StudiesError> {
+    let opt = |v: Option<f64>| v.map(|x| format!("{x:e}")).unwrap_or_default();
     let rows: Vec<Vec<String>> = g
         .eigen
         .iter()
@@ -456,6 +479,12 @@ pub fn write_growth_files(out: &Path, g: &TrialGrowth) -> Result<(), StudiesErro
         ],
         &rows,
     )?;
+    Ok(())
+}
+
+/// `trial_shape.csv`: the band-passed smooth wear (J/m) and the trial corrugation shape for
+/// 2A_max = 1 µm along the rail (m).
+fn write_trial_shape_csv(out: &Path, g: &TrialGrowth) -> Result<(), StudiesError> {
     let wb = &g.smooth_wear_band;
     let (lo, hi) = wb
         .values

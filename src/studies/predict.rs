@@ -172,13 +172,14 @@ pub fn predict(
         path: out.to_path_buf(),
         source,
     })?;
+    let dirs = StageDirs::in_dir(out);
     let lines = super::grow::mode_lines(prepared);
-    let smooth = smooth_passage(m, prepared, &out.join("passage"), passage_files, progress)?;
+    let smooth = smooth_passage(m, prepared, &dirs.passage, passage_files, progress)?;
     progress.stage("coupled wheel–track modes", 1);
     let coupled = prepared.coupled_modes(m.run.speed(), &[]);
     progress.finish();
     let coupled = coupled.map_err(StudiesError::from)?;
-    let attribution = write_passage_attribution(&out.join("passage"), &coupled, &smooth)?;
+    let attribution = write_passage_attribution(&dirs.passage, &coupled, &smooth)?;
     let check = initiation_check(m, &smooth);
     let growth = trial_growth_if_any(
         &prepared.engine,
@@ -192,11 +193,11 @@ pub fn predict(
         None => no_initiation_verdict(m.run.speed_kmh, Some(check)),
     };
     let rate = super::grow::growth_rate(m, prepared, m.run.speed(), progress)?;
-    super::grow::write_growth_rate(&out.join("grow"), &rate)?;
+    super::grow::write_growth_rate(&dirs.grow, &rate)?;
     let rate_brief = super::grow::rate_summary(&rate, &coupled.modes);
     let gj = match &growth {
         Some(g) => Some(write_growth(
-            &out.join("grow"),
+            &dirs.grow,
             g,
             m,
             verdict.clone(),
@@ -211,7 +212,7 @@ pub fn predict(
         &lines,
         &coupled,
         &opts.sweep_speeds_kmh,
-        &out.join("sweep"),
+        &dirs.sweep,
         progress,
     )?;
     let input = ReportInput {
@@ -227,12 +228,9 @@ pub fn predict(
         verdict: &verdict,
         seconds: t0.elapsed().as_secs_f64(),
     };
-    report(&input).write(&out.join("report"))?;
+    report(&input).write(&dirs.report)?;
     let json = predict_json(&input, t0.elapsed().as_secs_f64());
-    let text = serde_json::to_string_pretty(&json).map_err(|source| StudiesError::Json {
-        what: "predict.json",
-        source,
-    })?;
+    let text = pretty_json("predict.json", &json)?;
     let p = out.join("predict.json");
     crate::io::write_text(&p, &text).map_err(StudiesError::io(&p))?;
     Ok(Prediction {
@@ -243,6 +241,35 @@ pub fn predict(
         verdict,
         json,
     })
+}
+
+/// The directories of a prediction's stages inside its output directory.
+struct StageDirs {
+    /// The smooth-rail passage and its attribution to coupled modes: `passage`.
+    passage: PathBuf,
+    /// The growth-rate spectrum and the trial-amplitude growth: `grow`.
+    grow: PathBuf,
+    /// The short speed sweep: `sweep`.
+    sweep: PathBuf,
+    /// The report: `report`.
+    report: PathBuf,
+}
+
+impl StageDirs {
+    /// The stage directories in `out`.
+    fn in_dir(out: &Path) -> Self {
+        StageDirs {
+            passage: out.join("passage"),
+            grow: out.join("grow"),
+            sweep: out.join("sweep"),
+            report: out.join("report"),
+        }
+    }
+}
+
+/// `value` as pretty-printed JSON; `what` names it in an error.
+fn pretty_json<T: Serialize>(what: &'static str, value: &T) -> Result<String, StudiesError> {
+    serde_json::to_string_pretty(value).map_err(|source| StudiesError::Json { what, source })
 }
 
 /// The smooth-rail passage with all records; its files go into `dir`.
@@ -308,10 +335,7 @@ fn write_growth(
     let mut gj = grow_json(g, m.run.speed_kmh, Vec::new(), verdict, 0.0);
     gj.coupled = growth_attribution(g, coupled);
     gj.growth_rate = rate;
-    let text = serde_json::to_string_pretty(&gj).map_err(|source| StudiesError::Json {
-        what: "grow.json",
-        source,
-    })?;
+    let text = pretty_json("grow.json", &gj)?;
     super::grow::write_grow_json(dir, &text)?;
     Ok(gj)
 }

@@ -26,19 +26,28 @@ pub(super) struct LedgerStep {
     pub(super) frictional_power_w: f64,
     /// Spin moment (N·m).
     pub(super) mz_nm: f64,
-    /// True when either modal system sub-steps.
+    /// True when either modal system sub-steps (no unit).
     pub(super) substepped: bool,
 }
 
 /// The passage's energy balance (docs/theory.md §7.8), advanced once per contact step.
 pub(super) struct Ledger {
+    /// The work terms accumulated so far (each in J).
     pub(super) eb: EnergyBalance,
+    /// Stored energy of track and wheel at the static start, kinetic + strain (J).
     pub(super) e_start: f64,
+    /// Elastic energy of the half-space at the static start, Hertz estimate (J).
     pub(super) e_contact_start: f64,
+    /// Contact force at the static start (x, y, n; N).
     pub(super) f_start: [f64; 3],
+    /// Compliance of the residual springs in series with the contact (x, y, n; m/N).
     pub(super) series_c: [f64; 3],
+    /// Damper power of both systems at the end of the previous contact step (W).
     pub(super) p_damp_prev: f64,
+    /// Contact power F · (v_wheel − v_rail) at the end of the previous contact step (W).
     pub(super) p_contact_prev: f64,
+    /// Wheel modal coordinates at the end of the previous contact step (√kg·m: the
+    /// coordinates of mass-normalised modes).
     pub(super) qw_prev: Vec<f64>,
 }
 

@@ -12,246 +12,385 @@ pub(super) struct BandOut {
     pub(super) slices: Vec<SliceReport>,
 }
 
-/// Spectrum slicing over one band: from the factorisation `first` at the band's lower bound
-/// (`from_zero`: the negative rigid-body shift σ₀ of a band that starts at 0 Hz, with the
-/// grounded-structure probe if `grounded`, i.e. no eigenvalue below `GROUNDED_TEST · |σ₀|`;
-/// otherwise a bound λ_lo > 0, where the band starts with a two-sided slice) up to
-/// `top = (shift, Sturm count)`. The eigenvectors go into `phi` (n × the band's Sturm count)
-/// in the order of the returned eigenvalues. `lam_max` (rad²/s²) scales the small moves of a
-/// shift that hits a zero pivot.
-#[allow(clippy::too_many_arguments)]
+/// One band of the spectrum slicing: where it starts and ends.
+pub(super) struct BandParams {
+    /// The factorisation at the band's lower bound: the negative rigid-body shift σ₀
+    /// (rad²/s²) of a band from 0 Hz, else a bound λ_lo > 0 (where the band starts with a
+    /// two-sided slice).
+    pub(super) first: ShiftFactor,
+    /// The band starts at 0 Hz (`first` is at σ₀ < 0).
+    pub(super) from_zero: bool,
+    /// A band from 0 Hz of a grounded structure: no eigenvalue below `GROUNDED_TEST · |σ₀|`
+    /// (Sturm count), so the grounded-structure probe may move the first shift up.
+    pub(super) grounded: bool,
+    /// The band's upper bound: `(shift (rad²/s²), Sturm count there)`.
+    pub(super) top: (f64, usize),
+    /// λ_max (rad²/s²) of the whole solve: scales the small moves of a shift that hits a
+    /// zero pivot.
+    pub(super) lam_max: f64,
+}
+
+/// The running state of a band: what its committed slices found and what they carry on.
+struct BandState {
+    /// Eigenvalues found so far (rad²/s²), in the order of the band's columns.
+    lambdas: Vec<f64>,
+    /// Converged pairs above the last boundary (λ ≥ τ, from the converged prefix of the
+    /// previous slice), rad²/s²: their vectors sit in phi right after the committed columns.
+    /// They are eigenpairs of the next slice already, so it deflates them (with all modes
+    /// found so far) and needs that many fewer new ones; discarding them would make the
+    /// next slice converge them again. Measured on the default track to 5 kHz with all
+    /// earlier slices deflated: 3064 solved vectors with carrying, 3120 without (−2 %,
+    /// within the run-to-run spread of the wall time).
+    carried: Vec<f64>,
+    /// The band's slices, ascending.
+    slices: Vec<SliceReport>,
+    /// Eigenvalues per rad²/s² in the previous slice.
+    last_density: Option<f64>,
+}
+
+/// Where a slice starts, what kind of slice it is, and the band it lies in.
+struct SliceStart<'c> {
+    /// The factorisation at the slice's lower bound lo.
+    cur: &'c ShiftFactor,
+    /// Lower bound lo (rad²/s²) = `cur.shift`.
+    lo: f64,
+    /// Sturm count at lo.
+    nu_cur: usize,
+    /// The band's last slice (the remainder is at most 1.5 targets).
+    last: bool,
+    /// The first slice of a band above 0 Hz: two-sided from the start.
+    two_sided: bool,
+    /// Lower bound (rad²/s²) of a band above 0 Hz, whose modes below it are never
+    /// deflated; `None` for a band from 0 Hz.
+    band_lo: Option<f64>,
+    /// The band's upper bound: `(shift (rad²/s²), Sturm count there)`.
+    top: (f64, usize),
+    /// λ_max (rad²/s²), see [`BandParams::lam_max`].
+    lam_max: f64,
+}
+
+/// A solved slice: the Lanczos result, its upper bound `hi` (rad²/s²) and the Sturm count
+/// there, the factorisation at `hi` when a slice follows, and the midpoint factorisation of
+/// a two-sided solve.
+struct SolvedSlice {
+    out: SliceOut,
+    hi: f64,
+    nu_hi: usize,
+    next: Option<ShiftFactor>,
+    mid: Option<ShiftFactor>,
+    /// Solved two-sided (with the shift at `mid`).
+    sided: bool,
+}
+
+/// Spectrum slicing over one band (see [`BandParams`]): from the factorisation at its lower
+/// bound up to its top, slice by slice ([`solve_slice`], [`complete_slice`],
+/// [`BandState::commit`]). The eigenvectors go into `phi` (n × the band's Sturm count) in
+/// the order of the returned eigenvalues.
 pub(super) fn run_band(
     ctx: &mut Ctx<'_>,
     mut phi: MatMut<'_, f64>,
-    first: ShiftFactor,
-    from_zero: bool,
-    grounded: bool,
-    top: (f64, usize),
-    lam_max: f64,
+    band: BandParams,
     opts: &EigenOptions,
     progress: Option<&Counter<'_>>,
 ) -> Result<BandOut, EigenError> {
     let n = ctx.sys.n();
+    let BandParams {
+        first,
+        from_zero,
+        grounded,
+        top,
+        lam_max,
+    } = band;
     let (top_shift, nu_max) = top;
-    let nu0 = first.negative_count;
-    let total = nu_max.saturating_sub(nu0);
+    let total = nu_max.saturating_sub(first.negative_count);
     let mut reported = 0usize;
     debug_assert_eq!((phi.nrows(), phi.ncols()), (n, total));
-    let mut lambdas: Vec<f64> = Vec::with_capacity(total);
-    let mut slices: Vec<SliceReport> = Vec::new();
+    let mut st = BandState {
+        lambdas: Vec::with_capacity(total),
+        carried: Vec::new(),
+        slices: Vec::new(),
+        last_density: None,
+    };
     let mut cur = if from_zero && grounded && total > 0 {
         grounded_first_shift(ctx, phi.as_ref(), first, lam_max, opts)?
     } else {
         first
     };
-    // Converged pairs above the last boundary (λ ≥ τ, from the converged prefix of the
-    // previous slice): their vectors sit in phi right after the committed columns, their λ in
-    // `carried`. They are eigenpairs of the next slice already, so it deflates them (with all
-    // modes found so far) and needs that many fewer new ones; discarding them would make the
-    // next slice converge them again. Measured on the default track to 5 kHz with all earlier
-    // slices deflated: 3064 solved vectors with carrying, 3120 without (−2 %, within the
-    // run-to-run spread of the wall time).
-    let mut carried: Vec<f64> = Vec::new();
     // Lower bound of a band above 0 Hz: the modes below it are never deflated here.
     let band_lo = (!from_zero).then_some(cur.shift);
-    // Eigenvalues per rad²/s² in the previous slice.
-    let mut last_density: Option<f64> = None;
     loop {
         let nu_cur = cur.negative_count;
         if nu_cur >= nu_max {
             break;
         }
-        let remaining = nu_max - nu_cur;
-        let lo = cur.shift;
         let target = opts.modes_per_slice;
-        // A remainder of up to 1.5 targets is one last slice (default track to 5 kHz: a
-        // 170-mode last slice instead of a 152-mode one and an 18-mode tail costing a
-        // factorisation and ~4 s).
-        let last = remaining <= target + target / 2;
         let t_slice = Instant::now();
-        // The first slice of a band above 0 Hz cannot deflate the modes below its bound lo
-        // (another band's, or below f_min): with the shift at lo they would converge at the
-        // negative end of θ as unwanted pairs, about as many as the slice wants and denser
-        // in λ (default track to 2 kHz in two bands: 872 solved vectors for the upper band's
-        // first 93 modes, against ~3 per mode otherwise). So that slice is two-sided: it
-        // wants every eigenvalue in [lo, hi) (Sturm count known) with the Lanczos shift at
-        // the midpoint, where the undeflated ones below lo are farther from the shift than
-        // every wanted one.
-        let two_sided = !from_zero && slices.is_empty();
-        let mut sided = two_sided;
-        let col0 = lambdas.len();
-        let nc = carried.len();
-        // Deflated: every mode found so far and the carried pairs (contiguous in phi). The
-        // modes of earlier slices lie below σ at θ = 1/(λ − σ) < 0; left in, the ones of the
-        // slices before the last compete with the far end of the wanted θ and converge as
-        // unwanted Ritz values (default track to 5 kHz, subspace ratio 3: deflating only the
-        // previous slice solved 3592 vectors, deflating all 2880, and the M-orthonormality
-        // error of the whole basis fell from 1.3e-8 to 2.5e-14).
-        let locked_range = (0, col0 + nc);
-        let mut mid: Option<ShiftFactor> = None;
-        // In a band above 0 Hz a slice whose width exceeds CAP_RATIO × its distance from the
-        // band's lower bound would meet the undeflated modes below that bound at the far end
-        // of θ. Such a slice ends at the cap instead, with the Sturm count known there
-        // (default track to 5 kHz in two bands: the upper band's second slice, as wide as
-        // that distance, needed 4 restarts and 5.8 solved vectors per mode). The band's last
-        // slice is two-sided (shift at its midpoint m, half-width h): the same margin,
-        // h ≤ CAP_RATIO · (m − bound), allows it a width of up to
-        // 2·CAP_RATIO/(1 − CAP_RATIO) = 4.7 times that distance (default track to 5 kHz:
-        // a 183-mode last slice of 536 vectors instead of a capped 97-mode one of 464 and
-        // an 86-mode last one of 264).
-        let capped = match (band_lo, last_density) {
-            (Some(b), Some(rho))
-                if !(two_sided || (last && top_shift - lo <= TWO_SIDED_CAP_RATIO * (lo - b))) =>
-            {
-                cap_factor(
-                    ctx,
-                    (lo, b),
-                    rho,
-                    (nu_cur, nu_max),
-                    top_shift,
-                    target,
-                    lam_max,
-                )?
-            }
-            _ => None,
+        let start = SliceStart {
+            cur: &cur,
+            lo: cur.shift,
+            nu_cur,
+            // A remainder of up to 1.5 targets is one last slice (default track to 5 kHz: a
+            // 170-mode last slice instead of a 152-mode one and an 18-mode tail costing a
+            // factorisation and ~4 s).
+            last: nu_max - nu_cur <= target + target / 2,
+            // The first slice of a band above 0 Hz cannot deflate the modes below its bound
+            // lo (another band's, or below f_min): with the shift at lo they would converge
+            // at the negative end of θ as unwanted pairs, about as many as the slice wants
+            // and denser in λ (default track to 2 kHz in two bands: 872 solved vectors for
+            // the upper band's first 93 modes, against ~3 per mode otherwise). So that slice
+            // is two-sided: it wants every eigenvalue in [lo, hi) (Sturm count known) with
+            // the Lanczos shift at the midpoint, where the undeflated ones below lo are
+            // farther from the shift than every wanted one.
+            two_sided: band_lo.is_some() && st.slices.is_empty(),
+            band_lo,
+            top,
+            lam_max,
         };
-        let mut out;
-        // A slice to a bound whose Sturm count is known: the cap, or the band top.
-        let known_end = match capped {
-            Some(f) => Some((f.shift, f.negative_count, Some(f))),
-            None if last && !two_sided => Some((top_shift, nu_max, None)),
-            None => None,
-        };
-        let (hi, nu_hi, next) = if let Some((hi, nu_hi, next)) = known_end {
-            let carried_below = carried.iter().filter(|&&x| x < hi).count();
-            let need_new = (nu_hi - nu_cur).saturating_sub(carried_below);
-            let want = need_new + opts.block_size.max((nu_hi - nu_cur) / 5);
-            let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
-            // The band's last slice is two-sided (deflating everything below lo): with the
-            // shift midway, its modes near the band top lie half as far from the shift as
-            // with the shift at lo, so they converge sooner and more accurately (default
-            // track to 5 kHz: 416 instead of 536 solved vectors in the upper band's last
-            // slice, and the M-orthogonality across the band bound 5e-8 instead of 2e-7).
-            out = if next.is_none() {
-                let m = factorize(ctx, 0.5 * (lo + hi), 1.0, lam_max)?;
-                let o = lanczos_slice(ctx, &m, locked, want, Some((hi, need_new)), Some(lo), opts)?;
-                mid = Some(m);
-                sided = true;
-                o
-            } else {
-                lanczos_slice(ctx, &cur, locked, want, Some((hi, need_new)), None, opts)?
-            };
-            (hi, nu_hi, next)
-        } else if two_sided {
-            // Width of about `target` modes, corrected once by the Sturm count.
-            let (hi, nu_hi, next) =
-                two_sided_upper(ctx, lo, (nu_cur, nu_max), top_shift, target, last, lam_max)?;
-            let need = nu_hi - nu_cur;
-            let m = factorize(ctx, 0.5 * (lo + hi), 1.0, lam_max)?;
-            let want = need + opts.block_size.max(need / 5);
-            out = lanczos_slice(
-                ctx,
-                &m,
-                phi.as_ref().subcols(0, 0),
-                want,
-                Some((hi, need)),
-                Some(lo),
-                opts,
-            )?;
-            mid = Some(m);
-            (hi, nu_hi, next)
-        } else {
-            // The slice stops once `want` pairs converged (early convergence checks) and
-            // the boundary below keeps 2/3 or more of them: 1.25 targets keep about one.
-            let want = (target + target / 4).saturating_sub(nc).max(target / 2);
-            out = {
-                let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
-                lanczos_slice(ctx, &cur, locked, want, None, None, opts)?
-            };
-            // Boundary in the widest relative gap of the last third of the converged λ
-            // (carried and new; everything below it has converged; a wide gap keeps K − τM
-            // well conditioned).
-            let tau = gap_boundary(&out.lambdas, lo, &carried, top_shift);
-            if tau >= top_shift {
-                (top_shift, nu_max, None)
-            } else {
-                let f = factorize(ctx, tau, 1.0, lam_max)?;
-                (f.shift, f.negative_count, Some(f))
-            }
-        };
-        let need = nu_hi - nu_cur;
-        let carried_in = carried.iter().filter(|&&x| x < hi).count();
-        let select = |o: &SliceOut| -> Vec<usize> {
-            (0..o.lambdas.len())
-                .filter(|&i| o.lambdas[i] >= lo && o.lambdas[i] < hi)
-                .collect()
-        };
-        let mut keep = select(&out);
-        if keep.len() + carried_in != need {
-            // The Sturm count says the converged prefix skipped an eigenvalue (e.g. a
-            // multiplicity larger than the block): iterate again with the count known.
-            out = {
-                let locked = phi.as_ref().subcols(locked_range.0, locked_range.1);
-                let nl = need.saturating_sub(carried_in);
-                let lf = mid.as_ref().unwrap_or(&cur);
-                let wide = if sided { 2 * nl } else { nl };
-                lanczos_slice(
-                    ctx,
-                    lf,
-                    locked,
-                    wide + opts.block_size,
-                    Some((hi, nl)),
-                    sided.then_some(lo),
-                    opts,
-                )?
-            };
-            keep = select(&out);
-            if keep.len() + carried_in != need {
-                return Err(EigenError::MissedModes {
-                    lo_hz: lambda_to_hz(lo),
-                    hi_hz: lambda_to_hz(hi),
-                    expected: need,
-                    found: keep.len() + carried_in,
-                    restarts: out.restarts,
-                });
-            }
-        }
+        let mut solved = solve_slice(ctx, phi.as_ref(), &st, &start, opts)?;
+        let keep = complete_slice(ctx, phi.as_ref(), &st, &start, &mut solved, opts)?;
+        let SolvedSlice {
+            out,
+            hi,
+            nu_hi,
+            next,
+            mid,
+            ..
+        } = solved;
         drop(mid);
-        // Layout from col0: the slice's modes (carried ones below hi, then the new ones), then
-        // the pairs carried on (carried ones at or above hi, then new converged ones between
-        // hi and λ_max, as many as fit).
-        commit_slice(
+        let lo = start.lo;
+        let carried_in = st.carried.iter().filter(|&&x| x < hi).count();
+        // Layout from the committed columns: the slice's modes (carried ones below hi, then
+        // the new ones), then the pairs carried on (carried ones at or above hi, then new
+        // converged ones between hi and λ_max, as many as fit).
+        st.commit(
             phi.as_mut(),
-            col0,
-            &mut carried,
-            &mut lambdas,
             (&out, &keep),
             hi,
             (top_shift, next.is_some()),
             total,
         );
-        last_density = Some((nu_hi - nu_cur) as f64 / (hi - lo).max(f64::MIN_POSITIVE));
-        slices.push(SliceReport {
+        st.last_density = Some((nu_hi - nu_cur) as f64 / (hi - lo).max(f64::MIN_POSITIVE));
+        st.slices.push(SliceReport {
             shift_lo_rad2_s2: lo,
             shift_hi_rad2_s2: hi,
             sturm_lo: nu_cur,
             sturm_hi: nu_hi,
-            modes_found: need,
+            modes_found: nu_hi - nu_cur,
             carried: carried_in,
             restarts: out.restarts,
             solved_vectors: out.solved,
             lanczos_s: t_slice.elapsed().as_secs_f64(),
         });
         if let Some(c) = progress {
-            c.add((lambdas.len() - reported) as u64);
-            reported = lambdas.len();
+            c.add((st.lambdas.len() - reported) as u64);
+            reported = st.lambdas.len();
         }
         match next {
             Some(f) => cur = f,
             None => break,
         }
     }
-    Ok(BandOut { lambdas, slices })
+    Ok(BandOut {
+        lambdas: st.lambdas,
+        slices: st.slices,
+    })
+}
+
+/// Solves the slice from `start`, deflating every mode found so far and
+/// the carried pairs (the first columns of `phi`). The modes of earlier slices lie below σ
+/// at θ = 1/(λ − σ) < 0; left in, the ones of the slices before the last compete with the
+/// far end of the wanted θ and converge as unwanted Ritz values (default track to 5 kHz,
+/// subspace ratio 3: deflating only the previous slice solved 3592 vectors, deflating all
+/// 2880, and the M-orthonormality error of the whole basis fell from 1.3e-8 to 2.5e-14).
+///
+/// The slice ends at a bound whose Sturm count is known (the cap of [`cap_factor`], or the
+/// band top for its last slice, solved two-sided), at the upper bound of a two-sided first
+/// slice ([`two_sided_upper`]), or, open-ended, in a wide gap of its converged eigenvalues
+/// ([`gap_boundary`]).
+fn solve_slice(
+    ctx: &mut Ctx<'_>,
+    phi: MatRef<'_, f64>,
+    st: &BandState,
+    start: &SliceStart<'_>,
+    opts: &EigenOptions,
+) -> Result<SolvedSlice, EigenError> {
+    let (top_shift, nu_max) = start.top;
+    let lam_max = start.lam_max;
+    let (lo, nu_cur, last, two_sided) = (start.lo, start.nu_cur, start.last, start.two_sided);
+    let target = opts.modes_per_slice;
+    let nc = st.carried.len();
+    let locked = phi.subcols(0, st.lambdas.len() + nc);
+    // In a band above 0 Hz a slice whose width exceeds CAP_RATIO × its distance from the
+    // band's lower bound would meet the undeflated modes below that bound at the far end
+    // of θ. Such a slice ends at the cap instead, with the Sturm count known there
+    // (default track to 5 kHz in two bands: the upper band's second slice, as wide as
+    // that distance, needed 4 restarts and 5.8 solved vectors per mode). The band's last
+    // slice is two-sided (shift at its midpoint m, half-width h): the same margin,
+    // h ≤ CAP_RATIO · (m − bound), allows it a width of up to
+    // 2·CAP_RATIO/(1 − CAP_RATIO) = 4.7 times that distance (default track to 5 kHz:
+    // a 183-mode last slice of 536 vectors instead of a capped 97-mode one of 464 and
+    // an 86-mode last one of 264).
+    let capped = match (start.band_lo, st.last_density) {
+        (Some(b), Some(rho))
+            if !(two_sided || (last && top_shift - lo <= TWO_SIDED_CAP_RATIO * (lo - b))) =>
+        {
+            cap_factor(
+                ctx,
+                (lo, b),
+                rho,
+                (nu_cur, nu_max),
+                top_shift,
+                target,
+                lam_max,
+            )?
+        }
+        _ => None,
+    };
+    // A slice to a bound whose Sturm count is known: the cap, or the band top.
+    let known_end = match capped {
+        Some(f) => Some((f.shift, f.negative_count, Some(f))),
+        None if last && !two_sided => Some((top_shift, nu_max, None)),
+        None => None,
+    };
+    if let Some((hi, nu_hi, next)) = known_end {
+        let carried_below = st.carried.iter().filter(|&&x| x < hi).count();
+        let need_new = (nu_hi - nu_cur).saturating_sub(carried_below);
+        let want = need_new + opts.block_size.max((nu_hi - nu_cur) / 5);
+        // The band's last slice is two-sided (deflating everything below lo): with the
+        // shift midway, its modes near the band top lie half as far from the shift as
+        // with the shift at lo, so they converge sooner and more accurately (default
+        // track to 5 kHz: 416 instead of 536 solved vectors in the upper band's last
+        // slice, and the M-orthogonality across the band bound 5e-8 instead of 2e-7).
+        let (out, mid, sided) = if next.is_none() {
+            let m = factorize(ctx, 0.5 * (lo + hi), 1.0, lam_max)?;
+            let slice = SliceParams {
+                fac: &m,
+                locked,
+                want,
+                known: Some((hi, need_new)),
+                two_sided: Some(lo),
+            };
+            let o = lanczos_slice(ctx, &slice, opts)?;
+            (o, Some(m), true)
+        } else {
+            let slice = SliceParams {
+                fac: start.cur,
+                locked,
+                want,
+                known: Some((hi, need_new)),
+                two_sided: None,
+            };
+            (lanczos_slice(ctx, &slice, opts)?, None, two_sided)
+        };
+        Ok(SolvedSlice {
+            out,
+            hi,
+            nu_hi,
+            next,
+            mid,
+            sided,
+        })
+    } else if two_sided {
+        // Width of about `target` modes, corrected once by the Sturm count.
+        let (hi, nu_hi, next) =
+            two_sided_upper(ctx, lo, (nu_cur, nu_max), top_shift, target, last, lam_max)?;
+        let need = nu_hi - nu_cur;
+        let m = factorize(ctx, 0.5 * (lo + hi), 1.0, lam_max)?;
+        let want = need + opts.block_size.max(need / 5);
+        let slice = SliceParams {
+            fac: &m,
+            locked: phi.subcols(0, 0),
+            want,
+            known: Some((hi, need)),
+            two_sided: Some(lo),
+        };
+        let out = lanczos_slice(ctx, &slice, opts)?;
+        Ok(SolvedSlice {
+            out,
+            hi,
+            nu_hi,
+            next,
+            mid: Some(m),
+            sided: true,
+        })
+    } else {
+        // The slice stops once `want` pairs converged (early convergence checks) and
+        // the boundary below keeps 2/3 or more of them: 1.25 targets keep about one.
+        let want = (target + target / 4).saturating_sub(nc).max(target / 2);
+        let slice = SliceParams {
+            fac: start.cur,
+            locked,
+            want,
+            known: None,
+            two_sided: None,
+        };
+        let out = lanczos_slice(ctx, &slice, opts)?;
+        // Boundary in the widest relative gap of the last third of the converged λ
+        // (carried and new; everything below it has converged; a wide gap keeps K − τM
+        // well conditioned).
+        let tau = gap_boundary(&out.lambdas, lo, &st.carried, top_shift);
+        let (hi, nu_hi, next) = if tau >= top_shift {
+            (top_shift, nu_max, None)
+        } else {
+            let f = factorize(ctx, tau, 1.0, lam_max)?;
+            (f.shift, f.negative_count, Some(f))
+        };
+        Ok(SolvedSlice {
+            out,
+            hi,
+            nu_hi,
+            next,
+            mid: None,
+            sided: two_sided,
+        })
+    }
+}
+
+/// The indices of the new pairs of `solved` in `[lo, hi)`, after a second Lanczos run with
+/// the count known if the Sturm count says the converged prefix skipped an eigenvalue (e.g.
+/// a multiplicity larger than the block). An error if they are still too few.
+fn complete_slice(
+    ctx: &mut Ctx<'_>,
+    phi: MatRef<'_, f64>,
+    st: &BandState,
+    start: &SliceStart<'_>,
+    solved: &mut SolvedSlice,
+    opts: &EigenOptions,
+) -> Result<Vec<usize>, EigenError> {
+    let (lo, hi) = (start.lo, solved.hi);
+    let need = solved.nu_hi - start.nu_cur;
+    let carried_in = st.carried.iter().filter(|&&x| x < hi).count();
+    let select = |o: &SliceOut| -> Vec<usize> {
+        (0..o.lambdas.len())
+            .filter(|&i| o.lambdas[i] >= lo && o.lambdas[i] < hi)
+            .collect()
+    };
+    let mut keep = select(&solved.out);
+    if keep.len() + carried_in != need {
+        let locked = phi.subcols(0, st.lambdas.len() + st.carried.len());
+        let nl = need.saturating_sub(carried_in);
+        let lf = solved.mid.as_ref().unwrap_or(start.cur);
+        let wide = if solved.sided { 2 * nl } else { nl };
+        let slice = SliceParams {
+            fac: lf,
+            locked,
+            want: wide + opts.block_size,
+            known: Some((hi, nl)),
+            two_sided: solved.sided.then_some(lo),
+        };
+        solved.out = lanczos_slice(ctx, &slice, opts)?;
+        keep = select(&solved.out);
+        if keep.len() + carried_in != need {
+            return Err(EigenError::MissedModes {
+                lo_hz: lambda_to_hz(lo),
+                hi_hz: lambda_to_hz(hi),
+                expected: need,
+                found: keep.len() + carried_in,
+                restarts: solved.out.restarts,
+            });
+        }
+    }
+    Ok(keep)
 }
 
 /// The grounded-structure probe at the start of a band from 0 Hz: a short, loose Lanczos run
@@ -276,7 +415,14 @@ fn grounded_first_shift(
         // (θ_Ritz ≤ θ₁), and the Sturm count at 0.9·l1 decides whether the shift moves.
         let mut popts = opts.clone();
         popts.tolerance = 1e-4;
-        lanczos_slice(ctx, &first, empty, 1, None, None, &popts)?
+        let slice = SliceParams {
+            fac: &first,
+            locked: empty,
+            want: 1,
+            known: None,
+            two_sided: None,
+        };
+        lanczos_slice(ctx, &slice, &popts)?
     };
     let l1 = probe.lambdas.first().copied().unwrap_or(0.0);
     let moved = GROUNDED_SHIFT * l1;
@@ -387,65 +533,67 @@ fn gap_boundary(lambdas: &[f64], lo: f64, carried: &[f64], top_shift: f64) -> f6
     }
 }
 
-/// Writes a finished slice into `phi` from column `col0`: first the slice's modes (the
-/// `carried` pairs below `hi`, then the new ones `out.vecs[keep]`, their eigenvalues
-/// appended to `lambdas`), then the pairs carried on to the next slice (carried ones at or
-/// above `hi`, then, if there is a next slice (`more`), the strictly converged new ones
-/// between `hi` and `top_shift` up to the first that is not), as many as fit in `total`
-/// columns. `carried` is replaced by the eigenvalues carried on (rad²/s²).
-#[allow(clippy::too_many_arguments)]
-fn commit_slice(
-    mut phi: MatMut<'_, f64>,
-    col0: usize,
-    carried: &mut Vec<f64>,
-    lambdas: &mut Vec<f64>,
-    (out, keep): (&SliceOut, &[usize]),
-    hi: f64,
-    (top_shift, more): (f64, bool),
-    total: usize,
-) {
-    let nc = carried.len();
-    let old_carried = phi.as_ref().subcols(col0, nc).to_owned();
-    let mut next_carried: Vec<(f64, usize, bool)> = Vec::new(); // (λ, index, from old)
-    let mut c = col0;
-    for (i, &x) in carried.iter().enumerate() {
-        if x < hi {
-            phi.as_mut().col_mut(c).copy_from(old_carried.col(i));
-            lambdas.push(x);
-            c += 1;
-        } else {
-            next_carried.push((x, i, true));
-        }
-    }
-    for &i in keep {
-        phi.as_mut().col_mut(c).copy_from(out.vecs.col(i));
-        lambdas.push(out.lambdas[i]);
-        c += 1;
-    }
-    if more {
-        // Carried: the strictly converged pairs above hi, up to the first that is not
-        // (the next slice must find every eigenvalue above the carried ones itself).
-        for (i, &x) in out.lambdas.iter().enumerate() {
-            if x >= hi && x < top_shift {
-                if !out.strict[i] {
-                    break;
-                }
-                next_carried.push((x, i, false));
+impl BandState {
+    /// Writes a finished slice into `phi` from the first column after the committed ones:
+    /// first the slice's modes (the `carried` pairs below `hi`, then the new ones
+    /// `out.vecs[keep]`, their eigenvalues appended to `lambdas`), then the pairs carried
+    /// on to the next slice (carried ones at or above `hi`, then, if there is a next slice
+    /// (`more`), the strictly converged new ones between `hi` and `top_shift` up to the
+    /// first that is not), as many as fit in `total` columns. `carried` is replaced by the
+    /// eigenvalues carried on (rad²/s²).
+    fn commit(
+        &mut self,
+        mut phi: MatMut<'_, f64>,
+        (out, keep): (&SliceOut, &[usize]),
+        hi: f64,
+        (top_shift, more): (f64, bool),
+        total: usize,
+    ) {
+        let (carried, lambdas) = (&mut self.carried, &mut self.lambdas);
+        let col0 = lambdas.len();
+        let nc = carried.len();
+        let old_carried = phi.as_ref().subcols(col0, nc).to_owned();
+        let mut next_carried: Vec<(f64, usize, bool)> = Vec::new(); // (λ, index, from old)
+        let mut c = col0;
+        for (i, &x) in carried.iter().enumerate() {
+            if x < hi {
+                phi.as_mut().col_mut(c).copy_from(old_carried.col(i));
+                lambdas.push(x);
+                c += 1;
+            } else {
+                next_carried.push((x, i, true));
             }
         }
-    }
-    next_carried.sort_by(|a, b| a.0.total_cmp(&b.0));
-    next_carried.truncate(total.saturating_sub(c));
-    carried.clear();
-    for &(x, i, from_old) in &next_carried {
-        let src = if from_old {
-            old_carried.col(i)
-        } else {
-            out.vecs.col(i)
-        };
-        phi.as_mut().col_mut(c).copy_from(src);
-        carried.push(x);
-        c += 1;
+        for &i in keep {
+            phi.as_mut().col_mut(c).copy_from(out.vecs.col(i));
+            lambdas.push(out.lambdas[i]);
+            c += 1;
+        }
+        if more {
+            // Carried: the strictly converged pairs above hi, up to the first that is not
+            // (the next slice must find every eigenvalue above the carried ones itself).
+            for (i, &x) in out.lambdas.iter().enumerate() {
+                if x >= hi && x < top_shift {
+                    if !out.strict[i] {
+                        break;
+                    }
+                    next_carried.push((x, i, false));
+                }
+            }
+        }
+        next_carried.sort_by(|a, b| a.0.total_cmp(&b.0));
+        next_carried.truncate(total.saturating_sub(c));
+        carried.clear();
+        for &(x, i, from_old) in &next_carried {
+            let src = if from_old {
+                old_carried.col(i)
+            } else {
+                out.vecs.col(i)
+            };
+            phi.as_mut().col_mut(c).copy_from(src);
+            carried.push(x);
+            c += 1;
+        }
     }
 }
 

@@ -135,8 +135,8 @@ impl Ctx<'_> {
         }
     }
 
-    /// Makes `z` M-orthonormal and M-orthogonal to `locked` and `basis` (both M-orthonormal),
-    /// given `m_locked = M·locked` and `m_basis = M·basis`. Returns `(c, r)` with
+    /// Makes `z` M-orthonormal and M-orthogonal to `against.locked` and `against.basis`
+    /// (both M-orthonormal; see [`OrthoAgainst`]). Returns `(c, r)` with
     /// `z_in = locked·(…) + basis·c + z_out·r`; the `locked` part is dropped (it only removes
     /// round-off: `locked` spans eigenvectors, see module doc). Columns that vanish (rank
     /// deficiency) are replaced by random directions with a zero row in `r`. On return `mz`
@@ -144,195 +144,264 @@ impl Ctx<'_> {
     ///
     /// One round is two passes of block classical Gram–Schmidt ("twice is enough", Giraud et
     /// al., Numer. Math. 101 (2005) 87–100) with the coefficients `(M V)ᵀ z` formed from the
-    /// stored `M V`, so the passes need no sparse product (for a diagonal M, `m_locked` and
-    /// `m_basis` are empty and the coefficients are `Vᵀ(d∘z)`, the first pass's update and the
+    /// stored `M V`, so the passes need no sparse product ([`GramSchmidt::project_consistent`];
+    /// for a diagonal M the coefficients are `Vᵀ(d∘z)`, the first pass's update and the
     /// second pass's coefficients sharing one sweep over V, and the second pass's update
-    /// skipped when those coefficients are negligible, see [`NEGLIGIBLE_SECOND_PASS`]); then
-    /// one sparse product `M z`, the
-    /// Gram matrix `zᵀ M z` and the symmetric (Löwdin) orthonormalisation `z ← z G^{-1/2}`,
-    /// whose `M z ← M z G^{-1/2}` is carried along. Another round follows while a column
-    /// still shrank by more than half in the second pass (Kahan–Parlett criterion), the
-    /// block's Gram matrix is ill-conditioned (κ(G) > 10⁴: the Löwdin step then leaves an
-    /// orthogonality error ≈ u·κ(G)), or a column was replaced by a random vector.
-    #[allow(clippy::too_many_arguments)]
+    /// skipped when those coefficients are negligible, see [`GramSchmidt::project_diagonal`]
+    /// and [`NEGLIGIBLE_SECOND_PASS`]); then one sparse product `M z`, the Gram matrix
+    /// `zᵀ M z` and the symmetric (Löwdin) orthonormalisation `z ← z G^{-1/2}`, whose
+    /// `M z ← M z G^{-1/2}` is carried along ([`Ctx::lowdin`]). Another round follows while
+    /// a column still shrank by more than half in the second pass (Kahan–Parlett
+    /// criterion), the block's Gram matrix is ill-conditioned (κ(G) > 10⁴: the Löwdin step
+    /// then leaves an orthogonality error ≈ u·κ(G)), or a column was replaced by a random
+    /// vector.
     pub(super) fn orthonormalize(
         &mut self,
-        locked: MatRef<'_, f64>,
-        m_locked: MatRef<'_, f64>,
-        basis: MatRef<'_, f64>,
-        m_basis: MatRef<'_, f64>,
+        against: &OrthoAgainst<'_>,
         mut z: MatMut<'_, f64>,
         mut mz: MatMut<'_, f64>,
         scratch: &mut Mat<f64>,
     ) -> Result<(Mat<f64>, Mat<f64>), EigenError> {
         let b = z.ncols();
-        let j = basis.ncols();
+        let j = against.basis.ncols();
         let n = z.nrows();
         // Tall-skinny products, split over row ranges (see `spmm`).
         let par = self.par();
         if scratch.nrows() != n || scratch.ncols() != b {
             *scratch = Mat::<f64>::zeros(n, b);
         }
-        let mut c = Mat::<f64>::zeros(j, b);
-        let mut r_acc = Mat::<f64>::identity(b, b);
-        let mut passes = 0;
-        let mut rounds = 0;
-        let mut replaced_last = false;
+        let mut gs = GramSchmidt {
+            c: Mat::<f64>::zeros(j, b),
+            r_acc: Mat::<f64>::identity(b, b),
+            passes: 0,
+            rounds: 0,
+            replaced_last: false,
+            removed: Vec::new(),
+            removed_last: Vec::new(),
+        };
         let mut again = true;
-        while again && rounds < 4 {
-            rounds += 1;
-            // ‖projected part‖²_M per column over the round, and in its last pass.
-            let mut removed = vec![0.0f64; b];
-            let mut removed_last = vec![0.0f64; b];
+        while again && gs.rounds < 4 {
+            gs.rounds += 1;
+            gs.removed = vec![0.0f64; b];
+            gs.removed_last = vec![0.0f64; b];
             // The locked vectors are eigenvectors: Op keeps a block M-orthogonal to them up to
             // round-off, so one projection per block suffices (again after a random
             // replacement, which is not orthogonal to them).
-            if let Some(d) = self.m_diag {
-                // Diagonal M: coefficients Vᵀ(d∘z) from V itself; the first pass's update
-                // and the second pass's coefficients in one sweep over V (three reads of V
-                // per block instead of four reads of V and M V, two when the second pass is
-                // negligible).
-                passes += 1;
-                let reps = if replaced_last {
-                    2
-                } else {
-                    usize::from(rounds == 1)
-                };
-                // First pass against the basis, which removes the bulk of z (the Lanczos
-                // recurrence), then the locked vectors on what is left: projected before,
-                // the round-off of the large z (≈ u‖z‖ along the locked vectors) would stay
-                // in the much smaller result (grounded lattice: 1.8e-10 instead of 1e-15).
-                let mut c01 = None;
-                if j > 0 {
-                    scale_rows(d, z.as_ref(), scratch.as_mut());
-                    let c0 = tall_t_mul(basis, scratch.as_ref(), par);
-                    let c1 = tall_update_then_t_mul(z.as_mut(), basis, c0.as_ref(), d, par);
-                    add_squared_col_norms(c0.as_ref(), &mut removed, &mut removed_last);
-                    c01 = Some((c0, c1));
-                }
-                for _ in 0..reps {
-                    if locked.ncols() > 0 {
-                        scale_rows(d, z.as_ref(), scratch.as_mut());
-                        let cl = tall_t_mul(locked, scratch.as_ref(), par);
-                        tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
-                        add_squared_col_norms(cl.as_ref(), &mut removed, &mut removed_last);
-                    }
-                }
-                removed_last.fill(0.0);
-                if let Some((mut c0, c1)) = c01 {
-                    // The second pass's update changes z by at most ‖c1‖ (columns of V are
-                    // M-orthonormal; the locked projection above is M-orthogonal to V and
-                    // leaves c1 as it is): skip its read of V when that is below
-                    // `NEGLIGIBLE_SECOND_PASS` of every column's M-norm.
-                    let negligible = (0..b).all(|col| {
-                        let zz: f64 = (0..n).map(|r| d[r] * z[(r, col)] * z[(r, col)]).sum();
-                        c1.col(col).squared_norm_l2()
-                            <= NEGLIGIBLE_SECOND_PASS * NEGLIGIBLE_SECOND_PASS * zz
-                    });
-                    if !negligible {
-                        passes += 1;
-                        tall_mul_add(z.as_mut(), basis, c1.as_ref(), -1.0, par);
-                        add_squared_col_norms(c1.as_ref(), &mut removed, &mut removed_last);
-                        c0 += &c1;
-                    }
-                    matmul(
-                        c.as_mut(),
-                        Accum::Add,
-                        c0.as_ref(),
-                        r_acc.as_ref(),
-                        1.0,
-                        Par::Seq,
-                    );
-                }
-            } else {
-                for pass in 0..2 {
-                    passes += 1;
-                    removed_last.fill(0.0);
-                    // Locked vectors after the first basis pass (see the lumped case).
-                    if locked.ncols() > 0 && ((rounds == 1 && pass == 1) || replaced_last) {
-                        let cl = tall_t_mul(m_locked, z.as_ref(), par);
-                        tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
-                        add_squared_col_norms(cl.as_ref(), &mut removed, &mut removed_last);
-                    }
-                    if j > 0 {
-                        let cv = tall_t_mul(m_basis, z.as_ref(), par);
-                        tall_mul_add(z.as_mut(), basis, cv.as_ref(), -1.0, par);
-                        add_squared_col_norms(cv.as_ref(), &mut removed, &mut removed_last);
-                        // c += cv · r_acc
-                        matmul(
-                            c.as_mut(),
-                            Accum::Add,
-                            cv.as_ref(),
-                            r_acc.as_ref(),
-                            1.0,
-                            Par::Seq,
-                        );
-                    }
-                }
+            match self.m_diag {
+                Some(d) => gs.project_diagonal(d, against, z.as_mut(), scratch, par),
+                None => gs.project_consistent(against, z.as_mut(), par),
             }
-            replaced_last = false;
+            gs.replaced_last = false;
             let t = Instant::now();
             mul_m(self.m, self.m_diag, z.as_ref(), mz.as_mut());
             self.timing.orthogonalize_spmm_s += t.elapsed().as_secs_f64();
-            // Symmetric (Löwdin) orthonormalisation of the block.
-            let mut g = tall_t_mul(z.as_ref(), mz.as_ref(), par);
-            let gt = g.transpose().to_owned();
-            g += gt;
-            g *= faer::Scale(0.5);
-            // ‖z‖²_M before the round ≈ what was removed + what is left (Pythagoras).
-            let before: Vec<f64> = (0..b).map(|i| removed[i] + g[(i, i)].max(0.0)).collect();
-            let s_ref = before
-                .iter()
-                .copied()
-                .fold(0.0f64, f64::max)
-                .max(f64::MIN_POSITIVE);
-            let shrink_last = (0..b)
-                .map(|i| {
-                    let left = g[(i, i)].max(0.0);
-                    (left / (left + removed_last[i]).max(f64::MIN_POSITIVE)).sqrt()
-                })
-                .fold(f64::INFINITY, f64::min);
-            let (lam, u) = dense_eig(g.as_ref())?;
-            let mut scaled = u.clone();
-            let mut r = Mat::<f64>::zeros(b, b);
-            let mut deficient = Vec::new();
-            for i in 0..b {
-                if lam[i] > 1e-20 * s_ref {
-                    let s = lam[i].sqrt();
-                    for row in 0..b {
-                        scaled[(row, i)] = u[(row, i)] / s;
-                        r[(i, row)] = s * u[(row, i)];
-                    }
-                } else {
-                    deficient.push(i);
-                    for row in 0..b {
-                        scaled[(row, i)] = 0.0;
-                    }
-                }
-            }
-            let kappa = lam[b - 1] / lam[0].max(f64::MIN_POSITIVE);
-            // z ← z·S and M z ← M z·S.
-            for mut x in [z.as_mut(), mz.as_mut()] {
-                scratch.fill(0.0);
-                tall_mul_add(scratch.as_mut(), x.as_ref(), scaled.as_ref(), 1.0, par);
-                x.copy_from(&*scratch);
-            }
-            for &i in &deficient {
-                for row in 0..n {
-                    z[(row, i)] = self.rng.next_f64();
-                }
-                replaced_last = true;
-            }
-            r_acc = mm(r.as_ref(), r_acc.as_ref(), Par::Seq);
-            again = replaced_last || shrink_last < 0.5 || kappa > 1e4;
+            again = self.lowdin(&mut gs, z.as_mut(), mz.as_mut(), scratch, par)?;
         }
-        if replaced_last {
+        if gs.replaced_last {
             // Random columns of the last round (only after 4 rounds): M z is not carried.
             mul_m(self.m, self.m_diag, z.as_ref(), mz.as_mut());
         }
-        self.timing.orthogonalization_passes += passes;
+        self.timing.orthogonalization_passes += gs.passes;
         self.timing.orthogonalized_blocks += 1;
-        Ok((c, r_acc))
+        Ok((gs.c, gs.r_acc))
+    }
+
+    /// The symmetric (Löwdin) orthonormalisation of a round: `z ← z G^{-1/2}` and
+    /// `M z ← M z G^{-1/2}` with the Gram matrix `G = zᵀ M z`; columns in its null space
+    /// (eigenvalue below 10⁻²⁰ of the largest M-norm² before the round) are replaced by
+    /// random directions. Accumulates the factor into `gs.r_acc`; returns whether another
+    /// round is needed (a replaced column, a column that shrank by more than half in the
+    /// round's last pass, or κ(G) > 10⁴).
+    fn lowdin(
+        &mut self,
+        gs: &mut GramSchmidt,
+        mut z: MatMut<'_, f64>,
+        mut mz: MatMut<'_, f64>,
+        scratch: &mut Mat<f64>,
+        par: Par,
+    ) -> Result<bool, EigenError> {
+        let (n, b) = (z.nrows(), z.ncols());
+        let mut g = tall_t_mul(z.as_ref(), mz.as_ref(), par);
+        let gt = g.transpose().to_owned();
+        g += gt;
+        g *= faer::Scale(0.5);
+        // ‖z‖²_M before the round ≈ what was removed + what is left (Pythagoras).
+        let before: Vec<f64> = (0..b).map(|i| gs.removed[i] + g[(i, i)].max(0.0)).collect();
+        let s_ref = before
+            .iter()
+            .copied()
+            .fold(0.0f64, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let shrink_last = (0..b)
+            .map(|i| {
+                let left = g[(i, i)].max(0.0);
+                (left / (left + gs.removed_last[i]).max(f64::MIN_POSITIVE)).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        let (lam, u) = dense_eig(g.as_ref())?;
+        let mut scaled = u.clone();
+        let mut r = Mat::<f64>::zeros(b, b);
+        let mut deficient = Vec::new();
+        for i in 0..b {
+            if lam[i] > 1e-20 * s_ref {
+                let s = lam[i].sqrt();
+                for row in 0..b {
+                    scaled[(row, i)] = u[(row, i)] / s;
+                    r[(i, row)] = s * u[(row, i)];
+                }
+            } else {
+                deficient.push(i);
+                for row in 0..b {
+                    scaled[(row, i)] = 0.0;
+                }
+            }
+        }
+        let kappa = lam[b - 1] / lam[0].max(f64::MIN_POSITIVE);
+        // z ← z·S and M z ← M z·S.
+        for mut x in [z.as_mut(), mz.as_mut()] {
+            scratch.fill(0.0);
+            tall_mul_add(scratch.as_mut(), x.as_ref(), scaled.as_ref(), 1.0, par);
+            x.copy_from(&*scratch);
+        }
+        for &i in &deficient {
+            for row in 0..n {
+                z[(row, i)] = self.rng.next_f64();
+            }
+            gs.replaced_last = true;
+        }
+        gs.r_acc = mm(r.as_ref(), gs.r_acc.as_ref(), Par::Seq);
+        Ok(gs.replaced_last || shrink_last < 0.5 || kappa > 1e4)
+    }
+}
+
+/// The M-orthonormal vectors a block is made M-orthogonal to by [`Ctx::orthonormalize`].
+pub(super) struct OrthoAgainst<'a> {
+    /// Deflated eigenvectors (n × p, p ≥ 0).
+    pub(super) locked: MatRef<'a, f64>,
+    /// `M · locked` (n × p); empty (n × 0) for a diagonal M.
+    pub(super) m_locked: MatRef<'a, f64>,
+    /// The Krylov basis V (n × j, j ≥ 0).
+    pub(super) basis: MatRef<'a, f64>,
+    /// `M · basis` (n × j); empty (n × 0) for a diagonal M.
+    pub(super) m_basis: MatRef<'a, f64>,
+}
+
+/// The running state of one [`Ctx::orthonormalize`].
+struct GramSchmidt {
+    /// Coefficients of the input block on the basis so far (j × b).
+    c: Mat<f64>,
+    /// Product of the rounds' Löwdin factors (b × b): `z_in = basis·c + z·r_acc` (plus the
+    /// dropped locked part).
+    r_acc: Mat<f64>,
+    /// Gram–Schmidt passes over the basis so far.
+    passes: usize,
+    /// Rounds so far (at most 4).
+    rounds: usize,
+    /// The last round replaced a column by a random vector.
+    replaced_last: bool,
+    /// ‖projected part‖²_M per column over the current round.
+    removed: Vec<f64>,
+    /// The same in the round's last pass.
+    removed_last: Vec<f64>,
+}
+
+impl GramSchmidt {
+    /// One round's projections for a diagonal M (`d`): coefficients `Vᵀ(d∘z)` from V
+    /// itself; the first pass's update and the second pass's coefficients in one sweep over
+    /// V (three reads of V per block instead of four reads of V and M V, two when the
+    /// second pass is negligible).
+    fn project_diagonal(
+        &mut self,
+        d: &[f64],
+        against: &OrthoAgainst<'_>,
+        mut z: MatMut<'_, f64>,
+        scratch: &mut Mat<f64>,
+        par: Par,
+    ) {
+        let (locked, basis) = (against.locked, against.basis);
+        let (n, b, j) = (z.nrows(), z.ncols(), basis.ncols());
+        self.passes += 1;
+        let reps = if self.replaced_last {
+            2
+        } else {
+            usize::from(self.rounds == 1)
+        };
+        // First pass against the basis, which removes the bulk of z (the Lanczos
+        // recurrence), then the locked vectors on what is left: projected before,
+        // the round-off of the large z (≈ u‖z‖ along the locked vectors) would stay
+        // in the much smaller result (grounded lattice: 1.8e-10 instead of 1e-15).
+        let mut c01 = None;
+        if j > 0 {
+            scale_rows(d, z.as_ref(), scratch.as_mut());
+            let c0 = tall_t_mul(basis, scratch.as_ref(), par);
+            let c1 = tall_update_then_t_mul(z.as_mut(), basis, c0.as_ref(), d, par);
+            add_squared_col_norms(c0.as_ref(), &mut self.removed, &mut self.removed_last);
+            c01 = Some((c0, c1));
+        }
+        for _ in 0..reps {
+            if locked.ncols() > 0 {
+                scale_rows(d, z.as_ref(), scratch.as_mut());
+                let cl = tall_t_mul(locked, scratch.as_ref(), par);
+                tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
+                add_squared_col_norms(cl.as_ref(), &mut self.removed, &mut self.removed_last);
+            }
+        }
+        self.removed_last.fill(0.0);
+        if let Some((mut c0, c1)) = c01 {
+            // The second pass's update changes z by at most ‖c1‖ (columns of V are
+            // M-orthonormal; the locked projection above is M-orthogonal to V and
+            // leaves c1 as it is): skip its read of V when that is below
+            // `NEGLIGIBLE_SECOND_PASS` of every column's M-norm.
+            let negligible = (0..b).all(|col| {
+                let zz: f64 = (0..n).map(|r| d[r] * z[(r, col)] * z[(r, col)]).sum();
+                c1.col(col).squared_norm_l2()
+                    <= NEGLIGIBLE_SECOND_PASS * NEGLIGIBLE_SECOND_PASS * zz
+            });
+            if !negligible {
+                self.passes += 1;
+                tall_mul_add(z.as_mut(), basis, c1.as_ref(), -1.0, par);
+                add_squared_col_norms(c1.as_ref(), &mut self.removed, &mut self.removed_last);
+                c0 += &c1;
+            }
+            matmul(
+                self.c.as_mut(),
+                Accum::Add,
+                c0.as_ref(),
+                self.r_acc.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+        }
+    }
+
+    /// One round's two projections for a general M, with the coefficients `(M V)ᵀ z` from
+    /// the stored `M V` (and the locked vectors after the first basis pass, see
+    /// [`GramSchmidt::project_diagonal`]).
+    fn project_consistent(&mut self, against: &OrthoAgainst<'_>, mut z: MatMut<'_, f64>, par: Par) {
+        let (locked, basis) = (against.locked, against.basis);
+        for pass in 0..2 {
+            self.passes += 1;
+            self.removed_last.fill(0.0);
+            if locked.ncols() > 0 && ((self.rounds == 1 && pass == 1) || self.replaced_last) {
+                let cl = tall_t_mul(against.m_locked, z.as_ref(), par);
+                tall_mul_add(z.as_mut(), locked, cl.as_ref(), -1.0, par);
+                add_squared_col_norms(cl.as_ref(), &mut self.removed, &mut self.removed_last);
+            }
+            if basis.ncols() > 0 {
+                let cv = tall_t_mul(against.m_basis, z.as_ref(), par);
+                tall_mul_add(z.as_mut(), basis, cv.as_ref(), -1.0, par);
+                add_squared_col_norms(cv.as_ref(), &mut self.removed, &mut self.removed_last);
+                // c += cv · r_acc
+                matmul(
+                    self.c.as_mut(),
+                    Accum::Add,
+                    cv.as_ref(),
+                    self.r_acc.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+            }
+        }
     }
 }
 

@@ -392,9 +392,14 @@ fn run_bands(
         // Band 0 keeps the seed of the single-band solver (reproducible results).
         let rng = Rng((opts.seed ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)) | 1);
         let mut ctx = problem.ctx((bands > 1).then_some(&running), rng);
-        let out = run_band(
-            &mut ctx, view, first, from_zero, grounded, top, lam_max, opts, progress,
-        );
+        let band = BandParams {
+            first,
+            from_zero,
+            grounded,
+            top,
+            lam_max,
+        };
+        let out = run_band(&mut ctx, view, band, opts, progress);
         running.fetch_sub(1, AtomicOrdering::Relaxed);
         out.map(|out| (out, ctx.timing))
     };

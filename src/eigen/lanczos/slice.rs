@@ -15,6 +15,24 @@ pub(super) struct SliceOut {
     pub(super) solved: usize,
 }
 
+/// What one Lanczos slice looks for (see [`lanczos_slice`]).
+pub(super) struct SliceParams<'a> {
+    /// The factorisation of `K − σM` at the slice's shift σ (rad²/s²).
+    pub(super) fac: &'a ShiftFactor,
+    /// The deflated vectors (n × p, p ≥ 0): M-orthonormal eigenvectors found before.
+    pub(super) locked: MatRef<'a, f64>,
+    /// Converged pairs wanted (at least 1, raised to the `need` of `known`; cut to what fits
+    /// in the problem beside `locked`).
+    pub(super) want: usize,
+    /// `Some((hi, need))`: the Sturm count puts exactly `need` eigenvalues in the slice below
+    /// `hi` (rad²/s²), and the slice ends once its converged prefix holds them; `None`: an
+    /// open-ended slice that ends at `want` converged pairs.
+    pub(super) known: Option<(f64, usize)>,
+    /// `Some(lo)`: a two-sided slice, whose wanted pairs lie in `[lo, hi)` (rad²/s²) on both
+    /// sides of σ (about midway); `known` must then be given. `None`: one-sided, λ ≥ σ.
+    pub(super) two_sided: Option<f64>,
+}
+
 /// Block Lanczos at shift `fac.shift`, deflating `locked`, until the *converged prefix* (the
 /// Ritz pairs of largest θ, i.e. λ just above σ, that are all converged) holds `want` pairs,
 /// or — when `known = Some((hi, need))` (Sturm count) — until it holds `need` values below
@@ -23,123 +41,38 @@ pub(super) struct SliceOut {
 /// `two_sided = Some(lo)`: the wanted pairs lie on both sides of σ, in `[lo, hi)` with σ
 /// about midway (the first slice of a band whose lower neighbours are not deflated). The
 /// prefix is then ordered by |θ| (nearest λ to σ first) and `known` must be given.
-#[allow(clippy::too_many_arguments)]
+///
+/// Every cycle extends the Krylov basis ([`Krylov::extend`]), solves the Rayleigh–Ritz
+/// problem ([`rayleigh_ritz`]), counts the converged prefix ([`converged_prefix`]) and, once
+/// the subspace is full without the wanted pairs, restarts ([`thick_restart`]).
 pub(super) fn lanczos_slice(
     ctx: &mut Ctx<'_>,
-    fac: &ShiftFactor,
-    locked: MatRef<'_, f64>,
-    want: usize,
-    known: Option<(f64, usize)>,
-    two_sided: Option<f64>,
+    sp: &SliceParams<'_>,
     opts: &EigenOptions,
 ) -> Result<SliceOut, EigenError> {
     let n = ctx.sys.n();
+    let locked = sp.locked;
     let p = locked.ncols();
-    let sigma = fac.shift;
-    let need = known.map_or(0, |k| k.1);
-    let (b, want, m_max) = subspace_size(n, p, want, need, opts)?;
+    let sigma = sp.fac.shift;
+    let two_sided = sp.two_sided;
+    let need = sp.known.map_or(0, |k| k.1);
+    let (b, want, m_max) = subspace_size(n, p, sp.want, need, opts)?;
     let round_up = |x: usize| x.div_ceil(b) * b;
     // Convergence is checked when the subspace is full and, from half of it (and at least
     // `want` + 2 blocks) on, every EARLY_CHECK_BLOCKS blocks.
     let early_from = round_up((want + 2 * b).max(m_max / 2));
-    let mut v = Mat::<f64>::zeros(n, m_max);
-    // M·V, kept alongside V so that the Gram–Schmidt passes need no sparse product (not
-    // needed for a diagonal M).
-    let lumped = ctx.m_diag.is_some();
-    let mut mv = Mat::<f64>::zeros(n, if lumped { 0 } else { m_max });
-    let mut m_locked = Mat::<f64>::zeros(n, if lumped { 0 } else { p });
-    if p > 0 && !lumped {
-        let t = Instant::now();
-        sym_spmm(ctx.m, locked, m_locked.as_mut());
-        ctx.timing.orthogonalize_spmm_s += t.elapsed().as_secs_f64();
-    }
-    let mut scratch = Mat::<f64>::zeros(n, b);
-    let mut h = Mat::<f64>::zeros(m_max + b, m_max);
-    let mut q = Mat::<f64>::from_fn(n, b, |_, _| ctx.rng.next_f64());
-    let mut z = Mat::<f64>::zeros(n, b);
-    let mut mz = Mat::<f64>::zeros(n, b);
-    let (mut rhs, mut kz) = if opts.refine_solves {
-        (Mat::<f64>::zeros(n, b), Mat::<f64>::zeros(n, b))
-    } else {
-        (Mat::<f64>::zeros(0, 0), Mat::<f64>::zeros(0, 0))
-    };
-    let mut buf = ctx.sys.solve_buffer(b);
-    // mq = M q throughout (returned by every orthonormalisation).
-    let mut mq = Mat::<f64>::zeros(n, b);
-    ctx.orthonormalize(
-        locked,
-        m_locked.as_ref(),
-        v.as_ref().subcols(0, 0),
-        mv.as_ref().subcols(0, 0),
-        q.as_mut(),
-        mq.as_mut(),
-        &mut scratch,
-    )?;
+    let mut kr = Krylov::new(ctx, locked, b, m_max, opts.refine_solves)?;
     let mut j = 0usize;
     let mut restarts = 0usize;
-    let mut solved = 0usize;
     loop {
-        while j + b <= m_max {
-            v.as_mut().subcols_mut(j, b).copy_from(&q);
-            if !lumped {
-                mv.as_mut().subcols_mut(j, b).copy_from(&mq);
-            }
-            z.copy_from(&mq);
-            let t = Instant::now();
-            if opts.refine_solves {
-                rhs.copy_from(&z);
-            }
-            ctx.solve(fac, z.as_mut(), &mut buf);
-            ctx.timing.solved_vectors += b;
-            solved += b;
-            if opts.refine_solves {
-                // One step of iterative refinement: z += A⁻¹ (rhs − (K − σM) z).
-                sym_spmm(ctx.k, z.as_ref(), kz.as_mut());
-                mul_m(ctx.m, ctx.m_diag, z.as_ref(), mz.as_mut());
-                for c in 0..b {
-                    for r in 0..n {
-                        rhs[(r, c)] -= kz[(r, c)] - sigma * mz[(r, c)];
-                    }
-                }
-                ctx.solve(fac, rhs.as_mut(), &mut buf);
-                z += &rhs;
-                ctx.timing.solved_vectors += b;
-                solved += b;
-            }
-            ctx.timing.solve_s += t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            let (c, r) = ctx.orthonormalize(
-                locked,
-                m_locked.as_ref(),
-                v.as_ref().subcols(0, j + b),
-                mv.as_ref().subcols(0, if lumped { 0 } else { j + b }),
-                z.as_mut(),
-                mz.as_mut(),
-                &mut scratch,
-            )?;
-            ctx.timing.orthogonalize_s += t.elapsed().as_secs_f64();
-            h.as_mut().submatrix_mut(0, j, j + b, b).copy_from(&c);
-            h.as_mut().submatrix_mut(j + b, j, b, b).copy_from(&r);
-            std::mem::swap(&mut q, &mut z);
-            std::mem::swap(&mut mq, &mut mz);
-            j += b;
-            if j < m_max && j >= early_from && ((j - early_from) / b) % EARLY_CHECK_BLOCKS == 0 {
-                break;
-            }
-        }
-        // Rayleigh–Ritz on the symmetric part.
-        let t_rr = Instant::now();
-        let hj = h.as_ref().submatrix(0, 0, j, j);
-        let t = Mat::<f64>::from_fn(j, j, |r, c| 0.5 * (hj[(r, c)] + hj[(c, r)]));
-        let (theta, s) = dense_eig(t.as_ref())?;
-        let e = h.as_ref().submatrix(j, 0, b, j);
-        let es = mm(e, s.as_ref(), Par::Seq);
-        ctx.timing.rayleigh_ritz_s += t_rr.elapsed().as_secs_f64();
+        j = kr.extend(ctx, sp.fac, locked, j, early_from)?;
+        let rr = rayleigh_ritz(ctx, kr.h.as_ref(), j, b)?;
+        let theta = &rr.theta;
         let ritz = Ritz {
             sigma,
-            theta: &theta,
-            s: s.as_ref(),
-            es: es.as_ref(),
+            theta,
+            s: rr.s.as_ref(),
+            es: rr.es.as_ref(),
         };
         // Indices by descending θ (wanted = largest θ = λ just above σ), or by descending |θ|
         // for a two-sided slice.
@@ -147,25 +80,14 @@ pub(super) fn lanczos_slice(
         if two_sided.is_some() {
             order.sort_by(|&a, &b| theta[b].abs().total_cmp(&theta[a].abs()));
         }
-        // Convergence: ‖Op x − θx‖_M ≤ tol · max(θ, θ_max/100). The floor reflects the
-        // attainable accuracy: solves and re-orthogonalisation err by O(u κ)·‖Op‖ with
-        // ‖Op‖ = θ_max, so Ritz values far from the shift (θ ≪ θ_max) cannot be resolved to
-        // tol relative to their own θ. The true residual of every pair is checked afterwards.
-        let theta_abs_max = theta[0].abs().max(theta[j - 1].abs());
-        let converged = |idx: usize| -> bool {
-            let res = es.as_ref().col(idx).norm_l2();
-            (theta[idx] > 0.0 || two_sided.is_some())
-                && res <= opts.tolerance * theta[idx].abs().max(1e-2 * theta_abs_max)
-        };
-        let lambda_of = |idx: usize| ritz.lambda(idx);
-        let prefix = order.iter().take_while(|&&i| converged(i)).count();
-        let done = match known {
+        let prefix = converged_prefix(&ritz, &order, two_sided.is_some(), opts.tolerance);
+        let done = match sp.known {
             None => prefix >= want,
             Some((hi, need)) => {
                 let lo = two_sided.unwrap_or(f64::NEG_INFINITY);
                 let below = order[..prefix]
                     .iter()
-                    .filter(|&&i| lambda_of(i) < hi && lambda_of(i) >= lo)
+                    .filter(|&&i| ritz.lambda(i) < hi && ritz.lambda(i) >= lo)
                     .count();
                 // The Sturm count guarantees there are exactly `need` below hi: no need to wait
                 // for a converged value above hi (that one converges slowly).
@@ -177,8 +99,8 @@ pub(super) fn lanczos_slice(
                 ctx,
                 &ritz,
                 &order[..prefix],
-                v.as_ref().subcols(0, j),
-                q.as_ref(),
+                kr.v.as_ref().subcols(0, j),
+                kr.q.as_ref(),
                 opts.tolerance,
             );
             return Ok(SliceOut {
@@ -186,7 +108,7 @@ pub(super) fn lanczos_slice(
                 strict,
                 vecs,
                 restarts,
-                solved,
+                solved: kr.solved,
             });
         }
         if j + b <= m_max {
@@ -194,7 +116,9 @@ pub(super) fn lanczos_slice(
             continue;
         }
         if restarts >= opts.max_restarts {
-            let (hi, expected) = known.unwrap_or((lambda_of(order[want.min(j) - 1]), want));
+            let (hi, expected) = sp
+                .known
+                .unwrap_or((ritz.lambda(order[want.min(j) - 1]), want));
             return Err(EigenError::MissedModes {
                 lo_hz: lambda_to_hz(sigma),
                 hi_hz: lambda_to_hz(hi),
@@ -210,10 +134,216 @@ pub(super) fn lanczos_slice(
             (want, m_max, b),
             two_sided.is_some(),
             opts.restart_keep,
-            (v.as_mut(), mv.as_mut(), h.as_mut()),
+            (kr.v.as_mut(), kr.mv.as_mut(), kr.h.as_mut()),
         );
         restarts += 1;
     }
+}
+
+/// The Krylov basis of one slice and the work space of its extension.
+struct Krylov {
+    /// The M-orthonormal basis V (n × m_max; the first j columns are in use).
+    v: Mat<f64>,
+    /// M·V, kept alongside V so that the Gram–Schmidt passes need no sparse product (empty
+    /// for a diagonal M).
+    mv: Mat<f64>,
+    /// M times the deflated vectors (empty for a diagonal M).
+    m_locked: Mat<f64>,
+    /// `Op V = [V Q] H`: the projected operator ((m_max + b) × m_max).
+    h: Mat<f64>,
+    /// The pending block Q (n × b) and `M Q`.
+    q: Mat<f64>,
+    mq: Mat<f64>,
+    /// The next block being formed and its M product (n × b).
+    z: Mat<f64>,
+    mz: Mat<f64>,
+    /// Work space of the Gram–Schmidt passes (n × b).
+    scratch: Mat<f64>,
+    /// Right-hand side and `K z` of the iterative refinement (n × b; empty without it).
+    rhs: Mat<f64>,
+    kz: Mat<f64>,
+    /// One step of iterative refinement after every solve.
+    refine: bool,
+    buf: SolveWorkspace,
+    /// Right-hand sides solved so far.
+    solved: usize,
+}
+
+impl Krylov {
+    /// The work space of a slice with block size `b` and subspace size `m_max`, deflating
+    /// `locked`; the first block Q is random, made M-orthonormal and M-orthogonal to
+    /// `locked`.
+    fn new(
+        ctx: &mut Ctx<'_>,
+        locked: MatRef<'_, f64>,
+        b: usize,
+        m_max: usize,
+        refine: bool,
+    ) -> Result<Self, EigenError> {
+        let n = ctx.sys.n();
+        let p = locked.ncols();
+        let v = Mat::<f64>::zeros(n, m_max);
+        let lumped = ctx.m_diag.is_some();
+        let mv = Mat::<f64>::zeros(n, if lumped { 0 } else { m_max });
+        let mut m_locked = Mat::<f64>::zeros(n, if lumped { 0 } else { p });
+        if p > 0 && !lumped {
+            let t = Instant::now();
+            sym_spmm(ctx.m, locked, m_locked.as_mut());
+            ctx.timing.orthogonalize_spmm_s += t.elapsed().as_secs_f64();
+        }
+        let scratch = Mat::<f64>::zeros(n, b);
+        let h = Mat::<f64>::zeros(m_max + b, m_max);
+        let q = Mat::<f64>::from_fn(n, b, |_, _| ctx.rng.next_f64());
+        let z = Mat::<f64>::zeros(n, b);
+        let mz = Mat::<f64>::zeros(n, b);
+        let (rhs, kz) = if refine {
+            (Mat::<f64>::zeros(n, b), Mat::<f64>::zeros(n, b))
+        } else {
+            (Mat::<f64>::zeros(0, 0), Mat::<f64>::zeros(0, 0))
+        };
+        let buf = ctx.sys.solve_buffer(b);
+        // mq = M q throughout (returned by every orthonormalisation).
+        let mq = Mat::<f64>::zeros(n, b);
+        let mut kr = Krylov {
+            v,
+            mv,
+            m_locked,
+            h,
+            q,
+            mq,
+            z,
+            mz,
+            scratch,
+            rhs,
+            kz,
+            refine,
+            buf,
+            solved: 0,
+        };
+        let against = OrthoAgainst {
+            locked,
+            m_locked: kr.m_locked.as_ref(),
+            basis: kr.v.as_ref().subcols(0, 0),
+            m_basis: kr.mv.as_ref().subcols(0, 0),
+        };
+        ctx.orthonormalize(&against, kr.q.as_mut(), kr.mq.as_mut(), &mut kr.scratch)?;
+        Ok(kr)
+    }
+
+    /// Extends the basis from `j` columns block by block (solve with `fac`, optional
+    /// refinement, orthonormalisation against `locked` and V) until it is full or an early
+    /// convergence check is due from `early_from` columns on; returns the new size.
+    fn extend(
+        &mut self,
+        ctx: &mut Ctx<'_>,
+        fac: &ShiftFactor,
+        locked: MatRef<'_, f64>,
+        mut j: usize,
+        early_from: usize,
+    ) -> Result<usize, EigenError> {
+        let (n, b) = (self.q.nrows(), self.q.ncols());
+        let m_max = self.v.ncols();
+        let sigma = fac.shift;
+        let lumped = ctx.m_diag.is_some();
+        while j + b <= m_max {
+            self.v.as_mut().subcols_mut(j, b).copy_from(&self.q);
+            if !lumped {
+                self.mv.as_mut().subcols_mut(j, b).copy_from(&self.mq);
+            }
+            self.z.copy_from(&self.mq);
+            let t = Instant::now();
+            if self.refine {
+                self.rhs.copy_from(&self.z);
+            }
+            ctx.solve(fac, self.z.as_mut(), &mut self.buf);
+            ctx.timing.solved_vectors += b;
+            self.solved += b;
+            if self.refine {
+                // One step of iterative refinement: z += A⁻¹ (rhs − (K − σM) z).
+                sym_spmm(ctx.k, self.z.as_ref(), self.kz.as_mut());
+                mul_m(ctx.m, ctx.m_diag, self.z.as_ref(), self.mz.as_mut());
+                for c in 0..b {
+                    for r in 0..n {
+                        self.rhs[(r, c)] -= self.kz[(r, c)] - sigma * self.mz[(r, c)];
+                    }
+                }
+                ctx.solve(fac, self.rhs.as_mut(), &mut self.buf);
+                self.z += &self.rhs;
+                ctx.timing.solved_vectors += b;
+                self.solved += b;
+            }
+            ctx.timing.solve_s += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let against = OrthoAgainst {
+                locked,
+                m_locked: self.m_locked.as_ref(),
+                basis: self.v.as_ref().subcols(0, j + b),
+                m_basis: self.mv.as_ref().subcols(0, if lumped { 0 } else { j + b }),
+            };
+            let (c, r) = ctx.orthonormalize(
+                &against,
+                self.z.as_mut(),
+                self.mz.as_mut(),
+                &mut self.scratch,
+            )?;
+            ctx.timing.orthogonalize_s += t.elapsed().as_secs_f64();
+            self.h.as_mut().submatrix_mut(0, j, j + b, b).copy_from(&c);
+            self.h.as_mut().submatrix_mut(j + b, j, b, b).copy_from(&r);
+            std::mem::swap(&mut self.q, &mut self.z);
+            std::mem::swap(&mut self.mq, &mut self.mz);
+            j += b;
+            if j < m_max && j >= early_from && ((j - early_from) / b) % EARLY_CHECK_BLOCKS == 0 {
+                break;
+            }
+        }
+        Ok(j)
+    }
+}
+
+/// The Rayleigh–Ritz solution of one cycle, owned (borrowed as a [`Ritz`]).
+struct RitzSolution {
+    /// Ritz values θ = 1/(λ − σ) (s²/rad²), ascending.
+    theta: Vec<f64>,
+    /// Their eigenvectors in the Krylov basis (j × j).
+    s: Mat<f64>,
+    /// `E·s` (b × j), whose column norms are the Ritz residuals.
+    es: Mat<f64>,
+}
+
+/// Rayleigh–Ritz on the symmetric part of the leading `j × j` block of `h` (block size
+/// `b`): the Ritz values θ (ascending), their eigenvectors `s` and `E·s` (E: the `b` rows of
+/// `h` below that block).
+fn rayleigh_ritz(
+    ctx: &mut Ctx<'_>,
+    h: MatRef<'_, f64>,
+    j: usize,
+    b: usize,
+) -> Result<RitzSolution, EigenError> {
+    let t_rr = Instant::now();
+    let hj = h.submatrix(0, 0, j, j);
+    let t = Mat::<f64>::from_fn(j, j, |r, c| 0.5 * (hj[(r, c)] + hj[(c, r)]));
+    let (theta, s) = dense_eig(t.as_ref())?;
+    let e = h.submatrix(j, 0, b, j);
+    let es = mm(e, s.as_ref(), Par::Seq);
+    ctx.timing.rayleigh_ritz_s += t_rr.elapsed().as_secs_f64();
+    Ok(RitzSolution { theta, s, es })
+}
+
+/// The length of the converged prefix of `order`: the pairs, in that order, up to the first
+/// that has not converged. Convergence: ‖Op x − θx‖_M ≤ `tol` · max(θ, θ_max/100) (and θ > 0
+/// for a one-sided slice). The floor reflects the attainable accuracy: solves and
+/// re-orthogonalisation err by O(u κ)·‖Op‖ with ‖Op‖ = θ_max, so Ritz values far from the
+/// shift (θ ≪ θ_max) cannot be resolved to tol relative to their own θ. The true residual of
+/// every pair is checked afterwards.
+fn converged_prefix(ritz: &Ritz<'_>, order: &[usize], two_sided: bool, tol: f64) -> usize {
+    let (theta, es) = (ritz.theta, ritz.es);
+    let j = theta.len();
+    let theta_abs_max = theta[0].abs().max(theta[j - 1].abs());
+    let converged = |idx: usize| -> bool {
+        let res = es.col(idx).norm_l2();
+        (theta[idx] > 0.0 || two_sided) && res <= tol * theta[idx].abs().max(1e-2 * theta_abs_max)
+    };
+    order.iter().take_while(|&&i| converged(i)).count()
 }
 
 /// Block size `b`, number of wanted pairs and Krylov subspace size `m_max` (a multiple of

@@ -86,6 +86,164 @@ pub fn expand_range(r: &Range) -> Result<Vec<f64>, String> {
         .collect())
 }
 
+/// The study file's TOML read into its schema; a syntax error or an unknown or mistyped key
+/// names the key.
+fn read_study_file(text: &str, file: &str) -> Result<StudyFile, StudiesError> {
+    let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+        key_error(
+            file,
+            "(syntax)",
+            format!(
+                "TOML syntax error: {}",
+                e.to_string().trim().replace('\n', " ")
+            ),
+        )
+    })?;
+    serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+        let mut key = e.path().to_string();
+        let message = e.into_inner().message().to_string();
+        if let Some(rest) = message.strip_prefix("unknown field `") {
+            if let Some(name) = rest.split('`').next() {
+                key = if key == "." {
+                    name.to_string()
+                } else {
+                    format!("{key}.{name}")
+                };
+            }
+        }
+        key_error(file, key, message)
+    })
+}
+
+/// The varied parameters of `raw`: at least one, each a dotted model key varied once, with
+/// exactly one of a non-empty `values` list and a `range`.
+fn parameters(raw: &StudyFile, file: &str) -> Result<Vec<Parameter>, StudiesError> {
+    if raw.parameter.is_empty() {
+        return Err(key_error(
+            file,
+            "parameter",
+            "give at least one [[parameter]]",
+        ));
+    }
+    let mut parameters = Vec::new();
+    for (i, p) in raw.parameter.iter().enumerate() {
+        let k = format!("parameter[{i}]");
+        if p.key.trim().is_empty() || p.key.split('.').any(|s| s.trim().is_empty()) {
+            return Err(key_error(
+                file,
+                format!("{k}.key"),
+                "must be a dotted model key, e.g. fastening.vertical_stiffness",
+            ));
+        }
+        if parameters.iter().any(|q: &Parameter| q.key == p.key) {
+            return Err(key_error(
+                file,
+                format!("{k}.key"),
+                format!("`{}` is varied twice", p.key),
+            ));
+        }
+        let values = match (&p.values, &p.range) {
+            (Some(_), Some(_)) | (None, None) => {
+                return Err(key_error(
+                    file,
+                    k,
+                    "give exactly one of `values` and `range`",
+                ))
+            }
+            (Some(v), None) if v.is_empty() => {
+                return Err(key_error(file, format!("{k}.values"), "is empty"))
+            }
+            (Some(v), None) => v.clone(),
+            (None, Some(r)) => expand_range(r)
+                .map_err(|m| key_error(file, format!("{k}.range"), m))?
+                .into_iter()
+                .map(toml::Value::Float)
+                .collect(),
+        };
+        parameters.push(Parameter {
+            key: p.key.trim().to_string(),
+            values,
+        });
+    }
+    Ok(parameters)
+}
+
+/// Equal lengths for `combine = "zip"`, and at most [`MAX_CASES`] cases.
+fn check_case_count(
+    parameters: &[Parameter],
+    combine: Combine,
+    file: &str,
+) -> Result<(), StudiesError> {
+    if combine == Combine::Zip {
+        let n = parameters[0].values.len();
+        if let Some(i) = parameters.iter().position(|p| p.values.len() != n) {
+            return Err(key_error(
+                file,
+                format!("parameter[{i}]"),
+                format!(
+                    "has {} values, parameter[0] has {n}; combine = \"zip\" needs equal lengths",
+                    parameters[i].values.len()
+                ),
+            ));
+        }
+    }
+    let n_cases: f64 = match combine {
+        Combine::Grid => parameters.iter().map(|p| p.values.len() as f64).product(),
+        Combine::Zip => parameters[0].values.len() as f64,
+    };
+    if n_cases > MAX_CASES as f64 {
+        return Err(key_error(
+            file,
+            "parameter",
+            format!("{n_cases} cases; at most {MAX_CASES}"),
+        ));
+    }
+    Ok(())
+}
+
+/// `speeds_kmh`: not empty, every speed within the range of `run.speed_kmh`.
+fn check_speeds(v: &[f64], file: &str) -> Result<(), StudiesError> {
+    if v.is_empty() {
+        return Err(key_error(file, "speeds_kmh", "is empty"));
+    }
+    if let Some(s) = v.iter().find(|s| {
+        !(s.is_finite()
+            && **s >= crate::studies::speeds::MIN_SPEED_KMH
+            && **s <= crate::studies::speeds::MAX_SPEED_KMH)
+    }) {
+        return Err(key_error(
+            file,
+            "speeds_kmh",
+            format!(
+                "speed {s} km/h out of range, allowed {} to {} km/h (as run.speed_kmh)",
+                crate::studies::speeds::MIN_SPEED_KMH,
+                crate::studies::speeds::MAX_SPEED_KMH
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The criterion's limits: each ≥ 0 and finite when given.
+fn check_criterion(criterion: &StudyCriterion, file: &str) -> Result<(), StudiesError> {
+    let bad = |v: Option<f64>| v.is_some_and(|v| !(v >= 0.0 && v.is_finite()));
+    if bad(criterion.min_relative_wear) {
+        return Err(key_error(
+            file,
+            "criterion.min_relative_wear",
+            "must be ≥ 0 and finite",
+        ));
+    }
+    if bad(criterion.max_wavelength_deviation) {
+        return Err(key_error(
+            file,
+            "criterion.max_wavelength_deviation",
+            "must be ≥ 0 and finite",
+        ));
+    }
+    Ok(())
+}
+
 impl Study {
     /// Reads and checks a study file; a relative `model` path is taken relative to it.
     pub fn load(path: &Path) -> Result<Self, StudiesError> {
@@ -100,149 +258,30 @@ impl Study {
 
     /// Parses study TOML text; `file` names it in messages, `dir` resolves a relative model
     /// path, `default_title` is used without a `title` key.
+    ///
+    /// Phases: the TOML and its schema ([`read_study_file`]), the parameters
+    /// ([`parameters`]) and the number of cases they make ([`check_case_count`]), the speeds
+    /// ([`check_speeds`]), the criterion and the peaks ([`check_criterion`]), the
+    /// substructure options.
     pub fn parse_str(
         text: &str,
         file: &str,
         dir: &Path,
         default_title: &str,
     ) -> Result<Self, StudiesError> {
-        let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            key_error(
-                file,
-                "(syntax)",
-                format!(
-                    "TOML syntax error: {}",
-                    e.to_string().trim().replace('\n', " ")
-                ),
-            )
-        })?;
-        let raw: StudyFile =
-            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
-                let mut key = e.path().to_string();
-                let message = e.into_inner().message().to_string();
-                if let Some(rest) = message.strip_prefix("unknown field `") {
-                    if let Some(name) = rest.split('`').next() {
-                        key = if key == "." {
-                            name.to_string()
-                        } else {
-                            format!("{key}.{name}")
-                        };
-                    }
-                }
-                key_error(file, key, message)
-            })?;
+        let raw = read_study_file(text, file)?;
         let base = if raw.model == "builtin:dutch" {
             ModelSource::Builtin
         } else {
             ModelSource::File(dir.join(&raw.model))
         };
-        if raw.parameter.is_empty() {
-            return Err(key_error(
-                file,
-                "parameter",
-                "give at least one [[parameter]]",
-            ));
-        }
-        let mut parameters = Vec::new();
-        for (i, p) in raw.parameter.iter().enumerate() {
-            let k = format!("parameter[{i}]");
-            if p.key.trim().is_empty() || p.key.split('.').any(|s| s.trim().is_empty()) {
-                return Err(key_error(
-                    file,
-                    format!("{k}.key"),
-                    "must be a dotted model key, e.g. fastening.vertical_stiffness",
-                ));
-            }
-            if parameters.iter().any(|q: &Parameter| q.key == p.key) {
-                return Err(key_error(
-                    file,
-                    format!("{k}.key"),
-                    format!("`{}` is varied twice", p.key),
-                ));
-            }
-            let values = match (&p.values, &p.range) {
-                (Some(_), Some(_)) | (None, None) => {
-                    return Err(key_error(
-                        file,
-                        k,
-                        "give exactly one of `values` and `range`",
-                    ))
-                }
-                (Some(v), None) if v.is_empty() => {
-                    return Err(key_error(file, format!("{k}.values"), "is empty"))
-                }
-                (Some(v), None) => v.clone(),
-                (None, Some(r)) => expand_range(r)
-                    .map_err(|m| key_error(file, format!("{k}.range"), m))?
-                    .into_iter()
-                    .map(toml::Value::Float)
-                    .collect(),
-            };
-            parameters.push(Parameter {
-                key: p.key.trim().to_string(),
-                values,
-            });
-        }
-        if raw.combine == Combine::Zip {
-            let n = parameters[0].values.len();
-            if let Some(i) = parameters.iter().position(|p| p.values.len() != n) {
-                return Err(key_error(
-                    file,
-                    format!("parameter[{i}]"),
-                    format!(
-                        "has {} values, parameter[0] has {n}; combine = \"zip\" needs equal lengths",
-                        parameters[i].values.len()
-                    ),
-                ));
-            }
-        }
-        let n_cases: f64 = match raw.combine {
-            Combine::Grid => parameters.iter().map(|p| p.values.len() as f64).product(),
-            Combine::Zip => parameters[0].values.len() as f64,
-        };
-        if n_cases > MAX_CASES as f64 {
-            return Err(key_error(
-                file,
-                "parameter",
-                format!("{n_cases} cases; at most {MAX_CASES}"),
-            ));
-        }
+        let parameters = parameters(&raw, file)?;
+        check_case_count(&parameters, raw.combine, file)?;
         if let Some(v) = &raw.speeds_kmh {
-            if v.is_empty() {
-                return Err(key_error(file, "speeds_kmh", "is empty"));
-            }
-            if let Some(s) = v.iter().find(|s| {
-                !(s.is_finite()
-                    && **s >= crate::studies::speeds::MIN_SPEED_KMH
-                    && **s <= crate::studies::speeds::MAX_SPEED_KMH)
-            }) {
-                return Err(key_error(
-                    file,
-                    "speeds_kmh",
-                    format!(
-                        "speed {s} km/h out of range, allowed {} to {} km/h (as run.speed_kmh)",
-                        crate::studies::speeds::MIN_SPEED_KMH,
-                        crate::studies::speeds::MAX_SPEED_KMH
-                    ),
-                ));
-            }
+            check_speeds(v, file)?;
         }
         let criterion = raw.criterion.unwrap_or_default();
-        let bad = |v: Option<f64>| v.is_some_and(|v| !(v >= 0.0 && v.is_finite()));
-        if bad(criterion.min_relative_wear) {
-            return Err(key_error(
-                file,
-                "criterion.min_relative_wear",
-                "must be ≥ 0 and finite",
-            ));
-        }
-        if bad(criterion.max_wavelength_deviation) {
-            return Err(key_error(
-                file,
-                "criterion.max_wavelength_deviation",
-                "must be ≥ 0 and finite",
-            ));
-        }
+        check_criterion(&criterion, file)?;
         let peaks = raw.peaks.unwrap_or(3);
         if !(1..=20).contains(&peaks) {
             return Err(key_error(file, "peaks", format!("{peaks}: allowed 1 … 20")));

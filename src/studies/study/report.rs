@@ -135,12 +135,52 @@ fn study_criterion_text(c: &super::StudyCriterion) -> String {
     }
 }
 
+/// Writes a finished study into `out`: `study.csv` (one row per case and speed), the plots
+/// of every indicator against the first parameter, and the report `study` with the cases'
+/// table.
 pub(super) fn write_study(
     study: &Study,
     cases: &[(Case, CaseResult)],
     out: &Path,
 ) -> Result<(), StudiesError> {
     let gk = growth_keys(cases);
+    let readable = write_study_csv(study, cases, &gk, out)?;
+    let mut doc = Document::new(format!("Design study: {}", study.title));
+    doc.paragraph(format!(
+        "Study file {}; base model {}; {} case(s); parameters: {}.",
+        study.file,
+        study.base.display(),
+        cases.len(),
+        study
+            .parameters
+            .iter()
+            .map(|p| p.key.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    if !study.set.is_empty() {
+        doc.paragraph(format!("Overrides of every case: {}.", study.set.join(" ")));
+    }
+    doc.paragraph(study_criterion_text(&study.criterion));
+    doc.heading(2, "Indicators vs parameters");
+    write_study_plots(study, cases, &gk, out, &mut doc)?;
+    doc.heading(2, "Cases");
+    let mut rh: Vec<String> = vec!["case".into()];
+    rh.extend(readable_header().iter().map(|s| s.to_string()));
+    rh.extend(gk.iter().cloned());
+    doc.table(&rh, readable);
+    doc.write(&out.join("study"))?;
+    Ok(())
+}
+
+/// Writes `study.csv` (the case, its parameter values, the indicators and the growth keys
+/// `gk` per case and speed); returns the rows of the report's readable table.
+fn write_study_csv(
+    study: &Study,
+    cases: &[(Case, CaseResult)],
+    gk: &[String],
+    out: &Path,
+) -> Result<Vec<Vec<String>>, StudiesError> {
     let mut header = vec!["case".to_string()];
     header.extend(study.parameters.iter().map(|p| p.key.clone()));
     header.extend(indicator_header(study.peaks));
@@ -169,8 +209,18 @@ pub(super) fn write_study(
         }
     }
     write_table_csv(&out.join("study.csv"), &header, &rows)?;
+    Ok(readable)
+}
 
-    // Plots: indicator vs the first parameter, one curve per (other parameters, speed).
+/// The plots of every indicator and growth key `gk` against the first parameter, one curve
+/// per (other parameters, speed), written into `out` and added to `doc`.
+fn write_study_plots(
+    study: &Study,
+    cases: &[(Case, CaseResult)],
+    gk: &[String],
+    out: &Path,
+    doc: &mut Document,
+) -> Result<(), StudiesError> {
     let first = &study.parameters[0];
     let numeric = first.values.iter().all(|v| as_number(v).is_some());
     let x_label = if numeric {
@@ -181,33 +231,18 @@ pub(super) fn write_study(
     } else {
         format!("case ({} not numeric)", first.key)
     };
-    let mut doc = Document::new(format!("Design study: {}", study.title));
-    doc.paragraph(format!(
-        "Study file {}; base model {}; {} case(s); parameters: {}.",
-        study.file,
-        study.base.display(),
-        cases.len(),
-        study
-            .parameters
-            .iter()
-            .map(|p| p.key.as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
-    ));
-    if !study.set.is_empty() {
-        doc.paragraph(format!("Overrides of every case: {}.", study.set.join(" ")));
-    }
-    doc.paragraph(study_criterion_text(&study.criterion));
-    let mut extra: Vec<(String, String)> =
-        gk.iter().map(|k| (k.clone(), growth_label(k))).collect();
     let mut plots = Vec::new();
     for (stem, label, f) in INDICATORS {
         plots.push((stem.to_string(), label.to_string(), Some(f), None));
     }
-    for (k, l) in extra.drain(..) {
-        plots.push((format!("growth_{k}"), l, None, Some(k)));
+    for k in gk {
+        plots.push((
+            format!("growth_{k}"),
+            growth_label(k),
+            None,
+            Some(k.clone()),
+        ));
     }
-    doc.heading(2, "Indicators vs parameters");
     for (stem, label, f, gkey) in plots {
         let mut series: BTreeMap<String, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
         for (c, r) in cases {
@@ -252,12 +287,6 @@ pub(super) fn write_study(
         )?;
         doc.image(format!("{label} vs {}", first.key), format!("{file}.png"));
     }
-    doc.heading(2, "Cases");
-    let mut rh: Vec<String> = vec!["case".into()];
-    rh.extend(readable_header().iter().map(|s| s.to_string()));
-    rh.extend(gk.iter().cloned());
-    doc.table(&rh, readable);
-    doc.write(&out.join("study"))?;
     Ok(())
 }
 
