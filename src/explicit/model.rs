@@ -157,6 +157,24 @@ impl ExplicitModel {
     /// and the static deflections.
     pub fn new(model: &Model, opts: ExplicitOptions) -> Result<Self, ExplicitError> {
         let t0 = Instant::now();
+        let track_structure = TrackStructure::build(model)?;
+        let wheel_structure = WheelStructure::build(model)?;
+        let mut em = Self::from_structures(model, track_structure, wheel_structure, opts)?;
+        em.setup_seconds = t0.elapsed().as_secs_f64();
+        Ok(em)
+    }
+
+    /// As [`Self::new`] on given track and wheel structures instead of the model's (the
+    /// model gives the rail inclination, the contact and the loads; the wheel's start and the
+    /// solution zone are the track structure's layout): the explicit path of the same
+    /// structures another engine runs on, e.g. meshes the model's keys do not reach ([`crate::model::test_problems::all_modes_structures`]).
+    pub fn from_structures(
+        model: &Model,
+        track_structure: TrackStructure,
+        wheel_structure: WheelStructure,
+        opts: ExplicitOptions,
+    ) -> Result<Self, ExplicitError> {
+        let t0 = Instant::now();
         if !(opts.safety > 0.0 && opts.safety <= 1.0) {
             return Err(ExplicitError::Static {
                 part: "model",
@@ -164,8 +182,6 @@ impl ExplicitModel {
             });
         }
         let frame = ContactFrame::for_inclination(model.rail.inclination);
-        let track_structure = TrackStructure::build(model)?;
-        let wheel_structure = WheelStructure::build(model)?;
         let (tm, _) = track_structure.assemble()?;
         let (wm, _) = wheel_structure.assemble()?;
         let track = Part::new(&tm, &opts, "track")?;

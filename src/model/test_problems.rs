@@ -3,6 +3,8 @@
 //! builds in well under a second (the default model takes minutes to solve).
 
 use super::{load_model, Model, ModelError, ModelSource};
+use crate::mesh::wheel::WheelParams;
+use crate::structure::{StructureError, TrackStructure, WheelStructure};
 
 /// The overrides (`key=value`, as `--set` takes them) that turn the default model into the
 /// small test model: 4 bays, 80 mm elements along the rail, a 30 mm rail section (15 mm in
@@ -61,6 +63,80 @@ pub fn small_passage_model(extra: &[&str]) -> Result<Model, ModelError> {
     small_model(&all)
 }
 
+/// The overrides, after [`SMALL_MODEL`], of the all-modes model: 3 bays of the RPM5
+/// fastening (fewest node planes along the rail), one-element sleepers, a 50 mm rail section
+/// throughout, a 0.3 m zone 0.2 m after the wheel's start, every damper off (fastenings,
+/// ballast, rail, primary suspension, wheel modes) and a 32 × 12 contact grid.
+pub const ALL_MODES: [&str; 23] = [
+    "track.bays=3",
+    "fastening.model=\"RPM5\"",
+    "mesh.sleeper_elements=[1,1,1]",
+    "mesh.element_length=0.15",
+    "mesh.fine_element_length=0.15",
+    "mesh.section_size=0.05",
+    "mesh.head_size=0.05",
+    "mesh.mass=\"lumped\"",
+    "run.solution_zone_offset=0.2",
+    "run.solution_zone_length=0.3",
+    "contact.grid_nx=32",
+    "contact.grid_ny=12",
+    "fastening.vertical_damping=0",
+    "fastening.lateral_damping=0",
+    "fastening.longitudinal_damping=0",
+    "ballast.vertical_damping=0",
+    "ballast.lateral_damping=0",
+    "ballast.longitudinal_damping=0",
+    "rail.structural_damping=0",
+    "vehicle.primary_damping=0",
+    "wheel.damping_ratio=0",
+    "run.residual_flexibility=false",
+    "run.wheel_residual_flexibility=false",
+];
+
+/// Element length along the whole rail of the all-modes track (m): 0.3 m, half the sleeper
+/// spacing, twice the longest the key `mesh.element_length` allows (a quarter of the
+/// spacing, which keeps the sleeper-pitch bending of a real track resolved).
+pub const ALL_MODES_ELEMENT_LENGTH_M: f64 = 0.3;
+
+/// The all-modes model: [`SMALL_MODEL`], [`ALL_MODES`] and `extra` (the last wins), then the
+/// rail's element length set to [`ALL_MODES_ELEMENT_LENGTH_M`] *without* the range check of
+/// `mesh.element_length` (the only value outside its key's range). A model for tests that
+/// need every mode of both substructures from a dense eigen-solve (a few thousand DOFs
+/// each; [`all_modes_structures`]), such as the identity of the reduced and the explicit
+/// passage with complete bases (docs/theory.md §8.6): it is not a physical track model.
+pub fn all_modes_model(extra: &[&str]) -> Result<Model, ModelError> {
+    let all: Vec<&str> = ALL_MODES.iter().chain(extra).copied().collect();
+    let mut m = small_model(&all)?;
+    m.mesh.element_length = ALL_MODES_ELEMENT_LENGTH_M;
+    m.mesh.fine_element_length = ALL_MODES_ELEMENT_LENGTH_M;
+    Ok(m)
+}
+
+/// The all-modes wheel's mesh: the model's wheel ([`WheelStructure::params_of`]) with 8
+/// circumferential segments, 0.4 m elements, a 10 mm fine zone at the contact, one element
+/// through the web and no brake disc (the keys allow at least 12 segments and at most
+/// 0.1 m, and always mesh the disc): about 3,800 free DOFs instead of 17,645.
+pub fn all_modes_wheel_params(m: &Model) -> WheelParams {
+    WheelParams {
+        circumferential_divisions: 8,
+        axial_size_m: 0.4,
+        radial_size_m: 0.4,
+        contact_size_m: 0.4,
+        contact_half_width_m: 0.01,
+        web_layers: 1,
+        brake_disc: None,
+        ..WheelStructure::params_of(m)
+    }
+}
+
+/// The track and the wheel of an all-modes model ([`all_modes_model`]): the track as the
+/// model builds it, the wheel on [`all_modes_wheel_params`].
+pub fn all_modes_structures(m: &Model) -> Result<(TrackStructure, WheelStructure), StructureError> {
+    let track = TrackStructure::build(m)?;
+    let wheel = WheelStructure::with_params(m, all_modes_wheel_params(m))?;
+    Ok((track, wheel))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -76,5 +152,22 @@ mod tests {
             (0.04, 0.04)
         );
         assert_eq!(m.track.bays, 4);
+    }
+
+    /// The all-modes structures are within reach of a dense eigen-solve (a few thousand
+    /// DOFs each) and undamped, and the model keeps the element length outside its key's
+    /// range.
+    #[test]
+    fn the_all_modes_structures_are_small_and_undamped() {
+        let m = all_modes_model(&[]).unwrap();
+        assert_eq!(m.mesh.element_length, ALL_MODES_ELEMENT_LENGTH_M);
+        let (track, wheel) = all_modes_structures(&m).unwrap();
+        let dofs = [track.dofmap.n_free(), wheel.dofmap.n_free()];
+        assert!(dofs.iter().all(|&n| n < 5000), "free DOFs {dofs:?}");
+        let (tm, _) = track.assemble().unwrap();
+        let (wm, _) = wheel.assemble().unwrap();
+        for c in [&tm.c, &wm.c] {
+            assert!(c.as_ref().val().iter().all(|&x| x == 0.0));
+        }
     }
 }

@@ -93,7 +93,15 @@ pub fn balanced_journal_weights(mesh: &Mesh, nodes: &[usize]) -> Vec<f64> {
 impl WheelStructure {
     /// Builds the wheel substructure of a model.
     pub fn build(m: &Model) -> Result<WheelStructure, StructureError> {
-        let params = WheelParams {
+        Self::with_params(m, Self::params_of(m))
+    }
+
+    /// The wheel's geometry and mesh parameters of a model: its radius and conicity, the
+    /// mesh keys `mesh.wheel_segments` and `mesh.wheel_element_size` (the contact zone at
+    /// half that size), the rest of the geometry (rim, web, hub, axle, journal, brake disc)
+    /// the default wheel's.
+    pub fn params_of(m: &Model) -> WheelParams {
+        WheelParams {
             radius_m: m.wheel.radius,
             conicity: m.wheel.conicity,
             circumferential_divisions: m.mesh.wheel_segments,
@@ -102,7 +110,14 @@ impl WheelStructure {
             contact_size_m: 0.5 * m.mesh.wheel_element_size,
             max_nodes: super::MAX_DOFS / 3,
             ..WheelParams::default()
-        };
+        }
+    }
+
+    /// Builds the wheel substructure of a model on the wheel mesh of `params` instead of
+    /// [`Self::params_of`]`(m)` (the model gives the material, the loads and the primary
+    /// suspension). For meshes the model's keys do not reach, such as the tiny wheels of
+    /// [`crate::model::test_problems::all_modes_structures`].
+    pub fn with_params(m: &Model, params: WheelParams) -> Result<WheelStructure, StructureError> {
         let (mut mesh, topology) = wheel(&params, 0).map_err(|e| match e {
             crate::mesh::MeshError::TooLarge {
                 nodes,
