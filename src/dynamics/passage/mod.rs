@@ -728,18 +728,8 @@ impl PassageEngine {
         let x0 = self.x_start_m;
         let [z0, z1] = self.zone_m;
         let half_grid = contact.config().grid.half_length_x_m;
-        let x_end = z1 + half_grid + 2.0 * dx;
-        let n_steps = ((x_end - x0) / dx).ceil() as usize;
-        let nx = contact.config().grid.nx;
-        let xs: Vec<f64> = contact.x_m().to_vec();
-        let mut heights = vec![0.0; nx];
-        let fill_heights = |xc: f64, h: &mut [f64]| {
-            if let Some(p) = profile {
-                for (hi, &xi) in h.iter_mut().zip(&xs) {
-                    *hi = p.height_at(xc + xi);
-                }
-            }
-        };
+        let n_steps = self.step_count(half_grid, dx);
+        let mut road = RoadAhead::new(&contact, profile);
 
         // --- Static start (steady rolling at the static load): `st`, above.
         let (xi0, delta0) = (st.creepage, st.approach_m);
@@ -747,7 +737,6 @@ impl PassageEngine {
         let mut rr = vec![0.0; 3 * mt];
         let mut slopes = vec![0.0; 3 * mt];
         self.rail_line.rows_at(x0, &mut rr)?;
-        let wr = &self.wheel_contact.rows;
         // Force on the wheel in frame components (x, t, n).
         let f0 = [f_l0, 0.0, f_n0];
         let mut ft = vec![0.0; mt];
@@ -765,13 +754,7 @@ impl PassageEngine {
 
         // --- Records.
         let mut h = Histories::with_capacity(n_steps);
-        let mut rail_point =
-            self.track_modes_for_point
-                .as_ref()
-                .map(|(_, pos, _)| RailPointRecord {
-                    position_m: *pos,
-                    displacement_m: Vec::with_capacity(n_steps),
-                });
+        let mut rail_point = self.rail_point_record(n_steps);
         let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
         let mut wear = WearAccumulator::new(&contact, z0, nbins);
         let mut ledger = Ledger::start(self, (&tr, &wh), &st, opts.energy, f0[0]);
@@ -788,26 +771,8 @@ impl PassageEngine {
             tr.advance_displacement();
             wh.advance_displacement();
             self.rail_line.rows_at(xc, &mut rr)?;
-            let (u_r, v_r) = contact_motion(&rr, &tr);
-            let (u_w, v_w) = contact_motion(wr, &wh);
-            self.follow_consistent_compliance(&mut contact, t, xc)?;
-            let delta = u_r[2] - u_w[2];
-            let xi = (v_w[0] - v_r[0]) / v;
-            let eta = (v_w[1] - v_r[1]) / v;
-            fill_heights(xc, &mut heights);
-            let r = contact
-                .step(&StepInputs {
-                    normal: NormalInput::Approach(delta),
-                    longitudinal: Longitudinal::Creepage(xi),
-                    lateral_creepage: eta,
-                    spin_per_m: spin,
-                    rail_height_m: profile.map(|_| &heights[..]),
-                })
-                .map_err(|source| DynamicsError::Contact {
-                    t_s: t,
-                    x_m: xc,
-                    source,
-                })?;
+            let (r, [xi, delta]) =
+                self.contact_step(&mut contact, &mut road, (&rr, &tr, &wh), [t, xc, v, spin])?;
             if xc - half_grid < z1 && xc + half_grid > z0 {
                 wear.add_step(&contact, xc);
             }
@@ -822,13 +787,7 @@ impl PassageEngine {
             self.generalised_forces(&f, &fw_const, &rr, (&mut ft, &mut fw));
             tr.complete(&ft);
             wh.complete(&fw);
-            if !(tr.q.iter().all(|x| x.is_finite()) && wh.q.iter().all(|x| x.is_finite())) {
-                return Err(DynamicsError::Diverged {
-                    t_s: t,
-                    x_m: xc,
-                    what: "modal coordinates".into(),
-                });
-            }
+            check_finite((&tr, &wh), t, xc)?;
             if opts.energy {
                 ledger.add_step(
                     self,
@@ -850,19 +809,9 @@ impl PassageEngine {
             }
             last_delta = r.approach_m;
             h.push_step(&contact, &r, [t, xc, xi, delta], dx);
-            if let (Some(rec), Some((_, _, rows))) =
-                (rail_point.as_mut(), self.track_modes_for_point.as_ref())
-            {
-                rec.displacement_m.push([
-                    dot(&rows[..mt], &tr.q),
-                    dot(&rows[mt..2 * mt], &tr.q),
-                    dot(&rows[2 * mt..], &tr.q),
-                ]);
-            }
-            if let Some(p) = progress {
-                if n % 64 == 0 {
-                    p.done(n as u64);
-                }
+            self.record_rail_point(rail_point.as_mut(), &tr);
+            if let Some(p) = progress.filter(|_| n % 64 == 0) {
+                p.done(n as u64);
             }
         }
         let eb = if opts.energy {
@@ -889,6 +838,121 @@ impl PassageEngine {
             seconds: t_wall.elapsed().as_secs_f64(),
         })
     }
+}
+
+impl PassageEngine {
+    /// One contact step of the passage at time `t` (s) with the contact at `xc` (m), speed
+    /// `v` (m/s) and spin `spin` (1/m): the approach and the creepages from the predicted
+    /// motion of rail (contact rows `rr`) and wheel, the consistent compliance followed, the
+    /// rail heights under the grid, the transient contact advanced. Returns the step's
+    /// result and `[ξ (−), δ (m)]`, the longitudinal creepage and the approach it was given.
+    fn contact_step(
+        &self,
+        contact: &mut TransientRolling,
+        road: &mut RoadAhead<'_>,
+        (rr, tr, wh): (&[f64], &ModalVerlet, &ModalVerlet),
+        [t, xc, v, spin]: [f64; 4],
+    ) -> Result<(crate::contact::StepResult, [f64; 2]), DynamicsError> {
+        let (u_r, v_r) = contact_motion(rr, tr);
+        let (u_w, v_w) = contact_motion(&self.wheel_contact.rows, wh);
+        self.follow_consistent_compliance(contact, t, xc)?;
+        let delta = u_r[2] - u_w[2];
+        let xi = (v_w[0] - v_r[0]) / v;
+        let eta = (v_w[1] - v_r[1]) / v;
+        let r = contact
+            .step(&StepInputs {
+                normal: NormalInput::Approach(delta),
+                longitudinal: Longitudinal::Creepage(xi),
+                lateral_creepage: eta,
+                spin_per_m: spin,
+                rail_height_m: road.heights_at(xc),
+            })
+            .map_err(|source| DynamicsError::Contact {
+                t_s: t,
+                x_m: xc,
+                source,
+            })?;
+        Ok((r, [xi, delta]))
+    }
+
+    /// The number of contact steps of length `dx` (m) from the start until the grid of half
+    /// length `half_grid` (m) has left the zone, with two steps to spare.
+    fn step_count(&self, half_grid: f64, dx: f64) -> usize {
+        let x_end = self.zone_m[1] + half_grid + 2.0 * dx;
+        ((x_end - self.x_start_m) / dx).ceil() as usize
+    }
+
+    /// An empty record of the rail point's displacement for `n_steps` steps, when the
+    /// passage records one.
+    fn rail_point_record(&self, n_steps: usize) -> Option<RailPointRecord> {
+        self.track_modes_for_point
+            .as_ref()
+            .map(|(_, pos, _)| RailPointRecord {
+                position_m: *pos,
+                displacement_m: Vec::with_capacity(n_steps),
+            })
+    }
+
+    /// Appends the rail point's displacement (x, t, n; m) from the track's modal state, when
+    /// the passage records one.
+    fn record_rail_point(&self, rec: Option<&mut RailPointRecord>, tr: &ModalVerlet) {
+        if let (Some(rec), Some((_, _, rows))) = (rec, self.track_modes_for_point.as_ref()) {
+            let mt = tr.len();
+            rec.displacement_m.push([
+                dot(&rows[..mt], &tr.q),
+                dot(&rows[mt..2 * mt], &tr.q),
+                dot(&rows[2 * mt..], &tr.q),
+            ]);
+        }
+    }
+}
+
+/// The rail-top heights under the contact grid (m) as the contact moves over a profile;
+/// `None` on a smooth rail. The buffer is allocated once per passage.
+struct RoadAhead<'a> {
+    profile: Option<&'a RailProfile>,
+    /// The grid's x positions relative to the contact point (m).
+    xs: Vec<f64>,
+    /// The heights at `xc + xs` (m).
+    heights: Vec<f64>,
+}
+
+impl<'a> RoadAhead<'a> {
+    fn new(contact: &TransientRolling, profile: Option<&'a RailProfile>) -> Self {
+        let xs = contact.x_m().to_vec();
+        let heights = vec![0.0; xs.len()];
+        Self {
+            profile,
+            xs,
+            heights,
+        }
+    }
+
+    /// The heights under the grid with the contact at `xc` (m), or `None` on a smooth rail.
+    fn heights_at(&mut self, xc: f64) -> Option<&[f64]> {
+        let p = self.profile?;
+        for (h, &x) in self.heights.iter_mut().zip(&self.xs) {
+            *h = p.height_at(xc + x);
+        }
+        Some(&self.heights)
+    }
+}
+
+/// An error when a modal coordinate of track or wheel is no longer finite at time `t` (s),
+/// contact at `xc` (m).
+fn check_finite(
+    (tr, wh): (&ModalVerlet, &ModalVerlet),
+    t: f64,
+    xc: f64,
+) -> Result<(), DynamicsError> {
+    if tr.q.iter().all(|x| x.is_finite()) && wh.q.iter().all(|x| x.is_finite()) {
+        return Ok(());
+    }
+    Err(DynamicsError::Diverged {
+        t_s: t,
+        x_m: xc,
+        what: "modal coordinates".into(),
+    })
 }
 
 /// The displacement and the predicted velocity at the contact (frame components x, t, n; m
