@@ -2,13 +2,16 @@
 //! validation/substructure.md).
 //!
 //! ```text
-//! cargo run --example study_bench -- study [--basis substructured|full] [--key K] [--values a,b,…] [--speed KMH]
+//! cargo run --example study_bench -- study [--basis substructured|full] [--key K] [--values a,b,…] [--speed KMH] [--static-update]
 //! cargo run --example study_bench -- validate [--key K] [--value V] [--speed KMH] [--fmax-check HZ] [--ballast-degree D] [--list N] [--residuals N]
 //! ```
 //!
 //! `study`: a one-parameter study of the default model (default: ten railpad vertical
 //! stiffnesses 0.4–2.2 GN/m at 140 km/h) through the library's study runner; prints the
-//! basis plan, wall and CPU time, the machine's load and a digest of `study.csv`.
+//! basis plan, wall and CPU time, the machine's load, a digest of `study.csv` and each
+//! substructured case's step times. `--static-update`: the cases' residual flexibility from
+//! the study's reference factorisation updated for the changed springs, instead of a
+//! factorisation of each case's own `K`.
 //! `validate`: for one value, the substructured basis against the full Lanczos basis
 //! (frequencies below `--fmax-check`, default 3 kHz) and one passage on each basis (band RMS
 //! of F_L, F_N and wear, dominant wavelength). `--residuals N`: for the lowest N modes of
@@ -30,6 +33,7 @@ use corrugation::dynamics::PassageRunner;
 use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::basis::track_basis;
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
+use corrugation::eigen::spmm::sym_spmm;
 use corrugation::eigen::substructure::{
     substructured_track_basis, track_components, SubstructureOptions,
 };
@@ -75,7 +79,8 @@ fn study(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
     let plan = basis_plan(&study, &models, &ModalCache::new(&cache_dir))?;
     println!("plan: {plan}");
     let (t0, c0) = (Instant::now(), cpu_seconds());
-    let runners = CaseRunners::new(&study, &cache_dir);
+    let runners = CaseRunners::new(&study, &cache_dir)
+        .with_static_update(args.iter().any(|a| a == "--static-update"));
     let factory = |m: &corrugation::model::Model| -> Result<Box<dyn PassageRunner>, BoxError> {
         Ok(Box::new(runners.prepared(m)?))
     };
@@ -91,16 +96,43 @@ fn study(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
     for (c, r) in &out.cases {
         for row in &r.rows {
             println!(
-                "  {}: F_L band {:.2} N, F_N band {:.2} N, dominant {:?}",
+                "  {}: F_L band {:.9} N, F_N band {:.9} N, wear band/mean {:.9e}, dominant {:?}",
                 c.label(),
                 row.fl_band_rms_n,
                 row.fn_band_rms_n,
+                row.relative_wear.unwrap_or(f64::NAN),
                 row.wear_peaks.first().map(|p| p.wavelength_mm)
             );
         }
     }
+    print_phases(&runners.phases());
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())
+}
+
+/// The step times of each substructured case and their sums (wall, s).
+fn print_phases(phases: &[corrugation::studies::study::CasePhases]) {
+    if phases.is_empty() {
+        return;
+    }
+    println!("phases (wall s): case,structure,components,reduced,expand,classify,engine,of_which_residual");
+    let mut sum = [0.0; 7];
+    for (i, p) in phases.iter().enumerate() {
+        let v = [
+            p.structure_s,
+            p.components_s,
+            p.basis.reduced_s,
+            p.basis.expand_s,
+            p.basis.classify_s,
+            p.engine_s,
+            p.residual_s,
+        ];
+        sum.iter_mut().zip(&v).for_each(|(s, x)| *s += x);
+        let row: Vec<String> = v.iter().map(|x| format!("{x:.2}")).collect();
+        println!("  {i},{}", row.join(","));
+    }
+    let row: Vec<String> = sum.iter().map(|x| format!("{x:.1}")).collect();
+    println!("  sum,{}", row.join(","));
 }
 
 fn validate(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
@@ -190,15 +222,29 @@ fn validate(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `y = A x` for a sparse matrix in compressed columns (both triangles stored).
+/// `y = A x` for a symmetric sparse matrix stored with both triangles.
 fn sparse_times(a: faer::sparse::SparseColMatRef<'_, usize, f64>, x: &[f64]) -> Vec<f64> {
-    let mut y = vec![0.0; a.nrows()];
-    for (j, &xj) in x.iter().enumerate() {
-        for (i, v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
-            y[i] += v * xj;
-        }
-    }
-    y
+    let mut y = faer::Mat::<f64>::zeros(a.nrows(), 1);
+    sym_spmm(
+        a,
+        faer::MatRef::from_column_major_slice(x, x.len(), 1),
+        y.as_mut(),
+    );
+    y.col(0).iter().copied().collect()
+}
+
+/// `A x` for a dense matrix and a vector.
+fn dense_times(a: faer::MatRef<'_, f64>, x: &[f64]) -> Vec<f64> {
+    let mut y = faer::Mat::<f64>::zeros(a.nrows(), 1);
+    faer::linalg::matmul::matmul(
+        y.as_mut(),
+        faer::Accum::Replace,
+        a,
+        faer::MatRef::from_column_major_slice(x, x.len(), 1),
+        1.0,
+        faer::Par::rayon(0),
+    );
+    y.col(0).iter().copied().collect()
 }
 
 /// The lowest `n` modes of both bases in the full model's K and M (see the module doc).
@@ -288,20 +334,12 @@ fn ritz_detail(
     let (rail, sl) = (&comp.rail, &comp.sleeper);
     let (nr, ns, sd) = (rail.vectors.ncols(), sl.vectors.ncols(), sl.vectors.nrows());
     let n = k_red.nrows();
-    let mut g = vec![0.0; n];
-    for (c, gc) in g.iter_mut().enumerate().take(nr) {
-        *gc = (0..rail.vectors.nrows())
-            .map(|i| rail.vectors[(i, c)] * kp[i])
-            .sum();
+    // g = Ψᵀ K φ, block by block
+    let mut g = dense_times(rail.vectors.transpose(), &kp[..rail.vectors.nrows()]);
+    for &o in &comp.sleeper_offsets {
+        g.extend(dense_times(sl.vectors.transpose(), &kp[o..o + sd]));
     }
-    for (s, &o) in comp.sleeper_offsets.iter().enumerate() {
-        for c in 0..ns {
-            g[nr + s * ns + c] = (0..sd).map(|i| sl.vectors[(i, c)] * kp[o + i]).sum();
-        }
-    }
-    let kq: Vec<f64> = (0..n)
-        .map(|r| (0..n).map(|c| k_red[(r, c)] * qj[c]).sum())
-        .collect();
+    let kq = dense_times(k_red.as_ref(), &qj);
     let d: Vec<f64> = kq.iter().zip(&g).map(|(a, b)| a - b).collect();
     let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
     let qkq: f64 = qj.iter().zip(&kq).map(|(a, b)| a * b).sum();

@@ -7,6 +7,19 @@ use super::{DynamicsError, RailProfile};
 use crate::model::Model;
 use crate::structure::{TrackStructure, WheelStructure};
 
+/// Where the track's static flexibility at the contact (for its residual flexibility,
+/// [`super::residual`]) comes from.
+pub enum TrackStatic<'a> {
+    /// The residual flexibility cached with the track entry of this key (computed from a
+    /// factorisation of `K` and stored when absent).
+    Cached(&'a crate::eigen::cache::CacheKey),
+    /// A factorisation of the track's `K`, not cached.
+    Factorise,
+    /// Given (e.g. a reference factorisation updated for changed spring stiffnesses); it
+    /// must be the static flexibility of this track's `K`.
+    Given(&'a dyn super::residual::StaticFlexibility),
+}
+
 /// The engine of a model with its classified bases, built once and reused for any number of
 /// passages (speeds, rail profiles).
 pub struct PreparedModel {
@@ -22,6 +35,9 @@ pub struct PreparedModel {
     pub modal_seconds: f64,
     /// True when both bases came from the cache.
     pub cached: bool,
+    /// Wall time (s) of the track's and the wheel's residual flexibilities (0 when the
+    /// model asks for neither).
+    pub residual_seconds: f64,
 }
 
 impl PreparedModel {
@@ -51,6 +67,23 @@ impl PreparedModel {
         residual_key: Option<&crate::eigen::cache::CacheKey>,
         opts: &PassageOptions,
     ) -> Result<Self, DynamicsError> {
+        let stat = match residual_key {
+            Some(k) => TrackStatic::Cached(k),
+            None => TrackStatic::Factorise,
+        };
+        Self::with_track_basis_static(model, track, tb, cache, stat, opts)
+    }
+
+    /// As [`Self::with_track_basis`], with the source of the track's static flexibility at
+    /// the contact given.
+    pub fn with_track_basis_static(
+        model: &Model,
+        track: &TrackStructure,
+        tb: crate::eigen::basis::ModalBasis<crate::eigen::classify::TrackModeClass>,
+        cache: &crate::eigen::cache::ModalCache,
+        stat: TrackStatic<'_>,
+        opts: &PassageOptions,
+    ) -> Result<Self, DynamicsError> {
         use crate::eigen::basis::wheel_basis;
 
         let wheel = WheelStructure::build(model)?;
@@ -73,6 +106,7 @@ impl PreparedModel {
             &wm,
             opts,
         )?;
+        let t_residual = std::time::Instant::now();
         if model.run.residual_flexibility {
             let lm = super::residual::LineModes {
                 line: &engine.rail_line,
@@ -80,8 +114,8 @@ impl PreparedModel {
                 omega2: &engine.track_sys.omega2,
             };
             let travel = engine.travel_m();
-            let r = match residual_key {
-                Some(key) => {
+            let r = match stat {
+                TrackStatic::Cached(key) => {
                     let k = tm.k.as_ref();
                     super::residual::cached_residual(
                         cache,
@@ -94,12 +128,15 @@ impl PreparedModel {
                     )?
                     .0
                 }
-                None => super::residual::ResidualFlexibility::compute(
+                TrackStatic::Factorise => super::residual::ResidualFlexibility::compute(
                     track,
                     &super::residual::StiffnessFactor::new(tm.k.as_ref())?,
                     lm,
                     travel,
                 )?,
+                TrackStatic::Given(f) => {
+                    super::residual::ResidualFlexibility::compute(track, f, lm, travel)?
+                }
             };
             engine.set_residual_flexibility(Some(r))?;
         }
@@ -117,6 +154,7 @@ impl PreparedModel {
             engine.set_wheel_residual(Some(w))?;
         }
         Ok(PreparedModel {
+            residual_seconds: t_residual.elapsed().as_secs_f64(),
             engine,
             modal_seconds: tb.seconds + wb.seconds,
             cached: tb.cached && wb.cached,

@@ -255,6 +255,47 @@ fn static_flexibility(
     (g, cross)
 }
 
+/// Per node plane `[x, t, n]` values (m/N): `G` of each plane and the cross terms of each
+/// plane with the next.
+pub type PlaneFlexibility = (Vec<[f64; 3]>, Vec<[f64; 3]>);
+
+/// The static flexibility of the track at its contact line: `G_d(p) = b_{p,d}ᵀ K⁻¹ b_{p,d}`
+/// per node plane `p` of `p0..=p1` and direction `d` of the contact frame, and the cross
+/// terms `b_{p,d}ᵀ K⁻¹ b_{p+1,d}` (m/N), for the unit contact loads of
+/// [`for_each_plane_solution`]. [`StiffnessFactor`] solves with the factorised `K`; a
+/// design study may instead update a reference factorisation for changed spring
+/// stiffnesses (`crate::studies::study`).
+pub trait StaticFlexibility {
+    /// Rows of `K` (the track's free DOFs).
+    fn n(&self) -> usize;
+    /// `(G, cross)` for the planes `p0..=p1` of `line` (`p1 − p0` cross terms).
+    fn plane_flexibility(
+        &self,
+        track: &TrackStructure,
+        line: &RailContactLine,
+        frame: &ContactFrame,
+        p0: usize,
+        p1: usize,
+    ) -> Result<PlaneFlexibility, DynamicsError>;
+}
+
+impl StaticFlexibility for StiffnessFactor {
+    fn n(&self) -> usize {
+        StiffnessFactor::n(self)
+    }
+
+    fn plane_flexibility(
+        &self,
+        track: &TrackStructure,
+        line: &RailContactLine,
+        frame: &ContactFrame,
+        p0: usize,
+        p1: usize,
+    ) -> Result<PlaneFlexibility, DynamicsError> {
+        Ok(static_flexibility(track, self, line, frame, p0, p1))
+    }
+}
+
 /// The kept track modes as the residual flexibility sees them: their rows on the rail's
 /// contact line, the contact frame, and their squared frequencies (rad²/s², all > 0: the
 /// track is supported).
@@ -270,11 +311,11 @@ pub struct LineModes<'a> {
 
 impl ResidualFlexibility {
     /// Computes the residual flexibility of the planes a contact travelling over
-    /// `x_range_m` (m, either order) uses, for the kept modes `lm`; `factor` is the factorised
-    /// `K`.
+    /// `x_range_m` (m, either order) uses, for the kept modes `lm`; `factor` gives the static
+    /// flexibility (e.g. the factorised `K`, [`StiffnessFactor`]).
     pub fn compute(
         track: &TrackStructure,
-        factor: &StiffnessFactor,
+        factor: &dyn StaticFlexibility,
         lm: LineModes<'_>,
         x_range_m: [f64; 2],
     ) -> Result<Self, DynamicsError> {
@@ -306,7 +347,14 @@ impl ResidualFlexibility {
             });
         }
         let (p0, p1) = plane_range(line, x_lo.min(x_hi), x_lo.max(x_hi))?;
-        let (g, gc) = static_flexibility(track, factor, line, frame, p0, p1);
+        let (g, gc) = factor.plane_flexibility(track, line, frame, p0, p1)?;
+        if g.len() != p1 - p0 + 1 || gc.len() != p1 - p0 {
+            return Err(DynamicsError::SizeMismatch {
+                what: "residual flexibility: static flexibility values vs node planes",
+                found: g.len() + gc.len(),
+                expected: 2 * (p1 - p0) + 1,
+            });
+        }
         let np = p1 - p0 + 1;
         let mut rows: Vec<Vec<f64>> = Vec::with_capacity(np);
         for p in p0..=p1 {

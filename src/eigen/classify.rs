@@ -523,21 +523,43 @@ impl TrackClassifier {
         track: &TrackStructure,
         u_free: &[&[f64]],
     ) -> Result<Vec<TrackModeClass>, ClassifyError> {
-        let n_free = track.dofmap.n_free();
-        let mut full = Vec::with_capacity(u_free.len());
-        for u in u_free {
-            if u.len() != n_free {
-                return Err(ClassifyError::Length {
-                    expected: n_free,
-                    got: u.len(),
-                });
-            }
-            full.push(track.dofmap.expand(u)?);
-        }
+        let full = expand_all(track, u_free)?;
         let refs: Vec<&[f64]> = full.iter().map(|u| u.as_slice()).collect();
         let energies = strain_energy_per_part_many(&track.mesh, &track.materials, &refs)?;
+        let solid: Vec<[f64; 2]> = energies
+            .iter()
+            .map(|e| [e.get(Part::Rail), e.get(Part::Sleeper)])
+            .collect();
+        self.classify_full_with_solid_energy(track, &full, &solid)
+    }
+
+    /// [`Self::classify_many`] with the strain energies of the rail and the sleeper elements
+    /// given per mode (`[rail, sleepers]`, J for the mode's amplitude), e.g. from a
+    /// substructured basis's component coordinates; the springs' energies are computed.
+    pub fn classify_many_with_solid_energy(
+        &self,
+        track: &TrackStructure,
+        u_free: &[&[f64]],
+        solid: &[[f64; 2]],
+    ) -> Result<Vec<TrackModeClass>, ClassifyError> {
+        let full = expand_all(track, u_free)?;
+        if solid.len() != u_free.len() {
+            return Err(ClassifyError::Count {
+                modes: u_free.len(),
+                frequencies: solid.len(),
+            });
+        }
+        self.classify_full_with_solid_energy(track, &full, solid)
+    }
+
+    fn classify_full_with_solid_energy(
+        &self,
+        track: &TrackStructure,
+        full: &[Vec<f64>],
+        solid: &[[f64; 2]],
+    ) -> Result<Vec<TrackModeClass>, ClassifyError> {
         let mut out = Vec::with_capacity(full.len());
-        for (u, e) in full.iter().zip(&energies) {
+        for (u, e) in full.iter().zip(solid) {
             let (mut ef, mut eb) = (0.0, 0.0);
             for (s, k) in track.springs.iter().zip(&track.spring_kinds) {
                 match k {
@@ -546,7 +568,7 @@ impl TrackClassifier {
                     SpringKind::Ballast => eb += s.energy(u),
                 }
             }
-            let parts = [e.get(Part::Rail), e.get(Part::Sleeper), ef, eb];
+            let parts = [e[0], e[1], ef, eb];
             let tot: f64 = parts.iter().sum();
             let energy = if tot > 0.0 {
                 TrackEnergyShares {
@@ -723,6 +745,23 @@ impl TrackClassifier {
         let r_s = (at.iter().map(|a| a * a).sum::<f64>() / at.len().max(1) as f64).sqrt();
         r_s < PINNED_PINNED_NODE_RATIO * rms(w.iter().copied(), wl)
     }
+}
+
+/// Free-DOF vectors of `track` expanded to all DOFs (constrained DOFs zero).
+fn expand_all(track: &TrackStructure, u_free: &[&[f64]]) -> Result<Vec<Vec<f64>>, ClassifyError> {
+    let n_free = track.dofmap.n_free();
+    u_free
+        .iter()
+        .map(|u| {
+            if u.len() != n_free {
+                return Err(ClassifyError::Length {
+                    expected: n_free,
+                    got: u.len(),
+                });
+            }
+            Ok(track.dofmap.expand(u)?)
+        })
+        .collect()
 }
 
 /// Linear interpolation of samples (x increasing), clamped at the ends.

@@ -101,7 +101,7 @@ pub mod classify;
 pub mod factor;
 pub mod lanczos;
 pub mod ordering;
-mod spmm;
+pub mod spmm;
 pub mod substructure;
 
 #[cfg(test)]

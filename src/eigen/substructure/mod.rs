@@ -47,7 +47,7 @@ use faer::linalg::matmul::matmul;
 use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
 use faer::{Accum, Mat, MatRef, Par, Side};
 
-use super::basis::{classify_in_chunks, BasisError, ModalBasis};
+use super::basis::{BasisError, ModalBasis};
 use super::cache::{CacheKey, CacheLookup, CacheMeta, ModalCache};
 use super::classify::{TrackClassifier, TrackModeClass};
 use super::factor::ShiftedSystem;
@@ -275,6 +275,17 @@ pub fn track_components(
     Ok(c)
 }
 
+/// Wall time (s) of the steps of [`substructured_track_basis_timed`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BasisPhases {
+    /// The reduced stiffness, the dense reduced eigenproblem and its refinement.
+    pub reduced_s: f64,
+    /// The expansion `Φ = ΨQ` to the track's free DOFs.
+    pub expand_s: f64,
+    /// The classification of the expanded modes.
+    pub classify_s: f64,
+}
+
 /// The track's classified modes below `fmax_hz` from its component bases: the reduced
 /// eigenproblem with the track's current spring stiffnesses, expanded and classified.
 pub fn substructured_track_basis(
@@ -282,24 +293,88 @@ pub fn substructured_track_basis(
     comp: &TrackComponents,
     fmax_hz: f64,
 ) -> Result<ModalBasis<TrackModeClass>, SubstructureError> {
+    substructured_track_basis_timed(track, comp, fmax_hz).map(|(b, _)| b)
+}
+
+/// [`substructured_track_basis`] with the wall time of each step.
+pub fn substructured_track_basis_timed(
+    track: &TrackStructure,
+    comp: &TrackComponents,
+    fmax_hz: f64,
+) -> Result<(ModalBasis<TrackModeClass>, BasisPhases), SubstructureError> {
     let t = Instant::now();
     let k_red = reduced_stiffness(track, comp)?;
     let (freqs, q) = reduced_modes(&k_red, fmax_hz)?;
+    let reduced_s = t.elapsed().as_secs_f64();
     let modes = expand(comp, track.dofmap.n_free(), &q);
-    let classifier = TrackClassifier::new(track).map_err(BasisError::from)?;
-    let classes = classify_in_chunks(&modes, &freqs, &crate::progress::Silent, |u, _| {
-        Ok(classifier.classify_many(track, u)?)
-    })?;
+    let expand_s = t.elapsed().as_secs_f64() - reduced_s;
+    let classes = classify_modes(track, comp, &q, &modes)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let phases = BasisPhases {
+        reduced_s,
+        expand_s,
+        classify_s: seconds - reduced_s - expand_s,
+    };
     let m = freqs.len();
-    Ok(ModalBasis {
+    let basis = ModalBasis {
         frequencies_hz: freqs,
         modes,
         residuals: vec![f64::NAN; m],
         sturm_count: m,
         classes,
         cached: false,
-        seconds: t.elapsed().as_secs_f64(),
-    })
+        seconds,
+    };
+    Ok((basis, phases))
+}
+
+/// Classifies the expanded modes `Φ = ΨQ`, with the strain energies of the rail and of the
+/// sleepers from the component coordinates: `Ψ_cᵀ K_c Ψ_c = diag(ω̃²)`, so a component's
+/// energy in mode `j` is `½ Σ ω̃²_c Q_cj²`, equal to the element sum over its solids that
+/// [`TrackClassifier::classify_many`] forms (one pass over every element per mode, most of
+/// the classification's work); the springs' energies and the shape come from `Φ`.
+fn classify_modes(
+    track: &TrackStructure,
+    comp: &TrackComponents,
+    q: &Mat<f64>,
+    modes: &Mat<f64>,
+) -> Result<Vec<TrackModeClass>, SubstructureError> {
+    use rayon::prelude::*;
+    /// Modes classified per parallel task.
+    const CHUNK: usize = 64;
+    let classifier = TrackClassifier::new(track).map_err(BasisError::from)?;
+    let (nr, ns) = (comp.rail.omega2.len(), comp.sleeper.omega2.len());
+    let energy = |j: usize, first: usize, w2: &[f64]| -> f64 {
+        0.5 * w2
+            .iter()
+            .enumerate()
+            .map(|(c, w)| w * q[(first + c, j)].powi(2))
+            .sum::<f64>()
+    };
+    let solid: Vec<[f64; 2]> = (0..q.ncols())
+        .map(|j| {
+            let sleepers = (0..comp.sleeper_offsets.len())
+                .map(|i| energy(j, nr + i * ns, &comp.sleeper.omega2))
+                .sum();
+            [energy(j, 0, &comp.rail.omega2), sleepers]
+        })
+        .collect();
+    let per_chunk: Vec<Vec<TrackModeClass>> = (0..q.ncols())
+        .step_by(CHUNK)
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|c0| {
+            let c1 = (c0 + CHUNK).min(q.ncols());
+            let cols: Vec<Vec<f64>> = (c0..c1)
+                .map(|j| modes.col(j).iter().copied().collect())
+                .collect();
+            let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+            classifier
+                .classify_many_with_solid_energy(track, &refs, &solid[c0..c1])
+                .map_err(|e| SubstructureError::Basis(BasisError::from(e)))
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(per_chunk.into_iter().flatten().collect())
 }
 
 mod cache;

@@ -9,13 +9,17 @@ use std::sync::{Arc, Mutex};
 
 use serde::{Deserialize, Serialize};
 
+use super::static_update::StaticUpdater;
 use super::{Case, Study};
-use crate::dynamics::{passage::PassageOptions, prepared::PreparedModel};
+use crate::dynamics::{
+    passage::PassageOptions,
+    prepared::{PreparedModel, TrackStatic},
+};
 use crate::eigen::basis::cache_key;
 use crate::eigen::cache::{CacheKey, ModalCache};
 use crate::eigen::substructure::{
-    component_key, substructured_track_basis, track_components, SubstructureOptions,
-    TrackComponents,
+    component_key, substructured_track_basis_timed, track_components, BasisPhases,
+    SubstructureOptions, TrackComponents,
 };
 use crate::model::Model;
 use crate::structure::TrackStructure;
@@ -142,6 +146,27 @@ pub struct CaseRunners {
     basis: StudyBasis,
     options: SubstructureOptions,
     components: Mutex<Option<(String, Arc<TrackComponents>)>>,
+    statics: Mutex<Option<(String, Arc<StaticUpdater>)>>,
+    static_update: bool,
+    phases: Mutex<Vec<CasePhases>>,
+}
+
+/// Wall time (s) of the steps of one substructured case's preparation
+/// ([`CaseRunners::prepared`]), in the order the cases were prepared.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CasePhases {
+    /// Building the case's track structure.
+    pub structure_s: f64,
+    /// Loading (or building) the component bases; 0 when kept from an earlier case.
+    pub components_s: f64,
+    /// The substructured basis: reduced eigenproblem, expansion, classification.
+    pub basis: BasisPhases,
+    /// The passage engine: wheel basis, damping projection, residual flexibilities.
+    pub engine_s: f64,
+    /// Of `engine_s`, the track's and the wheel's residual flexibilities (with the
+    /// reference factorisation of the study's static flexibility, [`StaticUpdater`], in the
+    /// case that made it).
+    pub residual_s: f64,
 }
 
 impl CaseRunners {
@@ -152,7 +177,25 @@ impl CaseRunners {
             basis: study.basis,
             options: study.substructure,
             components: Mutex::new(None),
+            statics: Mutex::new(None),
+            static_update: false,
+            phases: Mutex::new(Vec::new()),
         }
+    }
+
+    /// Whether a substructured study's cases get the track's static flexibility at the
+    /// contact by updating one reference factorisation ([`StaticUpdater`]) or each from a
+    /// factorisation of its own `K` (`false`, the default: on the default track a railpad
+    /// stiffness changes several thousand springs, and solving them once costs about as much
+    /// as ten cases' own factorisations, docs/performance.md §7).
+    pub fn with_static_update(mut self, on: bool) -> Self {
+        self.static_update = on;
+        self
+    }
+
+    /// The step times of the substructured cases prepared so far.
+    pub fn phases(&self) -> Vec<CasePhases> {
+        self.phases.lock().map(|p| p.clone()).unwrap_or_default()
     }
 
     fn components(
@@ -181,23 +224,70 @@ impl CaseRunners {
         Ok(c)
     }
 
+    /// The reference factorisation for the cases with the spring layout of `track`
+    /// ([`StaticUpdater`]): `track` becomes the reference when there is none for its
+    /// component key.
+    fn statics(&self, m: &Model, track: &TrackStructure) -> Result<Arc<StaticUpdater>, BoxError> {
+        let key = component_key(m, m.run.fmax, &self.options, "rail-component")?.hex();
+        let mut memo = self
+            .statics
+            .lock()
+            .map_err(|_| "static-flexibility memo poisoned by an earlier panic")?;
+        if let Some((k, u)) = memo.as_ref() {
+            if *k == key {
+                return Ok(u.clone());
+            }
+        }
+        *memo = None;
+        let u = Arc::new(StaticUpdater::new(track)?);
+        *memo = Some((key, u.clone()));
+        Ok(u)
+    }
+
     /// The prepared model (engine and bases) of one case.
     pub fn prepared(&self, m: &Model) -> Result<PreparedModel, BoxError> {
         let opts = PassageOptions::default();
         match self.basis {
             StudyBasis::Full => Ok(PreparedModel::new(m, &self.cache, &opts)?),
             StudyBasis::Substructured => {
+                let t = std::time::Instant::now();
                 let track = TrackStructure::build(m)?;
+                let structure_s = t.elapsed().as_secs_f64();
                 let comp = self.components(m, &track)?;
-                let tb = substructured_track_basis(&track, &comp, m.run.fmax)?;
-                Ok(PreparedModel::with_track_basis(
+                let components_s = t.elapsed().as_secs_f64() - structure_s;
+                let (tb, basis) = substructured_track_basis_timed(&track, &comp, m.run.fmax)?;
+                let t1 = std::time::Instant::now();
+                let t_ref = std::time::Instant::now();
+                let statics = if m.run.residual_flexibility && self.static_update {
+                    Some(self.statics(m, &track)?)
+                } else {
+                    None
+                };
+                let reference_s = t_ref.elapsed().as_secs_f64();
+                let case_static = statics.as_ref().map(|u| u.for_track(&track));
+                let stat = match &case_static {
+                    Some(c) => TrackStatic::Given(c),
+                    None => TrackStatic::Factorise,
+                };
+                let p = PreparedModel::with_track_basis_static(
                     m,
                     &track,
                     tb,
                     &self.cache,
-                    None,
+                    stat,
                     &opts,
-                )?)
+                )?;
+                let phase = CasePhases {
+                    structure_s,
+                    components_s,
+                    basis,
+                    engine_s: t1.elapsed().as_secs_f64(),
+                    residual_s: p.residual_seconds + reference_s,
+                };
+                if let Ok(mut v) = self.phases.lock() {
+                    v.push(phase);
+                }
+                Ok(p)
             }
         }
     }

@@ -94,8 +94,9 @@ pub mod bases;
 mod parse;
 mod report;
 mod run;
+pub mod static_update;
 
-pub use bases::{basis_plan, BasisPlan, CaseRunners, StudyBasis};
+pub use bases::{basis_plan, BasisPlan, CasePhases, CaseRunners, StudyBasis};
 pub use parse::expand_range;
 pub use run::{model_hash, run_study, CaseResult, GrowthHook, RunnerFactory, StudyOutcome};
 
