@@ -37,6 +37,35 @@ def near(f, fs, tol):
     return any(g is not None and abs(g - f) <= tol * f for g in fs)
 
 
+def ratio(a, b):
+    return (a / b) if (a is not None and b) else None
+
+
+def verdict(ok):
+    return "–" if ok is None else ("holds" if ok else "**fails**")
+
+
+def fmt(x):
+    return "–" if x is None else f"{x:.4g}"
+
+
+def claim_cells(R, fw, fl, fn):
+    """The table cells after the cell's labels: the five R, the four ratios, the RPM3 wear
+    frequency and the five verdicts (registered thresholds), from the wear band RMS by model
+    R and RPM3's wear, F_L and F_N component frequencies."""
+    r3 = R["RPM3"]
+    q31, q23, q53, q43 = ratio(r3, R["RPM1"]), ratio(R["RPM2"], r3), ratio(R["RPM5"], r3), ratio(R["RPM4"], r3)
+    c5 = None if fw is None else (near(fw, fl, C5_TOL) and not near(fw, fn, C5_TOL))
+    return (" | ".join(fmt(R[k]) for k in R) + " | "
+            + " | ".join(fmt(x) for x in (q31, q23, q53, q43)) + f" | {fmt(fw)} | "
+            + " | ".join(verdict(x) for x in (
+                None if q31 is None else q31 >= C1,
+                None if q23 is None else q23 <= C2,
+                None if q53 is None else q53 <= C3,
+                None if q43 is None else q43 >= C4,
+                c5)) + " |")
+
+
 def table(out):
     lines = ["| hold | ζ wheel | km/h | R1 | R2 | R3 | R4 | R5 | R3/R1 | R2/R3 | R5/R3 | R4/R3 | RPM3 wear f (Hz) | C1 | C2 | C3 | C4 | C5 |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -56,27 +85,13 @@ def table(out):
             cells.setdefault(key, {})[r["fastening.model"].strip("\"")] = r
         for (z, v), by in sorted(cells.items()):
             R = {k: fnum(by[k]["wear_band_rms_j_per_m"]) if k in by else None for k in ["RPM1", "RPM2", "RPM3", "RPM4", "RPM5"]}
-            r3 = R["RPM3"]
-            ratio = lambda a, b: (a / b) if (a is not None and b) else None
-            q31, q23, q53, q43 = ratio(r3, R["RPM1"]), ratio(R["RPM2"], r3), ratio(R["RPM5"], r3), ratio(R["RPM4"], r3)
             fw = fnum(by["RPM3"].get("wear_peak1_frequency_hz")) if "RPM3" in by else None
             fl = [fnum(by["RPM3"].get(f"fl_peak{i}_frequency_hz")) for i in (1, 2, 3)] if "RPM3" in by else []
             fn = [fnum(by["RPM3"].get(f"fn_peak{i}_frequency_hz")) for i in (1, 2, 3)] if "RPM3" in by else []
-            c5 = None if fw is None else (near(fw, fl, C5_TOL) and not near(fw, fn, C5_TOL))
-            v_ = lambda ok: "–" if ok is None else ("holds" if ok else "**fails**")
-            fmt = lambda x: "–" if x is None else f"{x:.4g}"
-            lines.append(
-                f"| H{h} | {z:g} | {v:g} | " + " | ".join(fmt(R[k]) for k in R) + " | "
-                + " | ".join(fmt(x) for x in (q31, q23, q53, q43)) + f" | {fmt(fw)} | "
-                + " | ".join(v_(x) for x in (
-                    None if q31 is None else q31 >= C1,
-                    None if q23 is None else q23 <= C2,
-                    None if q53 is None else q53 <= C3,
-                    None if q43 is None else q43 >= C4,
-                    c5)) + " |")
+            lines.append(f"| H{h} | {z:g} | {v:g} | " + claim_cells(R, fw, fl, fn))
             if h == 0 and (z, v) in h5 and h5[(z, v)]:
-                q = ratio(r3, h5[(z, v)])
-                lines.append(f"| H5 (RPM1 grid points) vs H0 RPM3 | {z:g} | {v:g} | {fmt(h5[(z, v)])} | | | | | {fmt(q)} | | | | | {v_(q >= C1)} | | | | |")
+                q = ratio(R["RPM3"], h5[(z, v)])
+                lines.append(f"| H5 (RPM1 grid points) vs H0 RPM3 | {z:g} | {v:g} | {fmt(h5[(z, v)])} | | | | | {fmt(q)} | | | | | {verdict(q >= C1)} | | | | |")
     print("\n".join(lines))
 
 
@@ -131,9 +146,6 @@ def passage_cells(dirname):
 def etable(out):
     lines = ["| excitation | seed | ζ wheel | km/h | R1 | R2 | R3 | R4 | R5 | R3/R1 | R2/R3 | R5/R3 | R4/R3 | RPM3 wear f (Hz) | C1 | C2 | C3 | C4 | C5 |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    v_ = lambda ok: "–" if ok is None else ("holds" if ok else "**fails**")
-    fmt = lambda x: "–" if x is None else f"{x:.4g}"
-    ratio = lambda a, b: (a / b) if (a is not None and b) else None
     for e in (1, 2):
         cells = passage_cells(os.path.join(out, f"e{e}"))
         keys = sorted({(z, v, s) for (_, z, v, s) in cells})
@@ -143,22 +155,11 @@ def etable(out):
         for (z, v, s) in keys:
             R = {r: cells[(r, z, v, s)]["wear_band_rms"] if (r, z, v, s) in cells else None
                  for r in ["RPM1", "RPM2", "RPM3", "RPM4", "RPM5"]}
-            r3 = R["RPM3"]
-            q31, q23, q53, q43 = ratio(r3, R["RPM1"]), ratio(R["RPM2"], r3), ratio(R["RPM5"], r3), ratio(R["RPM4"], r3)
             c3 = cells.get(("RPM3", z, v, s))
             fw = c3["wear_components"][0]["frequency_hz"] if c3 and c3["wear_components"] else None
             fl = [c["frequency_hz"] for c in c3["fl_components"][:3]] if c3 else []
             fn = [c["frequency_hz"] for c in c3["fn_components"][:3]] if c3 else []
-            c5 = None if fw is None else (near(fw, fl, C5_TOL) and not near(fw, fn, C5_TOL))
-            lines.append(
-                f"| E{e} | {'–' if s is None else s} | {z:g} | {v:g} | " + " | ".join(fmt(R[k]) for k in R) + " | "
-                + " | ".join(fmt(x) for x in (q31, q23, q53, q43)) + f" | {fmt(fw)} | "
-                + " | ".join(v_(x) for x in (
-                    None if q31 is None else q31 >= C1,
-                    None if q23 is None else q23 <= C2,
-                    None if q53 is None else q53 <= C3,
-                    None if q43 is None else q43 >= C4,
-                    c5)) + " |")
+            lines.append(f"| E{e} | {'–' if s is None else s} | {z:g} | {v:g} | " + claim_cells(R, fw, fl, fn))
     print("\n".join(lines))
 
 
