@@ -6,7 +6,7 @@ mod common;
 
 use corrugation::dynamics::{
     analysis::summarise,
-    passage::PassageEngine,
+    passage::{PassageEngine, TrackInput, WheelInput},
     record::PassageRecord,
     reduced::rayleigh_frequencies_hz,
     residual::{LineModes, ResidualFlexibility, StiffnessFactor},
@@ -197,14 +197,18 @@ fn compare_at(
     let wheel_hz = rayleigh_frequencies_hz(wm.k.as_ref(), &wb.1);
     let engine = PassageEngine::new(
         m,
-        track,
-        &tb.0,
-        &tb.1,
-        tm.c.as_ref(),
-        wheel,
-        &wheel_hz,
-        &wb.1,
-        wm,
+        TrackInput {
+            structure: track,
+            frequencies_hz: &tb.0,
+            modes: &tb.1,
+            damping: tm.c.as_ref(),
+        },
+        WheelInput {
+            structure: wheel,
+            frequencies_hz: &wheel_hz,
+            modes: &wb.1,
+            matrices: wm,
+        },
         &popts,
     )
     .unwrap();
@@ -375,14 +379,18 @@ fn reduced_with_all_modes_is_the_explicit_fe_passage() {
     let wheel_hz = rayleigh_frequencies_hz(wm.k.as_ref(), &wb.1);
     let engine = PassageEngine::new(
         &m,
-        &track,
-        &tb.0,
-        &tb.1,
-        tm.c.as_ref(),
-        &wheel,
-        &wheel_hz,
-        &wb.1,
-        &wm,
+        TrackInput {
+            structure: &track,
+            frequencies_hz: &tb.0,
+            modes: &tb.1,
+            damping: tm.c.as_ref(),
+        },
+        WheelInput {
+            structure: &wheel,
+            frequencies_hz: &wheel_hz,
+            modes: &wb.1,
+            matrices: &wm,
+        },
         &popts,
     )
     .unwrap();

@@ -2,7 +2,7 @@
 //! the modal cache or given), built once and run for any number of passages; the
 //! [`super::PassageRunner`] the studies use (docs/theory.md §7).
 
-use super::passage::{PassageEngine, PassageOptions};
+use super::passage::{PassageEngine, PassageOptions, TrackInput, WheelInput};
 use super::{DynamicsError, RailProfile};
 use crate::model::Model;
 use crate::structure::{TrackStructure, WheelStructure};
@@ -96,14 +96,18 @@ impl PreparedModel {
         let wheel_hz = super::reduced::rayleigh_frequencies_hz(wm.k.as_ref(), &wb.modes);
         let mut engine = PassageEngine::new(
             model,
-            track,
-            &tb.frequencies_hz,
-            &tb.modes,
-            tm.c.as_ref(),
-            &wheel,
-            &wheel_hz,
-            &wb.modes,
-            &wm,
+            TrackInput {
+                structure: track,
+                frequencies_hz: &tb.frequencies_hz,
+                modes: &tb.modes,
+                damping: tm.c.as_ref(),
+            },
+            WheelInput {
+                structure: &wheel,
+                frequencies_hz: &wheel_hz,
+                modes: &wb.modes,
+                matrices: &wm,
+            },
             opts,
         )?;
         let t_residual = std::time::Instant::now();

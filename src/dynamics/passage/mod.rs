@@ -142,23 +142,55 @@ fn global_frame() -> ContactFrame {
     }
 }
 
+/// The track as [`PassageEngine::new`] takes it: the structure, its modal basis and its
+/// assembled damping matrix.
+#[derive(Clone, Copy)]
+pub struct TrackInput<'a> {
+    /// The track's FE structure.
+    pub structure: &'a TrackStructure,
+    /// Natural frequencies of the basis (Hz), ascending.
+    pub frequencies_hz: &'a [f64],
+    /// Mass-normalised modes over the free DOFs (n × m).
+    pub modes: &'a Mat<f64>,
+    /// The assembled damping matrix over the free DOFs (N·s/m).
+    pub damping: faer::sparse::SparseColMatRef<'a, usize, f64>,
+}
+
+/// The wheel as [`PassageEngine::new`] takes it: the structure, its modal basis and its
+/// assembled matrices (the damping, and the mass for the constant loads).
+#[derive(Clone, Copy)]
+pub struct WheelInput<'a> {
+    /// The wheel's FE structure.
+    pub structure: &'a WheelStructure,
+    /// Natural frequencies of the basis (Hz), ascending; the rigid modes' 0 to round-off.
+    pub frequencies_hz: &'a [f64],
+    /// Mass-normalised modes over the free DOFs (n × m).
+    pub modes: &'a Mat<f64>,
+    /// The wheel's assembled K, M, C.
+    pub matrices: &'a crate::fe::assembly::FeMatrices,
+}
+
 impl PassageEngine {
-    /// Builds the engine from a model, its structures and their modal bases (mass-normalised
-    /// modes over the free DOFs, frequencies in Hz), the assembled damping matrices, and the
-    /// options (the rail-point offset fixes which node is recorded).
-    #[allow(clippy::too_many_arguments)]
+    /// Builds the engine from a model, its track and wheel with their modal bases and
+    /// matrices, and the options (the rail-point offset fixes which node is recorded).
     pub fn new(
         model: &Model,
-        track: &TrackStructure,
-        track_freqs_hz: &[f64],
-        track_modes: &Mat<f64>,
-        track_c: faer::sparse::SparseColMatRef<'_, usize, f64>,
-        wheel: &WheelStructure,
-        wheel_freqs_hz: &[f64],
-        wheel_modes: &Mat<f64>,
-        wheel_mats: &crate::fe::assembly::FeMatrices,
+        track_in: TrackInput<'_>,
+        wheel_in: WheelInput<'_>,
         opts: &PassageOptions,
     ) -> Result<Self, DynamicsError> {
+        let TrackInput {
+            structure: track,
+            frequencies_hz: track_freqs_hz,
+            modes: track_modes,
+            damping: track_c,
+        } = track_in;
+        let WheelInput {
+            structure: wheel,
+            frequencies_hz: wheel_freqs_hz,
+            modes: wheel_modes,
+            matrices: wheel_mats,
+        } = wheel_in;
         let frame = ContactFrame::for_inclination(model.rail.inclination);
         let track_sys = ModalSystem::new(track_freqs_hz, track_modes, track_c, RIGID_HZ)?;
         if let Some(i) = track_sys.omega2.iter().position(|&w| w == 0.0) {
