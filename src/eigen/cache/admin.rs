@@ -29,10 +29,9 @@ pub struct CacheEntryInfo {
     pub dir: PathBuf,
     /// Bytes on disk of all the entry's files (B).
     pub bytes: u64,
-    /// The metadata, when `meta.json` is readable (`None` marks a broken entry, which a
-    /// lookup would report corrupt and recompute).
-    #[serde(skip)]
-    pub meta: Option<CacheMeta>,
+    /// Whether `meta.json` is readable; a broken entry would be reported corrupt by a lookup
+    /// and recomputed.
+    pub readable: bool,
     /// Number of DOFs of the basis (0 when the metadata is unreadable).
     pub n_dofs: usize,
     /// Number of modes (0 when the metadata is unreadable).
@@ -68,11 +67,23 @@ pub struct PruneReport {
     pub leftovers_removed: usize,
 }
 
+/// Bytes of the files under `d` (B). A file or directory removed while it is being summed
+/// (a concurrent prune or store) counts as empty rather than failing the listing.
 fn dir_bytes(d: &Path) -> Result<u64, CacheError> {
+    let gone = |e: &std::io::Error| e.kind() == std::io::ErrorKind::NotFound;
+    let rd = match fs::read_dir(d) {
+        Ok(rd) => rd,
+        Err(e) if gone(&e) => return Ok(0),
+        Err(e) => return Err(io_err("read dir", d)(e)),
+    };
     let mut total = 0;
-    for e in fs::read_dir(d).map_err(io_err("read dir", d))? {
+    for e in rd {
         let e = e.map_err(io_err("read dir", d))?;
-        let md = e.metadata().map_err(io_err("stat", &e.path()))?;
+        let md = match e.metadata() {
+            Ok(md) => md,
+            Err(err) if gone(&err) => continue,
+            Err(err) => return Err(io_err("stat", &e.path())(err)),
+        };
         total += if md.is_dir() {
             dir_bytes(&e.path())?
         } else {
@@ -119,7 +130,7 @@ impl ModalCache {
                 n_dofs: meta.as_ref().map_or(0, |m| m.n_dofs),
                 n_modes: meta.as_ref().map_or(0, |m| m.n_modes),
                 f_max_hz: meta.as_ref().map_or(f64::NAN, |m| m.f_max_hz),
-                meta,
+                readable: meta.is_some(),
                 dir,
                 idle_s,
             });
@@ -239,6 +250,7 @@ mod tests {
         assert_eq!(e.len(), 2);
         assert_eq!(e[0].key, b.hex(), "b was used longest ago");
         assert_eq!((e[0].n_dofs, e[0].n_modes, e[0].f_max_hz), (1000, 3, 100.0));
+        assert!(e[0].readable && e[1].readable);
         // b's modes alone are 1000 × 3 f64 = 24,000 B of data.
         assert!(e[0].bytes > 24_000 && e[0].bytes < 28_000, "{}", e[0].bytes);
         assert!((e[0].idle_s - 3600.0).abs() < 60.0 && (e[1].idle_s - 100.0).abs() < 60.0);
