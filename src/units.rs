@@ -29,7 +29,7 @@ pub fn ms_to_kmh(ms: f64) -> f64 {
 ///
 /// Valid range: finite and positive; the model and the sweeps accept 1 to 500 km/h
 /// (`crate::model::SPEED_KMH`) and check it where the speed is read.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Speed {
     /// Speed (km/h).
     kmh: f64,

@@ -81,7 +81,8 @@ fn spectrum_growth_rate_follows_the_phase() {
         points: 25,
         ..RateOptions::default()
     };
-    let s = growth_rate_spectrum(&p.engine, m.run.speed(), m.wear.coefficient, &o).unwrap();
+    let s =
+        growth_rate_spectrum(&p.engine, m.run.requested_speed(), m.wear.coefficient, &o).unwrap();
     assert_eq!(s.points.len(), 25);
     assert!((s.points[0].wavelength_m - 0.02).abs() < 1e-12);
     assert!((s.points[24].wavelength_m - 0.08).abs() < 1e-12);

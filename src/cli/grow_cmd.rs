@@ -228,11 +228,11 @@ impl GrowCmd {
         coupled: &[CoupledMode],
     ) -> anyhow::Result<Option<RateSummary>> {
         let pb = super::progress::bar("growth-rate spectrum");
-        let s = growth_rate(m, prepared, m.run.speed(), &pb)?;
+        let s = growth_rate(m, prepared, m.run.requested_speed(), &pb)?;
         pb.finish_and_clear();
         write_growth_rate(&self.out, &s)?;
         if !self.json {
-            println!("{}", s.sentence(m.run.speed_kmh));
+            println!("{}", s.sentence());
         }
         let rate = rate_summary(&s, coupled);
         if let Some(a) = rate.as_ref().and_then(|r| r.fastest_mode.as_ref()) {

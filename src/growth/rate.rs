@@ -40,6 +40,7 @@ use crate::contact::{Longitudinal, NormalInput, StepInputs, TransientRolling, We
 use crate::dynamics::passage::{PassageEngine, PassageOptions};
 use crate::dynamics::record::PassageRecord;
 use crate::dynamics::{DynamicsError, RailProfile};
+use crate::units::Speed;
 
 /// The contact inputs of a [`ContactTransfer`], in column order.
 pub const INPUTS: [&str; 4] = ["roughness", "approach", "creepage_x", "creepage_t"];
@@ -405,8 +406,8 @@ impl RatePoint {
 /// The growth-rate spectrum of a model at one speed.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct GrowthRateSpectrum {
-    /// Speed (m/s).
-    pub speed_m_per_s: f64,
+    /// The speed as requested (km/h and m/s; see [`Speed`]).
+    pub speed: Speed,
     /// Wear coefficient `k_w` (m³/J).
     pub wear_coefficient_m3_per_j: f64,
     /// Worn width `2b` (m), the static contact width.
@@ -447,8 +448,9 @@ impl GrowthRateSpectrum {
         })
     }
 
-    /// One sentence on which wavelengths grow at the speed (km/h given for the text).
-    pub fn sentence(&self, speed_kmh: f64) -> String {
+    /// One sentence on which wavelengths grow at the spectrum's speed.
+    pub fn sentence(&self) -> String {
+        let speed_kmh = self.speed.kmh();
         let mm = |m: f64| format!("{:.1}", crate::units::m_to_mm(m));
         let band = match (self.points.first(), self.points.last()) {
             (Some(a), Some(b)) => format!("{}–{} mm", mm(a.wavelength_m), mm(b.wavelength_m)),
@@ -579,16 +581,16 @@ pub fn linear_responses(
         .collect())
 }
 
-/// The growth-rate spectrum of `engine` at `speed_m_per_s` (m/s) with the wear coefficient
+/// The growth-rate spectrum of `engine` at `speed` with the wear coefficient
 /// `wear_coefficient` (m³/J; the growth rate scales with it).
 pub fn growth_rate_spectrum(
     engine: &PassageEngine,
-    speed_m_per_s: f64,
+    speed: Speed,
     wear_coefficient: f64,
     o: &RateOptions,
 ) -> Result<GrowthRateSpectrum, DynamicsError> {
     o.check()?;
-    let v = speed_m_per_s;
+    let v = speed.m_per_s();
     let lambdas = spectrum_wavelengths(o);
     let r = linear_responses(engine, v, &lambdas, o)?;
     let width = 2.0 * engine.hertz_b_m();
@@ -601,7 +603,7 @@ pub fn growth_rate_spectrum(
             .collect()
     };
     Ok(GrowthRateSpectrum {
-        speed_m_per_s: v,
+        speed,
         wear_coefficient_m3_per_j: wear_coefficient,
         width_m: width,
         points: pick(0),
@@ -782,7 +784,7 @@ mod tests {
             longitudinal_force_n_per_m: 0.0,
         };
         let mut g = GrowthRateSpectrum {
-            speed_m_per_s: 38.9,
+            speed: Speed::from_kmh(60.0),
             wear_coefficient_m3_per_j: 1e-13,
             width_m: 0.01,
             points: vec![
@@ -796,10 +798,9 @@ mod tests {
             normal_only: vec![],
         };
         assert_eq!(g.growing_ranges_m(), vec![[0.03, 0.04], [0.06, 0.06]]);
-        assert!(g.sentence(140.0).contains("grows at 30.0–40.0 mm, 60.0 mm"));
+        assert!(g.sentence().contains("grows at 30.0–40.0 mm, 60.0 mm"));
+        assert!(g.sentence().starts_with("Growth-rate spectrum at 60 km/h"));
         g.points.retain(|p| !p.grows());
-        assert!(g
-            .sentence(140.0)
-            .contains("no wavelength in 20.0–50.0 mm grows"));
+        assert!(g.sentence().contains("no wavelength in 20.0–50.0 mm grows"));
     }
 }

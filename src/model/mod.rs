@@ -517,6 +517,12 @@ impl Run {
     pub fn speed(&self) -> f64 {
         crate::units::kmh_to_ms(self.speed_kmh)
     }
+
+    /// The speed as given in the model (`speed_kmh` carried exactly; see
+    /// [`crate::units::Speed`]).
+    pub fn requested_speed(&self) -> crate::units::Speed {
+        crate::units::Speed::from_kmh(self.speed_kmh)
+    }
 }
 
 impl Model {

@@ -198,7 +198,7 @@ pub struct RateSummary {
 pub fn rate_summary(s: &GrowthRateSpectrum, modes: &[CoupledMode]) -> Option<RateSummary> {
     let p = s.fastest()?;
     Some(RateSummary {
-        speed_kmh: crate::units::ms_to_kmh(s.speed_m_per_s),
+        speed_kmh: s.speed.kmh(),
         fastest_wavelength_mm: m_to_mm(p.wavelength_m),
         fastest_frequency_hz: p.frequency_hz,
         max_rate_per_passage: p.growth_rate_per_passage,
@@ -502,18 +502,18 @@ fn write_trial_shape_csv(out: &Path, g: &TrialGrowth) -> Result<(), StudiesError
     Ok(())
 }
 
-/// The growth-rate spectrum of `p` at `speed_m_per_s` (m/s), with the model's wear
-/// coefficient and the default settings ([`RateOptions`]), counted as one stage on `progress`.
+/// The growth-rate spectrum of `p` at `speed`, with the model's wear coefficient and the
+/// default settings ([`RateOptions`]), counted as one stage on `progress`.
 pub fn growth_rate(
     m: &Model,
     p: &PreparedModel,
-    speed_m_per_s: f64,
+    speed: crate::units::Speed,
     progress: &dyn Progress,
 ) -> Result<GrowthRateSpectrum, crate::dynamics::DynamicsError> {
     progress.stage("growth-rate spectrum (linear wear response)", 1);
     let s = growth_rate_spectrum(
         &p.engine,
-        speed_m_per_s,
+        speed,
         m.wear.coefficient,
         &RateOptions::default(),
     );
@@ -585,7 +585,7 @@ pub fn write_growth_rate(out: &Path, s: &GrowthRateSpectrum) -> Result<(), Studi
         &stem,
         &format!(
             "Growth-rate spectrum at {:.0} km/h (> 0 grows)",
-            crate::units::ms_to_kmh(s.speed_m_per_s)
+            s.speed.kmh()
         ),
         "wavelength (mm)",
         "growth rate per passage (-)",
@@ -707,4 +707,41 @@ pub fn write_text_csv(
     rows: &[Vec<String>],
 ) -> Result<(), StudiesError> {
     crate::io::write_text_csv(path, header, rows).map_err(StudiesError::io(path))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::growth::rate::RatePoint;
+    use crate::units::Speed;
+
+    /// The growth-rate summary carries the model's speed exactly: 60 km/h reads 60, not the
+    /// 60.00000000000001 of a round trip through m/s (`60 / 3.6 * 3.6`).
+    #[test]
+    fn rate_summary_carries_the_requested_speed() {
+        assert_ne!(60.0_f64 / 3.6 * 3.6, 60.0);
+        let point = |l: f64, sigma: f64| RatePoint {
+            wavelength_m: l,
+            frequency_hz: 60.0 / 3.6 / l,
+            gain_j_per_m2: 1.0,
+            phase_deg: 180.0,
+            growth_rate_per_passage: sigma,
+            wear_parts_re: [0.0; 4],
+            wear_parts_im: [0.0; 4],
+            normal_force_n_per_m: 0.0,
+            longitudinal_force_n_per_m: 0.0,
+        };
+        let s = GrowthRateSpectrum {
+            speed: Speed::from_kmh(60.0),
+            wear_coefficient_m3_per_j: 1e-13,
+            width_m: 0.01,
+            points: vec![point(0.03, -1.0), point(0.04, 2.0)],
+            rigid: vec![],
+            normal_only: vec![],
+        };
+        let brief = rate_summary(&s, &[]).unwrap();
+        assert_eq!(brief.speed_kmh, 60.0);
+        assert_eq!(brief.fastest_wavelength_mm, 40.0);
+        assert_eq!(brief.growing_wavelengths, 1);
+    }
 }

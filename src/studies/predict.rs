@@ -192,7 +192,7 @@ pub fn predict(
         Some(g) => growth_verdict(g, m.run.speed_kmh, &lines, Some(check)),
         None => no_initiation_verdict(m.run.speed_kmh, Some(check)),
     };
-    let rate = super::grow::growth_rate(m, prepared, m.run.speed(), progress)?;
+    let rate = super::grow::growth_rate(m, prepared, m.run.requested_speed(), progress)?;
     super::grow::write_growth_rate(&dirs.grow, &rate)?;
     let rate_brief = super::grow::rate_summary(&rate, &coupled.modes);
     let gj = match &growth {
@@ -311,7 +311,7 @@ fn predict_json(r: &ReportInput<'_>, seconds: f64) -> PredictJson {
         fl_components: s.fl_components.clone(),
         limiting_amplitude_um: r.growth.and_then(|(g, _)| g.limiting_amplitude_um),
         verdict: r.verdict.clone(),
-        growth_rate: r.rate.sentence(r.m.run.speed_kmh),
+        growth_rate: r.rate.sentence(),
         growth_rate_summary: r.rate_brief.cloned(),
         wear_coupled: r.attribution.wear.clone(),
         sweep_speeds_kmh: sw.speeds_kmh.clone(),
@@ -605,7 +605,7 @@ fn growth_section(d: &mut Document, g: &TrialGrowth, gj: &GrowJson) {
 /// The growth-rate spectrum beside the trial amplitudes: which wavelengths grow.
 fn rate_section(d: &mut Document, r: &ReportInput<'_>) {
     d.heading(2, "Growth-rate spectrum (linear, small roughness)");
-    d.paragraph(r.rate.sentence(r.m.run.speed_kmh));
+    d.paragraph(r.rate.sentence());
     d.paragraph(
         "The new wear of one passage over a small sinusoidal roughness, per unit roughness, \
          from the coupled receptances and the contact linearised by its own solver \
