@@ -15,6 +15,9 @@ pub enum TrackStatic<'a> {
     Cached(&'a crate::eigen::cache::CacheKey),
     /// A factorisation of the track's `K`, not cached.
     Factorise,
+    /// A factorisation of the track's `K` reusing the symbolic analysis shared by the
+    /// models of a study (same pattern of `K`), not cached.
+    FactoriseShared(&'a super::residual::SharedStiffnessAnalysis),
     /// Given (e.g. a reference factorisation updated for changed spring stiffnesses); it
     /// must be the static flexibility of this track's `K`.
     Given(&'a dyn super::residual::StaticFlexibility),
@@ -135,6 +138,12 @@ impl PreparedModel {
                 TrackStatic::Factorise => super::residual::ResidualFlexibility::compute(
                     track,
                     &super::residual::StiffnessFactor::new(tm.k.as_ref())?,
+                    lm,
+                    travel,
+                )?,
+                TrackStatic::FactoriseShared(a) => super::residual::ResidualFlexibility::compute(
+                    track,
+                    &a.factor(tm.k.as_ref())?,
                     lm,
                     travel,
                 )?,

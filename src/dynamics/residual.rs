@@ -68,7 +68,7 @@ use serde::{Deserialize, Serialize};
 
 use super::reduced::{ContactFrame, RailContactLine};
 use super::DynamicsError;
-use crate::eigen::factor::{ShiftFactor, ShiftedSystem, SolveWorkspace};
+use crate::eigen::factor::{SharedAnalysis, ShiftFactor, ShiftedSystem, SolveWorkspace};
 use crate::eigen::FillOrdering;
 use crate::fe::assembly::DofMap;
 use crate::structure::TrackStructure;
@@ -136,6 +136,28 @@ impl StiffnessFactor {
         // At σ = 0 the mass matrix does not enter; K stands in for its pattern.
         let sys = ShiftedSystem::new(k, k, FillOrdering::Auto, Par::rayon(0))
             .map_err(DynamicsError::StiffnessFactor)?;
+        Self::factorise(sys)
+    }
+
+    /// As [`Self::new`], reusing the symbolic analysis of an earlier factor of a `K` with
+    /// the same pattern ([`Self::analysis`]; e.g. the cases of a stiffness study): only the
+    /// numeric factorisation is done. The factor equals that of [`Self::new`]; a `K` of
+    /// another pattern is analysed afresh.
+    pub fn with_analysis(
+        k: SparseColMatRef<'_, usize, f64>,
+        shared: &SharedAnalysis,
+    ) -> Result<Self, DynamicsError> {
+        let sys = ShiftedSystem::with_analysis(k, k, shared, FillOrdering::Auto, Par::rayon(0))
+            .map_err(DynamicsError::StiffnessFactor)?;
+        Self::factorise(sys)
+    }
+
+    /// The symbolic analysis of this factor, for [`Self::with_analysis`].
+    pub fn analysis(&self) -> SharedAnalysis {
+        self.sys.analysis()
+    }
+
+    fn factorise(sys: ShiftedSystem) -> Result<Self, DynamicsError> {
         let factor = sys
             .factorize(0.0)
             .map_err(DynamicsError::StiffnessFactor)?
@@ -150,6 +172,15 @@ impl StiffnessFactor {
             });
         }
         Ok(StiffnessFactor { sys, factor })
+    }
+
+    /// Overwrites the columns `b` of `rhs` (n × k) with vectors `z_b` such that
+    /// `bᵀ K⁻¹ c = z_b · z_c` ([`ShiftedSystem::whiten_in_place`]: the forward substitution
+    /// alone, over the factor's part a sparse load reaches).
+    pub fn whiten_in_place(&self, rhs: faer::MatMut<'_, f64>) -> Result<(), DynamicsError> {
+        self.sys
+            .whiten_in_place(&self.factor, rhs)
+            .map_err(DynamicsError::StiffnessFactor)
     }
 
     /// Workspace for [`Self::solve_in_place`] with up to `ncols` right-hand sides (allocate
@@ -167,6 +198,35 @@ impl StiffnessFactor {
     /// Number of rows (free DOFs).
     pub fn n(&self) -> usize {
         self.sys.n()
+    }
+}
+
+/// The symbolic analysis of the first `K` factorised through it, reused for every later
+/// `K` of the same pattern (the cases of a stiffness study): each factorisation is then
+/// numeric only, with the same factor as [`StiffnessFactor::new`].
+#[derive(Default)]
+pub struct SharedStiffnessAnalysis {
+    analysis: std::sync::Mutex<Option<SharedAnalysis>>,
+}
+
+impl SharedStiffnessAnalysis {
+    /// Factorises `k`, with the stored analysis when there is one (and its pattern is
+    /// that of `k`), else analysing `k` and storing its analysis.
+    pub fn factor(
+        &self,
+        k: SparseColMatRef<'_, usize, f64>,
+    ) -> Result<StiffnessFactor, DynamicsError> {
+        let stored = self.analysis.lock().ok().and_then(|a| a.clone());
+        match stored {
+            Some(a) => StiffnessFactor::with_analysis(k, &a),
+            None => {
+                let f = StiffnessFactor::new(k)?;
+                if let Ok(mut a) = self.analysis.lock() {
+                    *a = Some(f.analysis());
+                }
+                Ok(f)
+            }
+        }
     }
 }
 
@@ -233,7 +293,9 @@ pub fn for_each_plane_solution(
 }
 
 /// `G_d(p)` for the planes `p0..=p1` and the cross terms `b_{p,d}ᵀ K⁻¹ b_{p+1,d}`, for the
-/// contact nodes and weights of `line` (the line's modes are not used).
+/// contact nodes and weights of `line` (the line's modes are not used): each as the dot
+/// product of whitened loads ([`StiffnessFactor::whiten_in_place`]), in blocks of planes,
+/// the last plane of a block kept for the next block's first cross term.
 fn static_flexibility(
     track: &TrackStructure,
     factor: &StiffnessFactor,
@@ -241,18 +303,62 @@ fn static_flexibility(
     frame: &ContactFrame,
     p0: usize,
     p1: usize,
-) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
-    let axes = [frame.x, frame.t, frame.n];
+) -> Result<PlaneFlexibility, DynamicsError> {
     let np = p1 - p0 + 1;
+    let n = factor.n();
+    let per_block = (BLOCK / 3).max(1);
     let mut g = vec![[0.0; 3]; np];
     let mut cross = vec![[0.0; 3]; np.saturating_sub(1)];
-    for_each_plane_solution(track, factor, line, frame, p0, p1, &mut |i, d, u| {
-        g[i][d] = nodes_dot(&line.nodes[p0 + i], &track.dofmap, axes[d], u);
-        if i + 1 < np {
-            cross[i][d] = nodes_dot(&line.nodes[p0 + i + 1], &track.dofmap, axes[d], u);
+    let mut z = Mat::<f64>::zeros(n, 3 * per_block.min(np));
+    let mut prev = Mat::<f64>::zeros(n, 3);
+    let mut b = vec![0.0; n];
+    let dot = |a: faer::ColRef<'_, f64>, c: faer::ColRef<'_, f64>| -> f64 {
+        a.iter().zip(c.iter()).map(|(x, y)| x * y).sum()
+    };
+    let mut first = 0;
+    while first < np {
+        let planes = per_block.min(np - first);
+        let mut block = z.as_mut().subcols_mut(0, 3 * planes);
+        for i in 0..planes {
+            for d in 0..3 {
+                let mut force = [0.0; 3];
+                force[d] = 1.0;
+                b.iter_mut().for_each(|v| *v = 0.0);
+                super::reduced::add_nodes_load(
+                    &line.nodes[p0 + first + i],
+                    &track.dofmap,
+                    frame,
+                    1.0,
+                    force,
+                    &mut b,
+                );
+                block
+                    .as_mut()
+                    .col_mut(3 * i + d)
+                    .iter_mut()
+                    .zip(&b)
+                    .for_each(|(o, &v)| *o = v);
+            }
         }
-    });
-    (g, cross)
+        factor.whiten_in_place(block.as_mut())?;
+        for i in 0..planes {
+            for d in 0..3 {
+                let c = block.as_ref().col(3 * i + d);
+                g[first + i][d] = dot(c, c);
+                if i > 0 {
+                    cross[first + i - 1][d] = dot(block.as_ref().col(3 * (i - 1) + d), c);
+                } else if first > 0 {
+                    cross[first - 1][d] = dot(prev.col(d), c);
+                }
+            }
+        }
+        for d in 0..3 {
+            prev.col_mut(d)
+                .copy_from(block.as_ref().col(3 * (planes - 1) + d));
+        }
+        first += planes;
+    }
+    Ok((g, cross))
 }
 
 /// Per node plane `[x, t, n]` values (m/N): `G` of each plane and the cross terms of each
@@ -292,7 +398,7 @@ impl StaticFlexibility for StiffnessFactor {
         p0: usize,
         p1: usize,
     ) -> Result<PlaneFlexibility, DynamicsError> {
-        Ok(static_flexibility(track, self, line, frame, p0, p1))
+        static_flexibility(track, self, line, frame, p0, p1)
     }
 }
 
@@ -574,7 +680,7 @@ pub fn lateral_spread_flexibility(
             planes: line.planes_x_m.len(),
         });
     }
-    let (g, _) = static_flexibility(track, factor, &line, frame, plane, plane + 1);
+    let (g, _) = static_flexibility(track, factor, &line, frame, plane, plane + 1)?;
     Ok(g[0])
 }
 
@@ -624,6 +730,58 @@ pub fn cached_residual(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The plane flexibilities from whitened loads (forward substitution over the reached
+    /// supernodes) against the same quadratic forms from full solves and the nodes' weighted
+    /// displacements (faer's forward and backward substitution), on the small test track:
+    /// agreement to round-off (1e-10 relative); a factor sharing the first one's analysis
+    /// gives the same values for a changed railpad stiffness as its own analysis.
+    #[test]
+    fn whitened_plane_flexibility_matches_full_solves() {
+        let m = crate::model::test_problems::small_model(&[]).unwrap();
+        let track = TrackStructure::build(&m).unwrap();
+        let (mats, _) = track.assemble().unwrap();
+        let factor = StiffnessFactor::new(mats.k.as_ref()).unwrap();
+        let frame = ContactFrame::for_inclination(m.rail.inclination);
+        let empty = Mat::<f64>::zeros(track.dofmap.n_free(), 0);
+        let line = RailContactLine::new(&track, &empty, &frame, 0.005).unwrap();
+        let (p0, p1) = (2, 2 + 10);
+        let (g, cross) = static_flexibility(&track, &factor, &line, &frame, p0, p1).unwrap();
+        let axes = [frame.x, frame.t, frame.n];
+        let (mut g_ref, mut c_ref) = (vec![[0.0; 3]; 11], vec![[0.0; 3]; 10]);
+        for_each_plane_solution(&track, &factor, &line, &frame, p0, p1, &mut |i, d, u| {
+            g_ref[i][d] = nodes_dot(&line.nodes[p0 + i], &track.dofmap, axes[d], u);
+            if i < 10 {
+                c_ref[i][d] = nodes_dot(&line.nodes[p0 + i + 1], &track.dofmap, axes[d], u);
+            }
+        });
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-10 * b.abs();
+        for i in 0..11 {
+            for d in 0..3 {
+                assert!(
+                    close(g[i][d], g_ref[i][d]),
+                    "G {i} {d}: {} vs {}",
+                    g[i][d],
+                    g_ref[i][d]
+                );
+                if i < 10 {
+                    assert!(close(cross[i][d], c_ref[i][d]), "cross {i} {d}");
+                }
+            }
+        }
+        let shared = SharedStiffnessAnalysis::default();
+        shared.factor(mats.k.as_ref()).unwrap();
+        let m2 = crate::model::test_problems::small_model(&["fastening.vertical_stiffness=9e8"])
+            .unwrap();
+        let track2 = TrackStructure::build(&m2).unwrap();
+        let (mats2, _) = track2.assemble().unwrap();
+        let own = StiffnessFactor::new(mats2.k.as_ref()).unwrap();
+        let reused = shared.factor(mats2.k.as_ref()).unwrap();
+        let a = static_flexibility(&track2, &own, &line, &frame, p0, p1).unwrap();
+        let b = static_flexibility(&track2, &reused, &line, &frame, p0, p1).unwrap();
+        assert_eq!(a, b);
+        assert_ne!(a.0, g, "the stiffness change must change the flexibility");
+    }
 
     /// Hand-computed: two intervals of 10 and 30 mm with mid-element residuals
     /// ¼(R_i + R_{i+1} + 2 R_{i,i+1}); the constant compliance is their length-weighted mean.

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use super::static_update::StaticUpdater;
 use super::{Case, Study};
+use crate::dynamics::residual::SharedStiffnessAnalysis;
 use crate::dynamics::{
     passage::PassageOptions,
     prepared::{PreparedModel, TrackStatic},
@@ -147,6 +148,9 @@ pub struct CaseRunners {
     options: SubstructureOptions,
     components: Mutex<Option<(String, Arc<TrackComponents>)>>,
     statics: Mutex<Option<(String, Arc<StaticUpdater>)>>,
+    /// The symbolic analysis of the track's `K` shared by the cases (their `K` differ in
+    /// values only when the study changes stiffnesses).
+    analysis: SharedStiffnessAnalysis,
     static_update: bool,
     phases: Mutex<Vec<CasePhases>>,
 }
@@ -178,6 +182,7 @@ impl CaseRunners {
             options: study.substructure,
             components: Mutex::new(None),
             statics: Mutex::new(None),
+            analysis: SharedStiffnessAnalysis::default(),
             static_update: false,
             phases: Mutex::new(Vec::new()),
         }
@@ -267,7 +272,7 @@ impl CaseRunners {
                 let case_static = statics.as_ref().map(|u| u.for_track(&track));
                 let stat = match &case_static {
                     Some(c) => TrackStatic::Given(c),
-                    None => TrackStatic::Factorise,
+                    None => TrackStatic::FactoriseShared(&self.analysis),
                 };
                 let p = PreparedModel::with_track_basis_static(
                     m,
