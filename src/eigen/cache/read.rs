@@ -43,6 +43,7 @@ pub(super) fn read_modes(
 ) -> Result<Mat<f64>, CorruptEntry> {
     let path = d.join(file);
     let f = fs::File::open(&path).map_err(io_err("open", &path))?;
+    let bytes = f.metadata().map_err(io_err("stat", &path))?.len();
     let mut r = Hashing {
         inner: std::io::BufReader::with_capacity(1 << 16, f),
         hasher: blake3::Hasher::new(),
@@ -50,7 +51,10 @@ pub(super) fn read_modes(
     let npy_err = |source| CorruptEntry::Npy { file, source };
     let header = npyz::NpyHeader::from_reader(&mut r).map_err(npy_err)?;
     let f8 = matches!(header.dtype(), npyz::DType::Plain(t) if t.to_string() == "<f8");
-    if header.shape() != [n as u64, m as u64] || header.order() != npyz::Order::C || !f8 {
+    // A file too short for its shape is refused before the matrix is allocated.
+    let values = (n as u64).saturating_mul(m as u64);
+    let short = bytes < values.saturating_mul(8);
+    if header.shape() != [n as u64, m as u64] || header.order() != npyz::Order::C || !f8 || short {
         return Err(CorruptEntry::Shape {
             file,
             shape: header.shape().to_vec(),
