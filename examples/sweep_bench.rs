@@ -48,6 +48,23 @@ fn main() -> anyhow::Result<()> {
         t.elapsed().as_secs_f64(),
         model.run.fmax
     );
+    let p = &prepared.times;
+    println!(
+        "preparation (wall s; the track's side beside the wheel's): track mesh {:.2}, basis {:.2}, \
+         damping {:.2} | wheel mesh {:.2}, basis {:.2}, assembly {:.2}, Rayleigh {:.2} | \
+         engine {:.2} | residual flexibility: track {:.2}, wheel {:.2} | total {:.2}",
+        p.track_mesh,
+        p.track_basis,
+        p.track_damping,
+        p.wheel_mesh,
+        p.wheel_basis,
+        p.wheel_assembly,
+        p.wheel_rayleigh,
+        p.engine,
+        p.track_residual,
+        p.wheel_residual,
+        p.total
+    );
     let map = MapOptions {
         frequency_lines_hz: prepared.longitudinal_compression_hz(),
         ..MapOptions::default()

@@ -4,8 +4,13 @@
 
 use super::passage::{PassageEngine, PassageOptions, TrackInput, WheelInput};
 use super::{DynamicsError, RailProfile};
+use crate::eigen::basis::ModalBasis;
+use crate::eigen::cache::ModalCache;
+use crate::eigen::classify::{TrackModeClass, WheelModeClass};
+use crate::fe::assembly::FeMatrices;
 use crate::model::Model;
 use crate::structure::{TrackStructure, WheelStructure};
+use faer::sparse::SparseColMat;
 
 /// Where the track's static flexibility at the contact (for its residual flexibility,
 /// [`super::residual`]) comes from.
@@ -20,7 +25,46 @@ pub enum TrackStatic<'a> {
     FactoriseShared(&'a super::residual::SharedStiffnessAnalysis),
     /// Given (e.g. a reference factorisation updated for changed spring stiffnesses); it
     /// must be the static flexibility of this track's `K`.
-    Given(&'a dyn super::residual::StaticFlexibility),
+    Given(&'a (dyn super::residual::StaticFlexibility + Sync)),
+}
+
+/// Wall times (s) of the phases of a [`PreparedModel`]'s preparation. The track's side (mesh,
+/// basis, damping) runs beside the wheel's (mesh, basis, assembly, Rayleigh frequencies), and
+/// the track's residual flexibility beside the wheel's, so phases overlap: `total` is the
+/// wall time of the whole. A phase that did not run is 0.
+#[derive(Clone, Debug, Default)]
+pub struct PreparationTimes {
+    /// Building the track's mesh and structure (0 when the track was given).
+    pub track_mesh: f64,
+    /// Loading (or computing) the track's modal basis (0 when the basis was given).
+    pub track_basis: f64,
+    /// Assembling the track's damping matrix.
+    pub track_damping: f64,
+    /// Building the wheel's mesh and structure.
+    pub wheel_mesh: f64,
+    /// Loading (or computing) the wheel's modal basis.
+    pub wheel_basis: f64,
+    /// Assembling the wheel's stiffness, mass and damping.
+    pub wheel_assembly: f64,
+    /// The wheel modes' Rayleigh frequencies.
+    pub wheel_rayleigh: f64,
+    /// The passage engine: the modal systems (damping projections), the contact lines'
+    /// modal rows, the loads.
+    pub engine: f64,
+    /// The track's residual flexibility (from the cache, or a factorisation of `K`).
+    pub track_residual: f64,
+    /// The wheel's residual flexibility.
+    pub wheel_residual: f64,
+    /// The whole preparation.
+    pub total: f64,
+}
+
+/// Runs `f`, adding its wall time (s) to `into`.
+fn timed<T>(into: &mut f64, f: impl FnOnce() -> T) -> T {
+    let t = std::time::Instant::now();
+    let out = f();
+    *into += t.elapsed().as_secs_f64();
+    out
 }
 
 /// The engine of a model with its classified bases, built once and reused for any number of
@@ -41,21 +85,91 @@ pub struct PreparedModel {
     /// Wall time (s) of the track's and the wheel's residual flexibilities (0 when the
     /// model asks for neither).
     pub residual_seconds: f64,
+    /// Wall times (s) of the preparation's phases.
+    pub times: PreparationTimes,
+}
+
+/// The wheel's side of the preparation: structure, basis, matrices, Rayleigh frequencies.
+struct WheelSide {
+    wheel: WheelStructure,
+    basis: ModalBasis<WheelModeClass>,
+    mats: FeMatrices,
+    hz: Vec<f64>,
+}
+
+impl WheelSide {
+    fn prepare(
+        model: &Model,
+        cache: &ModalCache,
+        times: &mut PreparationTimes,
+    ) -> Result<Self, DynamicsError> {
+        let wheel = timed(&mut times.wheel_mesh, || WheelStructure::build(model))?;
+        let basis = timed(&mut times.wheel_basis, || {
+            crate::eigen::basis::wheel_basis(model, &wheel, cache, model.run.fmax)
+        })?;
+        let (mats, _) = timed(&mut times.wheel_assembly, || wheel.assemble())?;
+        // The wheel floats: its rigid modes' frequencies from the Rayleigh quotient, which is
+        // 0 to round-off where the eigen-solver's eigenvalue may not be.
+        let hz = timed(&mut times.wheel_rayleigh, || {
+            super::reduced::rayleigh_frequencies_hz(mats.k.as_ref(), &basis.modes)
+        });
+        Ok(WheelSide {
+            wheel,
+            basis,
+            mats,
+            hz,
+        })
+    }
+}
+
+/// The track's side of the preparation and the wheel's, ready for the engine.
+struct Parts<'a> {
+    track: &'a TrackStructure,
+    basis: ModalBasis<TrackModeClass>,
+    damping: SparseColMat<usize, f64>,
+    wheel: WheelSide,
+    times: PreparationTimes,
 }
 
 impl PreparedModel {
     /// Builds the track and wheel, loads or computes their modes below `model.run.fmax`
-    /// (cached in `cache`), assembles the damping, and builds the engine.
+    /// (cached in `cache`), assembles the damping, and builds the engine. The track's side
+    /// and the wheel's are prepared concurrently; the result does not depend on the thread
+    /// count.
     pub fn new(
         model: &Model,
-        cache: &crate::eigen::cache::ModalCache,
+        cache: &ModalCache,
         opts: &PassageOptions,
     ) -> Result<Self, DynamicsError> {
-        let track = TrackStructure::build(model)?;
+        let t = std::time::Instant::now();
         let fmax = model.run.fmax;
-        let tb = crate::eigen::basis::track_basis(model, &track, cache, fmax)?;
         let key = crate::eigen::basis::cache_key(model, fmax, "track")?;
-        Self::with_track_basis(model, &track, tb, cache, Some(&key), opts)
+        let (mut tt, mut tw) = (PreparationTimes::default(), PreparationTimes::default());
+        let (track_side, wheel) = rayon::join(
+            || -> Result<_, DynamicsError> {
+                let track = timed(&mut tt.track_mesh, || TrackStructure::build(model))?;
+                let tb = timed(&mut tt.track_basis, || {
+                    crate::eigen::basis::track_basis(model, &track, cache, fmax)
+                })?;
+                let c = timed(&mut tt.track_damping, || track.assemble_damping())?;
+                Ok((track, tb, c))
+            },
+            || WheelSide::prepare(model, cache, &mut tw),
+        );
+        let (track, basis, damping) = track_side?;
+        let parts = Parts {
+            track: &track,
+            basis,
+            damping,
+            wheel: wheel?,
+            times: PreparationTimes {
+                track_mesh: tt.track_mesh,
+                track_basis: tt.track_basis,
+                track_damping: tt.track_damping,
+                ..tw
+            },
+        };
+        Self::finish(model, parts, cache, TrackStatic::Cached(&key), opts, t)
     }
 
     /// As [`Self::new`] with the track's modal basis given (e.g. a substructured one,
@@ -65,8 +179,8 @@ impl PreparedModel {
     pub fn with_track_basis(
         model: &Model,
         track: &TrackStructure,
-        tb: crate::eigen::basis::ModalBasis<crate::eigen::classify::TrackModeClass>,
-        cache: &crate::eigen::cache::ModalCache,
+        tb: ModalBasis<TrackModeClass>,
+        cache: &ModalCache,
         residual_key: Option<&crate::eigen::cache::CacheKey>,
         opts: &PassageOptions,
     ) -> Result<Self, DynamicsError> {
@@ -82,98 +196,91 @@ impl PreparedModel {
     pub fn with_track_basis_static(
         model: &Model,
         track: &TrackStructure,
-        tb: crate::eigen::basis::ModalBasis<crate::eigen::classify::TrackModeClass>,
-        cache: &crate::eigen::cache::ModalCache,
+        tb: ModalBasis<TrackModeClass>,
+        cache: &ModalCache,
         stat: TrackStatic<'_>,
         opts: &PassageOptions,
     ) -> Result<Self, DynamicsError> {
-        use crate::eigen::basis::wheel_basis;
+        let t = std::time::Instant::now();
+        let (mut tt, mut tw) = (PreparationTimes::default(), PreparationTimes::default());
+        let (damping, wheel) = rayon::join(
+            || timed(&mut tt.track_damping, || track.assemble_damping()),
+            || WheelSide::prepare(model, cache, &mut tw),
+        );
+        let parts = Parts {
+            track,
+            basis: tb,
+            damping: damping?,
+            wheel: wheel?,
+            times: PreparationTimes {
+                track_damping: tt.track_damping,
+                ..tw
+            },
+        };
+        Self::finish(model, parts, cache, stat, opts, t)
+    }
 
-        let wheel = WheelStructure::build(model)?;
-        let fmax = model.run.fmax;
-        let wb = wheel_basis(model, &wheel, cache, fmax)?;
-        let (tm, _) = track.assemble()?;
-        let (wm, _) = wheel.assemble()?;
-        // The wheel floats: its rigid modes' frequencies from the Rayleigh quotient, which is
-        // 0 to round-off where the eigen-solver's eigenvalue may not be.
-        let wheel_hz = super::reduced::rayleigh_frequencies_hz(wm.k.as_ref(), &wb.modes);
-        let mut engine = PassageEngine::new(
-            model,
-            TrackInput {
-                structure: track,
-                frequencies_hz: &tb.frequencies_hz,
-                modes: &tb.modes,
-                damping: tm.c.as_ref(),
-            },
-            WheelInput {
-                structure: &wheel,
-                frequencies_hz: &wheel_hz,
-                modes: &wb.modes,
-                matrices: &wm,
-            },
-            opts,
-        )?;
+    /// Builds the engine from the prepared parts and sets the residual flexibilities the
+    /// model asks for (the track's and the wheel's concurrently). `t` is the preparation's
+    /// start.
+    fn finish(
+        model: &Model,
+        parts: Parts<'_>,
+        cache: &ModalCache,
+        stat: TrackStatic<'_>,
+        opts: &PassageOptions,
+        t: std::time::Instant,
+    ) -> Result<Self, DynamicsError> {
+        let Parts {
+            track,
+            basis: tb,
+            damping,
+            wheel: w,
+            mut times,
+        } = parts;
+        let mut engine = timed(&mut times.engine, || {
+            PassageEngine::new(
+                model,
+                TrackInput {
+                    structure: track,
+                    frequencies_hz: &tb.frequencies_hz,
+                    modes: &tb.modes,
+                    damping: damping.as_ref(),
+                },
+                WheelInput {
+                    structure: &w.wheel,
+                    frequencies_hz: &w.hz,
+                    modes: &w.basis.modes,
+                    matrices: &w.mats,
+                },
+                opts,
+            )
+        })?;
         let t_residual = std::time::Instant::now();
-        if model.run.residual_flexibility {
-            let lm = super::residual::LineModes {
-                line: &engine.rail_line,
-                frame: &engine.frame,
-                omega2: &engine.track_sys.omega2,
-            };
-            let travel = engine.travel_m();
-            let r = match stat {
-                TrackStatic::Cached(key) => {
-                    let k = tm.k.as_ref();
-                    super::residual::cached_residual(
-                        cache,
-                        key,
-                        track,
-                        k,
-                        lm,
-                        engine.hertz_b_m,
-                        travel,
-                    )?
-                    .0
-                }
-                TrackStatic::Factorise => super::residual::ResidualFlexibility::compute(
-                    track,
-                    &super::residual::StiffnessFactor::new(tm.k.as_ref())?,
-                    lm,
-                    travel,
-                )?,
-                TrackStatic::FactoriseShared(a) => super::residual::ResidualFlexibility::compute(
-                    track,
-                    &a.factor(tm.k.as_ref())?,
-                    lm,
-                    travel,
-                )?,
-                TrackStatic::Given(f) => {
-                    super::residual::ResidualFlexibility::compute(track, f, lm, travel)?
-                }
-            };
+        let (r, wr) = {
+            let (tr, twr) = (&mut times.track_residual, &mut times.wheel_residual);
+            let e = &engine;
+            rayon::join(
+                || timed(tr, || track_residual(model, e, track, cache, stat)),
+                || timed(twr, || wheel_residual(model, e, &w, cache)),
+            )
+        };
+        if let Some(r) = r? {
             engine.set_residual_flexibility(Some(r))?;
         }
-        if model.run.wheel_residual_flexibility {
-            let w =
-                super::wheel_residual::WheelResidual::compute(super::wheel_residual::WheelModes {
-                    wheel: &wheel,
-                    k: wm.k.as_ref(),
-                    m: wm.m.as_ref(),
-                    modes: &wb.modes,
-                    omega2: &engine.wheel_system().omega2,
-                    frame: &engine.frame,
-                    half_width_m: engine.hertz_b_m,
-                })?;
-            engine.set_wheel_residual(Some(w))?;
+        if let Some(wr) = wr? {
+            engine.set_wheel_residual(Some(wr))?;
         }
+        times.total = t.elapsed().as_secs_f64();
         Ok(PreparedModel {
             residual_seconds: t_residual.elapsed().as_secs_f64(),
             engine,
-            modal_seconds: tb.seconds + wb.seconds,
-            cached: tb.cached && wb.cached,
+            modal_seconds: tb.seconds + w.basis.seconds,
+            cached: tb.cached && w.basis.cached,
             track_frequencies_hz: tb.frequencies_hz,
             track_classes: tb.classes,
-            wheel_frequencies_hz: wheel_hz,
+            wheel_frequencies_hz: w.hz,
+            times,
         })
     }
 
@@ -221,6 +328,70 @@ impl PreparedModel {
             .map(|(&f, _)| f)
             .collect()
     }
+}
+
+/// The track's residual flexibility when the model asks for it, from `stat`; the track's
+/// `K` is assembled only when it is to be factorised.
+fn track_residual(
+    model: &Model,
+    engine: &PassageEngine,
+    track: &TrackStructure,
+    cache: &ModalCache,
+    stat: TrackStatic<'_>,
+) -> Result<Option<super::residual::ResidualFlexibility>, DynamicsError> {
+    use super::residual::{cached_residual, LineModes, ResidualFlexibility, StiffnessFactor};
+    if !model.run.residual_flexibility {
+        return Ok(None);
+    }
+    let lm = LineModes {
+        line: &engine.rail_line,
+        frame: &engine.frame,
+        omega2: &engine.track_sys.omega2,
+    };
+    let travel = engine.travel_m();
+    let stiffness =
+        || -> Result<SparseColMat<usize, f64>, DynamicsError> { Ok(track.assemble()?.0.k) };
+    let r = match stat {
+        TrackStatic::Cached(key) => {
+            cached_residual(cache, key, track, &stiffness, lm, engine.hertz_b_m, travel)?.0
+        }
+        TrackStatic::Factorise => ResidualFlexibility::compute(
+            track,
+            &StiffnessFactor::new(stiffness()?.as_ref())?,
+            lm,
+            travel,
+        )?,
+        TrackStatic::FactoriseShared(a) => {
+            ResidualFlexibility::compute(track, &a.factor(stiffness()?.as_ref())?, lm, travel)?
+        }
+        TrackStatic::Given(f) => ResidualFlexibility::compute(track, f, lm, travel)?,
+    };
+    Ok(Some(r))
+}
+
+/// The wheel's residual flexibility when the model asks for it, cached with the wheel's
+/// basis.
+fn wheel_residual(
+    model: &Model,
+    engine: &PassageEngine,
+    w: &WheelSide,
+    cache: &ModalCache,
+) -> Result<Option<super::wheel_residual::WheelResidual>, DynamicsError> {
+    use super::wheel_residual::{WheelModes, WheelResidual};
+    if !model.run.wheel_residual_flexibility {
+        return Ok(None);
+    }
+    let key = crate::eigen::basis::cache_key(model, model.run.fmax, "wheel")?;
+    let wm = WheelModes {
+        wheel: &w.wheel,
+        k: w.mats.k.as_ref(),
+        m: w.mats.m.as_ref(),
+        modes: &w.basis.modes,
+        omega2: &engine.wheel_system().omega2,
+        frame: &engine.frame,
+        half_width_m: engine.hertz_b_m,
+    };
+    Ok(Some(WheelResidual::cached(cache, &key, wm)?.0))
 }
 
 impl super::PassageRunner for PreparedModel {

@@ -62,7 +62,7 @@
 //! 36.5 mm (the ≈ 1.4 kHz F_L component weakens, the ≈ 1.07 kHz one stays); mean F_N and
 //! F_L unchanged within 0.05 %. Energy balance of the small model of tests/passage.rs with
 //! the residual spring counted: within 0.1 %.
-use faer::sparse::SparseColMatRef;
+use faer::sparse::{SparseColMat, SparseColMatRef};
 use faer::{Mat, Par};
 use serde::{Deserialize, Serialize};
 
@@ -685,13 +685,14 @@ pub fn lateral_spread_flexibility(
 }
 
 /// Loads the residual flexibility of the track basis under `key` from the modal cache, or
-/// computes it (factorising `K` once) and stores it there, next to the modes. `tag` names
-/// what else determines it (the lateral weights' semi-width and the covered range).
+/// computes it (factorising `K` once, assembled by `k` only then) and stores it there, next to
+/// the modes. The file's name holds what else determines it (the lateral weights'
+/// semi-width and the contact frame's normal).
 pub fn cached_residual(
     cache: &crate::eigen::cache::ModalCache,
     key: &crate::eigen::cache::CacheKey,
     track: &TrackStructure,
-    k: SparseColMatRef<'_, usize, f64>,
+    k: &dyn Fn() -> Result<SparseColMat<usize, f64>, DynamicsError>,
     lm: LineModes<'_>,
     half_width_m: f64,
     x_range_m: [f64; 2],
@@ -713,7 +714,7 @@ pub fn cached_residual(
             }
         }
     }
-    let factor = StiffnessFactor::new(k)?;
+    let factor = StiffnessFactor::new(k()?.as_ref())?;
     let r = ResidualFlexibility::compute(track, &factor, lm, x_range_m)?;
     let bytes = serde_json::to_vec(&r)?;
     if let Err(e) = cache.store_aux(key, &name, &bytes) {

@@ -314,6 +314,110 @@ impl WheelResidual {
     }
 }
 
+/// Revision of [`WheelResidual::cached`]'s file (its name and layout) and of the
+/// computation: bump it when either changes, so that no stale file is read.
+pub const WHEEL_RESIDUAL_REVISION: u64 = 1;
+
+impl WheelResidual {
+    /// The value's exact bytes: the twelve flexibilities' bit patterns, then the mode and
+    /// rigid-mode counts, each as 8 little-endian bytes.
+    fn to_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(14 * 8);
+        for v in [
+            &self.static_m_per_n,
+            &self.modal_m_per_n,
+            &self.point_residual_m_per_n,
+            &self.structural_m_per_n,
+        ] {
+            v.iter().for_each(|x| b.extend(x.to_le_bytes()));
+        }
+        b.extend((self.modes as u64).to_le_bytes());
+        b.extend((self.rigid_modes as u64).to_le_bytes());
+        b
+    }
+
+    /// The value of [`Self::to_bytes`]'s bytes; `None` when they are not 14 words.
+    fn from_bytes(b: &[u8]) -> Option<Self> {
+        if b.len() != 14 * 8 {
+            return None;
+        }
+        let word = |i: usize| -> [u8; 8] { b[8 * i..8 * i + 8].try_into().expect("8 bytes") };
+        let v3 = |k: usize| std::array::from_fn(|d| f64::from_le_bytes(word(3 * k + d)));
+        Some(WheelResidual {
+            static_m_per_n: v3(0),
+            modal_m_per_n: v3(1),
+            point_residual_m_per_n: v3(2),
+            structural_m_per_n: v3(3),
+            modes: usize::try_from(u64::from_le_bytes(word(12))).ok()?,
+            rigid_modes: usize::try_from(u64::from_le_bytes(word(13))).ok()?,
+        })
+    }
+
+    /// True when this value can belong to `wm`: its mode counts are `wm`'s and its
+    /// flexibilities are finite, the static ones positive and the residuals ≥ 0.
+    fn fits(&self, wm: &WheelModes<'_>) -> bool {
+        let rigid = wm.omega2.iter().filter(|&&w| w == 0.0).count();
+        let all = [
+            self.static_m_per_n,
+            self.modal_m_per_n,
+            self.point_residual_m_per_n,
+            self.structural_m_per_n,
+        ];
+        self.modes == wm.modes.ncols()
+            && self.rigid_modes == rigid
+            && all.iter().flatten().all(|x| x.is_finite())
+            && self.static_m_per_n.iter().all(|&x| x > 0.0)
+            && self.point_residual_m_per_n.iter().all(|&x| x >= 0.0)
+            && self.structural_m_per_n.iter().all(|&x| x >= 0.0)
+    }
+
+    /// The name of the cache file of `wm`'s value: the revision and a digest of what
+    /// determines the value besides the wheel's matrices and modes (which the cache entry's
+    /// key covers): the modes' ω², the contact frame and the load's half-width.
+    fn cache_name(wm: &WheelModes<'_>) -> String {
+        let mut h = blake3::Hasher::new();
+        h.update(&(wm.modes.nrows() as u64).to_le_bytes());
+        let f = wm.frame;
+        let words = wm.omega2.iter().chain([&wm.half_width_m]).chain(f.x.iter());
+        for x in words.chain(f.t.iter()).chain(f.n.iter()) {
+            h.update(&x.to_bits().to_le_bytes());
+        }
+        let hex = h.finalize().to_hex();
+        format!(
+            "wheel-residual-r{WHEEL_RESIDUAL_REVISION}-{}.bin",
+            &hex[..32]
+        )
+    }
+
+    /// The residual flexibility of `wm` from the auxiliary file of the wheel basis's cache
+    /// entry `key`, or computed ([`Self::compute`]) and stored there (a failure to store is
+    /// reported to the cache's progress, not an error). The file holds the values' bit
+    /// patterns, so a cached value is the computed one exactly. The flag is true for a value
+    /// read from the cache.
+    pub fn cached(
+        cache: &crate::eigen::cache::ModalCache,
+        key: &crate::eigen::cache::CacheKey,
+        wm: WheelModes<'_>,
+    ) -> Result<(Self, bool), DynamicsError> {
+        let name = Self::cache_name(&wm);
+        if let Some(r) = cache
+            .load_aux(key, &name)
+            .and_then(|b| Self::from_bytes(&b))
+        {
+            if r.fits(&wm) {
+                return Ok((r, true));
+            }
+        }
+        let r = Self::compute(wm)?;
+        if let Err(e) = cache.store_aux(key, &name, &r.to_bytes()) {
+            cache.progress().warn(&format!(
+                "could not cache the wheel's residual flexibility: {e}"
+            ));
+        }
+        Ok((r, false))
+    }
+}
+
 /// The sparse LDLᵀ of `K` with stiff springs (the mean diagonal of K) at the `held` DOFs.
 fn held_factor(
     k: SparseColMatRef<'_, usize, f64>,
@@ -352,6 +456,23 @@ mod tests {
     /// so `ΦᵀMΦ = I`) and three zero eigenvalues. The elastic flexibility between two loads is
     /// then the closed form `Σ_{λ>0} (φᵀb_a)(φᵀb_b)/λ`; inertia relief must give it from the
     /// truncated basis' rigid modes alone, and with every mode kept the residual vanishes.
+    /// The cache file's bytes give back the value bit for bit; a payload of another length
+    /// is refused.
+    #[test]
+    fn cached_bytes_round_trip_exactly() {
+        let r = WheelResidual {
+            static_m_per_n: [1.0 / 3.0, 2.5e-10, f64::MIN_POSITIVE],
+            modal_m_per_n: [0.1, 0.2, 0.30000000000000004],
+            point_residual_m_per_n: [7e-11, 0.0, 1e-300],
+            structural_m_per_n: [std::f64::consts::PI * 1e-11, 5e-12, 6e-12],
+            modes: 96,
+            rigid_modes: 3,
+        };
+        let b = r.to_bytes();
+        assert_eq!(WheelResidual::from_bytes(&b), Some(r));
+        assert_eq!(WheelResidual::from_bytes(&b[..b.len() - 1]), None);
+    }
+
     #[test]
     fn inertia_relief_gives_the_closed_form_elastic_flexibility() {
         let n = 24;

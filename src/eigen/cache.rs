@@ -36,6 +36,7 @@ use faer::Mat;
 use npyz::WriterBuilder;
 
 mod admin;
+mod read;
 pub use admin::{CacheEntryInfo, PrunePolicy, PruneReport, LEFTOVER_AGE_S};
 use serde::{Deserialize, Serialize};
 
@@ -534,20 +535,14 @@ impl ModalCache {
             &meta.frequencies_blake3,
             &[meta.n_modes as u64],
         )?;
-        let flat: Vec<f64> = read_checked(
-            d,
-            "modes.npy",
-            &meta.modes_blake3,
-            &[meta.n_dofs as u64, meta.n_modes as u64],
-        )?;
         let (n, m) = (meta.n_dofs, meta.n_modes);
-        if flat.len() != n * m || freqs.len() != m {
+        if freqs.len() != m {
             return Err(CorruptEntry::Shape {
-                file: "modes.npy",
-                shape: vec![flat.len() as u64],
+                file: "frequencies_hz.npy",
+                shape: vec![freqs.len() as u64],
             });
         }
-        let modes = Mat::<f64>::from_fn(n, m, |i, j| flat[i * m + j]);
+        let modes = read::read_modes(d, "modes.npy", &meta.modes_blake3, n, m)?;
         Ok(CachedModes {
             frequencies_hz: freqs,
             modes,
@@ -671,6 +666,28 @@ mod tests {
             })
             .count();
         assert_eq!(leftovers, 0);
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// A matrix of several read chunks (and a partial last block of rows) comes back bit
+    /// for bit, in its column-major layout.
+    #[test]
+    fn a_matrix_of_several_chunks_round_trips() {
+        let dir = tmpdir("chunks");
+        let cache = ModalCache::new(&dir);
+        let key = CacheKey::new().str("model", "chunks");
+        let (n, m) = (3001, 400); // 8 MiB chunks of 2621 rows: two chunks
+        let modes = Mat::<f64>::from_fn(n, m, |i, j| (i as f64 * 1e-3 - j as f64).sin() / 7.0);
+        let f: Vec<f64> = (0..m).map(|j| j as f64 * 1.5).collect();
+        let (_, _, meta) = sample();
+        cache.store(&key, &f, &modes, meta).unwrap();
+        match cache.load(&key) {
+            CacheLookup::Hit(c) => {
+                assert_eq!(c.modes, modes);
+                assert_eq!(c.frequencies_hz, f);
+            }
+            other => panic!("expected hit, got {other:?}"),
+        }
         let _ = fs::remove_dir_all(&dir);
     }
 

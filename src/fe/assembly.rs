@@ -380,6 +380,59 @@ pub fn assemble(
     })
 }
 
+/// The damping matrix `C` alone (N·s/m, over the free DOFs): the discrete dampers of
+/// `springs` on `n_nodes` nodes, stored on the pattern of the springs' own entries. Its
+/// nonzero values are those of [`assemble`]'s `C` bit for bit (each entry sums the same
+/// springs' terms in the same order, from 0); only the stored zeros of the elements' pattern
+/// are left out. For a caller that needs `C` but neither `K` nor `M`.
+pub fn assemble_damping(
+    springs: &[Spring],
+    n_nodes: usize,
+    dofmap: &DofMap,
+) -> Result<SparseColMat<usize, f64>, FeError> {
+    check_len("DofMap nodes vs mesh nodes", n_nodes, dofmap.n_nodes())?;
+    for (i, s) in springs.iter().enumerate() {
+        s.validate(i, 3 * n_nodes)?;
+    }
+    let free = |s: &Spring| -> Vec<(usize, f64)> {
+        s.weights()
+            .into_iter()
+            .filter_map(|(d, w)| dofmap.free_index(d).map(|f| (f, w)))
+            .collect()
+    };
+    let mut entries: Vec<(usize, usize)> = Vec::new();
+    for s in springs {
+        let g = free(s);
+        for &(c, _) in &g {
+            entries.extend(g.iter().map(|&(r, _)| (c, r)));
+        }
+    }
+    entries.sort_unstable();
+    entries.dedup();
+    let nf = dofmap.n_free();
+    let mut col_ptr = vec![0usize; nf + 1];
+    for &(c, _) in &entries {
+        col_ptr[c + 1] += 1;
+    }
+    for c in 0..nf {
+        col_ptr[c + 1] += col_ptr[c];
+    }
+    let row_idx: Vec<usize> = entries.iter().map(|&(_, r)| r).collect();
+    let mut cv = vec![0.0f64; row_idx.len()];
+    for s in springs {
+        let g = free(s);
+        for &(ci, wi) in &g {
+            for &(ri, wj) in &g {
+                let (a, b) = (col_ptr[ci], col_ptr[ci + 1]);
+                let pos = a + row_idx[a..b].binary_search(&ri).unwrap_or(0);
+                cv[pos] += s.damping * wi * wj;
+            }
+        }
+    }
+    let symbolic = SymbolicSparseColMat::new_checked(nf, nf, col_ptr, None, row_idx);
+    Ok(SparseColMat::new(symbolic, cv))
+}
+
 /// Every point mass on an existing node, with a finite mass ≥ 0 (kg).
 fn check_point_masses(mesh: &Mesh, point_masses: &[PointMass]) -> Result<(), FeError> {
     for (i, p) in point_masses.iter().enumerate() {

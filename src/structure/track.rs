@@ -138,6 +138,19 @@ impl TrackStructure {
         )?;
         Ok((mats, t.elapsed().as_secs_f64()))
     }
+
+    /// The damping matrix `C` alone (N·s/m, over the free DOFs): the nonzero values of
+    /// [`Self::assemble`]'s `C`, without assembling the elements
+    /// ([`crate::fe::assembly::assemble_damping`]).
+    pub fn assemble_damping(
+        &self,
+    ) -> Result<faer::sparse::SparseColMat<usize, f64>, StructureError> {
+        Ok(crate::fe::assembly::assemble_damping(
+            &self.springs,
+            self.mesh.nodes.len(),
+            &self.dofmap,
+        )?)
+    }
 }
 
 /// The inclined rail section (foot node lines at the fastenings' holds, within the
