@@ -12,6 +12,10 @@ Usage:
   python3 validation/reference_claims.py etable OUT
     the same table for the excitation cells E1 and E2 (passage JSON files in OUT/e1, OUT/e2,
     written by reference_claims_e.sh); E2 rows per seed and the seeds' mean ratio.
+  python3 validation/reference_claims.py attr OUT
+    which mode selects in the elastic-hold cells (reference_claims_attr.sh's passages
+    OUT/h{2,3,4}-rho{7800,9000}): the dominant wear frequency with the wheel density 7800 and
+    9000 kg/m^3 (a wheel mode's ratio is sqrt(7800/9000) = 0.931) and its coupled mode.
 Thresholds are the registered ones; do not edit them.
 """
 import csv
@@ -163,8 +167,21 @@ def etable(out):
     print("\n".join(lines))
 
 
+def attr(out):
+    import json
+    for h in (2, 3, 4):
+        p = os.path.join(out, f"h{h}")
+        if not os.path.exists(f"{p}-rho9000.json"):
+            continue
+        a, b = (json.load(open(f"{p}-rho{r}.json")) for r in (7800, 9000))
+        fa, fb = a["dominant_frequency_hz"], b["dominant_frequency_hz"]
+        m = json.load(open(f"{p}-rho7800/coupled_attribution.json"))["wear"][0]
+        print(f"H{h}: {fa:.1f} -> {fb:.1f} Hz (ratio {fb / fa:.3f}); coupled mode "
+              f"{m['mode_frequency_hz']:.0f} Hz, dominant {m['dominant']}, shares {m['shares']}")
+
+
 if __name__ == "__main__":
-    commands = {"table": table, "roughness": roughness, "etable": etable}
+    commands = {"table": table, "roughness": roughness, "etable": etable, "attr": attr}
     if len(sys.argv) != 3 or sys.argv[1] not in commands:
         sys.exit(__doc__)
     commands[sys.argv[1]](sys.argv[2])

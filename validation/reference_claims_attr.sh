@@ -5,7 +5,7 @@
 # wheel-density test (wheel.density 7800 -> 9000 kg/m^3; a wheel mode's frequency scales by
 # sqrt(7800/9000) = 0.931). Run after reference_claims.sh "2 3 4" (the track bases are then
 # cached). Usage: bash validation/reference_claims_attr.sh [OUT]  (default
-# validation/out/claims/attr). Prints one line per hold.
+# validation/out/claims/attr). Prints one line per hold (reference_claims.py attr).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-validation/out/claims/attr}
@@ -23,13 +23,5 @@ for h in 2:1e9 3:3e9 4:1e10; do
       --set "wheel.density=$rho" > "$d.json.part"
     mv "$d.json.part" "$d.json"
   done
-  python3 - "$OUT/h$n" <<'PY'
-import json, sys
-p = sys.argv[1]
-a, b = (json.load(open(f"{p}-rho{r}.json")) for r in (7800, 9000))
-fa, fb = a["dominant_frequency_hz"], b["dominant_frequency_hz"]
-m = json.load(open(f"{p}-rho7800/coupled_attribution.json"))["wear"][0]
-print(f"{p.rsplit('/', 1)[-1]}: {fa:.1f} -> {fb:.1f} Hz (ratio {fb / fa:.3f}); coupled mode "
-      f"{m['mode_frequency_hz']:.0f} Hz, dominant {m['dominant']}, shares {m['shares']}")
-PY
 done
+python3 validation/reference_claims.py attr "$OUT"
