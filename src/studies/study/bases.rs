@@ -209,24 +209,15 @@ impl CaseRunners {
         track: &TrackStructure,
     ) -> Result<Arc<TrackComponents>, BoxError> {
         let key = component_key(m, m.run.fmax, &self.options, "rail-component")?.hex();
-        let mut memo = self
-            .components
-            .lock()
-            .map_err(|_| "component memo poisoned by an earlier panic")?;
-        if let Some((k, c)) = memo.as_ref() {
-            if *k == key {
-                return Ok(c.clone());
-            }
-        }
-        let c = Arc::new(track_components(
-            m,
-            track,
-            &self.cache,
-            m.run.fmax,
-            &self.options,
-        )?);
-        *memo = Some((key, c.clone()));
-        Ok(c)
+        memoised(&self.components, key, "component memo", || {
+            Ok(track_components(
+                m,
+                track,
+                &self.cache,
+                m.run.fmax,
+                &self.options,
+            )?)
+        })
     }
 
     /// The reference factorisation for the cases with the spring layout of `track`
@@ -234,19 +225,9 @@ impl CaseRunners {
     /// component key.
     fn statics(&self, m: &Model, track: &TrackStructure) -> Result<Arc<StaticUpdater>, BoxError> {
         let key = component_key(m, m.run.fmax, &self.options, "rail-component")?.hex();
-        let mut memo = self
-            .statics
-            .lock()
-            .map_err(|_| "static-flexibility memo poisoned by an earlier panic")?;
-        if let Some((k, u)) = memo.as_ref() {
-            if *k == key {
-                return Ok(u.clone());
-            }
-        }
-        *memo = None;
-        let u = Arc::new(StaticUpdater::new(track)?);
-        *memo = Some((key, u.clone()));
-        Ok(u)
+        memoised(&self.statics, key, "static-flexibility memo", || {
+            Ok(StaticUpdater::new(track)?)
+        })
     }
 
     /// The prepared model (engine and bases) of one case.
@@ -296,6 +277,29 @@ impl CaseRunners {
             }
         }
     }
+}
+
+/// The value memoised in `memo` under `key`, or `build()`'s, which then replaces the memo (a
+/// memo holds one key: a study's cases share one component set). `what` names the memo in
+/// the error when an earlier panic poisoned it.
+fn memoised<T>(
+    memo: &Mutex<Option<(String, Arc<T>)>>,
+    key: String,
+    what: &str,
+    build: impl FnOnce() -> Result<T, BoxError>,
+) -> Result<Arc<T>, BoxError> {
+    let mut memo = memo
+        .lock()
+        .map_err(|_| format!("{what} poisoned by an earlier panic"))?;
+    if let Some((k, v)) = memo.as_ref() {
+        if *k == key {
+            return Ok(v.clone());
+        }
+    }
+    *memo = None;
+    let v = Arc::new(build()?);
+    *memo = Some((key, v.clone()));
+    Ok(v)
 }
 
 #[cfg(test)]
