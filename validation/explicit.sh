@@ -5,6 +5,8 @@
 #   bash validation/explicit.sh            # every case
 #   bash validation/explicit.sh rpm3-140   # one case: rpm3-140 rpm1-140 rpm4-140 rpm3-98
 #                                          #   rpm3-118 rpm3-heavy-wheel rpm3-trial10
+#                                          # growth: rpm3-grow (the trial-amplitude procedure
+#                                          #   on both engines, five explicit passages)
 #                                          # convergence checks: rpm3-140-dtc-half (half the
 #                                          #   contact step), rpm3-140-node (node-line load)
 # EXTRA adds --set pairs to every engine of every case, e.g. the converged contact grid:
@@ -41,6 +43,7 @@ case_sets() {
     rpm3-118) echo "--set fastening.model=RPM3 --set run.speed_kmh=118" ;;
     rpm3-heavy-wheel) echo "--set fastening.model=RPM3 --set run.speed_kmh=140 --set wheel.density=9000" ;;
     rpm3-trial10) echo "--set fastening.model=RPM3 --set run.speed_kmh=140" ;;
+    rpm3-grow) echo "--set fastening.model=RPM3 --set run.speed_kmh=140" ;;
     *) echo "unknown case $1" >&2; exit 2 ;;
   esac
 }
@@ -49,6 +52,17 @@ run_case() {
   local c=$1 dir=$OUT/$1 sets prof=()
   sets="$(case_sets "$c") ${EXTRA:-}"
   mkdir -p "$dir"
+  if [ "$c" = rpm3-grow ]; then
+    # The whole trial-amplitude procedure on each engine (default amplitudes 10-160 µm).
+    # shellcheck disable=SC2086
+    /usr/bin/time -v $BIN grow --engine explicit $sets --no-rate --json --out "$dir/explicit" \
+      > "$dir/explicit.json" 2> "$dir/explicit.time"
+    # shellcheck disable=SC2086
+    /usr/bin/time -v $BIN grow $sets --no-rate --json --out "$dir/reduced" \
+      > "$dir/reduced.json" 2> "$dir/reduced.time"
+    python3 validation/explicit_grow.py "$dir" | tee "$dir/table.md"
+    return
+  fi
   if [ "$c" = rpm3-trial10 ]; then
     # The reduced model's 10 µm trial corrugation: −c·W_band of its smooth passage.
     # shellcheck disable=SC2086
