@@ -690,3 +690,74 @@ fn wheel_residual_flexibility_adds_to_the_series_compliance_and_balances_energy(
     let (d_approach, cf) = (out[1].0 - out[0].0, out[1].1);
     assert!(cf > 0.0 && (d_approach - cf).abs() < 0.01 * cf, "{out:?}");
 }
+
+/// A recorder whose passages fail over profiles deeper than `limit_m` (peak to trough), as a
+/// passage over a deep corrugation fails when the patch outgrows the contact grid.
+struct FailsWhenDeep<'a> {
+    inner: &'a corrugation::dynamics::passage::PassageEngine,
+    limit_m: f64,
+}
+
+impl corrugation::dynamics::PassageRecorder for FailsWhenDeep<'_> {
+    fn record(
+        &self,
+        speed_m_per_s: f64,
+        profile: Option<&corrugation::dynamics::RailProfile>,
+    ) -> Result<corrugation::dynamics::record::PassageRecord, corrugation::dynamics::DynamicsError>
+    {
+        match profile {
+            Some(p) if p.peak_to_trough_m() > self.limit_m => {
+                Err(corrugation::dynamics::DynamicsError::Diverged {
+                    t_s: 0.0,
+                    x_m: 0.0,
+                    what: "a test failure over a deep profile".to_string(),
+                })
+            }
+            _ => self.inner.record(speed_m_per_s, profile),
+        }
+    }
+
+    fn hertz_b_m(&self) -> f64 {
+        self.inner.hertz_b_m()
+    }
+}
+
+/// A trial passage that fails stops the procedure at its amplitude and keeps the ones below,
+/// with the same results as a run that asked for those amplitudes only; the verdict says
+/// which amplitude was not evaluated and why.
+#[test]
+fn a_failed_trial_stops_the_growth_and_keeps_the_smaller_amplitudes() {
+    use corrugation::growth::procedure::{trial_growth, ModeLines};
+    let m = small_model();
+    let opts = PassageOptions::default();
+    let p = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
+    let v = m.run.speed();
+    let failing = FailsWhenDeep {
+        inner: &p.engine,
+        limit_m: 60e-6,
+    };
+    let modes = ModeLines::default();
+    let g = trial_growth(&failing, v, &[10.0, 40.0, 80.0], &modes, |_| {}).expect("growth");
+    let s = g.stopped.as_ref().expect("the 80 µm trial fails");
+    assert_eq!(s.amplitude_um, 80.0);
+    assert!(
+        s.reason.contains("a test failure over a deep profile"),
+        "{}",
+        s.reason
+    );
+    let ran: Vec<f64> = g.amplitudes.iter().map(|a| a.amplitude_um).collect();
+    assert_eq!(ran, [10.0, 40.0]);
+    let plain = trial_growth(&p.engine, v, &[10.0, 40.0], &modes, |_| {}).expect("growth");
+    assert!(plain.stopped.is_none());
+    for (a, b) in g.amplitudes.iter().zip(&plain.amplitudes) {
+        assert_eq!(a.phase.correlation, b.phase.correlation);
+        assert_eq!(a.summary.fl_band_rms_n, b.summary.fl_band_rms_n);
+    }
+    assert!(p.engine.hertz_b_m() > 0.0);
+    let verdict = corrugation::growth::verdict::growth_verdict(&g, m.run.speed_kmh, &modes, None);
+    assert!(
+        verdict.lines[1].contains("80 µm") && verdict.lines[1].contains("not evaluated"),
+        "{:?}",
+        verdict.lines
+    );
+}

@@ -101,6 +101,13 @@ pub fn study_growth(
         &modes,
         |_| {},
     )?;
+    if let Some(s) = &g.stopped {
+        anyhow::bail!(
+            "growth: the trial amplitude {} µm failed: {}",
+            s.amplitude_um,
+            s.reason
+        );
+    }
     let mut out = BTreeMap::new();
     out.insert(
         "limiting_amplitude_um".to_string(),

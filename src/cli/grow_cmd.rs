@@ -203,7 +203,16 @@ impl GrowCmd {
             println!("  outputs in {}", self.out.display());
             print_verdict(&j.verdict);
         }
-        Ok(())
+        match &g.stopped {
+            None => Ok(()),
+            Some(s) => anyhow::bail!(
+                "trial amplitude {} µm: {} (the amplitudes below it are written to {}; \
+                 grow.json's stopped_at_um marks where the procedure stopped)",
+                s.amplitude_um,
+                s.reason,
+                self.out.display()
+            ),
+        }
     }
 
     /// The trial amplitudes and the rate-check wavelengths.

@@ -112,6 +112,20 @@ pub struct TrialGrowth {
     pub eigen: Vec<EigenComparison>,
     /// The band-passed smooth-rail wear (x in m, J/m), the shape of every trial corrugation.
     pub smooth_wear_band: Signal,
+    /// The trial amplitude whose passage failed, if one did: the procedure stops there (the
+    /// larger amplitudes are not run) and keeps the amplitudes below it. `None` when every
+    /// amplitude ran.
+    pub stopped: Option<StoppedTrial>,
+}
+
+/// A trial amplitude whose passage failed (e.g. the contact patch outgrew the contact grid
+/// under the dynamic load of a deep corrugation).
+#[derive(Clone, Debug, Serialize)]
+pub struct StoppedTrial {
+    /// 2A_max of the failed trial (µm).
+    pub amplitude_um: f64,
+    /// The passage's error, with what to change.
+    pub reason: String,
 }
 
 /// Eigenfrequencies of the mode families the components are compared with (Hz).
@@ -177,6 +191,8 @@ pub fn analyse_record(
 
 /// Runs the trial-amplitude procedure at `speed_m_per_s` for the amplitudes `2A_max` (µm,
 /// any order; run ascending). `on_passage` is called after each passage (for progress).
+/// A failed smooth-rail passage is an error; a failed trial passage stops the procedure at
+/// that amplitude ([`TrialGrowth::stopped`]) and keeps the amplitudes that ran.
 pub fn trial_growth(
     engine: &dyn PassageRecorder,
     speed_m_per_s: f64,
@@ -200,13 +216,23 @@ pub fn trial_growth(
     let mut amps: Vec<f64> = amplitudes_um.to_vec();
     amps.sort_by(f64::total_cmp);
     let mut results = Vec::with_capacity(amps.len());
+    let mut stopped = None;
     for (k, &a_um) in amps.iter().enumerate() {
         let trial = trial_corrugation(&w0.band, crate::units::um_to_m(a_um))?;
         let x: Vec<f64> = (0..trial.height.len())
             .map(|i| trial.height.x_m(i))
             .collect();
         let profile = RailProfile::new(x, trial.height.values.clone())?;
-        let rec = engine.record(speed_m_per_s, Some(&profile))?;
+        let rec = match engine.record(speed_m_per_s, Some(&profile)) {
+            Ok(rec) => rec,
+            Err(e) => {
+                stopped = Some(StoppedTrial {
+                    amplitude_um: a_um,
+                    reason: e.to_string(),
+                });
+                break;
+            }
+        };
         on_passage(k + 1);
         let summary = crate::dynamics::analysis::summarise(&rec)?;
         let (w, fl, fnn) = analyse_record(&rec)?;
@@ -244,6 +270,7 @@ pub fn trial_growth(
         limiting_amplitude_um,
         eigen,
         smooth_wear_band: w0.band,
+        stopped,
     })
 }
 

@@ -358,13 +358,25 @@ pub fn growth_verdict(
         .dominant_wavelength_mm
         .zip(g.smooth.dominant_frequency_hz);
     let near = strongest.and_then(|(_, f)| nearest_mode(f, &families(modes)));
-    verdict(&VerdictInput {
+    let mut v = verdict(&VerdictInput {
         speed_kmh,
         trials: &trials,
         strongest_wear: strongest,
         nearest_mode: near.as_ref(),
         initiation,
-    })
+    });
+    if let Some(s) = &g.stopped {
+        v.lines.insert(
+            1.min(v.lines.len()),
+            format!(
+                "The trial corrugation of {} and any larger ones were not evaluated: its \
+                 passage failed ({}).",
+                amp(s.amplitude_um),
+                s.reason
+            ),
+        );
+    }
+    v
 }
 
 /// The verdict when the smooth rail leaves no wear component to grow (no trial growth ran).

@@ -139,6 +139,11 @@ pub struct GrowJson {
     pub coupled: Vec<AmplitudeAttribution>,
     /// The growth-rate spectrum in brief; `None` when it was not computed.
     pub growth_rate: Option<RateSummary>,
+    /// The trial amplitude 2A_max (µm) whose passage failed, where the procedure stopped
+    /// (the amplitudes above are the ones that ran); `None` when every amplitude ran.
+    pub stopped_at_um: Option<f64>,
+    /// Why that passage failed, with what to change; `None` when every amplitude ran.
+    pub stopped_reason: Option<String>,
     /// Wall-clock time of the run, s (0 when not measured).
     pub seconds: f64,
 }
@@ -306,6 +311,8 @@ pub fn grow_json(
         verdict,
         coupled: Vec::new(),
         growth_rate: None,
+        stopped_at_um: g.stopped.as_ref().map(|s| s.amplitude_um),
+        stopped_reason: g.stopped.as_ref().map(|s| s.reason.clone()),
         seconds,
     }
 }
