@@ -2,16 +2,18 @@
 //! validation/substructure.md).
 //!
 //! ```text
-//! cargo run --example study_bench -- study [--basis substructured|full] [--key K] [--values a,b,…] [--speed KMH] [--static-update]
+//! cargo run --example study_bench -- study [--basis substructured|full] [--key K] [--values a,b,…] [--speed KMH] [--static-update] [--concurrent N]
 //! cargo run --example study_bench -- validate [--key K] [--value V] [--speed KMH] [--fmax-check HZ] [--ballast-degree D] [--list N] [--residuals N]
 //! ```
 //!
 //! `study`: a one-parameter study of the default model (default: ten railpad vertical
 //! stiffnesses 0.4–2.2 GN/m at 140 km/h) through the library's study runner; prints the
 //! basis plan, wall and CPU time, the machine's load, a digest of `study.csv` and each
-//! substructured case's step times. `--static-update`: the cases' residual flexibility from
-//! the study's reference factorisation updated for the changed springs, instead of a
-//! factorisation of each case's own `K`.
+//! substructured case's step times (wall, and the process's CPU time during each step: a
+//! step's own with `--concurrent 1`) and the passages' times. `--static-update`: the cases'
+//! residual flexibility from the study's reference factorisation updated for the changed
+//! springs, instead of a factorisation of each case's own `K`. `--concurrent N`: the study's
+//! `concurrent_cases` (default: the study file's default).
 //! `validate`: for one value, the substructured basis against the full Lanczos basis
 //! (frequencies below `--fmax-check`, default 3 kHz) and one passage on each basis (band RMS
 //! of F_L, F_N and wear, dominant wavelength). `--residuals N`: for the lowest N modes of
@@ -68,8 +70,11 @@ fn study(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
             .join(",")
     });
     let values: Vec<String> = values.split(',').map(|v| v.trim().to_string()).collect();
+    let concurrent = arg(args, "--concurrent")
+        .map(|n| format!("concurrent_cases = {n}\n"))
+        .unwrap_or_default();
     let text = format!(
-        "title = \"study_bench\"\nmodel = \"builtin:dutch\"\nspeeds_kmh = [{speed:?}]\nbasis = \"{basis}\"\n[[parameter]]\nkey = \"{key}\"\nvalues = [{}]\n",
+        "title = \"study_bench\"\nmodel = \"builtin:dutch\"\nspeeds_kmh = [{speed:?}]\nbasis = \"{basis}\"\n{concurrent}[[parameter]]\nkey = \"{key}\"\nvalues = [{}]\n",
         values.join(", ")
     );
     let dir = std::env::temp_dir().join(format!("study_bench-{}", std::process::id()));
@@ -77,12 +82,19 @@ fn study(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
     let models = study.case_models()?;
     let cache_dir: PathBuf = default_cache_dir();
     let plan = basis_plan(&study, &models, &ModalCache::new(&cache_dir))?;
-    println!("plan: {plan}");
+    println!(
+        "plan: {plan}; {} case(s) at a time after the first",
+        study.concurrent_cases
+    );
     let (t0, c0) = (Instant::now(), cpu_seconds());
     let runners = CaseRunners::new(&study, &cache_dir)
         .with_static_update(args.iter().any(|a| a == "--static-update"));
+    let passages = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
     let factory = |m: &corrugation::model::Model| -> Result<Box<dyn PassageRunner>, BoxError> {
-        Ok(Box::new(runners.prepared(m)?))
+        Ok(Box::new(Timed {
+            inner: runners.prepared(m)?,
+            times: passages.clone(),
+        }))
     };
     let out = run_study(&study, &factory, None, &dir, &corrugation::progress::Silent)?;
     let (wall, cpu) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
@@ -106,17 +118,49 @@ fn study(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
         }
     }
     print_phases(&runners.phases());
+    let p = passages.lock().map(|p| p.clone()).unwrap_or_default();
+    println!(
+        "passages: {}, wall {:.1} s, CPU {:.1} s (summed)",
+        p.len(),
+        p.iter().map(|x: &[f64; 2]| x[0]).sum::<f64>(),
+        p.iter().map(|x| x[1]).sum::<f64>()
+    );
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())
 }
 
-/// The step times of each substructured case and their sums (wall, s).
+/// A passage runner that records each passage's wall and process CPU time (s).
+struct Timed<R> {
+    inner: R,
+    times: std::sync::Arc<std::sync::Mutex<Vec<[f64; 2]>>>,
+}
+
+impl<R: PassageRunner> PassageRunner for Timed<R> {
+    fn run(
+        &self,
+        speed: corrugation::units::Speed,
+        profile: Option<&corrugation::dynamics::RailProfile>,
+    ) -> Result<corrugation::dynamics::PassageSummary, corrugation::dynamics::DynamicsError> {
+        let (t, c) = (Instant::now(), cpu_seconds());
+        let r = self.inner.run(speed, profile);
+        if let Ok(mut v) = self.times.lock() {
+            v.push([t.elapsed().as_secs_f64(), cpu_seconds() - c]);
+        }
+        r
+    }
+
+    fn prepared(&self) -> Option<&PreparedModel> {
+        self.inner.prepared()
+    }
+}
+
+/// The step times of each substructured case and their sums (wall and process CPU, s).
 fn print_phases(phases: &[corrugation::studies::study::CasePhases]) {
     if phases.is_empty() {
         return;
     }
-    println!("phases (wall s): case,structure,components,reduced,expand,classify,engine,of_which_residual");
-    let mut sum = [0.0; 7];
+    println!("phases (s): case,structure,components,reduced,expand,classify,engine,of_which_residual | CPU: structure+components,reduced,expand,classify,engine");
+    let mut sum = [0.0; 12];
     for (i, p) in phases.iter().enumerate() {
         let v = [
             p.structure_s,
@@ -126,6 +170,11 @@ fn print_phases(phases: &[corrugation::studies::study::CasePhases]) {
             p.basis.classify_s,
             p.engine_s,
             p.residual_s,
+            p.structure_cpu_s,
+            p.basis.reduced_cpu_s,
+            p.basis.expand_cpu_s,
+            p.basis.classify_cpu_s,
+            p.engine_cpu_s,
         ];
         sum.iter_mut().zip(&v).for_each(|(s, x)| *s += x);
         let row: Vec<String> = v.iter().map(|x| format!("{x:.2}")).collect();

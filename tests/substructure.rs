@@ -57,3 +57,60 @@ fn passage_on_the_substructured_basis_matches_the_full_basis() {
     );
     assert!(rel(wa, wb) < 0.02, "{wa} vs {wb} mm");
 }
+
+/// A substructured railpad-stiffness study on the small passage model run with one case at a
+/// time and with three at a time (after the first) writes byte-identical `study.csv` and
+/// case files: the cases' numbers do not depend on the concurrency (each case is computed
+/// whole by one worker from the shared, read-only component bases and caches). A one-case
+/// study fills the modal cache first, so that both runs read the same cached bases (a base
+/// read back from the cache may differ from the freshly built one in the last bits).
+#[test]
+fn a_concurrent_study_writes_the_serial_study_files() {
+    use corrugation::model::test_problems::{SMALL_MODEL, SMALL_PASSAGE};
+    use corrugation::studies::study::{run_study, CaseRunners, Study};
+    let root = std::env::temp_dir().join(format!("substructure-study-{}", std::process::id()));
+    let set: Vec<String> = SMALL_MODEL
+        .iter()
+        .chain(&SMALL_PASSAGE)
+        .map(|s| format!("{s:?}"))
+        .collect();
+    let run = |concurrent: usize, values: &str| -> std::collections::BTreeMap<String, Vec<u8>> {
+        let text = format!(
+            "model = \"builtin:dutch\"\nset = [{}]\nspeeds_kmh = [140.0]\nbasis = \"substructured\"\nconcurrent_cases = {concurrent}\n[[parameter]]\nkey = \"fastening.vertical_stiffness\"\nvalues = [{values}]\n",
+            set.join(", ")
+        );
+        let n = values.split(',').count();
+        let out = root.join(format!("out-{concurrent}-{n}"));
+        let study = Study::parse_str(&text, "s.toml", &root, "s").unwrap();
+        assert_eq!(study.concurrent_cases, concurrent);
+        let runners = CaseRunners::new(&study, &root.join("cache"));
+        let factory = |m: &corrugation::model::Model| -> Result<
+            Box<dyn PassageRunner>,
+            corrugation::studies::BoxError,
+        > { Ok(Box::new(runners.prepared(m)?)) };
+        let o = run_study(&study, &factory, None, &out, &corrugation::progress::Silent).unwrap();
+        assert_eq!((o.computed, o.reused), (n, 0));
+        let mut files = std::collections::BTreeMap::new();
+        files.insert(
+            "study.csv".to_string(),
+            std::fs::read(out.join("study.csv")).unwrap(),
+        );
+        for i in 0..n {
+            let name = format!("cases/{i:04}.json");
+            files.insert(name.clone(), std::fs::read(out.join(&name)).unwrap());
+        }
+        files
+    };
+    run(1, "1.1e9");
+    let values = "0.6e9, 0.9e9, 1.3e9, 1.8e9, 2.4e9";
+    let serial = run(1, values);
+    let concurrent = run(3, values);
+    assert_eq!(serial.len(), 6);
+    let _ = std::fs::remove_dir_all(&root);
+    for (name, bytes) in &serial {
+        assert!(
+            concurrent.get(name) == Some(bytes),
+            "{name} differs between one and three cases at a time"
+        );
+    }
+}

@@ -275,7 +275,9 @@ pub fn track_components(
     Ok(c)
 }
 
-/// Wall time (s) of the steps of [`substructured_track_basis_timed`].
+/// Wall time (s) of the steps of [`substructured_track_basis_timed`], and the process's CPU
+/// time (s, all threads; `NaN` where `/proc` is not available) during each: the CPU times
+/// are the steps' own only while nothing else runs in the process.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BasisPhases {
     /// The reduced stiffness, the dense reduced eigenproblem and its refinement.
@@ -284,6 +286,17 @@ pub struct BasisPhases {
     pub expand_s: f64,
     /// The classification of the expanded modes.
     pub classify_s: f64,
+    /// Process CPU time during the reduced step.
+    pub reduced_cpu_s: f64,
+    /// Process CPU time during the expansion.
+    pub expand_cpu_s: f64,
+    /// Process CPU time during the classification.
+    pub classify_cpu_s: f64,
+}
+
+/// The process's CPU time (s, all threads), `NaN` where it is not available.
+pub(crate) fn process_cpu_s() -> f64 {
+    crate::progress::cpu_seconds().unwrap_or(f64::NAN)
 }
 
 /// The track's classified modes below `fmax_hz` from its component bases: the reduced
@@ -302,18 +315,21 @@ pub fn substructured_track_basis_timed(
     comp: &TrackComponents,
     fmax_hz: f64,
 ) -> Result<(ModalBasis<TrackModeClass>, BasisPhases), SubstructureError> {
-    let t = Instant::now();
+    let (t, c0) = (Instant::now(), process_cpu_s());
     let k_red = reduced_stiffness(track, comp)?;
     let (freqs, q) = reduced_modes(&k_red, fmax_hz)?;
-    let reduced_s = t.elapsed().as_secs_f64();
+    let (reduced_s, c1) = (t.elapsed().as_secs_f64(), process_cpu_s());
     let modes = expand(comp, track.dofmap.n_free(), &q);
-    let expand_s = t.elapsed().as_secs_f64() - reduced_s;
+    let (expand_s, c2) = (t.elapsed().as_secs_f64() - reduced_s, process_cpu_s());
     let classes = classify_modes(track, comp, &q, &modes)?;
-    let seconds = t.elapsed().as_secs_f64();
+    let (seconds, c3) = (t.elapsed().as_secs_f64(), process_cpu_s());
     let phases = BasisPhases {
         reduced_s,
         expand_s,
         classify_s: seconds - reduced_s - expand_s,
+        reduced_cpu_s: c1 - c0,
+        expand_cpu_s: c2 - c1,
+        classify_cpu_s: c3 - c2,
     };
     let m = freqs.len();
     let basis = ModalBasis {

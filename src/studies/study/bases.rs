@@ -19,7 +19,7 @@ use crate::dynamics::{
 use crate::eigen::basis::cache_key;
 use crate::eigen::cache::{CacheKey, ModalCache};
 use crate::eigen::substructure::{
-    component_key, substructured_track_basis_timed, track_components, BasisPhases,
+    component_key, process_cpu_s, substructured_track_basis_timed, track_components, BasisPhases,
     SubstructureOptions, TrackComponents,
 };
 use crate::model::Model;
@@ -156,7 +156,9 @@ pub struct CaseRunners {
 }
 
 /// Wall time (s) of the steps of one substructured case's preparation
-/// ([`CaseRunners::prepared`]), in the order the cases were prepared.
+/// ([`CaseRunners::prepared`]), in the order the cases were prepared, and the process's CPU
+/// time (s, all threads) during the steps: the steps' own only while one case runs at a
+/// time (`concurrent_cases = 1`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CasePhases {
     /// Building the case's track structure.
@@ -171,6 +173,10 @@ pub struct CasePhases {
     /// reference factorisation of the study's static flexibility, [`StaticUpdater`], in the
     /// case that made it).
     pub residual_s: f64,
+    /// Process CPU time during the structure and the component bases.
+    pub structure_cpu_s: f64,
+    /// Process CPU time during the engine's preparation.
+    pub engine_cpu_s: f64,
 }
 
 impl CaseRunners {
@@ -236,13 +242,14 @@ impl CaseRunners {
         match self.basis {
             StudyBasis::Full => Ok(PreparedModel::new(m, &self.cache, &opts)?),
             StudyBasis::Substructured => {
-                let t = std::time::Instant::now();
+                let (t, c0) = (std::time::Instant::now(), process_cpu_s());
                 let track = TrackStructure::build(m)?;
                 let structure_s = t.elapsed().as_secs_f64();
                 let comp = self.components(m, &track)?;
                 let components_s = t.elapsed().as_secs_f64() - structure_s;
+                let c1 = process_cpu_s();
                 let (tb, basis) = substructured_track_basis_timed(&track, &comp, m.run.fmax)?;
-                let t1 = std::time::Instant::now();
+                let (t1, c2) = (std::time::Instant::now(), process_cpu_s());
                 let t_ref = std::time::Instant::now();
                 let statics = if m.run.residual_flexibility && self.static_update {
                     Some(self.statics(m, &track)?)
@@ -269,6 +276,8 @@ impl CaseRunners {
                     basis,
                     engine_s: t1.elapsed().as_secs_f64(),
                     residual_s: p.residual_seconds + reference_s,
+                    structure_cpu_s: c1 - c0,
+                    engine_cpu_s: process_cpu_s() - c2,
                 };
                 if let Ok(mut v) = self.phases.lock() {
                     v.push(phase);

@@ -6,6 +6,10 @@ use serde::Deserialize;
 
 use super::StudyCriterion;
 use super::{Case, Combine, Parameter, Range, Study, StudyBasis, MAX_CASES};
+
+/// Largest `concurrent_cases` of a study file (each concurrent case holds its own basis and
+/// engine in memory).
+const MAX_CONCURRENT_CASES: usize = 4;
 use crate::eigen::substructure::SubstructureOptions;
 use crate::model::{load_model, Model, ModelSource};
 use crate::studies::StudiesError;
@@ -42,6 +46,8 @@ struct StudyFile {
     basis: StudyBasis,
     #[serde(default)]
     substructure: Option<SubstructureOptions>,
+    #[serde(default)]
+    concurrent_cases: Option<usize>,
     parameter: Vec<ParamFile>,
 }
 
@@ -262,7 +268,7 @@ impl Study {
     /// Phases: the TOML and its schema ([`read_study_file`]), the parameters
     /// ([`parameters`]) and the number of cases they make ([`check_case_count`]), the speeds
     /// ([`check_speeds`]), the criterion and the peaks ([`check_criterion`]), the
-    /// substructure options.
+    /// substructure options, the concurrency.
     pub fn parse_str(
         text: &str,
         file: &str,
@@ -297,6 +303,17 @@ impl Study {
         substructure
             .validate()
             .map_err(|e| key_error(file, "substructure", e.to_string()))?;
+        let concurrent_cases = raw.concurrent_cases.unwrap_or(match raw.basis {
+            StudyBasis::Substructured => 2,
+            StudyBasis::Full => 1,
+        });
+        if !(1..=MAX_CONCURRENT_CASES).contains(&concurrent_cases) {
+            return Err(key_error(
+                file,
+                "concurrent_cases",
+                format!("{concurrent_cases}: allowed 1 … {MAX_CONCURRENT_CASES}"),
+            ));
+        }
         Ok(Study {
             file: file.to_string(),
             title: raw.title.unwrap_or_else(|| default_title.to_string()),
@@ -309,6 +326,7 @@ impl Study {
             criterion,
             basis: raw.basis,
             substructure,
+            concurrent_cases,
             parameters,
         })
     }
