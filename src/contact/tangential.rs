@@ -141,17 +141,21 @@ impl TangentialSolver {
 
     /// Uniform displacements `(c_x ΔA Σ fx, c_y ΔA Σ fy)` (m) of the series compliance.
     fn uniform(&self, fx: &[f64], fy: &[f64]) -> (f64, f64) {
-        let ux = if self.uniform_x_m_per_pa != 0.0 {
-            self.uniform_x_m_per_pa * fx.iter().sum::<f64>()
-        } else {
-            0.0
-        };
-        let uy = if self.uniform_y_m_per_pa != 0.0 {
-            self.uniform_y_m_per_pa * fy.iter().sum::<f64>()
-        } else {
-            0.0
-        };
-        (ux, uy)
+        let sum = |f: &[f64], c: f64| if c != 0.0 { f.iter().sum::<f64>() } else { 0.0 };
+        self.uniform_of_sums(
+            sum(fx, self.uniform_x_m_per_pa),
+            sum(fy, self.uniform_y_m_per_pa),
+        )
+    }
+
+    /// Uniform displacements `(c_x ΔA sx, c_y ΔA sy)` (m) of the series compliance for the
+    /// traction sums `sx, sy` (Pa); exactly 0 along an axis without series compliance.
+    fn uniform_of_sums(&self, sx: f64, sy: f64) -> (f64, f64) {
+        let u = |c: f64, s: f64| if c != 0.0 { c * s } else { 0.0 };
+        (
+            u(self.uniform_x_m_per_pa, sx),
+            u(self.uniform_y_m_per_pa, sy),
+        )
     }
 
     /// `S = C τ + c ΔA Σ τ + e` exactly (one FFT pair), with the extended displacement rows
@@ -455,6 +459,11 @@ impl TangentialSolver {
     ) {
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
         let (lo, hi) = (self.lo, self.hi);
+        // the search direction is zero outside `lo..hi` (see `start`): its sums run there
+        let (mut sdx, mut sdy) = (
+            self.dx_[lo..hi].iter().sum::<f64>(),
+            self.dy_[lo..hi].iter().sum::<f64>(),
+        );
         while self.products < self.cg_iterations {
             conv.tangential_box(
                 &self.dx_,
@@ -464,18 +473,18 @@ impl TangentialSolver {
                 self.rows,
                 self.cols,
             );
-            let (cux, cuy) = self.uniform(&self.dx_, &self.dy_);
-            if cux != 0.0 || cuy != 0.0 {
-                for i in lo..hi {
+            let (cux, cuy) = self.uniform_of_sums(sdx, sdy);
+            let series = cux != 0.0 || cuy != 0.0;
+            self.products += 1;
+            self.exact_now = false;
+            // model product w = C d on adhesion, P C d + κ d on slip (d ∥ tangent there),
+            // with the series compliance's uniform displacement added to C d
+            let mut den = 0.0;
+            for i in lo..hi {
+                if series {
                     self.qx[i] += cux;
                     self.qy[i] += cuy;
                 }
-            }
-            self.products += 1;
-            self.exact_now = false;
-            // model product w = C d on adhesion, P C d + κ d on slip (d ∥ tangent there)
-            let mut den = 0.0;
-            for i in lo..hi {
                 den += self.qx[i] * self.dx_[i]
                     + self.qy[i] * self.dy_[i]
                     + self.kap[i] * (self.dx_[i] * self.dx_[i] + self.dy_[i] * self.dy_[i]);
@@ -500,9 +509,12 @@ impl TangentialSolver {
             }
             let beta = rr_new / rr;
             rr = rr_new;
+            (sdx, sdy) = (0.0, 0.0);
             for i in lo..hi {
                 self.dx_[i] = self.qx[i] + beta * self.dx_[i];
                 self.dy_[i] = self.qy[i] + beta * self.dy_[i];
+                sdx += self.dx_[i];
+                sdy += self.dy_[i];
             }
         }
     }
