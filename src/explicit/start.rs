@@ -199,7 +199,7 @@ impl ElasticWheel {
                     .for_each(|(x, y)| *x -= c * y);
             }
             let nn = mdot(&self.rigid[k], &self.rigid[k]).sqrt();
-            if !(nn > 0.0) {
+            if nn.is_nan() || nn <= 0.0 {
                 return Err(ExplicitError::Static {
                     part: "wheel",
                     reason: "a rigid-body mode of the wheel body has no mass".into(),
