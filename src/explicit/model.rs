@@ -10,8 +10,9 @@ use faer::Mat;
 use super::local::LocalCompliance;
 use super::operator::ExplicitOperator;
 use super::passage::{static_contact_force, Coupling};
+use super::rotating::{tread_planes, WheelLocalCompliance};
 use super::stable::{StableStep, DEFAULT_SAFETY};
-use super::start::{add_line_force, solve_one, wheel_elastic_static, wheel_rigid_modes};
+use super::start::{add_line_force, solve_one, wheel_rigid_modes, ElasticWheel};
 use super::ExplicitError;
 use crate::dynamics::patch::{plane_weights, PlaneWeights};
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
@@ -35,7 +36,9 @@ pub struct ExplicitOptions {
     /// static Hertz patch).
     pub load_spread: LoadSpread,
     /// Whether the element-scale variation of the mesh's local compliance is removed from
-    /// the contact (default) or kept.
+    /// the contact (default) or kept: on the rail its variation inside each element
+    /// (docs/theory.md §8.6), on the rotating wheel its variation with the contact's
+    /// material angle around the faceted tread, against its value at θ = 0 (§8.7).
     pub local_compliance: ExplicitLocalCompliance,
     /// The wheel treatment (default fixed, `explicit.wheel`; docs/theory.md §8.7).
     pub wheel: ExplicitWheel,
@@ -146,6 +149,10 @@ pub struct ExplicitModel {
     pub(super) patch_a_m: f64,
     /// The mesh's local compliance under the patch, when its variation is removed.
     pub(super) local: Option<LocalCompliance>,
+    /// The rotating wheel's tread compliance, when its variation is removed.
+    pub(super) wheel_local: Option<WheelLocalCompliance>,
+    /// Wall time of computing `wheel_local` (s).
+    pub(super) wheel_local_seconds: f64,
     /// Static Hertz approach at the wheel load (m).
     pub(super) hertz_approach_m: f64,
     pub(super) opts: ExplicitOptions,
@@ -237,8 +244,32 @@ impl ExplicitModel {
         drop(fac);
         let mut fw = wheel_const.clone();
         add_nodes_load(&wc.nodes, &wheel_structure.dofmap, &frame, 1.0, f0, &mut fw);
-        let wheel_static =
-            wheel_elastic_static(&wheel_structure, &wm, &wheel.op, &rigid, &wc.nodes, &fw)?;
+        let elastic = ElasticWheel::new(&wheel_structure, &wm, &wheel.op, &rigid, &wc.nodes)?;
+        let wheel_static = elastic.solve(&fw);
+        let t_local = Instant::now();
+        let wheel_local = match (opts.wheel, opts.local_compliance) {
+            (ExplicitWheel::Rotating, ExplicitLocalCompliance::Constant) => {
+                // The contact can turn the wheel at most by the rail's length from the start
+                // over the contact radius.
+                let px = &line.planes_x_m;
+                let phi_max = (px[px.len() - 1] - x_start_m) / loads.contact_radius_m;
+                let topo = &wheel_structure.topology;
+                let dm = &wheel_structure.dofmap;
+                let sprung: Vec<usize> = (0..3)
+                    .filter_map(|c| dm.free_index(3 * wheel_structure.sprung_node + c))
+                    .collect();
+                Some(WheelLocalCompliance::compute(
+                    &elastic.body_only(&sprung)?,
+                    &tread_planes(&wheel_structure, &wc.nodes)?,
+                    (&topo.thetas, topo.contact_angle_index()),
+                    [frame.x, frame.t, frame.n],
+                    phi_max,
+                    n_w,
+                )?)
+            }
+            _ => None,
+        };
+        let wheel_local_seconds = t_local.elapsed().as_secs_f64();
         Ok(ExplicitModel {
             model: model.clone(),
             frame,
@@ -254,6 +285,8 @@ impl ExplicitModel {
             hertz_b_m: hertz.b_m,
             patch_a_m,
             local,
+            wheel_local,
+            wheel_local_seconds,
             hertz_approach_m: hertz.approach_m,
             loads,
             wheel_const,

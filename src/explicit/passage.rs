@@ -152,6 +152,9 @@ pub struct ExplicitInfo {
     pub wheel: &'static str,
     /// The rotating wheel's spin rate (rad/s; 0 for the fixed wheel).
     pub spin_rate_rad_s: f64,
+    /// Wall time of computing the rotating wheel's tread compliance over the angles of the
+    /// travel, part of `setup_seconds` (s; 0 when it is not computed).
+    pub wheel_local_seconds: f64,
     /// The energy audit (when [`super::ExplicitOptions::audit`] asks for it and the ledger
     /// is kept).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -221,6 +224,7 @@ impl ExplicitModel {
             frame: self.frame,
             loads: &self.loads,
             wheel_const: &self.wheel_const,
+            local: self.wheel_local.as_ref(),
         };
         let omega = self.opts.spin_rate_rad_s.unwrap_or(v / self.wheel_radius_m);
         RotatingWheel::new(&parts, omega, (steps, dt, self.opts.coupling.hold())).map(Some)

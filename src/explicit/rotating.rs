@@ -23,6 +23,10 @@
 //! displacement at the contact is read the same way. The coupling's unit responses are those
 //! of the two angle planes around the contact (computed as the contact reaches a plane).
 
+mod local;
+
+pub(crate) use local::WheelLocalCompliance;
+
 use super::operator::{ExplicitOperator, StepScratch};
 use super::response::{Hold, UnitResponse};
 use super::ExplicitError;
@@ -69,6 +73,18 @@ pub enum SpinError {
     /// The contact nodes do not lie on the wheel's contact angle plane.
     #[error("the wheel's contact nodes are not on the contact angle plane")]
     ContactOffPlane,
+    /// The passage turns the wheel beyond the angles whose local compliance was computed.
+    #[error(
+        "the passage turns the wheel by {phi_rad:.3} rad, beyond the {phi_max_rad:.3} rad over \
+         which the tread's local compliance was computed (a spin rate above V/R): set \
+         explicit.local_compliance = \"mesh\" or leave the spin rate at V/R"
+    )]
+    Uncovered {
+        /// The passage's rotation (rad).
+        phi_rad: f64,
+        /// The rotation covered (rad).
+        phi_max_rad: f64,
+    },
 }
 
 /// A substructure spinning at `Ω` (rad/s) about the y axis through the origin: the
@@ -297,16 +313,65 @@ pub(super) struct WheelParts<'a> {
     pub(super) loads: &'a WheelLoads,
     /// Their sum (N).
     pub(super) wheel_const: &'a [f64],
+    /// The tread's local compliance whose variation with the angle is removed from the
+    /// contact (`None`: kept).
+    pub(super) local: Option<&'a WheelLocalCompliance>,
 }
 
 /// A node set of one angle plane: free indices (x, y, z; `usize::MAX` = held) and weight.
-type PlaneNodes = Vec<([usize; 3], f64)>;
+pub(super) type PlaneNodes = Vec<([usize; 3], f64)>;
+
+/// The contact's tread nodes and lateral weights (`contact_nodes`, on the angle plane
+/// θ = 0) repeated on every angle plane of `wheel`, in the order of its angles.
+pub(super) fn tread_planes(
+    wheel: &WheelStructure,
+    contact_nodes: &[(usize, f64)],
+) -> Result<Vec<PlaneNodes>, ExplicitError> {
+    let topo = &wheel.topology;
+    let nm = topo.meridian.len();
+    let k0 = topo.contact_angle_index();
+    let dm = &wheel.dofmap;
+    let free = |node: usize| [0, 1, 2].map(|c| dm.free_index(3 * node + c).unwrap_or(usize::MAX));
+    // The contact's meridian nodes and weights, repeated at every angle.
+    let merid: Vec<(usize, f64)> = contact_nodes
+        .iter()
+        .map(|&(node, wt)| (node.wrapping_sub(topo.node(k0, 0)), wt))
+        .collect();
+    if merid.iter().any(|&(m, _)| m >= nm) {
+        return Err(SpinError::ContactOffPlane.into());
+    }
+    Ok((0..topo.thetas.len())
+        .map(|k| {
+            merid
+                .iter()
+                .map(|&(m, wt)| (free(topo.node(k, m)), wt))
+                .collect()
+        })
+        .collect())
+}
 
 /// The unit responses of one angle plane (rest to a unit load change over a contact step,
 /// applied as the coupling's hold, in the spinning x, y, z) and the key of the plane (its index counted along the travel).
 struct PlaneResponse {
     key: Option<i64>,
     r: UnitResponse,
+}
+
+/// The contact's place on a wheel with the angle planes at `thetas` (rad, increasing, in
+/// (−π, π]) when the material angle under it is `phi` (rad).
+fn locate_angle(th: &[f64], phi: f64) -> OnWheel {
+    let nt = th.len();
+    let tau = std::f64::consts::TAU;
+    let turns = ((phi - th[0]) / tau).floor();
+    let psi = phi - turns * tau;
+    let k = th.partition_point(|&x| x <= psi).saturating_sub(1);
+    let next = if k + 1 < nt { th[k + 1] } else { th[0] + tau };
+    let s = ((psi - th[k]) / (next - th[k])).clamp(0.0, 1.0);
+    OnWheel {
+        j: k as i64 + nt as i64 * turns as i64,
+        s,
+        cs: [phi.cos(), phi.sin()],
+    }
 }
 
 /// Where the contact is on the wheel: angle plane `j` (counted along the travel), weight `s`
@@ -341,6 +406,8 @@ pub(super) struct RotatingWheel {
     fk: Vec<f64>,
     /// The contact's place during the current contact step (held at its end).
     at: OnWheel,
+    /// The tread's local compliance whose variation is removed (`None`: kept).
+    local: Option<WheelLocalCompliance>,
 }
 
 impl RotatingWheel {
@@ -354,30 +421,10 @@ impl RotatingWheel {
         let w = p.structure;
         let topo = &w.topology;
         let nm = topo.meridian.len();
-        let k0 = topo.contact_angle_index();
         let nt = topo.thetas.len();
         let ring = (0..nt).flat_map(|k| (0..nm).map(move |m| topo.node(k, m)));
         let spin = SpinFrame::new(p.op, &w.dofmap, ring, omega)?;
-        let dm = &w.dofmap;
-        let free =
-            |node: usize| [0, 1, 2].map(|c| dm.free_index(3 * node + c).unwrap_or(usize::MAX));
-        // The contact's meridian nodes and weights, repeated at every angle.
-        let merid: Vec<(usize, f64)> = p
-            .contact_nodes
-            .iter()
-            .map(|&(node, wt)| (node - topo.node(k0, 0), wt))
-            .collect();
-        if merid.iter().any(|&(m, _)| m >= nm) {
-            return Err(SpinError::ContactOffPlane.into());
-        }
-        let planes = (0..nt)
-            .map(|k| {
-                merid
-                    .iter()
-                    .map(|&(m, wt)| (free(topo.node(k, m)), wt))
-                    .collect()
-            })
-            .collect();
+        let planes = tread_planes(w, p.contact_nodes)?;
         let n = p.op.n();
         let mut ground = vec![0.0; n];
         for &(ix, iz, _) in &spin.pairs {
@@ -410,6 +457,7 @@ impl RotatingWheel {
                 s: 0.0,
                 cs: [1.0, 0.0],
             },
+            local: p.local.cloned(),
         })
     }
 
@@ -421,20 +469,35 @@ impl RotatingWheel {
     /// The contact's place on the wheel at time `t` (s): the material angle under the
     /// contact is `Ωt` (the tread runs backwards through the contact at `−Ω`).
     fn locate(&self, t: f64) -> OnWheel {
-        let phi = self.spin.omega * t;
-        let th = &self.thetas;
-        let nt = th.len();
-        let tau = std::f64::consts::TAU;
-        let turns = ((phi - th[0]) / tau).floor();
-        let psi = phi - turns * tau;
-        let k = th.partition_point(|&x| x <= psi).saturating_sub(1);
-        let next = if k + 1 < nt { th[k + 1] } else { th[0] + tau };
-        let s = ((psi - th[k]) / (next - th[k])).clamp(0.0, 1.0);
-        OnWheel {
-            j: k as i64 + nt as i64 * turns as i64,
-            s,
-            cs: [phi.cos(), phi.sin()],
+        locate_angle(&self.thetas, self.spin.omega * t)
+    }
+
+    /// `Δg_d = g_d(φ) − g_d(0)` (m/N per contact-frame direction), the variation of the
+    /// tread's local compliance with the contact's material angle that the contact is
+    /// relieved of at the current step's place (after [`Self::advance`]); zero when it is
+    /// kept (`explicit.local_compliance = "mesh"`).
+    pub(super) fn local_variation(&self) -> [f64; 3] {
+        self.local
+            .as_ref()
+            .and_then(|l| l.variation(self.at))
+            .unwrap_or([0.0; 3])
+    }
+
+    /// Checks that the removal of the tread's local compliance variation covers a passage
+    /// of `t_end` (s).
+    pub(super) fn check_coverage(&self, t_end: f64) -> Result<(), ExplicitError> {
+        let Some(l) = &self.local else {
+            return Ok(());
+        };
+        let phi = self.spin.omega.abs() * t_end;
+        if phi > l.phi_max() {
+            return Err(SpinError::Uncovered {
+                phi_rad: phi,
+                phi_max_rad: l.phi_max(),
+            }
+            .into());
         }
+        Ok(())
     }
 
     fn plane(&self, j: i64) -> &PlaneNodes {

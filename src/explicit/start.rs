@@ -100,81 +100,157 @@ pub(super) fn wheel_rigid_modes(
     Ok(modes)
 }
 
-/// The elastic static deflection of the free-floating wheel under `f` (N): the rigid
-/// components of `f` are removed (`f − M R Rᵀ f`), three DOFs that fix the rigid motion in a
-/// statically determinate way are held by a stiff spring (their reactions vanish for a
+/// The elastic static solver of the free-floating wheel, by inertia relief: the rigid
+/// components of a load are removed (`f − M R Rᵀ f`), three DOFs that fix the rigid motion in
+/// a statically determinate way are held by a stiff spring (their reactions vanish for a
 /// balanced load, so the spring's size does not matter), and the rigid part of the solution
-/// is removed (`u − R Rᵀ M u`).
-pub(super) fn wheel_elastic_static(
-    wheel: &WheelStructure,
-    mats: &crate::fe::assembly::FeMatrices,
-    op: &ExplicitOperator,
-    rigid: &[Vec<f64>],
-    contact_nodes: &[(usize, f64)],
-    f: &[f64],
-) -> Result<Vec<f64>, ExplicitError> {
-    let n = f.len();
-    let mass = op.mass();
-    let mut fe = f.to_vec();
-    for r in rigid {
-        let c: f64 = r.iter().zip(f).map(|(a, b)| a * b).sum();
-        fe.iter_mut()
-            .zip(r)
-            .zip(mass)
-            .for_each(|((x, ri), mi)| *x -= c * mi * ri);
-    }
-    // Supports: x and z of the contact node, x of the node farthest from it in z.
-    let dm = &wheel.dofmap;
-    let cn = contact_nodes
-        .iter()
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|&(nd, _)| nd)
-        .unwrap_or_else(|| wheel.topology.contact_node());
-    let zc = wheel.mesh.nodes[cn][2];
-    let far = (0..wheel.mesh.nodes.len())
-        .filter(|&nd| nd != wheel.sprung_node && dm.free_index(3 * nd).is_some())
-        .max_by(|&a, &b| {
-            (wheel.mesh.nodes[a][2] - zc)
-                .abs()
-                .total_cmp(&(wheel.mesh.nodes[b][2] - zc).abs())
-        })
-        .unwrap_or(cn);
-    let held: Vec<usize> = [3 * cn, 3 * cn + 2, 3 * far]
-        .iter()
-        .filter_map(|&d| dm.free_index(d))
-        .collect();
-    if held.len() != 3 {
-        return Err(ExplicitError::Static {
-            part: "wheel",
-            reason: "the contact node's x/z DOFs are not free".into(),
-        });
-    }
-    let mut k = mats.k.clone();
-    {
-        let (cp, ri) = (
-            k.symbolic().col_ptr().to_vec(),
-            k.symbolic().row_idx().to_vec(),
-        );
-        let vals = k.val_mut();
-        for &d in &held {
-            let p =
-                (cp[d]..cp[d + 1])
-                    .find(|&p| ri[p] == d)
-                    .ok_or_else(|| ExplicitError::Static {
+/// is removed (`u − R Rᵀ M u`). The primary suspension stays in `K` (the sprung mass moves
+/// with the rigid vertical mode). The held DOFs are the contact node's x and z and the x of
+/// the node farthest from it in z.
+pub(crate) struct ElasticWheel {
+    fac: StiffnessFactor,
+    rigid: Vec<Vec<f64>>,
+    mass: Vec<f64>,
+}
+
+impl ElasticWheel {
+    /// Factorises the held stiffness of `wheel` (matrices `mats`, operator `op`, rigid modes
+    /// `rigid`, contact nodes `contact_nodes`).
+    pub(super) fn new(
+        wheel: &WheelStructure,
+        mats: &crate::fe::assembly::FeMatrices,
+        op: &ExplicitOperator,
+        rigid: &[Vec<f64>],
+        contact_nodes: &[(usize, f64)],
+    ) -> Result<Self, ExplicitError> {
+        // Supports: x and z of the contact node, x of the node farthest from it in z.
+        let dm = &wheel.dofmap;
+        let cn = contact_nodes
+            .iter()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|&(nd, _)| nd)
+            .unwrap_or_else(|| wheel.topology.contact_node());
+        let zc = wheel.mesh.nodes[cn][2];
+        let far = (0..wheel.mesh.nodes.len())
+            .filter(|&nd| nd != wheel.sprung_node && dm.free_index(3 * nd).is_some())
+            .max_by(|&a, &b| {
+                (wheel.mesh.nodes[a][2] - zc)
+                    .abs()
+                    .total_cmp(&(wheel.mesh.nodes[b][2] - zc).abs())
+            })
+            .unwrap_or(cn);
+        let held: Vec<usize> = [3 * cn, 3 * cn + 2, 3 * far]
+            .iter()
+            .filter_map(|&d| dm.free_index(d))
+            .collect();
+        if held.len() != 3 {
+            return Err(ExplicitError::Static {
+                part: "wheel",
+                reason: "the contact node's x/z DOFs are not free".into(),
+            });
+        }
+        let mut k = mats.k.clone();
+        {
+            let (cp, ri) = (
+                k.symbolic().col_ptr().to_vec(),
+                k.symbolic().row_idx().to_vec(),
+            );
+            let vals = k.val_mut();
+            for &d in &held {
+                let p = (cp[d]..cp[d + 1]).find(|&p| ri[p] == d).ok_or_else(|| {
+                    ExplicitError::Static {
                         part: "wheel",
                         reason: "K has no diagonal entry at a support DOF".into(),
-                    })?;
-            vals[p] *= 2.0;
+                    }
+                })?;
+                vals[p] *= 2.0;
+            }
+        }
+        let fac = StiffnessFactor::new(k.as_ref()).map_err(|e| ExplicitError::Static {
+            part: "wheel",
+            reason: e.to_string(),
+        })?;
+        Ok(ElasticWheel {
+            fac,
+            rigid: rigid.to_vec(),
+            mass: op.mass().to_vec(),
+        })
+    }
+
+    /// The same solver with the inertia relief over the wheel body only: the `sprung` DOFs
+    /// get no inertial share of a load (their mass is left out of the balancing and the rigid
+    /// modes are M-orthonormalised again without it), so the primary suspension carries no
+    /// force and the solution is the free wheel body's elastic deflection.
+    pub(crate) fn body_only(mut self, sprung: &[usize]) -> Result<Self, ExplicitError> {
+        for &d in sprung {
+            self.mass[d] = 0.0;
+        }
+        let m = &self.mass;
+        let mdot = |a: &[f64], b: &[f64]| -> f64 {
+            a.iter().zip(b).zip(m).map(|((x, y), w)| x * w * y).sum()
+        };
+        for k in 0..self.rigid.len() {
+            for j in 0..k {
+                let c = mdot(&self.rigid[k], &self.rigid[j]);
+                let (head, tail) = self.rigid.split_at_mut(k);
+                tail[0]
+                    .iter_mut()
+                    .zip(&head[j])
+                    .for_each(|(x, y)| *x -= c * y);
+            }
+            let nn = mdot(&self.rigid[k], &self.rigid[k]).sqrt();
+            if nn.is_nan() || nn <= 0.0 {
+                return Err(ExplicitError::Static {
+                    part: "wheel",
+                    reason: "a rigid-body mode of the wheel body has no mass".into(),
+                });
+            }
+            self.rigid[k].iter_mut().for_each(|x| *x /= nn);
+        }
+        Ok(self)
+    }
+
+    /// The load `f` (N) without its rigid components, `f − M R Rᵀ f`, in place.
+    fn balance(&self, f: &mut [f64]) {
+        for r in &self.rigid {
+            let c: f64 = r.iter().zip(f.iter()).map(|(a, b)| a * b).sum();
+            f.iter_mut()
+                .zip(r)
+                .zip(&self.mass)
+                .for_each(|((x, ri), mi)| *x -= c * mi * ri);
         }
     }
-    let fac = StiffnessFactor::new(k.as_ref()).map_err(|e| ExplicitError::Static {
-        part: "wheel",
-        reason: e.to_string(),
-    })?;
-    let mut u = solve_one(&fac, &fe);
-    for r in rigid {
-        let c: f64 = (0..n).map(|i| r[i] * mass[i] * u[i]).sum();
-        u.iter_mut().zip(r).for_each(|(x, y)| *x -= c * y);
+
+    /// The solution `u` without its rigid part, `u − R Rᵀ M u`, in place.
+    fn elastic_part(&self, u: &mut [f64]) {
+        let n = u.len();
+        for r in &self.rigid {
+            let c: f64 = (0..n).map(|i| r[i] * self.mass[i] * u[i]).sum();
+            u.iter_mut().zip(r).for_each(|(x, y)| *x -= c * y);
+        }
     }
-    Ok(u)
+
+    /// The elastic static deflection (m) under the load `f` (N).
+    pub(crate) fn solve(&self, f: &[f64]) -> Vec<f64> {
+        let mut fe = f.to_vec();
+        self.balance(&mut fe);
+        let mut u = solve_one(&self.fac, &fe);
+        self.elastic_part(&mut u);
+        u
+    }
+
+    /// [`Self::solve`] of several loads together (one block solve), each in place.
+    pub(crate) fn solve_many(&self, loads: &mut [Vec<f64>]) {
+        let Some(n) = loads.first().map(Vec::len) else {
+            return;
+        };
+        loads.iter_mut().for_each(|f| self.balance(f));
+        let mut b = Mat::from_fn(n, loads.len(), |i, j| loads[j][i]);
+        let mut ws = self.fac.workspace(loads.len());
+        self.fac.solve_in_place(b.as_mut(), &mut ws);
+        for (j, u) in loads.iter_mut().enumerate() {
+            u.iter_mut().enumerate().for_each(|(i, x)| *x = b[(i, j)]);
+            self.elastic_part(u);
+        }
+    }
 }

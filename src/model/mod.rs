@@ -171,9 +171,11 @@ pub struct Explicit {
     #[serde(default)]
     pub load_spread: LoadSpread,
     /// What the contact sees of the mesh's local compliance under the moving load:
-    /// `"constant"` (default: its element-scale variation with the load's position is
-    /// removed, the mean kept, as the reduced passage's constant residual flexibility) or
-    /// `"mesh"` (the mesh's own, position dependent; docs/theory.md §8.6).
+    /// `"constant"` (default: on the rail its element-scale variation with the load's
+    /// position is removed, the mean kept, as the reduced passage's constant residual
+    /// flexibility; on the rotating wheel its variation with the contact's material angle is
+    /// removed, the value at θ = 0, the fixed wheel's contact, kept) or `"mesh"` (the mesh's
+    /// own, position dependent; docs/theory.md §8.6, §8.7).
     #[serde(default)]
     pub local_compliance: ExplicitLocalCompliance,
     /// The wheel treatment of the explicit path (docs/theory.md §8.7): `"fixed"` (default,
@@ -187,7 +189,8 @@ pub struct Explicit {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ExplicitLocalCompliance {
-    /// The element-scale variation removed (series compliance −Δg(x)).
+    /// The element-scale variation removed (series compliance −Δg(x) on the rail, and
+    /// −(g(φ) − g(0)) on the rotating wheel).
     #[default]
     Constant,
     /// The mesh's own position-dependent local compliance.

@@ -71,6 +71,7 @@ impl ExplicitModel {
         // The rotating wheel (rotating.rs); `None` for the fixed wheel.
         let rot = self.rotating_wheel(plan.v, plan.nw, plan.dtw)?;
         if let Some(r) = &rot {
+            r.check_coverage(plan.n_steps as f64 * plan.dt_c)?;
             r.add_rolling_velocity(&self.wheel_structure, &state.uw, &mut state.vw);
             // The wheel's material velocity at the contact back to the steady creepage's.
             let dv = st.creepage * plan.v - r.contact_velocity_x(&state.uw, &state.vw);
@@ -473,7 +474,11 @@ impl<'a> Stepper<'a> {
             x_m: xc,
             source,
         };
-        let dg = m.local_variation(xc, pw);
+        let mut dg = m.local_variation(xc, pw);
+        if let Some(r) = &self.rot {
+            let dw = r.local_variation();
+            dg = [0, 1, 2].map(|d| dg[d] + dw[d]);
+        }
         for d in 0..3 {
             self.series_c[d] = self.series[d] - dg[d];
             if self.series_c[d] < 0.0 {
@@ -586,6 +591,7 @@ impl<'a> Stepper<'a> {
             clamped_steps: self.clamped,
             wheel: m.opts.wheel.as_str(),
             spin_rate_rad_s: self.rot.as_ref().map_or(0.0, |r| r.omega()),
+            wheel_local_seconds: m.wheel_local_seconds,
             audit,
         };
         ExplicitRecord {
