@@ -760,4 +760,25 @@ fn a_failed_trial_stops_the_growth_and_keeps_the_smaller_amplitudes() {
         "{:?}",
         verdict.lines
     );
+    // When even the smallest trial fails, no trial is evaluated and the verdict says so
+    // (not "no wear component", which the smooth rail had).
+    let all_fail = FailsWhenDeep {
+        inner: &p.engine,
+        limit_m: 1e-6,
+    };
+    let g = trial_growth(&all_fail, v, &[10.0, 40.0], &modes, |_| {}).expect("growth");
+    assert!(g.amplitudes.is_empty());
+    assert_eq!(g.stopped.as_ref().map(|s| s.amplitude_um), Some(10.0));
+    let verdict = corrugation::growth::verdict::growth_verdict(&g, m.run.speed_kmh, &modes, None);
+    assert_eq!(
+        verdict.outcome,
+        corrugation::growth::verdict::Outcome::NotEvaluated {
+            failed_amplitude_um: 10.0
+        }
+    );
+    assert!(
+        verdict.lines[0].starts_with("Growth not evaluated"),
+        "{:?}",
+        verdict.lines
+    );
 }

@@ -105,6 +105,11 @@ pub enum Outcome {
         /// The largest amplitude tried (µm).
         largest_tried_um: f64,
     },
+    /// The smallest trial's passage failed, so no trial was evaluated.
+    NotEvaluated {
+        /// The smallest trial amplitude, whose passage failed (µm).
+        failed_amplitude_um: f64,
+    },
 }
 
 /// The verdict: its outcome and its sentences (the first is the headline).
@@ -365,6 +370,19 @@ pub fn growth_verdict(
         nearest_mode: near.as_ref(),
         initiation,
     });
+    if let (Some(s), true) = (&g.stopped, g.amplitudes.is_empty()) {
+        // Without an evaluated trial the verdict's own headline ("no wear component") is
+        // wrong: the smooth rail had one, but no trial passage could run.
+        v.outcome = Outcome::NotEvaluated {
+            failed_amplitude_um: s.amplitude_um,
+        };
+        v.lines[0] = format!(
+            "Growth not evaluated on this track at {} km/h: the passage over the smallest \
+             trial corrugation ({}) failed, so no trial corrugation was evaluated.",
+            trim_zeros(&sig(speed_kmh, 4)),
+            amp(s.amplitude_um)
+        );
+    }
     if let Some(s) = &g.stopped {
         v.lines.insert(
             1.min(v.lines.len()),

@@ -164,7 +164,10 @@ impl CaseContext<'_> {
 /// Runs `f(i)` for `i = 0 … n − 1` and returns the results in index order: `f(0)` alone
 /// first (it fills the caches and memos the later cases share), then the rest on up to
 /// `workers` threads, each taking the next index when it is free. The results do not depend
-/// on `workers` when each `f(i)` does not depend on the others' timing.
+/// on `workers` when each `f(i)` does not depend on the others' timing. Plain scoped threads
+/// rather than a rayon pool: a case's own parallel work would let rayon's work stealing start
+/// further cases while a thread waits inside it, so the number of cases in memory at once
+/// (a few GB each) would not be bounded by `workers`.
 fn in_order<T: Send>(n: usize, workers: usize, f: &(dyn Fn(usize) -> T + Sync)) -> Vec<T> {
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::sync::Mutex;
