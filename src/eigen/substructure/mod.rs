@@ -90,6 +90,13 @@ pub enum SubstructureError {
         /// What it joins.
         what: String,
     },
+    /// The classification's rail planes or the passage's rows reach DOFs outside the
+    /// components.
+    #[error("{what}: the substructured basis cannot represent it; use basis = \"full\"")]
+    Rows {
+        /// Which rows, and where.
+        what: String,
+    },
     /// Bad options.
     #[error("substructure option {name} = {value}: {allowed}")]
     Option {
@@ -359,22 +366,7 @@ fn classify_modes(
     /// Modes classified per parallel task.
     const CHUNK: usize = 64;
     let classifier = TrackClassifier::new(track).map_err(BasisError::from)?;
-    let (nr, ns) = (comp.rail.omega2.len(), comp.sleeper.omega2.len());
-    let energy = |j: usize, first: usize, w2: &[f64]| -> f64 {
-        0.5 * w2
-            .iter()
-            .enumerate()
-            .map(|(c, w)| w * q[(first + c, j)].powi(2))
-            .sum::<f64>()
-    };
-    let solid: Vec<[f64; 2]> = (0..q.ncols())
-        .map(|j| {
-            let sleepers = (0..comp.sleeper_offsets.len())
-                .map(|i| energy(j, nr + i * ns, &comp.sleeper.omega2))
-                .sum();
-            [energy(j, 0, &comp.rail.omega2), sleepers]
-        })
-        .collect();
+    let solid = solid_energies(comp, q);
     let per_chunk: Vec<Vec<TrackModeClass>> = (0..q.ncols())
         .step_by(CHUNK)
         .collect::<Vec<_>>()
@@ -393,14 +385,38 @@ fn classify_modes(
     Ok(per_chunk.into_iter().flatten().collect())
 }
 
+/// The rail's and the sleepers' strain energies `[rail, sleepers]` of every mode `Φ = ΨQ`
+/// (J for the mode's amplitude): `½ Σ ω̃²_c Q_cj²` per component, since
+/// `Ψ_cᵀ K_c Ψ_c = diag(ω̃²)`.
+fn solid_energies(comp: &TrackComponents, q: &Mat<f64>) -> Vec<[f64; 2]> {
+    let (nr, ns) = (comp.rail.omega2.len(), comp.sleeper.omega2.len());
+    let energy = |j: usize, first: usize, w2: &[f64]| -> f64 {
+        0.5 * w2
+            .iter()
+            .enumerate()
+            .map(|(c, w)| w * q[(first + c, j)].powi(2))
+            .sum::<f64>()
+    };
+    (0..q.ncols())
+        .map(|j| {
+            let sleepers = (0..comp.sleeper_offsets.len())
+                .map(|i| energy(j, nr + i * ns, &comp.sleeper.omega2))
+                .sum();
+            [energy(j, 0, &comp.rail.omega2), sleepers]
+        })
+        .collect()
+}
+
 mod cache;
 mod components;
 mod reduced;
+mod shapes;
 
 pub use cache::{component_key, COMPONENT_REVISION};
 use cache::{load_component, store_component};
 use components::*;
 pub use reduced::{expand, reduced_modes, reduced_stiffness};
+pub use shapes::{expand_rows, passage_track_basis_timed, ReducedShapes};
 
 #[cfg(test)]
 mod tests;
