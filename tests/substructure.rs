@@ -14,29 +14,59 @@ use corrugation::eigen::substructure::{
 
 use corrugation::structure::TrackStructure;
 
-#[test]
-fn passage_on_the_substructured_basis_matches_the_full_basis() {
-    let m = corrugation::model::test_problems::small_model(&[
-        "run.fmax=3000",
-        "fastening.vertical_stiffness=0.8e9",
-    ])
-    .unwrap();
-    let dir = std::env::temp_dir().join(format!("substructure-passage-{}", std::process::id()));
-    let cache = ModalCache::new(&dir);
-    let track = TrackStructure::build(&m).unwrap();
-    let fmax = m.run.fmax;
-    let comp = track_components(&m, &track, &cache, fmax, &SubstructureOptions::default()).unwrap();
-    let sub = substructured_track_basis(&track, &comp, fmax).unwrap();
-    let full = track_basis(&m, &track, &cache, fmax).unwrap();
-    let opts = PassageOptions::default();
-    let run = |tb| {
-        PreparedModel::with_track_basis(&m, &track, tb, &cache, None, &opts)
+/// The 4-bay test track at f_max 3 kHz with a 0.8 GN/m railpad, a modal cache in a fresh
+/// temporary directory named after `name`, and the track's component bases.
+struct Setup {
+    m: corrugation::model::Model,
+    dir: std::path::PathBuf,
+    cache: ModalCache,
+    track: TrackStructure,
+    comp: corrugation::eigen::substructure::TrackComponents,
+}
+
+impl Setup {
+    fn new(name: &str) -> Self {
+        let m = corrugation::model::test_problems::small_model(&[
+            "run.fmax=3000",
+            "fastening.vertical_stiffness=0.8e9",
+        ])
+        .unwrap();
+        let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+        let cache = ModalCache::new(&dir);
+        let track = TrackStructure::build(&m).unwrap();
+        let opts = SubstructureOptions::default();
+        let comp = track_components(&m, &track, &cache, m.run.fmax, &opts).unwrap();
+        Setup {
+            m,
+            dir,
+            cache,
+            track,
+            comp,
+        }
+    }
+
+    /// One passage at 140 km/h on the track basis `tb`.
+    fn passage(
+        &self,
+        tb: corrugation::eigen::basis::ModalBasis<corrugation::eigen::classify::TrackModeClass>,
+    ) -> corrugation::dynamics::PassageSummary {
+        let opts = PassageOptions::default();
+        PreparedModel::with_track_basis(&self.m, &self.track, tb, &self.cache, None, &opts)
             .unwrap()
             .run(corrugation::units::Speed::from_kmh(140.0), None)
             .unwrap()
-    };
+    }
+}
+
+#[test]
+fn passage_on_the_substructured_basis_matches_the_full_basis() {
+    let s = Setup::new("substructure-passage");
+    let fmax = s.m.run.fmax;
+    let sub = substructured_track_basis(&s.track, &s.comp, fmax).unwrap();
+    let full = track_basis(&s.m, &s.track, &s.cache, fmax).unwrap();
+    let run = |tb| s.passage(tb);
     let (a, b) = (run(full), run(sub));
-    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&s.dir);
     let rel = |x: f64, y: f64| (y - x).abs() / x.abs();
     eprintln!(
         "full: F_L {} N, F_N {} N, wear {} , dominant {:?} mm; substructured: {} N, {} N, {}, {:?} mm",
@@ -66,28 +96,14 @@ fn passage_on_the_substructured_basis_matches_the_full_basis() {
 /// rows agree to round-off, which the contact's iterative solves amplify).
 #[test]
 fn a_passage_on_the_passage_basis_matches_the_fully_expanded_basis() {
-    let m = corrugation::model::test_problems::small_model(&[
-        "run.fmax=3000",
-        "fastening.vertical_stiffness=0.8e9",
-    ])
-    .unwrap();
-    let dir = std::env::temp_dir().join(format!("substructure-rows-{}", std::process::id()));
-    let cache = ModalCache::new(&dir);
-    let track = TrackStructure::build(&m).unwrap();
-    let fmax = m.run.fmax;
-    let comp = track_components(&m, &track, &cache, fmax, &SubstructureOptions::default()).unwrap();
-    let full = substructured_track_basis(&track, &comp, fmax).unwrap();
-    let shapes = ReducedShapes::new(&track, &comp).unwrap();
-    let (part, _) = passage_track_basis_timed(&track, &comp, &shapes, fmax).unwrap();
-    let opts = PassageOptions::default();
-    let run = |tb| {
-        PreparedModel::with_track_basis(&m, &track, tb, &cache, None, &opts)
-            .unwrap()
-            .run(corrugation::units::Speed::from_kmh(140.0), None)
-            .unwrap()
-    };
+    let s = Setup::new("substructure-rows");
+    let fmax = s.m.run.fmax;
+    let full = substructured_track_basis(&s.track, &s.comp, fmax).unwrap();
+    let shapes = ReducedShapes::new(&s.track, &s.comp).unwrap();
+    let (part, _) = passage_track_basis_timed(&s.track, &s.comp, &shapes, fmax).unwrap();
+    let run = |tb| s.passage(tb);
     let (a, b) = (run(full), run(part));
-    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&s.dir);
     let rel = |x: f64, y: f64| (y - x).abs() / x.abs();
     let pairs = [
         ("mean F_N", a.mean_fn_n, b.mean_fn_n, 1e-6),

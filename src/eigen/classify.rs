@@ -210,6 +210,24 @@ pub struct TrackEnergyShares {
     pub ballast: f64,
 }
 
+impl TrackEnergyShares {
+    /// The shares of the strain energies `[rail, sleepers, fastening, ballast]` (J); all zero
+    /// when their sum is not positive.
+    pub fn from_energies(parts: [f64; 4]) -> Self {
+        let tot: f64 = parts.iter().sum();
+        if tot > 0.0 {
+            TrackEnergyShares {
+                rail: parts[0] / tot,
+                sleepers: parts[1] / tot,
+                fastening: parts[2] / tot,
+                ballast: parts[3] / tot,
+            }
+        } else {
+            TrackEnergyShares::default()
+        }
+    }
+}
+
 /// Section resultants of one node plane (units of the mode shape: m for a displacement).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct SectionMotion {
@@ -641,18 +659,7 @@ impl TrackClassifier {
                     SpringKind::Ballast => eb += s.energy(u),
                 }
             }
-            let parts = [e[0], e[1], ef, eb];
-            let tot: f64 = parts.iter().sum();
-            let energy = if tot > 0.0 {
-                TrackEnergyShares {
-                    rail: parts[0] / tot,
-                    sleepers: parts[1] / tot,
-                    fastening: parts[2] / tot,
-                    ballast: parts[3] / tot,
-                }
-            } else {
-                TrackEnergyShares::default()
-            };
+            let energy = TrackEnergyShares::from_energies([e[0], e[1], ef, eb]);
             out.push(self.classify_shape(u, energy)?);
         }
         Ok(out)

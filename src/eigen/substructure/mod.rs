@@ -289,9 +289,11 @@ pub fn track_components(
 pub struct BasisPhases {
     /// The reduced stiffness, the dense reduced eigenproblem and its refinement.
     pub reduced_s: f64,
-    /// The expansion `Φ = ΨQ` to the track's free DOFs.
+    /// The expansion `Φ = ΨQ` to the track's free DOFs (for [`passage_track_basis_timed`],
+    /// to the rows the passage reads).
     pub expand_s: f64,
-    /// The classification of the expanded modes.
+    /// The classification of the modes (for [`passage_track_basis_timed`], with the energy
+    /// shares, from the component coordinates).
     pub classify_s: f64,
     /// Process CPU time during the reduced step.
     pub reduced_cpu_s: f64,
@@ -322,13 +324,31 @@ pub fn substructured_track_basis_timed(
     comp: &TrackComponents,
     fmax_hz: f64,
 ) -> Result<(ModalBasis<TrackModeClass>, BasisPhases), SubstructureError> {
+    timed_basis(
+        track,
+        comp,
+        fmax_hz,
+        |q| expand(comp, track.dofmap.n_free(), q),
+        |q, modes| classify_modes(track, comp, q, modes),
+    )
+}
+
+/// The reduced eigenproblem of `track` on `comp` below `fmax_hz`, its modes expanded by
+/// `expand(Q)` and classified by `classify(Q, Φ)`, with each step's wall and CPU time.
+fn timed_basis(
+    track: &TrackStructure,
+    comp: &TrackComponents,
+    fmax_hz: f64,
+    expand: impl FnOnce(&Mat<f64>) -> Mat<f64>,
+    classify: impl FnOnce(&Mat<f64>, &Mat<f64>) -> Result<Vec<TrackModeClass>, SubstructureError>,
+) -> Result<(ModalBasis<TrackModeClass>, BasisPhases), SubstructureError> {
     let (t, c0) = (Instant::now(), process_cpu_s());
     let k_red = reduced_stiffness(track, comp)?;
     let (freqs, q) = reduced_modes(&k_red, fmax_hz)?;
     let (reduced_s, c1) = (t.elapsed().as_secs_f64(), process_cpu_s());
-    let modes = expand(comp, track.dofmap.n_free(), &q);
+    let modes = expand(&q);
     let (expand_s, c2) = (t.elapsed().as_secs_f64() - reduced_s, process_cpu_s());
-    let classes = classify_modes(track, comp, &q, &modes)?;
+    let classes = classify(&q, &modes)?;
     let (seconds, c3) = (t.elapsed().as_secs_f64(), process_cpu_s());
     let phases = BasisPhases {
         reduced_s,
@@ -415,6 +435,7 @@ mod shapes;
 pub use cache::{component_key, COMPONENT_REVISION};
 use cache::{load_component, store_component};
 use components::*;
+use reduced::expand_sleepers;
 pub use reduced::{expand, reduced_modes, reduced_stiffness};
 pub use shapes::{expand_rows, passage_track_basis_timed, ReducedShapes};
 

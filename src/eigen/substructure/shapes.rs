@@ -261,7 +261,7 @@ pub fn expand_rows(
     rail_rows: &[usize],
 ) -> Mat<f64> {
     let m = q.ncols();
-    let (nr, ns) = (comp.rail.vectors.ncols(), comp.sleeper.vectors.ncols());
+    let nr = comp.rail.vectors.ncols();
     let mut phi = Mat::<f64>::full(n_free, m, f64::NAN);
     let psi = comp.rail.vectors.as_ref();
     let gathered = Mat::from_fn(rail_rows.len(), nr, |i, c| psi[(rail_rows[i], c)]);
@@ -279,17 +279,7 @@ pub fn expand_rows(
             phi[(r, j)] = rows[(i, j)];
         }
     }
-    let sd = comp.sleeper.vectors.nrows();
-    for (i, &o) in comp.sleeper_offsets.iter().enumerate() {
-        matmul(
-            phi.as_mut().subrows_mut(o, sd),
-            Accum::Replace,
-            comp.sleeper.vectors.as_ref(),
-            q.as_ref().subrows(nr + i * ns, ns),
-            1.0,
-            Par::rayon(0),
-        );
-    }
+    expand_sleepers(comp, q, &mut phi);
     phi
 }
 
@@ -319,18 +309,7 @@ fn energy_shares(
                     SpringKind::Ballast => eb += e,
                 }
             }
-            let parts = [solid[j][0], solid[j][1], ef, eb];
-            let tot: f64 = parts.iter().sum();
-            if tot > 0.0 {
-                TrackEnergyShares {
-                    rail: parts[0] / tot,
-                    sleepers: parts[1] / tot,
-                    fastening: parts[2] / tot,
-                    ballast: parts[3] / tot,
-                }
-            } else {
-                TrackEnergyShares::default()
-            }
+            TrackEnergyShares::from_energies([solid[j][0], solid[j][1], ef, eb])
         })
         .collect()
 }
@@ -355,32 +334,14 @@ pub fn passage_track_basis_timed(
             ),
         });
     }
-    let (t, c0) = (Instant::now(), process_cpu_s());
-    let k_red = reduced_stiffness(track, comp)?;
-    let (freqs, q) = reduced_modes(&k_red, fmax_hz)?;
-    let (reduced_s, c1) = (t.elapsed().as_secs_f64(), process_cpu_s());
-    let modes = expand_rows(comp, shapes.n_free, &q, &shapes.rail_rows);
-    let (expand_s, c2) = (t.elapsed().as_secs_f64() - reduced_s, process_cpu_s());
-    let energy = energy_shares(track, comp, &q, &modes);
-    let classes = shapes.classify(comp, &q, &energy);
-    let (seconds, c3) = (t.elapsed().as_secs_f64(), process_cpu_s());
-    let phases = BasisPhases {
-        reduced_s,
-        expand_s,
-        classify_s: seconds - reduced_s - expand_s,
-        reduced_cpu_s: c1 - c0,
-        expand_cpu_s: c2 - c1,
-        classify_cpu_s: c3 - c2,
-    };
-    let m = freqs.len();
-    let basis = ModalBasis {
-        frequencies_hz: freqs,
-        modes,
-        residuals: vec![f64::NAN; m],
-        sturm_count: m,
-        classes,
-        cached: false,
-        seconds,
-    };
-    Ok((basis, phases))
+    timed_basis(
+        track,
+        comp,
+        fmax_hz,
+        |q| expand_rows(comp, shapes.n_free, q, &shapes.rail_rows),
+        |q, modes| {
+            let energy = energy_shares(track, comp, q, modes);
+            Ok(shapes.classify(comp, q, &energy))
+        },
+    )
 }
