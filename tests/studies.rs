@@ -21,7 +21,7 @@ use corrugation::studies::initiation::{
 use corrugation::studies::speeds::{parse_speeds, Shard};
 use corrugation::studies::study::{run_study, Study};
 use corrugation::studies::sweep::{
-    merge, read_summary, speed_file, sweep, write_shard_plan, MapOptions,
+    merge, read_summary, speed_file, sweep, sweep_beside, write_shard_plan, MapOptions,
 };
 use corrugation::studies::{BoxError, StudiesError};
 use corrugation::units::kmh_to_ms;
@@ -329,6 +329,45 @@ fn map_ridges_lie_on_the_mode_lines() {
 
 /// Shards 0/3, 1/3, 2/3 merged (library and CLI) give exactly the files of the unsharded
 /// sweep, byte for byte, sweep.json included.
+/// The map options made beside the passages (`sweep_beside`, as the `sweep` command makes
+/// the coupled modes) give the files of `sweep` with the same options byte for byte, each
+/// speed is run once, and a failing option maker is reported after the passages, which are
+/// saved (a rerun resumes them).
+#[test]
+fn options_made_beside_the_passages_give_the_sweep_files() {
+    let tmp = tmpdir("beside");
+    let base = tmp.path().to_path_buf();
+    let speeds = parse_speeds("60:200:10").unwrap();
+    let runner = ModeLocked::default();
+    let (plain, beside) = (base.join("plain"), base.join("beside"));
+    sweep(&runner, &speeds, &plain, &opts(), KEY, &Silent).unwrap();
+    sweep_beside(&runner, &speeds, &beside, || Ok(opts()), KEY, &Silent).unwrap();
+    assert_eq!(runner.calls.load(Ordering::SeqCst), 2 * speeds.len());
+    let (a, b) = (tree(&plain), tree(&beside));
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    for (k, v) in &a {
+        assert!(v == &b[k], "{} differs", k.display());
+    }
+    let failing = base.join("failing");
+    let e = sweep_beside(
+        &runner,
+        &speeds,
+        &failing,
+        || Err("no coupled modes".into()),
+        KEY,
+        &Silent,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, StudiesError::MapLines(_)) && e.to_string().contains("no coupled modes"),
+        "{e}"
+    );
+    assert_eq!(runner.calls.load(Ordering::SeqCst), 3 * speeds.len());
+    let out = sweep_beside(&runner, &speeds, &failing, || Ok(opts()), KEY, &Silent).unwrap();
+    assert_eq!(out.stats.reused.len(), speeds.len());
+    assert_eq!(runner.calls.load(Ordering::SeqCst), 3 * speeds.len());
+}
+
 #[test]
 fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
     let tmp = tmpdir("merge");

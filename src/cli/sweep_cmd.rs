@@ -9,7 +9,7 @@ use clap::Args;
 use corrugation::studies::coupled::sweep_reference_speed_kmh;
 use corrugation::studies::grow::WHEEL_LINE_SHARE;
 use corrugation::studies::speeds::{parse_speeds, Shard};
-use corrugation::studies::sweep::{sweep, write_shard_plan, MapOptions};
+use corrugation::studies::sweep::{sweep_beside, write_shard_plan, MapOptions};
 
 use super::{engine, ModelArgs};
 
@@ -64,24 +64,31 @@ impl SweepCmd {
         let cache = self.cache.as_deref();
         // One modal model for both the mode lines and the passages.
         let prepared = engine::prepared(&model, cache)?;
-        // The coupled modes once, at a speed fixed by the whole sweep (shards agree).
-        let t_c = Instant::now();
+        // The coupled modes once, at a speed fixed by the whole sweep (shards agree),
+        // computed beside the first passages: they enter only the maps.
         let v_c = sweep_reference_speed_kmh(model.run.speed_kmh, &all);
-        let coupled = prepared.coupled_modes(corrugation::units::kmh_to_ms(v_c), &[])?;
-        eprintln!(
-            "sweep: coupled wheel–track modes at {v_c} km/h in {:.1} s",
-            t_c.elapsed().as_secs_f64()
-        );
-        let opts = MapOptions {
-            frequency_lines_hz: prepared.longitudinal_compression_hz(),
-            wheel_lines_hz: prepared.wheel_contact_modes_hz(WHEEL_LINE_SHARE),
-            coupled_speed_kmh: Some(v_c),
-            coupled_modes: coupled.visible(),
-            ..MapOptions::default()
+        let lines = || -> Result<MapOptions, corrugation::studies::BoxError> {
+            let t_c = Instant::now();
+            let coupled = prepared.coupled_modes(corrugation::units::kmh_to_ms(v_c), &[])?;
+            eprintln!(
+                "sweep: coupled wheel–track modes at {v_c} km/h in {:.1} s (beside the passages)",
+                t_c.elapsed().as_secs_f64()
+            );
+            Ok(MapOptions {
+                frequency_lines_hz: prepared.longitudinal_compression_hz(),
+                wheel_lines_hz: prepared.wheel_contact_modes_hz(WHEEL_LINE_SHARE),
+                coupled_speed_kmh: Some(v_c),
+                coupled_modes: coupled.visible(),
+                ..MapOptions::default()
+            })
         };
-        let runner: Box<dyn corrugation::dynamics::PassageRunner> = match self.engine {
-            engine::Engine::Reduced => Box::new(prepared),
-            engine::Engine::Explicit => engine::runner_for_engine(&model, cache, self.engine)?,
+        let explicit;
+        let runner: &dyn corrugation::dynamics::PassageRunner = match self.engine {
+            engine::Engine::Reduced => &prepared,
+            engine::Engine::Explicit => {
+                explicit = engine::runner_for_engine(&model, cache, self.engine)?;
+                explicit.as_ref()
+            }
         };
         // Resume only into a directory of the same model and program version.
         // (The explicit engine's results are never mixed with the reduced ones.)
@@ -94,7 +101,7 @@ impl SweepCmd {
             }
         );
         let pb = super::progress::bar("speed sweep");
-        let out = sweep(runner.as_ref(), &speeds, &self.out, &opts, &run_key, &pb)?;
+        let out = sweep_beside(runner, &speeds, &self.out, lines, &run_key, &pb)?;
         drop(pb);
         // Which shard of which sweep this directory holds: `merge` checks the shards form one.
         write_shard_plan(&self.out, &all, shard)?;

@@ -210,6 +210,24 @@ pub struct TrackEnergyShares {
     pub ballast: f64,
 }
 
+impl TrackEnergyShares {
+    /// The shares of the strain energies `[rail, sleepers, fastening, ballast]` (J); all zero
+    /// when their sum is not positive.
+    pub fn from_energies(parts: [f64; 4]) -> Self {
+        let tot: f64 = parts.iter().sum();
+        if tot > 0.0 {
+            TrackEnergyShares {
+                rail: parts[0] / tot,
+                sleepers: parts[1] / tot,
+                fastening: parts[2] / tot,
+                ballast: parts[3] / tot,
+            }
+        } else {
+            TrackEnergyShares::default()
+        }
+    }
+}
+
 /// Section resultants of one node plane (units of the mode shape: m for a displacement).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct SectionMotion {
@@ -229,6 +247,32 @@ pub struct SectionMotion {
     pub w: f64,
     /// Rotation about x (rad per unit of the mode scale).
     pub theta: f64,
+}
+
+/// Number of section sums per node plane ([`TrackClassifier::section_sum_terms`]).
+pub const SECTION_SUMS: usize = 6;
+
+/// Quadratic measures of a mode's shape that [`TrackClassifier::classify_measured`] reads.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ShapeNorms {
+    /// The rail's `Σ a l |u|²` ([`TrackClassifier::rail_norm_weights`]; m³ times the
+    /// displacement unit squared).
+    pub rail: f64,
+    /// `Σ m |u|²` over the sleepers' nodes (kg times the displacement unit squared).
+    pub sleeper_mass: f64,
+    /// `Σ m |u|²` over all nodes (same unit).
+    pub total_mass: f64,
+}
+
+impl ShapeNorms {
+    /// The sleepers' share of `Σ m |u|²` (0 when there is no motion).
+    pub fn sleeper_kinetic_share(&self) -> f64 {
+        if self.total_mass > 0.0 {
+            self.sleeper_mass / self.total_mass
+        } else {
+            0.0
+        }
+    }
 }
 
 /// Classification of one track mode.
@@ -463,34 +507,81 @@ impl TrackClassifier {
     /// Section resultants per node plane of a full displacement vector (length 3 n_nodes).
     pub fn section_motion(&self, u_full: &[f64]) -> Result<Vec<SectionMotion>, ClassifyError> {
         self.check_full(u_full)?;
-        let atot: f64 = self.group_area.iter().sum();
         Ok(self
             .plane_nodes
             .iter()
-            .zip(&self.planes_x_m)
-            .map(|(nodes, &x)| {
-                let mut gx = [0.0; 3];
-                let (mut v, mut w, mut num) = (0.0, 0.0, 0.0);
+            .enumerate()
+            .map(|(p, nodes)| {
+                let mut sums = [0.0; SECTION_SUMS];
                 for (j, &n) in nodes.iter().enumerate() {
                     let a = self.area[j];
                     let u = &u_full[3 * n..3 * n + 3];
-                    gx[self.group[j] as usize] += a * u[0];
-                    v += a * u[1];
-                    w += a * u[2];
-                    num += a * (self.dy[j] * u[2] - self.dz[j] * u[1]);
+                    sums[self.group[j] as usize] += a * u[0];
+                    sums[3] += a * u[1];
+                    sums[4] += a * u[2];
+                    sums[5] += a * (self.dy[j] * u[2] - self.dz[j] * u[1]);
                 }
-                SectionMotion {
-                    x_m: x,
-                    x_head: gx[0] / self.group_area[0],
-                    x_web: gx[1] / self.group_area[1],
-                    x_foot: gx[2] / self.group_area[2],
-                    x_mean: (gx[0] + gx[1] + gx[2]) / atot,
-                    v: v / atot,
-                    w: w / atot,
-                    theta: num / self.polar_m4,
-                }
+                self.section_motion_from_sums(p, &sums)
             })
             .collect())
+    }
+
+    /// The section sums of node plane `p`'s displacement that [`Self::section_motion`]
+    /// forms, as linear functionals of the full displacement vector: `(global DOF, sum,
+    /// coefficient)` with the sums `Σ a u_x` over the head, the web and the foot nodes,
+    /// `Σ a u_y`, `Σ a u_z` and `Σ a (dy u_z − dz u_y)` (indices 0–5; a in m², dy, dz in m).
+    pub fn section_sum_terms(&self, p: usize) -> Vec<(usize, usize, f64)> {
+        let mut t = Vec::with_capacity(5 * self.area.len());
+        for (j, &n) in self.plane_nodes[p].iter().enumerate() {
+            let a = self.area[j];
+            t.push((3 * n, self.group[j] as usize, a));
+            t.push((3 * n + 1, 3, a));
+            t.push((3 * n + 1, 5, -a * self.dz[j]));
+            t.push((3 * n + 2, 4, a));
+            t.push((3 * n + 2, 5, a * self.dy[j]));
+        }
+        t
+    }
+
+    /// Number of rail node planes.
+    pub fn n_planes(&self) -> usize {
+        self.plane_nodes.len()
+    }
+
+    /// The motion of node plane `p` from its section sums ([`Self::section_sum_terms`]).
+    pub fn section_motion_from_sums(&self, p: usize, s: &[f64; SECTION_SUMS]) -> SectionMotion {
+        let atot: f64 = self.group_area.iter().sum();
+        SectionMotion {
+            x_m: self.planes_x_m[p],
+            x_head: s[0] / self.group_area[0],
+            x_web: s[1] / self.group_area[1],
+            x_foot: s[2] / self.group_area[2],
+            x_mean: (s[0] + s[1] + s[2]) / atot,
+            v: s[3] / atot,
+            w: s[4] / atot,
+            theta: s[5] / self.polar_m4,
+        }
+    }
+
+    /// The weight of every rail DOF in the rail's squared norm that [`Self::classify_shape`]
+    /// reads (`Σ a l |u|²`: section node area a, m², times the plane's tributary length l,
+    /// m): `(global DOF, weight)`.
+    pub fn rail_norm_weights(&self) -> Vec<(usize, f64)> {
+        let mut w = Vec::with_capacity(3 * self.plane_nodes.len() * self.area.len());
+        for (nodes, &l) in self.plane_nodes.iter().zip(&self.plane_len) {
+            for (j, &n) in nodes.iter().enumerate() {
+                for d in 0..3 {
+                    w.push((3 * n + d, self.area[j] * l));
+                }
+            }
+        }
+        w
+    }
+
+    /// Lumped mass of every mesh node (kg) and whether it is a sleeper node: the weights of
+    /// the sleepers' kinetic share.
+    pub fn node_masses(&self) -> (&[f64], &[bool]) {
+        (&self.node_mass, &self.is_sleeper)
     }
 
     fn check_full(&self, u_full: &[f64]) -> Result<(), ClassifyError> {
@@ -568,18 +659,7 @@ impl TrackClassifier {
                     SpringKind::Ballast => eb += s.energy(u),
                 }
             }
-            let parts = [e[0], e[1], ef, eb];
-            let tot: f64 = parts.iter().sum();
-            let energy = if tot > 0.0 {
-                TrackEnergyShares {
-                    rail: parts[0] / tot,
-                    sleepers: parts[1] / tot,
-                    fastening: parts[2] / tot,
-                    ballast: parts[3] / tot,
-                }
-            } else {
-                TrackEnergyShares::default()
-            };
+            let energy = TrackEnergyShares::from_energies([e[0], e[1], ef, eb]);
             out.push(self.classify_shape(u, energy)?);
         }
         Ok(out)
@@ -598,10 +678,86 @@ impl TrackClassifier {
         energy: TrackEnergyShares,
     ) -> Result<TrackModeClass, ClassifyError> {
         let sm = self.section_motion(u_full)?;
-        let wl = &self.plane_len;
         let sleeper_kinetic_share = self.sleeper_kinetic_share(u_full);
         let (rail_rms, section_fit) = self.rail_fit(u_full, &sm);
-        let series = self.motion_series(&sm);
+        Ok(self.classify_motion(&sm, sleeper_kinetic_share, rail_rms, section_fit, energy))
+    }
+
+    /// Classifies from measures of a mode's shape: the section motions `sm` of every node
+    /// plane, the sleepers' kinetic share ([`ShapeNorms::sleeper_kinetic_share`]), and the
+    /// rail's squared norm `Σ a l |u|²` ([`Self::rail_norm_weights`], m³ times the unit of
+    /// the displacements squared), from which the rail's RMS displacement and the section
+    /// fit follow: the squared norm of the rigid-section fit's residual is
+    /// `Σ a l |u|² − Σ_p l_p (2 X_p − Y_p)` with `X_p = Σ a u·fit` and `Y_p = Σ a |fit|²`,
+    /// both quadratic in the plane's section motion. Used for modes given by their
+    /// component coordinates, whose section motions and norms are products of small matrices.
+    pub fn classify_measured(
+        &self,
+        sm: &[SectionMotion],
+        norms: ShapeNorms,
+        energy: TrackEnergyShares,
+    ) -> TrackModeClass {
+        let (rail_rms, section_fit) = self.rail_fit_from_motion(norms.rail, sm);
+        self.classify_motion(
+            sm,
+            norms.sleeper_kinetic_share(),
+            rail_rms,
+            section_fit,
+            energy,
+        )
+    }
+
+    /// [`Self::rail_fit`] from the rail's squared norm and the section motions.
+    fn rail_fit_from_motion(&self, norm: f64, sm: &[SectionMotion]) -> (f64, f64) {
+        let ns = self.area.len();
+        let (mut sa, mut sdy, mut sdz, mut sr2) = ([0.0; 3], 0.0, 0.0, 0.0);
+        for j in 0..ns {
+            let a = self.area[j];
+            sa[self.group[j] as usize] += a;
+            sdy += a * self.dy[j];
+            sdz += a * self.dz[j];
+            sr2 += a * (self.dy[j] * self.dy[j] + self.dz[j] * self.dz[j]);
+        }
+        let atot: f64 = self.group_area.iter().sum();
+        let sat: f64 = sa.iter().sum();
+        let mut explained = 0.0;
+        for (s, &l) in sm.iter().zip(&self.plane_len) {
+            let gx = [s.x_head, s.x_web, s.x_foot];
+            // X: Σ a u·fit = Σ_g gx_g Σ_g a u_x + v Σ a u_y + w Σ a u_z + θ Σ a (dy u_z − dz u_y)
+            let x: f64 = (0..3)
+                .map(|g| gx[g] * gx[g] * self.group_area[g])
+                .sum::<f64>()
+                + atot * (s.v * s.v + s.w * s.w)
+                + s.theta * s.theta * self.polar_m4;
+            // Y: Σ a [gx² + (v − θ dz)² + (w + θ dy)²]
+            let y: f64 = (0..3).map(|g| gx[g] * gx[g] * sa[g]).sum::<f64>()
+                + sat * (s.v * s.v + s.w * s.w)
+                + 2.0 * s.theta * (s.w * sdy - s.v * sdz)
+                + s.theta * s.theta * sr2;
+            explained += l * (2.0 * x - y);
+        }
+        let resid = norm - explained;
+        let ltot: f64 = self.plane_len.iter().sum();
+        let rail_rms = if ltot > 0.0 {
+            (norm.max(0.0) / (ltot * atot)).sqrt()
+        } else {
+            0.0
+        };
+        let section_fit = if norm > 0.0 { 1.0 - resid / norm } else { 0.0 };
+        (rail_rms, section_fit)
+    }
+
+    /// The family and the rest of a mode's class from its shape measures.
+    fn classify_motion(
+        &self,
+        sm: &[SectionMotion],
+        sleeper_kinetic_share: f64,
+        rail_rms: f64,
+        section_fit: f64,
+        energy: TrackEnergyShares,
+    ) -> TrackModeClass {
+        let wl = &self.plane_len;
+        let series = self.motion_series(sm);
         let scale = if rail_rms > 0.0 { 1.0 / rail_rms } else { 0.0 };
         let mut amplitudes = [0.0; 5];
         for (a, s) in amplitudes.iter_mut().zip(&series) {
@@ -639,7 +795,7 @@ impl TrackClassifier {
                     <= PINNED_PINNED_WAVELENGTH_TOL * 2.0 * self.spacing_m
             })
             && self.is_pinned_pinned(&series[2]);
-        Ok(TrackModeClass {
+        TrackModeClass {
             family,
             rail_x_head: rms(sm.iter().map(|s| s.x_head), wl) * scale,
             rail_x_web: rms(sm.iter().map(|s| s.x_web), wl) * scale,
@@ -651,7 +807,7 @@ impl TrackClassifier {
             section_fit,
             pinned_pinned,
             rail_family: Some(rail_family),
-        })
+        }
     }
 
     /// The sleepers' share of Σ m|u|² over all nodes of `u_full` (0 if there is no motion).

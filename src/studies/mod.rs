@@ -75,6 +75,9 @@ pub enum StudiesError {
     /// Map options that cannot be used.
     #[error("map options: {0}")]
     MapOptions(&'static str),
+    /// The map options made beside a sweep's passages (mode lines, coupled modes) failed.
+    #[error("the sweep's mode lines: {0}")]
+    MapLines(#[source] BoxError),
     /// The modal cache key of a study case's basis could not be formed.
     #[error("modal cache key: {0}")]
     CacheKey(#[source] crate::eigen::basis::BasisError),

@@ -90,6 +90,13 @@ pub enum SubstructureError {
         /// What it joins.
         what: String,
     },
+    /// The classification's rail planes or the passage's rows reach DOFs outside the
+    /// components.
+    #[error("{what}: the substructured basis cannot represent it; use basis = \"full\"")]
+    Rows {
+        /// Which rows, and where.
+        what: String,
+    },
     /// Bad options.
     #[error("substructure option {name} = {value}: {allowed}")]
     Option {
@@ -282,9 +289,11 @@ pub fn track_components(
 pub struct BasisPhases {
     /// The reduced stiffness, the dense reduced eigenproblem and its refinement.
     pub reduced_s: f64,
-    /// The expansion `Φ = ΨQ` to the track's free DOFs.
+    /// The expansion `Φ = ΨQ` to the track's free DOFs (for [`passage_track_basis_timed`],
+    /// to the rows the passage reads).
     pub expand_s: f64,
-    /// The classification of the expanded modes.
+    /// The classification of the modes (for [`passage_track_basis_timed`], with the energy
+    /// shares, from the component coordinates).
     pub classify_s: f64,
     /// Process CPU time during the reduced step.
     pub reduced_cpu_s: f64,
@@ -315,13 +324,31 @@ pub fn substructured_track_basis_timed(
     comp: &TrackComponents,
     fmax_hz: f64,
 ) -> Result<(ModalBasis<TrackModeClass>, BasisPhases), SubstructureError> {
+    timed_basis(
+        track,
+        comp,
+        fmax_hz,
+        |q| expand(comp, track.dofmap.n_free(), q),
+        |q, modes| classify_modes(track, comp, q, modes),
+    )
+}
+
+/// The reduced eigenproblem of `track` on `comp` below `fmax_hz`, its modes expanded by
+/// `expand(Q)` and classified by `classify(Q, Φ)`, with each step's wall and CPU time.
+fn timed_basis(
+    track: &TrackStructure,
+    comp: &TrackComponents,
+    fmax_hz: f64,
+    expand: impl FnOnce(&Mat<f64>) -> Mat<f64>,
+    classify: impl FnOnce(&Mat<f64>, &Mat<f64>) -> Result<Vec<TrackModeClass>, SubstructureError>,
+) -> Result<(ModalBasis<TrackModeClass>, BasisPhases), SubstructureError> {
     let (t, c0) = (Instant::now(), process_cpu_s());
     let k_red = reduced_stiffness(track, comp)?;
     let (freqs, q) = reduced_modes(&k_red, fmax_hz)?;
     let (reduced_s, c1) = (t.elapsed().as_secs_f64(), process_cpu_s());
-    let modes = expand(comp, track.dofmap.n_free(), &q);
+    let modes = expand(&q);
     let (expand_s, c2) = (t.elapsed().as_secs_f64() - reduced_s, process_cpu_s());
-    let classes = classify_modes(track, comp, &q, &modes)?;
+    let classes = classify(&q, &modes)?;
     let (seconds, c3) = (t.elapsed().as_secs_f64(), process_cpu_s());
     let phases = BasisPhases {
         reduced_s,
@@ -359,22 +386,7 @@ fn classify_modes(
     /// Modes classified per parallel task.
     const CHUNK: usize = 64;
     let classifier = TrackClassifier::new(track).map_err(BasisError::from)?;
-    let (nr, ns) = (comp.rail.omega2.len(), comp.sleeper.omega2.len());
-    let energy = |j: usize, first: usize, w2: &[f64]| -> f64 {
-        0.5 * w2
-            .iter()
-            .enumerate()
-            .map(|(c, w)| w * q[(first + c, j)].powi(2))
-            .sum::<f64>()
-    };
-    let solid: Vec<[f64; 2]> = (0..q.ncols())
-        .map(|j| {
-            let sleepers = (0..comp.sleeper_offsets.len())
-                .map(|i| energy(j, nr + i * ns, &comp.sleeper.omega2))
-                .sum();
-            [energy(j, 0, &comp.rail.omega2), sleepers]
-        })
-        .collect();
+    let solid = solid_energies(comp, q);
     let per_chunk: Vec<Vec<TrackModeClass>> = (0..q.ncols())
         .step_by(CHUNK)
         .collect::<Vec<_>>()
@@ -393,14 +405,39 @@ fn classify_modes(
     Ok(per_chunk.into_iter().flatten().collect())
 }
 
+/// The rail's and the sleepers' strain energies `[rail, sleepers]` of every mode `Φ = ΨQ`
+/// (J for the mode's amplitude): `½ Σ ω̃²_c Q_cj²` per component, since
+/// `Ψ_cᵀ K_c Ψ_c = diag(ω̃²)`.
+fn solid_energies(comp: &TrackComponents, q: &Mat<f64>) -> Vec<[f64; 2]> {
+    let (nr, ns) = (comp.rail.omega2.len(), comp.sleeper.omega2.len());
+    let energy = |j: usize, first: usize, w2: &[f64]| -> f64 {
+        0.5 * w2
+            .iter()
+            .enumerate()
+            .map(|(c, w)| w * q[(first + c, j)].powi(2))
+            .sum::<f64>()
+    };
+    (0..q.ncols())
+        .map(|j| {
+            let sleepers = (0..comp.sleeper_offsets.len())
+                .map(|i| energy(j, nr + i * ns, &comp.sleeper.omega2))
+                .sum();
+            [energy(j, 0, &comp.rail.omega2), sleepers]
+        })
+        .collect()
+}
+
 mod cache;
 mod components;
 mod reduced;
+mod shapes;
 
 pub use cache::{component_key, COMPONENT_REVISION};
 use cache::{load_component, store_component};
 use components::*;
+use reduced::expand_sleepers;
 pub use reduced::{expand, reduced_modes, reduced_stiffness};
+pub use shapes::{expand_rows, passage_track_basis_timed, ReducedShapes};
 
 #[cfg(test)]
 mod tests;

@@ -185,7 +185,7 @@ pub fn reduced_modes(
 /// The track's modes `Φ = Ψ Q` over its free DOFs (n × m).
 pub fn expand(comp: &TrackComponents, n_free: usize, q: &Mat<f64>) -> Mat<f64> {
     let m = q.ncols();
-    let (nr, ns) = (comp.rail.vectors.ncols(), comp.sleeper.vectors.ncols());
+    let nr = comp.rail.vectors.ncols();
     let mut phi = Mat::<f64>::zeros(n_free, m);
     let rows = comp.rail.vectors.nrows();
     matmul(
@@ -196,6 +196,13 @@ pub fn expand(comp: &TrackComponents, n_free: usize, q: &Mat<f64>) -> Mat<f64> {
         1.0,
         Par::rayon(0),
     );
+    expand_sleepers(comp, q, &mut phi);
+    phi
+}
+
+/// The sleepers' rows of `Φ = ΨQ`, written into `phi` (n_free × m).
+pub(super) fn expand_sleepers(comp: &TrackComponents, q: &Mat<f64>, phi: &mut Mat<f64>) {
+    let (nr, ns) = (comp.rail.vectors.ncols(), comp.sleeper.vectors.ncols());
     let sd = comp.sleeper.vectors.nrows();
     for (i, &o) in comp.sleeper_offsets.iter().enumerate() {
         matmul(
@@ -207,5 +214,4 @@ pub fn expand(comp: &TrackComponents, n_free: usize, q: &Mat<f64>) -> Mat<f64> {
             Par::rayon(0),
         );
     }
-    phi
 }

@@ -189,3 +189,97 @@ fn component_energies_classify_like_the_element_energies() {
     );
     assert!(worst < 1e-4, "{worst:e}");
 }
+
+/// The passage basis ([`passage_track_basis_timed`]) against the fully expanded and
+/// element-classified one ([`substructured_track_basis`]) on the small track, two railpad
+/// stiffnesses on one component set: frequencies bitwise equal (the same reduced
+/// eigenproblem); every expanded row (the rail's passage rows, every sleeper DOF) within
+/// 1e-12 of the column's largest entry of the full expansion, every other row NaN; the
+/// classes from the component coordinates with the same family, rail family and
+/// pinned-pinned flag for every mode, energy shares, section fit, sleeper kinetic share and
+/// the normalised amplitudes within 1e-9, and the wavelength within 1e-9 relative. (The
+/// section sums, norms and spring energies are the same sums in another order, so they
+/// differ by round-off only.)
+#[test]
+fn the_passage_basis_matches_the_full_expansion() {
+    let fmax = 2000.0;
+    let base = small(&[]);
+    let comp = build_components(
+        &TrackStructure::build(&base).unwrap(),
+        fmax,
+        &SubstructureOptions::default(),
+    )
+    .unwrap();
+    let mut shapes: Option<ReducedShapes> = None;
+    for k in [0.6e9, 2.0e9] {
+        let m = small(&[&format!("fastening.vertical_stiffness={k}")]);
+        let track = TrackStructure::build(&m).unwrap();
+        let shapes = shapes.get_or_insert_with(|| ReducedShapes::new(&track, &comp).unwrap());
+        let full = substructured_track_basis(&track, &comp, fmax).unwrap();
+        let (part, _) = passage_track_basis_timed(&track, &comp, shapes, fmax).unwrap();
+        assert_eq!(full.frequencies_hz, part.frequencies_hz, "k = {k:e}");
+        assert!(part.frequencies_hz.len() > 20);
+        let n_free = track.dofmap.n_free();
+        let mut read = vec![false; n_free];
+        for &r in shapes.rail_rows() {
+            read[r] = true;
+        }
+        for &o in &comp.sleeper_offsets {
+            read[o..o + comp.sleeper.vectors.nrows()].fill(true);
+        }
+        let rail_read = shapes.rail_rows().len();
+        assert!(
+            rail_read > 0 && rail_read < comp.rail.vectors.nrows() / 2,
+            "{rail_read}"
+        );
+        let mut worst_row: f64 = 0.0;
+        for j in 0..full.modes.ncols() {
+            let scale = full.modes.col(j).iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for (i, &r) in read.iter().enumerate() {
+                let (a, b) = (full.modes[(i, j)], part.modes[(i, j)]);
+                if r {
+                    worst_row = worst_row.max((a - b).abs() / scale);
+                } else {
+                    assert!(b.is_nan(), "row {i} of mode {j} is {b}, not NaN");
+                }
+            }
+        }
+        assert!(worst_row < 1e-12, "k = {k:e}: rows differ by {worst_row:e}");
+        let mut worst: f64 = 0.0;
+        for (j, (a, b)) in full.classes.iter().zip(&part.classes).enumerate() {
+            assert_eq!(
+                (a.family, a.rail_family, a.pinned_pinned),
+                (b.family, b.rail_family, b.pinned_pinned),
+                "k = {k:e}, mode {j}"
+            );
+            let (ea, eb) = (a.energy, b.energy);
+            let pairs = [
+                (ea.rail, eb.rail),
+                (ea.sleepers, eb.sleepers),
+                (ea.fastening, eb.fastening),
+                (ea.ballast, eb.ballast),
+                (a.section_fit, b.section_fit),
+                (a.sleeper_kinetic_share, b.sleeper_kinetic_share),
+                (a.rail_x_head, b.rail_x_head),
+                (a.rail_x_web, b.rail_x_web),
+                (a.rail_x_foot, b.rail_x_foot),
+            ];
+            for (x, y) in pairs
+                .into_iter()
+                .chain(a.amplitudes.into_iter().zip(b.amplitudes))
+            {
+                worst = worst.max((x - y).abs());
+            }
+            match (a.wavelength_m, b.wavelength_m) {
+                (Some(x), Some(y)) => assert!((x - y).abs() <= 1e-9 * x, "mode {j}: {x} vs {y}"),
+                (x, y) => assert_eq!(x, y, "mode {j}"),
+            }
+        }
+        eprintln!(
+            "k = {k:e}: {} modes, {rail_read} rail rows of {}, rows within {worst_row:e}, class measures within {worst:e}",
+            part.frequencies_hz.len(),
+            comp.rail.vectors.nrows()
+        );
+        assert!(worst < 1e-9, "k = {k:e}: {worst:e}");
+    }
+}

@@ -19,8 +19,8 @@ use crate::dynamics::{
 use crate::eigen::basis::cache_key;
 use crate::eigen::cache::{CacheKey, ModalCache};
 use crate::eigen::substructure::{
-    component_key, process_cpu_s, substructured_track_basis_timed, track_components, BasisPhases,
-    SubstructureOptions, TrackComponents,
+    component_key, passage_track_basis_timed, process_cpu_s, track_components, BasisPhases,
+    ReducedShapes, SubstructureOptions, TrackComponents,
 };
 use crate::model::Model;
 use crate::structure::TrackStructure;
@@ -147,6 +147,7 @@ pub struct CaseRunners {
     basis: StudyBasis,
     options: SubstructureOptions,
     components: Mutex<Option<(String, Arc<TrackComponents>)>>,
+    shapes: Mutex<Option<(String, Arc<ReducedShapes>)>>,
     statics: Mutex<Option<(String, Arc<StaticUpdater>)>>,
     /// The symbolic analysis of the track's `K` shared by the cases (their `K` differ in
     /// values only when the study changes stiffnesses).
@@ -163,7 +164,8 @@ pub struct CaseRunners {
 pub struct CasePhases {
     /// Building the case's track structure.
     pub structure_s: f64,
-    /// Loading (or building) the component bases; 0 when kept from an earlier case.
+    /// Loading (or building) the component bases and forming their classification
+    /// operators ([`ReducedShapes`]); 0 when kept from an earlier case.
     pub components_s: f64,
     /// The substructured basis: reduced eigenproblem, expansion, classification.
     pub basis: BasisPhases,
@@ -187,6 +189,7 @@ impl CaseRunners {
             basis: study.basis,
             options: study.substructure,
             components: Mutex::new(None),
+            shapes: Mutex::new(None),
             statics: Mutex::new(None),
             analysis: SharedStiffnessAnalysis::default(),
             static_update: false,
@@ -226,6 +229,20 @@ impl CaseRunners {
         })
     }
 
+    /// The classification operators and passage rows of the component set of `track`
+    /// ([`ReducedShapes`]), formed by the first case of a component set.
+    fn shapes(
+        &self,
+        m: &Model,
+        track: &TrackStructure,
+        comp: &TrackComponents,
+    ) -> Result<Arc<ReducedShapes>, BoxError> {
+        let key = component_key(m, m.run.fmax, &self.options, "rail-component")?.hex();
+        memoised(&self.shapes, key, "classification-operator memo", || {
+            Ok(ReducedShapes::new(track, comp)?)
+        })
+    }
+
     /// The reference factorisation for the cases with the spring layout of `track`
     /// ([`StaticUpdater`]): `track` becomes the reference when there is none for its
     /// component key.
@@ -246,9 +263,10 @@ impl CaseRunners {
                 let track = TrackStructure::build(m)?;
                 let structure_s = t.elapsed().as_secs_f64();
                 let comp = self.components(m, &track)?;
+                let shapes = self.shapes(m, &track, &comp)?;
                 let components_s = t.elapsed().as_secs_f64() - structure_s;
                 let c1 = process_cpu_s();
-                let (tb, basis) = substructured_track_basis_timed(&track, &comp, m.run.fmax)?;
+                let (tb, basis) = passage_track_basis_timed(&track, &comp, &shapes, m.run.fmax)?;
                 let (t1, c2) = (std::time::Instant::now(), process_cpu_s());
                 let t_ref = std::time::Instant::now();
                 let statics = if m.run.residual_flexibility && self.static_update {

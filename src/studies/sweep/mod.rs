@@ -63,7 +63,8 @@ pub use maps::{assemble, psd_at_wavenumber};
 pub use merge::{merge, read_record, write_shard_plan, ShardPlan, SHARD_PLAN_FILE};
 pub(crate) use run::panic_text;
 pub use run::{
-    check_run_key, read_summary, run_passages, speed_file, sweep, write_summary, RUN_KEY_FILE,
+    check_run_key, read_summary, run_passages, speed_file, sweep, sweep_beside, write_summary,
+    RUN_KEY_FILE,
 };
 
 use serde::{Deserialize, Serialize};

@@ -10,6 +10,7 @@ use rayon::prelude::*;
 use super::super::speeds::speed_file_stem;
 use super::{assemble, MapOptions, PassageStats, StudiesError, SweepOutcome};
 use crate::dynamics::{PassageRunner, PassageSummary};
+use crate::studies::BoxError;
 
 /// Path of a speed's summary file in a sweep directory.
 pub fn speed_file(dir: &Path, speed_kmh: f64) -> PathBuf {
@@ -144,6 +145,34 @@ pub fn sweep(
     opts.check()?;
     let stats = run_passages(runner, speeds_kmh, dir, run_key, progress)?;
     let (record, maps) = assemble(dir, speeds_kmh, opts)?;
+    Ok(SweepOutcome {
+        record,
+        maps,
+        stats,
+    })
+}
+
+/// [`sweep`] with the map options made by `options` beside the passages: `options` (e.g.
+/// the coupled wheel–track modes, several seconds of serial work) runs on one thread of
+/// the rayon pool while the passages start on the others, and the maps are assembled when
+/// both are done. The options enter only the assembly, so the outputs are those of
+/// [`sweep`] with the same options. When `options` fails, the passages still finish and
+/// are saved (a rerun resumes) and its error is returned.
+pub fn sweep_beside(
+    runner: &dyn PassageRunner,
+    speeds_kmh: &[f64],
+    dir: &Path,
+    options: impl FnOnce() -> Result<MapOptions, BoxError> + Send,
+    run_key: &str,
+    progress: &dyn Progress,
+) -> Result<SweepOutcome, StudiesError> {
+    let (opts, stats) = rayon::join(options, || {
+        run_passages(runner, speeds_kmh, dir, run_key, progress)
+    });
+    let opts = opts.map_err(StudiesError::MapLines)?;
+    opts.check()?;
+    let stats = stats?;
+    let (record, maps) = assemble(dir, speeds_kmh, &opts)?;
     Ok(SweepOutcome {
         record,
         maps,
