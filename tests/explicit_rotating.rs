@@ -171,7 +171,7 @@ fn thin_ring_pair_splits_as_bryan_says() {
     }
     let wn = w1;
     let omega = 0.05 * wn;
-    let spin = SpinFrame::new(&op, &dm, 0..mesh.nodes.len(), omega).unwrap();
+    let spin = SpinFrame::new(&op, &dm, &mesh.nodes, 0..mesh.nodes.len(), omega).unwrap();
     let against = wave_frequency(&op, &spin, [&p1, &p2], 1.0, wn, 6.0);
     let with = -wave_frequency(&op, &spin, [&p1, &p2], -1.0, wn, 6.0);
     let nn = 2.0;
@@ -215,7 +215,7 @@ fn undamped_spinning_wheel_conserves_the_discrete_energy() {
     let op = ExplicitOperator::new(fm.k.as_ref(), fm.m.as_ref(), fm.c.as_ref()).unwrap();
     let omega = 140.0 / 3.6 / model.wheel.radius;
     let ring = (0..wheel.mesh.nodes.len()).filter(|&nd| nd != wheel.sprung_node);
-    let spin = SpinFrame::new(&op, &wheel.dofmap, ring, omega).unwrap();
+    let spin = SpinFrame::new(&op, &wheel.dofmap, &wheel.mesh.nodes, ring, omega).unwrap();
     let n = op.n();
     let mut s: u64 = 987654321;
     let mut u: Vec<f64> = (0..n)
