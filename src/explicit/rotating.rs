@@ -3,16 +3,21 @@
 //! the origin), with the Coriolis (gyroscopic) and spin-softening terms
 //!
 //! ```text
-//! M ü + (C + 2Ω G) u̇ + (K − Ω² M_⊥) u = f(t),   G = M J,  J u = ŷ × u,  M_⊥ u = M (u_x, 0, u_z)
+//! M ü + (C + 2Ω G) u̇ + (K − Ω² S) u = f(t),   G = M J,  J u = ŷ × u,
+//! S = M_⊥ − M â âᵀ M,  M_⊥ u = M (u_x, 0, u_z)
 //! ```
 //!
 //! (`u` in the spinning frame's components; `G` is skew with a lumped mass, so the Coriolis
-//! force does no work). The centrifugal load of the undeformed wheel and the stress
-//! stiffening it causes are left out (relative order `Ω²/ω²` of the lowest wheel mode, below
-//! 0.2 % at 140 km/h). The central difference takes the Coriolis term at the mean of the two
-//! half-step velocities (implicit midpoint in that term only: per node a 2×2 rotation of the
-//! half-step velocity, a Cayley transform), which keeps the scheme's discrete energy
-//! `½ v_{k+½}ᵀ M v_{k+½} + ½ u_kᵀ (K − Ω² M_⊥) u_{k+1}` exactly conserved without damping and
+//! force does no work; `â` the M-normalised rigid rotation about the axle). The centrifugal
+//! load of the undeformed wheel and the stress stiffening it causes are left out (relative
+//! order `Ω²/ω²` of the lowest wheel mode, below 0.2 % at 140 km/h), except the stress
+//! stiffening's action on the rigid rotation about the axle, `Ω² M â âᵀ M`, which cancels
+//! the spin softening on it exactly: a body spinning freely is neutral to a turn about its
+//! axis (without it the turn would be an unstable mode growing as `cosh Ωt`). The central
+//! difference takes the Coriolis term at the mean of the two half-step velocities
+//! (implicit midpoint in that term only: per node a 2×2 rotation of the half-step
+//! velocity, a Cayley transform), which keeps the scheme's discrete energy
+//! `½ v_{k+½}ᵀ M v_{k+½} + ½ u_kᵀ (K − Ω² S) u_{k+1}` exactly conserved without damping and
 //! load, and leaves the stable step of the non-rotating wheel unchanged.
 //!
 //! In the spinning frame the ground-fixed loads rotate (gravity, the train's resistance on
