@@ -271,7 +271,7 @@ fn axial_rotation(pairs: &[(usize, usize, f64)], mut raw: Vec<[f64; 2]>) -> Vec<
         .zip(&raw)
         .map(|(p, r)| p.2 * (r[0] * r[0] + r[1] * r[1]))
         .sum();
-    if !(norm2 > 0.0) {
+    if norm2.is_nan() || norm2 <= 0.0 {
         return vec![[0.0; 2]; pairs.len()];
     }
     let k = 1.0 / norm2.sqrt();
