@@ -3,16 +3,21 @@
 //! the origin), with the Coriolis (gyroscopic) and spin-softening terms
 //!
 //! ```text
-//! M ü + (C + 2Ω G) u̇ + (K − Ω² M_⊥) u = f(t),   G = M J,  J u = ŷ × u,  M_⊥ u = M (u_x, 0, u_z)
+//! M ü + (C + 2Ω G) u̇ + (K − Ω² S) u = f(t),   G = M J,  J u = ŷ × u,
+//! S = M_⊥ − M â âᵀ M,  M_⊥ u = M (u_x, 0, u_z)
 //! ```
 //!
 //! (`u` in the spinning frame's components; `G` is skew with a lumped mass, so the Coriolis
-//! force does no work). The centrifugal load of the undeformed wheel and the stress
-//! stiffening it causes are left out (relative order `Ω²/ω²` of the lowest wheel mode, below
-//! 0.2 % at 140 km/h). The central difference takes the Coriolis term at the mean of the two
-//! half-step velocities (implicit midpoint in that term only: per node a 2×2 rotation of the
-//! half-step velocity, a Cayley transform), which keeps the scheme's discrete energy
-//! `½ v_{k+½}ᵀ M v_{k+½} + ½ u_kᵀ (K − Ω² M_⊥) u_{k+1}` exactly conserved without damping and
+//! force does no work; `â` the M-normalised rigid rotation about the axle). The centrifugal
+//! load of the undeformed wheel and the stress stiffening it causes are left out (relative
+//! order `Ω²/ω²` of the lowest wheel mode, below 0.2 % at 140 km/h), except the stress
+//! stiffening's action on the rigid rotation about the axle, `Ω² M â âᵀ M`, which cancels
+//! the spin softening on it exactly: a body spinning freely is neutral to a turn about its
+//! axis (without it the turn would be an unstable mode growing as `cosh Ωt`). The central
+//! difference takes the Coriolis term at the mean of the two half-step velocities
+//! (implicit midpoint in that term only: per node a 2×2 rotation of the half-step
+//! velocity, a Cayley transform), which keeps the scheme's discrete energy
+//! `½ v_{k+½}ᵀ M v_{k+½} + ½ u_kᵀ (K − Ω² S) u_{k+1}` exactly conserved without damping and
 //! load, and leaves the stable step of the non-rotating wheel unchanged.
 //!
 //! In the spinning frame the ground-fixed loads rotate (gravity, the train's resistance on
@@ -95,6 +100,10 @@ pub struct SpinFrame {
     omega: f64,
     /// Free indices of the x and z DOF of each spinning node, and its lumped mass (kg).
     pairs: Vec<(usize, usize, f64)>,
+    /// The rigid rotation about the spin axis over the spinning nodes (x and z components
+    /// per node, 1/√kg): `ŷ × X`, M-orthogonal to the x and z translations and
+    /// M-normalised. The spin softening is not applied to it (see [`SpinFrame::step`]).
+    axial: Vec<[f64; 2]>,
 }
 
 /// Scratch of [`SpinFrame::step`] (allocated once).
@@ -107,11 +116,13 @@ pub struct SpinScratch {
 
 impl SpinFrame {
     /// The spin at `omega` (rad/s, positive about +y) of `nodes` of a substructure with the
-    /// operator `op` and DOF map `dofmap`. Every spinning node needs free x and z DOFs with
-    /// equal lumped masses (so that the Coriolis matrix is skew).
+    /// operator `op`, DOF map `dofmap` and node positions `positions` (m). Every spinning
+    /// node needs free x and z DOFs with equal lumped masses (so that the Coriolis matrix is
+    /// skew).
     pub fn new(
         op: &ExplicitOperator,
         dofmap: &DofMap,
+        positions: &[[f64; 3]],
         nodes: impl IntoIterator<Item = usize>,
         omega: f64,
     ) -> Result<Self, ExplicitError> {
@@ -120,6 +131,7 @@ impl SpinFrame {
         }
         let m = op.mass();
         let mut pairs = Vec::new();
+        let mut axial = Vec::new();
         for node in nodes {
             let (Some(ix), Some(iz)) =
                 (dofmap.free_index(3 * node), dofmap.free_index(3 * node + 2))
@@ -135,8 +147,25 @@ impl SpinFrame {
                 .into());
             }
             pairs.push((ix, iz, m[ix]));
+            // ŷ × X = (z, 0, −x).
+            let p = positions[node];
+            axial.push([p[2], -p[0]]);
         }
-        Ok(SpinFrame { omega, pairs })
+        Ok(SpinFrame {
+            omega,
+            axial: axial_rotation(&pairs, axial),
+            pairs,
+        })
+    }
+
+    /// The M-weighted rigid rotation about the spin axis contained in `u` (m·√kg): the
+    /// coefficient of [`SpinFrame::axial`].
+    fn axial_part(&self, u: &[f64]) -> f64 {
+        self.pairs
+            .iter()
+            .zip(&self.axial)
+            .map(|(&(ix, iz, m), r)| m * (r[0] * u[ix] + r[1] * u[iz]))
+            .sum()
     }
 
     /// The spin rate (rad/s).
@@ -174,12 +203,14 @@ impl SpinFrame {
         let w = self.omega;
         sc.f.copy_from_slice(f);
         let w2 = w * w;
-        for (p, &(ix, iz, m)) in self.pairs.iter().enumerate() {
+        let c = self.axial_part(u);
+        for (p, (&(ix, iz, m), r)) in self.pairs.iter().zip(&self.axial).enumerate() {
             let (vx, vz) = (v[ix], v[iz]);
             sc.v_old[p] = [vx, vz];
-            // −Ω² M_⊥ u moved to the load side; −2Ω m ŷ × v with ŷ × v = (v_z, 0, −v_x).
-            sc.f[ix] += m * (w2 * u[ix] - 2.0 * w * vz);
-            sc.f[iz] += m * (w2 * u[iz] + 2.0 * w * vx);
+            // −Ω² M_⊥ (u − a aᵀM u) moved to the load side (a the axial rotation); −2Ω m ŷ × v
+            // with ŷ × v = (v_z, 0, −v_x).
+            sc.f[ix] += m * (w2 * (u[ix] - c * r[0]) - 2.0 * w * vz);
+            sc.f[iz] += m * (w2 * (u[iz] - c * r[1]) + 2.0 * w * vx);
         }
         op.step(dt, u, v, &sc.f, &mut sc.op);
         let h = w * dt;
@@ -198,9 +229,9 @@ impl SpinFrame {
     }
 
     /// The scheme's conserved energy (J) between `u_k` (`u_prev`) and `u_{k+1}` (`u`) with
-    /// the half-step velocity `v = v_{k+½}`: `½ vᵀMv + ½ u_kᵀ K u_{k+1} − ½ Ω² u_kᵀ M_⊥ u_{k+1}`
-    /// (kinetic energy relative to the spinning frame, strain energy, centrifugal potential);
-    /// `ku` is scratch of length n.
+    /// the half-step velocity `v = v_{k+½}`: `½ vᵀMv + ½ u_kᵀ K u_{k+1} − ½ Ω² u_kᵀ S u_{k+1}`
+    /// with `S = M_⊥ − M a aᵀ M` (kinetic energy relative to the spinning frame, strain
+    /// energy, centrifugal potential; `a` the axial rotation); `ku` is scratch of length n.
     pub fn discrete_energy(
         &self,
         op: &ExplicitOperator,
@@ -220,9 +251,31 @@ impl SpinFrame {
             .pairs
             .iter()
             .map(|&(ix, iz, m)| m * (u_prev[ix] * u[ix] + u_prev[iz] * u[iz]))
-            .sum();
+            .sum::<f64>()
+            - self.axial_part(u_prev) * self.axial_part(u);
         op.kinetic_energy(v) + strain - 0.5 * self.omega * self.omega * centrifugal
     }
+}
+
+/// The rigid rotation `ŷ × X` (`raw`, x and z per spinning node of `pairs`) made
+/// M-orthogonal to the x and z translations of the spinning nodes and M-normalised; zero
+/// when it has no mass (no nodes, or all on the axis).
+fn axial_rotation(pairs: &[(usize, usize, f64)], mut raw: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    let mass: f64 = pairs.iter().map(|p| p.2).sum();
+    for c in 0..2 {
+        let mean = pairs.iter().zip(&raw).map(|(p, r)| p.2 * r[c]).sum::<f64>() / mass;
+        raw.iter_mut().for_each(|r| r[c] -= mean);
+    }
+    let norm2: f64 = pairs
+        .iter()
+        .zip(&raw)
+        .map(|(p, r)| p.2 * (r[0] * r[0] + r[1] * r[1]))
+        .sum();
+    if norm2.is_nan() || norm2 <= 0.0 {
+        return vec![[0.0; 2]; pairs.len()];
+    }
+    let k = 1.0 / norm2.sqrt();
+    raw.iter().map(|r| [k * r[0], k * r[1]]).collect()
 }
 
 /// `(cos α, sin α)` of a rotation about +y by `α` (rad): ground components of a spinning-frame
@@ -423,7 +476,7 @@ impl RotatingWheel {
         let nm = topo.meridian.len();
         let nt = topo.thetas.len();
         let ring = (0..nt).flat_map(|k| (0..nm).map(move |m| topo.node(k, m)));
-        let spin = SpinFrame::new(p.op, &w.dofmap, ring, omega)?;
+        let spin = SpinFrame::new(p.op, &w.dofmap, &w.mesh.nodes, ring, omega)?;
         let planes = tread_planes(w, p.contact_nodes)?;
         let n = p.op.n();
         let mut ground = vec![0.0; n];
