@@ -585,6 +585,43 @@ fn jacobi_preconditioned_tangential_solver_matches_the_plain_one() {
     );
 }
 
+#[test]
+fn circle_start_gives_the_solution_of_the_plain_warm_start() {
+    // The same transient sequence (load 100 kN ± 10 %, corrugated rail, lateral creepage,
+    // spin, a varying longitudinal creepage) with the last step's slip elements started on
+    // their new circle and without, and the reference: the plain warm start at a 1000×
+    // tighter tolerance. The start changes the path, not the solution.
+    let cfg = rolling_config(24, 18, 1.4);
+    let dx = cfg.grid.dx();
+    let mut runs = Vec::new();
+    for (circle, tol) in [
+        (true, cfg.tangential_tol),
+        (false, cfg.tangential_tol),
+        (false, 1e-3 * cfg.tangential_tol),
+    ] {
+        let mut eng = TransientRolling::new(TransientConfig {
+            tangential_tol: tol,
+            ..cfg
+        })
+        .unwrap();
+        eng.set_circle_start(circle);
+        // products counted from step 20 on: the warm-started regime of a passage
+        runs.push(transient_sequence(&mut eng, dx, 80, 20, |k| {
+            -1.5e-3 + 2e-4 * (0.3 * k as f64).sin()
+        }));
+    }
+    let diff = |a: usize, b: usize| force_power_difference(&runs[a].0, &runs[b].0);
+    let (circle, plain) = (diff(0, 2), diff(1, 2));
+    println!(
+        "tangential FFT pairs (steps 20..80): circle start {}, plain {} (reference {}); vs \
+         reference (force/µN, power rel.): circle {circle:?}, plain {plain:?}",
+        runs[0].1, runs[1].1, runs[2].1
+    );
+    assert!(circle.0 < 1e-6 && circle.1 < 1e-5, "{circle:?}");
+    assert!(plain.0 < 1e-6 && plain.1 < 1e-5, "{plain:?}");
+    assert!(runs[0].1 < runs[1].1, "{} vs {}", runs[0].1, runs[1].1);
+}
+
 /// Drives `eng` through `steps` transient steps of the tangential-solver comparisons: normal
 /// load 100 kN ± 10 %, a 30 mm rail corrugation of 5 µm, longitudinal creepage `creep(k)`,
 /// lateral creepage 0.8e-3 and spin 0.3 1/m. Returns `(F_x, F_y, frictional power)` per step
