@@ -96,6 +96,9 @@ pub struct TransientRolling {
     g_mod: f64,
     /// Series compliances `(c_x, c_y, c_z)` (m/N).
     series_c: [f64; 3],
+    /// Whether the warm start puts the last step's slip elements on their new circle
+    /// ([`Self::set_circle_start`]).
+    circle_start: bool,
 }
 
 impl TransientRolling {
@@ -143,6 +146,7 @@ impl TransientRolling {
             steps: 0,
             g_mod: gm,
             series_c: [0.0; 3],
+            circle_start: true,
             cfg,
         })
     }
@@ -183,6 +187,13 @@ impl TransientRolling {
     /// [`TangentialSolver::solve`]); off only to compare.
     pub fn set_tangential_jacobi(&mut self, on: bool) {
         self.tang.jacobi = on;
+    }
+
+    /// Whether the warm start of a step puts the elements that slipped in the last step on the
+    /// circle of their new traction bound (default on); off only to compare. The solution is
+    /// the same within the solver's tolerance; the start needs fewer influence products.
+    pub fn set_circle_start(&mut self, on: bool) {
+        self.circle_start = on;
     }
 
     /// Sets the rolling speed `V` (m/s, finite and > 0) from the next step on: it fixes the
@@ -412,7 +423,11 @@ impl TransientRolling {
     /// The warm start of the tangential solve: the traction extrapolated linearly in time
     /// from the last two steps (the solver projects it onto the new traction bound) where it
     /// changed by more than the solver tolerance; elsewhere the last traction (so that steady
-    /// rolling stays an exact fixed point of the step).
+    /// rolling stays an exact fixed point of the step). With [`Self::set_circle_start`] (the
+    /// default) an element that slipped in the last step starts on the circle of its new bound
+    /// `|τ| = µ p` in the extrapolated direction: the slip/adhesion split is carried over as
+    /// well as the traction, so a slip element whose bound grew does not start inside its
+    /// disc as an adhesion element that the solver must push out again (docs/theory.md §6.5).
     fn warm_start(&mut self) {
         if self.steps < 2 {
             return;
@@ -423,13 +438,23 @@ impl TransientRolling {
                 self.tx_prev[e] - self.tx_pp[e],
                 self.ty_prev[e] - self.ty_pp[e],
             );
-            if dx.abs().max(dy.abs()) > thr {
-                self.tx[e] = self.tx_prev[e] + dx;
-                self.ty[e] = self.ty_prev[e] + dy;
+            let (mut tx, mut ty) = if dx.abs().max(dy.abs()) > thr {
+                (self.tx_prev[e] + dx, self.ty_prev[e] + dy)
             } else {
-                self.tx[e] = self.tx_prev[e];
-                self.ty[e] = self.ty_prev[e];
+                (self.tx_prev[e], self.ty_prev[e])
+            };
+            let g = self.g[e];
+            if self.circle_start && self.state[e] == STATE_SLIP && g > 0.0 {
+                // inside the new disc by more than the solver's slip test: onto the circle
+                // (outside it, the solver's projection does the same)
+                let m2 = tx * tx + ty * ty;
+                if m2 > 0.0 && m2 < g * g * (1.0 - 1e-12) {
+                    let s = g / m2.sqrt();
+                    (tx, ty) = (tx * s, ty * s);
+                }
             }
+            self.tx[e] = tx;
+            self.ty[e] = ty;
         }
     }
 
