@@ -457,8 +457,10 @@ pub(super) struct RotatingWheel {
     slots: [PlaneResponse; 2],
     f: Vec<f64>,
     fk: Vec<f64>,
-    /// The contact's place during the current contact step (held at its end).
+    /// The contact's place during the current contact step (held at its end), and at the
+    /// step's start.
     at: OnWheel,
+    at_start: OnWheel,
     /// The tread's local compliance whose variation is removed (`None`: kept).
     local: Option<WheelLocalCompliance>,
 }
@@ -510,6 +512,11 @@ impl RotatingWheel {
                 s: 0.0,
                 cs: [1.0, 0.0],
             },
+            at_start: OnWheel {
+                j: 0,
+                s: 0.0,
+                cs: [1.0, 0.0],
+            },
             local: p.local.cloned(),
         })
     }
@@ -533,6 +540,18 @@ impl RotatingWheel {
         self.local
             .as_ref()
             .and_then(|l| l.variation(self.at))
+            .unwrap_or([0.0; 3])
+    }
+
+    /// The convective part of the tread's static deflection over the current step (m,
+    /// contact frame; after [`Self::advance`]) under the held force `f` (N, contact frame,
+    /// on the wheel): the displacement increment of the material point under the contact
+    /// as the force moves from the step's start angle to its end angle. Zero when the
+    /// local compliance is kept (`explicit.local_compliance = "mesh"`).
+    pub(super) fn convective(&self, f: [f64; 3]) -> [f64; 3] {
+        self.local
+            .as_ref()
+            .and_then(|l| l.convective(self.at, self.at_start, f))
             .unwrap_or([0.0; 3])
     }
 
@@ -617,6 +636,7 @@ impl RotatingWheel {
         t_end: f64,
     ) {
         self.at = self.locate(t_end);
+        self.at_start = self.locate(t_end - self.steps as f64 * self.dt);
         let frs = fc.map(|g| to_spinning(self.at.cs, self.ground_of(g)));
         let t0 = t_end - self.steps as f64 * self.dt;
         for k in 0..self.steps {

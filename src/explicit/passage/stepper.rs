@@ -492,8 +492,11 @@ impl<'a> Stepper<'a> {
         let [ur_old, uw_old] = pred.old;
         let [ur_new, uw_new] = pred.new;
         let delta = ur_new[2] - uw_new[2] + self.series[2] * f[2];
-        let xi = ((uw_new[0] - uw_old[0]) - (ur_new[0] - ur_old[0])) / (p.v * p.dt_c);
-        let eta = ((uw_new[1] - uw_old[1]) - (ur_new[1] - ur_old[1])) / (p.v * p.dt_c);
+        // The rotating wheel's contact is relieved of the faceted tread's convective static
+        // deflection, as the fixed wheel's contact (which does not move on the wheel) is.
+        let conv = self.rot.as_ref().map_or([0.0; 3], |r| r.convective(f));
+        let xi = ((uw_new[0] - uw_old[0] - conv[0]) - (ur_new[0] - ur_old[0])) / (p.v * p.dt_c);
+        let eta = ((uw_new[1] - uw_old[1] - conv[1]) - (ur_new[1] - ur_old[1])) / (p.v * p.dt_c);
         let r = self
             .contact
             .step(&StepInputs {

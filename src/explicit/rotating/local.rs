@@ -36,10 +36,12 @@ const PLANES_PER_SOLVE: usize = 8;
 /// reference compliance `g_d(0)`.
 #[derive(Clone, Debug)]
 pub(crate) struct WheelLocalCompliance {
-    /// Per angle plane `k`: `C_kk` and `C_k,k+1` (the next plane in angle, cyclically);
-    /// `None` where the contact does not travel.
+    /// Per angle plane `k`: `C_kk`, `C_k,k+1` and `C_k,k+2` (the next planes in angle,
+    /// cyclically; `[c][c']` the displacement along `c'` at the other plane under a unit
+    /// load along `c` at `k`); `None` where the contact does not travel.
     diag: Vec<Option<Block>>,
     cross: Vec<Option<Block>>,
+    cross2: Vec<Option<Block>>,
     /// The contact frame's axes in ground components.
     axes: [[f64; 3]; 3],
     /// `g_d` at θ = 0 (m/N).
@@ -81,6 +83,7 @@ impl WheelLocalCompliance {
         let needed: Vec<usize> = (0..=span.min(nt - 1)).map(|i| (k0 + i) % nt).collect();
         let mut diag = vec![None; nt];
         let mut cross = vec![None; nt];
+        let mut cross2 = vec![None; nt];
         for chunk in needed.chunks(PLANES_PER_SOLVE) {
             let mut loads: Vec<Vec<f64>> = Vec::with_capacity(3 * chunk.len());
             for &k in chunk {
@@ -100,11 +103,13 @@ impl WheelLocalCompliance {
                 let block = |nodes: &PlaneNodes| -> Block { [0, 1, 2].map(|c| read(nodes, &u[c])) };
                 diag[k] = Some(block(&planes[k]));
                 cross[k] = Some(block(&planes[(k + 1) % nt]));
+                cross2[k] = Some(block(&planes[(k + 2) % nt]));
             }
         }
         let mut lc = WheelLocalCompliance {
             diag,
             cross,
+            cross2,
             axes,
             reference: [0.0; 3],
             phi_max: if span + 1 >= nt {
@@ -148,6 +153,65 @@ impl WheelLocalCompliance {
         }))
     }
 
+    /// The block from a unit load at plane `load` to the displacement at plane `read`
+    /// (`[c][c']`: along `c'` under a load along `c`; planes at most two apart, by
+    /// reciprocity for a read behind the load); `None` where not computed or farther apart.
+    fn block(&self, read: i64, load: i64) -> Option<Block> {
+        let nt = self.diag.len() as i64;
+        let (r, l) = (read.rem_euclid(nt) as usize, load.rem_euclid(nt) as usize);
+        let tr = |b: Block| -> Block { [0, 1, 2].map(|c| [0, 1, 2].map(|cp| b[cp][c])) };
+        match read - load {
+            0 => self.diag[l],
+            1 => self.cross[l],
+            2 => self.cross2[l],
+            -1 => self.cross[r].map(tr),
+            -2 => self.cross2[r].map(tr),
+            _ => None,
+        }
+    }
+
+    /// The static displacement (m, contact-frame components in the ground frame of the
+    /// state at `load`) of the material point at `read` under the contact force `f` (N,
+    /// contact frame) at `load`, with the wheel turned to `load`'s angle (the state in
+    /// which the force acts there); `None` where the blocks were not computed.
+    fn transfer(&self, read: OnWheel, load: OnWheel, f: [f64; 3]) -> Option<[f64; 3]> {
+        let mut ground = [0.0; 3];
+        for (e, fe) in f.iter().enumerate() {
+            for c in 0..3 {
+                ground[c] += fe * self.axes[e][c];
+            }
+        }
+        let fr = super::to_spinning(load.cs, ground);
+        let mut disp = [0.0; 3];
+        for (i, wi) in [(read.j, 1.0 - read.s), (read.j + 1, read.s)] {
+            for (j, wj) in [(load.j, 1.0 - load.s), (load.j + 1, load.s)] {
+                if wi * wj == 0.0 {
+                    continue;
+                }
+                let b = self.block(i, j)?;
+                for c in 0..3 {
+                    for cp in 0..3 {
+                        disp[cp] += wi * wj * fr[c] * b[c][cp];
+                    }
+                }
+            }
+        }
+        let g = super::to_ground(load.cs, disp);
+        Some(self.axes.map(|a| a[0] * g[0] + a[1] * g[1] + a[2] * g[2]))
+    }
+
+    /// The convective part of the static deflection over a contact step (m, contact
+    /// frame): the displacement increment of the material point at `new` when the force
+    /// `f` (N, contact frame) held on the wheel moves from `old` to `new`,
+    /// `L(new, new) f − L(new, old) f`. Zero on an axisymmetric wheel up to a constant; on
+    /// the faceted tread it varies within each segment (docs/theory.md §8.7). `None` where
+    /// the blocks were not computed.
+    pub(super) fn convective(&self, new: OnWheel, old: OnWheel, f: [f64; 3]) -> Option<[f64; 3]> {
+        let a = self.transfer(new, new, f)?;
+        let b = self.transfer(new, old, f)?;
+        Some([0, 1, 2].map(|d| a[d] - b[d]))
+    }
+
     /// `g_d(φ) − g_d(0)` (m/N) with the contact at `at`; `None` where not computed.
     pub(super) fn variation(&self, at: OnWheel) -> Option<[f64; 3]> {
         let g = self.g(at)?;
@@ -157,30 +221,54 @@ impl WheelLocalCompliance {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{locate_angle, to_spinning};
+    use super::super::{locate_angle, to_spinning, PlaneNodes};
     use crate::dynamics::reduced::add_nodes_load;
     use crate::dynamics::wheel_residual::{elastic_flexibility, FreeBody};
     use crate::explicit::{ExplicitModel, ExplicitOptions};
     use crate::model::{load_model, test_problems::SMALL_MODEL, ExplicitWheel, ModelSource};
     use faer::Mat;
 
-    /// The tread compliance `g_d(φ)` at angle planes and between them against an independent
-    /// inertia-relief solve over the wheel body's mass (`elastic_flexibility`: its own
-    /// statically determinate supports, Gram–Schmidt and factorisation) of the
-    /// angle-interpolated load on the small wheel; the compliance
-    /// with the variation removed is the reference at every angle, and the reference is the
-    /// fixed wheel's compliance at its contact. The variation itself is not small (so the
-    /// test can tell a removal from none).
-    #[test]
-    fn tread_compliance_matches_a_direct_inertia_relief_solve() {
+    /// The small model's rotating-wheel explicit model (local compliance removed).
+    fn small_rotating() -> ExplicitModel {
         let sets: Vec<String> = SMALL_MODEL.iter().map(|s| s.to_string()).collect();
         let model = load_model(&ModelSource::Builtin, &sets).unwrap();
         let opts = ExplicitOptions {
             wheel: ExplicitWheel::Rotating,
             ..ExplicitOptions::default()
         };
-        let em = ExplicitModel::new(&model, opts).unwrap();
-        let lc = em.wheel_local.as_ref().unwrap();
+        ExplicitModel::new(&model, opts).unwrap()
+    }
+
+    /// The small wheel's tread: its local compliance, free DOFs, angle planes, plane angles
+    /// (rad), the contact plane's index and the contact frame's axes.
+    struct Tread<'a> {
+        lc: &'a super::WheelLocalCompliance,
+        n: usize,
+        planes: Vec<PlaneNodes>,
+        th: &'a [f64],
+        k0: usize,
+        axes: [[f64; 3]; 3],
+    }
+
+    impl<'a> Tread<'a> {
+        fn of(em: &'a ExplicitModel) -> Self {
+            let w = &em.wheel_structure;
+            let topo = &w.topology;
+            Tread {
+                lc: em.wheel_local.as_ref().unwrap(),
+                n: w.dofmap.n_free(),
+                planes: super::super::tread_planes(w, &em.wheel_nodes).unwrap(),
+                th: &topo.thetas,
+                k0: topo.contact_angle_index(),
+                axes: [em.frame.x, em.frame.t, em.frame.n],
+            }
+        }
+    }
+
+    /// The independent inertia-relief flexibility `b_aᵀ G_e b_b` (m/N) between `loads` over
+    /// the wheel body's mass (`elastic_flexibility`: its own statically determinate
+    /// supports, Gram–Schmidt and factorisation; the sprung mass gets no inertial share).
+    fn direct_flexibility(em: &ExplicitModel, loads: &[Vec<f64>]) -> Vec<Vec<f64>> {
         let w = &em.wheel_structure;
         let (fm, _) = w.assemble().unwrap();
         let n = w.dofmap.n_free();
@@ -189,7 +277,6 @@ mod tests {
         let sprung: Vec<usize> = (0..3)
             .filter_map(|c| w.dofmap.free_index(3 * w.sprung_node + c))
             .collect();
-        // The wheel body's mass: the sprung mass gets no inertial share.
         let mut mb = fm.m.clone();
         {
             let (cp, ri) = (
@@ -217,10 +304,43 @@ mod tests {
             omega2: &omega2,
             exclude: &sprung,
         };
-        let planes = super::super::tread_planes(w, &em.wheel_nodes).unwrap();
-        let topo = &w.topology;
-        let (th, k0) = (&topo.thetas, topo.contact_angle_index());
-        let axes = [em.frame.x, em.frame.t, em.frame.n];
+        elastic_flexibility(body, loads).unwrap()
+    }
+
+    /// The tread load (or read) vector of `n` free DOFs at the material angle `phi` (rad),
+    /// interpolated in angle between the planes at `th`, along the spinning-frame direction
+    /// `ar`.
+    fn angle_load(th: &[f64], planes: &[PlaneNodes], n: usize, phi: f64, ar: [f64; 3]) -> Vec<f64> {
+        let at = locate_angle(th, phi);
+        let mut b = vec![0.0; n];
+        for (j, wj) in [(at.j, 1.0 - at.s), (at.j + 1, at.s)] {
+            for &(idx, wt) in &planes[j.rem_euclid(th.len() as i64) as usize] {
+                for c in 0..3 {
+                    if idx[c] != usize::MAX {
+                        b[idx[c]] += wj * wt * ar[c];
+                    }
+                }
+            }
+        }
+        b
+    }
+
+    /// The tread compliance `g_d(φ)` at angle planes and between them against an independent
+    /// inertia-relief solve ([`direct_flexibility`]) of the angle-interpolated load on the
+    /// small wheel, to 1e-8 relative; the compliance with the variation removed is the
+    /// reference at every angle, and the reference is the fixed wheel's compliance at its
+    /// contact. The variation itself is not small (so the test can tell a removal from none).
+    #[test]
+    fn tread_compliance_matches_a_direct_inertia_relief_solve() {
+        let em = small_rotating();
+        let Tread {
+            lc,
+            n,
+            planes,
+            th,
+            k0,
+            axes,
+        } = Tread::of(&em);
         // Plane angles and points between them, over the fine zone and the coarse segments.
         let mut phis = Vec::new();
         for k in [k0, k0 + 1, k0 + 2, k0 + 5, k0 + 8] {
@@ -229,20 +349,9 @@ mod tests {
         }
         let mut loads = Vec::new();
         for &phi in &phis {
-            let at = locate_angle(th, phi);
+            let cs = locate_angle(th, phi).cs;
             for ax in axes {
-                let ar = to_spinning(at.cs, ax);
-                let mut b = vec![0.0; n];
-                for (j, wj) in [(at.j, 1.0 - at.s), (at.j + 1, at.s)] {
-                    for &(idx, wt) in &planes[j.rem_euclid(th.len() as i64) as usize] {
-                        for c in 0..3 {
-                            if idx[c] != usize::MAX {
-                                b[idx[c]] += wj * wt * ar[c];
-                            }
-                        }
-                    }
-                }
-                loads.push(b);
+                loads.push(angle_load(th, &planes, n, phi, to_spinning(cs, ax)));
             }
         }
         // The fixed wheel's contact load.
@@ -250,10 +359,17 @@ mod tests {
             let mut force = [0.0; 3];
             force[d] = 1.0;
             let mut b = vec![0.0; n];
-            add_nodes_load(&em.wheel_nodes, &w.dofmap, &em.frame, 1.0, force, &mut b);
+            add_nodes_load(
+                &em.wheel_nodes,
+                &em.wheel_structure.dofmap,
+                &em.frame,
+                1.0,
+                force,
+                &mut b,
+            );
             loads.push(b);
         }
-        let direct = elastic_flexibility(body, &loads).unwrap();
+        let direct = direct_flexibility(&em, &loads);
         let g_ref = lc.reference;
         let mut largest: f64 = 0.0;
         for (i, &phi) in phis.iter().enumerate() {
@@ -289,5 +405,75 @@ mod tests {
             "tread compliance: reference {g_ref:?} m/N, largest variation {largest:.3} of it"
         );
         assert!(largest > 0.05, "variation only {largest}");
+    }
+
+    /// The convective static deflection over a contact step from `φ₀` to `φ₁` against an
+    /// independent inertia-relief solve ([`direct_flexibility`]) on the small wheel: the
+    /// force `f` (contact frame) turned to the spinning frame at the load's angle, applied
+    /// as the angle-interpolated tread load at `φ₁` and at `φ₀`, the displacement read at
+    /// the material point of `φ₁` (same interpolation) and turned back to the contact frame
+    /// at the load's angle. `transfer` at both loads and `convective` (their difference)
+    /// agree with the direct solve to 1e-8 of the transferred displacement's size. Steps
+    /// inside one coarse segment, across a plane (reading up to two planes past the load)
+    /// and in the fine zone; the convective term is not small against the displacement (so
+    /// the test can tell it from none).
+    #[test]
+    fn convective_deflection_matches_a_direct_inertia_relief_solve() {
+        let em = small_rotating();
+        let t = Tread::of(&em);
+        let (lc, n, th, k0, axes) = (t.lc, t.n, t.th, t.k0, t.axes);
+        let planes = t.planes;
+        let at_frac = |k: usize, s: f64| th[k] + s * (th[k + 1] - th[k]);
+        // (φ₀, φ₁): in one coarse segment, across a plane (twice: the second reads two planes
+        // past the load), in the fine zone.
+        let steps = [
+            (at_frac(k0 + 5, 0.2), at_frac(k0 + 5, 0.7)),
+            (at_frac(k0 + 6, 0.8), at_frac(k0 + 7, 0.3)),
+            (at_frac(k0 + 4, 0.6), at_frac(k0 + 5, 0.1)),
+            (at_frac(k0, 0.1), at_frac(k0, 0.45)),
+        ];
+        let f = [2.5e3, -1.2e3, 7.0e4];
+        let mut largest: f64 = 0.0;
+        for (phi0, phi1) in steps {
+            let (new, old) = (locate_angle(th, phi1), locate_angle(th, phi0));
+            // Loads at φ₁ and φ₀ along each contact direction turned at the load's angle,
+            // reads at φ₁ along each contact direction turned at φ₁ and at φ₀.
+            let mut loads = Vec::new();
+            for (phi_pt, cs) in [(phi1, new.cs), (phi0, old.cs), (phi1, old.cs)] {
+                for ax in axes {
+                    loads.push(angle_load(th, &planes, n, phi_pt, to_spinning(cs, ax)));
+                }
+            }
+            let g = direct_flexibility(&em, &loads);
+            // Displacement along e: Σ_d f_d (read e)ᵀ G (load d).
+            let direct = |read: usize, load: usize| -> [f64; 3] {
+                [0, 1, 2].map(|e| (0..3).map(|d| f[d] * g[read + e][load + d]).sum())
+            };
+            let (a, b) = (direct(0, 0), direct(6, 3));
+            let scale = a.iter().chain(&b).fold(0.0_f64, |m, x| m.max(x.abs()));
+            let ta = lc.transfer(new, new, f).unwrap();
+            let tb = lc.transfer(new, old, f).unwrap();
+            let conv = lc.convective(new, old, f).unwrap();
+            for e in 0..3 {
+                let want = a[e] - b[e];
+                for (got, exp, what) in [(ta[e], a[e], "at φ₁"), (tb[e], b[e], "from φ₀")] {
+                    assert!(
+                        (got - exp).abs() <= 1e-8 * scale,
+                        "φ₀ {phi0} φ₁ {phi1} e {e}: transfer {what} {got} vs direct {exp}"
+                    );
+                }
+                assert!(
+                    (conv[e] - want).abs() <= 1e-8 * scale,
+                    "φ₀ {phi0} φ₁ {phi1} e {e}: convective {} vs direct {want}",
+                    conv[e]
+                );
+                largest = largest.max(want.abs() / scale);
+            }
+        }
+        eprintln!("convective deflection: largest {largest:.3e} of the displacement");
+        assert!(
+            largest > 1e-3,
+            "convective term only {largest} of the displacement"
+        );
     }
 }
