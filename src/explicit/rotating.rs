@@ -90,6 +90,41 @@ pub enum SpinError {
         /// The rotation covered (rad).
         phi_max_rad: f64,
     },
+    /// One contact step turns the wheel backwards, or by a tread plane spacing or more, so
+    /// the tread corrections' plane blocks (computed for planes at most two apart, forward
+    /// from the contact plane) would not cover it.
+    #[error(
+        "one contact step turns the wheel by {turn_rad:.3e} rad; the tread's local-compliance \
+         and convective corrections need a forward turn below the smallest angle-plane \
+         spacing, {spacing_rad:.3e} rad: shorten the contact step (a finer contact.grid_nx) or \
+         set explicit.local_compliance = \"mesh\""
+    )]
+    StepTurn {
+        /// The wheel's turn over one contact step (rad; negative: backwards).
+        turn_rad: f64,
+        /// The smallest spacing of the tread's angle planes (rad).
+        spacing_rad: f64,
+    },
+}
+
+/// Checks that one contact step's turn `turn_rad` (rad) is forward and below the smallest
+/// spacing of the angle planes at `thetas` (rad, increasing, one turn), so that the contact's
+/// start and end planes of a step are at most two planes apart.
+fn check_step_turn(thetas: &[f64], turn_rad: f64) -> Result<(), SpinError> {
+    let tau = std::f64::consts::TAU;
+    let n = thetas.len();
+    let spacing_rad = (0..n)
+        .map(|k| (thetas[(k + 1) % n] - thetas[k]).rem_euclid(tau))
+        .map(|h| if h == 0.0 { tau } else { h })
+        .fold(f64::INFINITY, f64::min);
+    if turn_rad >= 0.0 && turn_rad < spacing_rad {
+        Ok(())
+    } else {
+        Err(SpinError::StepTurn {
+            turn_rad,
+            spacing_rad,
+        })
+    }
 }
 
 /// A substructure spinning at `Ω` (rad/s) about the y axis through the origin: the
@@ -561,6 +596,7 @@ impl RotatingWheel {
         let Some(l) = &self.local else {
             return Ok(());
         };
+        check_step_turn(&self.thetas, self.spin.omega * self.steps as f64 * self.dt)?;
         let phi = self.spin.omega.abs() * t_end;
         if phi > l.phi_max() {
             return Err(SpinError::Uncovered {
@@ -814,6 +850,26 @@ impl RotatingWheel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The step-turn check against hand-computed plane spacings: planes at −0.1, 0 and
+    /// 0.2 rad are 0.1, 0.2 and (wrapping round) 2π − 0.3 rad apart, so the smallest spacing
+    /// is 0.1 rad: 0.099 rad passes, and 0.1 rad and any backward turn fail.
+    #[test]
+    fn a_contact_step_must_turn_forward_by_less_than_a_plane_spacing() {
+        let th = [-0.1, 0.0, 0.2];
+        assert!(check_step_turn(&th, 0.0).is_ok());
+        assert!(check_step_turn(&th, 0.099).is_ok());
+        match check_step_turn(&th, 0.1) {
+            Err(SpinError::StepTurn { spacing_rad, .. }) => {
+                assert!((spacing_rad - 0.1).abs() < 1e-15)
+            }
+            other => panic!("expected StepTurn, got {other:?}"),
+        }
+        assert!(check_step_turn(&th, -1e-6).is_err());
+        // Two planes: the wrap-around gap is the smaller one.
+        assert!(check_step_turn(&[0.0, 4.0], 2.0).is_ok());
+        assert!(check_step_turn(&[0.0, 4.0], 2.3).is_err());
+    }
 
     /// Ground and spinning components are inverse rotations, and the ground vertical seen
     /// from the spinning frame is `(−sin α, 0, cos α)`.
