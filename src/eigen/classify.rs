@@ -63,11 +63,14 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::fe::assembly::{spring_energy, strain_energy_per_part_many};
+use crate::fe::assembly::strain_energy_per_part_many;
 use crate::fe::hex8;
 use crate::mesh::Part;
 use crate::structure::track::SpringKind;
-use crate::structure::{TrackStructure, WheelStructure};
+use crate::structure::TrackStructure;
+
+mod wheel;
+pub use wheel::{classify_wheel_mode, classify_wheel_modes, WheelFamily, WheelModeClass};
 
 /// Height (m above the foot underside) of the top of the straight UIC54 web (start of the
 /// R22 head fillet); section nodes above it are *head*.
@@ -932,160 +935,6 @@ fn interp(x: &[f64], y: &[f64], at: f64) -> f64 {
     let i = x.partition_point(|&v| v <= at).clamp(1, n - 1) - 1;
     let t = (at - x[i]) / (x[i + 1] - x[i]);
     y[i] + t * (y[i + 1] - y[i])
-}
-
-/// Family of a wheel mode.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum WheelFamily {
-    /// Rigid-body motion (incl. bounce on the primary suspension).
-    Rigid,
-    /// Axial (umbrella / out-of-plane) rim motion.
-    Axial,
-    /// Radial (in-plane) rim motion.
-    Radial,
-    /// Anything else (circumferential, coupled).
-    Other,
-}
-
-impl WheelFamily {
-    /// All families, in output order.
-    pub const ALL: [WheelFamily; 4] = [
-        WheelFamily::Rigid,
-        WheelFamily::Axial,
-        WheelFamily::Radial,
-        WheelFamily::Other,
-    ];
-
-    /// snake_case name.
-    pub fn name(self) -> &'static str {
-        match self {
-            WheelFamily::Rigid => "rigid",
-            WheelFamily::Axial => "axial",
-            WheelFamily::Radial => "radial",
-            WheelFamily::Other => "other",
-        }
-    }
-
-    /// Index in [`WheelFamily::ALL`] (CSV code).
-    pub fn code(self) -> usize {
-        WheelFamily::ALL
-            .iter()
-            .position(|&f| f == self)
-            .unwrap_or(0)
-    }
-}
-
-/// Classification of one wheel mode.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct WheelModeClass {
-    /// Family.
-    pub family: WheelFamily,
-    /// Strain-energy share of the wheel elements (0 when there is no strain energy).
-    pub energy_wheel: f64,
-    /// Strain-energy share of the primary suspension.
-    pub energy_suspension: f64,
-    /// Rigid-body mode of the wheel (no elastic wheel deformation dominates).
-    pub rigid: bool,
-    /// Shares of Σ u² on the rim nodes: [radial, axial, circumferential].
-    pub rim_shares: [f64; 3],
-}
-
-/// Classifies a wheel mode (free-DOF vector of `wheel`) at frequency `f_hz` (Hz).
-pub fn classify_wheel_mode(
-    wheel: &WheelStructure,
-    u_free: &[f64],
-    f_hz: f64,
-) -> Result<WheelModeClass, ClassifyError> {
-    Ok(classify_wheel_modes(wheel, &[u_free], &[f_hz])?.remove(0))
-}
-
-/// [`classify_wheel_mode`] of several modes (`f_hz[i]` is the frequency of `u_free[i]`):
-/// the element strain energies of all of them in one pass over the elements (each element
-/// stiffness built once).
-pub fn classify_wheel_modes(
-    wheel: &WheelStructure,
-    u_free: &[&[f64]],
-    f_hz: &[f64],
-) -> Result<Vec<WheelModeClass>, ClassifyError> {
-    if f_hz.len() != u_free.len() {
-        return Err(ClassifyError::Count {
-            modes: u_free.len(),
-            frequencies: f_hz.len(),
-        });
-    }
-    let mut full = Vec::with_capacity(u_free.len());
-    for u in u_free {
-        if u.len() != wheel.dofmap.n_free() {
-            return Err(ClassifyError::Length {
-                expected: wheel.dofmap.n_free(),
-                got: u.len(),
-            });
-        }
-        if u.iter().any(|v| !v.is_finite()) {
-            return Err(ClassifyError::NonFinite);
-        }
-        full.push(wheel.dofmap.expand(u)?);
-    }
-    let refs: Vec<&[f64]> = full.iter().map(|u| u.as_slice()).collect();
-    let energies = strain_energy_per_part_many(&wheel.mesh, &wheel.materials, &refs)?;
-    full.iter()
-        .zip(&energies)
-        .zip(f_hz)
-        .map(|((u, e), &f)| Ok(wheel_shape_class(wheel, u, e.get(Part::Wheel), f)))
-        .collect()
-}
-
-/// Family of a wheel mode from its full displacement vector `u`, its element strain energy
-/// `ew` (J) and its frequency `f_hz` (Hz).
-fn wheel_shape_class(wheel: &WheelStructure, u: &[f64], ew: f64, f_hz: f64) -> WheelModeClass {
-    let es = spring_energy(&wheel.springs, u);
-    let tot = ew + es;
-    let (energy_wheel, energy_suspension) = if tot > 0.0 {
-        (ew / tot, es / tot)
-    } else {
-        (0.0, 0.0)
-    };
-    let r_rim = wheel.params.rim_inner_radius_m;
-    let mut s = [0.0; 3];
-    for (n, p) in wheel.mesh.nodes.iter().enumerate() {
-        if n == wheel.sprung_node {
-            continue;
-        }
-        let r = (p[0] * p[0] + p[2] * p[2]).sqrt();
-        if r < r_rim - 1e-9 || r == 0.0 {
-            continue;
-        }
-        let (ux, uy, uz) = (u[3 * n], u[3 * n + 1], u[3 * n + 2]);
-        let ur = (p[0] * ux + p[2] * uz) / r;
-        let ut = (p[2] * ux - p[0] * uz) / r;
-        s[0] += ur * ur;
-        s[1] += uy * uy;
-        s[2] += ut * ut;
-    }
-    let st: f64 = s.iter().sum();
-    let rim_shares = if st > 0.0 {
-        [s[0] / st, s[1] / st, s[2] / st]
-    } else {
-        [0.0; 3]
-    };
-    let rigid = f_hz < RIGID_BODY_HZ || energy_wheel < 0.5;
-    let family = if rigid {
-        WheelFamily::Rigid
-    } else if rim_shares[1] > 0.5 {
-        WheelFamily::Axial
-    } else if rim_shares[0] > 0.5 {
-        WheelFamily::Radial
-    } else {
-        WheelFamily::Other
-    };
-    WheelModeClass {
-        family,
-        energy_wheel,
-        energy_suspension,
-        rigid,
-        rim_shares,
-    }
 }
 
 #[cfg(test)]

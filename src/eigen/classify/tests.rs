@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::model::{load_model, ModelSource};
-use crate::structure::TrackStructure;
+use crate::structure::{TrackStructure, WheelStructure};
 
 fn small_track() -> TrackStructure {
     TrackStructure::build(
