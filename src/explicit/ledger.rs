@@ -42,6 +42,9 @@ pub(super) struct LedgerStep {
     pub(super) f_work: [f64; 3],
     /// Rail and wheel contact-point displacement at the step's start (m).
     pub(super) old: [[f64; 3]; 2],
+    /// When the force was held at the previous contact position (no corrector): the rail's
+    /// displacement there at the step's start and end (m); `None` when it acted at `xc`.
+    pub(super) held_at_previous: Option<[[f64; 3]; 2]>,
     /// The contact force at the step's start and end (N, on the wheel).
     pub(super) forces: [[f64; 3]; 2],
     /// The removed local compliance variation `Δg` at the step's end position (m/N).
@@ -149,9 +152,14 @@ impl<'a> Ledger<'a> {
         let ur_end = m.rail_at(&s.ut, k.xc)?;
         let uw_end = m.wheel_at(&s.uw);
         let [ur_old, uw_old] = k.old;
+        // The rail's displacement increment where the force acted.
+        let du_rail = match k.held_at_previous {
+            Some([a, b]) => [0, 1, 2].map(|d| b[d] - a[d]),
+            None => [0, 1, 2].map(|d| ur_end[d] - ur_old[d]),
+        };
         for d in 0..3 {
             let [on_rail, on_wheel] = [
-                -k.f_work[d] * (ur_end[d] - ur_old[d]),
+                -k.f_work[d] * du_rail[d],
                 k.f_work[d] * (uw_end[d] - uw_old[d]),
             ];
             self.rail_wheel[0] += on_rail;
@@ -164,9 +172,15 @@ impl<'a> Ledger<'a> {
         eb.spin_work_j -= k.v * k.spin * r.mz_nm * k.dt_c;
         // Convective work: the force rolling over the deflected rail, the change of the rail
         // displacement under the contact as the contact moves from x_n to x_{n+1} on the
-        // state at t_n (lateral and normal, as the reduced passage).
+        // state at t_n (lateral and normal, as the reduced passage); with the force held at
+        // x_n, the move on the state at t_{n+1}, the rest of the change from
+        // `u(x_n, t_n)` to `u(x_{n+1}, t_{n+1})`.
         for d in [1usize, 2] {
-            let w = k.f_work[d] * (ur_old[d] - self.ur_prev[d]);
+            let moved = match k.held_at_previous {
+                Some(_) => ur_end[d] - self.ur_prev[d] - du_rail[d],
+                None => ur_old[d] - self.ur_prev[d],
+            };
+            let w = k.f_work[d] * moved;
             eb.convective_work_j += w;
             self.by_direction[1][d] += w;
         }

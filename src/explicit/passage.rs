@@ -28,7 +28,8 @@
 //! fine mesh under the patch at the default contact step. The plain alternative, holding `F_n`
 //! without the corrector ([`Coupling::HeldForce`]), is explicit in the contact stiffness:
 //! with `k_contact · G` of order one it is at the edge of stability. Both are kept to show
-//! that in tests.
+//! that in tests. The held force acts where it was computed, at `x_n`, as in the reduced
+//! passage, which the all-modes comparison uses it for (docs/theory.md §8.6).
 //!
 //! # Start
 //! As the reduced passage: the contact brought to steady rolling at the static load; the
@@ -70,8 +71,10 @@ pub enum Coupling {
     /// `F_n` to `F_{n+1}` (first-order hold; unstable when the contact–mass frequency times
     /// the contact step exceeds 2√3; for tests).
     RampCorrector,
-    /// The last contact force held over the step, no corrector (unstable when the contact
-    /// stiffness times the one-step compliance is of order one; for tests).
+    /// The last contact force `F_n` held over the step where it was computed, at the
+    /// previous contact position `x_n` (as the reduced passage holds it), no corrector
+    /// (unstable when the contact stiffness times the one-step compliance is of order one;
+    /// for tests).
     HeldForce,
 }
 

@@ -84,6 +84,7 @@ fn remove_non_structural(o: &mut Object) {
             "wheel_residual_flexibility",
             "start",
             "rest_start_distance",
+            "creepage",
         ] {
             run.remove(k);
         }
@@ -165,6 +166,7 @@ mod tests {
             &["run.start=rest"][..],
             &["run.rest_start_distance=0.2"][..],
             &["run.wheel_residual_flexibility=false"][..],
+            &["run.creepage=increment"][..],
         ] {
             let m = with(set);
             assert!(!same(&base, &m, IdentityScope::Run), "{set:?}");

@@ -473,6 +473,29 @@ pub struct Run {
     /// when the track is long enough).
     #[serde(default = "default_rest_start_distance")]
     pub rest_start_distance: f64,
+    /// How the reduced passage forms the creepages from the structures' motion at the
+    /// contact (docs/theory.md §7.3): `"velocity"` (default: the relative velocity at the
+    /// step's end, `t_{n+1}`, divided by the speed) or `"increment"` (the relative
+    /// displacement increment over the contact step of the same material points divided by
+    /// `V Δt_c`, the slip Kalker's transient step integrates; the explicit path's). Reduced
+    /// engine only.
+    #[serde(default)]
+    pub creepage: CreepageKind,
+}
+
+/// How the reduced passage forms the creepages from the structures' motion (docs/theory.md
+/// §7.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CreepageKind {
+    /// The relative velocity of wheel and rail at the contact at the step's end, `t_{n+1}`
+    /// (the integrator's predicted velocity), divided by the speed.
+    #[default]
+    Velocity,
+    /// The relative displacement increment of the wheel's and the rail's contact points over
+    /// the contact step (both read with the rows of the step's end position), divided by
+    /// `V Δt_c`.
+    Increment,
 }
 
 /// How a passage starts (docs/theory.md §7.5).

@@ -515,3 +515,18 @@ fn start_keys_are_read_defaulted_and_range_checked() {
     ]));
     assert!(e.contains("run-in 0.200 m"), "{e}");
 }
+
+/// `run.creepage`: `"velocity"` when absent, `"increment"` read when given, and another
+/// value an error naming the key and the allowed values.
+#[test]
+fn creepage_key_is_read_defaulted_and_checked() {
+    assert_eq!(
+        dutch_with(&[]).unwrap().run.creepage,
+        CreepageKind::Velocity
+    );
+    let m = dutch_with(&["run.creepage=increment"]).unwrap();
+    assert_eq!(m.run.creepage, CreepageKind::Increment);
+    let e = err_text(dutch_with(&["run.creepage=mean"]));
+    assert!(e.contains("creepage"), "{e}");
+    assert!(e.contains("velocity") && e.contains("increment"), "{e}");
+}

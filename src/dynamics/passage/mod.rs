@@ -14,8 +14,10 @@
 //! 3. the contact inputs: rigid approach `δ = (u_rail − u_wheel)·n` (the rail-top profile
 //!    enters the contact solver's gap, column by column); creepages
 //!    `ξ = (u̇_wheel,x − u̇_rail,x)/V`, `η = (u̇_wheel,t − u̇_rail,t)/V` — the rail's
-//!    longitudinal vibration at the contact enters here — and the spin of the coned wheel on
-//!    the inclined rail `φ = −sin α / R` (1/m);
+//!    longitudinal vibration at the contact enters here — from the velocities at `t_{n+1}`,
+//!    or with `run.creepage = "increment"` from the displacement increments over the step
+//!    divided by `VΔt`; and the spin of the coned wheel on the inclined rail
+//!    `φ = −sin α / R` (1/m);
 //! 4. the transient rolling contact step ([`crate::contact::TransientRolling`]) gives the
 //!    forces on the wheel (F_L = Fx, lateral, F_N) and the frictional power density, which
 //!    is accumulated in rail-fixed bins: `W_f(x) = Σ τ·s Δt` integrated across the rail
@@ -63,7 +65,7 @@ mod step;
 use super::{DynamicsError, RailProfile};
 use crate::contact::WearAccumulator;
 use crate::contact::{TransientConfig, TransientRolling};
-use crate::model::{Model, ResidualVariation, StartKind};
+use crate::model::{CreepageKind, Model, ResidualVariation, StartKind};
 use crate::structure::{TrackStructure, WheelStructure};
 use step::{check_finite, RoadAhead};
 
@@ -764,6 +766,7 @@ impl PassageEngine {
         let half_grid = contact.config().grid.half_length_x_m;
         let n_steps = self.step_count(half_grid, dx);
         let mut road = RoadAhead::new(&contact, profile);
+        let increment = self.model.run.creepage == CreepageKind::Increment;
 
         // --- Static start (steady rolling at the static load): `st`, above.
         let (xi0, delta0) = (st.creepage, st.approach_m);
@@ -802,11 +805,24 @@ impl PassageEngine {
         for n in 1..=n_steps {
             let t = n as f64 * dt;
             let xc = x0 + v * t;
+            self.rail_line.rows_at(xc, &mut rr)?;
+            // With the increment creepage, the contact points' displacements at `t_n` read
+            // with the rows of `x_{n+1}`: the same material points at both ends of the step.
+            let start = increment.then(|| {
+                [
+                    step::contact_displacement(&rr, &tr),
+                    step::contact_displacement(&self.wheel_contact.rows, &wh),
+                ]
+            });
             tr.advance_displacement();
             wh.advance_displacement();
-            self.rail_line.rows_at(xc, &mut rr)?;
-            let (r, [xi, delta]) =
-                self.contact_step(&mut contact, &mut road, (&rr, &tr, &wh), [t, xc, v, spin])?;
+            let (r, [xi, delta]) = self.contact_step(
+                &mut contact,
+                &mut road,
+                (&rr, &tr, &wh),
+                start,
+                [t, xc, v, spin],
+            )?;
             if xc - half_grid < z1 && xc + half_grid > z0 {
                 wear.add_step(&contact, xc);
             }

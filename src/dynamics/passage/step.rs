@@ -14,21 +14,34 @@ impl PassageEngine {
     /// One contact step of the passage at time `t` (s) with the contact at `xc` (m), speed
     /// `v` (m/s) and spin `spin` (1/m): the approach and the creepages from the predicted
     /// motion of rail (contact rows `rr`) and wheel, the consistent compliance followed, the
-    /// rail heights under the grid, the transient contact advanced. Returns the step's
-    /// result and `[ξ (−), δ (m)]`, the longitudinal creepage and the approach it was given.
+    /// rail heights under the grid, the transient contact advanced. The creepages are the
+    /// relative velocity at the step's end over `v`, or, when `start` holds the rail's and
+    /// the wheel's contact displacements at the step's start (m, frame x, t, n; read with
+    /// the same rows), the relative displacement increment over `v Δt`
+    /// (`run.creepage = "increment"`). Returns the step's result and `[ξ (−), δ (m)]`, the
+    /// longitudinal creepage and the approach it was given.
     pub(super) fn contact_step(
         &self,
         contact: &mut TransientRolling,
         road: &mut RoadAhead<'_>,
         (rr, tr, wh): (&[f64], &ModalVerlet, &ModalVerlet),
+        start: Option<[[f64; 3]; 2]>,
         [t, xc, v, spin]: [f64; 4],
     ) -> Result<(crate::contact::StepResult, [f64; 2]), DynamicsError> {
         let (u_r, v_r) = contact_motion(rr, tr);
         let (u_w, v_w) = contact_motion(&self.wheel_contact.rows, wh);
         self.follow_consistent_compliance(contact, t, xc)?;
         let delta = u_r[2] - u_w[2];
-        let xi = (v_w[0] - v_r[0]) / v;
-        let eta = (v_w[1] - v_r[1]) / v;
+        // The relative rate of the wheel's contact point against the rail's (x, t; m/s).
+        let rate = match start {
+            Some([ur0, uw0]) => {
+                let dt = tr.dt();
+                [0, 1].map(|d| ((u_w[d] - uw0[d]) - (u_r[d] - ur0[d])) / dt)
+            }
+            None => [0, 1].map(|d| v_w[d] - v_r[d]),
+        };
+        let xi = rate[0] / v;
+        let eta = rate[1] / v;
         let r = contact
             .step(&StepInputs {
                 normal: NormalInput::Approach(delta),
@@ -123,6 +136,13 @@ pub(super) fn check_finite(
         x_m: xc,
         what: "modal coordinates".into(),
     })
+}
+
+/// The displacement at the contact (frame components x, t, n; m) of a modal system whose
+/// contact rows are `rows` (3 × the mode count, by direction).
+pub(super) fn contact_displacement(rows: &[f64], it: &ModalVerlet) -> [f64; 3] {
+    let m = it.len();
+    [0, 1, 2].map(|d| dot(&rows[d * m..(d + 1) * m], &it.q))
 }
 
 /// The displacement and the predicted velocity at the contact (frame components x, t, n; m

@@ -164,6 +164,9 @@ struct HeldLoads {
 struct Predicted {
     /// Rail under the patch and wheel at the contact, at the step's start (m, contact frame).
     old: [[f64; 3]; 2],
+    /// Without a corrector: the rail under the previous contact position, where the held
+    /// force acts, at the step's start (m, contact frame).
+    old_at_previous: Option<[f64; 3]>,
     /// The same after the predictor (m).
     new: [[f64; 3]; 2],
     /// The first sub-step's load at the previous and at this contact position (N).
@@ -321,7 +324,7 @@ impl<'a> Stepper<'a> {
             };
             a.replay(
                 self.m,
-                &pw,
+                if self.corrected { &pw } else { &self.pw_prev },
                 &forces,
                 [(p.nt, p.dtt), (p.nw, p.dtw)],
                 &self.s,
@@ -347,6 +350,9 @@ impl<'a> Stepper<'a> {
                 spin: p.spin,
                 f_work,
                 old: pred.old,
+                held_at_previous: pred
+                    .old_at_previous
+                    .map(|o| [o, self.m.rail_under(&self.s.ut, &self.pw_prev)]),
                 forces: [f, f_new],
                 dg: sol.dg,
                 damper_j: pred.damper_j,
@@ -363,7 +369,9 @@ impl<'a> Stepper<'a> {
 
     /// The predictor: the last force `F_n` held over the step at `x_{n+1}` (patch `pw`), the
     /// first sub-step also carrying the previous step's share on the rail where the
-    /// previous step's force acted; the track and the wheel advanced over their sub-steps.
+    /// previous step's force acted; without a corrector ([`super::Coupling::HeldForce`])
+    /// `F_n` held at `x_n` in every sub-step. The track and the wheel advanced over their
+    /// sub-steps.
     fn predict(&mut self, t: f64, pw: &PlaneWeights) -> Predicted {
         let (m, p, f) = (self.m, self.plan, self.f);
         let frame = m.frame;
@@ -374,9 +382,13 @@ impl<'a> Stepper<'a> {
         };
         let f0 = m.opts.coupling.first_load(f, self.f_prev);
         let split = m.opts.coupling.boundary_split(f, self.f_prev);
+        // Without a corrector the force is held where it was computed, at x_n (as the
+        // reduced passage holds it); with one, at x_{n+1}.
+        let held_at = if self.corrected { pw } else { &self.pw_prev };
+        let old_at_previous = (!self.corrected).then(|| m.rail_under(&self.s.ut, held_at));
         let loads = &mut self.loads;
         loads.track0.iter_mut().for_each(|x| *x = 0.0);
-        for (g, w) in [(split[0], &self.pw_prev), (split[1], pw)] {
+        for (g, w) in [(split[0], &self.pw_prev), (split[1], held_at)] {
             let neg = [-g[0], -g[1], -g[2]];
             add_line_force(
                 &m.line,
@@ -393,7 +405,7 @@ impl<'a> Stepper<'a> {
             &m.line,
             &m.track_structure,
             &frame,
-            pw,
+            held_at,
             neg,
             &mut loads.track,
         );
@@ -446,6 +458,7 @@ impl<'a> Stepper<'a> {
         let ur_new = m.rail_under(&self.s.ut, pw);
         Predicted {
             old: [ur_old, uw_old],
+            old_at_previous,
             new: [ur_new, uw_new],
             split,
             damper_j,
