@@ -39,7 +39,11 @@ fn main() -> anyhow::Result<()> {
     let cache = ModalCache::new(cache_dir.as_str());
     println!("{}", machine_load());
     let t = Instant::now();
-    let with_energy = PassageOptions::default();
+    // as `corrugation passage`: the energy balance, the damping product beside the contact
+    let with_energy = PassageOptions {
+        overlap: true,
+        ..PassageOptions::default()
+    };
     let prepared = PreparedModel::new(&model, &cache, &with_energy)?;
     let engine = &prepared.engine;
     let (mt, mw) = engine.mode_counts();
@@ -50,6 +54,11 @@ fn main() -> anyhow::Result<()> {
     let without = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
+    };
+    let alone = PassageOptions {
+        overlap: true,
+        ..without
     };
     let v = model.run.speed();
     let dt = engine.contact_config(v)?.grid.dx() / v;
@@ -60,6 +69,10 @@ fn main() -> anyhow::Result<()> {
     for (name, opts) in [
         ("energy (CLI)", with_energy),
         ("no energy (studies)", without),
+        (
+            "no energy, damping product beside the contact (a passage alone)",
+            alone,
+        ),
     ] {
         for _ in 0..reps {
             let (w0, c0, t0) = (Instant::now(), cpu_seconds(), thread_cpu_seconds());

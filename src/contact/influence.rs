@@ -920,7 +920,10 @@ mod tests {
             // by f32 rounding (Higham 2002 Thm 24.2: a radix-2 FFT's error is at most
             // about log2 N · u · ‖x‖₂ per pass; forward, kernel product, inverse, and the
             // rounding of the tractions), with the operator's norm ≤ λ_max
-            let (p1, p2) = (next_smooth3(2 * (r1 - r0) - 1), next_smooth3(2 * (c1 - c0) - 1));
+            let (p1, p2) = (
+                next_smooth3(2 * (r1 - r0) - 1),
+                next_smooth3(2 * (c1 - c0) - 1),
+            );
             let single = conv.boxes.iter().any(|b| (b.m1, b.m2) == (p1, p2));
             let norm = tx.iter().chain(&ty).map(|v| v * v).sum::<f64>().sqrt();
             let f32_bound = 10.0
