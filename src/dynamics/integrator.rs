@@ -693,23 +693,9 @@ mod tests {
         }
         let m = 29;
         let dt = 1.6e-5;
-        let mut c = Mat::<f64>::zeros(m, m);
-        for i in 0..m {
-            for j in 0..m {
-                c[(i, j)] = 40.0 / (1.0 + (i as f64 - j as f64).abs())
-                    + if i == j { i as f64 } else { 0.0 };
-            }
-        }
-        let omega2: Vec<f64> = (0..m)
-            .map(|i| (2.0 * PI * (80.0 + 150.0 * i as f64)).powi(2))
-            .collect();
-        let sys = ModalSystem {
-            omega2: omega2.clone(),
-            damping: c.clone(),
-        };
+        let (c, omega2, sys) = full_damping_system(m, [40.0, 1.0], [80.0, 150.0]);
         let mut it = ModalVerlet::new(&sys, dt).unwrap();
-        let q0: Vec<f64> = (0..m).map(|i| 1e-6 * ((i % 7) as f64 - 3.0)).collect();
-        let v0: Vec<f64> = (0..m).map(|i| 1e-3 * ((i % 5) as f64 - 2.0)).collect();
+        let (q0, v0) = test_state(m);
         let f: Vec<f64> = (0..m).map(|i| ((i % 3) as f64 - 1.0) * 10.0).collect();
         it.set_state(&q0, &v0, &f);
         let a0 = it.a.clone();
@@ -748,24 +734,10 @@ mod tests {
         // γ_{m+2} |E| |x| of its input x (b, and ½Δt df), so the bound is their sum.
         let m = 31;
         let dt = 1.6e-5;
-        let mut c = Mat::<f64>::zeros(m, m);
-        for i in 0..m {
-            for j in 0..m {
-                c[(i, j)] = 60.0 / (1.0 + (i as f64 - j as f64).abs())
-                    + if i == j { 2.0 * i as f64 } else { 0.0 };
-            }
-        }
-        let omega2: Vec<f64> = (0..m)
-            .map(|i| (2.0 * PI * (90.0 + 140.0 * i as f64)).powi(2))
-            .collect();
-        let sys = ModalSystem {
-            omega2: omega2.clone(),
-            damping: c.clone(),
-        };
+        let (c, omega2, sys) = full_damping_system(m, [60.0, 2.0], [90.0, 140.0]);
         let mut it = ModalVerlet::new(&sys, dt).unwrap();
         assert!(it.splits());
-        let q0: Vec<f64> = (0..m).map(|i| 1e-6 * ((i % 7) as f64 - 3.0)).collect();
-        let v0: Vec<f64> = (0..m).map(|i| 1e-3 * ((i % 5) as f64 - 2.0)).collect();
+        let (q0, v0) = test_state(m);
         let f_known: Vec<f64> = (0..m).map(|i| ((i % 3) as f64 - 1.0) * 1e3).collect();
         let df: Vec<f64> = (0..m).map(|i| ((i % 4) as f64 - 1.5) * 2.0).collect();
         it.set_state(&q0, &v0, &f_known);
@@ -805,6 +777,39 @@ mod tests {
             "{undamped} vs {}",
             bound.amax()
         );
+    }
+
+    /// A modal system of `m` modes with a full damping matrix
+    /// `C_ij = c[0] / (1 + |i − j|) + c[1] i δ_ij` (1/s) and `ω_i = 2π (f[0] + f[1] i)`
+    /// (rad/s): `(C, ω², system)`.
+    fn full_damping_system(
+        m: usize,
+        c: [f64; 2],
+        f: [f64; 2],
+    ) -> (Mat<f64>, Vec<f64>, ModalSystem) {
+        let mut cm = Mat::<f64>::zeros(m, m);
+        for i in 0..m {
+            for j in 0..m {
+                cm[(i, j)] = c[0] / (1.0 + (i as f64 - j as f64).abs())
+                    + if i == j { c[1] * i as f64 } else { 0.0 };
+            }
+        }
+        let omega2: Vec<f64> = (0..m)
+            .map(|i| (2.0 * PI * (f[0] + f[1] * i as f64)).powi(2))
+            .collect();
+        let sys = ModalSystem {
+            omega2: omega2.clone(),
+            damping: cm.clone(),
+        };
+        (cm, omega2, sys)
+    }
+
+    /// A displacement and velocity of `m` modes for the implicit-step tests.
+    fn test_state(m: usize) -> (Vec<f64>, Vec<f64>) {
+        (
+            (0..m).map(|i| 1e-6 * ((i % 7) as f64 - 3.0)).collect(),
+            (0..m).map(|i| 1e-3 * ((i % 5) as f64 - 2.0)).collect(),
+        )
     }
 
     fn gamma_f32(n: usize) -> f64 {
