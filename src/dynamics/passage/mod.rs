@@ -808,8 +808,9 @@ impl PassageEngine {
             let line = &self.rail_line;
             let last_plane = line.planes_x_m.len().saturating_sub(2);
             let p_first = line.locate(x0).map_or(0, |(p, _)| p);
+            // the last step's interval, with two steps to spare against rounding
             let p_last = line
-                .locate(x0 + v * dt * n_steps as f64)
+                .locate(x0 + v * dt * (n_steps + 2) as f64)
                 .map_or(last_plane, |(p, _)| p);
             Some(DampingOverlap::new(mt, p_first, p_last))
         } else {
