@@ -1,11 +1,13 @@
 //! Benchmark of one reduced-order passage of the default model at the model's speed (140
 //! km/h) over the 1 m solution zone, modes cached (figures in docs/performance.md): prepares
 //! the model once from the modal cache, then runs the passage `reps` times with the energy
-//! balance (as `corrugation passage`) and without (as the sweeps and studies), and prints per
-//! passage the wall and CPU seconds, the split into set-up (integrators, contact grid, static
-//! start) and time loop, the machine's load, and a digest of the results (mean forces, band
-//! RMS, dominant wavelength, and a bitwise digest of the force and wear histories), so that a
-//! speed-up is seen not to change the answer.
+//! balance and the damping product beside the contact step (as `corrugation passage`),
+//! without either (as the sweeps and studies), and with the damping product beside the contact
+//! but no energy balance (a lone passage's loop), and prints per passage the wall and CPU
+//! seconds, the split into set-up (integrators, contact grid, static start) and time loop, the
+//! machine's load, and a digest of the results (mean forces, band RMS, dominant wavelength,
+//! and a bitwise digest of the force and wear histories), so that a speed-up is seen not to
+//! change the answer.
 //!
 //! Run: `cargo run --release --example passage_bench -- CACHE_DIR [fmax_hz [reps [forces.csv]]]`
 //! (default 5,000 Hz, 3 repetitions; the CSV gets `t_s, fn_n, fl_n` of the last passage with
