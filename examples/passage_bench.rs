@@ -1,11 +1,13 @@
 //! Benchmark of one reduced-order passage of the default model at the model's speed (140
 //! km/h) over the 1 m solution zone, modes cached (figures in docs/performance.md): prepares
 //! the model once from the modal cache, then runs the passage `reps` times with the energy
-//! balance (as `corrugation passage`) and without (as the sweeps and studies), and prints per
-//! passage the wall and CPU seconds, the split into set-up (integrators, contact grid, static
-//! start) and time loop, the machine's load, and a digest of the results (mean forces, band
-//! RMS, dominant wavelength, and a bitwise digest of the force and wear histories), so that a
-//! speed-up is seen not to change the answer.
+//! balance and the damping product beside the contact step (as `corrugation passage`),
+//! without either (as the sweeps and studies), and with the damping product beside the contact
+//! but no energy balance (a lone passage's loop), and prints per passage the wall and CPU
+//! seconds, the split into set-up (integrators, contact grid, static start) and time loop, the
+//! machine's load, and a digest of the results (mean forces, band RMS, dominant wavelength,
+//! and a bitwise digest of the force and wear histories), so that a speed-up is seen not to
+//! change the answer.
 //!
 //! Run: `cargo run --release --example passage_bench -- CACHE_DIR [fmax_hz [reps [forces.csv]]]`
 //! (default 5,000 Hz, 3 repetitions; the CSV gets `t_s, fn_n, fl_n` of the last passage with
@@ -39,7 +41,11 @@ fn main() -> anyhow::Result<()> {
     let cache = ModalCache::new(cache_dir.as_str());
     println!("{}", machine_load());
     let t = Instant::now();
-    let with_energy = PassageOptions::default();
+    // as `corrugation passage`: the energy balance, the damping product beside the contact
+    let with_energy = PassageOptions {
+        overlap: true,
+        ..PassageOptions::default()
+    };
     let prepared = PreparedModel::new(&model, &cache, &with_energy)?;
     let engine = &prepared.engine;
     let (mt, mw) = engine.mode_counts();
@@ -50,6 +56,11 @@ fn main() -> anyhow::Result<()> {
     let without = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
+    };
+    let alone = PassageOptions {
+        overlap: true,
+        ..without
     };
     let v = model.run.speed();
     let dt = engine.contact_config(v)?.grid.dx() / v;
@@ -60,6 +71,10 @@ fn main() -> anyhow::Result<()> {
     for (name, opts) in [
         ("energy (CLI)", with_energy),
         ("no energy (studies)", without),
+        (
+            "no energy, damping product beside the contact (a passage alone)",
+            alone,
+        ),
     ] {
         for _ in 0..reps {
             let (w0, c0, t0) = (Instant::now(), cpu_seconds(), thread_cpu_seconds());

@@ -40,6 +40,7 @@ fn main() -> anyhow::Result<()> {
     let opts = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
     };
     let prepared = PreparedModel::new(&model, &cache, &opts)?;
     let (mt, mw) = prepared.engine.mode_counts();

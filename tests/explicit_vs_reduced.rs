@@ -57,6 +57,7 @@ fn wheel_rigid_modes_stay_rigid_at_a_high_fmax() {
     let opts = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
     };
     let p = PreparedModel::new(&m, &cache, &opts).unwrap();
     let f = &p.wheel_frequencies_hz;
@@ -215,6 +216,7 @@ fn compare_at(
     let popts = PassageOptions {
         energy: true,
         rail_point_offset_m: None,
+        overlap: false,
     };
     let wheel_hz = rayleigh_frequencies_hz(wm.k.as_ref(), &wb.1);
     let engine = PassageEngine::new(
@@ -408,6 +410,7 @@ fn reduced_with_all_modes_is_the_explicit_fe_passage() {
     let popts = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
     };
     let wheel_hz = rayleigh_frequencies_hz(wm.k.as_ref(), &wb.1);
     eprintln!(

@@ -31,6 +31,7 @@ fn linear_wear_response_matches_passages_over_small_sinusoids() {
     let opts = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
     };
     let p = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
     let v = m.run.speed();
@@ -75,6 +76,7 @@ fn spectrum_growth_rate_follows_the_phase() {
     let opts = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
     };
     let p = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
     let o = RateOptions {

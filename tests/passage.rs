@@ -549,6 +549,7 @@ fn shared_static_start_gives_the_passage_of_a_fresh_engine() {
     let opts = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
     };
     let v = |kmh: f64| corrugation::units::kmh_to_ms(kmh);
     let warm = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
@@ -781,4 +782,56 @@ fn a_failed_trial_stops_the_growth_and_keeps_the_smaller_amplitudes() {
         "{:?}",
         verdict.lines
     );
+}
+
+/// The track's damping product beside the contact step (`PassageOptions::overlap`, for a
+/// passage that runs alone): the same bits on one thread as on two (the split arithmetic does
+/// not depend on whether the second core takes its half), and the passage of the plain step
+/// within the tolerances stated for it in docs/performance.md §5.11 (the two differ only by
+/// the rounding of the split single-precision damping products): mean forces within 1e-6,
+/// band RMS within 1e-4, dominant wavelength within 1e-5 (relative).
+#[test]
+fn damping_product_beside_the_contact_gives_the_same_bits_on_one_and_two_threads() {
+    let m = small_model();
+    let plain = PassageOptions {
+        energy: false,
+        rail_point_offset_m: None,
+        overlap: false,
+    };
+    let alone = PassageOptions {
+        overlap: true,
+        ..plain
+    };
+    let p = PreparedModel::new(&m, &cache(), &plain).expect("modal model");
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("thread pool")
+            .install(|| run_passage(&p, &m, &alone))
+    };
+    let (one, s1) = on(1);
+    let (two, _) = on(2);
+    let (a, b) = (&one.histories, &two.histories);
+    assert_eq!(a.normal_n, b.normal_n);
+    assert_eq!(a.longitudinal_n, b.longitudinal_n);
+    assert_eq!(one.wear_j_per_m, two.wear_j_per_m);
+    let (base, s0) = run_passage(&p, &m, &plain);
+    // the split step is taken (its rounding differs from the plain step's)
+    assert_ne!(base.histories.longitudinal_n, a.longitudinal_n);
+    let rel = |x: f64, y: f64| (x - y).abs() / y.abs();
+    assert!(rel(s1.mean_fn_n, s0.mean_fn_n) < 1e-6);
+    assert!(rel(s1.mean_fl_n, s0.mean_fl_n) < 1e-6);
+    for (x, y, what) in [
+        (s1.fl_band_rms_n, s0.fl_band_rms_n, "F_L"),
+        (s1.fn_band_rms_n, s0.fn_band_rms_n, "F_N"),
+        (s1.wear_band_rms, s0.wear_band_rms, "wear"),
+    ] {
+        assert!(rel(x, y) < 1e-4, "band RMS of {what}: {x} vs {y}");
+    }
+    let (w1, w0) = (
+        s1.dominant_wavelength_mm.unwrap(),
+        s0.dominant_wavelength_mm.unwrap(),
+    );
+    assert!(rel(w1, w0) < 1e-5, "dominant wavelength {w1} vs {w0} mm");
 }

@@ -50,6 +50,7 @@ fn a_warm_preparation_gives_the_cold_ones_passage() {
     let opts = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
     };
     let cold = PreparedModel::new(&m, &cache, &opts).unwrap();
     let warm = PreparedModel::new(&m, &cache, &opts).unwrap();

@@ -68,7 +68,11 @@ impl PassageCmd {
                 self.json,
             );
         }
-        let opts = PassageOptions::default();
+        // a passage that runs alone: the track's damping product on the second core
+        let opts = PassageOptions {
+            overlap: true,
+            ..PassageOptions::default()
+        };
         let mut prepared = super::engine::prepared(&m, self.cache.as_deref())?;
         let pb = super::progress::bar("passage (time steps)");
         let rec = prepared

@@ -95,6 +95,7 @@ pub fn nodal_outputs(
     let opts = PassageOptions {
         energy: false,
         rail_point_offset_m: Some(0.0),
+        overlap: false,
     };
     let mut res = Vec::new();
     for (label, x) in points {

@@ -21,8 +21,9 @@
 //! `2nx` cannot hold). Tangential products pack `τx + i τy` into one complex FFT.
 
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
-use rustfft::num_complex::Complex64;
-use rustfft::{Fft, FftPlanner};
+use rustfft::num_complex::{Complex, Complex32, Complex64};
+use rustfft::num_traits::Zero;
+use rustfft::{Fft, FftNum, FftPlanner};
 use std::f64::consts::PI;
 use std::sync::Arc;
 
@@ -85,22 +86,23 @@ pub fn coefficients(
 }
 
 /// 2D FFT of an `m1 × m2` row-major complex array (rows of length `m2`), with preallocated
-/// transpose buffer and scratch.
+/// transpose buffer and scratch; in double (`T = f64`) or single precision (`T = f32`, the
+/// box products of [`Convolver::tangential_box`]).
 #[derive(Clone)]
-struct Fft2 {
+struct Fft2<T: FftNum> {
     m1: usize,
     m2: usize,
-    row_f: Arc<dyn Fft<f64>>,
-    col_f: Arc<dyn Fft<f64>>,
-    row_i: Arc<dyn Fft<f64>>,
-    col_i: Arc<dyn Fft<f64>>,
-    tbuf: Vec<Complex64>,
-    scratch: Vec<Complex64>,
+    row_f: Arc<dyn Fft<T>>,
+    col_f: Arc<dyn Fft<T>>,
+    row_i: Arc<dyn Fft<T>>,
+    col_i: Arc<dyn Fft<T>>,
+    tbuf: Vec<Complex<T>>,
+    scratch: Vec<Complex<T>>,
 }
 
-impl Fft2 {
+impl<T: FftNum> Fft2<T> {
     fn new(m1: usize, m2: usize) -> Self {
-        let mut pl = FftPlanner::new();
+        let mut pl = FftPlanner::<T>::new();
         let row_f = pl.plan_fft_forward(m2);
         let col_f = pl.plan_fft_forward(m1);
         let row_i = pl.plan_fft_inverse(m2);
@@ -117,16 +119,16 @@ impl Fft2 {
             col_f,
             row_i,
             col_i,
-            tbuf: vec![Complex64::new(0.0, 0.0); m1 * m2],
-            scratch: vec![Complex64::new(0.0, 0.0); ns.max(1)],
+            tbuf: vec![Complex::<T>::zero(); m1 * m2],
+            scratch: vec![Complex::<T>::zero(); ns.max(1)],
         }
     }
 
     /// Forward transform of `data` whose rows `nonzero_rows..` are zero. The result is left
     /// in `self.tbuf` in transposed layout (`m2 × m1`). All-zero rows are not transformed.
-    fn forward_to_t(&mut self, data: &mut [Complex64], nonzero_rows: usize) {
+    fn forward_to_t(&mut self, data: &mut [Complex<T>], nonzero_rows: usize) {
         let (m1, m2) = (self.m1, self.m2);
-        let zero = Complex64::new(0.0, 0.0);
+        let zero = Complex::<T>::zero();
         for i in 0..nonzero_rows {
             let row = &mut data[i * m2..(i + 1) * m2];
             // the transform of a zero row is zero (rows outside the contact)
@@ -147,7 +149,7 @@ impl Fft2 {
     }
 
     /// Inverse transform of `self.tbuf` (transposed layout); writes rows `r0..r1` of `data`.
-    fn inverse_from_t(&mut self, data: &mut [Complex64], r0: usize, r1: usize) {
+    fn inverse_from_t(&mut self, data: &mut [Complex<T>], r0: usize, r1: usize) {
         let (m1, m2) = (self.m1, self.m2);
         self.col_i
             .process_with_scratch(&mut self.tbuf, &mut self.scratch);
@@ -310,7 +312,7 @@ pub struct Convolver {
     ny: usize,
     m1: usize,
     m2: usize,
-    fft: Fft2,
+    fft: Fft2<f64>,
     rfft: RealFft2,
     /// Real spectra in transposed layout, already divided by `m1 m2`.
     kzz: Vec<f64>,
@@ -549,6 +551,12 @@ impl Convolver {
     /// whole grid's `m1 × m2`. Elements of rows `r0..r1` outside the columns `c0..c1` get 0;
     /// the other rows of `ux, uy` are left as they are. The padded grids and their kernel
     /// spectra are built with the convolver ([`box_grids`]); no allocation here.
+    ///
+    /// The box product runs in **single precision** (tractions rounded to `f32`, `f32` FFTs
+    /// and kernel spectra; about `10⁻⁷ λ_max ‖τ‖₂` of error): it serves the tangential
+    /// solver's inner conjugate gradients, which reduce a residual a few hundredfold between
+    /// exact double-precision products. A box whose padded grid would not be smaller than the
+    /// whole grid's takes the whole grid's rows in double precision.
     pub fn tangential_box(
         &mut self,
         tx: &[f64],
@@ -572,14 +580,13 @@ impl Convolver {
             return;
         };
         let bg = &mut self.boxes[k];
-        let zero = Complex64::new(0.0, 0.0);
         for a in 0..bx {
             let row = &mut bg.buf[a * p2..(a + 1) * p2];
             let e0 = (r0 + a) * ny + c0;
             for (b, v) in row[..by].iter_mut().enumerate() {
-                *v = Complex64::new(tx[e0 + b], ty[e0 + b]);
+                *v = Complex32::new(tx[e0 + b] as f32, ty[e0 + b] as f32);
             }
-            row[by..].fill(zero);
+            row[by..].fill(Complex32::zero());
         }
         bg.fft.forward_to_t(&mut bg.buf, bx);
         tangential_kernel_product(&bg.fft.tbuf, &bg.ka, &bg.kb, &mut bg.work, p1, p2);
@@ -590,7 +597,7 @@ impl Convolver {
             for j in 0..ny {
                 let (vx, vy) = if (c0..c1).contains(&j) {
                     let v = bg.buf[a * p2 + j - c0];
-                    (v.re, v.im)
+                    (f64::from(v.re), f64::from(v.im))
                 } else {
                     (0.0, 0.0)
                 };
@@ -623,15 +630,15 @@ impl Convolver {
 }
 
 /// `W = A Z + B conj Z(−k)` in the transposed spectral layout (`q = k2 · m1 + k1`) of an
-/// `m1 × m2` grid: the tangential kernel product of [`Convolver`] (type doc). Compiled
-/// twice: for AVX2 (four-lane vectors), used when the CPU has it (checked at run time), and
-/// for the baseline; the same multiplications and additions in the same order (no fused
-/// multiply-add), so both give the same bits.
-fn tangential_kernel_product(
-    z: &[Complex64],
-    ka: &[f64],
-    kb: &[Complex64],
-    work: &mut [Complex64],
+/// `m1 × m2` grid: the tangential kernel product of [`Convolver`] (type doc), in double or
+/// single precision. Compiled twice: for AVX2 (four `f64` or eight `f32` lanes), used when
+/// the CPU has it (checked at run time), and for the baseline; the same multiplications and
+/// additions in the same order (no fused multiply-add), so both give the same bits.
+fn tangential_kernel_product<T: FftNum>(
+    z: &[Complex<T>],
+    ka: &[T],
+    kb: &[Complex<T>],
+    work: &mut [Complex<T>],
     m1: usize,
     m2: usize,
 ) {
@@ -648,11 +655,11 @@ fn tangential_kernel_product(
 /// [`tangential_kernel_product_plain`] compiled with AVX2 enabled.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn tangential_kernel_product_avx2(
-    z: &[Complex64],
-    ka: &[f64],
-    kb: &[Complex64],
-    work: &mut [Complex64],
+fn tangential_kernel_product_avx2<T: FftNum>(
+    z: &[Complex<T>],
+    ka: &[T],
+    kb: &[Complex<T>],
+    work: &mut [Complex<T>],
     m1: usize,
     m2: usize,
 ) {
@@ -661,11 +668,11 @@ fn tangential_kernel_product_avx2(
 
 /// The kernel product of [`tangential_kernel_product`], for any instruction set.
 #[inline(always)]
-fn tangential_kernel_product_plain(
-    z: &[Complex64],
-    ka: &[f64],
-    kb: &[Complex64],
-    work: &mut [Complex64],
+fn tangential_kernel_product_plain<T: FftNum>(
+    z: &[Complex<T>],
+    ka: &[T],
+    kb: &[Complex<T>],
+    work: &mut [Complex<T>],
     m1: usize,
     m2: usize,
 ) {
@@ -685,7 +692,7 @@ fn tangential_kernel_product_plain(
             .zip(&b[1..])
             .zip(mrow[1..].iter().rev())
         {
-            *wv = z * av + bv * zm.conj();
+            *wv = *z * *av + *bv * zm.conj();
         }
     }
 }
@@ -724,17 +731,18 @@ fn box_grids(m1: usize, m2: usize, kernels: &[[f64; 3]]) -> Vec<BoxGrid> {
 }
 
 /// A padded grid `m1 × m2` smaller than the [`Convolver`]'s, for products confined to a box
-/// ([`Convolver::tangential_box`]): its FFTs, the tangential kernel spectra sampled from the
-/// whole grid's kernels, and scratch.
+/// ([`Convolver::tangential_box`]): its single-precision FFTs, the tangential kernel spectra
+/// sampled from the whole grid's kernels (transformed in double precision, then rounded to
+/// single), and scratch.
 #[derive(Clone)]
 struct BoxGrid {
     m1: usize,
     m2: usize,
-    fft: Fft2,
-    ka: Vec<f64>,
-    kb: Vec<Complex64>,
-    buf: Vec<Complex64>,
-    work: Vec<Complex64>,
+    fft: Fft2<f32>,
+    ka: Vec<f32>,
+    kb: Vec<Complex32>,
+    buf: Vec<Complex32>,
+    work: Vec<Complex32>,
 }
 
 impl BoxGrid {
@@ -743,7 +751,7 @@ impl BoxGrid {
     /// that it keeps its odd parity (real spectra, as in [`Convolver::new`]).
     fn new(m1: usize, m2: usize, f1: usize, f2: usize, kernels: &[[f64; 3]]) -> Self {
         let zero = Complex64::new(0.0, 0.0);
-        let mut fft = Fft2::new(m1, m2);
+        let mut fft = Fft2::<f64>::new(m1, m2);
         let wrap = |k: usize, m: usize, f: usize| -> (usize, bool) {
             if 2 * k < m {
                 (k, false)
@@ -778,13 +786,17 @@ impl BoxGrid {
         BoxGrid {
             m1,
             m2,
-            fft,
-            ka: kxx.iter().zip(&kyy).map(|(a, b)| 0.5 * (a + b)).collect(),
-            kb: (0..m1 * m2)
-                .map(|q| Complex64::new(0.5 * (kxx[q] - kyy[q]), kxy[q]))
+            fft: Fft2::new(m1, m2),
+            ka: kxx
+                .iter()
+                .zip(&kyy)
+                .map(|(a, b)| (0.5 * (a + b)) as f32)
                 .collect(),
-            buf: vec![zero; m1 * m2],
-            work: vec![zero; m1 * m2],
+            kb: (0..m1 * m2)
+                .map(|q| Complex32::new((0.5 * (kxx[q] - kyy[q])) as f32, kxy[q] as f32))
+                .collect(),
+            buf: vec![Complex32::zero(); m1 * m2],
+            work: vec![Complex32::zero(); m1 * m2],
         }
     }
 }
@@ -873,8 +885,8 @@ mod tests {
     fn box_products_equal_dense_sums() {
         // Independent check: dense double sum of the closed-form coefficients over a traction
         // confined to a box; odd and even box extents (padded sizes 15 × 9, 27 × 5, 16 × 16
-        // on the 24 × 10 and 16 × 9 grids), and a box as large as the grid (the whole-grid
-        // path)
+        // on the 24 × 10 and 16 × 9 grids: single precision), and a box as large as the grid
+        // (the whole grid's double-precision path)
         let (dx, dy) = (0.3e-3, 0.45e-3);
         let (es, g, nu) = (115e9, 80e9, 0.3);
         for &(nx, ny, (r0, r1), (c0, c1)) in &[
@@ -904,6 +916,21 @@ mod tests {
                     }
                 })
                 .collect();
+            // a box on a smaller padded grid is a single-precision product: bound its error
+            // by f32 rounding (Higham 2002 Thm 24.2: a radix-2 FFT's error is at most
+            // about log2 N · u · ‖x‖₂ per pass; forward, kernel product, inverse, and the
+            // rounding of the tractions), with the operator's norm ≤ λ_max
+            let (p1, p2) = (
+                next_smooth3(2 * (r1 - r0) - 1),
+                next_smooth3(2 * (c1 - c0) - 1),
+            );
+            let single = conv.boxes.iter().any(|b| (b.m1, b.m2) == (p1, p2));
+            let norm = tx.iter().chain(&ty).map(|v| v * v).sum::<f64>().sqrt();
+            let f32_bound = 10.0
+                * ((p1 * p2) as f64).log2()
+                * f64::from(f32::EPSILON)
+                * conv.lambda_max_t
+                * norm;
             let (mut ux, mut uy) = (vec![f64::NAN; n], vec![f64::NAN; n]);
             for _ in 0..2 {
                 // the second pass reuses the kept spectra of the padded size
@@ -920,7 +947,11 @@ mod tests {
                             sy += c.xy * tx[s] + c.yy * ty[s];
                         }
                     }
-                    let scale = 1e-10 * sx.abs().max(sy.abs()).max(1e-9);
+                    let scale = if single {
+                        f32_bound
+                    } else {
+                        1e-10 * sx.abs().max(sy.abs()).max(1e-9)
+                    };
                     assert!(
                         (ux[e] - sx).abs() < scale && (uy[e] - sy).abs() < scale,
                         "{nx}x{ny} box {r0}..{r1} × {c0}..{c1}, element {e}: ({}, {}) vs ({sx}, {sy})",

@@ -68,6 +68,10 @@ pub struct TangentialSolver {
     /// Rows and columns of the contact's box, on which the CG's products run.
     rows: (usize, usize),
     cols: (usize, usize),
+    /// The box's row segments within `lo..hi` (element ranges, one per row; capacity `nx`
+    /// from the start): the inner CG's loops run over them only (elsewhere the search
+    /// direction, the residual and the traction bound are zero).
+    segs: Vec<(usize, usize)>,
     /// Whether `sx, sy` are the exact product of the current traction (not the CG's
     /// recurrence).
     exact_now: bool,
@@ -123,6 +127,7 @@ impl TangentialSolver {
             hi: n,
             rows: (0, 0),
             cols: (0, 0),
+            segs: Vec::with_capacity(nx.max(1)),
             exact_now: false,
             algorithm: TangentialAlgorithm::Newton,
             jacobi: true,
@@ -354,6 +359,13 @@ impl TangentialSolver {
             col1 = col1.max(j + 1);
         }
         self.cols = (col0, col1);
+        self.segs.clear();
+        for r in self.rows.0..self.rows.1 {
+            let (a, b) = ((r * ny + col0).max(lo), (r * ny + col1).min(hi));
+            if a < b {
+                self.segs.push((a, b));
+            }
+        }
         for v in [&mut self.dx_, &mut self.dy_] {
             v[..lo].fill(0.0);
             v[hi..].fill(0.0);
@@ -458,12 +470,16 @@ impl TangentialSolver {
         stop: f64,
     ) {
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
-        let (lo, hi) = (self.lo, self.hi);
-        // the search direction is zero outside `lo..hi` (see `start`): its sums run there
-        let (mut sdx, mut sdy) = (
-            self.dx_[lo..hi].iter().sum::<f64>(),
-            self.dy_[lo..hi].iter().sum::<f64>(),
-        );
+        // the search direction is zero outside the box's segments within `lo..hi` (see
+        // `start`): its sums and the loops below run there
+        let segs = std::mem::take(&mut self.segs);
+        let (mut sdx, mut sdy) = (0.0, 0.0);
+        for &(a, b) in &segs {
+            for i in a..b {
+                sdx += self.dx_[i];
+                sdy += self.dy_[i];
+            }
+        }
         while self.products < self.cg_iterations {
             conv.tangential_box(
                 &self.dx_,
@@ -479,21 +495,25 @@ impl TangentialSolver {
             self.exact_now = false;
             // model product w = C d on adhesion, P C d + κ d on slip (d ∥ tangent there),
             // with the series compliance's uniform displacement added to C d
-            let mut den = 0.0;
-            for i in lo..hi {
-                if series {
+            if series {
+                for i in self.lo..self.hi {
                     self.qx[i] += cux;
                     self.qy[i] += cuy;
                 }
-                den += self.qx[i] * self.dx_[i]
-                    + self.qy[i] * self.dy_[i]
-                    + self.kap[i] * (self.dx_[i] * self.dx_[i] + self.dy_[i] * self.dy_[i]);
+            }
+            let mut den = 0.0;
+            for &(a, b) in &segs {
+                for i in a..b {
+                    den += self.qx[i] * self.dx_[i]
+                        + self.qy[i] * self.dy_[i]
+                        + self.kap[i] * (self.dx_[i] * self.dx_[i] + self.dy_[i] * self.dy_[i]);
+                }
             }
             if den <= 0.0 || rr == 0.0 {
                 break;
             }
             let alpha = rr / den;
-            let (violated, mut rr_new, mut rmax) = self.cg_update(pb.g, tx, ty, alpha);
+            let (violated, mut rr_new, mut rmax) = self.cg_update(pb.g, tx, ty, alpha, &segs);
             if violated {
                 if !norot {
                     self.to_circles(pb.g, tx, ty);
@@ -510,32 +530,38 @@ impl TangentialSolver {
             let beta = rr_new / rr;
             rr = rr_new;
             (sdx, sdy) = (0.0, 0.0);
-            for i in lo..hi {
-                self.dx_[i] = self.qx[i] + beta * self.dx_[i];
-                self.dy_[i] = self.qy[i] + beta * self.dy_[i];
-                sdx += self.dx_[i];
-                sdy += self.dy_[i];
+            for &(a, b) in &segs {
+                for i in a..b {
+                    self.dx_[i] = self.qx[i] + beta * self.dx_[i];
+                    self.dy_[i] = self.qy[i] + beta * self.dy_[i];
+                    sdx += self.dx_[i];
+                    sdy += self.dy_[i];
+                }
             }
         }
+        self.segs = segs;
     }
 
     /// One pass of a CG step of length `alpha`: the slip and traction update (an adhesion
     /// element leaving its disc is projected onto it and joins the slip set) and, with
     /// [`TangentialAlgorithm::Newton`], the model residual, its preconditioned copy (into
-    /// `qx, qy`; the product is no longer needed) and the reductions of the next step.
-    /// Returns whether an element left its disc, `r·z` and `max |r|`.
+    /// `qx, qy`; the product is no longer needed) and the reductions of the next step, over
+    /// the box's segments `segs` (every element with a positive bound; elsewhere the search
+    /// direction and the residual are zero). Returns whether an element left its disc, `r·z`
+    /// and `max |r|`.
     fn cg_update(
         &mut self,
         g: &[f64],
         tx: &mut [f64],
         ty: &mut [f64],
         alpha: f64,
+        segs: &[(usize, usize)],
     ) -> (bool, f64, f64) {
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
         let jacobi = self.jacobi && !norot;
         let mut violated = false;
         let (mut rr_new, mut rmax) = (0.0, 0.0_f64);
-        for i in self.lo..self.hi {
+        for i in segs.iter().flat_map(|&(a, b)| a..b) {
             let (qx, qy) = (self.qx[i], self.qy[i]);
             self.sx[i] += alpha * qx;
             self.sy[i] += alpha * qy;

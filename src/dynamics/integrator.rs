@@ -329,6 +329,73 @@ impl ModalVerlet {
         self.step_damper_work_j += 0.5 * dt * (p_old + self.damping_power());
     }
 
+    /// Whether the velocity half of a contact step can be split into a part known before
+    /// the contact force and a correction ([`Self::split_begin`], [`Self::complete_split`]):
+    /// one sub-step per contact step and a full damping matrix.
+    pub fn splits(&self) -> bool {
+        self.substeps == 1 && matches!(self.d_inv, DampingInverse::Packed(_))
+    }
+
+    /// `y = E x` in single precision (`E = (I + ½h C)⁻¹ − I`, `x` rounded to `f32`, the
+    /// product of [`sym_packed_product_f32`]), for [`Self::splits`] integrators; `x32` is
+    /// scratch of the mode count. `y` (1/s · modal units, as `x`) gets the result in `f64`.
+    pub fn damping_correction(&self, x: &[f64], x32: &mut [f32], y32: &mut [f32], y: &mut [f64]) {
+        let DampingInverse::Packed(e) = &self.d_inv else {
+            y.fill(0.0);
+            return;
+        };
+        for (r32, r) in x32.iter_mut().zip(x) {
+            *r32 = *r as f32;
+        }
+        sym_packed_product_f32(e, x32, y32);
+        for (v, v32) in y.iter_mut().zip(y32.iter()) {
+            *v = f64::from(*v32);
+        }
+    }
+
+    /// The first part of a split velocity half-step (after [`Self::advance_displacement`],
+    /// before the contact force is known): `b = v + ½h a + ½h (f_known − Ω² q)` (the
+    /// velocity right-hand side with the force `f_known`, e.g. the last contact force on the
+    /// new rows) and its damping correction `e_b = E b` ([`Self::damping_correction`]).
+    /// Reads the state only, so it can run beside the contact step.
+    pub fn split_begin(
+        &self,
+        f_known: &[f64],
+        b: &mut [f64],
+        (x32, y32): (&mut [f32], &mut [f32]),
+        e_b: &mut [f64],
+    ) {
+        let h = self.h;
+        for i in 0..self.len() {
+            b[i] = self.v[i]
+                + 0.5 * h * self.a[i]
+                + 0.5 * h * (f_known[i] - self.omega2[i] * self.q[i]);
+        }
+        self.damping_correction(b, x32, y32, e_b);
+    }
+
+    /// The second part of a split velocity half-step: the force is `f_known + df`, with
+    /// `e_df = E df` given (by linearity, e.g. from the damping corrections of the rows that
+    /// `df` combines): `rhs = b + ½h df`, `v = rhs + e_b + ½h e_df`, then the acceleration,
+    /// the damper force and the dampers' work as [`Self::complete`]. The same implicit step
+    /// as [`Self::complete`] with `f = f_known + df` up to the rounding of the single
+    /// precision products. For [`Self::splits`] integrators; no allocation.
+    pub fn complete_split(&mut self, b: &[f64], e_b: &[f64], df: &[f64], e_df: &[f64]) {
+        debug_assert!(self.splits());
+        let (dt, m) = (self.h, self.len());
+        let p_old = self.damping_power();
+        self.v_old.copy_from_slice(&self.v);
+        for i in 0..m {
+            self.rhs[i] = b[i] + 0.5 * dt * df[i];
+            self.v[i] = self.rhs[i] + e_b[i] + 0.5 * dt * e_df[i];
+        }
+        for i in 0..m {
+            self.a[i] = 2.0 / dt * (self.v[i] - self.v_old[i]) - self.a[i];
+            self.cv[i] = 2.0 / dt * (self.rhs[i] - self.v[i]);
+        }
+        self.step_damper_work_j += 0.5 * dt * (p_old + self.damping_power());
+    }
+
     /// The dampers' work over the last contact step (J): the trapezoidal rule over its
     /// sub-steps, `Σ ½h(q̇ᵀC q̇ |_k + q̇ᵀC q̇ |_{k+1})`.
     pub fn step_damper_work(&self) -> f64 {
@@ -626,23 +693,9 @@ mod tests {
         }
         let m = 29;
         let dt = 1.6e-5;
-        let mut c = Mat::<f64>::zeros(m, m);
-        for i in 0..m {
-            for j in 0..m {
-                c[(i, j)] = 40.0 / (1.0 + (i as f64 - j as f64).abs())
-                    + if i == j { i as f64 } else { 0.0 };
-            }
-        }
-        let omega2: Vec<f64> = (0..m)
-            .map(|i| (2.0 * PI * (80.0 + 150.0 * i as f64)).powi(2))
-            .collect();
-        let sys = ModalSystem {
-            omega2: omega2.clone(),
-            damping: c.clone(),
-        };
+        let (c, omega2, sys) = full_damping_system(m, [40.0, 1.0], [80.0, 150.0]);
         let mut it = ModalVerlet::new(&sys, dt).unwrap();
-        let q0: Vec<f64> = (0..m).map(|i| 1e-6 * ((i % 7) as f64 - 3.0)).collect();
-        let v0: Vec<f64> = (0..m).map(|i| 1e-3 * ((i % 5) as f64 - 2.0)).collect();
+        let (q0, v0) = test_state(m);
         let f: Vec<f64> = (0..m).map(|i| ((i % 3) as f64 - 1.0) * 10.0).collect();
         it.set_state(&q0, &v0, &f);
         let a0 = it.a.clone();
@@ -673,6 +726,92 @@ mod tests {
 
     /// `γ_n = n u / (1 − n u)` with the single-precision unit round-off `u = 2⁻²⁴` (Higham,
     /// §3.1): the relative bound of a sum of `n` rounded products.
+    #[test]
+    fn split_velocity_step_equals_a_dense_lu_solve() {
+        // Independent check of the split step (`split_begin` + `complete_split`): the force
+        // f = f_known + df with E df formed separately (by linearity) against the dense LU
+        // solve of (I + ½Δt C) v = rhs(f) in f64. Each single-precision product adds at most
+        // γ_{m+2} |E| |x| of its input x (b, and ½Δt df), so the bound is their sum.
+        let m = 31;
+        let dt = 1.6e-5;
+        let (c, omega2, sys) = full_damping_system(m, [60.0, 2.0], [90.0, 140.0]);
+        let mut it = ModalVerlet::new(&sys, dt).unwrap();
+        assert!(it.splits());
+        let (q0, v0) = test_state(m);
+        let f_known: Vec<f64> = (0..m).map(|i| ((i % 3) as f64 - 1.0) * 1e3).collect();
+        let df: Vec<f64> = (0..m).map(|i| ((i % 4) as f64 - 1.5) * 2.0).collect();
+        it.set_state(&q0, &v0, &f_known);
+        let a0 = it.a.clone();
+        it.advance_displacement();
+        let q1 = it.q.clone();
+        let (mut b, mut e_b, mut e_df) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+        let (mut x32, mut y32) = (vec![0.0f32; m], vec![0.0f32; m]);
+        it.split_begin(&f_known, &mut b, (&mut x32, &mut y32), &mut e_b);
+        it.damping_correction(&df, &mut x32, &mut y32, &mut e_df);
+        it.complete_split(&b, &e_b, &df, &e_df);
+        let lhs = nalgebra::DMatrix::from_fn(m, m, |i, j| {
+            0.5 * dt * c[(i, j)] + if i == j { 1.0 } else { 0.0 }
+        });
+        let bd = nalgebra::DVector::from_fn(m, |i, _| {
+            v0[i] + 0.5 * dt * a0[i] + 0.5 * dt * (f_known[i] - omega2[i] * q1[i])
+        });
+        let dd = nalgebra::DVector::from_fn(m, |i, _| 0.5 * dt * df[i]);
+        let v1 = lhs.clone().lu().solve(&(&bd + &dd)).unwrap();
+        let e = lhs.try_inverse().unwrap() - nalgebra::DMatrix::<f64>::identity(m, m);
+        let bound = (e.abs() * (bd.abs() + dd.abs())) * gamma_f32(m + 2);
+        for i in 0..m {
+            let err = (it.v[i] - v1[i]).abs();
+            assert!(
+                err <= bound[i] + 1e-14 * v1.amax(),
+                "mode {i}: {} vs {} (bound {})",
+                it.v[i],
+                v1[i],
+                bound[i]
+            );
+        }
+        // the damping acts: the dense solution differs from the undamped rhs by far more
+        // than the bound, so the test would see a wrong correction
+        let undamped = (&bd + &dd - &v1).amax();
+        assert!(
+            undamped > 100.0 * bound.amax(),
+            "{undamped} vs {}",
+            bound.amax()
+        );
+    }
+
+    /// A modal system of `m` modes with a full damping matrix
+    /// `C_ij = c[0] / (1 + |i − j|) + c[1] i δ_ij` (1/s) and `ω_i = 2π (f[0] + f[1] i)`
+    /// (rad/s): `(C, ω², system)`.
+    fn full_damping_system(
+        m: usize,
+        c: [f64; 2],
+        f: [f64; 2],
+    ) -> (Mat<f64>, Vec<f64>, ModalSystem) {
+        let mut cm = Mat::<f64>::zeros(m, m);
+        for i in 0..m {
+            for j in 0..m {
+                cm[(i, j)] = c[0] / (1.0 + (i as f64 - j as f64).abs())
+                    + if i == j { c[1] * i as f64 } else { 0.0 };
+            }
+        }
+        let omega2: Vec<f64> = (0..m)
+            .map(|i| (2.0 * PI * (f[0] + f[1] * i as f64)).powi(2))
+            .collect();
+        let sys = ModalSystem {
+            omega2: omega2.clone(),
+            damping: cm.clone(),
+        };
+        (cm, omega2, sys)
+    }
+
+    /// A displacement and velocity of `m` modes for the implicit-step tests.
+    fn test_state(m: usize) -> (Vec<f64>, Vec<f64>) {
+        (
+            (0..m).map(|i| 1e-6 * ((i % 7) as f64 - 3.0)).collect(),
+            (0..m).map(|i| 1e-3 * ((i % 5) as f64 - 2.0)).collect(),
+        )
+    }
+
     fn gamma_f32(n: usize) -> f64 {
         let nu = n as f64 * 2f64.powi(-24);
         nu / (1.0 - nu)

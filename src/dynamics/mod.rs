@@ -429,6 +429,7 @@ impl PassageRecorder for passage::PassageEngine {
         let quiet = passage::PassageOptions {
             energy: false,
             rail_point_offset_m: None,
+            overlap: false,
         };
         self.passage(speed_m_per_s, profile, &quiet, None)
     }

@@ -407,6 +407,7 @@ impl super::PassageRunner for PreparedModel {
         let opts = PassageOptions {
             energy: false,
             rail_point_offset_m: None,
+            overlap: false,
         };
         let rec = self.engine.passage(speed.m_per_s(), profile, &opts, None)?;
         super::analysis::summarise_at(&rec, speed)

@@ -423,6 +423,13 @@ impl RailContactLine {
         }
     }
 
+    /// The modal rows (x, t, n blocks, `3·m` values) of node plane `p` (`p <` the plane
+    /// count).
+    pub fn plane_rows(&self, p: usize) -> &[f64] {
+        let k = 3 * self.modes;
+        &self.rows[p * k..(p + 1) * k]
+    }
+
     /// Interval and linear weight of `x` (m): `(p, s)` with `x = (1−s)·x_p + s·x_{p+1}`;
     /// `None` off the rail.
     pub fn locate(&self, x: f64) -> Option<(usize, f64)> {

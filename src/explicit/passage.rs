@@ -364,6 +364,7 @@ impl crate::dynamics::PassageRecorder for ExplicitModel {
         let opts = PassageOptions {
             energy: false,
             rail_point_offset_m: None,
+            overlap: false,
         };
         self.passage(speed_m_per_s, profile, &opts, &mut |_, _| {})
             .map(|r| r.record)

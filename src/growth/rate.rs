@@ -653,6 +653,7 @@ pub fn passage_gain(
     let opts = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
     };
     let rec = engine.passage(v, Some(&profile), &opts, None)?;
     if rec.wear_j_per_m.len() != smooth.wear_j_per_m.len() {

@@ -640,6 +640,7 @@ pub fn rate_check(
     let opts = PassageOptions {
         energy: false,
         rail_point_offset_m: None,
+        overlap: false,
     };
     let dynamics = |e: crate::dynamics::DynamicsError| StudiesError::StudyCase {
         file: "growth-rate check".into(),
