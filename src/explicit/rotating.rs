@@ -660,20 +660,24 @@ impl RotatingWheel {
     }
 
     /// Advances the wheel over the contact step ending at `t_end` (s) (`steps` sub-steps)
-    /// under the contact force `fc[1]` (N, contact frame, on the wheel; `fc[0]` in the first
-    /// sub-step, [`Hold::first_load`]) held at the contact's end-of-step place and direction,
-    /// the rotating ground loads, the torque and the suspension.
+    /// under the contact force `f` (N, contact frame, on the wheel) held at the contact's
+    /// end-of-step place and direction, the rotating ground loads, the torque and the
+    /// suspension. The first sub-step carries `split` instead ([`Hold::boundary_split`]):
+    /// `split[0]`, the previous step's share, where the previous step's force acted (the
+    /// contact's place and direction at the step's start), and `split[1]` at the end-of-step
+    /// place (docs/theory.md §8.8).
     pub(super) fn advance(
         &mut self,
         op: &ExplicitOperator,
         u: &mut [f64],
         v: &mut [f64],
-        fc: [[f64; 3]; 2],
+        (split, f): ([[f64; 3]; 2], [f64; 3]),
         t_end: f64,
     ) {
         self.at = self.locate(t_end);
         self.at_start = self.locate(t_end - self.steps as f64 * self.dt);
-        let frs = fc.map(|g| to_spinning(self.at.cs, self.ground_of(g)));
+        let prev = to_spinning(self.at_start.cs, self.ground_of(split[0]));
+        let [first, held] = [split[1], f].map(|g| to_spinning(self.at.cs, self.ground_of(g)));
         let t0 = t_end - self.steps as f64 * self.dt;
         for k in 0..self.steps {
             let a = self.spin.omega * (t0 + k as f64 * self.dt);
@@ -687,7 +691,12 @@ impl RotatingWheel {
                 self.f[iz] += s * gx + cm1 * gz;
             }
             let mut f = std::mem::take(&mut self.f);
-            self.load(self.at, frs[usize::from(k > 0)], &mut f);
+            if k == 0 {
+                self.load(self.at_start, prev, &mut f);
+                self.load(self.at, first, &mut f);
+            } else {
+                self.load(self.at, held, &mut f);
+            }
             if let Some(sus) = &self.suspension {
                 sus.correction([c, s], self.spin.omega, u, v, &mut f);
             }

@@ -362,7 +362,7 @@ impl<'a> Stepper<'a> {
     }
 
     /// The predictor: the last force `F_n` held over the step at `x_{n+1}` (patch `pw`), the
-    /// first sub-step also carrying the previous step's share on the rail where the
+    /// first sub-step also carrying the previous step's share where the
     /// previous step's force acted; the track and the wheel advanced over their sub-steps.
     fn predict(&mut self, t: f64, pw: &PlaneWeights) -> Predicted {
         let (m, p, f) = (self.m, self.plan, self.f);
@@ -412,7 +412,7 @@ impl<'a> Stepper<'a> {
         );
         let (uw_new, g_wheel) = match self.rot.as_mut() {
             Some(r) => {
-                r.advance(&m.wheel.op, uw, vw, [f0, f], t);
+                r.advance(&m.wheel.op, uw, vw, (split, f), t);
                 let g = if self.corrected {
                     r.compliance(&m.wheel.op)
                 } else {
