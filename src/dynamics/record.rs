@@ -121,10 +121,15 @@ pub struct EnergyBalance {
     pub residual_spring_energy_change_j: f64,
     /// Work of the contact forces on the two structures (J): = −(friction + contact energy).
     pub contact_work_j: f64,
+    /// Work fed by the rotating wheel's spinning frame (J; zero for a wheel that does not
+    /// rotate, docs/theory.md §8.8): the contact force through the frame's turn of the
+    /// wheel's displacement under the contact over a contact step, and the primary
+    /// suspension's turn to the ground vertical. Counted as an input.
+    pub frame_work_j: f64,
 }
 
 impl EnergyBalance {
-    /// `input + spin work − (stored + dampers + friction + contact and residual-spring
+    /// `input + spin, convective and frame work − (stored + dampers + friction + contact and residual-spring
     /// energy)` over the input
     /// (−).
     pub fn relative_error(&self) -> f64 {
@@ -138,7 +143,8 @@ impl EnergyBalance {
             .abs()
             .max(self.frictional_work_j.abs() + self.damper_dissipation_j.abs())
             .max(f64::MIN_POSITIVE);
-        (self.external_work_j + self.spin_work_j + self.convective_work_j - out) / scale
+        (self.external_work_j + self.spin_work_j + self.convective_work_j + self.frame_work_j - out)
+            / scale
     }
 }
 

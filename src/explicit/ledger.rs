@@ -2,6 +2,7 @@
 //! reduced passage's [`EnergyBalance`], from the state at contact-step boundaries.
 
 use super::model::ExplicitModel;
+use super::rotating::RotatingWheel;
 use super::ExplicitError;
 use crate::dynamics::record::EnergyBalance;
 
@@ -53,6 +54,21 @@ pub(super) struct LedgerStep {
     /// starts at the contact and does not reach the dampers (pads, ballast, suspension)
     /// within the step, so this is the step's dissipation.
     pub(super) damper_j: f64,
+    /// The step's start and end times (s).
+    pub(super) t: [f64; 2],
+    /// The wheel's contact-point displacement at the step's end (m, contact frame).
+    pub(super) uw_end: [f64; 3],
+    /// The wheel's contact-point displacement of the step's start state as the structure
+    /// sees it (m, contact frame): on the rotating wheel turned to the ground with the
+    /// step's end rotation, where `old` turns it with the start rotation (the material
+    /// point's increment the contact reads); on the fixed wheel `old`'s.
+    pub(super) uw_turned: [f64; 3],
+    /// The rotating tread's convective deflection taken out of the creepage's wheel
+    /// increment (m, contact frame; zero on the fixed wheel).
+    pub(super) conv: [f64; 3],
+    /// Work of the rotating wheel's suspension turned to the ground vertical over the
+    /// predictor's sub-steps (J; zero on the fixed wheel).
+    pub(super) frame_j: f64,
 }
 
 /// The energy ledger of an explicit passage (the same terms as the reduced passage's,
@@ -69,6 +85,12 @@ pub(super) struct Ledger<'a> {
     /// Wheel-load work potentials `f·u` at the step's start: all, torque, gravity.
     before: [f64; 3],
     ku: Vec<f64>,
+    /// The wheel's state at the step's start (m; rotating wheel only).
+    uw_start: Vec<f64>,
+    /// The suspension's energy correction at the last step's end (J; rotating wheel only).
+    sus_prev: f64,
+    /// The wheel's contact-point displacement at the last step's end (m; rotating wheel).
+    uw_prev: [f64; 3],
     /// Contact work, convective work and series-spring energy per contact-frame direction
     /// (J), for the audit.
     pub(super) by_direction: [[f64; 3]; 3],
@@ -83,7 +105,13 @@ impl<'a> Ledger<'a> {
         s: &State,
         st: &crate::contact::StepResult,
         x0: f64,
+        rot: Option<&RotatingWheel>,
     ) -> Result<Self, ExplicitError> {
+        let nw = if on && rot.is_some() {
+            m.wheel.op.n()
+        } else {
+            0
+        };
         let mut l = Ledger {
             m,
             on,
@@ -100,29 +128,37 @@ impl<'a> Ledger<'a> {
             } else {
                 Vec::new()
             },
+            uw_start: vec![0.0; nw],
+            uw_prev: rot.map_or([0.0; 3], |r| r.wheel_at(&s.uw, 0.0, 0.0)),
+            sus_prev: rot.map_or(0.0, |r| r.suspension_energy_correction(&s.uw, 0.0)),
         };
         if on {
-            l.e_start = l.stored(s);
+            l.e_start = l.stored(s, rot, 0.0);
         }
         Ok(l)
     }
 
-    /// Kinetic + strain energy of both substructures (J).
-    fn stored(&mut self, s: &State) -> f64 {
-        let mut e = 0.0;
-        for (op, u, v) in [
-            (&self.m.track.op, &s.ut, &s.vt),
-            (&self.m.wheel.op, &s.uw, &s.vw),
-        ] {
-            let ku = &mut self.ku[..u.len()];
+    /// Kinetic + strain energy of both substructures (J) at time `t` (s); the rotating
+    /// wheel's in its spinning frame ([`RotatingWheel::stored`]).
+    fn stored(&mut self, s: &State, rot: Option<&RotatingWheel>, t: f64) -> f64 {
+        let plain = |op: &super::operator::ExplicitOperator, u: &[f64], v, ku: &mut [f64]| {
             op.apply_k(u, ku);
-            e += 0.5 * dot(u, ku) + op.kinetic_energy(v);
+            0.5 * dot(u, ku) + op.kinetic_energy(v)
+        };
+        let (track, wheel) = (&self.m.track.op, &self.m.wheel.op);
+        let e = plain(track, &s.ut, &s.vt, &mut self.ku[..s.ut.len()]);
+        let ku = &mut self.ku[..s.uw.len()];
+        e + match rot {
+            Some(r) => r.stored(wheel, &s.uw, &s.vw, t, ku),
+            None => plain(wheel, &s.uw, &s.vw, ku),
         }
-        e
     }
 
     pub(super) fn before_step(&mut self, uw: &[f64]) {
         if self.on {
+            if !self.uw_start.is_empty() {
+                self.uw_start.copy_from_slice(uw);
+            }
             let l = &self.m.loads;
             self.before = [
                 dot(&self.m.wheel_const, uw),
@@ -137,26 +173,68 @@ impl<'a> Ledger<'a> {
         s: &State,
         k: LedgerStep,
         r: &crate::contact::StepResult,
+        rot: Option<&RotatingWheel>,
     ) -> Result<(), ExplicitError> {
         if !self.on {
             return Ok(());
         }
         let (m, eb) = (self.m, &mut self.eb);
-        // Constant wheel loads: exact work f·Δu.
+        // Constant wheel loads: exact work f·Δu. On the rotating wheel the ground-fixed ones
+        // (gravity, resistance) turn in the spinning frame: their turn's work is added.
         eb.external_work_j += dot(&m.wheel_const, &s.uw) - self.before[0];
         eb.torque_work_j += dot(&m.loads.torque, &s.uw) - self.before[1];
         eb.gravity_work_j += dot(&m.loads.gravity, &s.uw) - self.before[2];
+        if let Some(rw) = rot {
+            // The ground-fixed loads turn in the spinning frame: the scheme's energy sees
+            // their work on the spinning frame's increments; the input is their work on the
+            // ground frame's, the difference is the frame's.
+            let u = [self.uw_start.as_slice(), s.uw.as_slice()];
+            let [sg, gg] = rw.load_work(&m.loads.gravity, u, k.t);
+            let [sd, gd] = rw.load_work(&m.loads.drawbar, u, k.t);
+            // Less the non-turning g · Δu counted above.
+            let g_du = dot(&m.loads.gravity, &s.uw) - self.before[2];
+            let d_du = dot(&m.loads.drawbar, &s.uw) - dot(&m.loads.drawbar, &self.uw_start);
+            eb.external_work_j += gg + gd - (g_du + d_du);
+            eb.gravity_work_j += gg - g_du;
+            eb.frame_work_j += sg + sd - (gg + gd);
+            // The suspension's spring along the ground vertical in the stored energy.
+            let e = rw.suspension_energy_correction(&s.uw, k.t[1]);
+            eb.frame_work_j += e - self.sus_prev;
+            self.sus_prev = e;
+        }
         eb.damper_dissipation_j += k.damper_j;
         // Work of the contact force on the two structures, with the corrected end-of-step
-        // displacements.
+        // displacements. On the rotating wheel the contact reads the material point's
+        // increment, the structure carries the force over the spinning frame's increment:
+        // the difference, the force's work through the frame's turn of the wheel's
+        // displacement under the contact, is fed by the rotation.
         let ur_end = m.rail_at(&s.ut, k.xc)?;
-        let uw_end = m.wheel_at(&s.uw);
-        let [ur_old, uw_old] = k.old;
+        let [ur_old, _] = k.old;
+        let (uw_end, uw_old) = (k.uw_end, k.uw_turned);
         // The rail's displacement increment where the force acted.
         let du_rail = match k.held_at_previous {
             Some([a, b]) => [0, 1, 2].map(|d| b[d] - a[d]),
             None => [0, 1, 2].map(|d| ur_end[d] - ur_old[d]),
         };
+        eb.frame_work_j += k.frame_j;
+        for d in 0..3 {
+            eb.frame_work_j += k.f_work[d] * (k.old[1][d] - uw_old[d]);
+        }
+        // The contact moving round the wheel: the change of the wheel's displacement under it
+        // as the contact moves from its place of t_n to that of t_{n+1} on the state at t_n
+        // (lateral and normal, as on the rail; the approach has the opposite sign).
+        if rot.is_some() {
+            for d in [1usize, 2] {
+                let w = -k.f_work[d] * (k.old[1][d] - self.uw_prev[d]);
+                eb.convective_work_j += w;
+                self.by_direction[1][d] += w;
+            }
+            self.uw_prev = uw_end;
+        }
+        // The tread's convective deflection taken out of the creepages (§8.7).
+        for d in 0..2 {
+            eb.convective_work_j += k.f_work[d] * k.conv[d];
+        }
         for d in 0..3 {
             let [on_rail, on_wheel] = [
                 -k.f_work[d] * du_rail[d],
@@ -207,9 +285,16 @@ impl<'a> Ledger<'a> {
 
     /// The balance at the end: `f_n` the last normal force (N), `delta` the contact
     /// solver's last approach (m), `c_n` the last normal series compliance (m/N).
-    pub(super) fn finish(mut self, s: &State, f_n: f64, delta: f64, c_n: f64) -> EnergyBalance {
+    /// `rot` the rotating wheel (`None`: fixed) and `t` the passage's end time (s).
+    pub(super) fn finish(
+        mut self,
+        s: &State,
+        (f_n, delta, c_n): (f64, f64, f64),
+        rot: Option<&RotatingWheel>,
+        t: f64,
+    ) -> EnergyBalance {
         if self.on {
-            self.eb.stored_change_j = self.stored(s) - self.e_start;
+            self.eb.stored_change_j = self.stored(s, rot, t) - self.e_start;
             // The half-space part of the approach: the solver's approach less the series
             // compliance's share (the structures' own compliance, whose energy is in the
             // stored energy: no separate spring).

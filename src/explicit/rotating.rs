@@ -208,6 +208,18 @@ impl SpinFrame {
         self.omega
     }
 
+    /// `½ Ω² uᵀ S u` (J), the centrifugal potential's share of the stored energy with a minus
+    /// sign (`S = M_⊥ − M a aᵀ M`, `a` the axial rotation).
+    pub fn softening_energy(&self, u: &[f64]) -> f64 {
+        let perp: f64 = self
+            .pairs
+            .iter()
+            .map(|&(ix, iz, m)| m * (u[ix] * u[ix] + u[iz] * u[iz]))
+            .sum();
+        let a = self.axial_part(u);
+        0.5 * self.omega * self.omega * (perp - a * a)
+    }
+
     /// Scratch for [`Self::step`].
     pub fn scratch(&self, op: &ExplicitOperator) -> SpinScratch {
         SpinScratch {
@@ -225,7 +237,9 @@ impl SpinFrame {
     /// lagged velocity added to `f`; each spinning node's velocity is then corrected to the
     /// midpoint rule of the Coriolis term, `(I + hJ) v⁺ = (I − hJ) v⁻ + Δt a` with
     /// `h = ΩΔt` (`J² = −I` in the x–z plane, so `(I + hJ)⁻¹ = (I − hJ)/(1 + h²)`), and the
-    /// displacement with it.
+    /// displacement with it. Returns the operator's damper work over the step (J, with the
+    /// velocity before the Coriolis correction; it differs from the corrected one's by the
+    /// relative order `ΩΔt`).
     pub fn step(
         &self,
         op: &ExplicitOperator,
@@ -234,7 +248,7 @@ impl SpinFrame {
         v: &mut [f64],
         f: &[f64],
         sc: &mut SpinScratch,
-    ) {
+    ) -> f64 {
         let w = self.omega;
         sc.f.copy_from_slice(f);
         let w2 = w * w;
@@ -247,7 +261,7 @@ impl SpinFrame {
             sc.f[ix] += m * (w2 * (u[ix] - c * r[0]) - 2.0 * w * vz);
             sc.f[iz] += m * (w2 * (u[iz] - c * r[1]) + 2.0 * w * vx);
         }
-        op.step(dt, u, v, &sc.f, &mut sc.op);
+        let damper_j = op.step(dt, u, v, &sc.f, &mut sc.op).damper_work_j;
         let h = w * dt;
         let inv = 1.0 / (1.0 + h * h);
         for (p, &(ix, iz, _)) in self.pairs.iter().enumerate() {
@@ -261,6 +275,7 @@ impl SpinFrame {
             u[ix] += dt * (nx - tx);
             u[iz] += dt * (nz - tz);
         }
+        damper_j
     }
 
     /// The scheme's conserved energy (J) between `u_k` (`u_prev`) and `u_{k+1}` (`u`) with
@@ -365,8 +380,16 @@ impl Suspension {
 
     /// Adds to `f` the true spring-damper force minus the assembled one at the rotation
     /// `cs = (cos Ωt, sin Ωt)` (`omega` in rad/s), with the lagged velocity `v` (exactly zero
-    /// at `Ωt = 0`, `Ω = 0`).
-    fn correction(&self, cs: [f64; 2], omega: f64, u: &[f64], v: &[f64], f: &mut [f64]) {
+    /// at `Ωt = 0`, `Ω = 0`). Returns the two forces (N): the assembled one along the
+    /// spinning z and the true one along the ground vertical.
+    fn correction(
+        &self,
+        cs: [f64; 2],
+        omega: f64,
+        u: &[f64],
+        v: &[f64],
+        f: &mut [f64],
+    ) -> [f64; 2] {
         let [c, s] = cs;
         let (mut r_a, mut rd_a) = (u[self.sprung], v[self.sprung]);
         let (mut r_t, mut rd_t) = (r_a, rd_a);
@@ -384,6 +407,50 @@ impl Suspension {
             f[ix] += ft * w * (-s);
             f[iz] += ft * w * c - fa * w;
         }
+        [fa, ft]
+    }
+
+    /// Saves the velocities the correction acts on (sprung mass, then the journals' x and
+    /// z) into `out` (length `1 + 2 × journals`).
+    fn save_velocity(&self, v: &[f64], out: &mut [f64]) {
+        out[0] = v[self.sprung];
+        for (p, &(ix, iz, _)) in self.journal.iter().enumerate() {
+            out[1 + 2 * p] = v[ix];
+            out[2 + 2 * p] = v[iz];
+        }
+    }
+
+    /// The work (J) of the correction `[fa, ft]` of [`Self::correction`] (at the rotation
+    /// `cs`) over a central-difference step of `dt` (s), in the step's own sense
+    /// `f · Δt (v_{k−½} + v_{k+½})/2`, with the saved velocities `old` ([`Self::save_velocity`])
+    /// and the new ones `v`.
+    fn correction_work(
+        &self,
+        [fa, ft]: [f64; 2],
+        [c, s]: [f64; 2],
+        dt: f64,
+        old: &[f64],
+        v: &[f64],
+    ) -> f64 {
+        let mean = |o: f64, n: f64| 0.5 * dt * (o + n);
+        let mut w = (fa - ft) * mean(old[0], v[self.sprung]);
+        for (p, &(ix, iz, wt)) in self.journal.iter().enumerate() {
+            w += ft * wt * (-s) * mean(old[1 + 2 * p], v[ix]);
+            w += (ft * wt * c - fa * wt) * mean(old[2 + 2 * p], v[iz]);
+        }
+        w
+    }
+
+    /// `½ k (r_t² − r_a²)` (J): the true spring's energy less the assembled one's at the
+    /// rotation `cs`, `r` the spring's stretch along the ground vertical and the spinning z.
+    fn energy_correction(&self, [c, s]: [f64; 2], u: &[f64]) -> f64 {
+        let mut r_a = u[self.sprung];
+        let mut r_t = r_a;
+        for &(ix, iz, w) in &self.journal {
+            r_a -= w * u[iz];
+            r_t -= w * (-s * u[ix] + c * u[iz]);
+        }
+        0.5 * self.k * (r_t * r_t - r_a * r_a)
     }
 }
 
@@ -498,6 +565,8 @@ pub(super) struct RotatingWheel {
     at_start: OnWheel,
     /// The tread's local compliance whose variation is removed (`None`: kept).
     local: Option<WheelLocalCompliance>,
+    /// The suspension's velocities before a sub-step (m/s; sprung mass, journals' x and z).
+    sus_v: Vec<f64>,
 }
 
 impl RotatingWheel {
@@ -553,6 +622,7 @@ impl RotatingWheel {
                 cs: [1.0, 0.0],
             },
             local: p.local.cloned(),
+            sus_v: vec![0.0; 1 + 2 * w.springs.first().map_or(0, |s| s.side_b.len())],
         })
     }
 
@@ -660,20 +730,27 @@ impl RotatingWheel {
     }
 
     /// Advances the wheel over the contact step ending at `t_end` (s) (`steps` sub-steps)
-    /// under the contact force `fc[1]` (N, contact frame, on the wheel; `fc[0]` in the first
-    /// sub-step, [`Hold::first_load`]) held at the contact's end-of-step place and direction,
-    /// the rotating ground loads, the torque and the suspension.
+    /// under the contact force `f` (N, contact frame, on the wheel) held at the contact's
+    /// end-of-step place and direction, the rotating ground loads, the torque and the
+    /// suspension. The first sub-step carries `split` instead ([`Hold::boundary_split`]):
+    /// `split[0]`, the previous step's share, where the previous step's force acted (the
+    /// contact's place and direction at the step's start), and `split[1]` at the end-of-step
+    /// place (docs/theory.md §8.8). Returns the work over the step (J) of the assembled
+    /// dampers and of the suspension's turn to the ground vertical (its true force less
+    /// the assembled one), each as the central difference's `f · (u_{k+1} − u_{k−1})/2`.
     pub(super) fn advance(
         &mut self,
         op: &ExplicitOperator,
         u: &mut [f64],
         v: &mut [f64],
-        fc: [[f64; 3]; 2],
+        (split, f): ([[f64; 3]; 2], [f64; 3]),
         t_end: f64,
-    ) {
+    ) -> [f64; 2] {
+        let (mut damper_j, mut frame_j) = (0.0, 0.0);
         self.at = self.locate(t_end);
         self.at_start = self.locate(t_end - self.steps as f64 * self.dt);
-        let frs = fc.map(|g| to_spinning(self.at.cs, self.ground_of(g)));
+        let prev = to_spinning(self.at_start.cs, self.ground_of(split[0]));
+        let [first, held] = [split[1], f].map(|g| to_spinning(self.at.cs, self.ground_of(g)));
         let t0 = t_end - self.steps as f64 * self.dt;
         for k in 0..self.steps {
             let a = self.spin.omega * (t0 + k as f64 * self.dt);
@@ -687,13 +764,91 @@ impl RotatingWheel {
                 self.f[iz] += s * gx + cm1 * gz;
             }
             let mut f = std::mem::take(&mut self.f);
-            self.load(self.at, frs[usize::from(k > 0)], &mut f);
-            if let Some(sus) = &self.suspension {
-                sus.correction([c, s], self.spin.omega, u, v, &mut f);
+            if k == 0 {
+                self.load(self.at_start, prev, &mut f);
+                self.load(self.at, first, &mut f);
+            } else {
+                self.load(self.at, held, &mut f);
             }
-            self.spin.step(op, self.dt, u, v, &f, &mut self.sc);
+            let forces = self.suspension.as_ref().map(|sus| {
+                sus.save_velocity(v, &mut self.sus_v);
+                sus.correction([c, s], self.spin.omega, u, v, &mut f)
+            });
+            damper_j += self.spin.step(op, self.dt, u, v, &f, &mut self.sc);
+            if let (Some(sus), Some(fs)) = (&self.suspension, forces) {
+                frame_j += sus.correction_work(fs, [c, s], self.dt, &self.sus_v, v);
+            }
             self.f = f;
         }
+        [damper_j, frame_j]
+    }
+
+    /// The stored energy of the wheel (J) in the spinning frame at time `t` (s) with the
+    /// state `u`, `v`: `½ vᵀMv + ½ uᵀ(K − Ω² S)u` with the suspension's spring along the
+    /// ground vertical (the assembled one lies along the spinning z); `ku` is scratch of
+    /// length n.
+    pub(super) fn stored(
+        &self,
+        op: &ExplicitOperator,
+        u: &[f64],
+        v: &[f64],
+        t: f64,
+        ku: &mut [f64],
+    ) -> f64 {
+        op.apply_k(u, ku);
+        let strain = 0.5 * u.iter().zip(ku.iter()).map(|(a, b)| a * b).sum::<f64>();
+        let sus = self
+            .suspension
+            .as_ref()
+            .map_or(0.0, |sus| sus.energy_correction(self.locate(t).cs, u));
+        op.kinetic_energy(v) + strain - self.spin.softening_energy(u) + sus
+    }
+
+    /// The work (J) of the ground-fixed load `g` (N, spinning-frame components at t = 0;
+    /// its part on the spinning nodes turns in the spinning frame, the rest, on the sprung
+    /// mass, does not) over the contact step from `t0` to `t1` (s), from the wheel's states
+    /// `u0` and `u1` (m): `[spinning, ground]`, its work on the spinning frame's
+    /// displacement increment (the trapezoidal rule of `Qᵀ(Ωt) g · Δu`, the work the
+    /// scheme's energy sees) and on the ground frame's, `g · (Q₁u₁ − Q₀u₀)`.
+    pub(super) fn load_work(
+        &self,
+        g: &[f64],
+        [u0, u1]: [&[f64]; 2],
+        [t0, t1]: [f64; 2],
+    ) -> [f64; 2] {
+        let mut spinning: f64 = g
+            .iter()
+            .zip(u1)
+            .zip(u0)
+            .map(|((g, a), b)| g * (a - b))
+            .sum();
+        let mut ground = spinning;
+        let [(s0, c0), (s1, c1)] = [t0, t1].map(|t| (self.spin.omega * t).sin_cos());
+        for &(ix, iz, _) in &self.spin.pairs {
+            let (gx, gz) = (g[ix], g[iz]);
+            let (dx, dz) = (u1[ix] - u0[ix], u1[iz] - u0[iz]);
+            // Less the non-turning g · Δu counted above.
+            spinning -= gx * dx + gz * dz;
+            ground -= gx * dx + gz * dz;
+            for (s, c) in [(s0, c0), (s1, c1)] {
+                // Qᵀ g = (c gx − s gz, s gx + c gz).
+                spinning += 0.5 * ((c * gx - s * gz) * dx + (s * gx + c * gz) * dz);
+            }
+            // Q u = (c x + s z, −s x + c z).
+            let q = |(s, c): (f64, f64), u: &[f64]| (c * u[ix] + s * u[iz], -s * u[ix] + c * u[iz]);
+            let (a0, a1) = (q((s0, c0), u0), q((s1, c1), u1));
+            ground += gx * (a1.0 - a0.0) + gz * (a1.1 - a0.1);
+        }
+        [spinning, ground]
+    }
+
+    /// `½ k (r_t² − r_a²)` (J) of the suspension at time `t` (s) with the wheel's state `u`:
+    /// the true spring's energy less the assembled one's ([`Self::stored`] holds the true
+    /// one); zero without a suspension.
+    pub(super) fn suspension_energy_correction(&self, u: &[f64], t: f64) -> f64 {
+        self.suspension
+            .as_ref()
+            .map_or(0.0, |sus| sus.energy_correction(self.locate(t).cs, u))
     }
 
     /// Makes sure the plane responses of `j` and `j + 1` are in the slots (computing the

@@ -173,6 +173,11 @@ struct Predicted {
     split: [[f64; 3]; 2],
     /// Work of the dampers over the step (J).
     damper_j: f64,
+    /// The wheel's contact-point displacement at the step's start as the structure sees it
+    /// ([`LedgerStep::uw_turned`], m).
+    uw_turned: [f64; 3],
+    /// Work of the rotating wheel's suspension turned to the ground vertical (J).
+    frame_j: f64,
     /// The wheel's one-step compliance at the contact (m/N per direction).
     g_wheel: [f64; 3],
 }
@@ -187,6 +192,9 @@ struct Solved {
     delta: f64,
     /// The removed local compliance variation at the position (m/N per direction).
     dg: [f64; 3],
+    /// The rotating tread's convective deflection taken out of the creepage (m, contact
+    /// frame; zero on the fixed wheel).
+    conv: [f64; 3],
 }
 
 /// The state of an explicit passage carried from one contact step to the next: the
@@ -251,9 +259,9 @@ impl<'a> Stepper<'a> {
         let rail_resp = RailResponses::new(m.track.op.n(), (plan.dtt, plan.nt, hold), slots);
         let rail_point = m.rail_point(popts, plan.n_steps);
         let wear = WearAccumulator::new(&contact, m.zone_m[0], plan.nbins);
-        let keep = popts.energy && rot.is_none();
-        let ledger = Ledger::new(m, keep, &s, &st, plan.x0)?;
-        let mut audit = (keep && m.opts.audit).then(|| Audit::new(m, &s));
+        let keep = popts.energy;
+        let ledger = Ledger::new(m, keep, &s, &st, plan.x0, rot.as_ref())?;
+        let mut audit = (keep && m.opts.audit && rot.is_none()).then(|| Audit::new(m, &s));
         if let Some(a) = audit.as_mut() {
             a.start(m, &s, [plan.dtt, plan.dtw]);
         }
@@ -356,8 +364,17 @@ impl<'a> Stepper<'a> {
                 forces: [f, f_new],
                 dg: sol.dg,
                 damper_j: pred.damper_j,
+                t: [t - p.dt_c, t],
+                uw_end: match &self.rot {
+                    Some(r) => r.wheel_at(&self.s.uw, t, t),
+                    None => self.m.wheel_at(&self.s.uw),
+                },
+                uw_turned: pred.uw_turned,
+                conv: sol.conv,
+                frame_j: pred.frame_j,
             },
             &sol.r,
+            self.rot.as_ref(),
         )?;
         self.f_prev = f;
         self.f = f_new;
@@ -368,17 +385,23 @@ impl<'a> Stepper<'a> {
     }
 
     /// The predictor: the last force `F_n` held over the step at `x_{n+1}` (patch `pw`), the
-    /// first sub-step also carrying the previous step's share on the rail where the
-    /// previous step's force acted; without a corrector ([`super::Coupling::HeldForce`])
-    /// `F_n` held at `x_n` in every sub-step. The track and the wheel advanced over their
-    /// sub-steps.
+    /// first sub-step also carrying the previous step's share where the previous step's
+    /// force acted (on the rail and on the rotating wheel); without a corrector
+    /// ([`super::Coupling::HeldForce`]) `F_n` held at `x_n` in every sub-step. The track and
+    /// the wheel advanced over their sub-steps.
     fn predict(&mut self, t: f64, pw: &PlaneWeights) -> Predicted {
         let (m, p, f) = (self.m, self.plan, self.f);
         let frame = m.frame;
         let ur_old = m.rail_under(&self.s.ut, pw);
-        let uw_old = match &self.rot {
-            Some(r) => r.wheel_at(&self.s.uw, t - p.dt_c, t),
-            None => m.wheel_at(&self.s.uw),
+        let (uw_old, uw_turned) = match &self.rot {
+            Some(r) => (
+                r.wheel_at(&self.s.uw, t - p.dt_c, t),
+                r.wheel_at(&self.s.uw, t, t),
+            ),
+            None => {
+                let w = m.wheel_at(&self.s.uw);
+                (w, w)
+            }
         };
         let f0 = m.opts.coupling.first_load(f, self.f_prev);
         let split = m.opts.coupling.boundary_split(f, self.f_prev);
@@ -422,9 +445,12 @@ impl<'a> Stepper<'a> {
             vt,
             &mut self.sc_t,
         );
+        let mut frame_j = 0.0;
         let (uw_new, g_wheel) = match self.rot.as_mut() {
             Some(r) => {
-                r.advance(&m.wheel.op, uw, vw, [f0, f], t);
+                let [d, fr] = r.advance(&m.wheel.op, uw, vw, (split, f), t);
+                damper_j += d;
+                frame_j = fr;
                 let g = if self.corrected {
                     r.compliance(&m.wheel.op)
                 } else {
@@ -462,6 +488,8 @@ impl<'a> Stepper<'a> {
             new: [ur_new, uw_new],
             split,
             damper_j,
+            uw_turned,
+            frame_j,
             g_wheel,
         }
     }
@@ -520,7 +548,13 @@ impl<'a> Stepper<'a> {
                 rail_height_m: self.heights.at(xc),
             })
             .map_err(to_contact)?;
-        Ok(Solved { r, xi, delta, dg })
+        Ok(Solved {
+            r,
+            xi,
+            delta,
+            dg,
+            conv,
+        })
     }
 
     /// The corrector: both structures get the response to the force change `df` (N) applied
@@ -565,9 +599,12 @@ impl<'a> Stepper<'a> {
     pub(super) fn finish(self, t_wall: Instant, cpu0: Option<f64>) -> ExplicitRecord {
         let (m, p) = (self.m, self.plan);
         let (by_direction, rail_wheel) = (self.ledger.by_direction, self.ledger.rail_wheel);
-        let eb = self
-            .ledger
-            .finish(&self.s, self.f[2], self.last_delta, self.series_c[2]);
+        let eb = self.ledger.finish(
+            &self.s,
+            (self.f[2], self.last_delta, self.series_c[2]),
+            self.rot.as_ref(),
+            p.n_steps as f64 * p.dt_c,
+        );
         let audit = self.audit.map(|a| {
             let mut r = a.finish(m, &self.s, [p.dtt, p.dtw]);
             [
