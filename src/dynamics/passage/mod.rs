@@ -845,32 +845,25 @@ impl PassageEngine {
                 tr.advance_displacement();
                 wh.advance_displacement();
                 let mut at = (0, 0.0);
-                let (r, [xi, delta]) = if let Some(ov) = overlap.as_mut() {
-                    at = self
-                        .rail_line
-                        .locate(xc)
-                        .ok_or_else(|| self.rail_line.off_rail("contact point", xc))?;
-                    let (res, ()) = rayon::join(
-                        || {
-                            self.contact_step(
-                                &mut contact,
-                                &mut road,
-                                (&rr, &tr, &wh),
-                                start,
-                                [t, xc, v, spin],
-                            )
-                        },
-                        || ov.begin(&tr, &self.rail_line, at.0, &f_last, &rr),
-                    );
-                    res?
-                } else {
+                let mut solve = || {
                     self.contact_step(
                         &mut contact,
                         &mut road,
                         (&rr, &tr, &wh),
                         start,
                         [t, xc, v, spin],
-                    )?
+                    )
+                };
+                let (r, [xi, delta]) = if let Some(ov) = overlap.as_mut() {
+                    at = self
+                        .rail_line
+                        .locate(xc)
+                        .ok_or_else(|| self.rail_line.off_rail("contact point", xc))?;
+                    let (res, ()) =
+                        rayon::join(solve, || ov.begin(&tr, &self.rail_line, at.0, &f_last, &rr));
+                    res?
+                } else {
+                    solve()?
                 };
                 if xc - half_grid < z1 && xc + half_grid > z0 {
                     wear.add_step(&contact, xc);
