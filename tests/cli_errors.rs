@@ -479,3 +479,19 @@ fn cache_limits_are_range_checked_and_an_empty_cache_lists_nothing() {
     assert_eq!(v["entries"].as_array().map(Vec::len), Some(0), "{out}");
     assert_eq!(v["total_bytes"], 0);
 }
+
+/// `--audit` with the rotating wheel is refused before any computation (the audit replays the
+/// fixed wheel's passage only), not silently dropped.
+#[test]
+fn explicit_audit_with_the_rotating_wheel_is_refused() {
+    let mut args: Vec<&str> = vec!["explicit"];
+    args.extend(SMALL_MODEL);
+    args.extend([
+        "--wheel",
+        "rotating",
+        "--audit",
+        "--out",
+        "/nonexistent/never-written",
+    ]);
+    assert_clean_error(&args, &["--audit", "rotating", "--wheel fixed"]);
+}

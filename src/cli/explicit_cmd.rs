@@ -38,7 +38,8 @@ pub struct ExplicitCmd {
     wheel: Option<WheelArg>,
     /// Also keep the energy audit (every contact step replayed with the forces the
     /// structures carried, its nodal work summed; twice the structural cost) in
-    /// explicit.json (docs/theory.md §8.8).
+    /// explicit.json (docs/theory.md §8.8). Fixed wheel only: refused with the rotating
+    /// wheel.
     #[arg(long)]
     audit: bool,
 }
@@ -59,6 +60,13 @@ impl ExplicitCmd {
             Some(WheelArg::Fixed) => m.explicit.wheel = ExplicitWheel::Fixed,
             Some(WheelArg::Rotating) => m.explicit.wheel = ExplicitWheel::Rotating,
             None => {}
+        }
+        if self.audit && m.explicit.wheel == ExplicitWheel::Rotating {
+            anyhow::bail!(
+                "--audit replays the fixed wheel's passage only; the rotating wheel (--wheel \
+                 rotating or explicit.wheel = \"rotating\") keeps its energy ledger without an \
+                 audit (docs/theory.md §8.8): drop --audit or use --wheel fixed"
+            );
         }
         let profile = match &self.corrugation {
             Some(p) => Some(RailProfile::read_csv_um(p)?),
