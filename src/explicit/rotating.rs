@@ -823,21 +823,23 @@ impl RotatingWheel {
             .map(|((g, a), b)| g * (a - b))
             .sum();
         let mut ground = spinning;
-        let [(s0, c0), (s1, c1)] = [t0, t1].map(|t| (self.spin.omega * t).sin_cos());
+        let [cs0, cs1] = [t0, t1].map(|t| {
+            let (s, c) = (self.spin.omega * t).sin_cos();
+            [c, s]
+        });
+        // The in-plane (x, z) dot product of two 3-vectors.
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[2] * b[2];
         for &(ix, iz, _) in &self.spin.pairs {
-            let (gx, gz) = (g[ix], g[iz]);
-            let (dx, dz) = (u1[ix] - u0[ix], u1[iz] - u0[iz]);
+            let gv = [g[ix], 0.0, g[iz]];
+            let du = [u1[ix] - u0[ix], 0.0, u1[iz] - u0[iz]];
             // Less the non-turning g · Δu counted above.
-            spinning -= gx * dx + gz * dz;
-            ground -= gx * dx + gz * dz;
-            for (s, c) in [(s0, c0), (s1, c1)] {
-                // Qᵀ g = (c gx − s gz, s gx + c gz).
-                spinning += 0.5 * ((c * gx - s * gz) * dx + (s * gx + c * gz) * dz);
+            spinning -= dot(gv, du);
+            ground -= dot(gv, du);
+            for cs in [cs0, cs1] {
+                spinning += 0.5 * dot(to_spinning(cs, gv), du);
             }
-            // Q u = (c x + s z, −s x + c z).
-            let q = |(s, c): (f64, f64), u: &[f64]| (c * u[ix] + s * u[iz], -s * u[ix] + c * u[iz]);
-            let (a0, a1) = (q((s0, c0), u0), q((s1, c1), u1));
-            ground += gx * (a1.0 - a0.0) + gz * (a1.1 - a0.1);
+            let [a0, a1] = [(cs0, u0), (cs1, u1)].map(|(cs, u)| to_ground(cs, [u[ix], 0.0, u[iz]]));
+            ground += gv[0] * (a1[0] - a0[0]) + gv[2] * (a1[2] - a0[2]);
         }
         [spinning, ground]
     }
