@@ -15,7 +15,8 @@ use corrugation::model::MAX_WHEEL_LOAD_N;
 const MAX_STEPS: usize = 10_000;
 
 /// Solves the wheel–rail contact (Hertz + half-space grid, Kalker's exact tangential theory)
-/// for the model's wheel, rail crown, steel, load and friction.
+/// for the model's wheel, rail crown, steels (combined as quasi-identical bodies), load,
+/// friction and contact grid (`contact.grid_nx`, `grid_ny`, `grid_margin`).
 #[derive(Debug, Args)]
 pub struct ContactCmd {
     #[command(flatten)]
@@ -73,16 +74,20 @@ impl ContactCmd {
             (None, Some(t)) => TangentialLoading::TractionCoefficient(t),
             (None, None) => TangentialLoading::TractionCoefficient(m.contact.traction_coefficient),
         };
+        let (youngs_pa, poisson) = corrugation::dynamics::setup::contact_steel(&m);
         let case = ContactCase {
             wheel_radius_m: m.wheel.radius,
             crown_radius_m: m.contact.rail_crown_radius,
-            youngs_pa: m.rail.youngs_modulus,
-            poisson: m.rail.poisson_ratio,
+            youngs_pa,
+            poisson,
             normal_load_n: self.normal_load.unwrap_or(m.vehicle.wheel_load),
             friction: self.friction.unwrap_or(m.contact.friction),
             tangential,
             speed_m_per_s: m.run.speed(),
             steps: self.steps,
+            grid_nx: m.contact.grid_nx,
+            grid_ny: m.contact.grid_ny,
+            grid_margin: m.contact.grid_margin,
             ..ContactCase::default()
         };
         let sol = solve_case(&case).context("solving the contact")?;

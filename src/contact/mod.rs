@@ -3,8 +3,10 @@
 //! Coulomb friction, and the frictional work that drives wear.
 //!
 //! # Model and assumptions
-//! * Both bodies are linear elastic half-spaces of the same steel ("quasi-identical"): the
-//!   normal and tangential problems decouple (Kalker 1990, §1.4; Johnson 1985, §5.4).
+//! * Both bodies are linear elastic half-spaces treated as "quasi-identical": the normal and
+//!   tangential problems decouple (Kalker 1990, §1.4; Johnson 1985, §5.4). A wheel and rail
+//!   of different steels enter through Kalker's combined constants
+//!   ([`quasi_identical_pair`]), which keep Hertz's combined modulus exact.
 //! * The potential contact area is a rectangular grid of `nx × ny` elements, uniform pressure
 //!   and traction per element, displacements collocated at element centres (Kalker's
 //!   "piecewise constant" discretisation, the one of CONTACT). Influence coefficients are the
@@ -138,6 +140,26 @@ pub fn combined_modulus(youngs_pa: f64, poisson: f64) -> f64 {
 /// Shear modulus `G = E / (2 (1 + ν))` (Pa).
 pub fn shear_modulus(youngs_pa: f64, poisson: f64) -> f64 {
     youngs_pa / (2.0 * (1.0 + poisson))
+}
+
+/// The elastic constants `(E (Pa), ν (−))` of the one steel the contact solvers take for a
+/// rail `(E₁, ν₁)` and a wheel `(E₂, ν₂)`: Kalker's combined constants of quasi-identical
+/// bodies, `1/G = (1/G₁ + 1/G₂)/2` and `ν/G = (ν₁/G₁ + ν₂/G₂)/2`, returned as
+/// `E = 2G(1 + ν)`. With them [`combined_modulus`] is Hertz's
+/// `1/E* = (1 − ν₁²)/E₁ + (1 − ν₂²)/E₂` exactly; what they leave out is the coupling of the
+/// normal and tangential problems of dissimilar bodies (Dundurs' constant β, zero for
+/// identical ones; Kalker 1990, §1.4). Two identical steels give `(E₁, ν₁)`.
+pub fn quasi_identical_pair(rail: (f64, f64), wheel: (f64, f64)) -> (f64, f64) {
+    let (g1, g2) = (
+        shear_modulus(rail.0, rail.1),
+        shear_modulus(wheel.0, wheel.1),
+    );
+    if g1 == g2 && rail.1 == wheel.1 {
+        return rail;
+    }
+    let g = 2.0 / (1.0 / g1 + 1.0 / g2);
+    let nu = 0.5 * g * (rail.1 / g1 + wheel.1 / g2);
+    (2.0 * g * (1.0 + nu), nu)
 }
 
 pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<(), ContactError> {

@@ -1,4 +1,4 @@
-//! The set-up shared by the reduced and the explicit passage (docs/theory.md §5.3, §6, §7):
+//! The set-up shared by the reduced and the explicit passage (docs/theory.md §6, §7.4, §7.5):
 //! the contact configuration and grid of a passage, the steady rolling state at the static
 //! load, the constant wheel loads (gravity, driving torque, train resistance) and the
 //! least-norm placement of the wheel's rigid modes.
@@ -67,7 +67,7 @@ mod tests {
 
 /// The constant loads on the wheel substructure as free-DOF vectors (N): gravity on every
 /// mass, the driving torque `T = μ_t W R` as a pure couple on the journal nodes, and the
-/// train's resistance `−μ_t W` on the journal nodes (docs/theory.md §5.3). Shared by the
+/// train's resistance `−μ_t W` on the journal nodes (docs/theory.md §7.4). Shared by the
 /// reduced and the explicit passage so that both apply the same loads.
 #[derive(Clone, Debug)]
 pub struct WheelLoads {
@@ -170,6 +170,16 @@ impl WheelLoads {
     }
 }
 
+/// The elastic constants `(E (Pa), ν (−))` of the contact's half-spaces for `model`: the
+/// rail's and the wheel's steel combined as quasi-identical bodies
+/// ([`crate::contact::quasi_identical_pair`]); the rail's own when the two are the same.
+pub fn contact_steel(model: &Model) -> (f64, f64) {
+    crate::contact::quasi_identical_pair(
+        (model.rail.youngs_modulus, model.rail.poisson_ratio),
+        (model.wheel.youngs_modulus, model.wheel.poisson_ratio),
+    )
+}
+
 /// The contact configuration of a passage of `model` at `speed_m_per_s` (m/s) under the wheel
 /// load: the model's grid around the static Hertz patch, and the tangential tolerance
 /// [`PASSAGE_TANGENTIAL_TOL`]. The reduced and the explicit passage use it alike.
@@ -178,11 +188,12 @@ pub fn contact_config_for(
     speed_m_per_s: f64,
 ) -> Result<TransientConfig, DynamicsError> {
     let m = model;
+    let (youngs_pa, poisson) = contact_steel(m);
     let mut cfg = TransientConfig::around_hertz(&HertzGridParams {
         radius_x_m: m.wheel.radius,
         radius_y_m: m.contact.rail_crown_radius,
-        youngs_pa: m.rail.youngs_modulus,
-        poisson: m.rail.poisson_ratio,
+        youngs_pa,
+        poisson,
         friction: m.contact.friction,
         speed_m_per_s,
         load_n: m.vehicle.wheel_load,
@@ -218,11 +229,12 @@ pub fn static_hertz(
     model: &Model,
     load_n: f64,
 ) -> Result<crate::contact::HertzContact, DynamicsError> {
+    let (youngs_pa, poisson) = contact_steel(model);
     crate::contact::HertzContact::solve(&crate::contact::HertzInput {
         radius_x_m: model.wheel.radius,
         radius_y_m: model.contact.rail_crown_radius,
-        youngs_pa: model.rail.youngs_modulus,
-        poisson: model.rail.poisson_ratio,
+        youngs_pa,
+        poisson,
         load_n,
     })
     .map_err(DynamicsError::StaticHertz)

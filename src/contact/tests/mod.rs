@@ -34,3 +34,20 @@ fn rolling_config(nx: usize, ny: usize, margin: f64) -> TransientConfig {
     })
     .unwrap()
 }
+
+/// Kalker's combined constants of two different steels reproduce Hertz's combined modulus
+/// `1/E* = (1 − ν₁²)/E₁ + (1 − ν₂²)/E₂` (the closed form) and the mean compliance of the
+/// shear moduli; identical steels are returned unchanged.
+#[test]
+fn quasi_identical_pair_keeps_the_hertz_modulus() {
+    use super::{combined_modulus, quasi_identical_pair, shear_modulus};
+    let (rail, wheel) = ((210e9, 0.3), (180e9, 0.27));
+    let (e, nu) = quasi_identical_pair(rail, wheel);
+    let hertz = 1.0 / ((1.0 - rail.1 * rail.1) / rail.0 + (1.0 - wheel.1 * wheel.1) / wheel.0);
+    approx::assert_relative_eq!(combined_modulus(e, nu), hertz, max_relative = 1e-14);
+    let g_mean =
+        2.0 / (1.0 / shear_modulus(rail.0, rail.1) + 1.0 / shear_modulus(wheel.0, wheel.1));
+    approx::assert_relative_eq!(shear_modulus(e, nu), g_mean, max_relative = 1e-14);
+    assert!(nu > wheel.1 && nu < rail.1);
+    assert_eq!(quasi_identical_pair(rail, rail), rail);
+}
