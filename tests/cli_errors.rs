@@ -454,6 +454,52 @@ fn explicit_time_step_above_the_computed_limit_is_refused() {
     }
 }
 
+/// Flags that only the reduced passage reads are refused with `passage --engine explicit`
+/// (not ignored), and the argument checks of `modes`, `grow` and `initiation` stop before
+/// any computation.
+#[test]
+fn reduced_only_flags_and_bad_counts_are_refused_before_any_work() {
+    let no = "/nonexistent/never-written";
+    for flag in [
+        &["--no-coupled"][..],
+        &["--no-nodal"],
+        &["--nodal-at", "5.0"],
+        &["--cache", no],
+    ] {
+        let mut args = vec!["passage", "--engine", "explicit", "--out", no];
+        args.extend(flag);
+        assert_clean_error(&args, &[flag[0], "reduced engine"]);
+    }
+    assert_clean_error(
+        &["modes", "--fmax", "1e6", "--out", no],
+        &["--fmax", "100 to 20000 Hz"],
+    );
+    assert_clean_error(
+        &[
+            "grow",
+            "--rounds",
+            "2",
+            "--passages-per-round",
+            "0",
+            "--out",
+            no,
+        ],
+        &["--passages-per-round", "at least 1"],
+    );
+    assert_clean_error(
+        &[
+            "initiation",
+            "--model",
+            "a.toml",
+            "--models",
+            "b.toml",
+            "--out",
+            no,
+        ],
+        &["--model", "--models"],
+    );
+}
+
 #[test]
 fn trial_amplitudes_are_range_checked_by_grow_and_predict() {
     for cmd in ["grow", "predict"] {

@@ -225,6 +225,12 @@ impl GrowCmd {
         {
             anyhow::bail!("--rate-check wavelengths must lie in [20, 80] mm (got {l})");
         }
+        if self.rounds > 0 && self.passages_per_round == 0 {
+            anyhow::bail!(
+                "--passages-per-round 0 with --rounds {}: a round needs at least 1 passage",
+                self.rounds
+            );
+        }
         Ok(())
     }
 

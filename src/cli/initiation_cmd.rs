@@ -95,6 +95,11 @@ impl InitiationCmd {
         if !(1..=20).contains(&self.peaks) {
             anyhow::bail!("--peaks must be 1 … 20 (got {})", self.peaks);
         }
+        if !self.models.is_empty() && self.model.model.is_some() {
+            anyhow::bail!(
+                "--model and --models: give either one model file (its fastening variants are compared) or the files to compare"
+            );
+        }
         // All models first, so a bad name or key stops before any passage.
         let mut cases = Vec::new();
         if self.models.is_empty() {

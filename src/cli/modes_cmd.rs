@@ -121,8 +121,11 @@ impl ModesCmd {
     /// Runs the command: the track and wheel bases (Lanczos or the cache), the CSV files,
     /// the optional VTU files, the summary.
     pub fn run(self) -> anyhow::Result<()> {
-        if !(self.fmax.is_finite() && self.fmax > 0.0) {
-            anyhow::bail!("--fmax must be a positive number of Hz (got {})", self.fmax);
+        if !(self.fmax.is_finite() && (100.0..=20000.0).contains(&self.fmax)) {
+            anyhow::bail!(
+                "--fmax {}: out of range, allowed 100 to 20000 Hz (as run.fmax)",
+                self.fmax
+            );
         }
         let m = self.model.load()?;
         super::check_out_dir(&self.out)?;

@@ -52,7 +52,29 @@ pub struct PassageCmd {
 }
 
 impl PassageCmd {
+    /// With `--engine explicit`: refuses the flags only the reduced passage reads (the
+    /// modal cache, the coupled-mode attribution and the nodal spectrum, which need the
+    /// modal bases), instead of ignoring them.
+    fn refuse_reduced_only_flags(&self) -> anyhow::Result<()> {
+        let r = &self.reference;
+        let given = [
+            ("--cache", self.cache.is_some()),
+            ("--no-coupled", r.no_coupled),
+            ("--no-nodal", r.no_nodal),
+            ("--nodal-at", !r.nodal_at_m.is_empty()),
+        ];
+        if let Some((flag, _)) = given.iter().find(|(_, on)| *on) {
+            anyhow::bail!(
+                "{flag} is for the reduced engine: `passage --engine explicit` writes no coupled-mode or nodal-spectrum files and reads no modal cache"
+            );
+        }
+        Ok(())
+    }
+
     pub fn run(self) -> anyhow::Result<()> {
+        if self.engine == super::engine::Engine::Explicit {
+            self.refuse_reduced_only_flags()?;
+        }
         let m = self.model.load()?;
         let profile = match &self.corrugation {
             Some(p) => Some(RailProfile::read_csv_um(p)?),
