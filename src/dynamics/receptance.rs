@@ -21,7 +21,7 @@
 //! Hertz compliance `c_H = dδ/dN = 2δ/(3N)`; its maxima are the coupled wheel–track
 //! resonances that amplify a roughness of that frequency. The longitudinal receptance
 //! `H_xx^rail` is what turns a fluctuating creep force into a fluctuating rail surface
-//! velocity (the creepage feedback of docs/theory.md §2.2 a).
+//! velocity (the creepage feedback of docs/theory.md §7.3).
 //!
 //! References: Ewins, *Modal Testing*, ch. 2 (receptance of non-proportionally damped
 //! systems); Grassie, Gregory, Harrison & Johnson, "The dynamic response of railway track to

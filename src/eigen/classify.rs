@@ -306,7 +306,8 @@ pub struct TrackModeClass {
     /// Family of the rail's own motion: the same rules without the sleeper test. It equals
     /// `family` unless the sleeper override applied; for a `sleeper` mode it tells what the
     /// rail does meanwhile (e.g. a longitudinal-compression rail motion carried along by
-    /// moving sleepers). `None` only in caches written before this field existed.
+    /// moving sleepers). `None` when a cache entry does not record it (it is then
+    /// read as `family`).
     #[serde(default)]
     pub rail_family: Option<TrackFamily>,
 }

@@ -152,9 +152,10 @@ fn frictional_power_matches_global_power_balance() {
     // ends (τ_i now, τ_{i+1} one step ago), including the path on which the material leaves the
     // contact; by the symmetry of the influence operator this balance is then exact up to the
     // solver tolerance. Measured rel. error: −2.4e-6 (16×12), −3.9e-7 (32×24), +6e-8 (48×36).
-    // The former pairing with the end-of-step traction alone (backward Euler along the path)
-    // lost (V/Δx) τᵀ(C − C̄)τ, C̄ the one-cell-shifted operator: −41.5 %, −24.2 %, −16.5 %
-    // on the same grids (first order in Δx; ≈ Δx µp0 / (G a ξ)).
+    // Pairing with the end-of-step traction alone (backward Euler along the path) would lose
+    // (V/Δx) τᵀ(C − C̄)τ, C̄ the one-cell-shifted operator: −41.5 %, −24.2 %, −16.5 %
+    // on the same grids (first order in Δx; ≈ Δx µp0 / (G a ξ)): the balance below tells the
+    // two pairings apart.
     for (nx, ny) in [(16usize, 12usize), (32, 24)] {
         let cfg = rolling_config(nx, ny, 1.2);
         let mut eng = TransientRolling::new(cfg).unwrap();

@@ -83,7 +83,7 @@ fn substructured_frequencies_match_the_full_solution_across_railpad_stiffness() 
 /// `n u ‖K‖`, a relative 1e-6 of the cluster's ω² here) on the same rounded matrix. The
 /// returned frequencies must agree with it to 1e-6 and each vector's Rayleigh quotient must
 /// be its eigenvalue to 1e-9. The dense solver alone misses both: its cluster eigenvalues
-/// are off by up to 1.3e-3 of ω² (measured when this test was written), one of them below
+/// are off by up to 1.3e-3 of ω² on this problem, one of them below
 /// the exact value.
 #[test]
 fn refined_modes_resolve_a_cluster_under_stiff_directions() {
