@@ -24,8 +24,8 @@ use crate::structure::{TrackStructure, WheelStructure};
 /// Options of the explicit path.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExplicitOptions {
-    /// Safety factor on the computed critical step (−), in (0, 1]; default
-    /// [`DEFAULT_SAFETY`] = 0.9.
+    /// Safety factor on the computed critical step (−), in (0, 1] here (a model file's
+    /// `explicit.safety` is limited to 0.1–1); default [`DEFAULT_SAFETY`] = 0.9.
     pub safety: f64,
     /// A time step for both substructures (s), checked against their stable limits; `None`
     /// (default) = each substructure at `safety ×` its own limit.
