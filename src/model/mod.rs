@@ -128,7 +128,8 @@ pub struct Model {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Wear {
-    /// Wear coefficient k (m³/J): worn volume per joule of frictional work. A single passage
+    /// Wear coefficient k (m³/J), greater than 0 and at most 1e-6: worn volume per joule of
+    /// frictional work. A single passage
     /// judges relative (differential) wear, which k scales and never shapes; the iterative
     /// growth uses it for the worn depth per passage. Default 1e-13 (Archard K ≈ 1e-4, mild
     /// wear, H ≈ 3 GPa, µ = 0.4: k = K/(µH)).
@@ -250,9 +251,10 @@ impl Default for Explicit {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Track {
-    /// Number of sleeper bays (−); the track is `bays × sleeper_spacing` long.
+    /// Number of sleeper bays (−), 2 to 400; the track is `bays × sleeper_spacing` long.
+    /// Default model: 16.
     pub bays: usize,
-    /// Sleeper spacing, centre to centre (m).
+    /// Sleeper spacing, centre to centre (m), 0.2 to 2; default model 0.6.
     pub sleeper_spacing: f64,
 }
 
@@ -260,9 +262,10 @@ pub struct Track {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Rail {
-    /// Cross-section profile: `"uic54"` (the embedded 54E1 half profile).
+    /// Cross-section profile (the only one accepted: `"uic54"`, the embedded, checked 54E1
+    /// half profile; a file naming another is refused).
     pub profile: String,
-    /// Rail cant as tan(angle) (−): 0.025 = 1/40; 0 = upright.
+    /// Rail cant as tan(angle) (−), 0 to 0.1: 0.025 = 1/40; 0 = upright.
     pub inclination: f64,
     /// Young's modulus (Pa), 1e9 to 1e13 ([`YOUNGS_MODULUS_PA`]).
     pub youngs_modulus: f64,
@@ -342,7 +345,7 @@ impl SpringDampers {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Wheel {
-    /// Nominal rolling radius (m).
+    /// Nominal rolling radius (m), 0.2 to 0.8; default model 0.46.
     pub radius: f64,
     /// Tread conicity (−): 0.025 = 1/40; 0 to 0.1.
     pub conicity: f64,
@@ -363,11 +366,13 @@ pub struct Wheel {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Vehicle {
-    /// Static vertical wheel load (N); the sprung mass is (load / g − unsprung mass).
+    /// Static vertical wheel load (N), greater than 0 and at most [`MAX_WHEEL_LOAD_N`];
+    /// default model 100e3. The sprung mass is (load / g − unsprung mass).
     pub wheel_load: f64,
-    /// Primary suspension stiffness per wheel (N/m).
+    /// Primary suspension stiffness per wheel (N/m), greater than 0 and at most 1e10;
+    /// default model 1.15e6.
     pub primary_stiffness: f64,
-    /// Primary suspension damping per wheel (N·s/m).
+    /// Primary suspension damping per wheel (N·s/m), 0 to 1e9; default model 2.5e3.
     pub primary_damping: f64,
     /// Gravitational acceleration (m/s²), 9 to 10.5 (the sprung mass is load / gravity).
     pub gravity: f64,
@@ -379,17 +384,19 @@ pub struct Vehicle {
 pub struct Contact {
     /// Coulomb friction coefficient (−), greater than 0 and at most 2.
     pub friction: f64,
-    /// Traction coefficient: mean F_L / F_N, set by the driving torque (−).
+    /// Traction coefficient: mean F_L / F_N, set by the driving torque (−), 0 to
+    /// `friction`; default model 0.15.
     pub traction_coefficient: f64,
-    /// Lateral radius of the rail head crown (m).
+    /// Lateral radius of the rail head crown (m), 0.05 to 10; default model 0.3 (R300).
     pub rail_crown_radius: f64,
     /// Contact-patch grid elements along the rolling direction (−). The passage's time step
     /// is one grid element over the speed, Δt = Δx / V. 8 to 256, and
     /// `grid_nx² · grid_ny` at most [`MAX_GRID_WORK`] (the passage's work grows so).
     pub grid_nx: usize,
-    /// Contact-patch grid elements across the rail (−).
+    /// Contact-patch grid elements across the rail (−), 4 to 256; default model 24.
     pub grid_ny: usize,
-    /// Grid half-lengths over the static Hertz semi-axes (−): the grid covers
+    /// Grid half-lengths over the static Hertz semi-axes (−), 1.05 to 3 (default model
+    /// 1.4): the grid covers
     /// `grid_margin · a` by `grid_margin · b`; larger when the normal load varies strongly.
     /// Over a corrugated rail the passage lengthens it along x at the same element size
     /// (`dynamics::passage::grid_for_profile`).
@@ -410,20 +417,24 @@ pub enum MassKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshParams {
-    /// Element length along the rail outside the fine zone (m).
+    /// Element length along the rail outside the fine zone (m), greater than 0 and at most a
+    /// quarter of the sleeper spacing; default model 0.04.
     pub element_length: f64,
-    /// Element length along the rail in and around the solution zone (m).
+    /// Element length along the rail in and around the solution zone (m), greater than 0 and
+    /// at most `element_length`; default model 0.01.
     pub fine_element_length: f64,
-    /// Target element size in the rail foot and web (m).
+    /// Target element size in the rail foot and web (m), 0.002 to 0.05; default model 0.02.
     pub section_size: f64,
-    /// Target element size near the running surface (m).
+    /// Target element size near the running surface (m), 0.001 to `section_size`; default
+    /// model 0.01.
     pub head_size: f64,
-    /// Hexahedra of a sleeper along x, y, z (−).
+    /// Hexahedra of a sleeper along x, y, z (−), 1 to 64 each; default model [4, 10, 2].
     pub sleeper_elements: [usize; 3],
-    /// Circumferential divisions of the wheel away from the contact (−).
+    /// Circumferential divisions of the wheel away from the contact (−), 12 to 720; default
+    /// model 36.
     pub wheel_segments: usize,
-    /// Largest element size of the wheel, axially and radially (m); half of it at the
-    /// contact zone of the tread.
+    /// Largest element size of the wheel, axially and radially (m), 0.005 to 0.1 (default
+    /// model 0.06); half of it at the contact zone of the tread.
     pub wheel_element_size: f64,
     /// Lumped or consistent mass.
     pub mass: MassKind,
@@ -433,13 +444,15 @@ pub struct MeshParams {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Run {
-    /// Train speed (km/h; converted to m/s by [`Run::speed`]).
+    /// Train speed (km/h; converted to m/s by [`Run::speed`]), 1 to 500; default model 140.
     pub speed_kmh: f64,
-    /// Distance from the wheel's start to the solution zone (m).
+    /// Distance from the wheel's start to the solution zone (m), 0 to 10; default model 0.3.
     pub solution_zone_offset: f64,
-    /// Length of the solution zone (m).
+    /// Length of the solution zone (m), greater than 0, the zone fitting on the track with its
+    /// offset; default model 1.
     pub solution_zone_length: f64,
-    /// Highest natural frequency kept in the modal bases of the passage (Hz).
+    /// Highest natural frequency kept in the modal bases of the passage (Hz), 100 to 20000;
+    /// default model 5000.
     pub fmax: f64,
     /// Static correction of the truncated track modes at the contact: the structural
     /// residual flexibility of the rail ([`crate::dynamics::residual`]) in series with the
