@@ -90,6 +90,19 @@ pub fn pa_to_mpa(pa: f64) -> f64 {
     pa / PA_PER_MPA
 }
 
+/// Newtons per kilonewton.
+pub const N_PER_KN: f64 = 1.0e3;
+
+/// Force in N → kN (for printed tables).
+pub fn n_to_kn(n: f64) -> f64 {
+    n / N_PER_KN
+}
+
+/// Time in s → ms (for printed tables).
+pub fn s_to_ms(s: f64) -> f64 {
+    s * 1.0e3
+}
+
 /// Bytes per GB (decimal, as disk sizes are quoted).
 pub const BYTES_PER_GB: f64 = 1.0e9;
 /// Seconds per day.

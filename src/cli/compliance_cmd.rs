@@ -11,6 +11,7 @@ use serde::Serialize;
 use corrugation::dynamics::compliance::{longitudinal_compliance, ComplianceLoad};
 use corrugation::model::{load_model, Model};
 use corrugation::structure::TrackStructure;
+use corrugation::units::{m_to_um, n_to_kn};
 
 use super::ModelArgs;
 
@@ -220,8 +221,8 @@ impl ComplianceCmd {
         println!(
             "u_x {} m ahead of {} kN down + {} kN along x (µm; in brackets the longitudinal force alone; w at the load in µm)",
             self.ahead,
-            self.vertical / 1e3,
-            self.longitudinal / 1e3
+            n_to_kn(self.vertical),
+            n_to_kn(self.longitudinal)
         );
         println!(
             "{:<6} {:<8} {:>10} {:>20} {:>20} {:>20} {:>8}",
@@ -232,7 +233,7 @@ impl ComplianceCmd {
                 .hold_stiffness_n_per_m
                 .map(|k| format!("{k:.1e}"))
                 .unwrap_or_else(|| "rigid".into());
-            let pair = |a: f64, b: f64| format!("{:.3} ({:.3})", a * 1e6, b * 1e6);
+            let pair = |a: f64, b: f64| format!("{:.3} ({:.3})", m_to_um(a), m_to_um(b));
             println!(
                 "{:<6} {:<8} {:>10} {:>20} {:>20} {:>20} {:>8.1}",
                 r.model,
@@ -241,7 +242,7 @@ impl ComplianceCmd {
                 pair(r.head_m, r.head_longitudinal_only_m),
                 pair(r.web_m, r.web_longitudinal_only_m),
                 pair(r.foot_m, r.foot_longitudinal_only_m),
-                r.vertical_at_load_m * 1e6
+                m_to_um(r.vertical_at_load_m)
             );
         }
     }

@@ -101,7 +101,7 @@ impl ContactCmd {
         } else {
             println!(
                 "wheel-rail contact: N = {:.1} kN, mu = {}",
-                case.normal_load_n / 1e3,
+                corrugation::units::n_to_kn(case.normal_load_n),
                 case.friction
             );
             println!("  a (along rail)      {:.3} mm", s.a_mm);

@@ -66,8 +66,8 @@ impl CoupledModesCmd {
             l.normal_stiffness_n_per_m,
             l.creep_coefficient_n[0],
             l.creep_coefficient_n[1],
-            1e3 * l.relaxation_length_m[0],
-            1e3 * l.relaxation_length_m[1]
+            corrugation::units::m_to_mm(l.relaxation_length_m[0]),
+            corrugation::units::m_to_mm(l.relaxation_length_m[1])
         );
         println!("position_m  frequency_hz  damping_%  rail_x/n  dominant (share)");
         for md in cm.below(self.list_to_hz) {

@@ -149,7 +149,7 @@ fn print_nodal(points: &[NodalPoint], lc_hz: &[f64], fmax: f64) {
                 p.label,
                 s.point_x_m,
                 s.record,
-                1e3 * s.duration_s,
+                corrugation::units::s_to_ms(s.duration_s),
                 s.resolution_hz,
                 peaks.join(", ")
             );

@@ -333,9 +333,13 @@ impl ContactSolution {
         })?);
         let state_f: Vec<f64> = self.state.iter().map(|&s| s as f64).collect();
         let fields: [(&str, &[f64], f64); 7] = [
-            ("pressure_mpa.npy", &self.pressure_pa, 1e-6),
-            ("tx_mpa.npy", &self.traction_x_pa, 1e-6),
-            ("ty_mpa.npy", &self.traction_y_pa, 1e-6),
+            (
+                "pressure_mpa.npy",
+                &self.pressure_pa,
+                1.0 / units::PA_PER_MPA,
+            ),
+            ("tx_mpa.npy", &self.traction_x_pa, 1.0 / units::PA_PER_MPA),
+            ("ty_mpa.npy", &self.traction_y_pa, 1.0 / units::PA_PER_MPA),
             ("slip_x.npy", &self.slip_x_m_per_s, 1.0),
             ("slip_y.npy", &self.slip_y_m_per_s, 1.0),
             ("state.npy", &state_f, 1.0),

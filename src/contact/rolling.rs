@@ -76,7 +76,7 @@ impl Default for HertzGridParams {
             youngs_pa: 210e9,
             poisson: 0.3,
             friction: 0.4,
-            speed_m_per_s: 140.0 / 3.6,
+            speed_m_per_s: crate::units::kmh_to_ms(140.0),
             load_n: 100e3,
             nx: 40,
             ny: 32,

@@ -131,7 +131,7 @@ impl RailProfile {
                     reason: "lateral coordinate of a half profile must be >= 0".into(),
                 });
             }
-            half.push([lat * 1e-3, up * 1e-3]);
+            half.push([crate::units::mm_to_m(lat), crate::units::mm_to_m(up)]);
         }
         if half.len() < 3 {
             return Err(MeshError::ProfileParse {

@@ -308,7 +308,10 @@ fn invalid(name: &'static str, value: f64, reason: &'static str) -> MeshError {
 
 fn vertex(half: &[[f64; 2]], y_mm: f64, z_mm: f64) -> Result<usize, MeshError> {
     half.iter()
-        .position(|p| (p[0] - y_mm * 1e-3).abs() < 1e-6 && (p[1] - z_mm * 1e-3).abs() < 1e-6)
+        .position(|p| {
+            (p[0] - crate::units::mm_to_m(y_mm)).abs() < 1e-6
+                && (p[1] - crate::units::mm_to_m(z_mm)).abs() < 1e-6
+        })
         .ok_or(MeshError::ProfileParse {
             line: 0,
             reason: format!("the section mesher needs the UIC54 key point ({y_mm}, {z_mm}) mm"),

@@ -572,13 +572,14 @@ fn growth_section(d: &mut Document, g: &TrialGrowth, gj: &GrowJson) {
             let c = |w: Option<f64>, dev: Option<f64>| {
                 format!(
                     "{} ({})",
-                    w.map(|x| sig(1000.0 * x, 3)).unwrap_or_else(|| "–".into()),
+                    w.map(|x| sig(crate::units::m_to_mm(x), 3))
+                        .unwrap_or_else(|| "–".into()),
                     pct(dev)
                 )
             };
             rows.push(vec![
                 f(a.amplitude_um),
-                sig(1000.0 * r.reference_wavelength_m, 3),
+                sig(crate::units::m_to_mm(r.reference_wavelength_m), 3),
                 c(r.wf_wavelength_m, r.wf_deviation),
                 c(r.fl_wavelength_m, r.fl_deviation),
                 c(r.fn_wavelength_m, r.fn_deviation),

@@ -2,6 +2,8 @@
 
 use std::path::Path;
 
+use crate::units::mm_to_m;
+
 use super::report::write_outputs;
 use super::run::same_speed;
 use super::{read_summary, speed_file, MapOptions, StudiesError, SweepMaps, SweepRecord};
@@ -109,7 +111,10 @@ pub fn assemble(
 fn build_maps(speeds: &[f64], summaries: &[PassageSummary], opts: &MapOptions) -> SweepMaps {
     let lam = opts.wavelength_grid_mm();
     let vms: Vec<f64> = speeds.iter().map(|&v| crate::units::kmh_to_ms(v)).collect();
-    let (lmin, lmax) = (opts.wavelength_min_mm * 1e-3, opts.wavelength_max_mm * 1e-3);
+    let (lmin, lmax) = (
+        mm_to_m(opts.wavelength_min_mm),
+        mm_to_m(opts.wavelength_max_mm),
+    );
     let f_lo = vms.iter().copied().fold(f64::MAX, f64::min) / lmax;
     let f_hi = vms.iter().copied().fold(f64::MIN, f64::max) / lmin;
     let freq = linspace(f_lo, f_hi, opts.frequency_points);
@@ -124,7 +129,7 @@ fn build_maps(speeds: &[f64], summaries: &[PassageSummary], opts: &MapOptions) -
     };
     for (s, &v) in summaries.iter().zip(&vms) {
         for &l in &lam {
-            let k = 1.0 / (l * 1e-3);
+            let k = 1.0 / mm_to_m(l);
             m.wear_wavelength.push(psd_at_wavenumber(&s.wear_psd, k));
             m.fl_wavelength.push(psd_at_wavenumber(&s.fl_psd, k));
         }

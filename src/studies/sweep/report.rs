@@ -189,7 +189,7 @@ impl ModeLines {
                 x: curve_v.clone(),
                 y: curve_v
                     .iter()
-                    .map(|&v| crate::units::kmh_to_ms(v) / f * 1e3)
+                    .map(|&v| crate::units::m_to_mm(crate::units::kmh_to_ms(v) / f))
                     .collect(),
                 style: *style,
             })
