@@ -21,7 +21,6 @@ const KEYS: [&str; 58] = [
     "rail.youngs_modulus",
     "rail.poisson_ratio",
     "rail.density",
-    "rail.structural_damping",
     "sleeper.length",
     "sleeper.width",
     "sleeper.height",

@@ -273,10 +273,6 @@ pub struct Rail {
     pub poisson_ratio: f64,
     /// Density (kg/m³), 1000 to 20000 ([`DENSITY_KG_M3`]).
     pub density: f64,
-    /// Stiffness-proportional (Rayleigh β) structural damping of the steel (s); 0 in the
-    /// reference, where all damping sits in the discrete dampers. Only 0 is accepted: steel
-    /// damping is not modelled yet (a non-zero value is an error, not silently ignored).
-    pub structural_damping: f64,
 }
 
 /// Half monoblock sleeper as a solid block.

@@ -40,7 +40,7 @@ impl Model {
         Ok(())
     }
 
-    /// `[rail]`: profile, inclination, material and (zero) structural damping.
+    /// `[rail]`: profile, inclination and material.
     fn validate_rail(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         let r = &self.rail;
         if r.profile != "uic54" {
@@ -59,15 +59,6 @@ impl Model {
             "(tan of cant angle)",
         )?;
         c.elastic("rail", r.youngs_modulus, r.poisson_ratio, r.density)?;
-        // Only 0 is supported: the reduced model (and the explicit path) has no steel damping
-        // yet, and a value that is accepted but ignored would mislead. The range says so.
-        c.range(
-            "rail.structural_damping",
-            r.structural_damping,
-            0.0,
-            0.0,
-            "s (Rayleigh beta; steel damping is not modelled yet: all damping sits in the discrete dampers, as in the reference)",
-        )?;
         Ok(())
     }
 

@@ -58,7 +58,6 @@ pub fn key_unit(key: &str) -> Option<&'static str> {
         "gravity" => "m/s²",
         "coefficient" => "m³/J",
         "time_step" => "s",
-        "structural_damping" => "s",
         _ if ends("damping_ratio") => "−",
         _ if ends("stiffness") => "N/m",
         _ if ends("damping") => "N·s/m",
