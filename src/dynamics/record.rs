@@ -126,12 +126,18 @@ pub struct EnergyBalance {
     /// wheel's displacement under the contact over a contact step, and the primary
     /// suspension's turn to the ground vertical. Counted as an input.
     pub frame_work_j: f64,
+    /// Work fed into the contact by the rotating wheel's tread corrections (J; zero for a
+    /// wheel that does not rotate and with `explicit.local_compliance = "mesh"`,
+    /// docs/theory.md §8.8): the contact force through the convective deflection taken
+    /// out of the creepage, and the explicit time dependence of the removed normal
+    /// compliance variation `−Δg(φ)` as the contact runs round the faceted tread. Both are
+    /// inputs of the contact law, not of the structures. Counted as an input.
+    pub tread_correction_work_j: f64,
 }
 
 impl EnergyBalance {
-    /// `input + spin, convective and frame work − (stored + dampers + friction + contact and residual-spring
-    /// energy)` over the input
-    /// (−).
+    /// `input + spin, convective, frame and tread-correction work − (stored + dampers +
+    /// friction + contact and residual-spring energy)` over the input (−).
     pub fn relative_error(&self) -> f64 {
         let out = self.stored_change_j
             + self.damper_dissipation_j
@@ -143,7 +149,12 @@ impl EnergyBalance {
             .abs()
             .max(self.frictional_work_j.abs() + self.damper_dissipation_j.abs())
             .max(f64::MIN_POSITIVE);
-        (self.external_work_j + self.spin_work_j + self.convective_work_j + self.frame_work_j - out)
+        (self.external_work_j
+            + self.spin_work_j
+            + self.convective_work_j
+            + self.frame_work_j
+            + self.tread_correction_work_j
+            - out)
             / scale
     }
 }

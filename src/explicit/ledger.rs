@@ -48,8 +48,11 @@ pub(super) struct LedgerStep {
     pub(super) held_at_previous: Option<[[f64; 3]; 2]>,
     /// The contact force at the step's start and end (N, on the wheel).
     pub(super) forces: [[f64; 3]; 2],
-    /// The removed local compliance variation `Δg` at the step's end position (m/N).
+    /// The removed local compliance variation `Δg` at the step's end position (m/N): the
+    /// rail's and the rotating tread's.
     pub(super) dg: [f64; 3],
+    /// The rotating tread's share of `dg` (m/N; zero on the fixed wheel).
+    pub(super) dg_wheel: [f64; 3],
     /// Work of the dampers over the predictor's sub-steps (J). The corrector's response
     /// starts at the contact and does not reach the dampers (pads, ballast, suspension)
     /// within the step, so this is the step's dissipation.
@@ -80,8 +83,10 @@ pub(super) struct Ledger<'a> {
     e_start: f64,
     e_contact_start: f64,
     ur_prev: [f64; 3],
-    /// The removed normal local compliance variation at the last position (m/N).
+    /// The removed normal local compliance variation at the last position (m/N), and the
+    /// rotating tread's share of it.
     dg_prev: f64,
+    dg_wheel_prev: f64,
     /// Wheel-load work potentials `f·u` at the step's start: all, torque, gravity.
     before: [f64; 3],
     ku: Vec<f64>,
@@ -120,6 +125,8 @@ impl<'a> Ledger<'a> {
             e_contact_start: hertz_energy(st.normal_force_n, st.approach_m, 0.0),
             ur_prev: m.rail_at(&s.ut, x0)?,
             dg_prev: m.local_variation(x0, &m.weights(x0)?)[2],
+            // The tread's variation is zero at the start's angle, its reference.
+            dg_wheel_prev: 0.0,
             before: [0.0; 3],
             by_direction: [[0.0; 3]; 3],
             rail_wheel: [0.0; 2],
@@ -231,9 +238,10 @@ impl<'a> Ledger<'a> {
             }
             self.uw_prev = uw_end;
         }
-        // The tread's convective deflection taken out of the creepages (§8.7).
+        // The tread's convective deflection taken out of the creepages (§8.7): an input of
+        // the contact law.
         for d in 0..2 {
-            eb.convective_work_j += k.f_work[d] * k.conv[d];
+            eb.tread_correction_work_j += k.f_work[d] * k.conv[d];
         }
         for d in 0..3 {
             let [on_rail, on_wheel] = [
@@ -264,10 +272,13 @@ impl<'a> Ledger<'a> {
         }
         self.ur_prev = ur_end;
         // The removed local compliance variation acts as a series spring of compliance
-        // −Δg(x) (docs/theory.md §8.6). Tangential: on the creepage increments at the step's
-        // end position, energy −Δg F̄ ΔF. Normal: in the approach, energy −½Δg(x)F², and
-        // rolling from x_n to x_{n+1} at F_n changes it by −½(Δg_{n+1} − Δg_n)F_n², of
-        // which the contact chain's balance leaves +½(Δg_{n+1} − Δg_n)F_n² as an input.
+        // −Δg (docs/theory.md §8.6, §8.8). Tangential: on the creepage increments at the
+        // step's end position, energy −Δg F̄ ΔF. Normal: in the approach, energy −½ Δg F²;
+        // the contact's approach is the structures' plus Δg F, so the mean force's work on
+        // that shift, F̄ Δ(Δg F), is the energy change ½ Δ(Δg F²) plus the work of the
+        // spring's explicit dependence on the contact's place, ½ F_n F_{n+1} (Δg_{n+1} − Δg_n),
+        // an input: the rail's share (Δg(x)) as convective work, the rotating tread's
+        // (Δg(φ)) as the tread corrections' work.
         let [fo, fnew] = k.forces;
         for d in 0..2 {
             let e = k.dg[d] * 0.5 * (fo[d] + fnew[d]) * (fnew[d] - fo[d]);
@@ -275,11 +286,15 @@ impl<'a> Ledger<'a> {
             self.by_direction[2][d] -= e;
         }
         let e = 0.5 * (k.dg[2] * fnew[2] * fnew[2] - self.dg_prev * fo[2] * fo[2]);
-        let roll = 0.5 * (k.dg[2] - self.dg_prev) * fo[2] * fo[2];
+        let dg_rail = [k.dg[2] - k.dg_wheel[2], self.dg_prev - self.dg_wheel_prev];
+        let roll = varying_spring_work([dg_rail[1], dg_rail[0]], [fo[2], fnew[2]]);
+        let tread = varying_spring_work([self.dg_wheel_prev, k.dg_wheel[2]], [fo[2], fnew[2]]);
         eb.residual_spring_energy_change_j -= e;
         eb.convective_work_j += roll;
-        self.by_direction[2][2] -= e + roll;
+        eb.tread_correction_work_j += tread;
+        self.by_direction[2][2] -= e + roll + tread;
         self.dg_prev = k.dg[2];
+        self.dg_wheel_prev = k.dg_wheel[2];
         Ok(())
     }
 
@@ -304,6 +319,14 @@ impl<'a> Ledger<'a> {
     }
 }
 
+/// The trapezoidal work (J) of the explicit time dependence of a series compliance that
+/// changes from `g[0]` to `g[1]` (m/N) while its force changes from `f[0]` to `f[1]` (N):
+/// the mean force times the change of the spring's stretch `g F`, less the change of its
+/// energy `½ g F²`, which is `½ f₀ f₁ (g₁ − g₀)`.
+fn varying_spring_work(g: [f64; 2], f: [f64; 2]) -> f64 {
+    0.5 * f[0] * f[1] * (g[1] - g[0])
+}
+
 /// Hertz estimate of the contact's elastic energy `(2/5) F (δ − c F)` (J) for the normal
 /// force `f` (N), the approach `d` (m) and a series compliance `c` (m/N) whose share of the
 /// approach is not in the half-space.
@@ -313,4 +336,24 @@ fn hertz_energy(f: f64, d: f64, c: f64) -> f64 {
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::varying_spring_work;
+
+    /// The work of a varying series compliance is the mean force times the change of the
+    /// spring's stretch `g F` less the change of its energy `½ g F²` (closed form by hand),
+    /// and differs from the force-at-the-start form `½ Δg F_n²` by `½ Δg F_n ΔF` (numbers
+    /// chosen so that the difference is not small).
+    #[test]
+    fn varying_spring_work_is_the_trapezoid_less_the_energy_change() {
+        let (g0, g1, f0, f1) = (-2.0e-10, 1.5e-10, 1.0e5, 1.1e5);
+        let direct = 0.5 * (f0 + f1) * (g1 * f1 - g0 * f0) - 0.5 * (g1 * f1 * f1 - g0 * f0 * f0);
+        let w = varying_spring_work([g0, g1], [f0, f1]);
+        assert!((w - direct).abs() < 1e-12 * direct.abs(), "{w} vs {direct}");
+        let rail_form = 0.5 * (g1 - g0) * f0 * f0;
+        assert!((w - rail_form - 0.5 * (g1 - g0) * f0 * (f1 - f0)).abs() < 1e-9 * w.abs());
+        assert!((w - rail_form).abs() > 0.05 * w.abs());
+    }
 }

@@ -190,8 +190,10 @@ struct Solved {
     xi: f64,
     /// The approach given to the contact (m).
     delta: f64,
-    /// The removed local compliance variation at the position (m/N per direction).
+    /// The removed local compliance variation at the position (m/N per direction): the
+    /// rail's and the rotating tread's, and the tread's share.
     dg: [f64; 3],
+    dg_wheel: [f64; 3],
     /// The rotating tread's convective deflection taken out of the creepage (m, contact
     /// frame; zero on the fixed wheel).
     conv: [f64; 3],
@@ -363,6 +365,7 @@ impl<'a> Stepper<'a> {
                     .map(|o| [o, self.m.rail_under(&self.s.ut, &self.pw_prev)]),
                 forces: [f, f_new],
                 dg: sol.dg,
+                dg_wheel: sol.dg_wheel,
                 damper_j: pred.damper_j,
                 t: [t - p.dt_c, t],
                 uw_end: match &self.rot {
@@ -516,9 +519,9 @@ impl<'a> Stepper<'a> {
             source,
         };
         let mut dg = m.local_variation(xc, pw);
-        if let Some(r) = &self.rot {
-            let dw = r.local_variation();
-            dg = [0, 1, 2].map(|d| dg[d] + dw[d]);
+        let dg_wheel = self.rot.as_ref().map_or([0.0; 3], |r| r.local_variation());
+        if self.rot.is_some() {
+            dg = [0, 1, 2].map(|d| dg[d] + dg_wheel[d]);
         }
         for d in 0..3 {
             self.series_c[d] = self.series[d] - dg[d];
@@ -553,6 +556,7 @@ impl<'a> Stepper<'a> {
             xi,
             delta,
             dg,
+            dg_wheel,
             conv,
         })
     }
