@@ -1,4 +1,4 @@
-//! The energy ledger of an explicit passage (docs/theory.md §7.8, §8.4): the same terms as the
+//! The energy ledger of an explicit passage (docs/theory.md §8.8; the reduced passage's terms in §7.8): the same terms as the
 //! reduced passage's [`EnergyBalance`], from the state at contact-step boundaries.
 
 use super::model::ExplicitModel;
