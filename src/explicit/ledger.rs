@@ -1,5 +1,5 @@
-//! The energy ledger of an explicit passage (docs/theory.md §8.8; the reduced passage's terms in §7.8): the same terms as the
-//! reduced passage's [`EnergyBalance`], from the state at contact-step boundaries.
+//! The energy ledger of an explicit passage (docs/theory.md §8.8): the same terms as the
+//! reduced passage's [`EnergyBalance`] (§7.8), from the state at contact-step boundaries.
 
 use super::model::ExplicitModel;
 use super::rotating::RotatingWheel;
