@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use common::SMALL_MODEL;
 
 /// Every numeric key of the model.
-const KEYS: [&str; 58] = [
+const KEYS: [&str; 57] = [
     "track.bays",
     "track.sleeper_spacing",
     "rail.inclination",
