@@ -583,8 +583,9 @@ impl Convolver {
         for a in 0..bx {
             let row = &mut bg.buf[a * p2..(a + 1) * p2];
             let e0 = (r0 + a) * ny + c0;
-            for (b, v) in row[..by].iter_mut().enumerate() {
-                *v = Complex32::new(tx[e0 + b] as f32, ty[e0 + b] as f32);
+            let (sx, sy) = (&tx[e0..e0 + by], &ty[e0..e0 + by]);
+            for ((v, x), y) in row[..by].iter_mut().zip(sx).zip(sy) {
+                *v = Complex32::new(*x as f32, *y as f32);
             }
             row[by..].fill(Complex32::zero());
         }
@@ -594,15 +595,15 @@ impl Convolver {
         bg.fft.inverse_from_t(&mut bg.buf, 0, bx);
         for a in 0..bx {
             let row = (r0 + a) * ny;
-            for j in 0..ny {
-                let (vx, vy) = if (c0..c1).contains(&j) {
-                    let v = bg.buf[a * p2 + j - c0];
-                    (f64::from(v.re), f64::from(v.im))
-                } else {
-                    (0.0, 0.0)
-                };
-                ux[row + j] = vx;
-                uy[row + j] = vy;
+            let (ux, uy) = (&mut ux[row..row + ny], &mut uy[row..row + ny]);
+            for u in [&mut *ux, &mut *uy] {
+                u[..c0].fill(0.0);
+                u[c1..].fill(0.0);
+            }
+            let src = &bg.buf[a * p2..a * p2 + by];
+            for ((x, y), v) in ux[c0..c1].iter_mut().zip(&mut uy[c0..c1]).zip(src) {
+                *x = f64::from(v.re);
+                *y = f64::from(v.im);
             }
         }
     }

@@ -23,6 +23,44 @@
 use super::influence::Convolver;
 use super::ContactError;
 
+/// `body` for `i` in `0..n` with its lane `l`, in blocks of four (`LANES`; the remainder on
+/// lane 0). The slices named after `mut` and `ref` (each of length `n`) are re-sliced to the
+/// block inside a block, so that its four bodies (written out: constant lane indices) index
+/// arrays of known length: no bounds checks, and the lanes' partial sums stay in registers.
+macro_rules! lanes {
+    ($n:expr, $i:ident, $l:ident, mut [$($m:ident),*], ref [$($r:ident),*], $body:block) => {{
+        let n: usize = $n;
+        let mut c = 0;
+        while c + 4 <= n {
+            {
+                $(let $m = &mut $m[c..c + 4];)*
+                $(let $r = &$r[c..c + 4];)*
+                {
+                    let ($i, $l) = (0, 0);
+                    $body
+                }
+                {
+                    let ($i, $l) = (1, 1);
+                    $body
+                }
+                {
+                    let ($i, $l) = (2, 2);
+                    $body
+                }
+                {
+                    let ($i, $l) = (3, 3);
+                    $body
+                }
+            }
+            c += 4;
+        }
+        for $i in c..n {
+            let $l = 0;
+            $body
+        }
+    }};
+}
+
 /// How the slip directions are found (see [`TangentialSolver::solve`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum TangentialAlgorithm {
@@ -75,6 +113,27 @@ pub struct TangentialSolver {
     /// Whether `sx, sy` are the exact product of the current traction (not the CG's
     /// recurrence).
     exact_now: bool,
+    /// Adhesion and slip masks of the inner CG (1 or 0 per element; both 0 where `g ≤ 0`),
+    /// set with the Jacobi preconditioner: the branch-free CG step.
+    wa: Vec<f64>,
+    ws: Vec<f64>,
+    /// The final traction of the last solve (Pa): with [`Self::ux_ext`] its product, the
+    /// start of the next solve by linearity ([`Self::linear_start`]).
+    tx_last: Vec<f64>,
+    ty_last: Vec<f64>,
+    /// Box (rows, columns) of the last solve's contact, and whether `tx_last, ty_last` and
+    /// `ux_ext, uy_ext` are a traction and its exact product (with the convolver of
+    /// `last_conv`: dims and self-influences).
+    last_box: ((usize, usize), (usize, usize)),
+    last_valid: bool,
+    last_conv: (usize, usize, f64, f64),
+    /// The start's slip by linearity (default `true`): `S = C τ_last + C (τ₀ − τ_last) + e`
+    /// with `C τ_last` the last solve's exact product and the difference as a box product
+    /// ([`Convolver::tangential_box`]), instead of a whole-grid product of the start `τ₀`.
+    /// Every solve still ends on an exact whole-grid product. It needs the same convolver as
+    /// the last solve (checked by its dimensions and self-influences; otherwise the whole-grid
+    /// product is taken).
+    pub linear_start: bool,
     /// The algorithm for the slip directions.
     pub algorithm: TangentialAlgorithm,
     /// Jacobi-precondition the inner CG of [`TangentialAlgorithm::Newton`] (default `true`;
@@ -129,6 +188,14 @@ impl TangentialSolver {
             cols: (0, 0),
             segs: Vec::with_capacity(nx.max(1)),
             exact_now: false,
+            wa: vec![0.0; n],
+            ws: vec![0.0; n],
+            tx_last: vec![0.0; n],
+            ty_last: vec![0.0; n],
+            last_box: ((0, 0), (0, 0)),
+            last_valid: false,
+            last_conv: (0, 0, 0.0, 0.0),
+            linear_start: true,
             algorithm: TangentialAlgorithm::Newton,
             jacobi: true,
             sx: vec![0.0; n],
@@ -175,6 +242,44 @@ impl TangentialSolver {
         }
         self.products += 1;
         self.exact_now = true;
+    }
+
+    /// The start's slip `S = C τ_last + C (τ₀ − τ_last) + c ΔA Σ τ₀ + e` on the contact's
+    /// elements `lo..hi` ([`Self::linear_start`]): `C τ_last` is the last solve's exact
+    /// product (`ux_ext`, kept), the difference's product a box product on the box holding
+    /// both contacts (`last_box` and the current one). Not exact (`exact_now` stays false):
+    /// the solve's convergence is confirmed by a whole-grid product.
+    fn start_by_linearity(
+        &mut self,
+        conv: &mut Convolver,
+        ex: &[f64],
+        ey: &[f64],
+        tx: &[f64],
+        ty: &[f64],
+        (last_rows, last_cols): ((usize, usize), (usize, usize)),
+    ) {
+        let hull = |a: (usize, usize), b: (usize, usize)| match (a.0 < a.1, b.0 < b.1) {
+            (true, true) => (a.0.min(b.0), a.1.max(b.1)),
+            (true, false) => a,
+            _ => b,
+        };
+        let rows = hull(self.rows, last_rows);
+        let cols = hull(self.cols, last_cols);
+        let ny = conv.dims().1;
+        let (a, b) = (rows.0 * ny, rows.1 * ny);
+        // (rx, ry) are free until the first residual: the traction's change on the box's rows
+        for i in a..b {
+            self.rx[i] = tx[i] - self.tx_last[i];
+            self.ry[i] = ty[i] - self.ty_last[i];
+        }
+        conv.tangential_box(&self.rx, &self.ry, &mut self.qx, &mut self.qy, rows, cols);
+        let (cux, cuy) = self.uniform(tx, ty);
+        for i in self.lo..self.hi {
+            self.sx[i] = self.ux_ext[i] + self.qx[i] + ex[i] + cux;
+            self.sy[i] = self.uy_ext[i] + self.qy[i] + ey[i] + cuy;
+        }
+        self.products += 1;
+        self.exact_now = false;
     }
 
     /// Slip tractions back onto their circles `|τ_i| = g_i` (after turns along the tangent).
@@ -261,10 +366,42 @@ impl TangentialSolver {
     /// state and the slip directions are converged. If it has not ended after
     /// `cg_iterations` products, the monotone accelerated projected gradient (FISTA) finishes.
     ///
-    /// Phases: `start` (the warm start projected, the slip set and the contact's box), then
-    /// per outer iteration `element_test`, the projected residual and the convergence test,
-    /// the CG model (`curvature`, `precondition`) and `inner_cg`; the FISTA fallback last.
+    /// Phases: `start` (the warm start projected, the slip set and the contact's box) and its
+    /// slip (by linearity from the last solve, [`Self::linear_start`]), then per outer
+    /// iteration `element_test`, the projected residual and the convergence test, the CG
+    /// model (`curvature`, `precondition`) and `inner_cg`; the FISTA fallback last.
     pub fn solve(
+        &mut self,
+        conv: &mut Convolver,
+        g: &[f64],
+        ex: &[f64],
+        ey: &[f64],
+        tx: &mut [f64],
+        ty: &mut [f64],
+    ) -> Result<usize, ContactError> {
+        let out = self.solve_from_start(conv, g, ex, ey, tx, ty);
+        // every successful solve ends on an exact whole-grid product of (tx, ty)
+        self.last_valid = out.is_ok();
+        if self.last_valid {
+            self.tx_last.copy_from_slice(tx);
+            self.ty_last.copy_from_slice(ty);
+            self.last_conv = Self::fingerprint(conv);
+            if g.iter().all(|&v| v <= 0.0) {
+                self.last_box = ((0, 0), (0, 0));
+            }
+        }
+        out
+    }
+
+    /// The convolver's dimensions and self-influences (m/Pa): the linear start's check that
+    /// the last solve's product belongs to the same operator.
+    fn fingerprint(conv: &Convolver) -> (usize, usize, f64, f64) {
+        let (nx, ny) = conv.dims();
+        (nx, ny, conv.diag_xx, conv.diag_yy)
+    }
+
+    /// [`Self::solve`] without the bookkeeping of the last solve.
+    fn solve_from_start(
         &mut self,
         conv: &mut Convolver,
         g: &[f64],
@@ -284,10 +421,16 @@ impl TangentialSolver {
             self.uy_ext.fill(0.0);
             return Ok(0);
         }
+        let last_box = self.last_box;
         self.start(conv, g, tx, ty);
+        self.last_box = (self.rows, self.cols);
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
         let s_tol = self.tol * gmax * conv.diag_t;
-        self.exact(conv, ex, ey, tx, ty);
+        if self.linear_start && self.last_valid && self.last_conv == Self::fingerprint(conv) {
+            self.start_by_linearity(conv, ex, ey, tx, ty, last_box);
+        } else {
+            self.exact(conv, ex, ey, tx, ty);
+        }
         let pb = Problem { g, ex, ey };
         while self.products < self.cg_iterations {
             // 1. element test of the slip elements: release to adhesion, tangent directions
@@ -314,7 +457,7 @@ impl TangentialSolver {
                 self.curvature(g, tx, ty);
             }
             if self.jacobi && !norot {
-                rr = self.precondition(conv);
+                rr = self.precondition(conv, g);
             }
             // settled active set and directions: one CG sequence to the tolerance
             let stop = if norot || (!changed && dmax == 0.0) {
@@ -435,12 +578,16 @@ impl TangentialSolver {
     }
 
     /// The Jacobi preconditioner: the inverse diagonal of the model Hessian into
-    /// `(mix, miy)`, the search direction scaled by it (`z = M⁻¹ r`). Returns `r·z`.
-    fn precondition(&mut self, conv: &Convolver) -> f64 {
+    /// `(mix, miy)`, the search direction scaled by it (`z = M⁻¹ r`), and the adhesion and
+    /// slip masks `(wa, ws)` of the branch-free CG step. Returns `r·z`.
+    fn precondition(&mut self, conv: &Convolver, g: &[f64]) -> f64 {
         let (cdx, cdy) = (conv.diag_xx, conv.diag_yy);
         let (hx, hy) = (cdx + self.uniform_x_m_per_pa, cdy + self.uniform_y_m_per_pa);
         let mut rr = 0.0;
         for i in self.lo..self.hi {
+            let inside = g[i] > 0.0;
+            self.wa[i] = f64::from(u8::from(inside && !self.slip[i]));
+            self.ws[i] = f64::from(u8::from(inside && self.slip[i]));
             let (mx, my) = if self.slip[i] {
                 let (px, py) = (self.px[i], self.py[i]);
                 let d = 1.0 / (px * px * hx + py * py * hy + self.kap[i]);
@@ -460,7 +607,48 @@ impl TangentialSolver {
     /// The inner conjugate gradients from the search direction `(dx_, dy_)` with `r·z = rr`
     /// until the model residual is below `stop` (m), an adhesion element leaves its disc
     /// (it joins the slip set; an exact product follows) or the products run out.
+    ///
+    /// The loops run branch-free where they can (adhesion and slip as masks, with the Jacobi
+    /// preconditioner) and reduce in four interleaved partial sums ([`lanes!`]); compiled for
+    /// AVX2 when the CPU has it (checked at run time; no fused multiply-add, so both builds
+    /// give the same bits).
     fn inner_cg(
+        &mut self,
+        conv: &mut Convolver,
+        pb: &Problem<'_>,
+        tx: &mut [f64],
+        ty: &mut [f64],
+        rr: f64,
+        stop: f64,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above), the only requirement of the
+            // `target_feature` function.
+            unsafe { self.inner_cg_avx2(conv, pb, tx, ty, rr, stop) };
+            return;
+        }
+        self.inner_cg_body(conv, pb, tx, ty, rr, stop);
+    }
+
+    /// [`Self::inner_cg_body`] compiled with AVX2 enabled.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn inner_cg_avx2(
+        &mut self,
+        conv: &mut Convolver,
+        pb: &Problem<'_>,
+        tx: &mut [f64],
+        ty: &mut [f64],
+        rr: f64,
+        stop: f64,
+    ) {
+        self.inner_cg_body(conv, pb, tx, ty, rr, stop);
+    }
+
+    /// The inner CG of [`Self::inner_cg`], for any instruction set.
+    #[inline(always)]
+    fn inner_cg_body(
         &mut self,
         conv: &mut Convolver,
         pb: &Problem<'_>,
@@ -470,15 +658,21 @@ impl TangentialSolver {
         stop: f64,
     ) {
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
+        let masked = self.jacobi && !norot;
         // the search direction is zero outside the box's segments within `lo..hi` (see
         // `start`): its sums and the loops below run there
         let segs = std::mem::take(&mut self.segs);
         let (mut sdx, mut sdy) = (0.0, 0.0);
-        for &(a, b) in &segs {
-            for i in a..b {
-                sdx += self.dx_[i];
-                sdy += self.dy_[i];
+        if self.uniform_x_m_per_pa != 0.0 || self.uniform_y_m_per_pa != 0.0 {
+            let mut acc = [[0.0; 2]; LANES];
+            for &(a, b) in &segs {
+                let (dx, dy) = (&self.dx_[a..b], &self.dy_[a..b]);
+                lanes!(b - a, i, l, mut [], ref [dx, dy], {
+                    acc[l][0] += dx[i];
+                    acc[l][1] += dy[i];
+                });
             }
+            (sdx, sdy) = (lane_sum(&acc, 0), lane_sum(&acc, 1));
         }
         while self.products < self.cg_iterations {
             conv.tangential_box(
@@ -490,30 +684,32 @@ impl TangentialSolver {
                 self.cols,
             );
             let (cux, cuy) = self.uniform_of_sums(sdx, sdy);
-            let series = cux != 0.0 || cuy != 0.0;
             self.products += 1;
             self.exact_now = false;
             // model product w = C d on adhesion, P C d + κ d on slip (d ∥ tangent there),
-            // with the series compliance's uniform displacement added to C d
-            if series {
-                for i in self.lo..self.hi {
-                    self.qx[i] += cux;
-                    self.qy[i] += cuy;
-                }
-            }
-            let mut den = 0.0;
+            // with the series compliance's uniform displacement added to C d (exactly 0
+            // without it), and dᵀ w
+            let mut acc = [[0.0; 1]; LANES];
             for &(a, b) in &segs {
-                for i in a..b {
-                    den += self.qx[i] * self.dx_[i]
-                        + self.qy[i] * self.dy_[i]
-                        + self.kap[i] * (self.dx_[i] * self.dx_[i] + self.dy_[i] * self.dy_[i]);
-                }
+                let (qx, qy) = (&mut self.qx[a..b], &mut self.qy[a..b]);
+                let (dx, dy, kap) = (&self.dx_[a..b], &self.dy_[a..b], &self.kap[a..b]);
+                lanes!(b - a, i, l, mut [qx, qy], ref [dx, dy, kap], {
+                    let (q1, q2) = (qx[i] + cux, qy[i] + cuy);
+                    qx[i] = q1;
+                    qy[i] = q2;
+                    acc[l][0] += q1 * dx[i] + q2 * dy[i] + kap[i] * (dx[i] * dx[i] + dy[i] * dy[i]);
+                });
             }
+            let den = lane_sum(&acc, 0);
             if den <= 0.0 || rr == 0.0 {
                 break;
             }
             let alpha = rr / den;
-            let (violated, mut rr_new, mut rmax) = self.cg_update(pb.g, tx, ty, alpha, &segs);
+            let (violated, mut rr_new, mut rmax) = if masked {
+                self.cg_update_masked(pb.g, tx, ty, alpha, &segs)
+            } else {
+                self.cg_update(pb.g, tx, ty, alpha, &segs)
+            };
             if violated {
                 if !norot {
                     self.to_circles(pb.g, tx, ty);
@@ -529,17 +725,84 @@ impl TangentialSolver {
             }
             let beta = rr_new / rr;
             rr = rr_new;
-            (sdx, sdy) = (0.0, 0.0);
+            let mut acc = [[0.0; 2]; LANES];
             for &(a, b) in &segs {
-                for i in a..b {
-                    self.dx_[i] = self.qx[i] + beta * self.dx_[i];
-                    self.dy_[i] = self.qy[i] + beta * self.dy_[i];
-                    sdx += self.dx_[i];
-                    sdy += self.dy_[i];
+                let (qx, qy) = (&self.qx[a..b], &self.qy[a..b]);
+                let (dx, dy) = (&mut self.dx_[a..b], &mut self.dy_[a..b]);
+                lanes!(b - a, i, l, mut [dx, dy], ref [qx, qy], {
+                    dx[i] = qx[i] + beta * dx[i];
+                    dy[i] = qy[i] + beta * dy[i];
+                    acc[l][0] += dx[i];
+                    acc[l][1] += dy[i];
+                });
+            }
+            (sdx, sdy) = (lane_sum(&acc, 0), lane_sum(&acc, 1));
+        }
+        self.segs = segs;
+    }
+
+    /// [`Self::cg_update`] with the Jacobi preconditioner and
+    /// [`TangentialAlgorithm::Newton`], branch-free: the model product `w` from the masks
+    /// `(wa, ws)` of [`Self::precondition`] (`w = wa q + ws (c t + κ d)`, the same values as the
+    /// branches), the reductions in [`lanes!`]. An adhesion element that left its disc is
+    /// projected in a second pass (the CG then stops: the step's residual is not used).
+    #[inline(always)]
+    fn cg_update_masked(
+        &mut self,
+        g: &[f64],
+        tx: &mut [f64],
+        ty: &mut [f64],
+        alpha: f64,
+        segs: &[(usize, usize)],
+    ) -> (bool, f64, f64) {
+        let mut acc = [[0.0; 2]; LANES];
+        let mut violated = false;
+        for &(a, b) in segs {
+            let (sx, sy) = (&mut self.sx[a..b], &mut self.sy[a..b]);
+            let (qx, qy) = (&mut self.qx[a..b], &mut self.qy[a..b]);
+            let (rx, ry) = (&mut self.rx[a..b], &mut self.ry[a..b]);
+            let (dx, dy, kap) = (&self.dx_[a..b], &self.dy_[a..b], &self.kap[a..b]);
+            let (px, py) = (&self.px[a..b], &self.py[a..b]);
+            let (mix, miy) = (&self.mix[a..b], &self.miy[a..b]);
+            let (wa, ws) = (&self.wa[a..b], &self.ws[a..b]);
+            let (txs, tys, gs) = (&mut tx[a..b], &mut ty[a..b], &g[a..b]);
+            lanes!(b - a, i, l, mut [sx, sy, qx, qy, rx, ry, txs, tys],
+                ref [dx, dy, kap, px, py, mix, miy, wa, ws, gs], {
+                let (q1, q2) = (qx[i], qy[i]);
+                sx[i] += alpha * q1;
+                sy[i] += alpha * q2;
+                let ax = txs[i] + alpha * dx[i];
+                let ay = tys[i] + alpha * dy[i];
+                violated |= (wa[i] > 0.0) & (ax * ax + ay * ay > gs[i] * gs[i]);
+                txs[i] = ax;
+                tys[i] = ay;
+                let c = q1 * px[i] + q2 * py[i];
+                let wx = q1 * wa[i] + (c * px[i] + kap[i] * dx[i]) * ws[i];
+                let wy = q2 * wa[i] + (c * py[i] + kap[i] * dy[i]) * ws[i];
+                let (r1, r2) = (rx[i] - alpha * wx, ry[i] - alpha * wy);
+                rx[i] = r1;
+                ry[i] = r2;
+                let (z1, z2) = (r1 * mix[i], r2 * miy[i]);
+                qx[i] = z1;
+                qy[i] = z2;
+                acc[l][0] += r1 * z1 + r2 * z2;
+                acc[l][1] = acc[l][1].max(r1.abs()).max(r2.abs());
+            });
+        }
+        if violated {
+            for i in segs.iter().flat_map(|&(a, b)| a..b) {
+                if self.wa[i] > 0.0 {
+                    let (mut ax, mut ay) = (tx[i], ty[i]);
+                    if ax * ax + ay * ay > g[i] * g[i] {
+                        project(&mut ax, &mut ay, g[i]);
+                        (tx[i], ty[i]) = (ax, ay);
+                        self.slip[i] = true;
+                    }
                 }
             }
         }
-        self.segs = segs;
+        let rmax = acc.iter().fold(0.0_f64, |m, a| m.max(a[1]));
+        (violated, lane_sum(&acc, 0), rmax)
     }
 
     /// One pass of a CG step of length `alpha`: the slip and traction update (an adhesion
@@ -682,6 +945,17 @@ impl TangentialSolver {
     }
 }
 
+/// Partial sums of the inner CG's reductions: element `i` of a segment goes to lane `i mod 4`
+/// of its blocks of four (the segment's last `n mod 4` elements to lane 0), so that the
+/// additions run in four independent chains (and vector lanes) instead of one.
+const LANES: usize = 4;
+
+/// The sum of the lanes' partial sums `k` (pairwise: `(l0 + l1) + (l2 + l3)`).
+#[inline(always)]
+fn lane_sum<const K: usize>(acc: &[[f64; K]; LANES], k: usize) -> f64 {
+    (acc[0][k] + acc[1][k]) + (acc[2][k] + acc[3][k])
+}
+
 #[inline]
 fn project(x: &mut f64, y: &mut f64, g: f64) {
     let m2 = *x * *x + *y * *y;
@@ -693,6 +967,189 @@ fn project(x: &mut f64, y: &mut f64, g: f64) {
             let s = g / m2.sqrt();
             *x *= s;
             *y *= s;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 16 × 12 grid (0.5 mm elements, steel) and an elliptic traction bound `µ p` (Pa)
+    /// centred `shift` rows from the grid's centre.
+    fn grid_and_bound(shift: f64) -> (Convolver, Vec<f64>) {
+        let (nx, ny) = (16, 12);
+        let conv = Convolver::new(nx, ny, 0.5e-3, 0.5e-3, 115e9, 80e9, 0.28);
+        let g = (0..nx * ny)
+            .map(|e| {
+                let x = ((e / ny) as f64 - 7.5 - shift) / 6.0;
+                let y = ((e % ny) as f64 - 5.5) / 4.6;
+                0.3 * 1.2e9 * (1.0 - x * x - y * y).max(0.0).sqrt()
+            })
+            .collect();
+        (conv, g)
+    }
+
+    #[test]
+    fn start_by_linearity_equals_the_whole_grid_product() {
+        // Independent check: the start's slip from the last solve's exact product plus the
+        // box product of the traction's change, against the whole-grid double-precision
+        // product of the start, on the elements of a contact that moved by one row; within
+        // the f32 rounding bound of the change's product
+        // (influence::tests::box_products_equal_dense_sums)
+        let (mut conv, g1) = grid_and_bound(0.0);
+        let (_, g2) = grid_and_bound(1.0);
+        let n = g1.len();
+        let ex: Vec<f64> = (0..n).map(|e| -1.2e-7 + 3e-10 * (e % 7) as f64).collect();
+        let ey: Vec<f64> = (0..n).map(|e| 4e-8 - 2e-10 * (e % 5) as f64).collect();
+        let mut s = TangentialSolver::new(n, 16);
+        s.tol = 1e-9;
+        let (mut tx, mut ty) = (vec![0.0; n], vec![0.0; n]);
+        s.solve(&mut conv, &g1, &ex, &ey, &mut tx, &mut ty).unwrap();
+        assert!(s.last_valid);
+        // the next start: the last traction, changed, projected onto the moved discs
+        let (mut tx0, mut ty0): (Vec<f64>, Vec<f64>) = (0..n)
+            .map(|e| {
+                (
+                    1.01 * tx[e] + 1e6 * (e % 3) as f64,
+                    ty[e] - 2e6 * (e % 4) as f64,
+                )
+            })
+            .unzip();
+        let last_box = s.last_box;
+        s.start(&conv, &g2, &mut tx0, &mut ty0);
+        let mut exact = s.clone();
+        s.start_by_linearity(&mut conv, &ex, &ey, &tx0, &ty0, last_box);
+        assert!(!s.exact_now);
+        exact.exact(&mut conv, &ex, &ey, &tx0, &ty0);
+        let change = tx0
+            .iter()
+            .zip(&tx)
+            .chain(ty0.iter().zip(&ty))
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
+        // the box holds both contacts: rows 0..16 at most, columns 0..12 (padded 32 × 24)
+        let bound =
+            10.0 * (32.0 * 24.0_f64).log2() * f64::from(f32::EPSILON) * conv.lambda_max_t * change;
+        let (mut worst, mut largest) = (0.0_f64, 0.0_f64);
+        // the elements with a positive bound (elsewhere the solver reads no slip)
+        for e in (s.lo..s.hi).filter(|&e| g2[e] > 0.0) {
+            worst = worst
+                .max((s.sx[e] - exact.sx[e]).abs())
+                .max((s.sy[e] - exact.sy[e]).abs());
+            largest = largest.max(exact.sx[e].abs()).max(exact.sy[e].abs());
+        }
+        println!(
+            "linear start: worst {worst:.3e} m, bound {bound:.3e} m, slip up to {largest:.3e} m"
+        );
+        assert!(worst <= bound, "{worst} > {bound}");
+        // not trivially small: the change's product is part of the slip
+        assert!(bound < 1e-3 * largest && change > 0.0);
+        // the last solve's product is kept (rows 1..=nx: the next step's upstream displacement)
+        assert_eq!(s.ux_ext, exact_ext_of(&mut conv, &tx, &ty).0);
+    }
+
+    /// `C τ` on the extended rows `0..=nx` (the solver's `ux_ext, uy_ext`).
+    fn exact_ext_of(conv: &mut Convolver, tx: &[f64], ty: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let (nx, ny) = conv.dims();
+        let (mut ux, mut uy) = (vec![0.0; (nx + 1) * ny], vec![0.0; (nx + 1) * ny]);
+        conv.tangential_ext(tx, ty, &mut ux, &mut uy);
+        (ux, uy)
+    }
+
+    /// A solver in the middle of an inner CG on the grid of [`grid_and_bound`]: adhesion and
+    /// slip elements (tangents, curvatures, Jacobi scales, masks), a search direction, its
+    /// product, the residual; traction and slip. Zero where the bound is zero.
+    fn cg_state(g: &[f64]) -> (TangentialSolver, Vec<f64>, Vec<f64>) {
+        let n = g.len();
+        let mut s = TangentialSolver::new(n, 16);
+        let (mut tx, mut ty) = (vec![0.0; n], vec![0.0; n]);
+        s.lo = g.iter().position(|&v| v > 0.0).unwrap();
+        s.hi = g.iter().rposition(|&v| v > 0.0).unwrap() + 1;
+        s.segs = (0..16)
+            .map(|r| ((r * 12 + 1).max(s.lo), (r * 12 + 11).min(s.hi)))
+            .filter(|(a, b)| a < b)
+            .collect();
+        let w = |e: usize, k: usize| ((e * 7919 + k * 104729) % 1000) as f64 / 1000.0 - 0.5;
+        for e in s.lo..s.hi {
+            if g[e] <= 0.0 {
+                continue;
+            }
+            let slip = e % 3 == 0;
+            s.slip[e] = slip;
+            let phi = 6.0 * w(e, 1);
+            if slip {
+                (tx[e], ty[e]) = (g[e] * phi.cos(), g[e] * phi.sin());
+                (s.px[e], s.py[e]) = (-phi.sin(), phi.cos());
+                s.kap[e] = 1e-12 * (1.5 + w(e, 2));
+                let d = 1e7 * w(e, 3);
+                (s.dx_[e], s.dy_[e]) = (d * s.px[e], d * s.py[e]);
+                let m = 1.0 / (1e-11 + s.kap[e]);
+                (s.mix[e], s.miy[e]) = (m, m);
+            } else {
+                (tx[e], ty[e]) = (0.4 * g[e] * w(e, 4), 0.4 * g[e] * w(e, 5));
+                (s.dx_[e], s.dy_[e]) = (1e7 * w(e, 6), 1e7 * w(e, 7));
+                (s.mix[e], s.miy[e]) = (1e11, 0.9e11);
+            }
+            s.wa[e] = f64::from(u8::from(!slip));
+            s.ws[e] = f64::from(u8::from(slip));
+            (s.qx[e], s.qy[e]) = (1e-4 * w(e, 8), 1e-4 * w(e, 9));
+            (s.rx[e], s.ry[e]) = (1e-7 * w(e, 10), 1e-7 * w(e, 11));
+            (s.sx[e], s.sy[e]) = (1e-6 * w(e, 12), 1e-6 * w(e, 13));
+        }
+        (s, tx, ty)
+    }
+
+    #[test]
+    fn branch_free_cg_step_equals_the_branching_one() {
+        // Independent check: the masked step against the branching `cg_update` from the same
+        // state: every element's traction, slip, residual and preconditioned residual bit
+        // for bit, `max |r|` exactly; `r·z` summed in another order, within
+        // `n u Σ |r z|` (Higham 2002 §3.1); an adhesion element pushed out of its disc
+        // projected and moved to the slip set by both
+        let (_, g) = grid_and_bound(0.0);
+        for alpha in [0.37, 40.0] {
+            let (mut a, mut txa, mut tya) = cg_state(&g);
+            let (mut b, mut txb, mut tyb) = (a.clone(), txa.clone(), tya.clone());
+            let segs = a.segs.clone();
+            let terms: f64 = {
+                let (mut c, mut t, mut u) = (b.clone(), txb.clone(), tyb.clone());
+                c.cg_update(&g, &mut t, &mut u, alpha, &segs);
+                segs.iter()
+                    .flat_map(|&(p, q)| p..q)
+                    .map(|e| (c.rx[e] * c.qx[e]).abs() + (c.ry[e] * c.qy[e]).abs())
+                    .sum()
+            };
+            let (va, rra, rma) = a.cg_update_masked(&g, &mut txa, &mut tya, alpha, &segs);
+            let (vb, rrb, rmb) = b.cg_update(&g, &mut txb, &mut tyb, alpha, &segs);
+            assert_eq!(va, vb, "alpha {alpha}");
+            assert_eq!(txa, txb);
+            assert_eq!(tya, tyb);
+            assert_eq!(a.slip, b.slip);
+            if va {
+                // the step's residual is not used after a violation
+                continue;
+            }
+            assert_eq!(rma.to_bits(), rmb.to_bits());
+            for (x, y) in [
+                (&a.sx, &b.sx),
+                (&a.sy, &b.sy),
+                (&a.rx, &b.rx),
+                (&a.ry, &b.ry),
+            ] {
+                assert_eq!(x, y);
+            }
+            for (x, y) in [(&a.qx, &b.qx), (&a.qy, &b.qy)] {
+                assert_eq!(x, y);
+            }
+            let n = (a.hi - a.lo) as f64;
+            assert!(
+                (rra - rrb).abs() <= n * f64::EPSILON * terms,
+                "{rra} vs {rrb} (bound {})",
+                n * f64::EPSILON * terms
+            );
+            assert!(rra > 0.0);
         }
     }
 }

@@ -196,6 +196,13 @@ impl TransientRolling {
         self.circle_start = on;
     }
 
+    /// Whether the tangential solver takes the slip of a step's start by linearity from the
+    /// last step's exact product (default on; [`TangentialSolver::linear_start`]); off only to
+    /// compare. The solution is the same within the solver's tolerance.
+    pub fn set_linear_start(&mut self, on: bool) {
+        self.tang.linear_start = on;
+    }
+
     /// Sets the rolling speed `V` (m/s, finite and > 0) from the next step on: it fixes the
     /// time step `Δt = Δx / V` and converts the slip distances of a step into slip velocities
     /// (the frictional power). The contact state itself does not depend on `V` — a step moves

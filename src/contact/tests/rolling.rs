@@ -586,6 +586,32 @@ fn circle_start_gives_the_solution_of_the_plain_warm_start() {
     assert!(runs[0].1 < runs[1].1, "{} vs {}", runs[0].1, runs[1].1);
 }
 
+#[test]
+fn linear_start_gives_the_solution_of_the_whole_grid_start() {
+    // The same transient sequence with the start's slip by linearity from the last step's
+    // exact product and with the whole-grid product of the start, and the reference: the
+    // whole-grid start at a 1000× tighter tolerance. The start's product changes the path
+    // (single-precision box product of the traction's change), not the solution.
+    let runs = switch_runs(|eng, on| eng.set_linear_start(on));
+    let diff = |a: usize, b: usize| force_power_difference(&runs[a].0, &runs[b].0);
+    let (linear, whole) = (diff(0, 2), diff(1, 2));
+    println!(
+        "tangential FFT pairs (steps 20..80): linear start {}, whole grid {} (reference {}); \
+         vs reference (force/µN, power rel.): linear {linear:?}, whole grid {whole:?}",
+        runs[0].1, runs[1].1, runs[2].1
+    );
+    assert!(linear.0 < 1e-6 && linear.1 < 1e-5, "{linear:?}");
+    assert!(whole.0 < 1e-6 && whole.1 < 1e-5, "{whole:?}");
+    // the start's product is replaced, not added to: at most one confirming product more in
+    // a step whose start already meets the tolerance
+    assert!(
+        runs[0].1 <= runs[1].1 + 60,
+        "{} vs {}",
+        runs[0].1,
+        runs[1].1
+    );
+}
+
 /// The result of [`transient_sequence`]: `(F_x, F_y, frictional power)` per step and the
 /// tangential influence products counted.
 type SequenceRun = (Vec<(f64, f64, f64)>, usize);
