@@ -74,14 +74,12 @@ use step::{check_finite, RoadAhead};
 /// Frequencies below this are rigid-body modes (Hz).
 pub const RIGID_HZ: f64 = 0.5;
 
-/// Relative tolerance of the tangential contact solver in a passage (traction error ≈ this ×
-/// µ p_max; the contact module's default is 1e-6). Measured on the default model (140 km/h,
-/// 2 and 5 kHz) against the former plain CG at 1e-6: the force histories move by
-/// ≤ 6e-5 of the mean F_L (≤ 5e-6 of the mean F_N), the band RMS of F_L and of the wear by
-/// ≤ 6e-4 (relative), the dominant wavelength by < 1e-5 — no more than with the Jacobi CG at
-/// 1e-6 (most of it is a start transient: the static start's creepage moves by ~4e-5
-/// relative, and the difference decays through the run-in). The Jacobi CG then needs 12
-/// instead of 16 tangential products per step.
+/// Relative tolerance of the tangential contact solver in a passage (−): the traction error
+/// is about this × µ p_max; default 1e-5 (the contact module's own default is 1e-6). Against
+/// a solve at 1e-6 on the default model (140 km/h, 2 and 5 kHz) the force histories differ by
+/// at most 6e-5 of the mean F_L, the band RMS of F_L and of the wear by 6e-4 (relative) and
+/// the dominant wavelength by less than 1e-5, for about three quarters of the tangential
+/// products per step (docs/performance.md §4).
 pub const PASSAGE_TANGENTIAL_TOL: f64 = 1e-5;
 
 /// What a passage records besides the wear.
