@@ -464,3 +464,40 @@ fn energy_ledger_matches_the_nodal_work_of_the_replayed_passage() {
     assert!(contact_chain.abs() < 0.005 * scale, "{contact_chain}");
     assert!(e.relative_error().abs() < 0.01, "{e:?}");
 }
+
+/// A user's fixed time step is refused above `safety ×` the computed critical step of the
+/// track or the wheel, and accepted just below it (the limit is the computed one, whatever
+/// it is: the test reads it from the default build, so the expected boundary is independent
+/// of the check).
+#[test]
+fn a_fixed_time_step_is_refused_above_safety_times_the_critical_step() {
+    let m = passage_model();
+    let em = ExplicitModel::new(&m, ExplicitOptions::default()).unwrap();
+    let [track, wheel] = em.stable_steps();
+    let safety = 0.8;
+    let limit = safety * track.critical_s.min(wheel.critical_s);
+    let with = |dt: f64| {
+        ExplicitModel::new(
+            &m,
+            ExplicitOptions {
+                safety,
+                time_step_s: Some(dt),
+                ..ExplicitOptions::default()
+            },
+        )
+    };
+    assert!(with(0.999 * limit).is_ok());
+    match with(1.001 * limit) {
+        Err(corrugation::explicit::ExplicitError::TimeStepTooLarge {
+            limit_s, safety: s, ..
+        }) => {
+            assert!(
+                (limit_s - limit).abs() <= 1e-12 * limit,
+                "{limit_s} vs {limit}"
+            );
+            assert_eq!(s, safety);
+        }
+        Err(e) => panic!("expected TimeStepTooLarge, got {e}"),
+        Ok(_) => panic!("a step above safety × the critical step was accepted"),
+    }
+}

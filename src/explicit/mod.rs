@@ -79,13 +79,17 @@ pub enum ExplicitError {
         /// The estimate (1/s²).
         omega2: f64,
     },
-    /// The user's time step is above the computed stable limit.
-    #[error("explicit.time_step = {given_s:.4e} s is above the stable limit {limit_s:.4e} s of the {part} (ω_max ≈ {omega_max:.4e} rad/s): lower explicit.time_step or leave it out (the step is then computed)")]
+    /// The user's time step is above `explicit.safety` × the computed critical step.
+    #[error("explicit.time_step = {given_s:.4e} s is above the allowed step {limit_s:.4e} s of the {part} (explicit.safety = {safety} × its critical step {critical_s:.4e} s, ω_max ≈ {omega_max:.4e} rad/s): lower explicit.time_step, raise explicit.safety (at most 1), or leave explicit.time_step out (the step is then computed)")]
     TimeStepTooLarge {
         /// The user's step (s).
         given_s: f64,
-        /// The stable limit (s).
+        /// The allowed step, `safety × critical_s` (s).
         limit_s: f64,
+        /// The safety factor (−).
+        safety: f64,
+        /// The critical step from the `ω_max` estimate (s).
+        critical_s: f64,
         /// Which substructure.
         part: &'static str,
         /// The estimated ω_max (rad/s).

@@ -27,8 +27,10 @@ pub struct ExplicitOptions {
     /// Safety factor on the computed critical step (−), in (0, 1] here (a model file's
     /// `explicit.safety` is limited to 0.1–1); default [`DEFAULT_SAFETY`] = 0.9.
     pub safety: f64,
-    /// A time step for both substructures (s), checked against their stable limits; `None`
-    /// (default) = each substructure at `safety ×` its own limit.
+    /// A time step for both substructures (s), refused above `safety ×` either one's
+    /// computed critical step (the estimate of `ω_max` approaches it from below, so the
+    /// safety factor is the margin); `None` (default) = each substructure at `safety ×` its
+    /// own critical step.
     pub time_step_s: Option<f64>,
     /// The coupling scheme (default predictor–corrector).
     pub coupling: Coupling,
@@ -99,10 +101,12 @@ impl Part {
         let step = StableStep::estimate(&op)?;
         let limit = step.with_safety(opts.safety);
         let dt_max_s = match opts.time_step_s {
-            Some(dt) if dt > step.critical_s => {
+            Some(dt) if dt > limit => {
                 return Err(ExplicitError::TimeStepTooLarge {
                     given_s: dt,
-                    limit_s: step.critical_s,
+                    limit_s: limit,
+                    safety: opts.safety,
+                    critical_s: step.critical_s,
                     part: name,
                     omega_max: step.omega_max_estimate,
                 })

@@ -160,9 +160,9 @@ pub struct Explicit {
     /// estimate of the true value), so the factor keeps a margin.
     #[serde(default = "default_explicit_safety")]
     pub safety: f64,
-    /// A time step for the track and the wheel (s), instead of the computed one; it is
-    /// checked against the computed stable limit when the explicit model is built, and a
-    /// larger value is an error. Default: none (computed).
+    /// A time step for the track and the wheel (s, 1e-10 to 1e-4), instead of the computed
+    /// one; when the explicit model is built it is refused above `safety` × the computed
+    /// critical step of either substructure. Default: none (computed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_step: Option<f64>,
     /// How the contact force is applied to the rail's node planes: `"patch"` (default, the
