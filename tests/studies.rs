@@ -96,6 +96,9 @@ fn summary(
         fl_band_rms_n: 500.0,
         fn_band_rms_n: 300.0,
         wear_band_rms: relative_wear * wear_mean,
+        fl_inside_band_rms_n: 250.0,
+        fn_inside_band_rms_n: 150.0,
+        wear_inside_band_rms: 0.5 * relative_wear * wear_mean,
         wear_mean,
         wear_components: vec![
             component(speed_kmh, f_wear, 1.0),

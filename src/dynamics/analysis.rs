@@ -45,6 +45,9 @@ pub struct Analysed {
     pub band: Signal,
     /// RMS of the band-passed signal.
     pub band_rms: f64,
+    /// RMS of the signal filtered with the band's roll-offs inside it
+    /// ([`BandPass::inside`]): the content strictly inside 20–80 mm.
+    pub inside_rms: f64,
     /// PSD of the band-passed signal.
     pub psd: Psd,
     /// Peaks in 20–80 mm, strongest first.
@@ -57,7 +60,9 @@ pub struct Analysed {
 pub fn analyse(sig: &Signal, v: f64) -> Result<Analysed, DynamicsError> {
     let mean = sig.values.iter().sum::<f64>() / sig.len() as f64;
     let band = band_pass(sig, &BandPass::default())?;
-    let band_rms = (band.values.iter().map(|x| x * x).sum::<f64>() / band.len() as f64).sqrt();
+    let rms = |s: &Signal| (s.values.iter().map(|x| x * x).sum::<f64>() / s.len() as f64).sqrt();
+    let band_rms = rms(&band);
+    let inside_rms = rms(&band_pass(sig, &BandPass::default().inside()?)?);
     let psd = Psd::estimate(&band, &PsdOptions::default())?;
     let raw_peaks = if band_rms > 0.0 {
         find_peaks(&psd, &PeakOptions::default(), v)?
@@ -76,6 +81,7 @@ pub fn analyse(sig: &Signal, v: f64) -> Result<Analysed, DynamicsError> {
         mean,
         band,
         band_rms,
+        inside_rms,
         psd,
         peaks,
         raw_peaks,
@@ -137,6 +143,9 @@ pub fn summarise_at(rec: &PassageRecord, speed: Speed) -> Result<PassageSummary,
         fl_band_rms_n: fl.band_rms,
         fn_band_rms_n: fnn.band_rms,
         wear_band_rms: w.band_rms,
+        fl_inside_band_rms_n: fl.inside_rms,
+        fn_inside_band_rms_n: fnn.inside_rms,
+        wear_inside_band_rms: w.inside_rms,
         wear_mean: w.mean,
         dominant_wavelength_mm: dom.as_ref().map(|c| c.wavelength_mm),
         dominant_frequency_hz: dom.as_ref().map(|c| c.frequency_hz),

@@ -47,6 +47,14 @@ pub struct PassageSummary {
     /// RMS of the band-passed frictional work per metre of rail, `W_f` integrated across the
     /// rail head (J/m).
     pub wear_band_rms: f64,
+    /// RMS of `F_L` strictly inside 20–80 mm (N): filtered with the band's roll-offs inside
+    /// it (gain 0 outside 20–80 mm, 1 on 22.2–57.1 mm). `fl_band_rms_n` also counts part of
+    /// 80–133 mm and 18.2–20 mm through its roll-offs outside the band (docs/theory.md §9.2).
+    pub fl_inside_band_rms_n: f64,
+    /// RMS of `F_N` strictly inside 20–80 mm (N), as [`Self::fl_inside_band_rms_n`].
+    pub fn_inside_band_rms_n: f64,
+    /// RMS of `W_f` strictly inside 20–80 mm (J/m), as [`Self::fl_inside_band_rms_n`].
+    pub wear_inside_band_rms: f64,
     /// Mean of `W_f` in the solution zone (J/m), for normalising `wear_band_rms`.
     pub wear_mean: f64,
     /// PSD peaks of the band-passed wear, strongest first.

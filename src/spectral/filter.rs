@@ -80,6 +80,35 @@ impl BandPass {
         }
     }
 
+    /// The same nominal band with its roll-offs moved inside it: gain 0 outside
+    /// `lambda_min_m..=lambda_max_m`, 1 on `1/(1/λ_max + w) ..= 1/(1/λ_min − w)`
+    /// (`w = transition_per_m`); for the default 20–80 mm band, 1 on 22.2–57.1 mm. Nothing
+    /// outside the band counts, at the price of attenuating its edges (docs/theory.md §9.2).
+    /// [`SpectralError::BadBand`] when the band is not wider than two roll-offs in
+    /// wavenumber.
+    pub fn inside(&self) -> Result<BandPass, SpectralError> {
+        check_positive("lambda_min_m", self.lambda_min_m)?;
+        check_positive("lambda_max_m", self.lambda_max_m)?;
+        check_positive("transition_per_m", self.transition_per_m)?;
+        let (lo, hi, w) = (
+            1.0 / self.lambda_max_m,
+            1.0 / self.lambda_min_m,
+            self.transition_per_m,
+        );
+        if hi - w <= lo + w {
+            return Err(SpectralError::BadBand {
+                lambda_min_m: self.lambda_min_m,
+                lambda_max_m: self.lambda_max_m,
+                reason: "band narrower than two roll-offs: no room for them inside it",
+            });
+        }
+        Ok(BandPass {
+            lambda_min_m: 1.0 / (hi - w),
+            lambda_max_m: 1.0 / (lo + w),
+            transition_per_m: w,
+        })
+    }
+
     fn validate(&self, dx_m: f64, length_m: f64) -> Result<(), SpectralError> {
         let bad = |reason| SpectralError::BadBand {
             lambda_min_m: self.lambda_min_m,

@@ -188,6 +188,58 @@ fn band_pass_rejects_out_of_band() {
     }
 }
 
+/// The band with its roll-offs inside it, against the raised cosine's closed form: for
+/// 20–80 mm (12.5–50 m⁻¹, roll-off 5 m⁻¹) gain 1 on 17.5–45 m⁻¹, 0 outside 12.5–50 m⁻¹, ½
+/// half-way (15 and 47.5 m⁻¹). A 107 mm line (κ = 9.35 m⁻¹), which the product's band
+/// passes at its roll-off gain `½(1 − cos(π(κ − 7.5)/5))` = 0.30, is removed, and a 40 mm
+/// line is kept whole (amplitudes fitted over the interior).
+#[test]
+fn band_with_inside_rolloffs_passes_nothing_outside_the_band() {
+    let bp = BandPass::default();
+    let inside = bp.inside().unwrap();
+    assert!((inside.lambda_min_m - 1.0 / 45.0).abs() < 1e-15);
+    assert!((inside.lambda_max_m - 1.0 / 17.5).abs() < 1e-15);
+    for (k, g) in [
+        (12.4, 0.0),
+        (12.5, 0.0),
+        (15.0, 0.5),
+        (17.5, 1.0),
+        (30.0, 1.0),
+        (45.0, 1.0),
+        (47.5, 0.5),
+        (50.0, 0.0),
+        (50.1, 0.0),
+    ] {
+        assert!(
+            (inside.gain(k) - g).abs() < 1e-12,
+            "κ {k}: {} vs {g}",
+            inside.gain(k)
+        );
+    }
+    let k107 = 1.0 / 0.107;
+    let g107 = 0.5 * (1.0 - (PI * (k107 - 7.5) / 5.0).cos());
+    assert!((bp.gain(k107) - g107).abs() < 1e-12 && (g107 - 0.30).abs() < 0.01);
+    let s = sines(0.0, 0.0005, 4000, &[(0.040, 1.0, 0.3), (0.107, 2.0, 1.1)]);
+    let f = band_pass(&s, &bp).unwrap();
+    let fi = band_pass(&s, &inside).unwrap();
+    for (sig, a40, a107) in [(&f, 1.0, 2.0 * g107), (&fi, 1.0, 0.0)] {
+        let b40 = fitted_amplitude(sig, 0.040, 600, 3400);
+        let b107 = fitted_amplitude(sig, 0.107, 600, 3400);
+        assert!((b40 - a40).abs() < 0.01, "40 mm: {b40} vs {a40}");
+        assert!((b107 - a107).abs() < 0.01, "107 mm: {b107} vs {a107}");
+    }
+    // A band too narrow for two roll-offs inside it.
+    let narrow = BandPass {
+        lambda_min_m: 0.05,
+        lambda_max_m: 0.06,
+        transition_per_m: 5.0,
+    };
+    assert!(matches!(
+        narrow.inside(),
+        Err(SpectralError::BadBand { .. })
+    ));
+}
+
 #[test]
 fn band_pass_is_zero_phase() {
     let bp = BandPass::default();
