@@ -157,12 +157,24 @@ fn passage_grow_and_predict_commands_write_their_outputs() {
         "fl_band_rms_n",
         "fn_band_rms_n",
         "wear_band_rms",
+        "fl_inside_band_rms_n",
+        "fn_inside_band_rms_n",
+        "wear_inside_band_rms",
         "wear_components",
         "dominant_wavelength_mm",
         "steps",
         "seconds",
     ] {
         assert!(p.get(k).is_some(), "passage --json lacks {k}: {p}");
+    }
+    // What lies strictly inside the band is part of what the band RMS counts.
+    for (inside, band) in [
+        ("fl_inside_band_rms_n", "fl_band_rms_n"),
+        ("fn_inside_band_rms_n", "fn_band_rms_n"),
+        ("wear_inside_band_rms", "wear_band_rms"),
+    ] {
+        let (a, b) = (p[inside].as_f64().unwrap(), p[band].as_f64().unwrap());
+        assert!(a > 0.0 && a <= b, "{inside} {a} vs {band} {b}");
     }
     for f in [
         "forces.csv",
