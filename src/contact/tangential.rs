@@ -787,6 +787,23 @@ mod tests {
         (s, tx, ty)
     }
 
+    /// The CG step of length `alpha` on `(tx, ty)` over `segs`.
+    fn step<'a>(
+        g: &'a [f64],
+        tx: &'a mut [f64],
+        ty: &'a mut [f64],
+        alpha: f64,
+        segs: &'a [(usize, usize)],
+    ) -> inner_cg::CgStep<'a> {
+        inner_cg::CgStep {
+            g,
+            tx,
+            ty,
+            alpha,
+            segs,
+        }
+    }
+
     #[test]
     fn branch_free_cg_step_equals_the_branching_one() {
         // Independent check: the masked step against the branching `cg_update` from the same
@@ -801,14 +818,14 @@ mod tests {
             let segs = a.segs.clone();
             let terms: f64 = {
                 let (mut c, mut t, mut u) = (b.clone(), txb.clone(), tyb.clone());
-                c.cg_update(&g, &mut t, &mut u, alpha, &segs);
+                c.cg_update(step(&g, &mut t, &mut u, alpha, &segs));
                 segs.iter()
                     .flat_map(|&(p, q)| p..q)
                     .map(|e| (c.rx[e] * c.qx[e]).abs() + (c.ry[e] * c.qy[e]).abs())
                     .sum()
             };
-            let (va, rra, rma) = a.cg_update_masked(&g, &mut txa, &mut tya, alpha, &segs);
-            let (vb, rrb, rmb) = b.cg_update(&g, &mut txb, &mut tyb, alpha, &segs);
+            let (va, rra, rma) = a.cg_update_masked(step(&g, &mut txa, &mut tya, alpha, &segs));
+            let (vb, rrb, rmb) = b.cg_update(step(&g, &mut txb, &mut tyb, alpha, &segs));
             assert_eq!(va, vb, "alpha {alpha}");
             assert_eq!(txa, txb);
             assert_eq!(tya, tyb);

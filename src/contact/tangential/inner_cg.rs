@@ -55,6 +55,17 @@ fn lane_sum<const K: usize>(acc: &[[f64; K]; LANES], k: usize) -> f64 {
     (acc[0][k] + acc[1][k]) + (acc[2][k] + acc[3][k])
 }
 
+/// One CG step's data for [`TangentialSolver::cg_update`] and
+/// [`TangentialSolver::cg_update_masked`]: the traction bound `g` (Pa), the traction
+/// `(tx, ty)` (Pa, updated in place), the step length `alpha` (−, the CG's `r·z / dᵀ w`) and the box's row segments `segs` (element ranges).
+pub(super) struct CgStep<'a> {
+    pub(super) g: &'a [f64],
+    pub(super) tx: &'a mut [f64],
+    pub(super) ty: &'a mut [f64],
+    pub(super) alpha: f64,
+    pub(super) segs: &'a [(usize, usize)],
+}
+
 impl TangentialSolver {
     /// The inner conjugate gradients from the search direction `(dx_, dy_)` with `r·z = rr`
     /// until the model residual is below `stop` (m), an adhesion element leaves its disc
@@ -157,10 +168,17 @@ impl TangentialSolver {
                 break;
             }
             let alpha = rr / den;
+            let step = CgStep {
+                g: pb.g,
+                tx: &mut *tx,
+                ty: &mut *ty,
+                alpha,
+                segs: &segs,
+            };
             let (violated, mut rr_new, mut rmax) = if masked {
-                self.cg_update_masked(pb.g, tx, ty, alpha, &segs)
+                self.cg_update_masked(step)
             } else {
-                self.cg_update(pb.g, tx, ty, alpha, &segs)
+                self.cg_update(step)
             };
             if violated {
                 if !norot {
@@ -199,14 +217,9 @@ impl TangentialSolver {
     /// branches), the reductions in [`lanes!`]. An adhesion element that left its disc is
     /// projected in a second pass (the CG then stops: the step's residual is not used).
     #[inline(always)]
-    pub(super) fn cg_update_masked(
-        &mut self,
-        g: &[f64],
-        tx: &mut [f64],
-        ty: &mut [f64],
-        alpha: f64,
-        segs: &[(usize, usize)],
-    ) -> (bool, f64, f64) {
+    pub(super) fn cg_update_masked(&mut self, step: CgStep<'_>) -> (bool, f64, f64) {
+        let (g, alpha, segs) = (step.g, step.alpha, step.segs);
+        let (tx, ty) = (step.tx, step.ty);
         let mut acc = [[0.0; 2]; LANES];
         let mut violated = false;
         for &(a, b) in segs {
@@ -264,14 +277,9 @@ impl TangentialSolver {
     /// the box's segments `segs` (every element with a positive bound; elsewhere the search
     /// direction and the residual are zero). Returns whether an element left its disc, `r·z`
     /// and `max |r|`.
-    pub(super) fn cg_update(
-        &mut self,
-        g: &[f64],
-        tx: &mut [f64],
-        ty: &mut [f64],
-        alpha: f64,
-        segs: &[(usize, usize)],
-    ) -> (bool, f64, f64) {
+    pub(super) fn cg_update(&mut self, step: CgStep<'_>) -> (bool, f64, f64) {
+        let (g, alpha, segs) = (step.g, step.alpha, step.segs);
+        let (tx, ty) = (step.tx, step.ty);
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
         let jacobi = self.jacobi && !norot;
         let mut violated = false;
