@@ -526,12 +526,7 @@ fn dense_reduced_stiffness(
         1.0,
         faer::Par::rayon(0),
     );
-    let diag = comp.rail.omega2.iter().chain(
-        comp.sleeper_offsets
-            .iter()
-            .flat_map(|_| comp.sleeper.omega2.iter()),
-    );
-    for (i, &w) in diag.enumerate() {
+    for (i, w) in comp.reduced_omega2().enumerate() {
         k[(i, i)] += w;
     }
     faer::Mat::from_fn(n, n, |i, j| 0.5 * (k[(i, j)] + k[(j, i)]))

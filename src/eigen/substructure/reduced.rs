@@ -147,12 +147,7 @@ pub fn reduced_stiffness(
             k[(i, j)] = k[(j, i)];
         }
     }
-    let diag = comp.rail.omega2.iter().chain(
-        comp.sleeper_offsets
-            .iter()
-            .flat_map(|_| comp.sleeper.omega2.iter()),
-    );
-    for (i, &w) in diag.enumerate() {
+    for (i, w) in comp.reduced_omega2().enumerate() {
         k[(i, i)] += w;
     }
     Ok(k)
