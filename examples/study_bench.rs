@@ -3,6 +3,7 @@
 //!
 //! ```text
 //! cargo run --example study_bench -- study [--basis substructured|full] [--key K] [--values a,b,…] [--speed KMH] [--static-update] [--concurrent N]
+//! cargo run --example study_bench -- reduced-check [--key K] [--values a,b,…]
 //! cargo run --example study_bench -- validate [--key K] [--value V] [--speed KMH] [--fmax-check HZ] [--ballast-degree D] [--list N] [--residuals N]
 //! ```
 //!
@@ -14,6 +15,10 @@
 //! residual flexibility from the study's reference factorisation updated for the changed
 //! springs, instead of a factorisation of each case's own `K`. `--concurrent N`: the study's
 //! `concurrent_cases` (default: the study file's default).
+//! `reduced-check`: for each value of `study` (default: the ten railpad stiffnesses), the
+//! reduced stiffness as the library forms it (by component blocks) against the dense product
+//! over all springs' projections `diag(ω̃²) + G diag(k) Gᵀ` formed here, and the reduced
+//! eigenproblem's frequencies below f_max from both: largest relative differences.
 //! `validate`: for one value, the substructured basis against the full Lanczos basis
 //! (frequencies below `--fmax-check`, default 3 kHz) and one passage on each basis (band RMS
 //! of F_L, F_N and wear, dominant wavelength). `--residuals N`: for the lowest N modes of
@@ -57,6 +62,7 @@ fn main() -> anyhow::Result<()> {
     match args.first().map(String::as_str) {
         Some("study") => study(&args, &key, speed),
         Some("validate") => validate(&args, &key, speed),
+        Some("reduced-check") => reduced_check(&args, &key),
         _ => bail!("usage: study_bench study|validate [options] (see the file's doc)"),
     }
 }
@@ -471,6 +477,113 @@ fn ritz_detail(
             qj[i],
             d[i],
             d[i] * qj[i]
+        );
+    }
+    Ok(())
+}
+
+/// `diag(ω̃²) + G diag(k) Gᵀ` with `G` the projections of every spring on the component
+/// bases, as one dense product (the reference for [`reduced_check`]).
+fn dense_reduced_stiffness(
+    track: &TrackStructure,
+    comp: &corrugation::eigen::substructure::TrackComponents,
+) -> faer::Mat<f64> {
+    let (rail_rows, sd) = (comp.rail.vectors.nrows(), comp.sleeper.vectors.nrows());
+    let (nr, ns) = (comp.rail.vectors.ncols(), comp.sleeper.vectors.ncols());
+    let n = comp.reduced_size();
+    let mut g = faer::Mat::<f64>::zeros(n, track.springs.len());
+    for (j, s) in track.springs.iter().enumerate() {
+        let sides = s
+            .side_a
+            .iter()
+            .map(|&(d, w)| (d, w))
+            .chain(s.side_b.iter().map(|&(d, w)| (d, -w)));
+        for (dof, w) in sides {
+            let Some(f) = track.dofmap.free_index(dof) else {
+                continue;
+            };
+            if f < rail_rows {
+                for c in 0..nr {
+                    g[(c, j)] += w * comp.rail.vectors[(f, c)];
+                }
+            } else {
+                let i = comp.sleeper_offsets.partition_point(|&o| o <= f) - 1;
+                let r = f - comp.sleeper_offsets[i];
+                assert!(r < sd, "spring {j} outside the components");
+                for c in 0..ns {
+                    g[(nr + i * ns + c, j)] += w * comp.sleeper.vectors[(r, c)];
+                }
+            }
+        }
+    }
+    let gk = faer::Mat::<f64>::from_fn(n, g.ncols(), |i, j| g[(i, j)] * track.springs[j].stiffness);
+    let mut k = faer::Mat::<f64>::zeros(n, n);
+    faer::linalg::matmul::matmul(
+        k.as_mut(),
+        faer::Accum::Replace,
+        gk.as_ref(),
+        g.transpose(),
+        1.0,
+        faer::Par::rayon(0),
+    );
+    for (i, w) in comp.reduced_omega2().enumerate() {
+        k[(i, i)] += w;
+    }
+    faer::Mat::from_fn(n, n, |i, j| 0.5 * (k[(i, j)] + k[(j, i)]))
+}
+
+/// See the module doc (`reduced-check`).
+fn reduced_check(args: &[String], key: &str) -> anyhow::Result<()> {
+    use corrugation::eigen::substructure::{reduced_modes, reduced_stiffness};
+    let values = arg(args, "--values").unwrap_or_else(|| {
+        (0..10)
+            .map(|i| format!("{:e}", 0.4e9 + 0.2e9 * i as f64))
+            .collect::<Vec<_>>()
+            .join(",")
+    });
+    let cache = ModalCache::new(default_cache_dir());
+    let opts = SubstructureOptions::default();
+    println!(
+        "value,modes,k_red_max_rel_difference,largest_freq_rel_difference,at_hz,blocked_s,dense_s"
+    );
+    for v in values.split(',') {
+        let m = load_model(&ModelSource::Builtin, &[format!("{key}={}", v.trim())])?;
+        let fmax = m.run.fmax;
+        let track = TrackStructure::build(&m)?;
+        let comp = track_components(&m, &track, &cache, fmax, &opts)?;
+        let t = Instant::now();
+        let kb = reduced_stiffness(&track, &comp)?;
+        let tb = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let kd = dense_reduced_stiffness(&track, &comp);
+        let td = t.elapsed().as_secs_f64();
+        let n = kb.nrows();
+        let (mut dk, mut scale) = (0.0f64, 0.0f64);
+        for j in 0..n {
+            for i in 0..n {
+                dk = dk.max((kb[(i, j)] - kd[(i, j)]).abs());
+                scale = scale.max(kd[(i, j)].abs());
+            }
+        }
+        let (fb, _) = reduced_modes(&kb, fmax)?;
+        let (fd, _) = reduced_modes(&kd, fmax)?;
+        anyhow::ensure!(
+            fb.len() == fd.len(),
+            "{v}: {} vs {} modes",
+            fb.len(),
+            fd.len()
+        );
+        let (mut worst, mut at) = (0.0f64, 0.0);
+        for (a, b) in fb.iter().zip(&fd) {
+            let e = ((a - b) / b).abs();
+            if e > worst {
+                (worst, at) = (e, *b);
+            }
+        }
+        println!(
+            "{v},{},{:.3e},{worst:.3e},{at:.3},{tb:.2},{td:.2}",
+            fb.len(),
+            dk / scale
         );
     }
     Ok(())

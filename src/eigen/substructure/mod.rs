@@ -205,6 +205,16 @@ impl TrackComponents {
     pub fn reduced_size(&self) -> usize {
         self.rail.omega2.len() + self.sleeper_offsets.len() * self.sleeper.omega2.len()
     }
+
+    /// `ω̃²` (rad²/s²) of every coordinate of the assembled reduced system, in its order:
+    /// the rail's, then each sleeper's.
+    pub fn reduced_omega2(&self) -> impl Iterator<Item = f64> + '_ {
+        let sleepers = self
+            .sleeper_offsets
+            .iter()
+            .flat_map(|_| &self.sleeper.omega2);
+        self.rail.omega2.iter().chain(sleepers).copied()
+    }
 }
 
 /// Builds the component bases of a track (no cache).

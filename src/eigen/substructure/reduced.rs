@@ -4,80 +4,153 @@
 
 use super::*;
 
-/// `Ψᵀ g_s` of every spring (N × n_springs, column per spring).
-pub(super) fn spring_projections(
-    track: &TrackStructure,
-    comp: &TrackComponents,
-) -> Result<Mat<f64>, SubstructureError> {
-    let sp = Split {
+/// The component split of `comp` (rail rows first, then the sleepers').
+fn comp_split(comp: &TrackComponents) -> Split {
+    Split {
         rail_dofs: comp.rail.vectors.nrows(),
         sleeper_offsets: comp.sleeper_offsets.clone(),
         sleeper_dofs: comp.sleeper.vectors.nrows(),
-    };
-    let (nr, ns) = (comp.rail.vectors.ncols(), comp.sleeper.vectors.ncols());
-    let mut g = Mat::<f64>::zeros(comp.reduced_size(), track.springs.len());
-    for (j, s) in track.springs.iter().enumerate() {
-        let sides = s
-            .side_a
-            .iter()
-            .map(|&(d, w)| (d, w))
-            .chain(s.side_b.iter().map(|&(d, w)| (d, -w)));
-        for (dof, w) in sides {
-            let Some(free) = track.dofmap.free_index(dof) else {
-                continue;
-            };
-            match locate(&sp, free) {
-                (None, r) => {
-                    for c in 0..nr {
-                        g[(c, j)] += w * comp.rail.vectors[(r, c)];
-                    }
-                }
-                (Some(i), r) => {
-                    if r >= sp.sleeper_dofs {
+    }
+}
+
+/// The non-zero entries of one spring's `g_s`: `(block, component-local row, weight)`.
+type BlockEntries = Vec<(usize, usize, f64)>;
+
+/// The non-zero parts of every spring's `g_s` by component block (block 0 the rail, block
+/// `1 + i` sleeper `i`): `(block, component-local row, weight)`, side b with its weights
+/// negated. Springs without stiffness contribute nothing to `K_red` and get no entries.
+fn spring_block_entries(
+    track: &TrackStructure,
+    sp: &Split,
+) -> Result<Vec<BlockEntries>, SubstructureError> {
+    track
+        .springs
+        .iter()
+        .enumerate()
+        .map(|(j, s)| {
+            if s.stiffness == 0.0 {
+                return Ok(Vec::new());
+            }
+            let sides = s
+                .side_a
+                .iter()
+                .map(|&(d, w)| (d, w))
+                .chain(s.side_b.iter().map(|&(d, w)| (d, -w)));
+            let mut e = Vec::new();
+            for (dof, w) in sides {
+                let Some(free) = track.dofmap.free_index(dof) else {
+                    continue;
+                };
+                match locate(sp, free) {
+                    (None, r) => e.push((0, r, w)),
+                    (Some(i), r) if r < sp.sleeper_dofs => e.push((1 + i, r, w)),
+                    _ => {
                         return Err(SubstructureError::Layout {
                             index: j,
                             kind: track.spring_kinds[j],
                             what: "a DOF outside the rail and the sleepers".into(),
-                        });
-                    }
-                    let base = nr + i * ns;
-                    for c in 0..ns {
-                        g[(base + c, j)] += w * comp.sleeper.vectors[(r, c)];
+                        })
                     }
                 }
             }
-        }
-    }
-    Ok(g)
+            Ok(e)
+        })
+        .collect()
 }
 
 /// The assembled reduced stiffness `diag(ω̃²) + Σ k_s (Ψᵀg_s)(Ψᵀg_s)ᵀ` of a track whose springs
 /// carry the current stiffnesses (`M_red = I`).
+///
+/// `Ψᵀg_s` is non-zero only on the blocks of the components the spring joins (a railpad
+/// spring: the rail's and one sleeper's coordinates; a ballast spring: one sleeper's), so
+/// the sum is formed block by block: for each pair of blocks `(a, b)` joined by some springs,
+/// `P_b diag(k) P_aᵀ` over those springs only (`P_a`: their projections on block `a`), the
+/// diagonal blocks as lower triangles, then mirrored. On the default track this is about a
+/// tenth of the dense product over all springs (docs/performance.md §7.5); the result is
+/// exactly symmetric.
 pub fn reduced_stiffness(
     track: &TrackStructure,
     comp: &TrackComponents,
 ) -> Result<Mat<f64>, SubstructureError> {
-    let g = spring_projections(track, comp)?;
-    let n = g.nrows();
-    let gk = Mat::<f64>::from_fn(n, g.ncols(), |i, j| g[(i, j)] * track.springs[j].stiffness);
+    use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure};
+    let sp = comp_split(comp);
+    let (nr, ns) = (comp.rail.vectors.ncols(), comp.sleeper.vectors.ncols());
+    let block = |b: usize| -> (usize, MatRef<'_, f64>) {
+        if b == 0 {
+            (0, comp.rail.vectors.as_ref())
+        } else {
+            (nr + (b - 1) * ns, comp.sleeper.vectors.as_ref())
+        }
+    };
+    let entries = spring_block_entries(track, &sp)?;
+    // the springs joining each pair of blocks (a ≤ b)
+    let mut pairs: BTreeMap<(usize, usize), Vec<usize>> = BTreeMap::new();
+    for (j, e) in entries.iter().enumerate() {
+        let mut blocks: Vec<usize> = e.iter().map(|&(b, _, _)| b).collect();
+        blocks.sort_unstable();
+        blocks.dedup();
+        for (x, &a) in blocks.iter().enumerate() {
+            for &b in &blocks[x..] {
+                pairs.entry((a, b)).or_default().push(j);
+            }
+        }
+    }
+    // P (block size × springs): column t = Ψ_blockᵀ g_s restricted to the block, times `scale`
+    let projection = |b: usize, springs: &[usize], scale: &dyn Fn(usize) -> f64| -> Mat<f64> {
+        let (_, psi) = block(b);
+        let mut p = Mat::<f64>::zeros(psi.ncols(), springs.len());
+        for (t, &j) in springs.iter().enumerate() {
+            let f = scale(j);
+            let mut col = p.col_mut(t);
+            for &(_, r, w) in entries[j].iter().filter(|e| e.0 == b) {
+                let row = psi.row(r);
+                for c in 0..psi.ncols() {
+                    col[c] += f * w * row[c];
+                }
+            }
+        }
+        p
+    };
+    let n = comp.reduced_size();
     let mut k = Mat::<f64>::zeros(n, n);
-    matmul(
-        k.as_mut(),
-        Accum::Replace,
-        gk.as_ref(),
-        g.transpose(),
-        1.0,
-        Par::rayon(0),
-    );
-    let diag = comp.rail.omega2.iter().chain(
-        comp.sleeper_offsets
-            .iter()
-            .flat_map(|_| comp.sleeper.omega2.iter()),
-    );
-    for (i, &w) in diag.enumerate() {
+    for ((a, b), springs) in &pairs {
+        let pa = projection(*a, springs, &|_| 1.0);
+        let pbk = projection(*b, springs, &|j| track.springs[j].stiffness);
+        let (r0, ra) = (block(*a).0, pa.nrows());
+        let (r1, rb) = (block(*b).0, pbk.nrows());
+        let dst = k.as_mut().submatrix_mut(r1, r0, rb, ra);
+        if a == b {
+            tri_matmul(
+                dst,
+                BlockStructure::TriangularLower,
+                Accum::Add,
+                pbk.as_ref(),
+                BlockStructure::Rectangular,
+                pa.transpose(),
+                BlockStructure::Rectangular,
+                1.0,
+                Par::rayon(0),
+            );
+        } else {
+            matmul(
+                dst,
+                Accum::Add,
+                pbk.as_ref(),
+                pa.transpose(),
+                1.0,
+                Par::rayon(0),
+            );
+        }
+    }
+    for j in 0..n {
+        for i in 0..j {
+            k[(i, j)] = k[(j, i)];
+        }
+    }
+    for (i, w) in comp.reduced_omega2().enumerate() {
         k[(i, i)] += w;
     }
-    Ok(Mat::from_fn(n, n, |i, j| 0.5 * (k[(i, j)] + k[(j, i)])))
+    Ok(k)
 }
 
 /// Columns above the `f_max` bound kept in the Rayleigh–Ritz refinement of
