@@ -459,9 +459,10 @@ fn rotating_ledger(lc: ExplicitLocalCompliance) -> EnergyBalance {
 /// (with the contact moving round the wheel) and the spinning frame's work = change of the
 /// stored energy (`½ vᵀMv + ½ uᵀ(K − Ω² S)u` with the suspension along the ground vertical)
 /// plus damper and frictional dissipation and the change of the contact's elastic energy,
-/// within 1 %
-/// (the criterion of the fixed wheel's ledger, tests/explicit.rs). The Coriolis term does no
-/// work (`MJ` skew), so it has no entry.
+/// within 1 % (the criterion of the fixed wheel's ledger, tests/explicit.rs). The
+/// convective work is the normal one only: the creepages read the material point's
+/// increment, which holds no change of place (docs/theory.md §8.8). The Coriolis term does
+/// no work (`MJ` skew), so it has no entry.
 #[test]
 fn rotating_passage_energy_ledger_closes() {
     let e = rotating_ledger(ExplicitLocalCompliance::Mesh);

@@ -227,15 +227,15 @@ impl<'a> Ledger<'a> {
         for d in 0..3 {
             eb.frame_work_j += k.f_work[d] * (k.old[1][d] - uw_old[d]);
         }
-        // The contact moving round the wheel: the change of the wheel's displacement under it
-        // as the contact moves from its place of t_n to that of t_{n+1} on the state at t_n
-        // (lateral and normal, as on the rail; the approach has the opposite sign).
+        // The contact moving round the wheel: the change of the wheel's normal displacement
+        // under it as the contact moves from its place of t_n to that of t_{n+1} on the state
+        // at t_n (as on the rail; the approach has the opposite sign). Normal only: the
+        // approach is a state, but the creepages read the material point's increment at the
+        // step's end place, which contains no change of place (docs/theory.md §8.8).
         if rot.is_some() {
-            for d in [1usize, 2] {
-                let w = -k.f_work[d] * (k.old[1][d] - self.uw_prev[d]);
-                eb.convective_work_j += w;
-                self.by_direction[1][d] += w;
-            }
+            let w = -k.f_work[2] * (k.old[1][2] - self.uw_prev[2]);
+            eb.convective_work_j += w;
+            self.by_direction[1][2] += w;
             self.uw_prev = uw_end;
         }
         // The tread's convective deflection taken out of the creepages (§8.7): an input of
@@ -256,20 +256,21 @@ impl<'a> Ledger<'a> {
         }
         eb.frictional_work_j += r.frictional_power_w * k.dt_c;
         eb.spin_work_j -= k.v * k.spin * r.mz_nm * k.dt_c;
-        // Convective work: the force rolling over the deflected rail, the change of the rail
-        // displacement under the contact as the contact moves from x_n to x_{n+1} on the
-        // state at t_n (lateral and normal, as the reduced passage); with the force held at
-        // x_n, the move on the state at t_{n+1}, the rest of the change from
-        // `u(x_n, t_n)` to `u(x_{n+1}, t_{n+1})`.
-        for d in [1usize, 2] {
-            let moved = match k.held_at_previous {
-                Some(_) => ur_end[d] - self.ur_prev[d] - du_rail[d],
-                None => ur_old[d] - self.ur_prev[d],
-            };
-            let w = k.f_work[d] * moved;
-            eb.convective_work_j += w;
-            self.by_direction[1][d] += w;
-        }
+        // Convective work: the force rolling over the deflected rail, the change of the rail's
+        // normal displacement under the contact as the contact moves from x_n to x_{n+1} on
+        // the state at t_n; with the force held at x_n, the move on the state at t_{n+1}, the
+        // rest of the change from `u(x_n, t_n)` to `u(x_{n+1}, t_{n+1})`. Normal only: the
+        // approach is the difference of the two surfaces' displacements where the contact is,
+        // a state, so its change holds the move; the creepages are the displacement
+        // increments at the step's end position (rail and wheel), whose work is the contact
+        // work and holds none (docs/theory.md §8.8).
+        let moved = match k.held_at_previous {
+            Some(_) => ur_end[2] - self.ur_prev[2] - du_rail[2],
+            None => ur_old[2] - self.ur_prev[2],
+        };
+        let w = k.f_work[2] * moved;
+        eb.convective_work_j += w;
+        self.by_direction[1][2] += w;
         self.ur_prev = ur_end;
         // The removed local compliance variation acts as a series spring of compliance
         // −Δg (docs/theory.md §8.6, §8.8). Tangential: on the creepage increments at the
