@@ -433,8 +433,8 @@ fn an_unwritable_out_directory_is_refused_before_the_computation() {
     }
 }
 
-/// A user time step above the explicit path's computed stable limit is refused with the
-/// key and the limit (after the set-up's progress line), by `explicit` and by
+/// A user time step above `explicit.safety` × the explicit path's computed critical step is
+/// refused with the keys and the limit (after the set-up's progress line), by `explicit` and by
 /// `passage --engine explicit` alike.
 #[test]
 fn explicit_time_step_above_the_computed_limit_is_refused() {
@@ -449,7 +449,9 @@ fn explicit_time_step_above_the_computed_limit_is_refused() {
         assert!(!err.contains("panicked"), "{err}");
         let last = err.trim_end().lines().last().unwrap_or("");
         assert!(
-            last.contains("explicit.time_step") && last.contains("stable limit"),
+            last.contains("explicit.time_step")
+                && last.contains("explicit.safety")
+                && last.contains("critical step"),
             "{err}"
         );
     }
