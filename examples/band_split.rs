@@ -5,8 +5,9 @@
 //! example splits the band RMS of F_L, F_N and the wear of each directory into
 //!
 //! - `product`: the product's filter (reproduces `summary.json`'s band RMS);
-//! - `inside`: a filter whose roll-offs lie *inside* the band (gain 0 outside 20–80 mm, 1 on
-//!   22.2–57.1 mm), so nothing outside the band counts;
+//! - `inside`: the band with its roll-offs *inside* it ([`BandPass::inside`], the summaries'
+//!   `*_inside_band_rms`: gain 0 outside 20–80 mm, 1 on 22.2–57.1 mm), so nothing outside
+//!   the band counts;
 //! - `below`: the content just below the band (gain 1 on 95–143 mm, 0 outside 80–200 mm),
 //!   which the product's low-side roll-off partly passes (gain 0.59 at 97 mm, 0.30 at
 //!   107 mm);
@@ -24,9 +25,6 @@
 
 use corrugation::spectral::{band_pass, BandPass, Signal};
 use std::path::Path;
-
-/// Roll-off width of every filter here, wavenumber (m⁻¹): the product's default.
-const TRANSITION_PER_M: f64 = 5.0;
 
 /// Reads columns `cols` (by header name) of a CSV file.
 fn columns(path: &Path, cols: &[&str]) -> Vec<Vec<f64>> {
@@ -60,12 +58,8 @@ fn split(x0: f64, dx: f64, values: &[f64]) -> [f64; 7] {
     let sig = Signal::new(x0, dx, values.to_vec()).expect("signal");
     let filt = |b: BandPass| band_pass(&sig, &b).expect("band pass").values;
     let product = filt(BandPass::default());
-    // Roll-offs inside 20-80 mm: gain 1 on [1/0.08 + 5, 1/0.02 - 5] m^-1, 0 beyond 12.5 and 50.
-    let inside = filt(BandPass {
-        lambda_min_m: 1.0 / (50.0 - TRANSITION_PER_M),
-        lambda_max_m: 1.0 / (12.5 + TRANSITION_PER_M),
-        transition_per_m: TRANSITION_PER_M,
-    });
+    // The summaries' inside-band filter: gain 0 outside 20-80 mm, 1 on 22.2-57.1 mm.
+    let inside = filt(BandPass::default().inside().expect("the default band"));
     // 80-200 mm, roll-offs of 2 m^-1 inside it: gain 1 on 95-143 mm, 0 outside 80-200 mm.
     let below = filt(BandPass {
         lambda_min_m: 1.0 / (12.5 - 2.0),

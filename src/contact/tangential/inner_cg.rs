@@ -57,7 +57,8 @@ fn lane_sum<const K: usize>(acc: &[[f64; K]; LANES], k: usize) -> f64 {
 
 /// One CG step's data for [`TangentialSolver::cg_update`] and
 /// [`TangentialSolver::cg_update_masked`]: the traction bound `g` (Pa), the traction
-/// `(tx, ty)` (Pa, updated in place), the step length `alpha` (−, the CG's `r·z / dᵀ w`) and the box's row segments `segs` (element ranges).
+/// `(tx, ty)` (Pa, updated in place), the step length `alpha` (−, the CG's `r·z / dᵀ w`)
+/// and the box's row segments `segs` (element ranges).
 pub(super) struct CgStep<'a> {
     pub(super) g: &'a [f64],
     pub(super) tx: &'a mut [f64],
