@@ -13,6 +13,8 @@
 //! (default 5,000 Hz, 3 repetitions; the CSV gets `t_s, fn_n, fl_n` of the last passage with
 //! the energy balance, to compare force histories between builds). The cache must hold the
 //! default model's modes (`corrugation modes --cache CACHE_DIR`), or they are computed (minutes).
+//! The environment variable `PASSAGE_BENCH_CASES` (a comma list of `energy`, `studies`,
+//! `alone`) runs only those cases, e.g. to profile one of them.
 
 #[path = "common/mod.rs"]
 mod common;
@@ -37,6 +39,7 @@ fn main() -> anyhow::Result<()> {
         .unwrap_or(5000.0);
     let reps: usize = args.get(3).map(|a| a.parse()).transpose()?.unwrap_or(3);
     let csv = args.get(4);
+    let cases = std::env::var("PASSAGE_BENCH_CASES").ok();
     let model = load_model(&ModelSource::Builtin, &[format!("run.fmax={fmax}")])?;
     let cache = ModalCache::new(cache_dir.as_str());
     println!("{}", machine_load());
@@ -75,7 +78,16 @@ fn main() -> anyhow::Result<()> {
             "no energy, damping product beside the contact (a passage alone)",
             alone,
         ),
-    ] {
+    ]
+    .into_iter()
+    .zip(["energy", "studies", "alone"])
+    .filter(|(_, key)| {
+        cases
+            .as_ref()
+            .is_none_or(|c| c.split(',').any(|k| k == *key))
+    })
+    .map(|(case, _)| case)
+    {
         for _ in 0..reps {
             let (w0, c0, t0) = (Instant::now(), cpu_seconds(), thread_cpu_seconds());
             let rec = engine.passage(v, None, &opts, None)?;

@@ -805,6 +805,80 @@ mod tests {
     }
 
     #[test]
+    fn avx2_inner_cg_gives_the_bits_of_the_baseline_loops() {
+        // Whole solves of a transient sequence (the contact moving by a row per step, load
+        // and shift varying, warm starts) with the inner CG's AVX2 kernels and with its
+        // baseline loops: the same tractions, slips and products bit for bit
+        let run = |plain: bool| {
+            inner_cg::tests::PLAIN_CG.with(|p| p.set(plain));
+            let mut out = Vec::new();
+            let (mut conv, _) = grid_and_bound(0.0);
+            let n = conv.dims().0 * conv.dims().1;
+            let mut s = TangentialSolver::new(n, 16);
+            s.uniform_x_m_per_pa = 1e-13;
+            let (mut tx, mut ty) = (vec![0.0; n], vec![0.0; n]);
+            for k in 0..6 {
+                let (_, g) = grid_and_bound(0.5 * k as f64 - 1.0);
+                let ex: Vec<f64> = (0..n)
+                    .map(|e| -1.2e-7 * (1.0 + 0.1 * k as f64) + 3e-10 * (e % 7) as f64)
+                    .collect();
+                let ey: Vec<f64> = (0..n).map(|e| 4e-8 - 2e-10 * (e % 5) as f64).collect();
+                let p = s.solve(&mut conv, &g, &ex, &ey, &mut tx, &mut ty).unwrap();
+                out.push(p as f64);
+                out.extend(tx.iter().chain(&ty).chain(&s.sx).chain(&s.sy));
+            }
+            inner_cg::tests::PLAIN_CG.with(|p| p.set(false));
+            out
+        };
+        let (simd, plain) = (run(false), run(true));
+        assert!(simd.iter().any(|&v| v != 0.0));
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&simd), bits(&plain));
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_cg_step_gives_the_bits_of_the_lanes_loop() {
+        // The AVX2 kernel of the masked step against the `lanes!` loop from the same state:
+        // the same operations per element in the same lanes, so every output bit for bit,
+        // with and without an adhesion element leaving its disc
+        let (_, g) = grid_and_bound(0.0);
+        for alpha in [0.37, 40.0] {
+            let (mut a, mut txa, mut tya) = cg_state(&g);
+            let (mut b, mut txb, mut tyb) = (a.clone(), txa.clone(), tya.clone());
+            let segs = a.segs.clone();
+            let Some(va) = a.cg_update_masked_avx2(step(&g, &mut txa, &mut tya, alpha, &segs))
+            else {
+                println!("no AVX2 on this CPU: nothing to compare");
+                return;
+            };
+            let vb = b.cg_update_masked(step(&g, &mut txb, &mut tyb, alpha, &segs));
+            assert_eq!(va.0, vb.0, "alpha {alpha}");
+            assert_eq!(
+                (va.1.to_bits(), va.2.to_bits()),
+                (vb.1.to_bits(), vb.2.to_bits())
+            );
+            assert_eq!((txa, tya), (txb, tyb));
+            assert_eq!(a.slip, b.slip);
+            assert_same_step_outputs(&a, &b);
+        }
+    }
+
+    /// Slip, residual and preconditioned residual of two solvers after a CG step: bit for bit.
+    fn assert_same_step_outputs(a: &TangentialSolver, b: &TangentialSolver) {
+        for (x, y) in [
+            (&a.sx, &b.sx),
+            (&a.sy, &b.sy),
+            (&a.rx, &b.rx),
+            (&a.ry, &b.ry),
+            (&a.qx, &b.qx),
+            (&a.qy, &b.qy),
+        ] {
+            assert_eq!(x, y);
+        }
+    }
+
+    #[test]
     fn branch_free_cg_step_equals_the_branching_one() {
         // Independent check: the masked step against the branching `cg_update` from the same
         // state: every element's traction, slip, residual and preconditioned residual bit
@@ -835,17 +909,7 @@ mod tests {
                 continue;
             }
             assert_eq!(rma.to_bits(), rmb.to_bits());
-            for (x, y) in [
-                (&a.sx, &b.sx),
-                (&a.sy, &b.sy),
-                (&a.rx, &b.rx),
-                (&a.ry, &b.ry),
-            ] {
-                assert_eq!(x, y);
-            }
-            for (x, y) in [(&a.qx, &b.qx), (&a.qy, &b.qy)] {
-                assert_eq!(x, y);
-            }
+            assert_same_step_outputs(&a, &b);
             let n = (a.hi - a.lo) as f64;
             assert!(
                 (rra - rrb).abs() <= n * f64::EPSILON * terms,

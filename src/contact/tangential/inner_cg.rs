@@ -85,17 +85,22 @@ impl TangentialSolver {
         rr: f64,
         stop: f64,
     ) {
+        #[cfg(test)]
+        let plain = tests::PLAIN_CG.with(|p| p.get());
+        #[cfg(not(test))]
+        let plain = false;
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if !plain && std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2 (checked just above), the only requirement of the
             // `target_feature` function.
             unsafe { self.inner_cg_avx2(conv, pb, tx, ty, rr, stop) };
             return;
         }
-        self.inner_cg_body(conv, pb, tx, ty, rr, stop);
+        self.inner_cg_body::<false>(conv, pb, tx, ty, rr, stop);
     }
 
-    /// [`Self::inner_cg_body`] compiled with AVX2 enabled.
+    /// [`Self::inner_cg_body`] compiled with AVX2 enabled, its loops in AVX2 vectors (module
+    /// `avx2`: the same bits).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn inner_cg_avx2(
@@ -107,12 +112,14 @@ impl TangentialSolver {
         rr: f64,
         stop: f64,
     ) {
-        self.inner_cg_body(conv, pb, tx, ty, rr, stop);
+        self.inner_cg_body::<true>(conv, pb, tx, ty, rr, stop);
     }
 
-    /// The inner CG of [`Self::inner_cg`], for any instruction set.
+    /// The inner CG of [`Self::inner_cg`]; with `SIMD` (only from [`Self::inner_cg_avx2`],
+    /// i.e. on a CPU with AVX2) its loops run in the AVX2 kernels of module `avx2`, which
+    /// give the bits of the [`lanes!`] loops.
     #[inline(always)]
-    fn inner_cg_body(
+    fn inner_cg_body<const SIMD: bool>(
         &mut self,
         conv: &mut Convolver,
         pb: &Problem<'_>,
@@ -155,6 +162,16 @@ impl TangentialSolver {
             // without it), and dᵀ w
             let mut acc = [[0.0; 1]; LANES];
             for &(a, b) in &segs {
+                // the AVX2 kernel takes the whole blocks of four, `lanes!` the rest
+                let mut a = a;
+                #[cfg(target_arch = "x86_64")]
+                if SIMD {
+                    let (qx, qy) = (&mut self.qx[a..b], &mut self.qy[a..b]);
+                    let (dx, dy, kap) = (&self.dx_[a..b], &self.dy_[a..b], &self.kap[a..b]);
+                    // SAFETY: `SIMD` only on a CPU with AVX2 (see `inner_cg_avx2`)
+                    a +=
+                        unsafe { avx2::model_product(qx, qy, [dx, dy, kap], (cux, cuy), &mut acc) };
+                }
                 let (qx, qy) = (&mut self.qx[a..b], &mut self.qy[a..b]);
                 let (dx, dy, kap) = (&self.dx_[a..b], &self.dy_[a..b], &self.kap[a..b]);
                 lanes!(b - a, i, l, mut [qx, qy], ref [dx, dy, kap], {
@@ -177,7 +194,7 @@ impl TangentialSolver {
                 segs: &segs,
             };
             let (violated, mut rr_new, mut rmax) = if masked {
-                self.cg_update_masked(step)
+                self.cg_update_masked_body::<SIMD>(step)
             } else {
                 self.cg_update(step)
             };
@@ -198,6 +215,14 @@ impl TangentialSolver {
             rr = rr_new;
             let mut acc = [[0.0; 2]; LANES];
             for &(a, b) in &segs {
+                let mut a = a;
+                #[cfg(target_arch = "x86_64")]
+                if SIMD {
+                    let (qx, qy) = (&self.qx[a..b], &self.qy[a..b]);
+                    let (dx, dy) = (&mut self.dx_[a..b], &mut self.dy_[a..b]);
+                    // SAFETY: `SIMD` only on a CPU with AVX2 (see `inner_cg_avx2`)
+                    a += unsafe { avx2::direction(dx, dy, [qx, qy], beta, &mut acc) };
+                }
                 let (qx, qy) = (&self.qx[a..b], &self.qy[a..b]);
                 let (dx, dy) = (&mut self.dx_[a..b], &mut self.dy_[a..b]);
                 lanes!(b - a, i, l, mut [dx, dy], ref [qx, qy], {
@@ -217,13 +242,53 @@ impl TangentialSolver {
     /// `(wa, ws)` of [`Self::precondition`] (`w = wa q + ws (c t + κ d)`, the same values as the
     /// branches), the reductions in [`lanes!`]. An adhesion element that left its disc is
     /// projected in a second pass (the CG then stops: the step's residual is not used).
-    #[inline(always)]
+    /// (The inner CG calls its body directly; this entry is the tests'.)
+    #[cfg(test)]
     pub(super) fn cg_update_masked(&mut self, step: CgStep<'_>) -> (bool, f64, f64) {
+        self.cg_update_masked_body::<false>(step)
+    }
+
+    /// [`Self::cg_update_masked`] in the AVX2 kernel of module `avx2` (the same bits);
+    /// `None` on a CPU without AVX2.
+    #[cfg(all(test, target_arch = "x86_64"))]
+    pub(super) fn cg_update_masked_avx2(&mut self, step: CgStep<'_>) -> Option<(bool, f64, f64)> {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return None;
+        }
+        Some(self.cg_update_masked_body::<true>(step))
+    }
+
+    /// [`Self::cg_update_masked`]; with `SIMD` (only on a CPU with AVX2) in the AVX2 kernel.
+    #[inline(always)]
+    fn cg_update_masked_body<const SIMD: bool>(&mut self, step: CgStep<'_>) -> (bool, f64, f64) {
         let (g, alpha, segs) = (step.g, step.alpha, step.segs);
         let (tx, ty) = (step.tx, step.ty);
         let mut acc = [[0.0; 2]; LANES];
         let mut violated = false;
         for &(a, b) in segs {
+            // the AVX2 kernel takes the whole blocks of four, `lanes!` the rest
+            let mut a = a;
+            #[cfg(target_arch = "x86_64")]
+            if SIMD {
+                let out = avx2::MaskedOut {
+                    s: [&mut self.sx[a..b], &mut self.sy[a..b]],
+                    q: [&mut self.qx[a..b], &mut self.qy[a..b]],
+                    r: [&mut self.rx[a..b], &mut self.ry[a..b]],
+                    t: [&mut tx[a..b], &mut ty[a..b]],
+                };
+                let inp = avx2::MaskedIn {
+                    d: [&self.dx_[a..b], &self.dy_[a..b]],
+                    p: [&self.px[a..b], &self.py[a..b]],
+                    mi: [&self.mix[a..b], &self.miy[a..b]],
+                    w: [&self.wa[a..b], &self.ws[a..b]],
+                    kap: &self.kap[a..b],
+                    g: &g[a..b],
+                };
+                // SAFETY: `SIMD` only on a CPU with AVX2 (see `inner_cg_avx2`)
+                let (done, v) = unsafe { avx2::masked_update(out, inp, alpha, &mut acc) };
+                violated |= v;
+                a += done;
+            }
             let (sx, sy) = (&mut self.sx[a..b], &mut self.sy[a..b]);
             let (qx, qy) = (&mut self.qx[a..b], &mut self.qy[a..b]);
             let (rx, ry) = (&mut self.rx[a..b], &mut self.ry[a..b]);
@@ -330,5 +395,223 @@ impl TangentialSolver {
             rmax = rmax.max(rx.abs()).max(ry.abs());
         }
         (violated, rr_new, rmax)
+    }
+}
+
+#[cfg(test)]
+pub(super) mod tests {
+    use std::cell::Cell;
+
+    thread_local! {
+        /// Run the inner CG's baseline loops even on a CPU with AVX2 (to compare the two).
+        pub(in crate::contact) static PLAIN_CG: Cell<bool> = const { Cell::new(false) };
+    }
+}
+
+/// The inner CG's loops over the whole blocks of four of one row segment in AVX2 vectors, with
+/// the bits of the [`lanes!`] loops: element `c + l` of a block in vector lane `l` (the lane
+/// of the partial sums in [`lanes!`]), the same multiplications and additions in the same
+/// order (no fused multiply-add). Each kernel returns how many elements it took (`n − n mod
+/// 4`); the caller runs [`lanes!`] on the rest (fewer than four: lane 0, as there). The one
+/// difference: a NaN in a residual is not ignored by the `max |r|` reduction (`vmaxpd`
+/// returns its second operand when either is NaN; `f64::max` returns the other one); a NaN
+/// ends the passage anyway (its finiteness check).
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::LANES;
+    use std::arch::x86_64::*;
+
+    /// The lanes `acc[·][k]` of the partial sums as a vector.
+    #[inline(always)]
+    unsafe fn lanes_in<const K: usize>(acc: &[[f64; K]; LANES], k: usize) -> __m256d {
+        _mm256_set_pd(acc[3][k], acc[2][k], acc[1][k], acc[0][k])
+    }
+
+    /// The vector `v` back into the lanes `acc[·][k]`.
+    #[inline(always)]
+    unsafe fn lanes_out<const K: usize>(acc: &mut [[f64; K]; LANES], k: usize, v: __m256d) {
+        let mut a = [0.0; LANES];
+        _mm256_storeu_pd(a.as_mut_ptr(), v);
+        for (l, x) in a.into_iter().enumerate() {
+            acc[l][k] = x;
+        }
+    }
+
+    /// Four elements of `x` from `c` (the caller keeps `c + 4 ≤ x.len()`).
+    #[inline(always)]
+    unsafe fn ld(x: &[f64], c: usize) -> __m256d {
+        debug_assert!(c + 4 <= x.len());
+        _mm256_loadu_pd(x.as_ptr().add(c))
+    }
+
+    /// `v` into four elements of `x` from `c` (the caller keeps `c + 4 ≤ x.len()`).
+    #[inline(always)]
+    unsafe fn st(x: &mut [f64], c: usize, v: __m256d) {
+        debug_assert!(c + 4 <= x.len());
+        _mm256_storeu_pd(x.as_mut_ptr().add(c), v);
+    }
+
+    /// `q += cu` and `acc[·][0] += q·d + κ (d·d)` (the CG's model product and `dᵀ w`).
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn model_product(
+        qx: &mut [f64],
+        qy: &mut [f64],
+        [dx, dy, kap]: [&[f64]; 3],
+        (cux, cuy): (f64, f64),
+        acc: &mut [[f64; 1]; LANES],
+    ) -> usize {
+        let n = qx.len();
+        let (qy, dx, dy, kap) = (&mut qy[..n], &dx[..n], &dy[..n], &kap[..n]);
+        let (vx, vy) = (_mm256_set1_pd(cux), _mm256_set1_pd(cuy));
+        let mut a = lanes_in(acc, 0);
+        let mut c = 0;
+        while c + 4 <= n {
+            let q1 = _mm256_add_pd(ld(qx, c), vx);
+            let q2 = _mm256_add_pd(ld(qy, c), vy);
+            st(qx, c, q1);
+            st(qy, c, q2);
+            let (d1, d2) = (ld(dx, c), ld(dy, c));
+            let qd = _mm256_add_pd(_mm256_mul_pd(q1, d1), _mm256_mul_pd(q2, d2));
+            let dd = _mm256_add_pd(_mm256_mul_pd(d1, d1), _mm256_mul_pd(d2, d2));
+            a = _mm256_add_pd(a, _mm256_add_pd(qd, _mm256_mul_pd(ld(kap, c), dd)));
+            c += 4;
+        }
+        lanes_out(acc, 0, a);
+        c
+    }
+
+    /// `d = q + β d` and `acc[·][0] += dx`, `acc[·][1] += dy` (the CG's new direction and its
+    /// sums).
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn direction(
+        dx: &mut [f64],
+        dy: &mut [f64],
+        [qx, qy]: [&[f64]; 2],
+        beta: f64,
+        acc: &mut [[f64; 2]; LANES],
+    ) -> usize {
+        let n = dx.len();
+        let (dy, qx, qy) = (&mut dy[..n], &qx[..n], &qy[..n]);
+        let b = _mm256_set1_pd(beta);
+        let (mut a0, mut a1) = (lanes_in(acc, 0), lanes_in(acc, 1));
+        let mut c = 0;
+        while c + 4 <= n {
+            let d1 = _mm256_add_pd(ld(qx, c), _mm256_mul_pd(b, ld(dx, c)));
+            let d2 = _mm256_add_pd(ld(qy, c), _mm256_mul_pd(b, ld(dy, c)));
+            st(dx, c, d1);
+            st(dy, c, d2);
+            a0 = _mm256_add_pd(a0, d1);
+            a1 = _mm256_add_pd(a1, d2);
+            c += 4;
+        }
+        lanes_out(acc, 0, a0);
+        lanes_out(acc, 1, a1);
+        c
+    }
+
+    /// The segment's arrays that [`masked_update`] writes: slip `s`, product in / scaled
+    /// residual out `q`, residual `r`, traction `t` (x, y each).
+    pub(super) struct MaskedOut<'a> {
+        pub(super) s: [&'a mut [f64]; 2],
+        pub(super) q: [&'a mut [f64]; 2],
+        pub(super) r: [&'a mut [f64]; 2],
+        pub(super) t: [&'a mut [f64]; 2],
+    }
+
+    /// The segment's arrays that [`masked_update`] reads: direction `d`, tangent `p`, Jacobi
+    /// scale `mi` (x, y each), adhesion and slip masks `w`, curvature `kap`, bound `g`.
+    pub(super) struct MaskedIn<'a> {
+        pub(super) d: [&'a [f64]; 2],
+        pub(super) p: [&'a [f64]; 2],
+        pub(super) mi: [&'a [f64]; 2],
+        pub(super) w: [&'a [f64]; 2],
+        pub(super) kap: &'a [f64],
+        pub(super) g: &'a [f64],
+    }
+
+    /// The masked CG step of `cg_update_masked_body` on the blocks of one segment; returns
+    /// the elements taken and whether an adhesion element left its disc, and accumulates `r·z` into `acc[·][0]` and `max |r|`
+    /// into `acc[·][1]`.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn masked_update(
+        out: MaskedOut<'_>,
+        inp: MaskedIn<'_>,
+        alpha: f64,
+        acc: &mut [[f64; 2]; LANES],
+    ) -> (usize, bool) {
+        let MaskedOut {
+            s: [sx, sy],
+            q: [qx, qy],
+            r: [rx, ry],
+            t: [tx, ty],
+        } = out;
+        let n = sx.len();
+        let (sy, qx, qy, rx, ry, tx, ty) = (
+            &mut sy[..n],
+            &mut qx[..n],
+            &mut qy[..n],
+            &mut rx[..n],
+            &mut ry[..n],
+            &mut tx[..n],
+            &mut ty[..n],
+        );
+        let (dx, dy, px, py) = (
+            &inp.d[0][..n],
+            &inp.d[1][..n],
+            &inp.p[0][..n],
+            &inp.p[1][..n],
+        );
+        let (mix, miy, wa, ws) = (
+            &inp.mi[0][..n],
+            &inp.mi[1][..n],
+            &inp.w[0][..n],
+            &inp.w[1][..n],
+        );
+        let (kap, g) = (&inp.kap[..n], &inp.g[..n]);
+        let al = _mm256_set1_pd(alpha);
+        let zero = _mm256_setzero_pd();
+        let sign = _mm256_set1_pd(-0.0);
+        let (mut a0, mut a1) = (lanes_in(acc, 0), lanes_in(acc, 1));
+        let mut viol = _mm256_setzero_pd();
+        let mut c = 0;
+        while c + 4 <= n {
+            let (q1, q2) = (ld(qx, c), ld(qy, c));
+            st(sx, c, _mm256_add_pd(ld(sx, c), _mm256_mul_pd(al, q1)));
+            st(sy, c, _mm256_add_pd(ld(sy, c), _mm256_mul_pd(al, q2)));
+            let (d1, d2) = (ld(dx, c), ld(dy, c));
+            let ax = _mm256_add_pd(ld(tx, c), _mm256_mul_pd(al, d1));
+            let ay = _mm256_add_pd(ld(ty, c), _mm256_mul_pd(al, d2));
+            let (w_a, w_s, gg) = (ld(wa, c), ld(ws, c), ld(g, c));
+            let out = _mm256_cmp_pd::<_CMP_GT_OQ>(
+                _mm256_add_pd(_mm256_mul_pd(ax, ax), _mm256_mul_pd(ay, ay)),
+                _mm256_mul_pd(gg, gg),
+            );
+            let adh = _mm256_cmp_pd::<_CMP_GT_OQ>(w_a, zero);
+            viol = _mm256_or_pd(viol, _mm256_and_pd(adh, out));
+            st(tx, c, ax);
+            st(ty, c, ay);
+            let (p1, p2, k) = (ld(px, c), ld(py, c), ld(kap, c));
+            let cc = _mm256_add_pd(_mm256_mul_pd(q1, p1), _mm256_mul_pd(q2, p2));
+            let sl1 = _mm256_add_pd(_mm256_mul_pd(cc, p1), _mm256_mul_pd(k, d1));
+            let sl2 = _mm256_add_pd(_mm256_mul_pd(cc, p2), _mm256_mul_pd(k, d2));
+            let wx = _mm256_add_pd(_mm256_mul_pd(q1, w_a), _mm256_mul_pd(sl1, w_s));
+            let wy = _mm256_add_pd(_mm256_mul_pd(q2, w_a), _mm256_mul_pd(sl2, w_s));
+            let r1 = _mm256_sub_pd(ld(rx, c), _mm256_mul_pd(al, wx));
+            let r2 = _mm256_sub_pd(ld(ry, c), _mm256_mul_pd(al, wy));
+            st(rx, c, r1);
+            st(ry, c, r2);
+            let z1 = _mm256_mul_pd(r1, ld(mix, c));
+            let z2 = _mm256_mul_pd(r2, ld(miy, c));
+            st(qx, c, z1);
+            st(qy, c, z2);
+            let rz = _mm256_add_pd(_mm256_mul_pd(r1, z1), _mm256_mul_pd(r2, z2));
+            a0 = _mm256_add_pd(a0, rz);
+            let m = _mm256_max_pd(a1, _mm256_andnot_pd(sign, r1));
+            a1 = _mm256_max_pd(m, _mm256_andnot_pd(sign, r2));
+            c += 4;
+        }
+        lanes_out(acc, 0, a0);
+        lanes_out(acc, 1, a1);
+        (c, _mm256_movemask_pd(viol) != 0)
     }
 }

@@ -15,9 +15,10 @@
 //! (it runs on a second core while the contact step runs), and `E r_d` of a plane is formed
 //! once, when the contact reaches the plane. The single-precision rounding of `E df` is
 //! scaled by the step's force change `F − F'`, a small fraction of the force. The arithmetic
-//! does not depend on whether the second core is there (`rayon::join` runs both halves on the
-//! calling thread when no other is free), so the results do not depend on the thread count;
-//! they differ from [`ModalVerlet::complete`]'s by the rounding of the split products.
+//! does not depend on whether the second core is there (the passage hands `E b` to a spinning
+//! worker, module `spin`, when the thread pool allows two threads, and otherwise runs it on
+//! the calling thread after the contact step), so the results do not depend on the thread
+//! count; they differ from [`ModalVerlet::complete`]'s by the rounding of the split products.
 
 use super::super::integrator::ModalVerlet;
 use super::super::reduced::RailContactLine;

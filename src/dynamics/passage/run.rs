@@ -5,6 +5,7 @@
 //! set-up are in the parent module.
 
 use super::super::record::RailPointRecord;
+use super::spin::SpinPair;
 use super::*;
 
 impl PassageEngine {
@@ -22,22 +23,22 @@ impl PassageEngine {
             p.total(k.n_steps as u64);
             p.done(0);
         }
-        // with the overlap, the loop runs on a worker of the thread pool, so that its
-        // `rayon::join`s do not cross into the pool at every step
-        let in_pool = s.overlap.is_some();
-        let mut run = || -> Result<(), DynamicsError> {
+        // with the overlap and a second thread allowed, a spinning worker takes the damping
+        // product beside each contact step (module `spin`)
+        let spin = s.overlap.is_some() && rayon::current_num_threads() >= 2;
+        let mut run = |pair: Option<&SpinPair>| -> Result<(), DynamicsError> {
             for n in 1..=k.n_steps {
-                self.passage_step(&mut s, &k, n)?;
+                self.passage_step(&mut s, &k, n, pair)?;
                 if let Some(p) = progress.filter(|_| n % 64 == 0) {
                     p.done(n as u64);
                 }
             }
             Ok(())
         };
-        if in_pool {
-            rayon::scope(|_| run())?;
+        if spin {
+            std::thread::scope(|sc| run(Some(&SpinPair::start(sc))))?;
         } else {
-            run()?;
+            run(None)?;
         }
         Ok(self.passage_record(s, &k, t_wall.elapsed().as_secs_f64()))
     }
@@ -260,6 +261,7 @@ impl PassageEngine {
         s: &mut StepState<'_>,
         k: &StepConstants,
         n: usize,
+        pair: Option<&SpinPair>,
     ) -> Result<(), DynamicsError> {
         let (dt, v, spin) = (k.dt, k.v, k.spin);
         let [z0, z1] = self.zone_m;
@@ -285,7 +287,11 @@ impl PassageEngine {
                 .locate(xc)
                 .ok_or_else(|| self.rail_line.off_rail("contact point", xc))?;
             let f_last = &s.f_last;
-            let (res, ()) = rayon::join(solve, || ov.begin(tr, &self.rail_line, at.0, f_last, rr));
+            let mut begin = || ov.begin(tr, &self.rail_line, at.0, f_last, rr);
+            let (res, ()) = match pair {
+                Some(p) => p.join(solve, begin),
+                None => (solve(), begin()),
+            };
             res?
         } else {
             solve()?
