@@ -26,6 +26,9 @@ use rustfft::num_traits::Zero;
 use rustfft::{Fft, FftNum, FftPlanner};
 use std::f64::consts::PI;
 use std::sync::Arc;
+use transpose::transpose;
+
+mod transpose;
 
 fn asinh_ratio(num: f64, den: f64) -> f64 {
     if den == 0.0 {
@@ -136,12 +139,10 @@ impl<T: FftNum> Fft2<T> {
                 self.row_f.process_with_scratch(row, &mut self.scratch);
             }
         }
-        // transpose column by column: contiguous writes, the zero rows as one fill
+        // the nonzero rows transposed, the zero rows as one fill per column
         let rows = nonzero_rows.min(m1);
-        for (j, col) in self.tbuf.chunks_exact_mut(m1).enumerate() {
-            for (i, c) in col[..rows].iter_mut().enumerate() {
-                *c = data[i * m2 + j];
-            }
+        transpose(data, m2, &mut self.tbuf, m1, (rows, m2));
+        for col in self.tbuf.chunks_exact_mut(m1) {
             col[rows..].fill(zero);
         }
         self.col_f
@@ -153,11 +154,13 @@ impl<T: FftNum> Fft2<T> {
         let (m1, m2) = (self.m1, self.m2);
         self.col_i
             .process_with_scratch(&mut self.tbuf, &mut self.scratch);
-        for (j, col) in self.tbuf.chunks_exact(m1).enumerate() {
-            for (i, v) in col[r0..r1].iter().enumerate() {
-                data[(r0 + i) * m2 + j] = *v;
-            }
-        }
+        transpose(
+            &self.tbuf[r0..],
+            m1,
+            &mut data[r0 * m2..],
+            m2,
+            (m2, r1 - r0),
+        );
         self.row_i
             .process_with_scratch(&mut data[r0 * m2..r1 * m2], &mut self.scratch);
     }

@@ -1,0 +1,176 @@
+//! Transposes of complex blocks between the row-major grids and the transposed spectral layout
+//! of [`super::Fft2`]: `dst[j · ds + i] = src[i · ss + j]` for `i < rows`, `j < cols`.
+//!
+//! Pure data movement, so every build gives the same bits. On a CPU with AVX2 (checked at
+//! run time) the block is moved in tiles held in 256-bit registers: 4 × 4 elements of
+//! `Complex<f32>` (8 bytes each) or 2 × 2 of `Complex<f64>` (16 bytes), instead of one
+//! strided element at a time (the scalar form was about a tenth of a passage's time loop,
+//! docs/performance.md §5.16); the edges that do not fill a tile are moved one by one.
+
+use rustfft::num_complex::Complex;
+use rustfft::FftNum;
+
+/// `dst[j · ds + i] = src[i · ss + j]` for `i < rows`, `j < cols` (`ss`, `ds`: the row
+/// strides of `src` and `dst`, in elements). Panics if a slice is too short.
+pub(super) fn transpose<T: FftNum>(
+    src: &[Complex<T>],
+    ss: usize,
+    dst: &mut [Complex<T>],
+    ds: usize,
+    (rows, cols): (usize, usize),
+) {
+    if rows == 0 || cols == 0 {
+        return;
+    }
+    assert!(src.len() >= (rows - 1) * ss + cols && dst.len() >= (cols - 1) * ds + rows);
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        let size = std::mem::size_of::<Complex<T>>();
+        let (ps, pd) = (src.as_ptr().cast::<f64>(), dst.as_mut_ptr().cast::<f64>());
+        // SAFETY: AVX2 is present (checked above); the bounds are checked by the assertion
+        // above (every tile lies inside the block); `Complex<T>` is two `T` (repr C), so an
+        // element of 8 bytes is moved as one f64 lane and one of 16 bytes as two, bits
+        // untouched (loads, shuffles and stores only).
+        unsafe {
+            match size {
+                8 => return avx2::tiles_8(ps, ss, pd, ds, rows, cols),
+                16 => return avx2::tiles_16(ps, ss, pd, ds, rows, cols),
+                _ => {}
+            }
+        }
+    }
+    edges(src, ss, dst, ds, (0, rows), (0, cols));
+}
+
+/// The plain element-by-element transpose of rows `i0..i1`, columns `j0..j1`.
+fn edges<T: FftNum>(
+    src: &[Complex<T>],
+    ss: usize,
+    dst: &mut [Complex<T>],
+    ds: usize,
+    (i0, i1): (usize, usize),
+    (j0, j1): (usize, usize),
+) {
+    for j in j0..j1 {
+        for i in i0..i1 {
+            dst[j * ds + i] = src[i * ss + j];
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use std::arch::x86_64::*;
+
+    /// The transpose for 8-byte elements in 4 × 4 tiles (the edges one by one), as f64 lanes.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn tiles_8(
+        src: *const f64,
+        ss: usize,
+        dst: *mut f64,
+        ds: usize,
+        rows: usize,
+        cols: usize,
+    ) {
+        let (r4, c4) = (rows - rows % 4, cols - cols % 4);
+        for i in (0..r4).step_by(4) {
+            for j in (0..c4).step_by(4) {
+                let ld = |k: usize| _mm256_loadu_pd(src.add((i + k) * ss + j));
+                let (a, b, c, d) = (ld(0), ld(1), ld(2), ld(3));
+                let t0 = _mm256_unpacklo_pd(a, b);
+                let t1 = _mm256_unpackhi_pd(a, b);
+                let t2 = _mm256_unpacklo_pd(c, d);
+                let t3 = _mm256_unpackhi_pd(c, d);
+                let st = |k: usize, v: __m256d| _mm256_storeu_pd(dst.add((j + k) * ds + i), v);
+                st(0, _mm256_permute2f128_pd::<0x20>(t0, t2));
+                st(1, _mm256_permute2f128_pd::<0x20>(t1, t3));
+                st(2, _mm256_permute2f128_pd::<0x31>(t0, t2));
+                st(3, _mm256_permute2f128_pd::<0x31>(t1, t3));
+            }
+        }
+        scalar_edges(src, ss, dst, ds, (rows, cols), (r4, c4), 1);
+    }
+
+    /// The transpose for 16-byte elements in 2 × 2 tiles (the edges one by one).
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn tiles_16(
+        src: *const f64,
+        ss: usize,
+        dst: *mut f64,
+        ds: usize,
+        rows: usize,
+        cols: usize,
+    ) {
+        let (r2, c2) = (rows - rows % 2, cols - cols % 2);
+        for i in (0..r2).step_by(2) {
+            for j in (0..c2).step_by(2) {
+                let a = _mm256_loadu_pd(src.add(2 * (i * ss + j)));
+                let b = _mm256_loadu_pd(src.add(2 * ((i + 1) * ss + j)));
+                _mm256_storeu_pd(
+                    dst.add(2 * (j * ds + i)),
+                    _mm256_permute2f128_pd::<0x20>(a, b),
+                );
+                _mm256_storeu_pd(
+                    dst.add(2 * ((j + 1) * ds + i)),
+                    _mm256_permute2f128_pd::<0x31>(a, b),
+                );
+            }
+        }
+        scalar_edges(src, ss, dst, ds, (rows, cols), (r2, c2), 2);
+    }
+
+    /// The elements outside the tiled `r_t × c_t` corner, `w` f64 words each.
+    #[inline(always)]
+    unsafe fn scalar_edges(
+        src: *const f64,
+        ss: usize,
+        dst: *mut f64,
+        ds: usize,
+        (rows, cols): (usize, usize),
+        (r_t, c_t): (usize, usize),
+        w: usize,
+    ) {
+        for i in 0..rows {
+            let j0 = if i < r_t { c_t } else { 0 };
+            for j in j0..cols {
+                for k in 0..w {
+                    *dst.add(w * (j * ds + i) + k) = *src.add(w * (i * ss + j) + k);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check<T: FftNum>(rows: usize, cols: usize, ss: usize, ds: usize)
+    where
+        T: From<f32>,
+    {
+        let src: Vec<Complex<T>> = (0..rows * ss)
+            .map(|k| Complex::new(T::from(k as f32), T::from(-(k as f32) - 0.5)))
+            .collect();
+        let fill = Complex::new(T::from(7.25), T::from(-7.25));
+        let mut dst = vec![fill; cols * ds];
+        let mut want = dst.clone();
+        transpose(&src, ss, &mut dst, ds, (rows, cols));
+        edges(&src, ss, &mut want, ds, (0, rows), (0, cols));
+        assert_eq!(dst, want, "{rows} x {cols}, strides {ss}, {ds}");
+    }
+
+    #[test]
+    fn tiled_transpose_moves_every_element_as_the_plain_one() {
+        // every remainder of the tiles (rows and columns mod 4 and mod 2), strides wider
+        // than the block; the elements outside the block stay untouched
+        for rows in [1, 2, 3, 4, 5, 8, 11, 24] {
+            for cols in [1, 3, 4, 6, 7, 36] {
+                for (ss, ds) in [(cols, rows), (cols + 5, rows + 3)] {
+                    check::<f32>(rows, cols, ss, ds);
+                    check::<f64>(rows, cols, ss, ds);
+                }
+            }
+        }
+    }
+}
