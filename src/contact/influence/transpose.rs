@@ -33,8 +33,8 @@ pub(super) fn transpose<T: FftNum>(
         // untouched (loads, shuffles and stores only).
         unsafe {
             match size {
-                8 => return avx2::tiles_8(ps, ss, pd, ds, rows, cols),
-                16 => return avx2::tiles_16(ps, ss, pd, ds, rows, cols),
+                8 => return avx2::tiles::<1>(ps, ss, pd, ds, rows, cols),
+                16 => return avx2::tiles::<2>(ps, ss, pd, ds, rows, cols),
                 _ => {}
             }
         }
@@ -62,9 +62,10 @@ fn edges<T: FftNum>(
 mod avx2 {
     use std::arch::x86_64::*;
 
-    /// The transpose for 8-byte elements in 4 × 4 tiles (the edges one by one), as f64 lanes.
+    /// The transpose for elements of `W` f64 words: 8-byte elements (`W = 1`) in 4 × 4 tiles,
+    /// 16-byte ones (`W = 2`) in 2 × 2 tiles; the edges one by one.
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn tiles_8(
+    pub(super) unsafe fn tiles<const W: usize>(
         src: *const f64,
         ss: usize,
         dst: *mut f64,
@@ -72,51 +73,31 @@ mod avx2 {
         rows: usize,
         cols: usize,
     ) {
-        let (r4, c4) = (rows - rows % 4, cols - cols % 4);
-        for i in (0..r4).step_by(4) {
-            for j in (0..c4).step_by(4) {
-                let ld = |k: usize| _mm256_loadu_pd(src.add((i + k) * ss + j));
-                let (a, b, c, d) = (ld(0), ld(1), ld(2), ld(3));
-                let t0 = _mm256_unpacklo_pd(a, b);
-                let t1 = _mm256_unpackhi_pd(a, b);
-                let t2 = _mm256_unpacklo_pd(c, d);
-                let t3 = _mm256_unpackhi_pd(c, d);
-                let st = |k: usize, v: __m256d| _mm256_storeu_pd(dst.add((j + k) * ds + i), v);
-                st(0, _mm256_permute2f128_pd::<0x20>(t0, t2));
-                st(1, _mm256_permute2f128_pd::<0x20>(t1, t3));
-                st(2, _mm256_permute2f128_pd::<0x31>(t0, t2));
-                st(3, _mm256_permute2f128_pd::<0x31>(t1, t3));
+        let t = 4 / W;
+        let (rt, ct) = (rows - rows % t, cols - cols % t);
+        for i in (0..rt).step_by(t) {
+            for j in (0..ct).step_by(t) {
+                let ld = |k: usize| _mm256_loadu_pd(src.add(W * ((i + k) * ss + j)));
+                let st =
+                    |k: usize, v: __m256d| _mm256_storeu_pd(dst.add(W * ((j + k) * ds + i)), v);
+                if W == 1 {
+                    let (a, b, c, d) = (ld(0), ld(1), ld(2), ld(3));
+                    let t0 = _mm256_unpacklo_pd(a, b);
+                    let t1 = _mm256_unpackhi_pd(a, b);
+                    let t2 = _mm256_unpacklo_pd(c, d);
+                    let t3 = _mm256_unpackhi_pd(c, d);
+                    st(0, _mm256_permute2f128_pd::<0x20>(t0, t2));
+                    st(1, _mm256_permute2f128_pd::<0x20>(t1, t3));
+                    st(2, _mm256_permute2f128_pd::<0x31>(t0, t2));
+                    st(3, _mm256_permute2f128_pd::<0x31>(t1, t3));
+                } else {
+                    let (a, b) = (ld(0), ld(1));
+                    st(0, _mm256_permute2f128_pd::<0x20>(a, b));
+                    st(1, _mm256_permute2f128_pd::<0x31>(a, b));
+                }
             }
         }
-        scalar_edges(src, ss, dst, ds, (rows, cols), (r4, c4), 1);
-    }
-
-    /// The transpose for 16-byte elements in 2 × 2 tiles (the edges one by one).
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn tiles_16(
-        src: *const f64,
-        ss: usize,
-        dst: *mut f64,
-        ds: usize,
-        rows: usize,
-        cols: usize,
-    ) {
-        let (r2, c2) = (rows - rows % 2, cols - cols % 2);
-        for i in (0..r2).step_by(2) {
-            for j in (0..c2).step_by(2) {
-                let a = _mm256_loadu_pd(src.add(2 * (i * ss + j)));
-                let b = _mm256_loadu_pd(src.add(2 * ((i + 1) * ss + j)));
-                _mm256_storeu_pd(
-                    dst.add(2 * (j * ds + i)),
-                    _mm256_permute2f128_pd::<0x20>(a, b),
-                );
-                _mm256_storeu_pd(
-                    dst.add(2 * ((j + 1) * ds + i)),
-                    _mm256_permute2f128_pd::<0x31>(a, b),
-                );
-            }
-        }
-        scalar_edges(src, ss, dst, ds, (rows, cols), (r2, c2), 2);
+        scalar_edges(src, ss, dst, ds, (rows, cols), (rt, ct), W);
     }
 
     /// The elements outside the tiled `r_t × c_t` corner, `w` f64 words each.
