@@ -157,33 +157,50 @@ fn box_products_equal_dense_sums() {
 
 #[test]
 fn kernel_product_dispatch_gives_the_bits_of_the_plain_loop() {
-    // the run-time dispatched product (AVX2 where the CPU has it) against the plain loop,
-    // bit for bit, on odd and even spectral grids; and against the formula written out
-    for &(m1, m2) in &[(48usize, 36usize), (15, 9), (64, 48)] {
-        let n = m1 * m2;
-        let val = |k: usize, s: usize| ((k * s) % 1009) as f64 / 97.0 - 5.0;
-        let z: Vec<Complex64> = (0..n)
-            .map(|k| Complex64::new(val(k, 7919), val(k, 104729)))
-            .collect();
-        let ka: Vec<f64> = (0..n).map(|k| val(k, 31)).collect();
-        let kb: Vec<Complex64> = (0..n)
-            .map(|k| Complex64::new(val(k, 17), val(k, 53)))
-            .collect();
-        let zero = Complex64::new(0.0, 0.0);
-        let (mut w, mut w_plain) = (vec![zero; n], vec![zero; n]);
-        tangential_kernel_product(&z, &ka, &kb, &mut w, m1, m2);
-        tangential_kernel_product_plain(&z, &ka, &kb, &mut w_plain, m1, m2);
-        for q in 0..n {
-            assert_eq!(w[q].re.to_bits(), w_plain[q].re.to_bits(), "{m1}x{m2} {q}");
-            assert_eq!(w[q].im.to_bits(), w_plain[q].im.to_bits(), "{m1}x{m2} {q}");
-            let (k2, k1) = (q / m1, q % m1);
-            let mq = ((m2 - k2) % m2) * m1 + (m1 - k1) % m1;
-            let e = z[q] * ka[q] + kb[q] * z[mq].conj();
-            assert!(
-                (w[q] - e).norm() <= 1e-14 * e.norm().max(1.0),
-                "{m1}x{m2} {q}"
-            );
-        }
+    // the run-time dispatched product (AVX2 where the CPU has it)
+    // against the plain loop, bit for bit, in both precisions, on odd and even spectral
+    // grids (rows shorter and longer than a vector, every remainder); and against the
+    // formula written out
+    for &(m1, m2) in &[
+        (48usize, 36usize),
+        (15, 9),
+        (64, 48),
+        (4, 3),
+        (6, 5),
+        (7, 2),
+    ] {
+        kernel_product_case::<f64>(m1, m2, 1e-14);
+        kernel_product_case::<f32>(m1, m2, 1e-5);
+    }
+}
+
+/// [`kernel_product_dispatch_gives_the_bits_of_the_plain_loop`] in precision `T` on an
+/// `m1 × m2` grid; `tol` the formula's relative tolerance.
+fn kernel_product_case<T: FftNum + From<f32> + Into<f64>>(m1: usize, m2: usize, tol: f64) {
+    let n = m1 * m2;
+    let val = |k: usize, s: usize| T::from(((k * s) % 1009) as f32 / 97.0 - 5.0);
+    let z: Vec<Complex<T>> = (0..n)
+        .map(|k| Complex::new(val(k, 7919), val(k, 104729)))
+        .collect();
+    let ka: Vec<T> = (0..n).map(|k| val(k, 31)).collect();
+    let kb: Vec<Complex<T>> = (0..n)
+        .map(|k| Complex::new(val(k, 17), val(k, 53)))
+        .collect();
+    let zero = Complex::new(T::from(0.0), T::from(0.0));
+    let (mut w, mut w_plain) = (vec![zero; n], vec![zero; n]);
+    tangential_kernel_product(&z, &ka, &kb, &mut w, m1, m2);
+    tangential_kernel_product_plain(&z, &ka, &kb, &mut w_plain, m1, m2);
+    let c64 = |c: Complex<T>| Complex64::new(c.re.into(), c.im.into());
+    for q in 0..n {
+        let bits = |c: Complex<T>| (c64(c).re.to_bits(), c64(c).im.to_bits());
+        assert_eq!(bits(w[q]), bits(w_plain[q]), "{m1}x{m2} {q}");
+        let (k2, k1) = (q / m1, q % m1);
+        let mq = ((m2 - k2) % m2) * m1 + (m1 - k1) % m1;
+        let e = c64(z[q]) * ka[q].into() + c64(kb[q]) * c64(z[mq]).conj();
+        assert!(
+            (c64(w[q]) - e).norm() <= tol * e.norm().max(1.0),
+            "{m1}x{m2} {q}"
+        );
     }
 }
 
