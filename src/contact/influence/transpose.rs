@@ -58,6 +58,8 @@ fn edges<T: FftNum>(
     }
 }
 
+/// The tiled kernels. Safety: the CPU must support AVX2 and every element of the block
+/// (`rows × cols` with the strides) must lie inside both buffers ([`transpose`] checks both).
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use std::arch::x86_64::*;
@@ -126,10 +128,7 @@ mod avx2 {
 mod tests {
     use super::*;
 
-    fn check<T: FftNum>(rows: usize, cols: usize, ss: usize, ds: usize)
-    where
-        T: From<f32>,
-    {
+    fn check<T: FftNum + From<f32>>(rows: usize, cols: usize, ss: usize, ds: usize) {
         let src: Vec<Complex<T>> = (0..rows * ss)
             .map(|k| Complex::new(T::from(k as f32), T::from(-(k as f32) - 0.5)))
             .collect();

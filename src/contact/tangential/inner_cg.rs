@@ -416,6 +416,11 @@ pub(super) mod tests {
 /// difference: a NaN in a residual is not ignored by the `max |r|` reduction (`vmaxpd`
 /// returns its second operand when either is NaN; `f64::max` returns the other one); a NaN
 /// ends the passage anyway (its finiteness check).
+///
+/// Safety of every kernel: the CPU must support AVX2 (the callers run them only from
+/// `inner_cg_avx2`, after the run-time check); the slices are re-sliced to the first one's
+/// length at entry (a shorter one panics), so the vector loads and stores of the blocks stay
+/// inside them.
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use super::LANES;

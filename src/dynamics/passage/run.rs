@@ -25,7 +25,7 @@ impl PassageEngine {
         }
         // with the overlap and a second thread allowed, a spinning worker takes the damping
         // product beside each contact step (module `spin`)
-        let spin = s.overlap.is_some() && rayon::current_num_threads() >= 2;
+        let two_cores = s.overlap.is_some() && rayon::current_num_threads() >= 2;
         let mut run = |pair: Option<&SpinPair>| -> Result<(), DynamicsError> {
             for n in 1..=k.n_steps {
                 self.passage_step(&mut s, &k, n, pair)?;
@@ -35,8 +35,8 @@ impl PassageEngine {
             }
             Ok(())
         };
-        if spin {
-            std::thread::scope(|sc| run(Some(&SpinPair::start(sc))))?;
+        if two_cores {
+            std::thread::scope(|sc| run(SpinPair::start(sc).as_ref()))?;
         } else {
             run(None)?;
         }

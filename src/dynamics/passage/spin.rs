@@ -58,16 +58,20 @@ pub(super) struct SpinPair {
 }
 
 impl SpinPair {
-    /// Starts the worker in `scope`.
-    pub(super) fn start<'scope>(scope: &'scope Scope<'scope, '_>) -> Self {
+    /// Starts the worker in `scope`; `None` when the system refuses a thread (the caller
+    /// then runs both halves itself).
+    pub(super) fn start<'scope>(scope: &'scope Scope<'scope, '_>) -> Option<Self> {
         let shared = Arc::new(Shared {
             state: AtomicU8::new(IDLE),
             job: UnsafeCell::new(None),
             panic: UnsafeCell::new(None),
         });
         let s = shared.clone();
-        scope.spawn(move || worker(&s));
-        SpinPair { shared }
+        std::thread::Builder::new()
+            .name("passage-spin".into())
+            .spawn_scoped(scope, move || worker(&s))
+            .ok()?;
+        Some(SpinPair { shared })
     }
 
     /// Runs `a` on the calling thread and `b` on the worker, and returns both results when
@@ -155,7 +159,7 @@ mod tests {
     #[test]
     fn both_halves_run_and_return_their_results() {
         std::thread::scope(|sc| {
-            let pair = SpinPair::start(sc);
+            let pair = SpinPair::start(sc).expect("a thread");
             let mut v = vec![0u64; 1000];
             for k in 0..200u64 {
                 let (left, right) = v.split_at_mut(500);
@@ -179,7 +183,7 @@ mod tests {
     #[test]
     fn a_panic_on_the_worker_reaches_the_caller() {
         std::thread::scope(|sc| {
-            let pair = SpinPair::start(sc);
+            let pair = SpinPair::start(sc).expect("a thread");
             let r = catch_unwind(AssertUnwindSafe(|| pair.join(|| 1, || panic!("job"))));
             assert!(r.is_err());
             // the pair still works afterwards
