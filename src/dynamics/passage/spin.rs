@@ -94,8 +94,12 @@ impl SpinPair {
         // DONE, and `Wait` below does not let this frame go (return or unwind) before DONE.
         let ptr: JobPtr = unsafe { std::mem::transmute(ptr) };
         // SAFETY: the state is IDLE (every join waits for DONE and resets it), so the worker
-        // does not read the slot now.
-        unsafe { *self.shared.job.get() = Some(ptr) };
+        // touches neither slot now. A payload left by a join whose own half panicked first
+        // is dropped here, so that it is not taken for this job's.
+        unsafe {
+            *self.shared.panic.get() = None;
+            *self.shared.job.get() = Some(ptr);
+        }
         self.shared.state.store(JOB, Ordering::Release);
         let wait = Wait(&self.shared);
         let ra = a();
@@ -177,6 +181,18 @@ mod tests {
                 assert_eq!(a, 500 * t);
                 assert_eq!(b, 1000 * t);
             }
+        });
+    }
+
+    #[test]
+    fn a_panic_on_both_sides_leaves_no_payload_for_the_next_join() {
+        std::thread::scope(|sc| {
+            let pair = SpinPair::start(sc).expect("a thread");
+            let r = catch_unwind(AssertUnwindSafe(|| {
+                pair.join(|| panic!("caller"), || panic!("job"))
+            }));
+            assert!(r.is_err());
+            assert_eq!(pair.join(|| 3, || 4), (3, 4));
         });
     }
 
