@@ -496,7 +496,7 @@ fn dense_reduced_stiffness(
         let sides = s
             .side_a
             .iter()
-            .map(|&(d, w)| (d, w))
+            .copied()
             .chain(s.side_b.iter().map(|&(d, w)| (d, -w)));
         for (dof, w) in sides {
             let Some(f) = track.dofmap.free_index(dof) else {
@@ -517,15 +517,7 @@ fn dense_reduced_stiffness(
         }
     }
     let gk = faer::Mat::<f64>::from_fn(n, g.ncols(), |i, j| g[(i, j)] * track.springs[j].stiffness);
-    let mut k = faer::Mat::<f64>::zeros(n, n);
-    faer::linalg::matmul::matmul(
-        k.as_mut(),
-        faer::Accum::Replace,
-        gk.as_ref(),
-        g.transpose(),
-        1.0,
-        faer::Par::rayon(0),
-    );
+    let mut k = &gk * g.transpose();
     for (i, w) in comp.reduced_omega2().enumerate() {
         k[(i, i)] += w;
     }

@@ -25,18 +25,24 @@ pub(super) fn transpose<T: FftNum>(
     assert!(src.len() >= (rows - 1) * ss + cols && dst.len() >= (cols - 1) * ds + rows);
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
-        let size = std::mem::size_of::<Complex<T>>();
+        let words = std::mem::size_of::<Complex<T>>() / 8;
         let (ps, pd) = (src.as_ptr().cast::<f64>(), dst.as_mut_ptr().cast::<f64>());
-        // SAFETY: AVX2 is present (checked above); the bounds are checked by the assertion
-        // above (every tile lies inside the block); `Complex<T>` is two `T` (repr C), so an
-        // element of 8 bytes is moved as one f64 lane and one of 16 bytes as two, bits
-        // untouched (loads, shuffles and stores only).
-        unsafe {
-            match size {
-                8 => return avx2::tiles::<1>(ps, ss, pd, ds, rows, cols),
-                16 => return avx2::tiles::<2>(ps, ss, pd, ds, rows, cols),
-                _ => {}
+        // SAFETY: AVX2 is present (checked above); the tiles lie inside the block, whose
+        // bounds the assertion above checks; `Complex<T>` is two `T` (repr C), so an element
+        // of 8 bytes is moved as one f64 lane and one of 16 bytes as two, bits untouched
+        // (loads, shuffles and stores only).
+        let tiled = unsafe {
+            match words {
+                1 => Some(avx2::tiles::<1>(ps, ss, pd, ds, rows, cols)),
+                2 => Some(avx2::tiles::<2>(ps, ss, pd, ds, rows, cols)),
+                _ => None,
             }
+        };
+        if let Some((rt, ct)) = tiled {
+            // the edges the tiles leave: the columns right of them, then the rows below
+            edges(src, ss, dst, ds, (0, rt), (ct, cols));
+            edges(src, ss, dst, ds, (rt, rows), (0, cols));
+            return;
         }
     }
     edges(src, ss, dst, ds, (0, rows), (0, cols));
@@ -64,8 +70,9 @@ fn edges<T: FftNum>(
 mod avx2 {
     use std::arch::x86_64::*;
 
-    /// The transpose for elements of `W` f64 words: 8-byte elements (`W = 1`) in 4 × 4 tiles,
-    /// 16-byte ones (`W = 2`) in 2 × 2 tiles; the edges one by one.
+    /// The transpose of the block's whole tiles for elements of `W` f64 words: 8-byte
+    /// elements (`W = 1`) in 4 × 4 tiles, 16-byte ones (`W = 2`) in 2 × 2 tiles. Returns the
+    /// tiled corner's rows and columns; the caller moves the rest.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn tiles<const W: usize>(
         src: *const f64,
@@ -74,7 +81,7 @@ mod avx2 {
         ds: usize,
         rows: usize,
         cols: usize,
-    ) {
+    ) -> (usize, usize) {
         let t = 4 / W;
         let (rt, ct) = (rows - rows % t, cols - cols % t);
         for i in (0..rt).step_by(t) {
@@ -99,28 +106,7 @@ mod avx2 {
                 }
             }
         }
-        scalar_edges(src, ss, dst, ds, (rows, cols), (rt, ct), W);
-    }
-
-    /// The elements outside the tiled `r_t × c_t` corner, `w` f64 words each.
-    #[inline(always)]
-    unsafe fn scalar_edges(
-        src: *const f64,
-        ss: usize,
-        dst: *mut f64,
-        ds: usize,
-        (rows, cols): (usize, usize),
-        (r_t, c_t): (usize, usize),
-        w: usize,
-    ) {
-        for i in 0..rows {
-            let j0 = if i < r_t { c_t } else { 0 };
-            for j in j0..cols {
-                for k in 0..w {
-                    *dst.add(w * (j * ds + i) + k) = *src.add(w * (i * ss + j) + k);
-                }
-            }
-        }
+        (rt, ct)
     }
 }
 

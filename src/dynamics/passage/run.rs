@@ -128,7 +128,6 @@ impl PassageEngine {
             fw_const,
             drive,
             f_last: f0,
-            f_end: ledger.f_start,
             last_delta: st.approach_m,
             overlap,
             wear,
@@ -155,7 +154,7 @@ impl PassageEngine {
         let StepState {
             tr,
             wh,
-            f_end,
+            f_last,
             last_delta,
             wear,
             ledger,
@@ -163,6 +162,12 @@ impl PassageEngine {
             rail_point,
             ..
         } = s;
+        // the last step's force, or the static start's when no step ran
+        let f_end = if k.n_steps > 0 {
+            f_last
+        } else {
+            ledger.f_start
+        };
         let eb = if k.energy {
             ledger.finish((&tr, &wh), f_end, last_delta)
         } else {
@@ -238,10 +243,9 @@ struct StepState<'a> {
     fw_const: Vec<f64>,
     /// Weight of the torque and the resistance (0 before their onset, 1 after).
     drive: f64,
-    /// Contact force on the wheel of the last step (x, t, n; N).
+    /// Contact force on the wheel of the last step (x, t, n; N; before the first step the
+    /// static loads').
     f_last: [f64; 3],
-    /// Contact force at the end of the passage so far (x, t, n; N).
-    f_end: [f64; 3],
     /// Approach of the last step (m).
     last_delta: f64,
     overlap: Option<DampingOverlap>,
@@ -300,7 +304,6 @@ impl PassageEngine {
             s.wear.add_step(&s.contact, xc);
         }
         let f = [r.fx_n, r.fy_n, r.normal_force_n];
-        s.f_end = f;
         // The driving torque and the resistance come on as a step at their onset.
         let drive_prev = s.drive;
         if s.drive == 0.0 && xc >= k.x_torque {

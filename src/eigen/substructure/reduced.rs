@@ -34,7 +34,7 @@ fn spring_block_entries(
             let sides = s
                 .side_a
                 .iter()
-                .map(|&(d, w)| (d, w))
+                .copied()
                 .chain(s.side_b.iter().map(|&(d, w)| (d, -w)));
             let mut e = Vec::new();
             for (dof, w) in sides {
