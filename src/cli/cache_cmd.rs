@@ -1,5 +1,10 @@
 //! `corrugation cache`: lists the modal cache's entries (size, basis, last use) and, with
 //! `--max-size-gb` or `--max-idle-days`, removes the least recently used ones.
+//!
+//! Only the cache's own entries and leftovers are ever listed or removed (the ownership rule
+//! of [`corrugation::eigen::cache`]). A directory that does not look like a modal cache — it
+//! exists, has no `CACHEDIR.TAG` and holds anything else — is refused (a mistyped `--cache`),
+//! unless `--force`; items that are not the cache's are named on stderr and left alone.
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -7,7 +12,7 @@ use std::time::Duration;
 use anyhow::bail;
 use clap::Args;
 
-use corrugation::eigen::cache::{default_cache_dir, ModalCache, PrunePolicy};
+use corrugation::eigen::cache::{default_cache_dir, CacheError, ModalCache, PrunePolicy};
 use corrugation::units::{bytes_to_gb, days_to_s, gb_to_bytes, s_to_days};
 
 /// List the modal cache and remove least recently used entries.
@@ -29,6 +34,10 @@ pub struct CacheCmd {
     /// Print the entries (and what was removed) as JSON on stdout.
     #[arg(long)]
     json: bool,
+    /// List and prune a directory that does not look like a modal cache (no CACHEDIR.TAG,
+    /// and other things than cache entries in it); even then only cache entries are removed.
+    #[arg(long)]
+    force: bool,
 }
 
 fn non_negative(flag: &str, v: Option<f64>) -> anyhow::Result<Option<f64>> {
@@ -46,6 +55,23 @@ impl CacheCmd {
         let max_gb = non_negative("--max-size-gb", self.max_size_gb)?;
         let max_days = non_negative("--max-idle-days", self.max_idle_days)?;
         let cache = ModalCache::new(self.cache.clone().unwrap_or_else(default_cache_dir));
+        let survey = match cache.check_is_cache() {
+            Ok(s) => s,
+            Err(CacheError::NotACache { .. }) if self.force => cache.survey()?,
+            Err(e @ CacheError::NotACache { .. }) => bail!(
+                "{e}; check --cache, or add --force to list and prune the cache entries in it \
+                 anyway (nothing else is ever removed)"
+            ),
+            Err(e) => return Err(e.into()),
+        };
+        if !survey.others.is_empty() {
+            eprintln!(
+                "note: {} item(s) in {} are not cache entries and are left alone: {}",
+                survey.others.len(),
+                cache.dir().display(),
+                corrugation::eigen::cache::quote_names(&survey.others)
+            );
+        }
         let entries = cache.entries()?;
         let total: u64 = entries.iter().map(|e| e.bytes).sum();
         eprintln!(
@@ -55,16 +81,17 @@ impl CacheCmd {
             bytes_to_gb(total)
         );
         if !self.json {
-            println!("key               GB      DOFs   modes  f_max_Hz  idle_days");
+            println!("key               GB      DOFs   modes  f_max_Hz  idle_days  valid");
             for e in &entries {
                 println!(
-                    "{:<16}  {:>6.3}  {:>7}  {:>5}  {:>8.0}  {:>9.2}",
+                    "{:<16}  {:>6.3}  {:>7}  {:>5}  {:>8.0}  {:>9.2}  {}",
                     &e.key[..e.key.len().min(16)],
                     bytes_to_gb(e.bytes),
                     e.n_dofs,
                     e.n_modes,
                     e.f_max_hz,
-                    s_to_days(e.idle_s)
+                    s_to_days(e.idle_s),
+                    if e.intact { "yes" } else { "no (recomputed)" }
                 );
             }
         }
@@ -85,6 +112,12 @@ impl CacheCmd {
                 bytes_to_gb(r.freed_bytes),
                 bytes_to_gb(r.kept_bytes)
             );
+            // A cache written before tags (entries only) gets its tag.
+            if !self.dry_run && !survey.tagged {
+                if let Err(e) = cache.tag_if_cache() {
+                    eprintln!("warning: {e}");
+                }
+            }
             Some(r)
         } else {
             None
@@ -96,6 +129,8 @@ impl CacheCmd {
                 "entries": entries,
                 "prune": report,
                 "dry_run": self.dry_run,
+                "tagged": survey.tagged,
+                "not_entries": survey.others,
             });
             println!("{}", serde_json::to_string_pretty(&j)?);
         }

@@ -48,6 +48,7 @@ pub struct CoupledModesCmd {
 impl CoupledModesCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let m = self.model.load()?;
+        super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let t0 = std::time::Instant::now();
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;

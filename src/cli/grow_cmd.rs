@@ -131,6 +131,7 @@ impl GrowCmd {
         let t0 = Instant::now();
         self.check_args()?;
         let m = self.model.load()?;
+        super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
         let coupled = if self.no_coupled {

@@ -80,6 +80,21 @@ pub fn check_trial_amplitudes(amplitudes_um: &[f64]) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuses an `--out` that is the modal cache's directory (`--cache`, or the default one) or
+/// lies inside it, before anything is created or computed (see
+/// [`corrugation::eigen::cache::ensure_outside_cache`]).
+pub fn check_out_outside_cache(
+    out: &std::path::Path,
+    cache: Option<&std::path::Path>,
+) -> anyhow::Result<()> {
+    let cache_dir = cache.map_or_else(
+        corrugation::eigen::cache::default_cache_dir,
+        std::path::Path::to_path_buf,
+    );
+    corrugation::eigen::cache::ensure_outside_cache(out, &cache_dir)
+        .map_err(|e| anyhow::anyhow!("--out: {e}"))
+}
+
 pub fn check_out_dir(dir: &std::path::Path) -> anyhow::Result<()> {
     let fail =
         |e: std::io::Error| anyhow::anyhow!("--out {}: cannot write there: {e}", dir.display());

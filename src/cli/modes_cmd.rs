@@ -128,6 +128,7 @@ impl ModesCmd {
             );
         }
         let m = self.model.load()?;
+        super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let cache_dir = self.cache.clone().unwrap_or_else(default_cache_dir);
         let pb = std::sync::Arc::new(super::progress::bar(&format!(

@@ -80,6 +80,7 @@ impl PassageCmd {
             Some(p) => Some(RailProfile::read_csv_um(p)?),
             None => None,
         };
+        super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         if self.engine == super::engine::Engine::Explicit {
             return super::explicit_cmd::run_explicit(

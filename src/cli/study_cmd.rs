@@ -39,8 +39,6 @@ impl StudyCmd {
         // Every case's model is checked before any engine work.
         let models = study.case_models()?;
         let cache_dir = self.cache.clone().unwrap_or_else(default_cache_dir);
-        let plan = basis_plan(&study, &models, &ModalCache::new(&cache_dir))?;
-        eprintln!("study `{}`: {plan}", study.title);
         let out = self.out.clone().unwrap_or_else(|| {
             let stem = self
                 .file
@@ -49,6 +47,9 @@ impl StudyCmd {
                 .unwrap_or_else(|| "study".into());
             PathBuf::from(format!("corrugation-out/study-{stem}"))
         });
+        super::check_out_outside_cache(&out, Some(&cache_dir))?;
+        let plan = basis_plan(&study, &models, &ModalCache::new(&cache_dir))?;
+        eprintln!("study `{}`: {plan}", study.title);
         let cache = self.cache.as_deref();
         let runners = CaseRunners::new(&study, &cache_dir);
         let factory = |m: &Model| -> Result<Box<dyn PassageRunner>, BoxError> {

@@ -60,6 +60,7 @@ impl SweepCmd {
             );
         }
         let model = self.model.load()?;
+        super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let cache = self.cache.as_deref();
         // One modal model for both the mode lines and the passages.

@@ -1,23 +1,43 @@
 //! On-disk modal cache: a modal basis (frequencies, mode shapes, per-mode residuals and
 //! caller-supplied classification data) stored under a content key.
 //!
-//! Layout of one entry `DIR/<key hex>/`:
+//! Layout of one entry `DIR/<key hex>/` (the key's 64 hex digits, [`CacheKey::hex`]):
 //! * `frequencies_hz.npy` — f64, shape (m,), Hz;
 //! * `modes.npy` — f64, shape (n, m), C order (row = DOF, column = mode; `numpy.load` gives the
 //!   usual n × m array), M-orthonormal mode shapes;
 //! * `meta.json` — [`CacheMeta`]: key, crate version, n, m, f_min/f_max, Sturm count,
 //!   per-mode residuals, blake3 hashes of both .npy files, and the caller's
-//!   `classification` (any `serde_json::Value`).
+//!   `classification` (any `serde_json::Value`);
+//! * `manifest.b3` — the blake3 hash of each of the three files above, `meta.json` included,
+//!   and a final line with the blake3 hash of the manifest's own preceding content (format in
+//!   `cache/manifest.rs`), written last;
+//! * auxiliary files ([`ModalCache::store_aux`], derived data such as the residual
+//!   flexibility), each carrying the blake3 hash of its content on its first line.
+//!
+//! The cache directory itself carries a `CACHEDIR.TAG` (the Cache Directory Tagging
+//! signature) once the cache has stored an entry in it.
 //!
 //! **Atomicity.** An entry is written into a fresh temporary directory `DIR/.tmp-<key>-<pid>-<n>`
-//! and renamed to its final name only when every file is complete and flushed (`rename(2)` of
-//! a directory is atomic on POSIX file systems). An interrupted write leaves only a `.tmp-*`
-//! directory that is never read. **Integrity.** On load, the blake3 hash of each .npy file is
-//! checked against `meta.json` and shapes against the metadata, so a truncated or corrupted
-//! entry is reported as [`CacheLookup::Corrupt`] (and can be recomputed and overwritten with
-//! [`ModalCache::store`]), never trusted. Auxiliary files of an entry (derived data such as
-//! the residual flexibility, [`ModalCache::store_aux`]) carry the blake3 hash of their content
-//! on their first line, checked on load: a mismatch is a miss, recomputed.
+//! and renamed to its final name only when every file, the manifest last, is complete and
+//! flushed (`rename(2)` of a directory is atomic on POSIX file systems). An interrupted write
+//! leaves only a `.tmp-*` directory that is never read. **Integrity.** On load, the manifest's
+//! own hash is checked, then `meta.json` against the manifest, then the blake3 hash of each
+//! .npy file against the manifest and `meta.json`, and the shapes against the metadata, so a
+//! truncated, corrupted or edited entry (a mode family relabelled in `meta.json`, say) is
+//! reported as [`CacheLookup::Corrupt`] (and recomputed and overwritten with
+//! [`ModalCache::store`]), never trusted. An entry without a valid manifest is corrupt too:
+//! **entries written before manifests (by earlier builds) are recomputed once**, on
+//! their first lookup. Auxiliary files are checked against the hash on their first line: a
+//! mismatch is a miss, recomputed.
+//!
+//! **Ownership.** The cache owns only its entries (key-named directories that hold a
+//! `meta.json` or a manifest and nothing but files the cache writes), the hidden
+//! `.tmp-<key>-*`/`.old-<key>-*` leftovers of interrupted writes and its tag: the exact rule
+//! is in `cache/owned.rs` ([`ModalCache::survey`]). Nothing else in the directory — an output
+//! folder, a user's file, a key-named folder holding a user's file — is ever listed, replaced
+//! or removed, and an untagged directory holding such things is never tagged and is refused
+//! by [`ModalCache::check_is_cache`] (`corrugation cache` without `--force`). An output
+//! directory inside the cache is refused up front ([`ensure_outside_cache`]).
 //!
 //! **Size.** [`ModalCache::entries`] lists the entries with their sizes and last use, and
 //! [`ModalCache::prune`] removes the least recently used ones (`corrugation cache`); a hit
@@ -36,8 +56,20 @@ use faer::Mat;
 use npyz::WriterBuilder;
 
 mod admin;
+mod manifest;
+mod owned;
 mod read;
 pub use admin::{CacheEntryInfo, PrunePolicy, PruneReport, LEFTOVER_AGE_S};
+pub use owned::{ensure_outside_cache, quote_names, CacheSurvey, TAG_FILE, TAG_SIGNATURE};
+
+/// An entry's frequencies (Hz), a 1-D `.npy` array.
+pub const FREQUENCIES_FILE: &str = "frequencies_hz.npy";
+/// An entry's mode shapes, a 2-D C-order `.npy` array (row = DOF).
+pub const MODES_FILE: &str = "modes.npy";
+/// An entry's metadata ([`CacheMeta`] as JSON).
+pub const META_FILE: &str = "meta.json";
+/// An entry's manifest: the blake3 hashes of its files, sealed by its own hash.
+pub const MANIFEST_FILE: &str = "manifest.b3";
 use serde::{Deserialize, Serialize};
 
 /// Errors of the modal cache.
@@ -79,6 +111,54 @@ pub enum CacheError {
         /// The auxiliary file's name.
         name: String,
     },
+    /// Something that is not the cache's sits where an entry is to be stored (a link, or a
+    /// key-named directory holding files the cache does not write); it is left alone.
+    #[error(
+        "modal cache: {} is in the way of an entry but is not one (it holds files the cache \
+         does not write); move it out of the cache directory",
+        dir.display()
+    )]
+    NotOurs {
+        /// The entry's directory.
+        dir: PathBuf,
+    },
+    /// The directory does not look like a modal cache: it exists, carries no `CACHEDIR.TAG`
+    /// and holds other things than cache entries (a mistyped cache directory, say).
+    #[error(
+        "modal cache: {} does not look like a modal cache: it has no {} and holds {} that \
+         {} not cache entries; nothing was listed or removed",
+        dir.display(),
+        owned::TAG_FILE,
+        owned::quote_names(others),
+        if others.len() == 1 { "is" } else { "are" }
+    )]
+    NotACache {
+        /// The directory.
+        dir: PathBuf,
+        /// Names of the items in it that are not the cache's.
+        others: Vec<String>,
+    },
+    /// An output directory that is the cache directory or lies inside it.
+    #[error(
+        "output directory {} is {}the modal cache's directory {}: that directory is for \
+         cache entries only; choose an output directory outside it (or another cache \
+         directory)",
+        out.display(),
+        if out_is_cache(out, cache) { "" } else { "inside " },
+        cache.display()
+    )]
+    OutInCache {
+        /// The output directory, as given.
+        out: PathBuf,
+        /// The cache directory, as given.
+        cache: PathBuf,
+    },
+}
+
+/// Whether `out` and `cache` resolve to the same directory (for the message of
+/// [`CacheError::OutInCache`]).
+fn out_is_cache(out: &Path, cache: &Path) -> bool {
+    ensure_outside_cache(cache, out).is_err()
 }
 
 /// Why a cache entry failed validation on load (it is then recomputed and stored again).
@@ -90,6 +170,22 @@ pub enum CorruptEntry {
     /// `meta.json` is not valid metadata.
     #[error("meta.json")]
     Meta(#[source] serde_json::Error),
+    /// The entry has no `manifest.b3`: it was written before manifests, or is an incomplete
+    /// copy.
+    #[error("no manifest.b3 (an entry written by an earlier build, or an incomplete copy)")]
+    NoManifest,
+    /// `manifest.b3` is not a valid, sealed manifest.
+    #[error("manifest.b3: {reason}")]
+    Manifest {
+        /// Why it is refused.
+        reason: &'static str,
+    },
+    /// `meta.json` names another hash for a data file than the manifest.
+    #[error("meta.json's hash of {file} differs from the manifest's")]
+    ManifestDisagrees {
+        /// The data file.
+        file: &'static str,
+    },
     /// `meta.json` names another key than its directory.
     #[error("meta.json key {found} ≠ directory {expected}")]
     KeyMismatch {
@@ -98,8 +194,8 @@ pub enum CorruptEntry {
         /// The directory's name.
         expected: String,
     },
-    /// A data file's blake3 hash differs from the one in `meta.json`.
-    #[error("{file} hash mismatch (truncated or corrupted)")]
+    /// A file's blake3 hash differs from the one the manifest (or `meta.json`) lists.
+    #[error("{file} hash mismatch (truncated, corrupted or edited)")]
     HashMismatch {
         /// The file.
         file: &'static str,
@@ -399,9 +495,18 @@ impl ModalCache {
         self.dir.join(key.hex())
     }
 
-    /// Stores a modal basis under `key` atomically (temp dir + rename); replaces an existing
-    /// (e.g. corrupt) entry. `meta.key`, `meta.crate_version`, the hashes and the sizes are
-    /// filled in here.
+    /// Whether an entry for `key` has been written with a manifest (a cheap check for
+    /// planning: [`Self::load`] still validates it, and an entry written before manifests is
+    /// recomputed).
+    pub fn has_entry(&self, key: &CacheKey) -> bool {
+        self.entry_dir(key).join(MANIFEST_FILE).is_file()
+    }
+
+    /// Stores a modal basis under `key` atomically (temp dir + rename, the manifest written
+    /// last); replaces an existing (e.g. corrupt) entry, provided it holds nothing but files
+    /// the cache writes (else [`CacheError::NotOurs`], and it is left alone). Tags the cache
+    /// directory (`CACHEDIR.TAG`) if it holds nothing but entries and leftovers.
+    /// `meta.key`, `meta.crate_version`, the hashes and the sizes are filled in here.
     pub fn store(
         &self,
         key: &CacheKey,
@@ -416,7 +521,10 @@ impl ModalCache {
             });
         }
         fs::create_dir_all(&self.dir).map_err(io_err("create dir", &self.dir))?;
+        self.tag_if_cache()?;
         let hex = key.hex();
+        let final_dir = self.dir.join(&hex);
+        Self::check_replaceable(&final_dir)?;
         let tmp = self.dir.join(format!(
             ".tmp-{hex}-{}-{}",
             std::process::id(),
@@ -425,8 +533,8 @@ impl ModalCache {
         let _ = fs::remove_dir_all(&tmp);
         fs::create_dir(&tmp).map_err(io_err("create dir", &tmp))?;
         let result = (|| {
-            let fp = tmp.join("frequencies_hz.npy");
-            let mp = tmp.join("modes.npy");
+            let fp = tmp.join(FREQUENCIES_FILE);
+            let mp = tmp.join(MODES_FILE);
             write_npy_1d(&fp, frequencies_hz)?;
             write_npy_2d(&mp, modes)?;
             meta.key = hex.clone();
@@ -435,11 +543,20 @@ impl ModalCache {
             meta.n_modes = modes.ncols();
             meta.frequencies_blake3 = hash_file(&fp)?.0;
             meta.modes_blake3 = hash_file(&mp)?.0;
-            let jp = tmp.join("meta.json");
             let json = serde_json::to_vec_pretty(&meta)?;
-            write_file(&jp, &json)?;
-            let final_dir = self.dir.join(&hex);
-            if final_dir.exists() {
+            write_file(&tmp.join(META_FILE), &json)?;
+            let listed = manifest::Listed {
+                frequencies: meta.frequencies_blake3.clone(),
+                modes: meta.modes_blake3.clone(),
+                meta: blake3::hash(&json).to_hex().to_string(),
+            };
+            write_file(
+                &tmp.join(MANIFEST_FILE),
+                manifest::render(&listed).as_bytes(),
+            )?;
+            // Checked again just before the swap: something may have appeared meanwhile.
+            Self::check_replaceable(&final_dir)?;
+            if fs::symlink_metadata(&final_dir).is_ok() {
                 // Move the old entry aside first (rename onto a non-empty dir fails).
                 let old = self.dir.join(format!(
                     ".old-{hex}-{}-{}",
@@ -458,13 +575,28 @@ impl ModalCache {
         result
     }
 
+    /// Refuses ([`CacheError::NotOurs`]) an existing `dir` where an entry is to be stored
+    /// unless it is a directory (not a link) holding nothing but files the cache writes.
+    fn check_replaceable(dir: &Path) -> Result<(), CacheError> {
+        match fs::symlink_metadata(dir) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+            Err(e) => Err(io_err("stat", dir)(e)),
+            Ok(md) if md.is_dir() && owned::holds_only_cache_files(dir) => Ok(()),
+            Ok(_) => Err(CacheError::NotOurs {
+                dir: dir.to_path_buf(),
+            }),
+        }
+    }
+
     /// Stores an auxiliary file `name` (derived data of the basis, e.g. the residual
     /// flexibility) inside the existing entry of `key`, atomically (temp file + rename).
     /// Fails when the entry does not exist: derived data lives and dies with its modes.
     /// The file is a line `blake3 <hex of bytes>` and then `bytes`; [`Self::load_aux`]
-    /// checks the hash.
+    /// checks the hash. The name is a plain file name, not hidden and none of the entry's own
+    /// files (`meta.json`, …).
     pub fn store_aux(&self, key: &CacheKey, name: &str, bytes: &[u8]) -> Result<(), CacheError> {
-        if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') {
+        let own = [FREQUENCIES_FILE, MODES_FILE, META_FILE, MANIFEST_FILE].contains(&name);
+        if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') || own {
             return Err(CacheError::AuxName { name: name.into() });
         }
         let d = self.entry_dir(key);
@@ -502,8 +634,8 @@ impl ModalCache {
         (hex == blake3::hash(payload).to_hex().as_bytes()).then(|| payload.to_vec())
     }
 
-    /// Looks up `key`; validates hashes, shapes and metadata. A hit marks the entry used
-    /// (for [`Self::prune`]).
+    /// Looks up `key`; validates the manifest, the hashes of `meta.json` and of the data
+    /// files, the shapes and the metadata. A hit marks the entry used (for [`Self::prune`]).
     pub fn load(&self, key: &CacheKey) -> CacheLookup {
         let hex = key.hex();
         let d = self.dir.join(&hex);
@@ -519,9 +651,25 @@ impl ModalCache {
         }
     }
 
-    fn load_dir(d: &Path, hex: &str) -> Result<CachedModes, CorruptEntry> {
-        let meta_path = d.join("meta.json");
+    /// The metadata of the entry `d` (named `hex`), checked through its manifest: the
+    /// manifest's seal, `meta.json`'s hash, the key, and the data files' hashes in
+    /// `meta.json` against the manifest's (the data files themselves are not read).
+    fn checked_meta(d: &Path, hex: &str) -> Result<CacheMeta, CorruptEntry> {
+        let manifest_path = d.join(MANIFEST_FILE);
+        let manifest_bytes = match fs::read(&manifest_path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                return Err(CorruptEntry::NoManifest)
+            }
+            Err(e) => return Err(io_err("read", &manifest_path)(e).into()),
+        };
+        let listed =
+            manifest::parse(&manifest_bytes).map_err(|reason| CorruptEntry::Manifest { reason })?;
+        let meta_path = d.join(META_FILE);
         let meta_bytes = fs::read(&meta_path).map_err(io_err("read", &meta_path))?;
+        if blake3::hash(&meta_bytes).to_hex().as_str() != listed.meta {
+            return Err(CorruptEntry::HashMismatch { file: META_FILE });
+        }
         let meta: CacheMeta = serde_json::from_slice(&meta_bytes).map_err(CorruptEntry::Meta)?;
         if meta.key != hex {
             return Err(CorruptEntry::KeyMismatch {
@@ -529,20 +677,33 @@ impl ModalCache {
                 expected: hex.into(),
             });
         }
+        if meta.frequencies_blake3 != listed.frequencies {
+            return Err(CorruptEntry::ManifestDisagrees {
+                file: FREQUENCIES_FILE,
+            });
+        }
+        if meta.modes_blake3 != listed.modes {
+            return Err(CorruptEntry::ManifestDisagrees { file: MODES_FILE });
+        }
+        Ok(meta)
+    }
+
+    fn load_dir(d: &Path, hex: &str) -> Result<CachedModes, CorruptEntry> {
+        let meta = Self::checked_meta(d, hex)?;
         let freqs: Vec<f64> = read_checked(
             d,
-            "frequencies_hz.npy",
+            FREQUENCIES_FILE,
             &meta.frequencies_blake3,
             &[meta.n_modes as u64],
         )?;
         let (n, m) = (meta.n_dofs, meta.n_modes);
         if freqs.len() != m {
             return Err(CorruptEntry::Shape {
-                file: "frequencies_hz.npy",
+                file: FREQUENCIES_FILE,
                 shape: vec![freqs.len() as u64],
             });
         }
-        let modes = read::read_modes(d, "modes.npy", &meta.modes_blake3, n, m)?;
+        let modes = read::read_modes(d, MODES_FILE, &meta.modes_blake3, n, m)?;
         Ok(CachedModes {
             frequencies_hz: freqs,
             modes,
@@ -751,6 +912,111 @@ mod tests {
         fs::create_dir_all(&tmp).unwrap();
         fs::write(tmp.join("modes.npy"), b"partial").unwrap();
         assert!(matches!(cache.load(&key), CacheLookup::Miss));
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// `meta.json` is checked through the manifest: a relabelled mode family, a changed mode
+    /// count or an edited residual — each still valid JSON naming the right key and hashes —
+    /// is corrupt, and a store replaces the entry.
+    #[test]
+    fn an_edited_meta_json_is_corrupt() {
+        let dir = tmpdir("meta-edit");
+        let cache = ModalCache::new(&dir);
+        let (f, m, meta) = sample();
+        let key = CacheKey::new().str("model", "meta-edit");
+        let entry = cache.store(&key, &f, &m, meta.clone()).unwrap();
+        let path = entry.join(META_FILE);
+        let good = fs::read_to_string(&path).unwrap();
+        let edits = [
+            good.replace("\"bending\"", "\"torsion\""),
+            good.replace("\"n_modes\": 3", "\"n_modes\": 2"),
+            good.replace("1e-12", "1e-11"),
+        ];
+        for edited in edits {
+            assert_ne!(edited, good);
+            fs::write(&path, &edited).unwrap();
+            match cache.load(&key) {
+                CacheLookup::Corrupt(CorruptEntry::HashMismatch { file: META_FILE }) => {}
+                other => panic!("edited meta.json: {other:?}"),
+            }
+        }
+        cache.store(&key, &f, &m, meta).unwrap();
+        assert!(matches!(cache.load(&key), CacheLookup::Hit(_)));
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// An entry without a manifest (one written before manifests) or with a broken one is
+    /// corrupt, never trusted, and is replaced by the next store.
+    #[test]
+    fn an_entry_without_a_valid_manifest_is_corrupt_and_replaced() {
+        let dir = tmpdir("manifest");
+        let cache = ModalCache::new(&dir);
+        let (f, m, meta) = sample();
+        let key = CacheKey::new().str("model", "manifest");
+        let entry = cache.store(&key, &f, &m, meta.clone()).unwrap();
+        let path = entry.join(MANIFEST_FILE);
+        let good = fs::read_to_string(&path).unwrap();
+        assert!(cache.has_entry(&key));
+        fs::remove_file(&path).unwrap();
+        assert!(!cache.has_entry(&key));
+        assert!(matches!(
+            cache.load(&key),
+            CacheLookup::Corrupt(CorruptEntry::NoManifest)
+        ));
+        // The legacy entry is still the cache's: listed (not intact), and replaceable.
+        let listed = cache.entries().unwrap();
+        assert_eq!(listed.len(), 1);
+        assert!(listed[0].readable && !listed[0].intact);
+        cache.store(&key, &f, &m, meta.clone()).unwrap();
+        assert!(matches!(cache.load(&key), CacheLookup::Hit(_)));
+        // One changed digit of a listed hash (seal not updated), and a resealed manifest
+        // whose modes hash disagrees with meta.json's.
+        let first_hash_digit = good.find('\n').unwrap() + 1;
+        let mut edited = good.clone().into_bytes();
+        edited[first_hash_digit] = if edited[first_hash_digit] == b'0' {
+            b'1'
+        } else {
+            b'0'
+        };
+        fs::write(&path, &edited).unwrap();
+        assert!(matches!(
+            cache.load(&key),
+            CacheLookup::Corrupt(CorruptEntry::Manifest { .. })
+        ));
+        let listed = manifest::parse(good.as_bytes()).unwrap();
+        let other_modes = manifest::Listed {
+            modes: "0".repeat(64),
+            ..listed
+        };
+        fs::write(&path, manifest::render(&other_modes)).unwrap();
+        assert!(matches!(
+            cache.load(&key),
+            CacheLookup::Corrupt(CorruptEntry::ManifestDisagrees { file: MODES_FILE })
+        ));
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// The first store tags the directory it creates; an auxiliary file may not take the
+    /// name of one of the entry's own files.
+    #[test]
+    fn the_first_store_tags_the_directory_and_aux_names_stay_clear_of_the_entry() {
+        let dir = tmpdir("tag");
+        let cache = ModalCache::new(&dir);
+        let (f, m, meta) = sample();
+        let key = CacheKey::new().str("model", "tag");
+        cache.store(&key, &f, &m, meta).unwrap();
+        let tag = fs::read_to_string(dir.join(TAG_FILE)).unwrap();
+        assert!(tag.starts_with(&format!("{TAG_SIGNATURE}\n#")), "{tag}");
+        for name in [META_FILE, MANIFEST_FILE, MODES_FILE, FREQUENCIES_FILE] {
+            assert!(matches!(
+                cache.store_aux(&key, name, b"x"),
+                Err(CacheError::AuxName { .. })
+            ));
+        }
+        cache.store_aux(&key, "derived.json", b"[1]").unwrap();
+        let s = cache.survey().unwrap();
+        assert!(s.tagged && s.entries == 1 && s.others.is_empty(), "{s:?}");
+        assert!(matches!(cache.load(&key), CacheLookup::Hit(_)));
         let _ = fs::remove_dir_all(&dir);
     }
 }

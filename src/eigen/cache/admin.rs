@@ -5,16 +5,24 @@
 //! parameter that enters K or M adds an entry, so a cache that is never pruned grows without
 //! bound. An entry's *last use* is the modification time of its `meta.json`, which
 //! [`ModalCache::load`] refreshes on every hit (a read-only cache simply keeps the time of
-//! the store). Removal renames the entry to a hidden `.old-*` directory first and deletes
-//! that, so a concurrent reader sees either the whole entry or a miss, never a partial one.
-//! Hidden `.tmp-*`/`.old-*` directories are the leftovers of interrupted writes or removals;
-//! they are never read and are removed by [`ModalCache::prune`] once older than a day.
+//! the store; the time is no part of the content the manifest hashes). Removal renames the
+//! entry to a hidden `.old-<key>-*` directory first and deletes that, so a concurrent reader
+//! sees either the whole entry or a miss, never a partial one. Hidden
+//! `.tmp-<key>-*`/`.old-<key>-*` directories are the leftovers of interrupted writes or
+//! removals; they are never read and are removed by [`ModalCache::prune`] once older than a
+//! day.
+//!
+//! Only what the cache owns is listed or removed: its entries and leftovers by the rule of
+//! `cache/owned.rs` (a key-named directory with a `meta.json` or manifest holding nothing but
+//! files the cache writes; a leftover named by the cache's own pattern). Any other file or
+//! directory in the cache directory is left alone, whatever the limits.
 
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, SystemTime};
 
-use super::{io_err, CacheError, CacheMeta, ModalCache, TMP_COUNTER};
+use super::owned::{classify, Item};
+use super::{io_err, CacheError, CacheMeta, ModalCache, META_FILE, TMP_COUNTER};
 
 /// Age after which a hidden `.tmp-*`/`.old-*` leftover is removed by [`ModalCache::prune`]
 /// (s): one day, far longer than any write of an entry takes.
@@ -32,6 +40,10 @@ pub struct CacheEntryInfo {
     /// Whether `meta.json` is readable; a broken entry would be reported corrupt by a lookup
     /// and recomputed.
     pub readable: bool,
+    /// Whether the manifest is present and sealed and `meta.json` matches it (the data
+    /// files' hashes are checked by a lookup only). An entry that fails this, one written
+    /// before manifests say, is recomputed on its next lookup.
+    pub intact: bool,
     /// Number of DOFs of the basis (0 when the metadata is unreadable).
     pub n_dofs: usize,
     /// Number of modes (0 when the metadata is unreadable).
@@ -102,8 +114,9 @@ fn age_s(path: &Path, now: SystemTime) -> f64 {
 }
 
 impl ModalCache {
-    /// Every entry of the cache, least recently used first. A cache directory that does not
-    /// exist is empty; hidden leftovers are not entries.
+    /// Every entry of the cache (see the ownership rule of `cache/owned.rs`), least recently
+    /// used first. A cache directory that does not exist is empty; leftovers, the tag and
+    /// anything that is not the cache's are not entries.
     pub fn entries(&self) -> Result<Vec<CacheEntryInfo>, CacheError> {
         let now = SystemTime::now();
         let mut out = Vec::new();
@@ -114,17 +127,19 @@ impl ModalCache {
         };
         for e in rd {
             let e = e.map_err(io_err("read dir", self.dir()))?;
-            let name = e.file_name().to_string_lossy().into_owned();
-            let dir = e.path();
-            if name.starts_with('.') || !dir.is_dir() {
+            if classify(&e) != Item::Entry {
                 continue;
             }
-            let meta_path = dir.join("meta.json");
+            let name = e.file_name().to_string_lossy().into_owned();
+            let dir = e.path();
+            let meta_path = dir.join(META_FILE);
             let meta: Option<CacheMeta> = fs::read(&meta_path)
                 .ok()
                 .and_then(|b| serde_json::from_slice(&b).ok());
             let idle_s = age_s(if meta.is_some() { &meta_path } else { &dir }, now);
+            let intact = Self::checked_meta(&dir, &name).is_ok();
             out.push(CacheEntryInfo {
+                intact,
                 key: name,
                 bytes: dir_bytes(&dir)?,
                 n_dofs: meta.as_ref().map_or(0, |m| m.n_dofs),
@@ -139,8 +154,10 @@ impl ModalCache {
         Ok(out)
     }
 
-    /// Removes the least recently used entries until the policy holds, and hidden leftovers
-    /// older than [`LEFTOVER_AGE_S`]. Each entry is renamed aside before it is deleted.
+    /// Removes the least recently used entries until the policy holds, and leftovers older
+    /// than [`LEFTOVER_AGE_S`]. Each entry is renamed aside before it is deleted. Only the
+    /// entries of [`Self::entries`] and the cache's own leftovers are ever removed; nothing
+    /// else in the directory is touched, whatever the limits.
     pub fn prune(&self, policy: PrunePolicy) -> Result<PruneReport, CacheError> {
         let entries = self.entries()?;
         let mut total: u64 = entries.iter().map(|e| e.bytes).sum();
@@ -182,10 +199,8 @@ impl ModalCache {
         };
         let mut n = 0;
         for e in rd.flatten() {
-            let name = e.file_name().to_string_lossy().into_owned();
             let p = e.path();
-            let hidden = name.starts_with(".tmp-") || name.starts_with(".old-");
-            if hidden && p.is_dir() && age_s(&p, now) > LEFTOVER_AGE_S as f64 {
+            if classify(&e) == Item::Leftover && age_s(&p, now) > LEFTOVER_AGE_S as f64 {
                 fs::remove_dir_all(&p).map_err(io_err("remove", &p))?;
                 n += 1;
             }
@@ -197,7 +212,7 @@ impl ModalCache {
 /// Marks the entry `dir` as used now (its `meta.json`'s modification time). Failures are
 /// ignored: a read-only cache keeps the time of the store.
 pub(super) fn touch(dir: &Path) {
-    if let Ok(f) = fs::File::options().append(true).open(dir.join("meta.json")) {
+    if let Ok(f) = fs::File::options().append(true).open(dir.join(META_FILE)) {
         let _ = f.set_modified(SystemTime::now());
     }
 }
@@ -250,7 +265,7 @@ mod tests {
         assert_eq!(e.len(), 2);
         assert_eq!(e[0].key, b.hex(), "b was used longest ago");
         assert_eq!((e[0].n_dofs, e[0].n_modes, e[0].f_max_hz), (1000, 3, 100.0));
-        assert!(e[0].readable && e[1].readable);
+        assert!(e[0].readable && e[1].readable && e[0].intact && e[1].intact);
         // b's modes alone are 1000 × 3 f64 = 24,000 B of data.
         assert!(e[0].bytes > 24_000 && e[0].bytes < 28_000, "{}", e[0].bytes);
         assert!((e[0].idle_s - 3600.0).abs() < 60.0 && (e[1].idle_s - 100.0).abs() < 60.0);
@@ -311,15 +326,22 @@ mod tests {
         let old = store(&c, "old", 10);
         let new = store(&c, "new", 10);
         set_age(&c, &old, 10 * 86_400);
-        // A broken entry (no meta.json) and an interrupted write's leftover, both old.
-        let broken = d.join("00ff");
+        // A broken entry (key name, unreadable meta.json, no manifest) and an interrupted
+        // write's leftover, both old.
+        let broken_key = CacheKey::new().str("entry", "broken").hex();
+        let broken = d.join(&broken_key);
         fs::create_dir_all(&broken).unwrap();
-        let leftover = d.join(".tmp-00ff-1-1");
+        fs::write(broken.join("meta.json"), b"{\"key\": ").unwrap();
+        let leftover = d.join(format!(".tmp-{broken_key}-1-1"));
         fs::create_dir_all(&leftover).unwrap();
+        fs::write(leftover.join("modes.npy"), b"partial").unwrap();
         let t = SystemTime::now() - Duration::from_secs(3 * 86_400);
         for p in [&broken, &leftover] {
             fs::File::open(p).unwrap().set_modified(t).unwrap();
         }
+        let listed = c.entries().unwrap();
+        let b = listed.iter().find(|e| e.key == broken_key).unwrap();
+        assert!(!b.readable && !b.intact);
         let r = c
             .prune(PrunePolicy {
                 max_idle: Some(Duration::from_secs(86_400)),
@@ -327,11 +349,147 @@ mod tests {
             })
             .unwrap();
         assert_eq!(r.removed.len(), 2, "{r:?}");
-        assert!(r.removed.contains(&old.hex()) && r.removed.contains(&"00ff".to_string()));
+        assert!(r.removed.contains(&old.hex()) && r.removed.contains(&broken_key));
         assert_eq!(r.leftovers_removed, 1);
         assert!(!leftover.exists() && !broken.exists());
         assert!(matches!(
             c.load(&new),
+            crate::eigen::cache::CacheLookup::Hit(_)
+        ));
+        fs::remove_dir_all(d).ok();
+    }
+
+    /// Things a user put into the cache directory: a folder (an `--out` directory), a file,
+    /// a link, a hidden folder, a key-named folder holding a user's file or a subfolder, a
+    /// key-named folder of user files without metadata, and a folder named like a leftover
+    /// that holds a subfolder. All of them old.
+    fn user_items(d: &Path) -> Vec<PathBuf> {
+        let t = SystemTime::now() - Duration::from_secs(400 * 86_400);
+        let k = |s: &str| CacheKey::new().str("user", s).hex();
+        let out = d.join("out");
+        fs::create_dir_all(out.join("plots")).unwrap();
+        fs::write(out.join("forces.csv"), b"t,f\n0,1\n").unwrap();
+        fs::write(d.join("notes.txt"), b"my notes").unwrap();
+        std::os::unix::fs::symlink(&out, d.join("link")).unwrap();
+        fs::create_dir_all(d.join(".git")).unwrap();
+        fs::write(d.join(".git/HEAD"), b"ref").unwrap();
+        let with_file = d.join(k("file"));
+        fs::create_dir_all(&with_file).unwrap();
+        fs::write(with_file.join("meta.json"), b"{}").unwrap();
+        fs::write(with_file.join("thesis.tex"), b"\\section{}").unwrap();
+        let with_dir = d.join(k("dir"));
+        fs::create_dir_all(with_dir.join("data")).unwrap();
+        fs::write(with_dir.join("manifest.b3"), b"mine").unwrap();
+        let no_meta = d.join(k("no-meta"));
+        fs::create_dir_all(&no_meta).unwrap();
+        fs::write(no_meta.join("modes.npy"), b"my array").unwrap();
+        let leftover_like = d.join(format!(".old-{}-1-1", k("old")));
+        fs::create_dir_all(leftover_like.join("keep")).unwrap();
+        let items = vec![
+            out.join("forces.csv"),
+            out.join("plots"),
+            d.join("notes.txt"),
+            d.join("link"),
+            d.join(".git/HEAD"),
+            with_file.join("thesis.tex"),
+            with_dir.join("data"),
+            no_meta.join("modes.npy"),
+            leftover_like.join("keep"),
+        ];
+        for p in [&out, &with_file, &with_dir, &no_meta, &leftover_like] {
+            fs::File::open(p).unwrap().set_modified(t).unwrap();
+        }
+        items
+    }
+
+    /// `prune` with a size limit of 0 and an age limit of 0 removes every entry and leftover
+    /// and nothing else: a user's folders and files in the cache directory survive, and are
+    /// not listed as entries.
+    #[test]
+    fn user_folders_and_files_in_the_cache_survive_any_prune() {
+        let (c, d) = cache("user");
+        let a = store(&c, "a", 10);
+        let b = store(&c, "b", 10);
+        let items = user_items(&d);
+        let leftover = d.join(format!(".old-{}-9-9", a.hex()));
+        fs::create_dir_all(&leftover).unwrap();
+        let t = SystemTime::now() - Duration::from_secs(3 * 86_400);
+        fs::File::open(&leftover).unwrap().set_modified(t).unwrap();
+        let keys: Vec<String> = c.entries().unwrap().into_iter().map(|e| e.key).collect();
+        assert_eq!(keys.len(), 2, "{keys:?}");
+        assert!(keys.contains(&a.hex()) && keys.contains(&b.hex()));
+        let s = c.survey().unwrap();
+        assert_eq!((s.entries, s.leftovers, s.others.len()), (2, 1, 8), "{s:?}");
+        let r = c
+            .prune(PrunePolicy {
+                max_bytes: Some(0),
+                max_idle: Some(Duration::ZERO),
+                dry_run: false,
+            })
+            .unwrap();
+        assert_eq!(r.removed.len(), 2, "{r:?}");
+        assert_eq!((r.leftovers_removed, r.kept_bytes), (1, 0));
+        assert!(!leftover.exists());
+        for p in &items {
+            assert!(
+                fs::symlink_metadata(p).is_ok(),
+                "{} was removed",
+                p.display()
+            );
+        }
+        assert!(c.entries().unwrap().is_empty());
+        assert!(d.join(crate::eigen::cache::TAG_FILE).is_file());
+        fs::remove_dir_all(d).ok();
+    }
+
+    /// A key-named folder that is not the cache's is not replaced by a store either.
+    #[test]
+    fn a_store_does_not_replace_a_folder_that_is_not_an_entry() {
+        let (c, d) = cache("replace");
+        let key = CacheKey::new().str("entry", "taken");
+        let dir = c.entry_dir(&key);
+        fs::create_dir_all(&dir).unwrap();
+        fs::write(dir.join("thesis.tex"), b"mine").unwrap();
+        let (f, m, meta) = crate::eigen::cache::tests::sample();
+        let err = c.store(&key, &f, &m, meta).unwrap_err();
+        assert!(matches!(err, CacheError::NotOurs { .. }), "{err}");
+        assert!(err.to_string().contains(&*dir.to_string_lossy()), "{err}");
+        assert_eq!(fs::read(dir.join("thesis.tex")).unwrap(), b"mine");
+        fs::remove_dir_all(d).ok();
+    }
+
+    /// A directory with other things than entries and no tag is not taken for a cache (nor
+    /// tagged); an empty or missing one, a tagged one and one of entries only are.
+    #[test]
+    fn a_folder_of_other_things_is_not_taken_for_a_cache() {
+        let (c, d) = cache("survey");
+        assert!(c.check_is_cache().is_ok(), "a missing directory");
+        fs::create_dir_all(&d).unwrap();
+        assert!(c.check_is_cache().is_ok(), "an empty directory");
+        fs::create_dir_all(d.join("src")).unwrap();
+        fs::write(d.join("Cargo.toml"), b"[package]").unwrap();
+        let err = c.check_is_cache().unwrap_err();
+        let msg = err.to_string();
+        assert!(matches!(err, CacheError::NotACache { .. }), "{msg}");
+        for s in [&*d.to_string_lossy(), "CACHEDIR.TAG", "`Cargo.toml`, `src`"] {
+            assert!(msg.contains(s), "{msg} lacks {s}");
+        }
+        assert!(!c.tag_if_cache().unwrap());
+        // A store into it works but does not tag the user's folder.
+        let key = store(&c, "a", 10);
+        assert!(!d.join(crate::eigen::cache::TAG_FILE).exists());
+        assert!(c.check_is_cache().is_err());
+        fs::remove_dir_all(d.join("src")).unwrap();
+        fs::remove_file(d.join("Cargo.toml")).unwrap();
+        // A legacy cache (entries only, no tag) is accepted and tagged.
+        let s = c.check_is_cache().unwrap();
+        assert_eq!((s.tagged, s.entries), (false, 1));
+        assert!(c.tag_if_cache().unwrap());
+        fs::write(d.join("notes.txt"), b"x").unwrap();
+        let s = c.check_is_cache().unwrap();
+        assert!(s.tagged && s.others == ["notes.txt"], "{s:?}");
+        assert!(matches!(
+            c.load(&key),
             crate::eigen::cache::CacheLookup::Hit(_)
         ));
         fs::remove_dir_all(d).ok();

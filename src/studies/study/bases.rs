@@ -82,7 +82,7 @@ impl std::fmt::Display for BasisPlan {
 }
 
 fn cached(cache: &ModalCache, key: &CacheKey) -> bool {
-    cache.entry_dir(key).join("meta.json").is_file()
+    cache.has_entry(key)
 }
 
 /// The bases the cases of `study` (`models`, from [`Study::case_models`]) need, counted by
