@@ -80,6 +80,7 @@ impl MeshCmd {
                 SpringKind::Fastening => "fastening",
                 SpringKind::Ballast => "ballast",
                 SpringKind::Hold => "elastic_hold",
+                SpringKind::EndDashpot => "end_dashpot",
             };
             *springs.entry(name.to_string()).or_insert(0) += 1;
         }
@@ -262,6 +263,7 @@ fn write_mesh_vtu(
                 SpringKind::Fastening => 3.0,
                 SpringKind::Ballast => 4.0,
                 SpringKind::Hold => 5.0,
+                SpringKind::EndDashpot => 6.0,
             });
         }
     }

@@ -193,4 +193,8 @@ pub struct PassageRecord {
     pub steps: usize,
     /// Wall time of the dynamic phase (s).
     pub seconds: f64,
+    /// Steps whose track damping product ran on a second thread beside the contact step (−;
+    /// 0 without [`crate::dynamics::passage::PassageOptions::overlap`], with one thread, on the
+    /// explicit path, or while the machine was oversubscribed). The results do not depend on it.
+    pub split_steps: usize,
 }

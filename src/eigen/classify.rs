@@ -661,6 +661,8 @@ impl TrackClassifier {
                     // An elastic hold is part of the fastening.
                     SpringKind::Fastening | SpringKind::Hold => ef += s.energy(u),
                     SpringKind::Ballast => eb += s.energy(u),
+                    // damping only: no strain energy
+                    SpringKind::EndDashpot => {}
                 }
             }
             let energy = TrackEnergyShares::from_energies([e[0], e[1], ef, eb]);

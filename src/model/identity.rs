@@ -6,7 +6,8 @@
 //! - [`IdentityScope::Modes`]: the sections that K and M read. It leaves out the contact,
 //!   wear and explicit sections; the speed, the passage's `run.fmax` (keyed separately by the
 //!   cache) and the residual-flexibility switches; and every damper (railpads, ballast,
-//!   elastic holds, primary suspension, the wheel's modal damping ratio): dampers enter C only,
+//!   elastic holds, the rail ends' dashpots, primary suspension, the wheel's modal damping
+//!   ratio): dampers enter C only,
 //!   so a damping or speed study reuses the modes.
 //! - [`IdentityScope::Track`]: `Modes` without the wheel, the vehicle and the wheel's mesh
 //!   keys (the track is built without them).
@@ -89,6 +90,12 @@ fn remove_non_structural(o: &mut Object) {
             run.remove(k);
         }
     }
+    // the rail ends' dashpots enter C only
+    if let Some(t) = o.get_mut("track").and_then(|r| r.as_object_mut()) {
+        for k in ["ends", "absorbing_layer_length", "absorbing_layer_rate"] {
+            t.remove(k);
+        }
+    }
     for part in ["fastening", "ballast"] {
         if let Some(f) = o.get_mut(part).and_then(|r| r.as_object_mut()) {
             f.retain(|k, _| !k.ends_with("damping"));
@@ -155,6 +162,17 @@ mod tests {
         assert_eq!(run_key(&with(&[])).unwrap(), run_key(&with(&[])).unwrap());
     }
 
+    /// The rail-end keys at their defaults are not written, so the identities (and with them
+    /// the cache keys and resume keys) of models that do not set them are those of the
+    /// program before the keys existed.
+    #[test]
+    fn default_rail_ends_leave_the_identity_as_it_was() {
+        let v = serde_json::to_value(&with(&[]).track).unwrap();
+        assert_eq!(v, serde_json::json!({"bays": 16, "sleeper_spacing": 0.6}));
+        let v = serde_json::to_value(&with(&["track.ends=\"free\""]).track).unwrap();
+        assert_eq!(v, serde_json::json!({"bays": 16, "sleeper_spacing": 0.6}));
+    }
+
     #[test]
     fn damping_and_speed_change_the_run_but_not_the_modes() {
         let base = with(&[]);
@@ -167,6 +185,12 @@ mod tests {
             &["run.rest_start_distance=0.2"][..],
             &["run.wheel_residual_flexibility=false"][..],
             &["run.creepage=increment"][..],
+            &["track.ends=\"absorbing\""][..],
+            &[
+                "track.ends=\"absorbing\"",
+                "track.absorbing_layer_length=2.0",
+                "track.absorbing_layer_rate=5e3",
+            ][..],
         ] {
             let m = with(set);
             assert!(!same(&base, &m, IdentityScope::Run), "{set:?}");

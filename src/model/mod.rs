@@ -256,6 +256,79 @@ pub struct Track {
     pub bays: usize,
     /// Sleeper spacing, centre to centre (m), 0.2 to 2; default model 0.6.
     pub sleeper_spacing: f64,
+    /// Boundary condition at both rail ends (docs/theory.md §3.7): `"free"` (default; the
+    /// ends reflect every wave) or `"absorbing"` (viscous dashpots on the end faces matched to
+    /// the rail's wave impedances, so that waves leave the model). Enters the damping only:
+    /// the modes, and their cache, do not depend on it.
+    #[serde(default, skip_serializing_if = "RailEnds::is_free")]
+    pub ends: RailEnds,
+    /// With `ends = "absorbing"`: length of the absorbing layer at each rail end (m), 0 to 10,
+    /// default [`DEFAULT_ABSORBING_LAYER_M`]; 0 = the end-face dashpots alone. The layers must
+    /// lie outside the wheel's travel.
+    #[serde(
+        default = "default_absorbing_layer",
+        skip_serializing_if = "is_default_absorbing_layer"
+    )]
+    pub absorbing_layer_length: f64,
+    /// With `ends = "absorbing"`: the layer's largest damping rate α_max (1/s), 0 to 1e6,
+    /// default [`DEFAULT_ABSORBING_LAYER_RATE`]: grounded dashpots in y and z of `α(d) m_i` on
+    /// every rail node of mass `m_i` in the layer, `α(d) = α_max (1 − d/L)²` at distance `d`
+    /// from the end face.
+    #[serde(
+        default = "default_absorbing_layer_rate",
+        skip_serializing_if = "is_default_absorbing_layer_rate"
+    )]
+    pub absorbing_layer_rate: f64,
+}
+
+/// Default `track.absorbing_layer_length` (m): about one vertical bending wavelength of the
+/// UIC54 rail at 300 Hz, the band's lower edge (docs/theory.md §3.7).
+pub const DEFAULT_ABSORBING_LAYER_M: f64 = 2.4;
+/// Default `track.absorbing_layer_rate` (1/s): with the default length, a quadratic ramp to
+/// it reflects at most 0.3 % of a vertical bending wave's energy over 0.3–3 kHz on a
+/// Euler–Bernoulli rail (docs/theory.md §3.7).
+pub const DEFAULT_ABSORBING_LAYER_RATE: f64 = 1.0e4;
+
+fn default_absorbing_layer() -> f64 {
+    DEFAULT_ABSORBING_LAYER_M
+}
+fn is_default_absorbing_layer(x: &f64) -> bool {
+    *x == DEFAULT_ABSORBING_LAYER_M
+}
+fn default_absorbing_layer_rate() -> f64 {
+    DEFAULT_ABSORBING_LAYER_RATE
+}
+fn is_default_absorbing_layer_rate(x: &f64) -> bool {
+    *x == DEFAULT_ABSORBING_LAYER_RATE
+}
+
+/// Boundary condition at the rail's two end faces (docs/theory.md §3.7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RailEnds {
+    /// Traction-free end faces: every wave reflects.
+    #[default]
+    Free,
+    /// Dashpots to the ground at every end-face node, per tributary area `A_i`: normal (x)
+    /// `ρ c_b A_i` with the bar speed `c_b = √(E/ρ)`, tangential (y, z) `ρ c_s A_i` with the
+    /// shear speed `c_s = √(G/ρ)`: the impedances of the rail's longitudinal wave and the
+    /// high-frequency limit of its bending waves.
+    Absorbing,
+}
+
+impl RailEnds {
+    /// Whether the ends are free (the default, left out when a model is written).
+    pub fn is_free(&self) -> bool {
+        *self == RailEnds::Free
+    }
+
+    /// The model-file name: `free`, `absorbing`.
+    pub fn name(self) -> &'static str {
+        match self {
+            RailEnds::Free => "free",
+            RailEnds::Absorbing => "absorbing",
+        }
+    }
 }
 
 /// Rail.

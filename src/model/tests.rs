@@ -530,3 +530,20 @@ fn creepage_key_is_read_defaulted_and_checked() {
     assert!(e.contains("creepage"), "{e}");
     assert!(e.contains("velocity") && e.contains("increment"), "{e}");
 }
+
+/// An absorbing layer that would reach into the wheel's travel is refused, naming the key and
+/// the room the track leaves; the default track leaves room for the default layer.
+#[test]
+fn an_absorbing_layer_in_the_wheels_travel_is_refused() {
+    assert!(dutch_with(&["track.ends=\"absorbing\""]).is_ok());
+    let e = err_text(dutch_with(&[
+        "track.ends=\"absorbing\"",
+        "track.absorbing_layer_length=4.5",
+    ]));
+    assert!(e.contains("track.absorbing_layer_length"), "{e}");
+    assert!(e.contains("wheel's travel"), "{e}");
+    let e = err_text(dutch_with(&["track.absorbing_layer_rate=-1"]));
+    assert!(e.contains("track.absorbing_layer_rate"), "{e}");
+    let e = err_text(dutch_with(&["track.ends=\"sponge\""]));
+    assert!(e.contains("track.ends") || e.contains("ends"), "{e}");
+}

@@ -29,6 +29,7 @@ impl Model {
             room,
             "m (zone must fit on the track)",
         )?;
+        self.validate_ends(&mut c)?;
         Ok(())
     }
 
@@ -37,6 +38,44 @@ impl Model {
         let t = &self.track;
         c.int("track.bays", t.bays, 2, 400)?;
         c.range("track.sleeper_spacing", t.sleeper_spacing, 0.2, 2.0, "m")?;
+        c.range(
+            "track.absorbing_layer_length",
+            t.absorbing_layer_length,
+            0.0,
+            10.0,
+            "m",
+        )?;
+        c.range(
+            "track.absorbing_layer_rate",
+            t.absorbing_layer_rate,
+            0.0,
+            1e6,
+            "1/s",
+        )?;
+        Ok(())
+    }
+
+    /// With absorbing rail ends: each end's absorbing layer lies outside the wheel's travel
+    /// (from its start to the solution zone's end, the zone centred on the track).
+    fn validate_ends(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
+        let t = &self.track;
+        if t.ends != RailEnds::Absorbing {
+            return Ok(());
+        }
+        let length = self.track_length();
+        let zone_start = 0.5 * (length - self.run.solution_zone_length);
+        let wheel_start = (zone_start - self.run.solution_zone_offset).max(0.0);
+        let room = wheel_start.min(length - zone_start - self.run.solution_zone_length);
+        if t.absorbing_layer_length > room {
+            return c.fail(
+                "track.absorbing_layer_length",
+                t.absorbing_layer_length.to_string(),
+                format!(
+                    "0 to {room:.3} m on this track: the layer at each end must lie outside the wheel's travel ({wheel_start:.3} to {:.3} m of a {length:.3} m track); lengthen the track (track.bays) or shorten the layer or run.solution_zone_offset",
+                    zone_start + self.run.solution_zone_length
+                ),
+            );
+        }
         Ok(())
     }
 

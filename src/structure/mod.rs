@@ -13,6 +13,7 @@
 //! of a solid: point supports make the stiffness grow without bound under refinement
 //! (docs/theory.md §3.3).
 
+pub mod ends;
 pub mod layout;
 pub mod track;
 pub mod wheel;
@@ -37,6 +38,12 @@ pub enum StructureError {
     /// Element or assembly failure.
     #[error(transparent)]
     Fe(#[from] crate::fe::FeError),
+    /// The complex harmonic matrix of an end-reflection test could not be built.
+    #[error("end reflection: the harmonic matrix")]
+    HarmonicMatrix(#[source] faer::sparse::CreationError),
+    /// The complex harmonic matrix of an end-reflection test could not be factorised.
+    #[error("end reflection: the harmonic LU factorisation")]
+    HarmonicLu(#[source] faer::sparse::linalg::LuError),
     /// A fastening footprint cell not fully covered by rail-foot nodes.
     #[error("supports: fastening cell (row {row}, column {column}) at x = {x_m} m is not covered by rail-foot nodes (covered {covered_m2:e} of {cell_m2:e} m²): the footprint must lie on the rail foot")]
     CellNotCovered {

@@ -18,6 +18,8 @@
 //!   grid-point nodes). As k → ∞ they approach the rigid hold of the same region.
 //! - **Ballast**: per half sleeper, stiffness and damping in x, y, z spread over the
 //!   bottom-face nodes by tributary area, to the ground.
+//! - **Rail ends**: free, or absorbing by dashpots on the end faces (`track.ends`,
+//!   [`super::ends`]).
 
 use std::time::Instant;
 
@@ -30,7 +32,9 @@ use crate::mesh::rail::{extrude_rail, RailTopology};
 use crate::mesh::section::{SectionMesh, SectionParams};
 use crate::mesh::sleeper::{half_sleeper, SleeperParams, SleeperTopology};
 use crate::mesh::Mesh;
-use crate::model::{HoldPattern, Model, RigidRegion};
+use crate::model::{HoldPattern, Model, RailEnds, RigidRegion};
+
+use super::ends::end_dashpots;
 
 use super::layout::{tributary_lengths, Layout, GEOMETRY_TOLERANCE};
 use super::StructureError;
@@ -49,6 +53,9 @@ pub enum SpringKind {
     Ballast,
     /// An elastic hold of the fastening (rail foot to ground, one direction).
     Hold,
+    /// A dashpot of an absorbing rail end (end-face node to ground, damping only;
+    /// [`super::ends`]).
+    EndDashpot,
 }
 
 /// The track substructure, before assembly.
@@ -108,6 +115,17 @@ impl TrackStructure {
             &mut springs,
             &mut spring_kinds,
         )?;
+
+        if m.track.ends == RailEnds::Absorbing {
+            let d = end_dashpots(
+                &rail,
+                &m.rail_material(),
+                m.track.absorbing_layer_length,
+                m.track.absorbing_layer_rate,
+            );
+            spring_kinds.extend(std::iter::repeat_n(SpringKind::EndDashpot, d.len()));
+            springs.extend(d);
+        }
 
         let held = held_dofs(&hold, &layout, &rail)?;
         let dofmap = DofMap::with_constraints(mesh.nodes.len(), &held)?;

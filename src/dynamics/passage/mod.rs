@@ -95,8 +95,9 @@ pub struct PassageOptions {
     pub rail_point_offset_m: Option<f64>,
     /// Run the track's implicit damping product on a second core beside the contact step
     /// (module `overlap`; for a passage that runs alone: it adds the damping products of
-    /// the node planes the contact crosses, about a third more of that product's CPU, and
-    /// the second core spins at 100 % while the time loop runs, module `spin`; it is used
+    /// the node planes the contact crosses, about a third more of that product's CPU; the
+    /// second thread waits by spinning for at most 1 ms, then parks, and the passage falls
+    /// back to one thread while the machine is oversubscribed, module `spin`; it is used
     /// when the thread pool has at least two threads, e.g. not with `RAYON_NUM_THREADS=1`).
     /// The results do not depend on the thread count, and differ from those without it by
     /// the rounding of the split single-precision products. Default `false` (sweeps and

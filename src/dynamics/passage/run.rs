@@ -23,8 +23,10 @@ impl PassageEngine {
             p.total(k.n_steps as u64);
             p.done(0);
         }
-        // with the overlap and a second thread allowed, a spinning worker takes the damping
-        // product beside each contact step (module `spin`)
+        // with the overlap and a second thread allowed, a worker thread takes the damping
+        // product beside each contact step while it has a core (module `spin`: bounded
+        // spinning, then parking; a job not started in time is taken back; one thread while
+        // the machine is oversubscribed)
         let two_cores = s.overlap.is_some() && rayon::current_num_threads() >= 2;
         let mut run = |pair: Option<&SpinPair>| -> Result<(), DynamicsError> {
             for n in 1..=k.n_steps {
@@ -35,12 +37,18 @@ impl PassageEngine {
             }
             Ok(())
         };
-        if two_cores {
-            std::thread::scope(|sc| run(SpinPair::start(sc).as_ref()))?;
+        let split_steps = if two_cores {
+            std::thread::scope(|sc| {
+                let pair = SpinPair::start(sc);
+                run(pair.as_ref()).map(|()| pair.map_or(0, |p| p.counts().split as usize))
+            })?
         } else {
             run(None)?;
-        }
-        Ok(self.passage_record(s, &k, t_wall.elapsed().as_secs_f64()))
+            0
+        };
+        let mut rec = self.passage_record(s, &k, t_wall.elapsed().as_secs_f64());
+        rec.split_steps = split_steps;
+        Ok(rec)
     }
 
     /// The start of a passage at `speed_m_per_s` (m/s) over `profile`: the contact at the
@@ -191,6 +199,7 @@ impl PassageEngine {
             static_approach_m,
             steps: k.n_steps,
             seconds,
+            split_steps: 0,
         }
     }
 }

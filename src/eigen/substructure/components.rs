@@ -193,6 +193,7 @@ pub(super) fn attachment_groups(
             SpringKind::Fastening => 0u8,
             SpringKind::Ballast => 1,
             SpringKind::Hold => 2,
+            SpringKind::EndDashpot => 3,
         };
         for &(dof, _) in s.side_a.iter().chain(&s.side_b) {
             let Some(free) = track.dofmap.free_index(dof) else {

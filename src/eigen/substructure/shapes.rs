@@ -307,6 +307,8 @@ fn energy_shares(
                     // An elastic hold is part of the fastening.
                     SpringKind::Fastening | SpringKind::Hold => ef += e,
                     SpringKind::Ballast => eb += e,
+                    // damping only: no strain energy
+                    SpringKind::EndDashpot => {}
                 }
             }
             TrackEnergyShares::from_energies([solid[j][0], solid[j][1], ef, eb])

@@ -667,6 +667,7 @@ impl<'a> Stepper<'a> {
                 static_approach_m: self.static_approach_m,
                 steps: p.n_steps,
                 seconds,
+                split_steps: 0,
             },
             info,
         }
