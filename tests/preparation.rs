@@ -57,7 +57,10 @@ fn a_warm_preparation_gives_the_cold_ones_passage() {
     assert!(!cold.cached && warm.cached);
     let aux = std::fs::read_dir(&dir)
         .unwrap()
-        .flat_map(|e| std::fs::read_dir(e.unwrap().path()).unwrap())
+        // the cache's entries (directories; the cache's own `CACHEDIR.TAG` is a file)
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .flat_map(|p| std::fs::read_dir(p).unwrap())
         .filter(|f| {
             let name = f.as_ref().unwrap().file_name();
             name.to_string_lossy().starts_with("wheel-residual-")
