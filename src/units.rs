@@ -27,7 +27,7 @@ pub fn ms_to_kmh(ms: f64) -> f64 {
 /// 60.00000000000001 of a round trip through m/s), and [`Speed::m_per_s`] of one built with
 /// [`Speed::from_m_per_s`] is exactly its m/s. The other unit is converted once, here.
 ///
-/// Valid range: finite and positive; the model and the sweeps accept 1 to 500 km/h
+/// Valid range: finite and positive; the model and the sweeps accept 40 to 500 km/h
 /// (`crate::model::SPEED_KMH`) and check it where the speed is read.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Speed {

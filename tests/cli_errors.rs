@@ -389,7 +389,7 @@ fn a_wheel_that_leaves_the_rail_is_an_error_not_zero_forces() {
 
 #[test]
 fn a_sweep_beyond_the_model_speed_limit_is_refused() {
-    // run.speed_kmh allows 1 to 500 km/h; `sweep --speeds 600` ran anyway.
+    // run.speed_kmh allows 40 to 500 km/h; `sweep --speeds 600` ran anyway.
     assert_clean_error(
         &[
             "sweep",
@@ -398,7 +398,7 @@ fn a_sweep_beyond_the_model_speed_limit_is_refused() {
             "--out",
             "/nonexistent/never-written",
         ],
-        &["--speeds", "600", "1 to 500 km/h"],
+        &["--speeds", "600", "40 to 500 km/h"],
     );
 }
 

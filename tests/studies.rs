@@ -113,6 +113,7 @@ fn summary(
         fn_psd: spectrum(speed_kmh, f_fn, 3.0),
         steps: 1000,
         seconds: 0.25 + speed_kmh * 1e-3,
+        contact_grid_widened: None,
     }
 }
 

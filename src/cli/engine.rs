@@ -76,8 +76,9 @@ pub fn runner_for(model: &Model, cache: Option<&Path>) -> anyhow::Result<Box<dyn
 
 /// The growth loop of one study case (`growth = true` in a study file): the trial-amplitude
 /// procedure at the model's speed with the default amplitudes 10, 40, 80, 160 µm; columns
-/// `limiting_amplitude_um` (0 when no amplitude grows consistently) and
-/// `consistent_amplitudes` (how many of the four grow consistently).
+/// `limiting_amplitude_um` (0 when no amplitude grows consistently),
+/// `consistent_amplitudes` (how many of the four grow consistently) and, when any of its
+/// passages ran on a widened contact grid, `widened_contact_grids` (how many).
 /// The runner's loaded modal bases are reused when it is a [`PreparedModel`]; otherwise the
 /// model is prepared from the cache in `cache` (default cache directory when `None`).
 pub fn study_growth(
@@ -117,5 +118,11 @@ pub fn study_growth(
         "consistent_amplitudes".to_string(),
         g.amplitudes.iter().filter(|a| a.grows_consistently).count() as f64,
     );
+    // passages rerun on a widened contact grid (docs/theory.md §6.8): a column only when some
+    // case has one
+    let widened = corrugation::studies::grow::widened_contact_grids(&g).len();
+    if widened > 0 {
+        out.insert("widened_contact_grids".to_string(), widened as f64);
+    }
     Ok(out)
 }

@@ -116,6 +116,13 @@ fn print_growth(j: &GrowJson) {
             sig(j.fn_band_rms_n[i], 3)
         );
     }
+    for w in &j.widened_contact_grids {
+        println!(
+            "  {}: the contact patch reached the boundary of the model's contact grid; the passage ran on {}",
+            corrugation::studies::grow::widened_passage_name(w.amplitude_um),
+            w.grid
+        );
+    }
     match j.limiting_amplitude_um {
         Some(a) => println!("  limiting amplitude (2A_max)_l = {} µm", sig(a, 4)),
         None => println!(

@@ -157,6 +157,7 @@ pub fn summarise_at(rec: &PassageRecord, speed: Speed) -> Result<PassageSummary,
         fn_components: fnn.peaks,
         steps: rec.steps,
         seconds: rec.seconds,
+        contact_grid_widened: rec.contact_grid_widened,
     })
 }
 

@@ -653,7 +653,7 @@ pub fn static_state(
         model.contact.traction_coefficient * w,
         frame.n[1] / engine.wheel_radius_m(),
     ];
-    let mut contact = super::setup::passage_contact(model, v, None)?;
+    let mut contact = super::setup::passage_contact(model, v, None, Default::default())?;
     contact
         .set_series_compliance(engine.series_compliance())
         .map_err(|source| DynamicsError::Contact {

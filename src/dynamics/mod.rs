@@ -60,6 +60,17 @@ pub enum DynamicsError {
         /// The contact error (says what to change).
         source: crate::contact::ContactError,
     },
+    /// The contact patch still reached the boundary of the contact grid after the passage
+    /// was rerun on the widest grid [`setup::run_widening_grid`] tries.
+    #[error("the contact patch still reaches the contact grid's boundary ({edge}) after the passage was rerun on grids widened {widenings} times (by 1.25 each) along it: {reason}")]
+    GridOutgrown {
+        /// Widenings tried along that edge's direction (−).
+        widenings: u32,
+        /// The edge reached (`"x"` or `"y"`).
+        edge: &'static str,
+        /// The last passage's error, with the model keys to change.
+        reason: String,
+    },
     /// The passage diverged (non-finite state).
     #[error("the passage diverged at t = {t_s:.6} s (x = {x_m:.4} m): {what}; lower contact.grid_nx's time step (raise grid_nx) or run.fmax")]
     Diverged {

@@ -197,4 +197,8 @@ pub struct PassageRecord {
     /// 0 without [`crate::dynamics::passage::PassageOptions::overlap`], with one thread, on the
     /// explicit path, or while the machine was oversubscribed). The results do not depend on it.
     pub split_steps: usize,
+    /// The contact grid the passage ran on when its contact patch reached the boundary of
+    /// the model's grid and it was rerun on a wider one
+    /// ([`crate::dynamics::setup::run_widening_grid`]); `None` on the model's grid.
+    pub contact_grid_widened: Option<crate::dynamics::setup::WidenedGrid>,
 }

@@ -34,9 +34,269 @@ pub fn grid_for_profile(grid: GridSpec, radius_x_m: f64, approach_m: f64, ptp_m:
     }
 }
 
+/// The factor on a contact grid's half-length per widening (−), see [`widen_grid`].
+pub const GRID_WIDENING: f64 = 1.25;
+
+/// The most widenings of a passage's contact grid per direction (−): up to
+/// `1.25⁴ ≈ 2.4` times the half-length of the model's grid (and as many reruns).
+pub const MAX_GRID_WIDENINGS: u32 = 4;
+
+/// How many times a passage's contact grid is widened along x and along y beyond the grid of
+/// [`passage_contact`] ([`widen_grid`]); the default, none, is the model's grid.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GridWidening {
+    /// Widenings along x (rolling direction).
+    pub x: u32,
+    /// Widenings along y (lateral).
+    pub y: u32,
+}
+
+impl GridWidening {
+    /// Whether the grid is widened at all.
+    pub fn any(&self) -> bool {
+        self.x > 0 || self.y > 0
+    }
+}
+
+/// `grid` widened `w.x` times along x and `w.y` times along y: each widening lengthens the
+/// half-length by [`GRID_WIDENING`] at the **same element size** (so the same time step
+/// `Δx/V` and resolution), with an even number of elements added, half on either side, so
+/// that the elements of `grid` keep their places and the widened grid only adds room around
+/// them. A direction not widened is left exactly as it is.
+pub fn widen_grid(grid: GridSpec, w: GridWidening) -> GridSpec {
+    // (elements, half-length) after k widenings of n elements of size d
+    let widen = |n: usize, half: f64, d: f64, k: u32| -> (usize, f64) {
+        if k == 0 {
+            return (n, half);
+        }
+        let extra = (0.5 * n as f64 * (GRID_WIDENING.powi(k as i32) - 1.0)).ceil() as usize;
+        let n = n + 2 * extra.max(1);
+        (n, 0.5 * n as f64 * d)
+    };
+    let (nx, half_length_x_m) = widen(grid.nx, grid.half_length_x_m, grid.dx(), w.x);
+    let (ny, half_length_y_m) = widen(grid.ny, grid.half_length_y_m, grid.dy(), w.y);
+    GridSpec {
+        nx,
+        ny,
+        half_length_x_m,
+        half_length_y_m,
+    }
+}
+
+/// The edge (`"x"` or `"y"`) at which the contact patch of a failed passage reached its grid,
+/// if that is why it failed.
+pub fn patch_at_grid_edge(e: &DynamicsError) -> Option<&'static str> {
+    match e {
+        DynamicsError::Contact {
+            source: crate::contact::ContactError::PatchAtGridEdge { edge },
+            ..
+        } => Some(edge),
+        _ => None,
+    }
+}
+
+/// The contact grid a passage ran on when it was widened ([`run_widening_grid`]): the
+/// patch reached the boundary of the grid of [`passage_contact`] (under a dynamic load above
+/// what `contact.grid_margin` leaves room for, e.g. over a deep corrugation) and the passage
+/// was rerun on this one.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct WidenedGrid {
+    /// Widenings along x and y (−), each by [`GRID_WIDENING`] in half-length.
+    pub widenings: [u32; 2],
+    /// Elements along x and y (−).
+    pub elements: [usize; 2],
+    /// Half-lengths along x and y (m).
+    pub half_lengths_m: [f64; 2],
+}
+
+impl WidenedGrid {
+    /// The widened grid `grid` after the widenings `w`.
+    pub fn new(grid: &GridSpec, w: GridWidening) -> Self {
+        WidenedGrid {
+            widenings: [w.x, w.y],
+            elements: [grid.nx, grid.ny],
+            half_lengths_m: [grid.half_length_x_m, grid.half_length_y_m],
+        }
+    }
+}
+
+impl std::fmt::Display for WidenedGrid {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let widened: Vec<String> = ["x", "y"]
+            .iter()
+            .zip(self.widenings)
+            .filter(|(_, k)| *k > 0)
+            .map(|(d, k)| format!("by {:.2} along {d}", GRID_WIDENING.powi(k as i32)))
+            .collect();
+        write!(
+            f,
+            "a contact grid of {} × {} elements, ±{:.2} × ±{:.2} mm (widened {} at the same element size)",
+            self.elements[0],
+            self.elements[1],
+            1e3 * self.half_lengths_m[0],
+            1e3 * self.half_lengths_m[1],
+            widened.join(" and ")
+        )
+    }
+}
+
+/// Runs a passage (`passage(widening)`) on the grid of [`passage_contact`] and, each time its
+/// contact patch reaches the grid's boundary ([`patch_at_grid_edge`] of the error `dynamics`
+/// finds in it), once more from the start on a grid widened along that edge
+/// ([`widen_grid`]), at most [`MAX_GRID_WIDENINGS`] times per direction; a passage that never
+/// reaches the boundary runs once, on the model's grid, exactly as without this. `on_rerun(edge,
+/// widening)` is told before each rerun. Returns the result and its widening; a passage that
+/// still reaches the boundary after the last widening returns
+/// [`DynamicsError::GridOutgrown`] (through `outgrown`).
+pub fn run_widening_grid<T, E>(
+    mut passage: impl FnMut(GridWidening) -> Result<T, E>,
+    dynamics: impl Fn(&E) -> Option<&DynamicsError>,
+    outgrown: impl FnOnce(DynamicsError) -> E,
+    mut on_rerun: impl FnMut(&'static str, GridWidening),
+) -> Result<(T, GridWidening), E> {
+    let mut w = GridWidening::default();
+    loop {
+        let e = match passage(w) {
+            Ok(r) => return Ok((r, w)),
+            Err(e) => e,
+        };
+        let Some(edge) = dynamics(&e).and_then(patch_at_grid_edge) else {
+            return Err(e);
+        };
+        let k = if edge == "x" { &mut w.x } else { &mut w.y };
+        if *k >= MAX_GRID_WIDENINGS {
+            let reason = dynamics(&e).map_or_else(String::new, ToString::to_string);
+            return Err(outgrown(DynamicsError::GridOutgrown {
+                widenings: MAX_GRID_WIDENINGS,
+                edge,
+                reason,
+            }));
+        }
+        *k += 1;
+        on_rerun(edge, w);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A widened grid keeps its element size and the places of the model grid's elements; a
+    /// direction not widened stays bit for bit; 1.25 per widening in half-length, at least.
+    #[test]
+    fn widened_grid_keeps_element_size_and_places() {
+        let g = GridSpec {
+            nx: 45,
+            ny: 24,
+            half_length_x_m: 10.03e-3,
+            half_length_y_m: 7.54e-3,
+        };
+        assert_eq!(widen_grid(g, GridWidening::default()), g);
+        for (wx, wy) in [(0, 1), (1, 0), (2, 3), (4, 4)] {
+            let w = widen_grid(g, GridWidening { x: wx, y: wy });
+            for (n0, n1, h0, h1, d0, d1, k) in [
+                (
+                    g.nx,
+                    w.nx,
+                    g.half_length_x_m,
+                    w.half_length_x_m,
+                    g.dx(),
+                    w.dx(),
+                    wx,
+                ),
+                (
+                    g.ny,
+                    w.ny,
+                    g.half_length_y_m,
+                    w.half_length_y_m,
+                    g.dy(),
+                    w.dy(),
+                    wy,
+                ),
+            ] {
+                if k == 0 {
+                    assert_eq!((n1, h1), (n0, h0));
+                    continue;
+                }
+                assert_eq!((n1 - n0) % 2, 0, "{n0} → {n1}");
+                assert!((d1 - d0).abs() < 1e-12 * d0, "element size {d0} → {d1}");
+                assert!(h1 >= GRID_WIDENING.powi(k as i32) * h0 * (1.0 - 1e-12));
+                assert!(h1 < GRID_WIDENING.powi(k as i32) * h0 + 2.0 * d0);
+            }
+            // the model grid's first element centre is an element centre of the widened grid
+            let e = (w.nx - g.nx) / 2;
+            assert!((w.x(e) - g.x(0)).abs() < 1e-12);
+            let e = (w.ny - g.ny) / 2;
+            assert!((w.y(e) - g.y(0)).abs() < 1e-12);
+        }
+    }
+
+    /// The rerun rule: a passage that never reaches the grid's edge runs once on the model's
+    /// grid; each edge reached widens that direction once; other errors pass through; the
+    /// last widening that still reaches it is an error naming the widenings.
+    #[test]
+    fn passages_rerun_on_a_widened_grid_only_when_the_patch_reaches_its_edge() {
+        let edge = |edge| DynamicsError::Contact {
+            t_s: 0.0,
+            x_m: 0.0,
+            source: crate::contact::ContactError::PatchAtGridEdge { edge },
+        };
+        fn dynamics(e: &DynamicsError) -> Option<&DynamicsError> {
+            Some(e)
+        }
+        let mut calls = Vec::new();
+        let r = run_widening_grid(
+            |w| {
+                calls.push(w);
+                Ok::<_, DynamicsError>(1)
+            },
+            dynamics,
+            |e| e,
+            |_, _| panic!("no rerun"),
+        );
+        assert_eq!(r.unwrap(), (1, GridWidening::default()));
+        assert_eq!(calls, [GridWidening::default()]);
+        // y, then x, then runs
+        let mut reruns = Vec::new();
+        let (_, w) = run_widening_grid(
+            |w| match (w.x, w.y) {
+                (0, 0) => Err(edge("y")),
+                (0, 1) => Err(edge("x")),
+                _ => Ok(()),
+            },
+            dynamics,
+            |e| e,
+            |e, w| reruns.push((e, w)),
+        )
+        .unwrap();
+        assert_eq!(w, GridWidening { x: 1, y: 1 });
+        assert_eq!(
+            reruns,
+            [
+                ("y", GridWidening { x: 0, y: 1 }),
+                ("x", GridWidening { x: 1, y: 1 })
+            ]
+        );
+        // another error is not retried
+        let e = run_widening_grid(
+            |_| Err::<(), _>(DynamicsError::MissingNodes { what: "x" }),
+            dynamics,
+            |e| e,
+            |_, _| panic!("no rerun"),
+        );
+        assert!(matches!(e, Err(DynamicsError::MissingNodes { .. })));
+        // the edge reached every time: MAX_GRID_WIDENINGS reruns, then the error
+        let mut n = 0;
+        let e = run_widening_grid(|_| Err::<(), _>(edge("y")), dynamics, |e| e, |_, _| n += 1)
+            .unwrap_err();
+        assert_eq!(n, MAX_GRID_WIDENINGS);
+        let msg = e.to_string();
+        assert!(matches!(e, DynamicsError::GridOutgrown { .. }), "{msg}");
+        assert!(
+            msg.contains("contact.grid_margin") && msg.contains("(y)"),
+            "{msg}"
+        );
+    }
 
     /// The reference contact (R 0.46 m on the R300 crown, 100 kN: a = 7.162 mm, δ_H = 104.1
     /// µm) on the default grid (44 elements, margin 1.4): closed-form half-length
@@ -208,18 +468,34 @@ pub fn contact_config_for(
 
 /// The transient contact of a passage of `model` at `speed_m_per_s` (m/s, finite and > 0):
 /// [`contact_config_for`], with the grid lengthened for a rail profile `(profile, static Hertz
-/// approach (m))` by [`grid_for_profile`]. The reduced and the explicit passage use it alike.
+/// approach (m))` by [`grid_for_profile`], then widened by `widening` ([`widen_grid`]; the
+/// default leaves it). The reduced and the explicit passage use it alike.
 pub fn passage_contact(
     model: &Model,
     speed_m_per_s: f64,
     profile: Option<(&RailProfile, f64)>,
+    widening: GridWidening,
 ) -> Result<TransientRolling, DynamicsError> {
     check_speed(speed_m_per_s)?;
     let mut cfg = contact_config_for(model, speed_m_per_s)?;
-    if let Some((p, approach_m)) = profile {
-        cfg.grid = grid_for_profile(cfg.grid, cfg.radius_x_m, approach_m, p.peak_to_trough_m());
-    }
+    cfg.grid = passage_grid(&cfg, profile, widening);
     TransientRolling::new(cfg).map_err(DynamicsError::ContactGrid)
+}
+
+/// The grid of [`passage_contact`] from the model's contact configuration `cfg`
+/// ([`contact_config_for`]): lengthened for the profile, then widened.
+pub fn passage_grid(
+    cfg: &TransientConfig,
+    profile: Option<(&RailProfile, f64)>,
+    widening: GridWidening,
+) -> GridSpec {
+    let grid = match profile {
+        Some((p, approach_m)) => {
+            grid_for_profile(cfg.grid, cfg.radius_x_m, approach_m, p.peak_to_trough_m())
+        }
+        None => cfg.grid,
+    };
+    widen_grid(grid, widening)
 }
 
 /// The static Hertz patch of the model's wheel on its rail crown under a vertical load

@@ -55,7 +55,10 @@ use crate::dynamics::reduced::{add_nodes_load, ContactFrame};
 use crate::dynamics::{
     passage::PassageOptions,
     record::{PassageRecord, RailPointRecord},
-    setup::{passage_contact, rigid_least_norm},
+    setup::{
+        contact_config_for, passage_contact, passage_grid, rigid_least_norm, run_widening_grid,
+        GridWidening, WidenedGrid,
+    },
 };
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
 use crate::model::{ExplicitWheel, Model};
@@ -180,6 +183,10 @@ impl ExplicitModel {
     /// Phases: the plan (steps and range), the static start, the set-up of the step loop
     /// (unit responses, scratch, energy ledger, recorder), the contact steps (predictor,
     /// contact, corrector, ledger, records) and the record.
+    ///
+    /// When the contact patch reaches the boundary of the contact grid the passage is run
+    /// again from the start on a widened grid, as the reduced passage does
+    /// ([`run_widening_grid`]; the record's `contact_grid_widened` then names the grid).
     pub fn passage(
         &self,
         speed_m_per_s: f64,
@@ -187,10 +194,37 @@ impl ExplicitModel {
         popts: &PassageOptions,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<ExplicitRecord, ExplicitError> {
+        let (mut rec, w) = run_widening_grid(
+            |w| self.passage_on_grid(speed_m_per_s, profile, popts, &mut *progress, w),
+            |e: &ExplicitError| match e {
+                ExplicitError::Dynamics(d) => Some(d),
+                _ => None,
+            },
+            ExplicitError::Dynamics,
+            |_, _| {},
+        )?;
+        if w.any() {
+            let cfg = contact_config_for(&self.model, speed_m_per_s)?;
+            let grid = passage_grid(&cfg, profile.map(|p| (p, self.hertz_approach_m)), w);
+            rec.record.contact_grid_widened = Some(WidenedGrid::new(&grid, w));
+        }
+        Ok(rec)
+    }
+
+    /// One passage (as [`Self::passage`]) on the contact grid widened by `widening`.
+    fn passage_on_grid(
+        &self,
+        speed_m_per_s: f64,
+        profile: Option<&RailProfile>,
+        popts: &PassageOptions,
+        progress: &mut dyn FnMut(usize, usize),
+        widening: GridWidening,
+    ) -> Result<ExplicitRecord, ExplicitError> {
         let mut contact = passage_contact(
             &self.model,
             speed_m_per_s,
             profile.map(|p| (p, self.hertz_approach_m)),
+            widening,
         )?;
         let plan = self.plan(speed_m_per_s, &contact);
         let mut heights = RailHeights::new(profile, &contact);

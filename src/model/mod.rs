@@ -28,7 +28,8 @@ pub use fastening::{
 };
 pub use load::{apply_override, load_model, load_model_str, ModelSource, BUILTIN_DUTCH};
 pub use validate::{
-    DENSITY_KG_M3, MAX_GRID_WORK, MAX_WHEEL_LOAD_N, POISSON_RATIO, SPEED_KMH, YOUNGS_MODULUS_PA,
+    DENSITY_KG_M3, MAX_GRID_WORK, MAX_WHEEL_LOAD_N, POISSON_RATIO, SPEED_KMH, SPEED_KMH_WHY,
+    YOUNGS_MODULUS_PA,
 };
 
 use serde::{Deserialize, Serialize};
@@ -468,7 +469,9 @@ pub struct Contact {
     /// 1.4): the grid covers
     /// `grid_margin · a` by `grid_margin · b`; larger when the normal load varies strongly.
     /// Over a corrugated rail the passage lengthens it along x at the same element size
-    /// (`dynamics::passage::grid_for_profile`).
+    /// (`dynamics::setup::grid_for_profile`); a passage whose contact patch still reaches the
+    /// grid's edge is rerun on a grid widened along that edge (`dynamics::setup::widen_grid`,
+    /// docs/theory.md §6.8).
     pub grid_margin: f64,
 }
 
@@ -513,7 +516,13 @@ pub struct MeshParams {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Run {
-    /// Train speed (km/h; converted to m/s by [`Run::speed`]), 1 to 500; default model 140.
+    /// Train speed (km/h; converted to m/s by [`Run::speed`]), 40 to 500 ([`SPEED_KMH`]);
+    /// default model 140. Not below 40 km/h: the passage's time step is the contact step
+    /// `Δx/V` (one contact-grid element over the speed), and its explicit coupling of the
+    /// contact force and the structures is stable only while that step is short against the
+    /// stiffest motion coupled through the contact; below about 30 km/h on the default model
+    /// the normal force grows step by step until the contact patch leaves the contact grid
+    /// (a wider grid, `contact.grid_margin`, does not help).
     pub speed_kmh: f64,
     /// Distance from the wheel's start to the solution zone (m), 0 to 10; default model 0.3.
     pub solution_zone_offset: f64,

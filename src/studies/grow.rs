@@ -30,6 +30,7 @@ use super::initiation::{evaluate, InitiationCriterion};
 use super::StudiesError;
 use crate::dynamics::coupled::{CoupledMode, ModeAttribution};
 use crate::dynamics::prepared::PreparedModel;
+use crate::dynamics::setup::WidenedGrid;
 use crate::dynamics::summary::PassageSummary;
 use crate::dynamics::PassageRecorder;
 use crate::growth::procedure::{trial_growth, GrowthRound, ModeLines, ProcedureError, TrialGrowth};
@@ -144,8 +145,35 @@ pub struct GrowJson {
     pub stopped_at_um: Option<f64>,
     /// Why that passage failed, with what to change; `None` when every amplitude ran.
     pub stopped_reason: Option<String>,
+    /// The passages whose contact patch reached the boundary of the model's contact grid and
+    /// that were rerun on a wider grid, with the grid each ran on; absent when every passage
+    /// ran on the model's grid.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub widened_contact_grids: Vec<WidenedPassageGrid>,
     /// Wall-clock time of the run, s (0 when not measured).
     pub seconds: f64,
+}
+
+/// A passage of the growth that ran on a widened contact grid
+/// ([`crate::dynamics::setup::run_widening_grid`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct WidenedPassageGrid {
+    /// Trial amplitude 2A_max (µm); 0 for the smooth rail.
+    pub amplitude_um: f64,
+    /// The grid it ran on.
+    pub grid: WidenedGrid,
+}
+
+/// The passages of `g` (smooth rail first, then the trial amplitudes) that ran on a widened
+/// contact grid.
+pub fn widened_contact_grids(g: &TrialGrowth) -> Vec<WidenedPassageGrid> {
+    std::iter::once((0.0, &g.smooth))
+        .chain(g.amplitudes.iter().map(|a| (a.amplitude_um, &a.summary)))
+        .filter_map(|(amplitude_um, s)| {
+            s.contact_grid_widened
+                .map(|grid| WidenedPassageGrid { amplitude_um, grid })
+        })
+        .collect()
 }
 
 /// The selected (dominant) wear frequency of one passage of the growth attributed to a
@@ -313,6 +341,7 @@ pub fn grow_json(
         growth_rate: None,
         stopped_at_um: g.stopped.as_ref().map(|s| s.amplitude_um),
         stopped_reason: g.stopped.as_ref().map(|s| s.reason.clone()),
+        widened_contact_grids: widened_contact_grids(g),
         seconds,
     }
 }
@@ -348,9 +377,28 @@ pub fn trial_growth_if_any(
     });
     progress.finish();
     match r {
-        Ok(g) => Ok(Some(g)),
+        Ok(g) => {
+            for w in widened_contact_grids(&g) {
+                progress.warn(&format!(
+                    "{}: the contact patch reached the boundary of the model's contact grid; the passage was rerun on {}",
+                    widened_passage_name(w.amplitude_um),
+                    w.grid
+                ));
+            }
+            Ok(Some(g))
+        }
         Err(ProcedureError::NoReference) => Ok(None),
         Err(e) => Err(e),
+    }
+}
+
+/// How the growth's outputs name a passage: the smooth rail (`amplitude_um` 0) or a trial
+/// amplitude.
+pub fn widened_passage_name(amplitude_um: f64) -> String {
+    if amplitude_um == 0.0 {
+        "smooth rail".into()
+    } else {
+        format!("trial amplitude {amplitude_um} µm")
     }
 }
 

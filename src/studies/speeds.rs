@@ -83,7 +83,8 @@ pub fn parse_speeds(spec: &str) -> Result<Vec<f64>, StudiesError> {
         .find(|v| !(v.is_finite() && **v >= MIN_SPEED_KMH && **v <= MAX_SPEED_KMH))
     {
         return Err(bad(format!(
-            "speed {v} km/h out of range, allowed {MIN_SPEED_KMH} to {MAX_SPEED_KMH} km/h (as run.speed_kmh)"
+            "speed {v} km/h out of range, allowed {MIN_SPEED_KMH} to {MAX_SPEED_KMH} {} (as run.speed_kmh)",
+            crate::model::SPEED_KMH_WHY
         )));
     }
     speeds.sort_by(f64::total_cmp);
@@ -168,10 +169,10 @@ mod tests {
         let v = parse_speeds("60:100:10").unwrap();
         assert_eq!(v, vec![60.0, 70.0, 80.0, 90.0, 100.0]);
         // 0.1 steps: no accumulated round-off, the stop on the grid is kept.
-        let v = parse_speeds("1:2:0.1").unwrap();
+        let v = parse_speeds("40:41:0.1").unwrap();
         assert_eq!(v.len(), 11);
-        assert_eq!(v[3], 1.3);
-        assert_eq!(v[10], 2.0);
+        assert_eq!(v[3], 40.3);
+        assert_eq!(v[10], 41.0);
         assert_eq!(parse_speeds("140:140:5").unwrap(), vec![140.0]);
     }
 
@@ -185,13 +186,15 @@ mod tests {
             ("0,60", "out of range"),
             ("-5", "out of range"),
             // The model's run.speed_kmh stops at 500 km/h: a sweep may not go beyond it.
-            ("600", "allowed 1 to 500 km/h"),
+            ("600", "allowed 40 to 500 km/h"),
             ("400:600:100", "speed 600 km/h out of range"),
-            ("0.5", "allowed 1 to 500"),
-            ("10:5:1", "below start"),
-            ("10:20:0", "positive"),
-            ("10:20", "start:stop:step"),
-            ("1:1e9:1e-3", "at most"),
+            // nor below 40 km/h, where a passage does not run
+            ("39", "allowed 40 to 500 km/h"),
+            ("10:50:10", "speed 10 km/h out of range"),
+            ("60:50:1", "below start"),
+            ("60:70:0", "positive"),
+            ("60:70", "start:stop:step"),
+            ("40:1e9:1e-3", "at most"),
         ] {
             let e = parse_speeds(spec).unwrap_err().to_string();
             assert!(e.contains(needle) && e.contains(spec), "{spec}: {e}");

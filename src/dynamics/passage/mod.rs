@@ -55,7 +55,8 @@ use super::record::{Histories, PassageRecord};
 use super::reduced::{dot, ContactFrame, ModalSystem, RailContactLine, WheelContact};
 use super::residual::ResidualFlexibility;
 use super::setup::{
-    check_speed, contact_config_for, passage_contact, rigid_least_norm, steady_contact, WheelLoads,
+    check_speed, contact_config_for, passage_contact, passage_grid, rigid_least_norm,
+    run_widening_grid, steady_contact, GridWidening, WheelLoads, WidenedGrid,
 };
 use super::wheel_residual::WheelResidual;
 use ledger::{Ledger, LedgerStep};
@@ -572,6 +573,53 @@ impl PassageEngine {
         contact_config_for(&self.model, speed_m_per_s)
     }
 
+    /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth) on
+    /// the model's contact grid (lengthened for the profile: [`passage_contact`]). When its
+    /// contact patch reaches the grid's boundary (a dynamic load beyond the room
+    /// `contact.grid_margin` leaves, e.g. over a deep trial corrugation) the passage is run
+    /// again from the start on a grid widened along that edge at the same element size
+    /// ([`run_widening_grid`]); the record's `contact_grid_widened` then names the grid it ran
+    /// on, and `progress` is warned. A passage that stays inside the model's grid runs once,
+    /// bit for bit as before.
+    pub fn passage(
+        &self,
+        speed_m_per_s: f64,
+        profile: Option<&RailProfile>,
+        opts: &PassageOptions,
+        progress: Option<&dyn crate::progress::Progress>,
+    ) -> Result<PassageRecord, DynamicsError> {
+        let (mut rec, w) = run_widening_grid(
+            |w| self.passage_on_grid(speed_m_per_s, profile, opts, progress, w),
+            |e: &DynamicsError| Some(e),
+            |e| e,
+            |edge, w| {
+                if let Some(p) = progress {
+                    let grid = self.widened_grid(speed_m_per_s, profile, w);
+                    p.warn(&format!(
+                        "the contact patch reached the contact grid's boundary ({edge}); rerunning the passage on {}",
+                        grid.map_or_else(|e| e.to_string(), |g| g.to_string())
+                    ));
+                }
+            },
+        )?;
+        if w.any() {
+            rec.contact_grid_widened = Some(self.widened_grid(speed_m_per_s, profile, w)?);
+        }
+        Ok(rec)
+    }
+
+    /// The contact grid of a passage at `v` (m/s) over `profile` widened by `w`.
+    fn widened_grid(
+        &self,
+        v: f64,
+        profile: Option<&RailProfile>,
+        w: GridWidening,
+    ) -> Result<WidenedGrid, DynamicsError> {
+        let cfg = self.contact_config(v)?;
+        let grid = passage_grid(&cfg, profile.map(|p| (p, self.hertz_approach_m)), w);
+        Ok(WidenedGrid::new(&grid, w))
+    }
+
     /// The static loads of the contact at the start: normal force `W / cos α` (N),
     /// longitudinal force (N: `μ_t W` for the static start, 0 for the start from rest), and
     /// the spin of the coned wheel on the inclined rail `−sin α / R` (1/m).
@@ -608,16 +656,19 @@ impl PassageEngine {
         }
     }
 
-    /// The contact of a passage at `v` (m/s) over `profile`, brought to steady rolling at the
-    /// static load ([`steady_contact`], with the engine's series compliance), and its steady
-    /// result. On the smooth rail the steady state does not depend on the speed (the contact
-    /// state moves by one element per step whatever the speed: [`TransientRolling::set_speed`]),
-    /// so it is computed once per engine and cloned: a sweep pays for one static start, and
-    /// every passage gets the state bit for bit as if it had computed it itself.
+    /// The contact of a passage at `v` (m/s) over `profile` on the grid widened by `widening`
+    /// ([`passage_contact`]), brought to steady rolling at the static load
+    /// ([`steady_contact`], with the engine's series compliance), and its steady result. On
+    /// the smooth rail's model grid the steady state does not depend on the speed (the
+    /// contact state moves by one element per step whatever the speed:
+    /// [`TransientRolling::set_speed`]), so it is computed once per engine and cloned: a sweep
+    /// pays for one static start, and every passage gets the state bit for bit as if it had
+    /// computed it itself.
     fn started_contact(
         &self,
         v: f64,
         profile: Option<&RailProfile>,
+        widening: GridWidening,
     ) -> Result<(TransientRolling, crate::contact::StepResult), DynamicsError> {
         let x0 = self.x_start_m;
         let contact_err = |source| DynamicsError::Contact {
@@ -626,8 +677,12 @@ impl PassageEngine {
             source,
         };
         let start = || -> Result<_, DynamicsError> {
-            let mut contact =
-                passage_contact(&self.model, v, profile.map(|p| (p, self.hertz_approach_m)))?;
+            let mut contact = passage_contact(
+                &self.model,
+                v,
+                profile.map(|p| (p, self.hertz_approach_m)),
+                widening,
+            )?;
             contact
                 .set_series_compliance(self.series_compliance)
                 .map_err(contact_err)?;
@@ -642,7 +697,7 @@ impl PassageEngine {
             let st = steady_contact(&mut contact, f_n0, f_l0, spin, heights.as_deref(), x0)?;
             Ok((contact, st))
         };
-        if profile.is_some() {
+        if profile.is_some() || widening.any() {
             return start();
         }
         check_speed(v)?;

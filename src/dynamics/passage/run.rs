@@ -9,15 +9,17 @@ use super::spin::SpinPair;
 use super::*;
 
 impl PassageEngine {
-    /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth).
-    pub fn passage(
+    /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth) on
+    /// the contact grid widened by `widening` ([`PassageEngine::passage`] chooses it).
+    pub(super) fn passage_on_grid(
         &self,
         speed_m_per_s: f64,
         profile: Option<&RailProfile>,
         opts: &PassageOptions,
         progress: Option<&dyn crate::progress::Progress>,
+        widening: GridWidening,
     ) -> Result<PassageRecord, DynamicsError> {
-        let (mut s, k) = self.passage_start(speed_m_per_s, profile, opts)?;
+        let (mut s, k) = self.passage_start(speed_m_per_s, profile, opts, widening)?;
         let t_wall = Instant::now();
         if let Some(p) = progress {
             p.total(k.n_steps as u64);
@@ -51,18 +53,20 @@ impl PassageEngine {
         Ok(rec)
     }
 
-    /// The start of a passage at `speed_m_per_s` (m/s) over `profile`: the contact at the
-    /// static start (steady rolling at the static load) placed in the modal states of track
-    /// and wheel, the step loop's state (integrators, buffers, records, the energy ledger,
-    /// the damping product's scratch when [`PassageOptions::overlap`] is on) and constants.
+    /// The start of a passage at `speed_m_per_s` (m/s) over `profile` on the contact grid
+    /// widened by `widening`: the contact at the static start (steady rolling at the static
+    /// load) placed in the modal states of track and wheel, the step loop's state
+    /// (integrators, buffers, records, the energy ledger, the damping product's scratch when
+    /// [`PassageOptions::overlap`] is on) and constants.
     fn passage_start<'a>(
         &self,
         speed_m_per_s: f64,
         profile: Option<&'a RailProfile>,
         opts: &PassageOptions,
+        widening: GridWidening,
     ) -> Result<(StepState<'a>, StepConstants), DynamicsError> {
         let v = speed_m_per_s;
-        let (contact, st) = self.started_contact(v, profile)?;
+        let (contact, st) = self.started_contact(v, profile, widening)?;
         let dt = contact.time_step_s();
         let dx = v * dt;
         let mut tr = ModalVerlet::new(&self.track_sys, dt)?;
@@ -200,6 +204,7 @@ impl PassageEngine {
             steps: k.n_steps,
             seconds,
             split_steps: 0,
+            contact_grid_widened: None,
         }
     }
 }

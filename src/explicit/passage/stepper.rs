@@ -668,6 +668,7 @@ impl<'a> Stepper<'a> {
                 steps: p.n_steps,
                 seconds,
                 split_steps: 0,
+                contact_grid_widened: None,
             },
             info,
         }

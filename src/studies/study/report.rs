@@ -101,6 +101,9 @@ fn growth_label(k: &str) -> String {
     match k {
         "limiting_amplitude_um" => "limiting amplitude (2A_max)_l (µm; 0: none)".into(),
         "consistent_amplitudes" => "trial amplitudes growing consistently (of 4)".into(),
+        "widened_contact_grids" => {
+            "growth passages rerun on a widened contact grid (docs/theory.md §6.8)".into()
+        }
         _ => k.to_string(),
     }
 }
@@ -234,7 +237,8 @@ fn write_study_plots(
     for (stem, label, f) in INDICATORS {
         plots.push((stem.to_string(), label.to_string(), Some(f), None));
     }
-    for k in gk {
+    // the count of widened contact grids is a note in the table, not an indicator to plot
+    for k in gk.iter().filter(|k| k.as_str() != "widened_contact_grids") {
         plots.push((
             format!("growth_{k}"),
             growth_label(k),

@@ -69,9 +69,16 @@ pub fn run_passages(
                 runner.run(crate::units::Speed::from_kmh(v), None)
             }));
             let r = match out {
-                Ok(Ok(s)) if same_speed(s.speed_kmh, v) => write_summary(&speed_file(dir, v), &s)
-                    .map(|_| v)
-                    .map_err(|e| format!("{v} km/h: {e}")),
+                Ok(Ok(s)) if same_speed(s.speed_kmh, v) => {
+                    if let Some(g) = &s.contact_grid_widened {
+                        progress.warn(&format!(
+                            "{v} km/h: the contact patch reached the boundary of the model's contact grid; the passage was rerun on {g}"
+                        ));
+                    }
+                    write_summary(&speed_file(dir, v), &s)
+                        .map(|_| v)
+                        .map_err(|e| format!("{v} km/h: {e}"))
+                }
                 Ok(Ok(s)) => Err(format!(
                     "{v} km/h: the runner returned a summary for {} km/h",
                     s.speed_kmh
