@@ -1,5 +1,5 @@
 //! Two failures of the robustness campaign, on the small test model (the real binary; about
-//! 20 s of CPU with the small model's modes cached in the tests' own directory, about 30 s
+//! 20 s of CPU with the small model's modes in the shared test cache (`common::small_model_cache`), about 30 s
 //! when they are solved first):
 //!
 //! - `grow` from rest (`run.start = "rest"`) with the default trial amplitudes stopped at
@@ -12,9 +12,9 @@
 
 mod common;
 
-use common::{is_one_line_error, run, SMALL_MODEL};
+use common::{is_one_line_error, run, small_model_cache, SMALL_MODEL};
 
-/// The cache and output directory of these tests (the small model's modes, shared by them).
+/// The output directory of these tests.
 fn workdir() -> std::path::PathBuf {
     std::env::temp_dir().join("corrugation-test-deep-trials")
 }
@@ -26,7 +26,7 @@ static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 /// `cmd` on the small model with `sets` (`key=value`), the tests' cache and `--out`.
 fn run_small(cmd: &[&str], sets: &[&str], out: &str) -> (i32, String, String) {
     let dir = workdir();
-    let cache = dir.join("cache").display().to_string();
+    let cache = small_model_cache().display().to_string();
     let out = dir.join(out).display().to_string();
     let mut args: Vec<&str> = cmd.to_vec();
     args.extend(SMALL_MODEL);

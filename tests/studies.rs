@@ -5,10 +5,11 @@
 mod common;
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
+use common::tree;
 use corrugation::dynamics::{
     DynamicsError, PassageRunner, PassageSummary, RailProfile, WavelengthComponent,
     WavelengthSpectrum,
@@ -198,26 +199,6 @@ fn assert_same_numbers(a: &PassageSummary, b: &PassageSummary) {
         &serde_json::to_value(b).unwrap(),
         "summary",
     );
-}
-
-/// All files under `dir` (relative path → bytes).
-fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.insert(
-                    p.strip_prefix(dir).unwrap().to_path_buf(),
-                    std::fs::read(&p).unwrap(),
-                );
-            }
-        }
-    }
-    out
 }
 
 /// Frequency selection: the wear map's ridge (per-speed maximum) lies on the drawn mode

@@ -98,7 +98,9 @@ impl CacheCmd {
         let report = if max_gb.is_some() || max_days.is_some() {
             let r = cache.prune(PrunePolicy {
                 max_bytes: max_gb.map(gb_to_bytes),
-                max_idle: max_days.map(|d| Duration::from_secs_f64(days_to_s(d))),
+                // beyond Duration's range (about 5.8e11 years) no entry is that idle
+                max_idle: max_days
+                    .map(|d| Duration::try_from_secs_f64(days_to_s(d)).unwrap_or(Duration::MAX)),
                 dry_run: self.dry_run,
             })?;
             eprintln!(

@@ -83,6 +83,12 @@ impl ComplianceCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let stiffnesses = self.check_args()?;
         let models = self.models(&stiffnesses)?;
+        for (_, _, m) in &models {
+            // the library's default load position, mid-track
+            let x = self.x.unwrap_or(0.5 * m.track_length());
+            super::check_rail_positions("--x", &[x], m)?;
+            super::check_rail_positions("--x + --ahead", &[x + self.ahead], m)?;
+        }
         let load = ComplianceLoad {
             vertical_n: self.vertical,
             longitudinal_n: self.longitudinal,
@@ -129,6 +135,12 @@ impl ComplianceCmd {
             if !v.is_finite() || v.abs() > 1e7 {
                 anyhow::bail!("{name} must be a finite force up to 1e7 N (got {v})");
             }
+        }
+        if self.vertical < 0.0 {
+            anyhow::bail!(
+                "--vertical {}: out of range, allowed 0 to 1e7 N (the wheel pushes down on the rail)",
+                self.vertical
+            );
         }
         if !(self.ahead.is_finite() && self.ahead >= 0.0) {
             anyhow::bail!(

@@ -69,6 +69,21 @@ impl ContactCmd {
                 self.steps
             );
         }
+        if let Some(x) = self.creepage {
+            if !(x.is_finite() && x.abs() <= 1.0) {
+                anyhow::bail!(
+                    "--creepage {x}: out of range, allowed -1 to 1 (−; -1 is a locked wheel sliding at the rolling speed, beyond ±1 the tread slips faster than the train moves)"
+                );
+            }
+        }
+        if let Some(t) = self.traction_coefficient {
+            let mu = self.friction.unwrap_or(m.contact.friction);
+            if !(t.is_finite() && t.abs() <= mu) {
+                anyhow::bail!(
+                    "--traction-coefficient {t}: out of range, allowed -{mu} to {mu} (−; F_x/N cannot exceed the friction coefficient {mu}, --friction or contact.friction)"
+                );
+            }
+        }
         let tangential = match (self.creepage, self.traction_coefficient) {
             (Some(x), _) => TangentialLoading::Creepage(x),
             (None, Some(t)) => TangentialLoading::TractionCoefficient(t),

@@ -49,6 +49,13 @@ impl CoupledModesCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let m = self.model.load()?;
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
+        super::check_rail_positions("--at", &self.at_m, &m)?;
+        if !(self.list_to_hz.is_finite() && self.list_to_hz >= 0.0) {
+            anyhow::bail!(
+                "--list-to-hz {}: allowed a finite frequency ≥ 0 Hz",
+                self.list_to_hz
+            );
+        }
         super::check_out_dir(&self.out)?;
         let t0 = std::time::Instant::now();
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;

@@ -42,6 +42,9 @@ use corrugation::studies::grow::{
 
 use super::ModelArgs;
 
+/// Most rounds of iterative growth (`--rounds`): each round runs one passage.
+pub const MAX_ROUNDS: usize = 1000;
+
 /// Trial-amplitude growth: smooth passage, trial corrugations, consistency, limiting amplitude.
 #[derive(Debug, Args)]
 pub struct GrowCmd {
@@ -55,10 +58,10 @@ pub struct GrowCmd {
         value_name = "UM,..."
     )]
     amplitudes_um: Vec<f64>,
-    /// Also run iterative growth for this many rounds (0 = off).
+    /// Also run iterative growth for this many rounds (0 = off), at most [`MAX_ROUNDS`].
     #[arg(long, default_value_t = 0, value_name = "N")]
     rounds: usize,
-    /// Passages per round of the iterative growth.
+    /// Passages per round of the iterative growth (1 or more).
     #[arg(long, default_value_t = 1000, value_name = "N")]
     passages_per_round: usize,
     /// Skip the growth-rate spectrum (`growth_rate.csv`).
@@ -233,9 +236,14 @@ impl GrowCmd {
         {
             anyhow::bail!("--rate-check wavelengths must lie in [20, 80] mm (got {l})");
         }
-        if self.rounds > 0 && self.passages_per_round == 0 {
+        if self.passages_per_round == 0 {
             anyhow::bail!(
-                "--passages-per-round 0 with --rounds {}: a round needs at least 1 passage",
+                "--passages-per-round 0: out of range, allowed at least 1 passage (a round's wear is one passage's times this count)"
+            );
+        }
+        if self.rounds > MAX_ROUNDS {
+            anyhow::bail!(
+                "--rounds {}: out of range, allowed 0 (off) to {MAX_ROUNDS} (each round runs one passage: about half a second on the default model, so {MAX_ROUNDS} rounds take about 10 minutes)",
                 self.rounds
             );
         }

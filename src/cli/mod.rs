@@ -95,6 +95,25 @@ pub fn check_out_outside_cache(
         .map_err(|e| anyhow::anyhow!("--out: {e}"))
 }
 
+/// Refuses a rail position of `flag` (m along the rail) that is not on the track of `m`
+/// (0 to `track.bays × track.sleeper_spacing`), before any modes are loaded or solved.
+pub fn check_rail_positions(
+    flag: &str,
+    xs: &[f64],
+    m: &corrugation::model::Model,
+) -> anyhow::Result<()> {
+    let length = m.track_length();
+    if let Some(x) = xs
+        .iter()
+        .find(|x| !(x.is_finite() && (0.0..=length).contains(*x)))
+    {
+        anyhow::bail!(
+            "{flag} {x}: off the track, allowed 0 to {length} m along the rail (track.bays × track.sleeper_spacing)"
+        );
+    }
+    Ok(())
+}
+
 pub fn check_out_dir(dir: &std::path::Path) -> anyhow::Result<()> {
     let fail =
         |e: std::io::Error| anyhow::anyhow!("--out {}: cannot write there: {e}", dir.display());

@@ -53,6 +53,7 @@ impl ReceptanceCmd {
         let t0 = std::time::Instant::now();
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         let m = self.model.load()?;
+        super::check_rail_positions("--at", &self.at_m, &m)?;
         let opts = ReceptanceOptions {
             from_hz: self.from_hz,
             to_hz: self.to_hz,

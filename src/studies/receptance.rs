@@ -38,7 +38,7 @@ pub const PEAKS: usize = 10;
 #[derive(Debug, thiserror::Error)]
 pub enum ReceptanceError {
     /// A frequency grid that cannot be used.
-    #[error("receptance: need 0 <= --from-hz < --to-hz and --step-hz > 0 (got {from_hz} .. {to_hz} step {step_hz} Hz)")]
+    #[error("receptance: need finite 0 <= --from-hz < --to-hz <= run.fmax ({fmax_hz} Hz: the modal basis ends there) and --step-hz > 0 (got {from_hz} .. {to_hz} step {step_hz} Hz)")]
     Grid {
         /// Lowest frequency (Hz).
         from_hz: f64,
@@ -46,6 +46,8 @@ pub enum ReceptanceError {
         to_hz: f64,
         /// Frequency step (Hz).
         step_hz: f64,
+        /// The model's frequency limit `run.fmax` (Hz).
+        fmax_hz: f64,
     },
     /// More than [`MAX_FREQUENCIES`] frequencies.
     #[error("receptance: {0} frequencies; raise --step-hz")]
@@ -108,14 +110,22 @@ pub struct FrequencyGrid {
 
 impl ReceptanceOptions {
     /// The frequency grid for a model of frequency limit `fmax_hz` (Hz): `from_hz` to the
-    /// highest frequency in steps of `step_hz`, at most [`MAX_FREQUENCIES`].
+    /// highest frequency (at most `fmax_hz`, where the modal basis ends) in steps of
+    /// `step_hz`, at most [`MAX_FREQUENCIES`].
     pub fn grid(&self, fmax_hz: f64) -> Result<FrequencyGrid, ReceptanceError> {
         let to_hz = self.to_hz.unwrap_or(fmax_hz.min(3000.0));
-        if !(self.from_hz >= 0.0 && self.step_hz > 0.0 && to_hz > self.from_hz) {
+        let finite = self.from_hz.is_finite() && to_hz.is_finite() && self.step_hz.is_finite();
+        if !(finite
+            && self.from_hz >= 0.0
+            && self.step_hz > 0.0
+            && to_hz > self.from_hz
+            && to_hz <= fmax_hz)
+        {
             return Err(ReceptanceError::Grid {
                 from_hz: self.from_hz,
                 to_hz,
                 step_hz: self.step_hz,
+                fmax_hz,
             });
         }
         let n = ((to_hz - self.from_hz) / self.step_hz).floor() as usize + 1;
@@ -426,11 +436,20 @@ mod tests {
         assert_eq!(g.frequencies_hz.len(), 246);
     }
 
-    /// An empty or reversed range, a non-positive step and a grid beyond
-    /// [`MAX_FREQUENCIES`] are refused with the values named.
+    /// An empty or reversed range, a non-positive or non-finite step, a top above the modal
+    /// basis's `run.fmax` and a grid beyond [`MAX_FREQUENCIES`] are refused with the values
+    /// named.
     #[test]
     fn bad_grids_are_refused() {
-        for (from_hz, to_hz, step_hz) in [(100.0, 50.0, 4.0), (-1.0, 50.0, 4.0), (0.0, 50.0, 0.0)] {
+        for (from_hz, to_hz, step_hz) in [
+            (100.0, 50.0, 4.0),
+            (-1.0, 50.0, 4.0),
+            (0.0, 50.0, 0.0),
+            (0.0, 5001.0, 4.0),
+            (0.0, f64::INFINITY, 4.0),
+            (f64::NAN, 50.0, 4.0),
+            (0.0, 50.0, f64::INFINITY),
+        ] {
             let opts = ReceptanceOptions {
                 from_hz,
                 to_hz: Some(to_hz),

@@ -68,3 +68,30 @@ pub fn dense_modes(op: &corrugation::explicit::ExplicitOperator) -> (Vec<f64>, V
         .collect();
     (vals, vecs)
 }
+
+/// A modal cache for the small test model shared by the integration tests (in the system's
+/// temporary directory, kept between runs): the first test to need the small model's modes
+/// solves them, the others load them. The cache is safe for processes running side by side.
+pub fn small_model_cache() -> std::path::PathBuf {
+    std::env::temp_dir().join("corrugation-test-small-model-cache")
+}
+
+/// All files under `dir` (relative path → bytes).
+pub fn tree(dir: &std::path::Path) -> std::collections::BTreeMap<std::path::PathBuf, Vec<u8>> {
+    let mut out = std::collections::BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.insert(
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                );
+            }
+        }
+    }
+    out
+}
