@@ -9,7 +9,7 @@ use clap::Args;
 use serde::Serialize;
 
 use corrugation::dynamics::compliance::{longitudinal_compliance, ComplianceLoad};
-use corrugation::model::{load_model, Model};
+use corrugation::model::{load_model, Model, MAX_HOLD_STIFFNESS, MIN_HOLD_STIFFNESS};
 use corrugation::structure::TrackStructure;
 use corrugation::units::{m_to_um, n_to_kn};
 
@@ -82,6 +82,7 @@ impl ComplianceCmd {
     /// so that a bad name or key stops early), their compliances, the files, the table.
     pub fn run(self) -> anyhow::Result<()> {
         let stiffnesses = self.check_args()?;
+        super::check_out_dir(&self.out)?;
         let models = self.models(&stiffnesses)?;
         let load = ComplianceLoad {
             vertical_n: self.vertical,
@@ -144,6 +145,11 @@ impl ComplianceCmd {
             let k: f64 = s
                 .parse()
                 .with_context(|| format!("--elastic {s}: not a number (N/m) or \"none\""))?;
+            if !(k.is_finite() && (MIN_HOLD_STIFFNESS..=MAX_HOLD_STIFFNESS).contains(&k)) {
+                anyhow::bail!(
+                    "--elastic {s}: out of range, allowed {MIN_HOLD_STIFFNESS:e} to {MAX_HOLD_STIFFNESS:e} N/m per fastening (as fastening.hold_stiffness), or \"none\""
+                );
+            }
             stiffnesses.push(k);
         }
         Ok(stiffnesses)

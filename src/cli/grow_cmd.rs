@@ -42,6 +42,9 @@ use corrugation::studies::grow::{
 
 use super::ModelArgs;
 
+/// Most rounds of iterative growth (`--rounds`): one passage each.
+const MAX_ROUNDS: usize = 1000;
+
 /// Trial-amplitude growth: smooth passage, trial corrugations, consistency, limiting amplitude.
 #[derive(Debug, Args)]
 pub struct GrowCmd {
@@ -138,6 +141,7 @@ impl GrowCmd {
         let t0 = Instant::now();
         self.check_args()?;
         let m = self.model.load()?;
+        super::check_trial_profile_grid(&self.amplitudes_um, &m)?;
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
@@ -232,6 +236,12 @@ impl GrowCmd {
             .find(|l| !(l.is_finite() && (20.0..=80.0).contains(*l)))
         {
             anyhow::bail!("--rate-check wavelengths must lie in [20, 80] mm (got {l})");
+        }
+        if self.rounds > MAX_ROUNDS {
+            anyhow::bail!(
+                "--rounds {}: at most {MAX_ROUNDS} rounds (one passage each; the growth saturates within tens)",
+                self.rounds
+            );
         }
         if self.rounds > 0 && self.passages_per_round == 0 {
             anyhow::bail!(
