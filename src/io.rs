@@ -42,7 +42,31 @@ where
     result
 }
 
-/// Removes the temp files `<name>.tmp.<pid>` of [`write_atomic`] in `dir` that a killed
+/// The process id in the name of a temp file of [`write_atomic`] (`<name>.tmp.<pid>`) or of
+/// the PNG writer of [`crate::report::plot`] (`<stem>.tmp<pid>.png`: the encoder picks the
+/// format from the extension); `None` for any other name.
+pub fn temp_file_pid(name: &str) -> Option<u32> {
+    let digits = |s: &str| -> Option<u32> {
+        (!s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
+            .then(|| s.parse().ok())
+            .flatten()
+    };
+    if let Some((stem, pid)) = name.rsplit_once(".tmp.") {
+        if !stem.is_empty() {
+            if let Some(p) = digits(pid) {
+                return Some(p);
+            }
+        }
+    }
+    let (stem, pid) = name.strip_suffix(".png")?.rsplit_once(".tmp")?;
+    if stem.is_empty() {
+        return None;
+    }
+    digits(pid)
+}
+
+/// Removes the temp files `<name>.tmp.<pid>` of [`write_atomic`] and `<stem>.tmp<pid>.png` of
+/// the PNG writer ([`temp_file_pid`]) in `dir` (not in its subdirectories) that a killed
 /// process left: those of processes no longer running (on Linux, no `/proc/<pid>`; where
 /// that cannot be told, none is removed). Returns how many were removed; a missing `dir` has
 /// none.
@@ -57,11 +81,7 @@ pub fn remove_stale_temp_files(dir: &Path) -> io::Result<usize> {
     for entry in entries {
         let entry = entry?;
         let name = entry.file_name();
-        let Some(pid) = name
-            .to_str()
-            .and_then(|n| n.rsplit_once(".tmp."))
-            .and_then(|(_, pid)| pid.parse::<u32>().ok())
-        else {
+        let Some(pid) = name.to_str().and_then(temp_file_pid) else {
             continue;
         };
         let dead =
@@ -152,6 +172,26 @@ mod tests {
         let d = std::env::temp_dir().join(format!("corrugation-io-{tag}-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         d
+    }
+
+    /// Only the writers' own temp names carry a pid; anything else is left alone.
+    #[test]
+    fn temp_file_names() {
+        assert_eq!(temp_file_pid("a.csv.tmp.123"), Some(123));
+        assert_eq!(temp_file_pid("psd.tmp4567.png"), Some(4567));
+        for other in [
+            "a.csv",
+            ".tmp.12",
+            ".tmp12.png",
+            "a.tmp.png",
+            "a.tmp12x.png",
+            "a.tmp.12x",
+            "a.tmp12.svg",
+            "notes.tmp",
+            "a.tmp.-1",
+        ] {
+            assert_eq!(temp_file_pid(other), None, "{other}");
+        }
     }
 
     #[test]

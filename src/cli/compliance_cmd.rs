@@ -9,7 +9,7 @@ use clap::Args;
 use serde::Serialize;
 
 use corrugation::dynamics::compliance::{longitudinal_compliance, ComplianceLoad};
-use corrugation::model::{load_model, Model};
+use corrugation::model::{load_model, Model, MAX_HOLD_STIFFNESS, MIN_HOLD_STIFFNESS};
 use corrugation::structure::TrackStructure;
 use corrugation::units::{m_to_um, n_to_kn};
 
@@ -82,12 +82,13 @@ impl ComplianceCmd {
     /// so that a bad name or key stops early), their compliances, the files, the table.
     pub fn run(self) -> anyhow::Result<()> {
         let stiffnesses = self.check_args()?;
+        super::check_out_dir(&self.out)?;
         let models = self.models(&stiffnesses)?;
         for (_, _, m) in &models {
             // the library's default load position, mid-track
             let x = self.x.unwrap_or(0.5 * m.track_length());
-            super::check_rail_positions("--x", &[x], m)?;
-            super::check_rail_positions("--x + --ahead", &[x + self.ahead], m)?;
+            super::check_on_track("--x", &[x], m)?;
+            super::check_on_track("--x + --ahead", &[x + self.ahead], m)?;
         }
         let load = ComplianceLoad {
             vertical_n: self.vertical,
@@ -156,6 +157,11 @@ impl ComplianceCmd {
             let k: f64 = s
                 .parse()
                 .with_context(|| format!("--elastic {s}: not a number (N/m) or \"none\""))?;
+            if !(k.is_finite() && (MIN_HOLD_STIFFNESS..=MAX_HOLD_STIFFNESS).contains(&k)) {
+                anyhow::bail!(
+                    "--elastic {s}: out of range, allowed {MIN_HOLD_STIFFNESS:e} to {MAX_HOLD_STIFFNESS:e} N/m per fastening (as fastening.hold_stiffness), or \"none\""
+                );
+            }
             stiffnesses.push(k);
         }
         Ok(stiffnesses)

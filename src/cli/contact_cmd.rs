@@ -105,11 +105,14 @@ impl ContactCmd {
             grid_margin: m.contact.grid_margin,
             ..ContactCase::default()
         };
+        if let Some(dir) = &self.out {
+            super::check_out_dir(dir)?;
+        }
         let sol = solve_case(&case).context("solving the contact")?;
         let s = sol.summary();
         if let Some(dir) = &self.out {
-            sol.write_fields(dir)
-                .with_context(|| format!("writing contact fields to {}", dir.display()))?;
+            // the error names the file
+            sol.write_fields(dir)?;
         }
         if self.json {
             println!("{}", serde_json::to_string_pretty(&s)?);

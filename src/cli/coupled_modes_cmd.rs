@@ -47,15 +47,15 @@ pub struct CoupledModesCmd {
 
 impl CoupledModesCmd {
     pub fn run(self) -> anyhow::Result<()> {
-        let m = self.model.load()?;
-        super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
-        super::check_rail_positions("--at", &self.at_m, &m)?;
-        if !(self.list_to_hz.is_finite() && self.list_to_hz >= 0.0) {
+        if !(self.list_to_hz.is_finite() && self.list_to_hz > 0.0) {
             anyhow::bail!(
-                "--list-to-hz {}: allowed a finite frequency ≥ 0 Hz",
+                "--list-to-hz {}: out of range, allowed a frequency greater than 0 Hz",
                 self.list_to_hz
             );
         }
+        let m = self.model.load()?;
+        super::check_on_track("--at", &self.at_m, &m)?;
+        super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let t0 = std::time::Instant::now();
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;

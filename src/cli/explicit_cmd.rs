@@ -69,7 +69,7 @@ impl ExplicitCmd {
             );
         }
         let profile = match &self.corrugation {
-            Some(p) => Some(RailProfile::read_csv_um(p)?),
+            Some(p) => Some(super::read_profile(p, &m)?),
             None => None,
         };
         let opts = ExplicitOptions {
@@ -93,6 +93,9 @@ pub fn run_explicit(
     let pb = super::progress::bar("explicit: set-up (assembly, static solves, stable step)");
     corrugation::dynamics::setup::require_static_start(m, "explicit")?;
     let em = ExplicitModel::new(m, opts).context("building the explicit model")?;
+    let estimate = em.passage_estimate(m.run.speed(), profile)?;
+    pb.finish_and_clear();
+    eprintln!("explicit passage: estimated {estimate}");
     pb.set_message("explicit passage (contact steps)");
     let opts = PassageOptions::default();
     let rec = em

@@ -141,6 +141,7 @@ impl GrowCmd {
         let t0 = Instant::now();
         self.check_args()?;
         let m = self.model.load()?;
+        super::check_trial_profile_grid(&self.amplitudes_um, &m)?;
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
@@ -243,7 +244,7 @@ impl GrowCmd {
         }
         if self.rounds > MAX_ROUNDS {
             anyhow::bail!(
-                "--rounds {}: out of range, allowed 0 (off) to {MAX_ROUNDS} (each round runs one passage: about half a second on the default model, so {MAX_ROUNDS} rounds take about 10 minutes)",
+                "--rounds {}: out of range, at most {MAX_ROUNDS} rounds (0 = off; each round runs one passage, about half a second on the default model, so {MAX_ROUNDS} rounds take about 10 minutes)",
                 self.rounds
             );
         }

@@ -77,6 +77,7 @@ impl InitiationCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let t0 = Instant::now();
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
+        super::check_out_dir(&self.out)?;
         if let Some(v) = self.min_relative_wear {
             if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
                 anyhow::bail!("--min-relative-wear must be a number from 0 to 1 (got {v})");

@@ -80,6 +80,55 @@ pub fn check_trial_amplitudes(amplitudes_um: &[f64]) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Reads the rail profile of `--corrugation FILE` (x in m, height in µm) and checks, before
+/// any work, that the contact grid a passage of `m` over it needs is within its bound
+/// ([`corrugation::dynamics::setup::check_profile_grid`]); warns when its depth looks like a
+/// unit slip.
+pub fn read_profile(
+    path: &std::path::Path,
+    m: &Model,
+) -> anyhow::Result<corrugation::dynamics::RailProfile> {
+    let p = corrugation::dynamics::RailProfile::read_csv_um(path)?;
+    let warning = corrugation::dynamics::setup::check_profile_grid(m, p.peak_to_trough_m())
+        .map_err(|e| anyhow::anyhow!("--corrugation {}: {e}", path.display()))?;
+    if let Some(w) = warning {
+        eprintln!("warning: --corrugation {}: {w}", path.display());
+    }
+    Ok(p)
+}
+
+/// Checks, before any work, that the largest trial amplitude of `--amplitudes-um` (µm,
+/// peak-to-trough) gives a contact grid within its bound on the model `m`
+/// ([`corrugation::dynamics::setup::check_profile_grid`]); warns when it looks like a unit
+/// slip.
+pub fn check_trial_profile_grid(amplitudes_um: &[f64], m: &Model) -> anyhow::Result<()> {
+    let Some(a) = amplitudes_um.iter().copied().reduce(f64::max) else {
+        return Ok(());
+    };
+    let ptp = corrugation::units::um_to_m(a);
+    if let Some(w) = corrugation::dynamics::setup::check_profile_grid(m, ptp)
+        .map_err(|e| anyhow::anyhow!("--amplitudes-um {a}: {e}"))?
+    {
+        eprintln!("warning: --amplitudes-um {a}: {w}");
+    }
+    Ok(())
+}
+
+/// Refuses, before any work, a position of `flag` (m along the rail) off the track of `m`:
+/// 0 to the track's length, `track.bays × track.sleeper_spacing`.
+pub fn check_on_track(flag: &str, xs: &[f64], m: &Model) -> anyhow::Result<()> {
+    let length = m.track_length();
+    if let Some(x) = xs
+        .iter()
+        .find(|x| !(x.is_finite() && (0.0..=length).contains(*x)))
+    {
+        anyhow::bail!(
+            "{flag} {x}: off the track: a position in m along the rail, 0 to {length} m (the track's length, track.bays × track.sleeper_spacing)"
+        );
+    }
+    Ok(())
+}
+
 /// Refuses an `--out` that is the modal cache's directory (`--cache`, or the default one) or
 /// lies inside it, before anything is created or computed (see
 /// [`corrugation::eigen::cache::ensure_outside_cache`]).
@@ -91,38 +140,50 @@ pub fn check_out_outside_cache(
         corrugation::eigen::cache::default_cache_dir,
         std::path::Path::to_path_buf,
     );
+    check_cache_dir(&cache_dir, cache.is_some())?;
     corrugation::eigen::cache::ensure_outside_cache(out, &cache_dir)
         .map_err(|e| anyhow::anyhow!("--out: {e}"))
 }
 
-/// Refuses a rail position of `flag` (m along the rail) that is not on the track of `m`
-/// (0 to `track.bays × track.sleeper_spacing`), before any modes are loaded or solved.
-pub fn check_rail_positions(
-    flag: &str,
-    xs: &[f64],
-    m: &corrugation::model::Model,
-) -> anyhow::Result<()> {
-    let length = m.track_length();
-    if let Some(x) = xs
-        .iter()
-        .find(|x| !(x.is_finite() && (0.0..=length).contains(*x)))
-    {
-        anyhow::bail!(
-            "{flag} {x}: off the track, allowed 0 to {length} m along the rail (track.bays × track.sleeper_spacing)"
-        );
+/// Refuses a modal cache path that exists and is not a directory (`given`: it is the
+/// `--cache` flag's, else the default): the modes could not be stored there, and every run
+/// would recompute them without a word.
+pub fn check_cache_dir(dir: &std::path::Path, given: bool) -> anyhow::Result<()> {
+    match std::fs::metadata(dir) {
+        Ok(md) if !md.is_dir() => {
+            let what = if given {
+                "--cache".to_string()
+            } else {
+                "the default modal cache directory".to_string()
+            };
+            anyhow::bail!(
+                "{what} {}: is a file, not a directory: the modes could not be cached there; give a directory (created if missing){}",
+                dir.display(),
+                if given { "" } else { " with --cache" }
+            )
+        }
+        _ => Ok(()),
     }
-    Ok(())
 }
 
+/// Creates the output directory `--out` and checks that it can be written, before any work;
+/// removes the temp files a killed earlier run left in it
+/// ([`corrugation::io::remove_stale_temp_files`]: the writers' own temp names of dead
+/// processes, in this directory only).
 pub fn check_out_dir(dir: &std::path::Path) -> anyhow::Result<()> {
     let fail =
         |e: std::io::Error| anyhow::anyhow!("--out {}: cannot write there: {e}", dir.display());
     std::fs::create_dir_all(dir).map_err(fail)?;
     let probe = dir.join(format!(".write-check.{}", std::process::id()));
     std::fs::write(&probe, b"").map_err(fail)?;
-    std::fs::remove_file(&probe).map_err(fail)
+    std::fs::remove_file(&probe).map_err(fail)?;
+    corrugation::io::remove_stale_temp_files(dir).map_err(fail)?;
+    Ok(())
 }
 
+/// Every command whose flags take numbers accepts negative ones
+/// (`allow_negative_numbers`), so that its range check refuses them with the flag, the unit
+/// and the range (not clap's "unexpected argument").
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Print the resolved model (after `extends` and `--set`) as TOML.
@@ -133,33 +194,43 @@ enum Command {
     #[command(allow_negative_numbers = true)]
     Contact(contact_cmd::ContactCmd),
     /// Eigenmodes of the track and the wheel (classified, cached): modes.csv, wheel_modes.csv.
+    #[command(allow_negative_numbers = true)]
     Modes(modes_cmd::ModesCmd),
     /// One reduced-order wheel passage: contact forces, wear along the rail, PSDs, plots.
+    #[command(allow_negative_numbers = true)]
     Passage(passage_cmd::PassageCmd),
     /// One passage of the full explicit FE path (untruncated track and wheel): the files of
     /// `passage` plus explicit.json.
+    #[command(allow_negative_numbers = true)]
     Explicit(explicit_cmd::ExplicitCmd),
     /// Receptances of the rail and the wheel at the contact and the contact force per unit
     /// roughness, with their peaks (which resonances a sweep can lock on).
+    #[command(allow_negative_numbers = true)]
     Receptance(receptance_cmd::ReceptanceCmd),
     /// Trial-amplitude growth (consistency, phase, limiting amplitude); --rounds for iterative growth.
+    #[command(allow_negative_numbers = true)]
     Grow(grow_cmd::GrowCmd),
     /// The main job: modes (cached), smooth passage, trial growth, short speed sweep, report.
+    #[command(allow_negative_numbers = true)]
     Predict(predict_cmd::PredictCmd),
     /// Speed sweep (parallel, resumable, --shard I/N): frequency-selection maps, dominant
     /// wavelength and frequency vs speed.
+    #[command(allow_negative_numbers = true)]
     Sweep(sweep_cmd::SweepCmd),
     /// Join the output directories of a sharded sweep into the unsharded result.
     Merge(merge_cmd::MergeCmd),
     /// Design study from a TOML file: parameters varied over a base model, indicators per case.
     Study(study_cmd::StudyCmd),
     /// Initiation table of RPM1–RPM5 (or any models) on the smooth rail.
+    #[command(allow_negative_numbers = true)]
     Initiation(initiation_cmd::InitiationCmd),
     /// Static longitudinal compliance of RPM1–RPM5, rigid and with elastic x-holds: u_x of
     /// the rail head, web and foot ahead of a wheel load with a longitudinal force.
+    #[command(allow_negative_numbers = true)]
     Compliance(compliance_cmd::ComplianceCmd),
     /// Coupled wheel–track modes (contact linearised at the static state): frequency,
     /// damping, energy shares in wheel, rail (by family) and support.
+    #[command(allow_negative_numbers = true)]
     CoupledModes(coupled_modes_cmd::CoupledModesCmd),
     /// The modal cache: its entries (size, basis, last use); --max-size-gb or --max-idle-days
     /// remove the least recently used.

@@ -20,7 +20,7 @@ use clap::Args;
 
 use corrugation::dynamics::analysis::{analyse, wear_signal, zone_signal, Analysed};
 use corrugation::dynamics::passage::PassageOptions;
-use corrugation::dynamics::{summary::PassageSummary, RailProfile};
+use corrugation::dynamics::summary::PassageSummary;
 use corrugation::io::{write_atomic, write_csv};
 use corrugation::report::plot::{line_plot, line_plot_log_y, Series};
 
@@ -76,8 +76,9 @@ impl PassageCmd {
             self.refuse_reduced_only_flags()?;
         }
         let m = self.model.load()?;
+        self.reference.check(&m)?;
         let profile = match &self.corrugation {
-            Some(p) => Some(RailProfile::read_csv_um(p)?),
+            Some(p) => Some(super::read_profile(p, &m)?),
             None => None,
         };
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;

@@ -58,6 +58,7 @@ impl PredictCmd {
     pub fn run(self) -> anyhow::Result<()> {
         super::check_trial_amplitudes(&self.amplitudes_um)?;
         let m = self.model.load()?;
+        super::check_trial_profile_grid(&self.amplitudes_um, &m)?;
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let speeds = parse_speeds(&self.speeds)?;

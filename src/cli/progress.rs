@@ -19,8 +19,14 @@ pub const INTERVAL_VAR: &str = "CORRUGATION_PROGRESS_SECONDS";
 const DEFAULT_INTERVAL_S: f64 = 10.0;
 
 /// The plain-line interval: [`INTERVAL_VAR`] when it is a number in [0.1, 3600] s, else the
-/// default (a bad value is reported once per indicator).
+/// default (a bad value is reported once per run, however many indicators the command makes).
 fn interval() -> Duration {
+    static INTERVAL: std::sync::OnceLock<Duration> = std::sync::OnceLock::new();
+    *INTERVAL.get_or_init(read_interval)
+}
+
+/// [`interval`] read from the environment.
+fn read_interval() -> Duration {
     match std::env::var(INTERVAL_VAR) {
         Err(_) => Duration::from_secs_f64(DEFAULT_INTERVAL_S),
         Ok(v) => match v.trim().parse::<f64>() {

@@ -52,8 +52,9 @@ impl ReceptanceCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let t0 = std::time::Instant::now();
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
+        super::check_out_dir(&self.out)?;
         let m = self.model.load()?;
-        super::check_rail_positions("--at", &self.at_m, &m)?;
+        super::check_on_track("--at", &self.at_m, &m)?;
         let opts = ReceptanceOptions {
             from_hz: self.from_hz,
             to_hz: self.to_hz,

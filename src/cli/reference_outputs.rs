@@ -43,6 +43,14 @@ pub struct ReferenceArgs {
     pub no_nodal: bool,
 }
 
+impl ReferenceArgs {
+    /// Refuses, before any work, a `--nodal-at` point off the track of `m` (0 to the track's
+    /// length, `track.bays × track.sleeper_spacing`, m).
+    pub fn check(&self, m: &corrugation::model::Model) -> anyhow::Result<()> {
+        super::check_on_track("--nodal-at", &self.nodal_at_m, m)
+    }
+}
+
 /// The coupled modes at the passage speed, written to `out`, and the summary's components
 /// attributed to them ([`passage_attribution`]); prints one line per wear component.
 pub fn coupled_attribution(

@@ -47,7 +47,8 @@ impl StudyCmd {
                 .unwrap_or_else(|| "study".into());
             PathBuf::from(format!("corrugation-out/study-{stem}"))
         });
-        super::check_out_outside_cache(&out, Some(&cache_dir))?;
+        super::check_out_outside_cache(&out, self.cache.as_deref())?;
+        super::check_out_dir(&out)?;
         let plan = basis_plan(&study, &models, &ModalCache::new(&cache_dir))?;
         eprintln!("study `{}`: {plan}", study.title);
         let cache = self.cache.as_deref();

@@ -71,6 +71,23 @@ pub enum DynamicsError {
         /// The last passage's error, with the model keys to change.
         reason: String,
     },
+    /// A rail profile so deep that the contact grid lengthened for it
+    /// ([`setup::grid_for_profile`]) is beyond [`setup::MAX_PROFILE_GRID_WORK`].
+    #[error("a rail profile of peak-to-trough {ptp_um} µm needs a contact grid of {nx:.3e} × {ny} elements (about {memory_gb:.3} GB and {work_ratio:.3e} times the default 32 × 24 grid's passage time; at most {limit_ratio:.0} times): corrugation is tens to hundreds of µm peak-to-trough (heights in µm)")]
+    ProfileGrid {
+        /// The profile's peak-to-trough (µm).
+        ptp_um: f64,
+        /// Elements along x the profile needs (−; a float: it may exceed any index).
+        nx: f64,
+        /// Elements across (−).
+        ny: usize,
+        /// Estimated memory of the grid (GB).
+        memory_gb: f64,
+        /// Estimated passage work over the default grid's (−).
+        work_ratio: f64,
+        /// The largest accepted work ratio (−).
+        limit_ratio: f64,
+    },
     /// The passage diverged (non-finite state).
     #[error("the passage diverged at t = {t_s:.6} s (x = {x_m:.4} m): {what}; lower contact.grid_nx's time step (raise grid_nx) or run.fmax")]
     Diverged {
@@ -119,7 +136,7 @@ pub enum DynamicsError {
     #[error("sparse LDLᵀ of the track stiffness failed: {0}; the track must be supported (ballast stiffness > 0)")]
     StiffnessFactor(#[source] crate::eigen::EigenError),
     /// The track stiffness is singular or indefinite.
-    #[error("the track stiffness is not positive definite ({negative_pivots} negative pivots, smallest relative pivot {min_rel_pivot:e}): the track must be supported (ballast stiffness > 0)")]
+    #[error("the track stiffness is not positive definite ({negative_pivots} negative pivots, smallest relative pivot {min_rel_pivot:e}): the track must be supported in every direction (ballast.*_stiffness > 0, and the rail held by the railpad springs fastening.*_stiffness or the fastening's holds, fastening.hold_stiffness)")]
     StiffnessIndefinite {
         /// Negative pivots of the LDLᵀ.
         negative_pivots: usize,
@@ -159,7 +176,7 @@ pub enum DynamicsError {
         dofs: usize,
     },
     /// A track mode at zero frequency: the track floats.
-    #[error("track mode {mode} has ω² = {omega2_rad2_s2} rad²/s² (a rigid-body mode): the track must be supported (ballast stiffness > 0)")]
+    #[error("track mode {mode} has ω² = {omega2_rad2_s2} rad²/s² (a rigid-body mode): the track must be supported in every direction (ballast.*_stiffness > 0, and the rail held by the railpad springs fastening.*_stiffness or the fastening's holds, fastening.hold_stiffness)")]
     TrackNotSupported {
         /// Index of the mode.
         mode: usize,
@@ -229,7 +246,7 @@ pub enum DynamicsError {
         modal_m_per_n: f64,
     },
     /// The wheel's elastic static flexibility at the contact is not above its modal part.
-    #[error("wheel residual flexibility, direction {direction}: FE {fe_m_per_n:.4e} m/N is not above the modal {modal_m_per_n:.4e} m/N: the wheel modes do not belong to this stiffness (clear the modal cache entry) or run.wheel_residual_flexibility = false")]
+    #[error("wheel residual flexibility, direction {direction}: FE {fe_m_per_n:.4e} m/N is not above the modal {modal_m_per_n:.4e} m/N: the wheel modes do not belong to this stiffness (clear the modal cache entry), the wheel's support is out of scale (vehicle.primary_stiffness) or run.wheel_residual_flexibility = false")]
     WheelResidualBelowModal {
         /// Direction (0, 1, 2 = x, t, n of the contact frame).
         direction: usize,

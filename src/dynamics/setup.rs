@@ -12,6 +12,35 @@ use crate::contact::{
 use crate::model::Model;
 use crate::structure::WheelStructure;
 
+/// The largest work of a passage's contact grid lengthened for a rail profile
+/// ([`grid_for_profile`]), in the units of [`crate::model::MAX_GRID_WORK`]: the passage takes
+/// `grid_nx` steps per contact-patch length of `grid_nx × grid_ny` elements of the model's
+/// grid, so over a profile `grid_nx · nx' · grid_ny` with the lengthened `nx'`. Four times the
+/// model grid's bound (48 times the default 32 × 24 grid's passage time): room for the trial
+/// amplitudes up to 5 mm peak-to-trough on the default grid, and for 160 µm on a 64 × 64 grid.
+pub const MAX_PROFILE_GRID_WORK: usize = 4 * crate::model::MAX_GRID_WORK;
+
+/// Memory per element of a passage's contact grid (bytes), an estimate: about 20 state arrays
+/// of `f64` per element plus the FFT influence kernels on the doubled `2nx × 2ny` grid.
+pub const CONTACT_BYTES_PER_ELEMENT: f64 = 600.0;
+
+/// Peak-to-trough of a rail profile (m) above which it is not a corrugation (those are tens
+/// to hundreds of µm): a larger one is likely a unit slip (heights in mm or m where µm are
+/// read) and is warned about ([`implausible_profile`]).
+pub const PLAUSIBLE_PROFILE_PTP_M: f64 = 2e-3;
+
+/// A warning when a rail profile's peak-to-trough `ptp_m` (m) is beyond
+/// [`PLAUSIBLE_PROFILE_PTP_M`] (a likely unit slip), else `None`.
+pub fn implausible_profile(ptp_m: f64) -> Option<String> {
+    (ptp_m > PLAUSIBLE_PROFILE_PTP_M).then(|| {
+        format!(
+            "the rail profile's peak-to-trough is {} µm ({:.4} mm): corrugation is tens to hundreds of µm deep; are the heights in µm (not mm or m)?",
+            crate::units::m_to_um(ptp_m),
+            1e3 * ptp_m
+        )
+    })
+}
+
 /// The contact grid for a passage over a rail profile of peak-to-trough `ptp_m` (m): the
 /// model's grid (`contact.grid_margin` × the Hertz semi-axes) covers the static patch on a
 /// smooth rail, but over a corrugation the crests ahead of and behind the patch can touch.
@@ -19,19 +48,51 @@ use crate::structure::WheelStructure;
 /// `δ_H` only where `x²/(2R_x) ≤ δ_H + ptp`, so the grid is lengthened along x to
 /// `L_x ≥ √(2 R_x (δ_H + ptp))` with the **same element size** (hence the same time step
 /// `Δt = Δx/V`, so passages over different trial amplitudes stay comparable). Never shrinks
-/// the grid; the lateral extent is unchanged (the profile varies along x only).
-pub fn grid_for_profile(grid: GridSpec, radius_x_m: f64, approach_m: f64, ptp_m: f64) -> GridSpec {
+/// the grid; the lateral extent is unchanged (the profile varies along x only). A grid whose
+/// work is beyond [`MAX_PROFILE_GRID_WORK`] is refused ([`DynamicsError::ProfileGrid`], with
+/// its elements, memory and work) before anything is allocated.
+pub fn grid_for_profile(
+    grid: GridSpec,
+    radius_x_m: f64,
+    approach_m: f64,
+    ptp_m: f64,
+) -> Result<GridSpec, DynamicsError> {
     let need = (2.0 * radius_x_m * (approach_m + ptp_m.max(0.0))).sqrt();
     if !(need.is_finite() && need > grid.half_length_x_m) {
-        return grid;
+        return Ok(grid);
     }
     let dx = grid.dx();
-    let nx = ((2.0 * need / dx).ceil() as usize).max(grid.nx);
-    GridSpec {
+    // in f64 first: a profile in m read as µm gives an element count beyond usize
+    let nx_f = (2.0 * need / dx).ceil().max(grid.nx as f64);
+    let work = grid.nx as f64 * nx_f * grid.ny as f64;
+    if !(work <= MAX_PROFILE_GRID_WORK as f64) {
+        let elements = nx_f * grid.ny as f64;
+        return Err(DynamicsError::ProfileGrid {
+            ptp_um: crate::units::m_to_um(ptp_m),
+            nx: nx_f,
+            ny: grid.ny,
+            memory_gb: elements * CONTACT_BYTES_PER_ELEMENT / 1e9,
+            work_ratio: work / (32.0 * 32.0 * 24.0),
+            limit_ratio: MAX_PROFILE_GRID_WORK as f64 / (32.0 * 32.0 * 24.0),
+        });
+    }
+    let nx = nx_f as usize;
+    Ok(GridSpec {
         nx,
         half_length_x_m: 0.5 * nx as f64 * dx,
         ..grid
-    }
+    })
+}
+
+/// Checks, before any work, that a passage of `model` over a rail profile of peak-to-trough
+/// `ptp_m` (m) has a contact grid within [`MAX_PROFILE_GRID_WORK`] ([`grid_for_profile`] at
+/// the static Hertz approach under the wheel load; the grid's element size does not depend on
+/// the speed); returns the warning of [`implausible_profile`], if any.
+pub fn check_profile_grid(model: &Model, ptp_m: f64) -> Result<Option<String>, DynamicsError> {
+    let cfg = contact_config_for(model, model.run.speed())?;
+    let hertz = static_hertz(model, model.vehicle.wheel_load)?;
+    grid_for_profile(cfg.grid, cfg.radius_x_m, hertz.approach_m, ptp_m)?;
+    Ok(implausible_profile(ptp_m))
 }
 
 /// The factor on a contact grid's half-length per widening (−), see [`widen_grid`].
@@ -298,22 +359,28 @@ mod tests {
         );
     }
 
+    /// The reference contact's wheel radius (m), static approach (m) and an `nx × ny` grid
+    /// of margin 1.4 around its patch.
+    fn reference_grid(nx: usize, ny: usize) -> (f64, f64, GridSpec) {
+        let g = GridSpec {
+            nx,
+            ny,
+            half_length_x_m: 1.4 * 7.162e-3,
+            half_length_y_m: 1.4 * 5.387e-3,
+        };
+        (0.46, 104.1e-6, g)
+    }
+
     /// The reference contact (R 0.46 m on the R300 crown, 100 kN: a = 7.162 mm, δ_H = 104.1
     /// µm) on the default grid (44 elements, margin 1.4): closed-form half-length
     /// √(2 R (δ_H + ptp)), element size kept.
     #[test]
     fn grid_grows_with_the_corrugation_depth_at_fixed_element_size() {
-        let (r, a, delta) = (0.46, 7.162e-3, 104.1e-6);
-        let g = GridSpec {
-            nx: 44,
-            ny: 32,
-            half_length_x_m: 1.4 * a,
-            half_length_y_m: 1.4 * 5.387e-3,
-        };
+        let (r, delta, g) = reference_grid(44, 32);
         // smooth rail: √(2Rδ) = 9.79 mm < 10.03 mm → unchanged
-        assert_eq!(grid_for_profile(g, r, delta, 0.0), g);
+        assert_eq!(grid_for_profile(g, r, delta, 0.0).unwrap(), g);
         for (ptp, nx) in [(10e-6, 45), (160e-6, 69)] {
-            let w = grid_for_profile(g, r, delta, ptp);
+            let w = grid_for_profile(g, r, delta, ptp).unwrap();
             let need = (2.0 * r * (delta + ptp)).sqrt();
             assert_eq!(w.nx, nx, "ptp {ptp}");
             assert!(w.half_length_x_m >= need && w.half_length_x_m < need + w.dx());
@@ -321,7 +388,26 @@ mod tests {
             assert_eq!((w.ny, w.half_length_y_m), (g.ny, g.half_length_y_m));
         }
         // never shrinks, bad input leaves the grid alone
-        assert_eq!(grid_for_profile(g, r, f64::NAN, 1e-4), g);
+        assert_eq!(grid_for_profile(g, r, f64::NAN, 1e-4).unwrap(), g);
+    }
+
+    /// A profile whose lengthened grid is beyond the work bound is refused before anything
+    /// is allocated, with its size and memory (a height of 1e9 µm, 1 km, read as µm); 5 mm
+    /// (the largest trial amplitude) passes on this grid.
+    #[test]
+    fn a_profile_beyond_the_grid_work_bound_is_refused() {
+        let (r, delta, g) = reference_grid(32, 24);
+        assert!(grid_for_profile(g, r, delta, 5e-3).is_ok());
+        for ptp in [1e3, 1e9, f64::MAX] {
+            match grid_for_profile(g, r, delta, ptp) {
+                Err(DynamicsError::ProfileGrid { nx, memory_gb, .. }) => {
+                    assert!(nx > 1e5 && memory_gb > 1.0, "{ptp}: {nx} {memory_gb}")
+                }
+                other => panic!("{ptp}: {other:?}"),
+            }
+        }
+        assert!(implausible_profile(160e-6).is_none());
+        assert!(implausible_profile(3e-3).is_some());
     }
 }
 
@@ -478,7 +564,7 @@ pub fn passage_contact(
 ) -> Result<TransientRolling, DynamicsError> {
     check_speed(speed_m_per_s)?;
     let mut cfg = contact_config_for(model, speed_m_per_s)?;
-    cfg.grid = passage_grid(&cfg, profile, widening);
+    cfg.grid = passage_grid(&cfg, profile, widening)?;
     TransientRolling::new(cfg).map_err(DynamicsError::ContactGrid)
 }
 
@@ -488,14 +574,14 @@ pub fn passage_grid(
     cfg: &TransientConfig,
     profile: Option<(&RailProfile, f64)>,
     widening: GridWidening,
-) -> GridSpec {
+) -> Result<GridSpec, DynamicsError> {
     let grid = match profile {
         Some((p, approach_m)) => {
-            grid_for_profile(cfg.grid, cfg.radius_x_m, approach_m, p.peak_to_trough_m())
+            grid_for_profile(cfg.grid, cfg.radius_x_m, approach_m, p.peak_to_trough_m())?
         }
         None => cfg.grid,
     };
-    widen_grid(grid, widening)
+    Ok(widen_grid(grid, widening))
 }
 
 /// The static Hertz patch of the model's wheel on its rail crown under a vertical load

@@ -27,6 +27,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod audit;
+pub mod estimate;
 mod ledger;
 mod local;
 pub mod model;
@@ -94,6 +95,21 @@ pub enum ExplicitError {
         part: &'static str,
         /// The estimated ω_max (rad/s).
         omega_max: f64,
+    },
+    /// The passage's estimated time is beyond
+    /// [`estimate::MAX_EXPLICIT_SECONDS`] ([`estimate::ExplicitEstimate`]).
+    #[error("{key} = {value}: the explicit passage would take {estimate}, beyond the bound of {limit_h:.0} h; {advice}")]
+    TooLong {
+        /// The model key that drives the work (`explicit.time_step`, `run.speed_kmh`).
+        key: &'static str,
+        /// Its value, with its unit.
+        value: String,
+        /// The estimate, with its basis.
+        estimate: String,
+        /// The bound (h).
+        limit_h: f64,
+        /// What to change.
+        advice: &'static str,
     },
     /// A static solve failed.
     #[error("static start of the {part}: {reason}")]

@@ -44,6 +44,7 @@ use std::time::Instant;
 use stepper::{RailHeights, Stepper};
 
 use super::audit::EnergyAudit;
+use super::estimate::{ExplicitEstimate, MAX_EXPLICIT_SECONDS};
 use super::ledger::State;
 use super::model::ExplicitModel;
 use super::operator::StepScratch;
@@ -205,10 +206,59 @@ impl ExplicitModel {
         )?;
         if w.any() {
             let cfg = contact_config_for(&self.model, speed_m_per_s)?;
-            let grid = passage_grid(&cfg, profile.map(|p| (p, self.hertz_approach_m)), w);
+            let grid = passage_grid(&cfg, profile.map(|p| (p, self.hertz_approach_m)), w)?;
             rec.record.contact_grid_widened = Some(WidenedGrid::new(&grid, w));
         }
         Ok(rec)
+    }
+
+    /// The estimated time and memory of a passage at `speed_m_per_s` (m/s) over `profile`
+    /// on the model's contact grid ([`ExplicitEstimate`]), before it runs.
+    pub fn passage_estimate(
+        &self,
+        speed_m_per_s: f64,
+        profile: Option<&RailProfile>,
+    ) -> Result<ExplicitEstimate, ExplicitError> {
+        let contact = passage_contact(
+            &self.model,
+            speed_m_per_s,
+            profile.map(|p| (p, self.hertz_approach_m)),
+            GridWidening::default(),
+        )?;
+        let e = self.estimate(&self.plan(speed_m_per_s, &contact));
+        self.check_estimate(speed_m_per_s, &e)?;
+        Ok(e)
+    }
+
+    /// Refuses a passage whose estimate `e` is beyond [`MAX_EXPLICIT_SECONDS`], naming the
+    /// key that drives its sub-steps: `explicit.time_step` when one is given, else the speed.
+    fn check_estimate(
+        &self,
+        speed_m_per_s: f64,
+        e: &ExplicitEstimate,
+    ) -> Result<(), ExplicitError> {
+        if e.within_bound() {
+            return Ok(());
+        }
+        let (key, value, advice) = match self.opts.time_step_s {
+            Some(dt) => (
+                "explicit.time_step",
+                format!("{dt:e} s"),
+                "leave explicit.time_step out (the stable step is then computed) or raise it",
+            ),
+            None => (
+                "run.speed_kmh",
+                format!("{:.4} km/h", crate::units::ms_to_kmh(speed_m_per_s)),
+                "raise run.speed_kmh (the sub-steps per contact step grow as 1/V) or coarsen the mesh (mesh.element_length, track.bays)",
+            ),
+        };
+        Err(ExplicitError::TooLong {
+            key,
+            value,
+            estimate: e.to_string(),
+            limit_h: MAX_EXPLICIT_SECONDS / 3600.0,
+            advice,
+        })
     }
 
     /// One passage (as [`Self::passage`]) on the contact grid widened by `widening`.
@@ -227,16 +277,21 @@ impl ExplicitModel {
             widening,
         )?;
         let plan = self.plan(speed_m_per_s, &contact);
+        self.check_estimate(speed_m_per_s, &self.estimate(&plan))?;
         let mut heights = RailHeights::new(profile, &contact);
         let start = self.static_start(&plan, &mut contact, &mut heights)?;
         let mut run = Stepper::new(self, plan, contact, heights, start, popts)?;
         let t_wall = Instant::now();
         let cpu0 = crate::progress::cpu_seconds();
         progress(0, plan.n_steps);
+        // every 16 contact steps, and at least once a second when a step is slow (a small
+        // explicit.time_step), so that the progress shows its rate and ETA from the start
+        let mut reported = Instant::now();
         for n in 1..=plan.n_steps {
             run.step(n)?;
-            if n % 16 == 0 || n == plan.n_steps {
+            if n % 16 == 0 || n == plan.n_steps || reported.elapsed().as_secs_f64() >= 1.0 {
                 progress(n, plan.n_steps);
+                reported = Instant::now();
             }
         }
         Ok(run.finish(t_wall, cpu0))

@@ -94,7 +94,7 @@ impl FasteningModel {
 /// `directions` is tied to the ground by spring-dampers instead.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ElasticHolds {
-    /// Stiffness per fastening (N/m), greater than 0 and at most [`MAX_HOLD_STIFFNESS`].
+    /// Stiffness per fastening (N/m), [`MIN_HOLD_STIFFNESS`] to [`MAX_HOLD_STIFFNESS`].
     pub stiffness: f64,
     /// Damping per fastening (N·s/m), 0 to 1e12; `None` (not given) is 0.
     pub damping: Option<f64>,
@@ -169,7 +169,7 @@ pub struct DirectionHold {
     /// `columns`/`rows`; empty otherwise.
     #[serde(default)]
     pub indices: Vec<usize>,
-    /// Elastic hold: stiffness per fastening (N/m), greater than 0 and at most
+    /// Elastic hold: stiffness per fastening (N/m), [`MIN_HOLD_STIFFNESS`] to
     /// [`MAX_HOLD_STIFFNESS`]; shared equally by the listed columns/rows or grid points.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stiffness: Option<f64>,
@@ -181,6 +181,12 @@ pub struct DirectionHold {
 fn region_none() -> RigidRegion {
     RigidRegion::None
 }
+
+/// Smallest stiffness per fastening of an elastic hold (N/m): 100 times below the softest
+/// fastening clip (1e6 N/m); a hold far softer leaves the rail, where the hold alone holds it
+/// in a direction (no railpad spring there), nearly free: at 1 N/m the track gets a rigid-body
+/// mode.
+pub const MIN_HOLD_STIFFNESS: f64 = 1e4;
 
 /// Largest stiffness per fastening of an elastic hold (N/m): far above any railpad, so that
 /// "k → ∞" can be approached, yet small enough to keep K well conditioned.
@@ -469,8 +475,8 @@ struct FasteningFile {
     /// fastening. Not allowed with `model = "custom"` (give `elastic` regions there).
     #[serde(default, skip_serializing_if = "HoldKind::is_rigid")]
     hold: HoldKind,
-    /// Stiffness per fastening of the elastic holds of a preset (N/m), greater than 0 and at
-    /// most [`MAX_HOLD_STIFFNESS`]; required with `hold = "elastic"`.
+    /// Stiffness per fastening of the elastic holds of a preset (N/m), [`MIN_HOLD_STIFFNESS`]
+    /// to [`MAX_HOLD_STIFFNESS`]; required with `hold = "elastic"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     hold_stiffness: Option<f64>,
     /// Damping per fastening of the elastic holds of a preset (N·s/m), 0 to 1e12; default 0.

@@ -3,6 +3,7 @@
 
 use super::{
     DirectionHold, Fastening, HoldPattern, Holds, ModelError, RigidRegion, MAX_HOLD_STIFFNESS,
+    MIN_HOLD_STIFFNESS,
 };
 
 /// Largest damping per fastening of an elastic hold (N·s/m), as for the railpad dampers.
@@ -131,13 +132,13 @@ impl Fastening {
 }
 
 fn check_stiffness(file: &str, key: &str, k: f64) -> Result<(), ModelError> {
-    if !(k.is_finite() && k > 0.0 && k <= MAX_HOLD_STIFFNESS) {
+    if !(k.is_finite() && (MIN_HOLD_STIFFNESS..=MAX_HOLD_STIFFNESS).contains(&k)) {
         return Err(ModelError::OutOfRange {
             file: file.into(),
             key: key.into(),
             value: k.to_string(),
             allowed: format!(
-                "greater than 0 and at most {MAX_HOLD_STIFFNESS:e} N/m per fastening (a rigid hold: rigid = …)"
+                "{MIN_HOLD_STIFFNESS:e} to {MAX_HOLD_STIFFNESS:e} N/m per fastening (an elastic hold stands for a fastening clip, 1e6 to 1e9 N/m; far below, the rail held by it alone in a direction is nearly free; a rigid hold: rigid = …)"
             ),
         });
     }

@@ -24,12 +24,12 @@ mod validate;
 
 pub use fastening::{
     Axis, DirectionHold, ElasticHolds, Fastening, FasteningModel, HoldKind, HoldPattern, Holds,
-    Preset, RigidRegion, MAX_HOLD_STIFFNESS,
+    Preset, RigidRegion, MAX_HOLD_STIFFNESS, MIN_HOLD_STIFFNESS,
 };
 pub use load::{apply_override, load_model, load_model_str, ModelSource, BUILTIN_DUTCH};
 pub use validate::{
-    DENSITY_KG_M3, MAX_GRID_WORK, MAX_WHEEL_LOAD_N, POISSON_RATIO, SPEED_KMH, SPEED_KMH_WHY,
-    YOUNGS_MODULUS_PA,
+    DENSITY_KG_M3, MAX_GRID_WORK, MAX_WHEEL_LOAD_N, MIN_PRIMARY_STIFFNESS, POISSON_RATIO,
+    SPEED_KMH, SPEED_KMH_WHY, YOUNGS_MODULUS_PA,
 };
 
 use serde::{Deserialize, Serialize};
@@ -439,7 +439,7 @@ pub struct Vehicle {
     /// Static vertical wheel load (N), greater than 0 and at most [`MAX_WHEEL_LOAD_N`];
     /// default model 100e3. The sprung mass is (load / g − unsprung mass).
     pub wheel_load: f64,
-    /// Primary suspension stiffness per wheel (N/m), greater than 0 and at most 1e10;
+    /// Primary suspension stiffness per wheel (N/m), [`MIN_PRIMARY_STIFFNESS`] (1e3) to 1e10;
     /// default model 1.15e6.
     pub primary_stiffness: f64,
     /// Primary suspension damping per wheel (N·s/m), 0 to 1e9; default model 2.5e3.
@@ -526,8 +526,9 @@ pub struct Run {
     pub speed_kmh: f64,
     /// Distance from the wheel's start to the solution zone (m), 0 to 10; default model 0.3.
     pub solution_zone_offset: f64,
-    /// Length of the solution zone (m), greater than 0, the zone fitting on the track with its
-    /// offset; default model 1.
+    /// Length of the solution zone (m), at least 0.08 (the longest wavelength of the wear
+    /// analysis band, 20–80 mm, which the zone's record must hold), the zone fitting on the
+    /// track with its offset; default model 1.
     pub solution_zone_length: f64,
     /// Highest natural frequency kept in the modal bases of the passage (Hz), 100 to 20000;
     /// default model 5000.

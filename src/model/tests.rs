@@ -327,12 +327,12 @@ fn elastic_holds_parse_and_nonsense_is_an_error_naming_the_key() {
         (
             "{ elastic = \"columns\", indices = [1], stiffness = 0.0 }",
             "fastening.custom.x.stiffness",
-            "greater than 0",
+            "1e4 to 1e13 N/m",
         ),
         (
             "{ elastic = \"columns\", indices = [1], stiffness = -1e9 }",
             "fastening.custom.x.stiffness",
-            "greater than 0",
+            "1e4 to 1e13 N/m",
         ),
         (
             "{ elastic = \"columns\", indices = [1] }",

@@ -23,11 +23,15 @@ impl Model {
         self.validate_start(&mut c)?;
         let run = &self.run;
         let room = self.track_length() - run.solution_zone_offset;
-        c.pos(
+        // The wear analysis band-passes the zone's record to 20-80 mm: it must hold the
+        // band's longest wavelength.
+        let shortest = crate::spectral::BandPass::default().lambda_max_m;
+        c.range(
             "run.solution_zone_length",
             run.solution_zone_length,
+            shortest,
             room,
-            "m (zone must fit on the track)",
+            "m (at least the analysis band's longest wavelength, which the zone's record must hold; the zone must fit on the track after run.solution_zone_offset)",
         )?;
         self.validate_ends(&mut c)?;
         Ok(())
@@ -224,11 +228,12 @@ impl Model {
     fn validate_vehicle(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
         let v = &self.vehicle;
         c.pos("vehicle.wheel_load", v.wheel_load, MAX_WHEEL_LOAD_N, "N")?;
-        c.pos(
+        c.range(
             "vehicle.primary_stiffness",
             v.primary_stiffness,
+            MIN_PRIMARY_STIFFNESS,
             1e10,
-            "N/m",
+            "N/m (primary suspensions are 1e5 to 1e7 N/m; far below, the wheel hangs free and its static flexibility swamps the elastic one)",
         )?;
         c.range(
             "vehicle.primary_damping",
@@ -420,6 +425,12 @@ pub const SPEED_KMH: [f64; 2] = [40.0, 500.0];
 
 /// The unit of [`SPEED_KMH`] and why it starts at 40 km/h, for the range errors.
 pub const SPEED_KMH_WHY: &str = "km/h (below 40 km/h the passage's contact step, one contact-grid element over the speed, is too long for the explicit coupling of the contact and the structures: the normal force grows step by step until the patch leaves the contact grid)";
+
+/// Smallest primary suspension stiffness per wheel (N/m): a 10 t sprung mass on it bounces
+/// at 0.05 Hz, far below any railway primary suspension (1e5 to 1e7 N/m, 1 to 10 Hz); the
+/// wheel then loses contact at once (a passage says so), and near 1 N/m its free-body
+/// flexibility swamps the elastic one in the wheel's residual-flexibility check.
+pub const MIN_PRIMARY_STIFFNESS: f64 = 1e3;
 
 /// Largest static wheel load (N): 50 t per wheel, beyond any railway axle load.
 pub const MAX_WHEEL_LOAD_N: f64 = 500e3;

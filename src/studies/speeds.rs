@@ -27,8 +27,20 @@ pub const MIN_SPEED_KMH: f64 = crate::model::SPEED_KMH[0];
 /// Highest accepted speed (km/h): that of `run.speed_kmh` ([`crate::model::SPEED_KMH`]).
 pub const MAX_SPEED_KMH: f64 = crate::model::SPEED_KMH[1];
 
-/// Most speeds in one sweep.
+/// Most speeds in one speed list (−): a sweep's or `predict`'s `--speeds`, a study's
+/// `speeds_kmh`; checked by [`check_speed_count`].
 pub const MAX_SPEEDS: usize = 100_000;
+
+/// Refuses a speed list of more than [`MAX_SPEEDS`] speeds (`n`, a float: a range's count may
+/// exceed any index), with the reason naming the cap; the one check of every speed list.
+pub fn check_speed_count(n: f64) -> Result<(), String> {
+    if n <= MAX_SPEEDS as f64 {
+        return Ok(());
+    }
+    Err(format!(
+        "{n} speeds; at most {MAX_SPEEDS} in one speed list (use a larger step or fewer speeds)"
+    ))
+}
 
 /// Parses `start:stop:step` or `v1,v2,...` (km/h) into sorted speeds (km/h).
 pub fn parse_speeds(spec: &str) -> Result<Vec<f64>, StudiesError> {
@@ -59,12 +71,7 @@ pub fn parse_speeds(spec: &str) -> Result<Vec<f64>, StudiesError> {
             return Err(bad(format!("stop {b} is below start {a}")));
         }
         let k_max = ((b - a) / s + 1e-9).floor();
-        if k_max + 1.0 > MAX_SPEEDS as f64 {
-            return Err(bad(format!(
-                "{} speeds; at most {MAX_SPEEDS}: use a larger step",
-                k_max + 1.0
-            )));
-        }
+        check_speed_count(k_max + 1.0).map_err(bad)?;
         (0..=k_max as usize)
             .map(|k| ((a + k as f64 * s) * 1e9).round() / 1e9)
             .collect::<Vec<f64>>()
@@ -73,9 +80,7 @@ pub fn parse_speeds(spec: &str) -> Result<Vec<f64>, StudiesError> {
             .split(',')
             .map(num)
             .collect::<Result<Vec<f64>, StudiesError>>()?;
-        if v.len() > MAX_SPEEDS {
-            return Err(bad(format!("{} speeds; at most {MAX_SPEEDS}", v.len())));
-        }
+        check_speed_count(v.len() as f64).map_err(bad)?;
         v
     };
     if let Some(v) = speeds

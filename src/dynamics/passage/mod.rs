@@ -616,7 +616,7 @@ impl PassageEngine {
         w: GridWidening,
     ) -> Result<WidenedGrid, DynamicsError> {
         let cfg = self.contact_config(v)?;
-        let grid = passage_grid(&cfg, profile.map(|p| (p, self.hertz_approach_m)), w);
+        let grid = passage_grid(&cfg, profile.map(|p| (p, self.hertz_approach_m)), w)?;
         Ok(WidenedGrid::new(&grid, w))
     }
 

@@ -54,6 +54,16 @@ impl ExplicitModel {
         }
     }
 
+    /// The estimated time and memory of a passage of `plan`
+    /// ([`crate::explicit::estimate::ExplicitEstimate`]).
+    pub(super) fn estimate(&self, plan: &Plan) -> crate::explicit::estimate::ExplicitEstimate {
+        crate::explicit::estimate::ExplicitEstimate::new(
+            plan.n_steps,
+            [plan.nt, plan.nw],
+            self.dofs(),
+        )
+    }
+
     /// The static start: the contact brought to steady rolling at the static load, the
     /// structures' static state with the wheel's rigid modes placed and turned to match it,
     /// and the rotating wheel (`None` for the fixed one) with its rolling velocity added.

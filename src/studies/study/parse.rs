@@ -174,12 +174,12 @@ fn parameters(raw: &StudyFile, file: &str) -> Result<Vec<Parameter>, StudiesErro
     Ok(parameters)
 }
 
-/// Equal lengths for `combine = "zip"`, and at most [`MAX_CASES`] cases.
+/// Equal lengths for `combine = "zip"`, and at most [`MAX_CASES`] cases; returns the cases.
 fn check_case_count(
     parameters: &[Parameter],
     combine: Combine,
     file: &str,
-) -> Result<(), StudiesError> {
+) -> Result<f64, StudiesError> {
     if combine == Combine::Zip {
         let n = parameters[0].values.len();
         if let Some(i) = parameters.iter().position(|p| p.values.len() != n) {
@@ -204,6 +204,23 @@ fn check_case_count(
             format!("{n_cases} cases; at most {MAX_CASES}"),
         ));
     }
+    Ok(n_cases)
+}
+
+/// The study's passages, cases × speeds, at most
+/// [`MAX_SPEEDS`](crate::studies::speeds::MAX_SPEEDS) (a sweep's most).
+fn check_passage_count(n_cases: f64, speeds: usize, file: &str) -> Result<(), StudiesError> {
+    let max = crate::studies::speeds::MAX_SPEEDS;
+    if n_cases * speeds as f64 > max as f64 {
+        return Err(key_error(
+            file,
+            "speeds_kmh",
+            format!(
+                "{n_cases} cases × {speeds} speeds = {} passages; at most {max} in one study (fewer speeds or parameter values)",
+                n_cases * speeds as f64
+            ),
+        ));
+    }
     Ok(())
 }
 
@@ -212,6 +229,8 @@ fn check_speeds(v: &[f64], file: &str) -> Result<(), StudiesError> {
     if v.is_empty() {
         return Err(key_error(file, "speeds_kmh", "is empty"));
     }
+    crate::studies::speeds::check_speed_count(v.len() as f64)
+        .map_err(|r| key_error(file, "speeds_kmh", r))?;
     if let Some(s) = v.iter().find(|s| {
         !(s.is_finite()
             && **s >= crate::studies::speeds::MIN_SPEED_KMH
@@ -282,9 +301,10 @@ impl Study {
             ModelSource::File(dir.join(&raw.model))
         };
         let parameters = parameters(&raw, file)?;
-        check_case_count(&parameters, raw.combine, file)?;
+        let n_cases = check_case_count(&parameters, raw.combine, file)?;
         if let Some(v) = &raw.speeds_kmh {
             check_speeds(v, file)?;
+            check_passage_count(n_cases, v.len(), file)?;
         }
         let criterion = raw.criterion.unwrap_or_default();
         check_criterion(&criterion, file)?;
