@@ -47,6 +47,7 @@ pub struct CoupledModesCmd {
 
 impl CoupledModesCmd {
     pub fn run(self) -> anyhow::Result<()> {
+        corrugation::lists::check_no_repeats("--at", "m", &self.at_m)?;
         let m = self.model.load()?;
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;

@@ -233,6 +233,7 @@ impl GrowCmd {
         {
             anyhow::bail!("--rate-check wavelengths must lie in [20, 80] mm (got {l})");
         }
+        corrugation::lists::check_no_repeats("--rate-check", "mm", &self.rate_check)?;
         if self.rounds > 0 && self.passages_per_round == 0 {
             anyhow::bail!(
                 "--passages-per-round 0 with --rounds {}: a round needs at least 1 passage",

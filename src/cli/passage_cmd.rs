@@ -72,6 +72,7 @@ impl PassageCmd {
     }
 
     pub fn run(self) -> anyhow::Result<()> {
+        self.reference.check()?;
         if self.engine == super::engine::Engine::Explicit {
             self.refuse_reduced_only_flags()?;
         }

@@ -43,6 +43,14 @@ pub struct ReferenceArgs {
     pub no_nodal: bool,
 }
 
+impl ReferenceArgs {
+    /// Refuses a `--nodal-at` point given twice.
+    pub fn check(&self) -> anyhow::Result<()> {
+        corrugation::lists::check_no_repeats("--nodal-at", "m", &self.nodal_at_m)?;
+        Ok(())
+    }
+}
+
 /// The coupled modes at the passage speed, written to `out`, and the summary's components
 /// attributed to them ([`passage_attribution`]); prints one line per wear component.
 pub fn coupled_attribution(
