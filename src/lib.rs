@@ -17,6 +17,7 @@
 //! |---|---|
 //! | [`units`] | the one place where mm, µm and km/h are converted to SI |
 //! | [`io`] | atomic output files: CSV, `.npy`, text |
+//! | [`lists`] | list-valued inputs: a value given twice is refused |
 //! | [`model`] | the TOML model file: parameters with units, `extends`, `--set` overrides, validation |
 //! | [`mesh`] | UIC54 section, rail extrusion, sleepers, wheel of revolution |
 //! | [`fe`] | hexahedral elements, spring-dampers, constraints, sparse K/M/C assembly |
@@ -41,6 +42,7 @@ pub mod explicit;
 pub mod fe;
 pub mod growth;
 pub mod io;
+pub mod lists;
 pub mod mesh;
 pub mod model;
 pub mod progress;

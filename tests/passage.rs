@@ -847,3 +847,64 @@ fn damping_product_beside_the_contact_gives_the_same_bits_on_one_and_two_threads
     );
     assert!(rel(w1, w0) < 1e-5, "dominant wavelength {w1} vs {w0} mm");
 }
+
+/// The coupled wheel–track modes (frequencies, damping, energy shares, contact amplitudes)
+/// are the same bits on one thread as on two: the passage and grow outputs
+/// `coupled_modes.*` and `coupled_attribution.json` do not depend on the thread count.
+#[test]
+fn coupled_modes_give_the_same_bits_on_one_and_two_threads() {
+    let m = small_model();
+    let p = PreparedModel::new(&m, &cache(), &PassageOptions::default()).expect("modal model");
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("thread pool")
+            .install(|| {
+                let t = std::time::Instant::now();
+                let c = p.coupled_modes(m.run.speed(), &[]).expect("coupled modes");
+                eprintln!("coupled modes on {threads} thread(s): {:?}", t.elapsed());
+                c
+            })
+    };
+    let (one, two) = (on(1), on(2));
+    assert!(!one.modes.is_empty());
+    assert_eq!(one, two);
+}
+
+/// A rail profile the wheel's contact never meets changes nothing: one whose crest lies
+/// beyond the rail the contact passes over (flat where the contact is) gives the smooth
+/// rail's summary bit for bit (the contact grid is lengthened only for the heights the
+/// contact meets), and one entirely off that rail is refused, naming both ranges.
+#[test]
+fn a_profile_off_the_wheels_travel_changes_nothing_or_is_refused() {
+    use corrugation::dynamics::{DynamicsError, RailProfile};
+    let m = small_model();
+    let opts = PassageOptions::default();
+    let p = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
+    let v = m.run.speed();
+    let [_, t1] = p.engine.rail_under_contact_m(v).unwrap();
+    let beyond = RailProfile::new(
+        vec![t1 - 0.2, t1 + 0.01, t1 + 0.1, t1 + 0.3],
+        vec![0.0, 0.0, 200e-6, 0.0],
+    )
+    .unwrap();
+    let summary = |profile: Option<&RailProfile>| {
+        let rec = p
+            .engine
+            .passage(v, profile, &opts, None)
+            .expect("passage runs");
+        let mut s = corrugation::dynamics::analysis::summarise(&rec).unwrap();
+        s.seconds = 0.0; // wall-clock time
+        s
+    };
+    let (smooth, partly) = (summary(None), summary(Some(&beyond)));
+    assert_eq!(
+        serde_json::to_string(&partly).unwrap(),
+        serde_json::to_string(&smooth).unwrap()
+    );
+    let off = RailProfile::new(vec![t1 + 0.001, t1 + 0.1], vec![0.0, 100e-6]).unwrap();
+    let e = p.engine.passage(v, Some(&off), &opts, None).unwrap_err();
+    assert!(matches!(e, DynamicsError::ProfileOffTravel { .. }), "{e}");
+    assert!(e.to_string().contains("entirely off"), "{e}");
+}

@@ -5,7 +5,7 @@
 mod common;
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
@@ -480,7 +480,75 @@ fn merged_shards_equal_the_unsharded_sweep_file_by_file() {
         ),
         "{e}"
     );
+    // A failed merge leaves nothing behind: no output directory (no `run.key` in it), no
+    // staging directory.
+    let left_behind = |base: &Path| -> Vec<String> {
+        std::fs::read_dir(base)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with('m') || n == "x" || n == "y" || n.contains("merging"))
+            .filter(|n| n != "merged")
+            .collect()
+    };
+    assert_eq!(left_behind(&base), Vec::<String>::new());
+    // Merging again into the merged directory (same sweep) gives the same files.
+    merge(&shard_dirs, &merged).unwrap();
+    assert_eq!(tree(&merged), a);
+    merge_refuses_overlaps_bad_files_and_other_folders(&base, &shard_dirs);
+    assert_eq!(left_behind(&base), Vec::<String>::new());
     std::fs::remove_dir_all(base).ok();
+}
+
+/// `merge --out` that is, lies inside or contains a shard (also spelled with `..`) is
+/// refused and the shard left as it was; a corrupt speed file is named in its own shard; a
+/// folder that is not a sweep is named as such.
+fn merge_refuses_overlaps_bad_files_and_other_folders(base: &Path, shard_dirs: &[PathBuf]) {
+    let before = tree(&shard_dirs[1]);
+    for (out, rel) in [
+        (shard_dirs[1].clone(), "is"),
+        (shard_dirs[0].join("..").join("shard1"), "is"),
+        (shard_dirs[1].join("sub"), "lies inside"),
+        (base.to_path_buf(), "contains"),
+    ] {
+        let e = merge(shard_dirs, &out).unwrap_err();
+        assert!(
+            matches!(&e, StudiesError::OutputOverlapsShard { relation, .. } if *relation == rel),
+            "{}: {e}",
+            out.display()
+        );
+        assert_eq!(tree(&shard_dirs[1]), before);
+    }
+    assert!(!shard_dirs[1].join("sub").exists());
+    // a truncated speed file of shard 2 is blamed on that file, not on its merged copy
+    let plan: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(shard_dirs[2].join("speeds").join("shard.json")).unwrap(),
+    )
+    .unwrap();
+    let all: Vec<f64> = serde_json::from_value(plan["speeds_kmh"].clone()).unwrap();
+    let bad = speed_file(&shard_dirs[2], Shard { index: 2, count: 3 }.select(&all)[0]);
+    let saved = std::fs::read(&bad).unwrap();
+    std::fs::write(&bad, b"{ \"speed_kmh\": 8").unwrap();
+    let e = merge(shard_dirs, &base.join("m5")).unwrap_err();
+    assert!(
+        matches!(&e, StudiesError::BadFile { path, .. } if path == &bad),
+        "{e}"
+    );
+    std::fs::write(&bad, saved).unwrap();
+    // a folder that is not a sweep output
+    let plain = base.join("plain");
+    std::fs::create_dir_all(plain.join("data")).unwrap();
+    let e = merge(&[shard_dirs[0].clone(), plain.clone()], &base.join("m6")).unwrap_err();
+    assert!(
+        matches!(&e, StudiesError::NotASweep { dir, .. } if dir == &plain),
+        "{e}"
+    );
+    let text = e.to_string();
+    assert!(
+        text.contains("is not a sweep output directory")
+            && text.contains("speeds/run.key")
+            && text.contains("corrugation sweep"),
+        "{text}"
+    );
 }
 
 /// A sweep whose passages fail (error, then panic) at some speeds keeps every finished speed;
@@ -821,6 +889,66 @@ fn cli_reports_bad_models_speeds_and_study_keys() {
         err.contains("bad.toml") && err.contains("parameter[0].value"),
         "{err}"
     );
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// A list that gives a value twice is refused before any work, naming the flag or key and
+/// the value: speeds (command line and study file), trial amplitudes, rate-check
+/// wavelengths, variants, contact positions, nodal points, study parameter values and cases.
+#[test]
+fn a_list_that_gives_a_value_twice_is_refused() {
+    let tmp = tmpdir("twice");
+    let dir = tmp.path().to_path_buf();
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    let study = |name: &str, speeds: &str, values: &str| {
+        let p = dir.join(name);
+        let text = format!(
+            "model = \"builtin:dutch\"\n{speeds}\n[[parameter]]\nkey = \"fastening.model\"\nvalues = {values}\n"
+        );
+        std::fs::write(&p, text).unwrap();
+        p.display().to_string()
+    };
+    let speeds = study("speeds.toml", "speeds_kmh = [100, 120, 100]", r#"["RPM1"]"#);
+    let values = study("values.toml", "", r#"["RPM1", "RPM2", "RPM1"]"#);
+    // (command line, the list's flag or key, the repeated value)
+    let cases = [
+        ("sweep --speeds 100,120,100", "speeds", "100 km/h"),
+        ("predict --speeds 100,100", "speeds", "100 km/h"),
+        ("grow --amplitudes-um 40,80,40", "--amplitudes-um", "40 µm"),
+        ("predict --amplitudes-um 40,40", "--amplitudes-um", "40 µm"),
+        ("grow --rate-check 41,41", "--rate-check", "41 mm"),
+        ("initiation --variants RPM1,RPM1", "--variants", "RPM1"),
+        ("compliance --variants RPM2,RPM2", "--variants", "RPM2"),
+        ("coupled-modes --at 1.5 --at 1.5", "--at", "1.5 m"),
+        ("receptance --at 2 --at 2", "--at", "2 m"),
+        (
+            "passage --nodal-at 1.2 --nodal-at 1.2",
+            "--nodal-at",
+            "1.2 m",
+        ),
+        ("study SPEEDS", "speeds_kmh", "100 km/h"),
+        ("study VALUES", "parameter[0].values", "RPM1"),
+    ];
+    for (line, list, value) in cases {
+        let mut args: Vec<&str> = line
+            .split(' ')
+            .map(|a| match a {
+                "SPEEDS" => speeds.as_str(),
+                "VALUES" => values.as_str(),
+                a => a,
+            })
+            .collect();
+        if args[0] != "study" {
+            args.extend(["--out", out]);
+        }
+        let (code, _, err) = common::run(&args);
+        assert!(code != 0 && code != 101, "{line}: {err}");
+        assert!(common::is_one_line_error(&err), "{line}: {err}");
+        for w in [list, value, "twice"] {
+            assert!(err.contains(w), "{line}: `{err}` lacks `{w}`");
+        }
+    }
     std::fs::remove_dir_all(dir).ok();
 }
 

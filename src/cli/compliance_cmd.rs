@@ -164,6 +164,11 @@ impl ComplianceCmd {
             }
             stiffnesses.push(k);
         }
+        let variants: Vec<&str> = self.variants.iter().map(|v| v.trim()).collect();
+        corrugation::lists::check_no_repeats("--variants", "", &variants)?;
+        let elastic: Vec<&str> = self.elastic.iter().map(|v| v.trim()).collect();
+        corrugation::lists::check_no_repeats("--elastic", "", &elastic)?;
+        corrugation::lists::check_no_repeats("--elastic", "N/m", &stiffnesses)?;
         Ok(stiffnesses)
     }
 

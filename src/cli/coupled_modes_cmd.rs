@@ -53,6 +53,7 @@ impl CoupledModesCmd {
                 self.list_to_hz
             );
         }
+        corrugation::lists::check_no_repeats("--at", "m", &self.at_m)?;
         let m = self.model.load()?;
         super::check_on_track("--at", &self.at_m, &m)?;
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;

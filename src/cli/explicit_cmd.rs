@@ -93,6 +93,9 @@ pub fn run_explicit(
     let pb = super::progress::bar("explicit: set-up (assembly, static solves, stable step)");
     corrugation::dynamics::setup::require_static_start(m, "explicit")?;
     let em = ExplicitModel::new(m, opts).context("building the explicit model")?;
+    if let Some(w) = em.check_profile(m.run.speed(), profile)? {
+        corrugation::progress::Progress::warn(&pb, &w);
+    }
     let estimate = em.passage_estimate(m.run.speed(), profile)?;
     pb.finish_and_clear();
     eprintln!("explicit passage: estimated {estimate}");

@@ -237,6 +237,7 @@ impl GrowCmd {
         {
             anyhow::bail!("--rate-check wavelengths must lie in [20, 80] mm (got {l})");
         }
+        corrugation::lists::check_no_repeats("--rate-check", "mm", &self.rate_check)?;
         if self.passages_per_round == 0 {
             anyhow::bail!(
                 "--passages-per-round 0: out of range, allowed at least 1 passage (a round's wear is one passage's times this count)"

@@ -87,6 +87,14 @@ impl InitiationCmd {
         if !(v.is_finite() && v >= 0.0) {
             anyhow::bail!("--max-wavelength-deviation must be a finite number ≥ 0 (got {v})");
         }
+        let variants: Vec<&str> = self.variants.iter().map(|v| v.trim()).collect();
+        corrugation::lists::check_no_repeats("--variants", "", &variants)?;
+        let models: Vec<String> = self
+            .models
+            .iter()
+            .map(|f| f.display().to_string())
+            .collect();
+        corrugation::lists::check_no_repeats("--models", "", &models)?;
         // Each model's own threshold unless the flag overrides it.
         let criterion_of = |m: &corrugation::model::Model| InitiationCriterion {
             min_relative_wear: self

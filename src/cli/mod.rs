@@ -77,6 +77,7 @@ pub fn check_trial_amplitudes(amplitudes_um: &[f64]) -> anyhow::Result<()> {
             bad.map_or("an empty list".into(), |a| format!("{a} µm"))
         );
     }
+    corrugation::lists::check_no_repeats("--amplitudes-um", "µm", amplitudes_um)?;
     Ok(())
 }
 

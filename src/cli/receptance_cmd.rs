@@ -51,6 +51,7 @@ pub struct ReceptanceCmd {
 impl ReceptanceCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let t0 = std::time::Instant::now();
+        corrugation::lists::check_no_repeats("--at", "m", &self.at_m)?;
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let m = self.model.load()?;

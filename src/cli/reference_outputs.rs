@@ -44,9 +44,10 @@ pub struct ReferenceArgs {
 }
 
 impl ReferenceArgs {
-    /// Refuses, before any work, a `--nodal-at` point off the track of `m` (0 to the track's
-    /// length, `track.bays × track.sleeper_spacing`, m).
+    /// Refuses, before any work, a `--nodal-at` point given twice or off the track of `m` (0
+    /// to the track's length, `track.bays × track.sleeper_spacing`, m).
     pub fn check(&self, m: &corrugation::model::Model) -> anyhow::Result<()> {
+        corrugation::lists::check_no_repeats("--nodal-at", "m", &self.nodal_at_m)?;
         super::check_on_track("--nodal-at", &self.nodal_at_m, m)
     }
 }

@@ -393,6 +393,66 @@ fn state_matrix(sys: &CoupledSystem<'_>, lin: &ContactLinearisation) -> Mat<f64>
     a
 }
 
+/// Parallelism of the dense eigen-solve of the state matrix: faer splits its work into this
+/// many parts whatever the size of the rayon pool it runs on, so the eigenpairs are the same
+/// bits on one thread as on two or more (faer's default, the pool's thread count, splits
+/// the work by the thread count and so rounds differently).
+const EIGEN_PARTS: usize = 2;
+
+/// The eigenvalues and right eigenvectors (columns) of the real matrix `a`, complex pairs
+/// as conjugate columns (as faer's `Mat::eigen`), computed with [`EIGEN_PARTS`] parts.
+fn real_eigen(a: &Mat<f64>) -> Result<(Vec<c64>, Mat<c64>), DynamicsError> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd;
+    let n = a.nrows();
+    let par = faer::Par::rayon(EIGEN_PARTS);
+    let mut u_real = Mat::<f64>::zeros(n, n);
+    let mut s_re = faer::diag::Diag::<f64>::zeros(n);
+    let mut s_im = faer::diag::Diag::<f64>::zeros(n);
+    let scratch = evd::evd_scratch::<f64>(
+        n,
+        evd::ComputeEigenvectors::No,
+        evd::ComputeEigenvectors::Yes,
+        par,
+        Default::default(),
+    );
+    evd::evd_real(
+        a.as_ref(),
+        s_re.as_mut(),
+        s_im.as_mut(),
+        None,
+        Some(u_real.as_mut()),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )
+    .map_err(|e| DynamicsError::CoupledEigen {
+        detail: format!("{e:?}"),
+    })?;
+    let mut s = vec![c64::new(0.0, 0.0); n];
+    let mut u = Mat::<c64>::zeros(n, n);
+    let mut j = 0;
+    while j < n {
+        let (re, im) = (s_re[j], s_im[j]);
+        if im == 0.0 || j + 1 == n {
+            s[j] = c64::new(re, 0.0);
+            for i in 0..n {
+                u[(i, j)] = c64::new(u_real[(i, j)], 0.0);
+            }
+            j += 1;
+        } else {
+            s[j] = c64::new(re, im);
+            s[j + 1] = c64::new(re, -im);
+            for i in 0..n {
+                u[(i, j)] = c64::new(u_real[(i, j)], u_real[(i, j + 1)]);
+                u[(i, j + 1)] = c64::new(u_real[(i, j)], -u_real[(i, j + 1)]);
+            }
+            j += 2;
+        }
+    }
+    Ok((s, u))
+}
+
 /// The oscillatory eigenpairs of the coupled system with a damped frequency above
 /// [`super::passage::RIGID_HZ`] (`Im λ > 0`; the wheel's rigid-body motion on the contact
 /// gives eigenvalues at or near zero), ascending in frequency. Overdamped (real) eigenvalues
@@ -412,11 +472,7 @@ pub fn coupled_state_modes(
     }
     let m = mt + mw;
     let a = state_matrix(sys, lin);
-    let eig = a.eigen().map_err(|e| DynamicsError::CoupledEigen {
-        detail: format!("{e:?}"),
-    })?;
-    let s = eig.S().column_vector();
-    let u = eig.U();
+    let (s, u) = real_eigen(&a)?;
     let lag: Vec<usize> = (0..2)
         .filter(|&d| lin.tangential_stiffness_n_per_m(d).is_some())
         .collect();

@@ -40,6 +40,15 @@ pub enum DynamicsError {
         /// What is wrong and what to change.
         reason: String,
     },
+    /// A rail profile that lies entirely off the rail the passage's contact passes over: it
+    /// would change nothing but the contact grid.
+    #[error("rail profile: its samples span x = {:.4} … {:.4} m, entirely off the rail the wheel's contact passes over in the passage, x = {:.4} … {:.4} m (the wheel's travel from its start through the solution zone, ± the contact grid's half-length); give the profile in track coordinates over that stretch", profile_m[0], profile_m[1], travel_m[0], travel_m[1])]
+    ProfileOffTravel {
+        /// First and last sample of the profile (m).
+        profile_m: [f64; 2],
+        /// The rail under the contact grid during the passage (m).
+        travel_m: [f64; 2],
+    },
     /// The time step is too large for the highest mode kept.
     #[error("time step {dt_s:.3e} s is unstable for the highest mode ({f_max_hz:.0} Hz): the limit is {dt_limit_s:.3e} s; lower run.fmax or refine the contact grid (contact.grid_nx: the time step is grid dx / speed)")]
     UnstableTimeStep {
@@ -333,6 +342,36 @@ impl RailProfile {
             .height_m
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
+        if hi >= lo {
+            hi - lo
+        } else {
+            0.0
+        }
+    }
+
+    /// Peak-to-trough height (m) of the profile on the stretch `[a, b]` (m) of the rail: of
+    /// its samples inside it and its interpolated heights at `a` and `b` when they lie within
+    /// the samples. On a stretch that holds every sample it is [`Self::peak_to_trough_m`].
+    pub fn peak_to_trough_within_m(&self, [a, b]: [f64; 2]) -> f64 {
+        let n = self.x_m.len();
+        if n == 0 {
+            return 0.0;
+        }
+        let inside = |x: f64| x >= self.x_m[0] && x <= self.x_m[n - 1];
+        let ends = [a, b]
+            .into_iter()
+            .filter(|&x| inside(x))
+            .map(|x| self.height_at(x));
+        let (lo, hi) = self
+            .x_m
+            .iter()
+            .zip(&self.height_m)
+            .filter(|(x, _)| (a..=b).contains(*x))
+            .map(|(_, h)| *h)
+            .chain(ends)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
                 (l.min(v), h.max(v))
             });
         if hi >= lo {

@@ -409,6 +409,45 @@ mod tests {
         assert!(implausible_profile(160e-6).is_none());
         assert!(implausible_profile(3e-3).is_some());
     }
+
+    /// A profile off the rail the contact passes over is refused with both ranges, one that
+    /// partly overlaps it is warned about, and only the heights on it lengthen the grid.
+    #[test]
+    fn a_profile_is_checked_against_the_rail_the_contact_passes_over() {
+        let travel = [1.0, 3.0];
+        let p = |x0: f64, x1: f64, h: [f64; 3]| {
+            RailProfile::new(vec![x0, 0.5 * (x0 + x1), x1], h.to_vec()).unwrap()
+        };
+        let off = p(3.01, 4.0, [0.0, 1e-4, 0.0]);
+        let e = check_profile_on_travel(&off, travel).unwrap_err();
+        assert!(matches!(e, DynamicsError::ProfileOffTravel { .. }), "{e}");
+        let text = e.to_string();
+        assert!(
+            text.contains("3.0100 … 4.0000 m") && text.contains("1.0000 … 3.0000 m"),
+            "{text}"
+        );
+        assert!(check_profile_on_travel(&p(0.0, 0.99, [0.0; 3]), travel).is_err());
+        let inside = p(1.5, 2.5, [0.0, 1e-4, -1e-4]);
+        assert_eq!(check_profile_on_travel(&inside, travel).unwrap(), None);
+        assert_eq!(
+            inside.peak_to_trough_within_m(travel),
+            inside.peak_to_trough_m()
+        );
+        // the 100 µm crest at x = 3.5 lies beyond the travel: met heights are flat
+        let partly = p(2.0, 5.0, [0.0, 1e-4, 0.0]);
+        let w = check_profile_on_travel(&partly, travel)
+            .unwrap()
+            .expect("a warning");
+        assert!(
+            w.contains("2.0000 … 5.0000 m") && w.contains("never met"),
+            "{w}"
+        );
+        // heights interpolated at the travel's end: 0 at 2 m, 2/3 of the crest at 3 m
+        let met = partly.peak_to_trough_within_m(travel);
+        assert!((met - 1e-4 * 2.0 / 3.0).abs() < 1e-15, "{met}");
+        let flat = RailProfile::new(vec![2.0, 3.2, 3.5, 5.0], vec![0.0, 0.0, 1e-4, 0.0]).unwrap();
+        assert_eq!(flat.peak_to_trough_within_m(travel), 0.0);
+    }
 }
 
 /// The constant loads on the wheel substructure as free-DOF vectors (N): gravity on every
@@ -552,14 +591,81 @@ pub fn contact_config_for(
     Ok(cfg)
 }
 
+/// A rail profile on a passage: what [`passage_grid`] lengthens the contact grid for.
+#[derive(Clone, Copy, Debug)]
+pub struct ProfileOnRail<'a> {
+    /// The profile.
+    pub profile: &'a RailProfile,
+    /// The static Hertz approach (m).
+    pub approach_m: f64,
+    /// The rail the contact grid passes over in the passage, `[from, to]` (m):
+    /// [`rail_under_contact_m`].
+    pub travel_m: [f64; 2],
+}
+
+impl<'a> ProfileOnRail<'a> {
+    /// `profile` (if any) with the static Hertz approach `approach_m` (m) on the rail
+    /// `travel_m()` gives (called only for a profile).
+    pub fn of<E>(
+        profile: Option<&'a RailProfile>,
+        approach_m: f64,
+        travel_m: impl FnOnce() -> Result<[f64; 2], E>,
+    ) -> Result<Option<Self>, E> {
+        profile
+            .map(|p| {
+                Ok(ProfileOnRail {
+                    profile: p,
+                    approach_m,
+                    travel_m: travel_m()?,
+                })
+            })
+            .transpose()
+    }
+}
+
+/// The stretch of rail `[from, to]` (m) the contact grid `grid` (the model's, around the
+/// static patch) passes over in a passage whose wheel starts at `x_start_m` and runs until
+/// the grid has left the solution zone ending at `zone_end_m` (m): from the start less the
+/// grid's half-length `L` to the last contact position (`zone end + L + 2Δx`, and a step of
+/// rounding) plus `L`. Heights of a rail profile outside it are never sampled.
+pub fn rail_under_contact_m(x_start_m: f64, zone_end_m: f64, grid: &GridSpec) -> [f64; 2] {
+    let (l, dx) = (grid.half_length_x_m, grid.dx());
+    [x_start_m - l, zone_end_m + 2.0 * l + 3.0 * dx]
+}
+
+/// Checks a rail profile against the rail the contact passes over (`travel_m`,
+/// [`rail_under_contact_m`]): [`DynamicsError::ProfileOffTravel`] when its samples lie
+/// entirely off it; the warning to give when they only partly overlap it (the heights off
+/// it are never met), `None` when they lie on it.
+pub fn check_profile_on_travel(
+    profile: &RailProfile,
+    travel_m: [f64; 2],
+) -> Result<Option<String>, DynamicsError> {
+    let x = &profile.x_m;
+    let span = [x[0], x[x.len() - 1]];
+    if span[1] < travel_m[0] || span[0] > travel_m[1] {
+        return Err(DynamicsError::ProfileOffTravel {
+            profile_m: span,
+            travel_m,
+        });
+    }
+    Ok((span[0] < travel_m[0] || span[1] > travel_m[1]).then(|| {
+        format!(
+            "the rail profile spans x = {:.4} … {:.4} m but the wheel's contact passes over x = {:.4} … {:.4} m only (its travel ± the contact grid's half-length): the heights outside are never met",
+            span[0], span[1], travel_m[0], travel_m[1]
+        )
+    }))
+}
+
 /// The transient contact of a passage of `model` at `speed_m_per_s` (m/s, finite and > 0):
-/// [`contact_config_for`], with the grid lengthened for a rail profile `(profile, static Hertz
-/// approach (m))` by [`grid_for_profile`], then widened by `widening` ([`widen_grid`]; the
-/// default leaves it). The reduced and the explicit passage use it alike.
+/// [`contact_config_for`], with the grid lengthened for a rail profile by
+/// [`grid_for_profile`] (for the part of it the contact meets: [`passage_grid`]), then widened
+/// by `widening` ([`widen_grid`]; the default leaves it). The reduced and the explicit
+/// passage use it alike.
 pub fn passage_contact(
     model: &Model,
     speed_m_per_s: f64,
-    profile: Option<(&RailProfile, f64)>,
+    profile: Option<ProfileOnRail<'_>>,
     widening: GridWidening,
 ) -> Result<TransientRolling, DynamicsError> {
     check_speed(speed_m_per_s)?;
@@ -569,16 +675,22 @@ pub fn passage_contact(
 }
 
 /// The grid of [`passage_contact`] from the model's contact configuration `cfg`
-/// ([`contact_config_for`]): lengthened for the profile, then widened.
+/// ([`contact_config_for`]): lengthened for the peak-to-trough height of the part of the
+/// profile on the rail the contact passes over
+/// ([`RailProfile::peak_to_trough_within_m`]; heights it never meets change nothing), then
+/// widened.
 pub fn passage_grid(
     cfg: &TransientConfig,
-    profile: Option<(&RailProfile, f64)>,
+    profile: Option<ProfileOnRail<'_>>,
     widening: GridWidening,
 ) -> Result<GridSpec, DynamicsError> {
     let grid = match profile {
-        Some((p, approach_m)) => {
-            grid_for_profile(cfg.grid, cfg.radius_x_m, approach_m, p.peak_to_trough_m())?
-        }
+        Some(p) => grid_for_profile(
+            cfg.grid,
+            cfg.radius_x_m,
+            p.approach_m,
+            p.profile.peak_to_trough_within_m(p.travel_m),
+        )?,
         None => cfg.grid,
     };
     Ok(widen_grid(grid, widening))

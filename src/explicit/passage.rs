@@ -57,8 +57,9 @@ use crate::dynamics::{
     passage::PassageOptions,
     record::{PassageRecord, RailPointRecord},
     setup::{
-        contact_config_for, passage_contact, passage_grid, rigid_least_norm, run_widening_grid,
-        GridWidening, WidenedGrid,
+        check_profile_on_travel, contact_config_for, passage_contact, passage_grid,
+        rail_under_contact_m, rigid_least_norm, run_widening_grid, GridWidening, ProfileOnRail,
+        WidenedGrid,
     },
 };
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
@@ -195,6 +196,7 @@ impl ExplicitModel {
         popts: &PassageOptions,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<ExplicitRecord, ExplicitError> {
+        self.check_profile(speed_m_per_s, profile)?;
         let (mut rec, w) = run_widening_grid(
             |w| self.passage_on_grid(speed_m_per_s, profile, popts, &mut *progress, w),
             |e: &ExplicitError| match e {
@@ -206,7 +208,13 @@ impl ExplicitModel {
         )?;
         if w.any() {
             let cfg = contact_config_for(&self.model, speed_m_per_s)?;
-            let grid = passage_grid(&cfg, profile.map(|p| (p, self.hertz_approach_m)), w)?;
+            let grid = passage_grid(
+                &cfg,
+                ProfileOnRail::of(profile, self.hertz_approach_m, || {
+                    self.rail_under_contact_m(speed_m_per_s)
+                })?,
+                w,
+            )?;
             rec.record.contact_grid_widened = Some(WidenedGrid::new(&grid, w));
         }
         Ok(rec)
@@ -222,7 +230,9 @@ impl ExplicitModel {
         let contact = passage_contact(
             &self.model,
             speed_m_per_s,
-            profile.map(|p| (p, self.hertz_approach_m)),
+            ProfileOnRail::of(profile, self.hertz_approach_m, || {
+                self.rail_under_contact_m(speed_m_per_s)
+            })?,
             GridWidening::default(),
         )?;
         let e = self.estimate(&self.plan(speed_m_per_s, &contact));
@@ -261,6 +271,31 @@ impl ExplicitModel {
         })
     }
 
+    /// The rail the contact grid passes over in a passage at `v` (m/s), as the reduced
+    /// passage's ([`rail_under_contact_m`] of the model's grid).
+    pub fn rail_under_contact_m(&self, v: f64) -> Result<[f64; 2], ExplicitError> {
+        let cfg = contact_config_for(&self.model, v)?;
+        Ok(rail_under_contact_m(
+            self.x_start_m,
+            self.zone_m[1],
+            &cfg.grid,
+        ))
+    }
+
+    /// Checks `profile` against the rail a passage at `v` (m/s) passes over
+    /// ([`check_profile_on_travel`]): an error when it lies entirely off it, the warning to
+    /// give when it only partly overlaps it.
+    pub fn check_profile(
+        &self,
+        v: f64,
+        profile: Option<&RailProfile>,
+    ) -> Result<Option<String>, ExplicitError> {
+        match profile {
+            Some(p) => Ok(check_profile_on_travel(p, self.rail_under_contact_m(v)?)?),
+            None => Ok(None),
+        }
+    }
+
     /// One passage (as [`Self::passage`]) on the contact grid widened by `widening`.
     fn passage_on_grid(
         &self,
@@ -273,7 +308,9 @@ impl ExplicitModel {
         let mut contact = passage_contact(
             &self.model,
             speed_m_per_s,
-            profile.map(|p| (p, self.hertz_approach_m)),
+            ProfileOnRail::of(profile, self.hertz_approach_m, || {
+                self.rail_under_contact_m(speed_m_per_s)
+            })?,
             widening,
         )?;
         let plan = self.plan(speed_m_per_s, &contact);

@@ -105,6 +105,25 @@ pub enum StudiesError {
         /// The run-key file compared.
         file: &'static str,
     },
+    /// A merge whose output directory is one of its shard directories, lies inside one, or
+    /// contains one (it would rewrite or mix with its own input).
+    #[error("merge: --out {} {relation} the shard directory {}; give an output directory apart from every shard", out.display(), shard.display())]
+    OutputOverlapsShard {
+        /// The output directory.
+        out: PathBuf,
+        /// The shard directory it overlaps.
+        shard: PathBuf,
+        /// `is`, `lies inside` or `contains`.
+        relation: &'static str,
+    },
+    /// A merge input that is not the output directory of a sweep.
+    #[error("merge: {} is not a sweep output directory (it has no {missing}); a sweep directory holds sweep.json and speeds/ with run.key, shard.json and one <speed>.json per speed, as written by `corrugation sweep --shard I/N --out DIR`", dir.display())]
+    NotASweep {
+        /// The directory given.
+        dir: PathBuf,
+        /// The file it lacks, e.g. `speeds/run.key`.
+        missing: String,
+    },
     /// A merge output directory that already holds passages of another model.
     #[error("merge: {} already holds passages of another model; use an empty --out", out.display())]
     OutputOfAnotherModel {

@@ -92,16 +92,9 @@ pub fn parse_speeds(spec: &str) -> Result<Vec<f64>, StudiesError> {
             crate::model::SPEED_KMH_WHY
         )));
     }
+    crate::lists::check_no_repeats_by_key("speeds", "km/h", &speeds, |v| speed_file_stem(*v))
+        .map_err(|e| bad(format!("{e} (speeds closer than 1e-6 km/h count as equal)")))?;
     speeds.sort_by(f64::total_cmp);
-    if let Some(w) = speeds
-        .windows(2)
-        .find(|w| speed_file_stem(w[0]) == speed_file_stem(w[1]))
-    {
-        return Err(bad(format!(
-            "speed {} km/h is given twice (speeds closer than 1e-6 km/h count as equal)",
-            w[0]
-        )));
-    }
     Ok(speeds)
 }
 

@@ -55,8 +55,9 @@ use super::record::{Histories, PassageRecord};
 use super::reduced::{dot, ContactFrame, ModalSystem, RailContactLine, WheelContact};
 use super::residual::ResidualFlexibility;
 use super::setup::{
-    check_speed, contact_config_for, passage_contact, passage_grid, rigid_least_norm,
-    run_widening_grid, steady_contact, GridWidening, WheelLoads, WidenedGrid,
+    check_profile_on_travel, check_speed, contact_config_for, passage_contact, passage_grid,
+    rail_under_contact_m, rigid_least_norm, run_widening_grid, steady_contact, GridWidening,
+    ProfileOnRail, WheelLoads, WidenedGrid,
 };
 use super::wheel_residual::WheelResidual;
 use ledger::{Ledger, LedgerStep};
@@ -581,6 +582,10 @@ impl PassageEngine {
     /// ([`run_widening_grid`]); the record's `contact_grid_widened` then names the grid it ran
     /// on, and `progress` is warned. A passage that stays inside the model's grid runs once,
     /// bit for bit as before.
+    ///
+    /// A profile entirely off the rail the contact passes over
+    /// ([`Self::rail_under_contact_m`]) is refused; one that only partly overlaps it is
+    /// warned about on `progress` ([`check_profile_on_travel`]).
     pub fn passage(
         &self,
         speed_m_per_s: f64,
@@ -588,6 +593,12 @@ impl PassageEngine {
         opts: &PassageOptions,
         progress: Option<&dyn crate::progress::Progress>,
     ) -> Result<PassageRecord, DynamicsError> {
+        if let Some(p) = profile {
+            let travel = self.rail_under_contact_m(speed_m_per_s)?;
+            if let (Some(w), Some(pr)) = (check_profile_on_travel(p, travel)?, progress) {
+                pr.warn(&w);
+            }
+        }
         let (mut rec, w) = run_widening_grid(
             |w| self.passage_on_grid(speed_m_per_s, profile, opts, progress, w),
             |e: &DynamicsError| Some(e),
@@ -616,8 +627,25 @@ impl PassageEngine {
         w: GridWidening,
     ) -> Result<WidenedGrid, DynamicsError> {
         let cfg = self.contact_config(v)?;
-        let grid = passage_grid(&cfg, profile.map(|p| (p, self.hertz_approach_m)), w)?;
+        let grid = passage_grid(
+            &cfg,
+            ProfileOnRail::of(profile, self.hertz_approach_m, || {
+                self.rail_under_contact_m(v)
+            })?,
+            w,
+        )?;
         Ok(WidenedGrid::new(&grid, w))
+    }
+
+    /// The rail the contact grid passes over in a passage at `v` (m/s):
+    /// [`rail_under_contact_m`] of the model's grid.
+    pub fn rail_under_contact_m(&self, v: f64) -> Result<[f64; 2], DynamicsError> {
+        let cfg = self.contact_config(v)?;
+        Ok(rail_under_contact_m(
+            self.x_start_m,
+            self.zone_m[1],
+            &cfg.grid,
+        ))
     }
 
     /// The static loads of the contact at the start: normal force `W / cos α` (N),
@@ -680,7 +708,9 @@ impl PassageEngine {
             let mut contact = passage_contact(
                 &self.model,
                 v,
-                profile.map(|p| (p, self.hertz_approach_m)),
+                ProfileOnRail::of(profile, self.hertz_approach_m, || {
+                    self.rail_under_contact_m(v)
+                })?,
                 widening,
             )?;
             contact

@@ -180,6 +180,22 @@ fn check_case_count(
     combine: Combine,
     file: &str,
 ) -> Result<f64, StudiesError> {
+    if combine == Combine::Grid {
+        for (i, p) in parameters.iter().enumerate() {
+            let key = format!("parameter[{i}].values");
+            crate::lists::check_no_repeats_by_key(&key, "", &p.values, |v| v.to_string())
+                .map_err(|e| {
+                    key_error(
+                        file,
+                        &key,
+                        format!(
+                            "{} is given twice (the grid would run its cases twice); give each value once",
+                            e.value
+                        ),
+                    )
+                })?;
+        }
+    }
     if combine == Combine::Zip {
         let n = parameters[0].values.len();
         if let Some(i) = parameters.iter().position(|p| p.values.len() != n) {
@@ -192,6 +208,27 @@ fn check_case_count(
                 ),
             ));
         }
+        let cases: Vec<String> = (0..n)
+            .map(|k| {
+                let set: Vec<String> = parameters
+                    .iter()
+                    .map(|p| format!("{} = {}", p.key, p.values[k]))
+                    .collect();
+                set.join(", ")
+            })
+            .collect();
+        crate::lists::check_no_repeats_by_key("parameter", "", &cases, |c| c.clone()).map_err(
+            |e| {
+                key_error(
+                    file,
+                    "parameter",
+                    format!(
+                        "the case `{}` is given twice (combine = \"zip\"); give each case once",
+                        e.value
+                    ),
+                )
+            },
+        )?;
     }
     let n_cases: f64 = match combine {
         Combine::Grid => parameters.iter().map(|p| p.values.len() as f64).product(),
@@ -246,6 +283,10 @@ fn check_speeds(v: &[f64], file: &str) -> Result<(), StudiesError> {
             ),
         ));
     }
+    crate::lists::check_no_repeats_by_key("speeds_kmh", "km/h", v, |s| {
+        crate::studies::speeds::speed_file_stem(*s)
+    })
+    .map_err(|e| key_error(file, "speeds_kmh", e.to_string()))?;
     Ok(())
 }
 
