@@ -65,7 +65,7 @@ pub fn grid_for_profile(
     // in f64 first: a profile in m read as µm gives an element count beyond usize
     let nx_f = (2.0 * need / dx).ceil().max(grid.nx as f64);
     let work = grid.nx as f64 * nx_f * grid.ny as f64;
-    if !(work <= MAX_PROFILE_GRID_WORK as f64) {
+    if work.is_nan() || work > MAX_PROFILE_GRID_WORK as f64 {
         let elements = nx_f * grid.ny as f64;
         return Err(DynamicsError::ProfileGrid {
             ptp_um: crate::units::m_to_um(ptp_m),
