@@ -23,10 +23,20 @@ pub struct CacheCmd {
     cache: Option<PathBuf>,
     /// Remove the least recently used entries until the cache holds at most this many GB
     /// (10⁹ bytes); ≥ 0.
-    #[arg(long, value_name = "GB", allow_negative_numbers = true)]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        value_name = "GB",
+        allow_negative_numbers = true
+    )]
     max_size_gb: Option<f64>,
     /// Remove the entries not used for more than this many days; ≥ 0.
-    #[arg(long, value_name = "DAYS", allow_negative_numbers = true)]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        value_name = "DAYS",
+        allow_negative_numbers = true
+    )]
     max_idle_days: Option<f64>,
     /// Only print what would be removed.
     #[arg(long)]

@@ -33,6 +33,7 @@ pub struct ComplianceCmd {
     /// its x-holds made elastic (fastening.hold = "elastic", hold_directions = ["x"]).
     /// Give --elastic none for rigid holds only.
     #[arg(
+        allow_hyphen_values = true,
         long,
         value_delimiter = ',',
         default_value = "1e9",
@@ -40,16 +41,31 @@ pub struct ComplianceCmd {
     )]
     elastic: Vec<String>,
     /// Vertical wheel load on the rail (N).
-    #[arg(long, default_value_t = 100e3, value_name = "N")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 100e3,
+        value_name = "N"
+    )]
     vertical: f64,
     /// Longitudinal force on the rail, along +x (N).
-    #[arg(long, default_value_t = 15e3, value_name = "N")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 15e3,
+        value_name = "N"
+    )]
     longitudinal: f64,
     /// Load position along the rail (m); default mid-track.
-    #[arg(long, value_name = "M")]
+    #[arg(allow_hyphen_values = true, long, value_name = "M")]
     x: Option<f64>,
     /// Distance ahead of the load where u_x is reported (m).
-    #[arg(long, default_value_t = 0.1, value_name = "M")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 0.1,
+        value_name = "M"
+    )]
     ahead: f64,
     /// Output directory.
     #[arg(long, default_value = "corrugation-out/compliance", value_name = "DIR")]
@@ -192,8 +208,8 @@ impl ComplianceCmd {
         }
         let mut models = Vec::new();
         for (name, k, sets) in &cases {
-            let m =
-                load_model(&self.model.source(), sets).with_context(|| format!("model {name}"))?;
+            let m = load_model(&self.model.source(), sets)
+                .with_context(|| format!("the model of --variants {name}"))?;
             models.push((name.clone(), *k, m));
         }
         Ok(models)

@@ -22,21 +22,31 @@ pub struct ContactCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Normal load (N). Default: vehicle.wheel_load.
-    #[arg(long, value_name = "N")]
+    #[arg(allow_hyphen_values = true, long, value_name = "N")]
     normal_load: Option<f64>,
     /// Prescribed longitudinal creepage (−; positive = braking).
-    #[arg(long, value_name = "X", conflicts_with = "traction_coefficient")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        value_name = "X",
+        conflicts_with = "traction_coefficient"
+    )]
     creepage: Option<f64>,
     /// Prescribed traction coefficient F_x/N (−; positive = driving). Default:
     /// contact.traction_coefficient.
-    #[arg(long, value_name = "T")]
+    #[arg(allow_hyphen_values = true, long, value_name = "T")]
     traction_coefficient: Option<f64>,
     /// Friction coefficient (−). Default: contact.friction.
-    #[arg(long, value_name = "MU")]
+    #[arg(allow_hyphen_values = true, long, value_name = "MU")]
     friction: Option<f64>,
     /// 1 = steady rolling; K > 1 = transient rolling from rest over K grid steps (at most
     /// 10000: a grid point crosses the patch in about 40 steps).
-    #[arg(long, value_name = "K", default_value_t = 1)]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        value_name = "K",
+        default_value_t = 1
+    )]
     steps: usize,
     /// Print the result as one JSON object.
     #[arg(long)]

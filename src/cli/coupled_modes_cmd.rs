@@ -25,10 +25,15 @@ pub struct CoupledModesCmd {
     model: ModelArgs,
     /// Contact positions (m along the rail); default: the mid-span and the sleeper nearest
     /// the centre of the solution zone.
-    #[arg(long = "at", value_name = "M")]
+    #[arg(allow_hyphen_values = true, long = "at", value_name = "M")]
     at_m: Vec<f64>,
     /// Highest frequency listed on the terminal (Hz; the files hold every mode).
-    #[arg(long, default_value_t = 3000.0, value_name = "HZ")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 3000.0,
+        value_name = "HZ"
+    )]
     list_to_hz: f64,
     /// Output directory.
     #[arg(

@@ -93,7 +93,10 @@ pub fn run_explicit(
     let pb = super::progress::bar("explicit: set-up (assembly, static solves, stable step)");
     corrugation::dynamics::setup::require_static_start(m, "explicit")?;
     let em = ExplicitModel::new(m, opts).context("building the explicit model")?;
-    if let Some(w) = em.check_profile(m.run.speed(), profile)? {
+    if let Some(w) = em
+        .check_profile(m.run.speed(), profile)
+        .context("--corrugation")?
+    {
         corrugation::progress::Progress::warn(&pb, &w);
     }
     let estimate = em.passage_estimate(m.run.speed(), profile)?;

@@ -52,6 +52,7 @@ pub struct GrowCmd {
     model: ModelArgs,
     /// Trial amplitudes 2A_max (peak-to-trough, µm), comma separated.
     #[arg(
+        allow_hyphen_values = true,
         long,
         value_delimiter = ',',
         default_value = "10,40,80,160",
@@ -59,17 +60,32 @@ pub struct GrowCmd {
     )]
     amplitudes_um: Vec<f64>,
     /// Also run iterative growth for this many rounds (0 = off), at most [`MAX_ROUNDS`].
-    #[arg(long, default_value_t = 0, value_name = "N")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 0,
+        value_name = "N"
+    )]
     rounds: usize,
     /// Passages per round of the iterative growth (1 or more).
-    #[arg(long, default_value_t = 1000, value_name = "N")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 1000,
+        value_name = "N"
+    )]
     passages_per_round: usize,
     /// Skip the growth-rate spectrum (`growth_rate.csv`).
     #[arg(long)]
     no_rate: bool,
     /// Check the growth-rate spectrum against passages over 1 µm sinusoidal corrugations at
     /// these wavelengths (mm, within 20–80), comma separated: `rate_check.csv`.
-    #[arg(long, value_delimiter = ',', value_name = "MM,...")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        value_delimiter = ',',
+        value_name = "MM,..."
+    )]
     rate_check: Vec<f64>,
     /// Skip the coupled wheel–track modes and the attribution of the selected frequencies.
     #[arg(long)]

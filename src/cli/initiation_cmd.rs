@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use anyhow::Context;
 use clap::Args;
 
 use corrugation::model::{load_model, ModelSource};
@@ -30,17 +31,22 @@ pub struct InitiationCmd {
     #[arg(long = "models", num_args = 1.., value_name = "FILE")]
     models: Vec<PathBuf>,
     /// Speed (km/h); default: the model's run.speed_kmh.
-    #[arg(long, value_name = "KMH")]
+    #[arg(allow_hyphen_values = true, long, value_name = "KMH")]
     speed: Option<f64>,
     /// Initiation threshold on the wear's band RMS relative to its mean (−, 0 to 1); default:
     /// each model's `wear.initiation_threshold` (0.01 in the shipped models).
-    #[arg(long, value_name = "RATIO")]
+    #[arg(allow_hyphen_values = true, long, value_name = "RATIO")]
     min_relative_wear: Option<f64>,
     /// Largest relative deviation of F_L's dominant wavelength from the wear's (−).
-    #[arg(long, default_value_t = InitiationCriterion::DEFAULT_MAX_WAVELENGTH_DEVIATION, value_name = "RATIO")]
+    #[arg(allow_hyphen_values = true, long, default_value_t = InitiationCriterion::DEFAULT_MAX_WAVELENGTH_DEVIATION, value_name = "RATIO")]
     max_wavelength_deviation: f64,
     /// PSD peaks per signal in the table.
-    #[arg(long, default_value_t = 3, value_name = "N")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 3,
+        value_name = "N"
+    )]
     peaks: usize,
     /// Output directory.
     #[arg(long, default_value = "corrugation-out/initiation", value_name = "DIR")]
@@ -116,10 +122,9 @@ impl InitiationCmd {
             for v in &self.variants {
                 let mut set = self.model.set.clone();
                 set.push(format!("fastening.model=\"{}\"", v.trim()));
-                cases.push((
-                    v.trim().to_string(),
-                    load_model(&self.model.source(), &set)?,
-                ));
+                let m = load_model(&self.model.source(), &set)
+                    .with_context(|| format!("the model of --variants {}", v.trim()))?;
+                cases.push((v.trim().to_string(), m));
             }
         } else {
             for f in &self.models {

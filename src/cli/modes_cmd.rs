@@ -77,7 +77,12 @@ pub struct ModesCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Upper frequency (Hz): all modes below it.
-    #[arg(long, default_value_t = 5000.0, value_name = "HZ")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 5000.0,
+        value_name = "HZ"
+    )]
     fmax: f64,
     /// Output directory.
     #[arg(long, default_value = "corrugation-out/modes", value_name = "DIR")]
@@ -86,7 +91,12 @@ pub struct ModesCmd {
     #[arg(long)]
     vtu: bool,
     /// Number of modes written with --vtu.
-    #[arg(long, default_value_t = 50, value_name = "N")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 50,
+        value_name = "N"
+    )]
     vtu_modes: usize,
     /// Print a JSON summary.
     #[arg(long)]

@@ -98,6 +98,11 @@ impl PassageCmd {
             ..PassageOptions::default()
         };
         let mut prepared = super::engine::prepared(&m, self.cache.as_deref())?;
+        if let (Some(p), Some(path)) = (&profile, &self.corrugation) {
+            let travel = prepared.engine.rail_under_contact_m(m.run.speed())?;
+            corrugation::dynamics::setup::check_profile_on_travel(p, travel)
+                .with_context(|| format!("--corrugation {}", path.display()))?;
+        }
         let pb = super::progress::bar("passage (time steps)");
         let rec = prepared
             .engine

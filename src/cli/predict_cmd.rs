@@ -24,6 +24,7 @@ pub struct PredictCmd {
     model: ModelArgs,
     /// Trial amplitudes 2A_max (peak-to-trough, µm), comma separated.
     #[arg(
+        allow_hyphen_values = true,
         long,
         value_delimiter = ',',
         default_value = "10,40,80,160",
@@ -31,7 +32,12 @@ pub struct PredictCmd {
     )]
     amplitudes_um: Vec<f64>,
     /// Speeds of the short sweep (km/h): start:stop:step or a list.
-    #[arg(long, default_value = "60:220:40", value_name = "SPEEDS")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value = "60:220:40",
+        value_name = "SPEEDS"
+    )]
     speeds: String,
     /// Output directory.
     #[arg(long, default_value = "corrugation-out/predict", value_name = "DIR")]

@@ -22,20 +22,30 @@ pub struct ReceptanceCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Lowest frequency (Hz).
-    #[arg(long, default_value_t = 20.0, value_name = "HZ")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 20.0,
+        value_name = "HZ"
+    )]
     from_hz: f64,
     /// Highest frequency (Hz); default: the smaller of run.fmax and 3000 Hz (the top of a
     /// 54.8–219 km/h sweep map: 219 km/h / 20 mm ≈ 3.04 kHz).
-    #[arg(long, value_name = "HZ")]
+    #[arg(allow_hyphen_values = true, long, value_name = "HZ")]
     to_hz: Option<f64>,
     /// Frequency step (Hz).
     /// (One complex LU of the m × m modal dynamic stiffness per frequency: ≈ 0.05 s at the
     /// default model's 746 track modes, 2 cores.)
-    #[arg(long, default_value_t = 4.0, value_name = "HZ")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value_t = 4.0,
+        value_name = "HZ"
+    )]
     step_hz: f64,
     /// Rail positions (m along the rail); default: the mid-span and the sleeper nearest the
     /// centre of the solution zone.
-    #[arg(long = "at", value_name = "M")]
+    #[arg(allow_hyphen_values = true, long = "at", value_name = "M")]
     at_m: Vec<f64>,
     /// Output directory.
     #[arg(long, default_value = "corrugation-out/receptance", value_name = "DIR")]

@@ -36,7 +36,7 @@ pub struct ReferenceArgs {
     /// Rail-top points (m along the rail) whose longitudinal displacement spectrum is
     /// reported ("f_L by the nodal spectrum"); default: the sleeper and the mid-span nearest
     /// the solution-zone centre. One extra passage per point.
-    #[arg(long = "nodal-at", value_name = "M")]
+    #[arg(allow_hyphen_values = true, long = "nodal-at", value_name = "M")]
     pub nodal_at_m: Vec<f64>,
     /// Skip the nodal spectra.
     #[arg(long)]

@@ -20,11 +20,16 @@ pub struct SweepCmd {
     model: ModelArgs,
     /// Speeds in km/h: START:STOP:STEP (STOP included only when it falls on the grid) or a
     /// list 60,80,100.
-    #[arg(long, default_value = "54.8:219:2", value_name = "SPEEDS")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value = "54.8:219:2",
+        value_name = "SPEEDS"
+    )]
     speeds: String,
     /// Run only shard I of N (I = 0 … N−1): every N-th speed starting at the I-th. Join the
     /// shard directories with `corrugation merge`.
-    #[arg(long, value_name = "I/N")]
+    #[arg(allow_hyphen_values = true, long, value_name = "I/N")]
     shard: Option<String>,
     /// Output directory (a rerun into it resumes: finished speeds are not recomputed).
     #[arg(long, default_value = "corrugation-out/sweep", value_name = "DIR")]

@@ -401,7 +401,7 @@ mod tests {
         for ptp in [1e3, 1e9, f64::MAX] {
             match grid_for_profile(g, r, delta, ptp) {
                 Err(DynamicsError::ProfileGrid { nx, memory_gb, .. }) => {
-                    assert!(nx > 1e5 && memory_gb > 1.0, "{ptp}: {nx} {memory_gb}")
+                    assert!(nx > 5e4 && memory_gb > 1.0, "{ptp}: {nx} {memory_gb}")
                 }
                 other => panic!("{ptp}: {other:?}"),
             }

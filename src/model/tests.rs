@@ -395,7 +395,7 @@ fn elastic_holds_parse_and_nonsense_is_an_error_naming_the_key() {
                 "fastening.hold_stiffness=1e14",
             ],
             "fastening.hold_stiffness",
-            "at most",
+            "1e4 to 1e13 N/m",
         ),
         (
             vec!["fastening.hold_stiffness=1e9"],

@@ -482,8 +482,10 @@ mod tests {
     fn a_slow_worker_half_parks_the_caller_and_still_returns() {
         std::thread::scope(|sc| {
             let pair = SpinPair::start(sc).expect("a thread");
+            // long against the caller's 50 µs of spinning, and against a time slice lost to
+            // other work on a loaded machine (3 ms was missed under load)
             let slow = || {
-                std::thread::sleep(Duration::from_millis(3));
+                std::thread::sleep(Duration::from_millis(200));
                 7
             };
             // the caller's half waits until the worker has started the job
