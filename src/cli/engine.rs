@@ -24,9 +24,16 @@ pub enum Engine {
     Explicit,
 }
 
-/// The explicit FE model of `model` (its `[explicit]` options).
+/// The explicit FE model of `model` (its `[explicit]` options); warns when its contact step at
+/// the model's speed is longer than the converged one
+/// ([`corrugation::explicit::contact_step::unconverged_contact_step`]).
 pub fn explicit_model(model: &Model) -> anyhow::Result<ExplicitModel> {
     corrugation::dynamics::setup::require_static_start(model, "explicit")?;
+    if let Some(w) =
+        corrugation::explicit::contact_step::unconverged_contact_step(model, model.run.speed())?
+    {
+        eprintln!("warning: {w}");
+    }
     ExplicitModel::new(model, ExplicitOptions::from_model(model))
         .context("building the explicit FE model")
 }

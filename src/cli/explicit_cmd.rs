@@ -99,6 +99,11 @@ pub fn run_explicit(
     {
         corrugation::progress::Progress::warn(&pb, &w);
     }
+    if let Some(w) =
+        corrugation::explicit::contact_step::unconverged_contact_step(m, m.run.speed())?
+    {
+        corrugation::progress::Progress::warn(&pb, &w);
+    }
     let estimate = em.passage_estimate(m.run.speed(), profile)?;
     pb.finish_and_clear();
     eprintln!("explicit passage: estimated {estimate}");

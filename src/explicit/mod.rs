@@ -27,6 +27,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod audit;
+pub mod contact_step;
 pub mod estimate;
 mod ledger;
 mod local;
