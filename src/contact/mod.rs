@@ -116,10 +116,12 @@ pub enum ContactError {
         limit_n: f64,
     },
     /// The contact patch touches the edge of the computational grid.
-    #[error("contact patch reaches the grid boundary ({edge}); enlarge the grid (GridSpec half-lengths)")]
+    #[error("contact patch reaches the grid boundary ({edge}) under a normal force of {normal_n:.0} N; enlarge the grid (GridSpec half-lengths)")]
     PatchAtGridEdge {
         /// Which edge.
         edge: &'static str,
+        /// The normal force of the step's normal solve (N).
+        normal_n: f64,
     },
     /// File output failed.
     #[error("writing contact fields to {path}: {source}")]

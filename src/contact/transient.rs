@@ -309,7 +309,7 @@ impl TransientRolling {
         let nres = self
             .normal
             .solve(&mut self.conv, &self.h, self.da, mode, &mut self.p)?;
-        let contact = self.contact_elements()?;
+        let contact = self.contact_elements(nres.load_n)?;
         let mu = self.cfg.friction;
         for (g, p) in self.g.iter_mut().zip(&self.p) {
             *g = mu * p;
@@ -393,9 +393,9 @@ impl TransientRolling {
         }
     }
 
-    /// The number of elements in contact after the normal solve; an error when the patch
-    /// touches the edge of the grid.
-    fn contact_elements(&self) -> Result<usize, ContactError> {
+    /// The number of elements in contact after the normal solve; an error (carrying the
+    /// normal solve's force `normal_n`, N) when the patch touches the edge of the grid.
+    fn contact_elements(&self, normal_n: f64) -> Result<usize, ContactError> {
         let (nx, ny) = (self.nx, self.ny);
         let mut contact = 0usize;
         for i in 0..nx {
@@ -403,10 +403,16 @@ impl TransientRolling {
                 if self.p[i * ny + j] > 0.0 {
                     contact += 1;
                     if i == 0 || i == nx - 1 {
-                        return Err(ContactError::PatchAtGridEdge { edge: "x" });
+                        return Err(ContactError::PatchAtGridEdge {
+                            edge: "x",
+                            normal_n,
+                        });
                     }
                     if ny > 1 && (j == 0 || j == ny - 1) {
-                        return Err(ContactError::PatchAtGridEdge { edge: "y" });
+                        return Err(ContactError::PatchAtGridEdge {
+                            edge: "y",
+                            normal_n,
+                        });
                     }
                 }
             }

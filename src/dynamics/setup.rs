@@ -145,16 +145,24 @@ pub fn widen_grid(grid: GridSpec, w: GridWidening) -> GridSpec {
 }
 
 /// The edge (`"x"` or `"y"`) at which the contact patch of a failed passage reached its grid,
-/// if that is why it failed.
-pub fn patch_at_grid_edge(e: &DynamicsError) -> Option<&'static str> {
+/// and the normal force then (N), if that is why it failed.
+pub fn patch_at_grid_edge(e: &DynamicsError) -> Option<(&'static str, f64)> {
     match e {
         DynamicsError::Contact {
-            source: crate::contact::ContactError::PatchAtGridEdge { edge },
+            source: crate::contact::ContactError::PatchAtGridEdge { edge, normal_n },
             ..
-        } => Some(edge),
+        } => Some((edge, *normal_n)),
         _ => None,
     }
 }
+
+/// The largest normal force, as a multiple of the static wheel load (−), under which a patch
+/// that reaches its grid's edge is taken for a deep profile's dynamic load and the passage is
+/// rerun on a widened grid. Measured dynamic wheel–rail forces stay below about three times
+/// the static load even at dipped joints and wheel flats; a force beyond twice that is a
+/// passage whose contact coupling has gone unstable, and a wider grid would only let it run
+/// longer. Such a passage is reported as diverged ([`DynamicsError::Diverged`]).
+pub const MAX_WIDENING_LOAD_FACTOR: f64 = 6.0;
 
 /// The contact grid a passage ran on when it was widened ([`run_widening_grid`]): the
 /// patch reached the boundary of the grid of [`passage_contact`] (under a dynamic load above
@@ -208,8 +216,11 @@ impl std::fmt::Display for WidenedGrid {
 /// reaches the boundary runs once, on the model's grid, exactly as without this. `on_rerun(edge,
 /// widening)` is told before each rerun. Returns the result and its widening; a passage that
 /// still reaches the boundary after the last widening returns
-/// [`DynamicsError::GridOutgrown`] (through `outgrown`).
+/// [`DynamicsError::GridOutgrown`] (through `outgrown`). A patch that reaches the boundary
+/// under a normal force above [`MAX_WIDENING_LOAD_FACTOR`] times `static_load_n` (N) is not
+/// rerun: the passage diverged, and [`DynamicsError::Diverged`] says so (through `outgrown`).
 pub fn run_widening_grid<T, E>(
+    static_load_n: f64,
     mut passage: impl FnMut(GridWidening) -> Result<T, E>,
     dynamics: impl Fn(&E) -> Option<&DynamicsError>,
     outgrown: impl FnOnce(DynamicsError) -> E,
@@ -221,9 +232,23 @@ pub fn run_widening_grid<T, E>(
             Ok(r) => return Ok((r, w)),
             Err(e) => e,
         };
-        let Some(edge) = dynamics(&e).and_then(patch_at_grid_edge) else {
+        let Some((edge, normal_n)) = dynamics(&e).and_then(patch_at_grid_edge) else {
             return Err(e);
         };
+        if normal_n > MAX_WIDENING_LOAD_FACTOR * static_load_n {
+            let (t_s, x_m) = match dynamics(&e) {
+                Some(DynamicsError::Contact { t_s, x_m, .. }) => (*t_s, *x_m),
+                _ => (f64::NAN, f64::NAN),
+            };
+            return Err(outgrown(DynamicsError::Diverged {
+                t_s,
+                x_m,
+                what: format!(
+                    "the normal contact force grew to {normal_n:.0} N, {:.1} times the static wheel load (more than {MAX_WIDENING_LOAD_FACTOR}), until the contact patch left its grid ({edge})",
+                    normal_n / static_load_n
+                ),
+            }));
+        }
         let k = if edge == "x" { &mut w.x } else { &mut w.y };
         if *k >= MAX_GRID_WIDENINGS {
             let reason = dynamics(&e).map_or_else(String::new, ToString::to_string);
@@ -294,19 +319,23 @@ mod tests {
 
     /// The rerun rule: a passage that never reaches the grid's edge runs once on the model's
     /// grid; each edge reached widens that direction once; other errors pass through; the
-    /// last widening that still reaches it is an error naming the widenings.
+    /// last widening that still reaches it is an error naming the widenings; a patch that
+    /// reaches it under more than six times the static load is a diverged passage, not rerun.
     #[test]
     fn passages_rerun_on_a_widened_grid_only_when_the_patch_reaches_its_edge() {
-        let edge = |edge| DynamicsError::Contact {
-            t_s: 0.0,
-            x_m: 0.0,
-            source: crate::contact::ContactError::PatchAtGridEdge { edge },
+        const LOAD: f64 = 1e5;
+        let edge_at = |edge, normal_n| DynamicsError::Contact {
+            t_s: 0.01,
+            x_m: 0.2,
+            source: crate::contact::ContactError::PatchAtGridEdge { edge, normal_n },
         };
+        let edge = |edge| edge_at(edge, 3.0 * LOAD);
         fn dynamics(e: &DynamicsError) -> Option<&DynamicsError> {
             Some(e)
         }
         let mut calls = Vec::new();
         let r = run_widening_grid(
+            LOAD,
             |w| {
                 calls.push(w);
                 Ok::<_, DynamicsError>(1)
@@ -320,6 +349,7 @@ mod tests {
         // y, then x, then runs
         let mut reruns = Vec::new();
         let (_, w) = run_widening_grid(
+            LOAD,
             |w| match (w.x, w.y) {
                 (0, 0) => Err(edge("y")),
                 (0, 1) => Err(edge("x")),
@@ -340,6 +370,7 @@ mod tests {
         );
         // another error is not retried
         let e = run_widening_grid(
+            LOAD,
             |_| Err::<(), _>(DynamicsError::MissingNodes { what: "x" }),
             dynamics,
             |e| e,
@@ -348,8 +379,14 @@ mod tests {
         assert!(matches!(e, Err(DynamicsError::MissingNodes { .. })));
         // the edge reached every time: MAX_GRID_WIDENINGS reruns, then the error
         let mut n = 0;
-        let e = run_widening_grid(|_| Err::<(), _>(edge("y")), dynamics, |e| e, |_, _| n += 1)
-            .unwrap_err();
+        let e = run_widening_grid(
+            LOAD,
+            |_| Err::<(), _>(edge("y")),
+            dynamics,
+            |e| e,
+            |_, _| n += 1,
+        )
+        .unwrap_err();
         assert_eq!(n, MAX_GRID_WIDENINGS);
         let msg = e.to_string();
         assert!(matches!(e, DynamicsError::GridOutgrown { .. }), "{msg}");
@@ -357,6 +394,35 @@ mod tests {
             msg.contains("contact.grid_margin") && msg.contains("(y)"),
             "{msg}"
         );
+        // a patch at the edge under 6.5 times the static load: diverged at once, no rerun;
+        // under 5.9 times: rerun
+        let e = run_widening_grid(
+            LOAD,
+            |_| Err::<(), _>(edge_at("x", 6.5 * LOAD)),
+            dynamics,
+            |e| e,
+            |_, _| panic!("no rerun"),
+        )
+        .unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            matches!(e, DynamicsError::Diverged { t_s, x_m, .. } if t_s == 0.01 && x_m == 0.2),
+            "{msg}"
+        );
+        assert!(msg.contains("6.5 times the static wheel load"), "{msg}");
+        let mut n = 0;
+        let _ = run_widening_grid(
+            LOAD,
+            |w| match w.x {
+                0 => Err(edge_at("x", 5.9 * LOAD)),
+                _ => Ok(()),
+            },
+            dynamics,
+            |e| e,
+            |_, _| n += 1,
+        )
+        .unwrap();
+        assert_eq!(n, 1);
     }
 
     /// The reference contact's wheel radius (m), static approach (m) and an `nx × ny` grid

@@ -198,6 +198,7 @@ impl ExplicitModel {
     ) -> Result<ExplicitRecord, ExplicitError> {
         self.check_profile(speed_m_per_s, profile)?;
         let (mut rec, w) = run_widening_grid(
+            self.model.vehicle.wheel_load,
             |w| self.passage_on_grid(speed_m_per_s, profile, popts, &mut *progress, w),
             |e: &ExplicitError| match e {
                 ExplicitError::Dynamics(d) => Some(d),

@@ -600,6 +600,7 @@ impl PassageEngine {
             }
         }
         let (mut rec, w) = run_widening_grid(
+            self.wheel_load_n,
             |w| self.passage_on_grid(speed_m_per_s, profile, opts, progress, w),
             |e: &DynamicsError| Some(e),
             |e| e,
