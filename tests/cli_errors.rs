@@ -544,3 +544,25 @@ fn explicit_audit_with_the_rotating_wheel_is_refused() {
     ]);
     assert_clean_error(&args, &["--audit", "rotating", "--wheel fixed"]);
 }
+
+/// Every command's help is plain text: no rustdoc link syntax (`` [`NAME`] ``) leaks from the
+/// doc comments clap turns into help.
+#[test]
+fn help_texts_carry_no_rustdoc_links() {
+    let (code, top, _) = run(&["--help"]);
+    assert_eq!(code, 0);
+    let commands: Vec<&str> = top
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| !l.trim().is_empty())
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .collect();
+    assert!(commands.len() > 10, "{top}");
+    for c in commands {
+        let (code, help, _) = run(&[c, "--help"]);
+        assert_eq!(code, 0, "{c}");
+        assert!(!help.contains("[`"), "{c} --help: {help}");
+    }
+}

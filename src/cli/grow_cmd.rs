@@ -59,7 +59,7 @@ pub struct GrowCmd {
         value_name = "UM,..."
     )]
     amplitudes_um: Vec<f64>,
-    /// Also run iterative growth for this many rounds (0 = off), at most [`MAX_ROUNDS`].
+    /// Also run iterative growth for this many rounds (0 = off), at most 1000.
     #[arg(
         allow_hyphen_values = true,
         long,
