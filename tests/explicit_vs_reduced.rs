@@ -322,6 +322,10 @@ fn compare_at(
         red.energy.relative_error(),
         ex.info.energy_error,
     );
+    eprintln!(
+        "  energy balance reduced {:?}\n  energy balance explicit {:?}",
+        red.energy, ex.record.energy
+    );
     assert_eq!(
         xr, xe,
         "the two passages sample different contact positions"
@@ -477,6 +481,32 @@ fn reduced_with_all_modes_is_the_explicit_fe_passage() {
         }
     }
     drop(engine);
+
+    // The start from rest (docs/theory.md §7.5): free rolling under the vertical load, the
+    // torque and the resistance stepping on 0.1 m before the zone. Both engines, the same
+    // tolerances at the model's contact step (means within 1e-3, dominant bins within one,
+    // the zone's histories within 10 % of the explicit band RMS).
+    let m_rest = all_modes_model(&[
+        INCREMENT,
+        "run.start=\"rest\"",
+        "run.rest_start_distance=0.1",
+    ])
+    .unwrap();
+    let rest = compare_at(
+        &m_rest,
+        (&track, &wheel),
+        (&tm, &wm),
+        (&tb, &wb),
+        &mut misses,
+    );
+    for k in 0..2 {
+        if rest.rms_diff_n[k] > 0.1 * rest.band_rms_n[k] {
+            misses.push(format!(
+                "start from rest: RMS difference {} N above 10 % of the band RMS {} N",
+                rest.rms_diff_n[k], rest.band_rms_n[k]
+            ));
+        }
+    }
 
     let m_half = all_modes_model(&[INCREMENT, "contact.grid_nx=64"]).unwrap();
     let mut out = Vec::new();

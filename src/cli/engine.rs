@@ -28,7 +28,6 @@ pub enum Engine {
 /// the model's speed is longer than the converged one
 /// ([`corrugation::explicit::contact_step::unconverged_contact_step`]).
 pub fn explicit_model(model: &Model) -> anyhow::Result<ExplicitModel> {
-    corrugation::dynamics::setup::require_static_start(model, "explicit")?;
     if let Some(w) =
         corrugation::explicit::contact_step::unconverged_contact_step(model, model.run.speed())?
     {

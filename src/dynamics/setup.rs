@@ -780,16 +780,41 @@ pub fn static_hertz(
     .map_err(DynamicsError::StaticHertz)
 }
 
-/// Refuses a model whose `run.start` an engine does not implement: `engine` (e.g. the
-/// explicit FE path) starts from the static solve only.
-pub fn require_static_start(model: &Model, engine: &'static str) -> Result<(), DynamicsError> {
-    if model.run.start == crate::model::StartKind::Static {
-        return Ok(());
+/// Position along the rail (m) from which the driving torque and the train's resistance act,
+/// both engines: −∞ for the static start (always), `zone_start_m − run.rest_start_distance`
+/// for the start from rest, refused when that lies before the wheel's start `x_start_m` (m)
+/// ([`crate::model::Model::run_in_m`]).
+pub fn torque_onset_m(
+    model: &Model,
+    x_start_m: f64,
+    zone_start_m: f64,
+) -> Result<f64, DynamicsError> {
+    match model.run.start {
+        crate::model::StartKind::Static => Ok(f64::NEG_INFINITY),
+        crate::model::StartKind::Rest => {
+            let x = zone_start_m - model.run.rest_start_distance;
+            if x < x_start_m - 1e-9 {
+                return Err(DynamicsError::OutOfRange {
+                    name: "run.rest_start_distance (m)",
+                    value: model.run.rest_start_distance,
+                    expected: "at most the run-in, the distance from the wheel's start to the solution zone (raise run.solution_zone_offset, and track.bays if the track is too short)",
+                });
+            }
+            Ok(x)
+        }
     }
-    Err(DynamicsError::Engine {
-        engine,
-        source: "run.start = \"rest\" is implemented by the reduced passage only; use run.start = \"static\" with this engine".into(),
-    })
+}
+
+/// The longitudinal contact force of a passage's start (N, on the wheel): `μ_t W` for the
+/// static start (steady rolling under traction), 0 for the start from rest (free rolling;
+/// the torque comes on later, [`torque_onset_m`]).
+pub fn start_longitudinal_force_n(model: &Model) -> f64 {
+    match model.run.start {
+        crate::model::StartKind::Static => {
+            model.contact.traction_coefficient * model.vehicle.wheel_load
+        }
+        crate::model::StartKind::Rest => 0.0,
+    }
 }
 
 /// A passage's speed must be finite and > 0 (m/s).

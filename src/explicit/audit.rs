@@ -76,6 +76,8 @@ pub(super) struct StepForces<'a> {
     pub(super) change: [f64; 3],
     /// `None` without a corrector.
     pub(super) hold: Option<Hold>,
+    /// The wheel's constant loads over the step (N; [`ExplicitModel::wheel_loads`]).
+    pub(super) wheel_loads: &'a [f64],
 }
 
 impl StepForces<'_> {
@@ -162,12 +164,13 @@ impl Audit {
         for k in 0..n {
             let (a, b) = (f.at_previous(k), f.at(k, n));
             let g = [0, 1, 2].map(|d| a[d] + b[d]);
-            self.load_w.copy_from_slice(&m.wheel_const);
+            let fc = f.wheel_loads;
+            self.load_w.copy_from_slice(fc);
             add_nodes_load(&m.wheel_nodes, dm, &m.frame, 1.0, g, &mut self.load_w);
             // The constant loads' share of the step's work, `f_c · (u_{k+1} − u_{k−1})/2`.
-            let before = dot(&m.wheel_const, uw) - 0.5 * dt * dot(&m.wheel_const, vw);
+            let before = dot(fc, uw) - 0.5 * dt * dot(fc, vw);
             let r = m.wheel.op.step(dt, uw, vw, &self.load_w, &mut self.sc_w);
-            let after = dot(&m.wheel_const, uw) - 0.5 * dt * dot(&m.wheel_const, vw);
+            let after = dot(fc, uw) - 0.5 * dt * dot(fc, vw);
             let w_const = after - before;
             self.sums.wheel_load_nodal_work_j += w_const;
             self.sums.wheel_contact_nodal_work_j += r.external_work_j - w_const;

@@ -89,6 +89,8 @@ pub(super) struct Ledger<'a> {
     dg_wheel_prev: f64,
     /// Wheel-load work potentials `f·u` at the step's start: all, torque, gravity.
     before: [f64; 3],
+    /// Whether the driving torque and the resistance act over the current step.
+    drive: bool,
     ku: Vec<f64>,
     /// The wheel's state at the step's start (m; rotating wheel only).
     uw_start: Vec<f64>,
@@ -128,6 +130,7 @@ impl<'a> Ledger<'a> {
             // The tread's variation is zero at the start's angle, its reference.
             dg_wheel_prev: 0.0,
             before: [0.0; 3],
+            drive: true,
             by_direction: [[0.0; 3]; 3],
             rail_wheel: [0.0; 2],
             ku: if on {
@@ -161,15 +164,18 @@ impl<'a> Ledger<'a> {
         }
     }
 
-    pub(super) fn before_step(&mut self, uw: &[f64]) {
+    /// Before a step whose wheel loads include the driving torque and the resistance when
+    /// `drive` (the wheel's state `uw` at the step's start).
+    pub(super) fn before_step(&mut self, uw: &[f64], drive: bool) {
+        self.drive = drive;
         if self.on {
             if !self.uw_start.is_empty() {
                 self.uw_start.copy_from_slice(uw);
             }
             let l = &self.m.loads;
             self.before = [
-                dot(&self.m.wheel_const, uw),
-                dot(&l.torque, uw),
+                dot(self.m.wheel_loads(drive), uw),
+                if drive { dot(&l.torque, uw) } else { 0.0 },
                 dot(&l.gravity, uw),
             ];
         }
@@ -188,8 +194,10 @@ impl<'a> Ledger<'a> {
         let (m, eb) = (self.m, &mut self.eb);
         // Constant wheel loads: exact work f·Δu. On the rotating wheel the ground-fixed ones
         // (gravity, resistance) turn in the spinning frame: their turn's work is added.
-        eb.external_work_j += dot(&m.wheel_const, &s.uw) - self.before[0];
-        eb.torque_work_j += dot(&m.loads.torque, &s.uw) - self.before[1];
+        eb.external_work_j += dot(m.wheel_loads(self.drive), &s.uw) - self.before[0];
+        if self.drive {
+            eb.torque_work_j += dot(&m.loads.torque, &s.uw) - self.before[1];
+        }
         eb.gravity_work_j += dot(&m.loads.gravity, &s.uw) - self.before[2];
         if let Some(rw) = rot {
             // The ground-fixed loads turn in the spinning frame: the scheme's energy sees
@@ -197,10 +205,16 @@ impl<'a> Ledger<'a> {
             // ground frame's, the difference is the frame's.
             let u = [self.uw_start.as_slice(), s.uw.as_slice()];
             let [sg, gg] = rw.load_work(&m.loads.gravity, u, k.t);
-            let [sd, gd] = rw.load_work(&m.loads.drawbar, u, k.t);
+            // The resistance acts only with the driving torque (a start from rest).
+            let [sd, gd, d_du] = if self.drive {
+                let [sd, gd] = rw.load_work(&m.loads.drawbar, u, k.t);
+                let d_du = dot(&m.loads.drawbar, &s.uw) - dot(&m.loads.drawbar, &self.uw_start);
+                [sd, gd, d_du]
+            } else {
+                [0.0; 3]
+            };
             // Less the non-turning g · Δu counted above.
             let g_du = dot(&m.loads.gravity, &s.uw) - self.before[2];
-            let d_du = dot(&m.loads.drawbar, &s.uw) - dot(&m.loads.drawbar, &self.uw_start);
             eb.external_work_j += gg + gd - (g_du + d_du);
             eb.gravity_work_j += gg - g_du;
             eb.frame_work_j += sg + sd - (gg + gd);

@@ -18,7 +18,7 @@ use crate::dynamics::patch::{plane_weights, PlaneWeights};
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
 use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
 use crate::dynamics::setup::WheelLoads;
-use crate::model::{ExplicitLocalCompliance, ExplicitWheel, LoadSpread, Model};
+use crate::model::{ExplicitLocalCompliance, ExplicitWheel, LoadSpread, Model, StartKind};
 use crate::structure::{TrackStructure, WheelStructure};
 
 /// Options of the explicit path.
@@ -140,7 +140,11 @@ pub struct ExplicitModel {
     /// (contact x, contact n, axle x) of each rigid mode.
     pub(super) rigid_obs: Vec<[f64; 3]>,
     pub(super) loads: WheelLoads,
+    /// The wheel's constant loads with the driving torque and the resistance (N).
     pub(super) wheel_const: Vec<f64>,
+    /// The same without them: gravity only (N), before the torque's onset of a start from
+    /// rest.
+    pub(super) wheel_free: Vec<f64>,
     /// Static deflection of the track and elastic deflection of the wheel.
     pub(super) track_static: Vec<f64>,
     pub(super) wheel_static: Vec<f64>,
@@ -164,6 +168,16 @@ pub struct ExplicitModel {
 }
 
 impl ExplicitModel {
+    /// The wheel's constant loads (N): with the driving torque and the train's resistance
+    /// when `drive`, gravity only otherwise (a start from rest before the torque's onset).
+    pub(super) fn wheel_loads(&self, drive: bool) -> &[f64] {
+        if drive {
+            &self.wheel_const
+        } else {
+            &self.wheel_free
+        }
+    }
+
     /// Builds the explicit model of `model`: structures, matrices, operators, stable steps
     /// and the static deflections.
     pub fn new(model: &Model, opts: ExplicitOptions) -> Result<Self, ExplicitError> {
@@ -246,7 +260,12 @@ impl ExplicitModel {
             }
         };
         drop(fac);
-        let mut fw = wheel_const.clone();
+        let wheel_free = loads.gravity.clone();
+        let mut fw = if model.run.start == StartKind::Static {
+            wheel_const.clone()
+        } else {
+            wheel_free.clone()
+        };
         add_nodes_load(&wc.nodes, &wheel_structure.dofmap, &frame, 1.0, f0, &mut fw);
         let elastic = ElasticWheel::new(&wheel_structure, &wm, &wheel.op, &rigid, &wc.nodes)?;
         let wheel_static = elastic.solve(&fw);
@@ -294,6 +313,7 @@ impl ExplicitModel {
             hertz_approach_m: hertz.approach_m,
             loads,
             wheel_const,
+            wheel_free,
             track_static,
             wheel_static,
             x_start_m,

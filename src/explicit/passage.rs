@@ -36,6 +36,11 @@
 //! track and the wheel's elastic deformation by static solves of the full `K` under the
 //! static contact force and the wheel loads (no dynamic relaxation); the wheel's rigid
 //! modes placed so that the approach is the steady one and turned so that the creepage is.
+//! With `run.start = "rest"` the same in free rolling: no longitudinal force and no driving
+//! torque or resistance in the static solves; both step on at the contact step whose end
+//! reaches `run.rest_start_distance` before the zone
+//! ([`crate::dynamics::setup::torque_onset_m`]), as in the reduced
+//! passage (docs/theory.md §7.5).
 
 mod stepper;
 
@@ -58,8 +63,8 @@ use crate::dynamics::{
     record::{PassageRecord, RailPointRecord},
     setup::{
         check_profile_on_travel, contact_config_for, passage_contact, passage_grid,
-        rail_under_contact_m, rigid_least_norm, run_widening_grid, GridWidening, ProfileOnRail,
-        WidenedGrid,
+        rail_under_contact_m, rigid_least_norm, run_widening_grid, start_longitudinal_force_n,
+        GridWidening, ProfileOnRail, WidenedGrid,
     },
 };
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
@@ -476,10 +481,12 @@ impl ExplicitModel {
     }
 }
 
-/// The static contact force (N, on the wheel, contact frame x, t, n): `(μ_t W, 0, W/cos α)`.
+/// The static contact force (N, on the wheel, contact frame x, t, n): `(F_L, 0, W/cos α)`,
+/// `F_L` the start's ([`start_longitudinal_force_n`]: `μ_t W` for the static start, 0 from
+/// rest).
 pub(super) fn static_contact_force(model: &Model, frame: &ContactFrame) -> [f64; 3] {
     let w = model.vehicle.wheel_load;
-    [model.contact.traction_coefficient * w, 0.0, w / frame.n[2]]
+    [start_longitudinal_force_n(model), 0.0, w / frame.n[2]]
 }
 
 impl crate::dynamics::PassageRecorder for ExplicitModel {

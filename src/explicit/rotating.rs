@@ -338,9 +338,12 @@ pub(super) struct RotatingWheel {
     thetas: Vec<f64>,
     planes: Vec<PlaneNodes>,
     /// The constant loads (N) and their ground-fixed part on the spinning nodes (gravity and
-    /// resistance), which rotates.
-    wheel_const: Vec<f64>,
-    ground: Vec<f64>,
+    /// resistance), which rotates; with the driving torque and the resistance (`[1]`) and
+    /// without (`[0]`: gravity only, a start from rest before the torque's onset).
+    wheel_const: [Vec<f64>; 2],
+    ground: [Vec<f64>; 2],
+    /// Whether the driving torque and the resistance act (index into the loads).
+    drive: bool,
     suspension: Option<Suspension>,
     /// Contact-step sub-steps and their length (s).
     steps: usize,
@@ -376,10 +379,11 @@ impl RotatingWheel {
         let spin = SpinFrame::new(p.op, &w.dofmap, &w.mesh.nodes, ring, omega)?;
         let planes = tread_planes(w, p.contact_nodes)?;
         let n = p.op.n();
-        let mut ground = vec![0.0; n];
+        let mut ground = [vec![0.0; n], vec![0.0; n]];
         for &(ix, iz, _) in &spin.pairs {
             for i in [ix, iz] {
-                ground[i] = p.loads.gravity[i] + p.loads.drawbar[i];
+                ground[0][i] = p.loads.gravity[i];
+                ground[1][i] = p.loads.gravity[i] + p.loads.drawbar[i];
             }
         }
         let slot = || PlaneResponse {
@@ -393,8 +397,9 @@ impl RotatingWheel {
             axes: [p.frame.x, p.frame.t, p.frame.n],
             thetas: topo.thetas.clone(),
             planes,
-            wheel_const: p.wheel_const.to_vec(),
+            wheel_const: [p.loads.gravity.clone(), p.wheel_const.to_vec()],
             ground,
+            drive: true,
             suspension: Suspension::new(w)?,
             steps,
             dt,
@@ -415,6 +420,12 @@ impl RotatingWheel {
             local: p.local.cloned(),
             sus_v: vec![0.0; 1 + 2 * w.springs.first().map_or(0, |s| s.side_b.len())],
         })
+    }
+
+    /// Switches the driving torque and the train's resistance on or off (off: gravity only,
+    /// a start from rest before the torque's onset).
+    pub(super) fn set_drive(&mut self, on: bool) {
+        self.drive = on;
     }
 
     /// The spin rate (rad/s).
@@ -548,9 +559,10 @@ impl RotatingWheel {
             let (s, c) = a.sin_cos();
             // cos a − 1 without cancellation.
             let cm1 = -2.0 * (0.5 * a).sin().powi(2);
-            self.f.copy_from_slice(&self.wheel_const);
+            let d = usize::from(self.drive);
+            self.f.copy_from_slice(&self.wheel_const[d]);
             for &(ix, iz, _) in &self.spin.pairs {
-                let (gx, gz) = (self.ground[ix], self.ground[iz]);
+                let (gx, gz) = (self.ground[d][ix], self.ground[d][iz]);
                 self.f[ix] += cm1 * gx - s * gz;
                 self.f[iz] += s * gx + cm1 * gz;
             }

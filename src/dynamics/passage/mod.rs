@@ -56,8 +56,8 @@ use super::reduced::{dot, ContactFrame, ModalSystem, RailContactLine, WheelConta
 use super::residual::ResidualFlexibility;
 use super::setup::{
     check_profile_on_travel, check_speed, contact_config_for, passage_contact, passage_grid,
-    rail_under_contact_m, rigid_least_norm, run_widening_grid, steady_contact, GridWidening,
-    ProfileOnRail, WheelLoads, WidenedGrid,
+    rail_under_contact_m, rigid_least_norm, run_widening_grid, start_longitudinal_force_n,
+    steady_contact, torque_onset_m, GridWidening, ProfileOnRail, WheelLoads, WidenedGrid,
 };
 use super::wheel_residual::WheelResidual;
 use ledger::{Ledger, LedgerStep};
@@ -650,39 +650,20 @@ impl PassageEngine {
     }
 
     /// The static loads of the contact at the start: normal force `W / cos α` (N),
-    /// longitudinal force (N: `μ_t W` for the static start, 0 for the start from rest), and
-    /// the spin of the coned wheel on the inclined rail `−sin α / R` (1/m).
+    /// longitudinal force (N: [`start_longitudinal_force_n`]), and the spin of the coned wheel
+    /// on the inclined rail `−sin α / R` (1/m).
     fn static_loads(&self) -> (f64, f64, f64) {
-        let w = self.wheel_load_n;
-        let f_l = match self.model.run.start {
-            StartKind::Static => self.model.contact.traction_coefficient * w,
-            StartKind::Rest => 0.0,
-        };
         (
-            w / self.frame.n[2],
-            f_l,
+            self.wheel_load_n / self.frame.n[2],
+            start_longitudinal_force_n(&self.model),
             self.frame.n[1] / self.wheel_radius_m,
         )
     }
 
     /// Position along the rail (m) from which the driving torque and the train's resistance
-    /// act: −∞ for the static start (always), `zone start − run.rest_start_distance` for the
-    /// start from rest (not before the wheel's start: [`crate::model::Model::run_in_m`]).
+    /// act ([`torque_onset_m`]).
     pub fn torque_onset_m(&self) -> Result<f64, DynamicsError> {
-        match self.model.run.start {
-            StartKind::Static => Ok(f64::NEG_INFINITY),
-            StartKind::Rest => {
-                let x = self.zone_m[0] - self.model.run.rest_start_distance;
-                if x < self.x_start_m - 1e-9 {
-                    return Err(DynamicsError::OutOfRange {
-                        name: "run.rest_start_distance (m)",
-                        value: self.model.run.rest_start_distance,
-                        expected: "at most the run-in, the distance from the wheel's start to the solution zone (raise run.solution_zone_offset, and track.bays if the track is too short)",
-                    });
-                }
-                Ok(x)
-            }
-        }
+        torque_onset_m(&self.model, self.x_start_m, self.zone_m[0])
     }
 
     /// The contact of a passage at `v` (m/s) over `profile` on the grid widened by `widening`

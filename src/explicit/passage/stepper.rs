@@ -10,6 +10,7 @@ use crate::contact::{
 };
 use crate::dynamics::patch::{max_planes, PlaneWeights};
 use crate::dynamics::reduced::add_nodes_load;
+use crate::dynamics::setup::{start_longitudinal_force_n, torque_onset_m};
 use crate::dynamics::{
     passage::PassageOptions,
     record::{Histories, PassageRecord, RailPointRecord},
@@ -74,8 +75,9 @@ impl ExplicitModel {
         heights: &mut RailHeights<'_>,
     ) -> Result<Start, ExplicitError> {
         let w_load = self.model.vehicle.wheel_load;
-        let f_l0 = self.model.contact.traction_coefficient * w_load;
+        let f_l0 = start_longitudinal_force_n(&self.model);
         let f_n0 = w_load / self.frame.n[2];
+        let x_torque = torque_onset_m(&self.model, plan.x0, self.zone_m[0])?;
         let st = steady_contact(contact, f_n0, f_l0, plan.spin, heights.at(plan.x0), plan.x0)?;
         let mut state = self.start_state(plan.v, st.creepage, st.approach_m)?;
         // The rotating wheel (rotating.rs); `None` for the fixed wheel.
@@ -90,7 +92,12 @@ impl ExplicitModel {
                 state.vw.iter_mut().zip(m).for_each(|(x, y)| *x += c[k] * y);
             }
         }
-        Ok(Start { st, state, rot })
+        Ok(Start {
+            st,
+            state,
+            rot,
+            x_torque,
+        })
     }
 }
 
@@ -159,6 +166,9 @@ pub(super) struct Start {
     state: State,
     /// The rotating wheel (`None` for the fixed wheel).
     rot: Option<RotatingWheel>,
+    /// Position from which the driving torque and the resistance act (m; −∞ for the static
+    /// start).
+    x_torque: f64,
 }
 
 /// The predictor's load vectors (N), allocated once per passage: the first sub-step's and
@@ -221,6 +231,10 @@ pub(super) struct Stepper<'a> {
     static_approach_m: f64,
     s: State,
     rot: Option<RotatingWheel>,
+    /// Position from which the driving torque and the resistance act (m), and whether they
+    /// do at the current step.
+    x_torque: f64,
+    drive: bool,
     corrected: bool,
     hold: Hold,
     sc_t: StepScratch,
@@ -262,7 +276,17 @@ impl<'a> Stepper<'a> {
         start: Start,
         popts: &PassageOptions,
     ) -> Result<Self, ExplicitError> {
-        let Start { st, state: s, rot } = start;
+        let Start {
+            st,
+            state: s,
+            mut rot,
+            x_torque,
+        } = start;
+        // Before the torque's onset (a start from rest) the wheel carries gravity only.
+        let drive = x_torque == f64::NEG_INFINITY;
+        if let Some(r) = rot.as_mut() {
+            r.set_drive(drive);
+        }
         let sc_t = m.track.op.scratch();
         let mut sc_w = m.wheel.op.scratch();
         let hold = m.opts.coupling.hold();
@@ -291,6 +315,8 @@ impl<'a> Stepper<'a> {
             static_approach_m: st.approach_m,
             s,
             rot,
+            x_torque,
+            drive,
             corrected: m.opts.coupling.corrected(),
             hold,
             sc_t,
@@ -301,8 +327,8 @@ impl<'a> Stepper<'a> {
             loads: HeldLoads {
                 track0: ftrack.clone(),
                 track: ftrack,
-                wheel0: m.wheel_const.clone(),
-                wheel: m.wheel_const.clone(),
+                wheel0: m.wheel_loads(drive).to_vec(),
+                wheel: m.wheel_loads(drive).to_vec(),
             },
             f,
             f_prev: f,
@@ -326,6 +352,15 @@ impl<'a> Stepper<'a> {
         let p = self.plan;
         let t = n as f64 * p.dt_c;
         let xc = p.x0 + p.v * t;
+        // The driving torque and the resistance (a start from rest) act from the contact
+        // step after the one whose end reached their onset, held over it and every later
+        // one: the reduced passage's loads at a step's end are held over the next step.
+        if !self.drive && xc - p.dx >= self.x_torque {
+            self.drive = true;
+            if let Some(r) = self.rot.as_mut() {
+                r.set_drive(true);
+            }
+        }
         let pw = self.m.weights(xc)?;
         let pred = self.predict(t, &pw);
         let sol = self.solve_contact(t, xc, &pw, &pred)?;
@@ -341,6 +376,7 @@ impl<'a> Stepper<'a> {
                 held: f,
                 change: df,
                 hold: self.corrected.then_some(self.hold),
+                wheel_loads: self.m.wheel_loads(self.drive),
             };
             a.replay(
                 self.m,
@@ -445,7 +481,7 @@ impl<'a> Stepper<'a> {
             neg,
             &mut loads.track,
         );
-        self.ledger.before_step(&self.s.uw);
+        self.ledger.before_step(&self.s.uw, self.drive);
         if let Some(a) = self.audit.as_mut() {
             a.save(&self.s);
         }
@@ -473,7 +509,7 @@ impl<'a> Stepper<'a> {
             }
             None => {
                 for (buf, g) in [(&mut loads.wheel0, f0), (&mut loads.wheel, f)] {
-                    buf.copy_from_slice(&m.wheel_const);
+                    buf.copy_from_slice(m.wheel_loads(self.drive));
                     add_nodes_load(
                         &m.wheel_nodes,
                         &m.wheel_structure.dofmap,
