@@ -50,6 +50,17 @@ fn modes_json_csv_and_cache() {
         .map(|v| v.as_u64().unwrap())
         .sum();
     assert_eq!(fam_sum, count);
+    // The wheel's in-plane and out-of-plane modes in 0.5 kHz to --fmax (1 kHz here).
+    let band = &a["wheel_band"];
+    assert_eq!(band["band_hz"], serde_json::json!([500.0, 1000.0]), "{a}");
+    let listed = band["in_plane_hz"].as_array().unwrap().len()
+        + band["out_of_plane_hz"].as_array().unwrap().len();
+    assert!(listed > 0, "{a}");
+    for f in ["in_plane_hz", "out_of_plane_hz"] {
+        for v in band[f].as_array().unwrap() {
+            assert!((500.0..1000.0).contains(&v.as_f64().unwrap()), "{a}");
+        }
+    }
 
     let csv_a = std::fs::read_to_string(dir.join("a/modes.csv")).unwrap();
     let header: Vec<&str> = csv_a.lines().next().unwrap().split(',').collect();

@@ -10,6 +10,9 @@
 //!   the family of the rail's own motion (differs from `family` for `sleeper` modes, whose
 //!   rail may e.g. carry a longitudinal-compression motion along with the sleepers);
 //! * `wheel_modes.csv` — one row per wheel mode (family rigid, axial, radial, other);
+//! * on stdout (and under `wheel_band` with `--json`): the wheel's in-plane (radial and
+//!   circumferential rim motion) and out-of-plane (axial) mode frequencies in 0.5–2 kHz (to `--fmax` if lower), so that a
+//!   change of the wheel's geometry keys shows where its modes went;
 //! * with `--vtu`: `track_mode_NNNN.vtu` and `wheel_mode_NNNN.vtu` for the first
 //!   `--vtu-modes` (default 50) modes of each substructure, mesh + point field `displacement`
 //!   (mode shape, M-normalised, m/√kg) — ParaView "Warp By Vector".
@@ -26,7 +29,9 @@ use serde::Serialize;
 
 use corrugation::eigen::basis::{track_basis, wheel_basis, ModalBasis};
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
-use corrugation::eigen::classify::{TrackModeClass, WheelModeClass};
+use corrugation::eigen::classify::{
+    wheel_band_modes, TrackModeClass, WheelBandModes, WheelModeClass, WHEEL_SUMMARY_BAND_HZ,
+};
 use corrugation::io::{write_vtu, VtuField, VTK_HEXAHEDRON};
 use corrugation::mesh::Mesh;
 use corrugation::structure::{TrackStructure, WheelStructure};
@@ -124,6 +129,8 @@ pub struct ModesSummary {
     #[serde(flatten)]
     pub track: SubSummary,
     pub wheel: SubSummary,
+    /// The wheel's in-plane and out-of-plane modes in 0.5–2 kHz (to `--fmax` if lower).
+    pub wheel_band: WheelBandModes,
     pub cache_dir: String,
 }
 
@@ -179,6 +186,14 @@ impl ModesCmd {
         let s = ModesSummary {
             track: sub_summary(&tb, tb.classes.iter().map(|c| c.family.name()), self.fmax),
             wheel: sub_summary(&wb, wb.classes.iter().map(|c| c.family.name()), self.fmax),
+            wheel_band: wheel_band_modes(
+                &wb.frequencies_hz,
+                &wb.classes,
+                [
+                    WHEEL_SUMMARY_BAND_HZ[0],
+                    WHEEL_SUMMARY_BAND_HZ[1].min(self.fmax),
+                ],
+            ),
             cache_dir: cache_dir.display().to_string(),
         };
         if self.json {
@@ -279,6 +294,25 @@ fn print_summary(s: &ModesSummary, out: &Path) {
             println!("  {f:<26} {n}");
         }
     }
+    let w = &s.wheel_band;
+    let list = |v: &[f64]| {
+        if v.is_empty() {
+            "none".to_string()
+        } else {
+            v.iter()
+                .map(|f| format!("{f:.0}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+                + " Hz"
+        }
+    };
+    println!(
+        "wheel modes {:.0}-{:.0} Hz: in-plane {}; out-of-plane {}",
+        w.band_hz[0],
+        w.band_hz[1],
+        list(&w.in_plane_hz),
+        list(&w.out_of_plane_hz),
+    );
     println!("written to {}", out.display());
 }
 

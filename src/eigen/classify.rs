@@ -70,7 +70,10 @@ use crate::structure::track::SpringKind;
 use crate::structure::TrackStructure;
 
 mod wheel;
-pub use wheel::{classify_wheel_mode, classify_wheel_modes, WheelFamily, WheelModeClass};
+pub use wheel::{
+    classify_wheel_mode, classify_wheel_modes, wheel_band_modes, WheelBandModes, WheelFamily,
+    WheelModeClass, WHEEL_SUMMARY_BAND_HZ,
+};
 
 /// Height (m above the foot underside) of the top of the straight UIC54 web (start of the
 /// R22 head fillet); section nodes above it are *head*.

@@ -62,8 +62,16 @@ pub struct WheelParams {
     pub rim_y_start_m: f64,
     /// Rim front (field side) face y (m), > 0.
     pub rim_y_end_m: f64,
-    /// Web faces y (m).
+    /// Web faces y (m) at the hub; the web's faces at the rim are these plus
+    /// [`Self::web_bend_m`].
     pub web_y_m: [f64; 2],
+    /// Axial shift of the web's mid-plane from the hub to the rim (m, +y towards the field
+    /// side; default 0: a straight web). A bent web follows
+    /// `y_mid(r) = y_mid(hub) + bend (1 − cos πt)/2`, `t = (r − hub radius)/(rim inner radius −
+    /// hub radius)`: it meets the hub and the rim at right angles, with the same axial
+    /// thickness everywhere. The web's faces at the hub and at the rim must both lie strictly
+    /// inside the rim's faces.
+    pub web_bend_m: f64,
     /// Hub outer radius (m).
     pub hub_radius_m: f64,
     /// Hub faces y (m).
@@ -111,6 +119,7 @@ impl Default for WheelParams {
             rim_y_start_m: -0.070,
             rim_y_end_m: 0.065,
             web_y_m: [-0.045, -0.015],
+            web_bend_m: 0.0,
             hub_radius_m: 0.15,
             hub_y_m: [-0.12, 0.065],
             axle_radius_m: 0.095,
@@ -318,6 +327,18 @@ impl WheelParams {
                 "the web must lie within the hub's y range",
             ));
         }
+        if p.web_bend_m != 0.0 {
+            let (a, b) = (p.rim_y_start_m, p.rim_y_end_m);
+            let [w0, w1] = p.web_y_m;
+            let d = p.web_bend_m;
+            if !(d.is_finite() && a < w0 && w1 < b && a < w0 + d && w1 + d < b) {
+                return Err(bad(
+                    "web_bend_m",
+                    d,
+                    "a bent web's faces at the hub and at the rim must lie strictly inside the rim's faces",
+                ));
+            }
+        }
         if let Some(d) = p.brake_disc {
             if !(d.y_start_m > y_sym && d.y_end_m > d.y_start_m && d.y_end_m < p.hub_y_m[0]) {
                 return Err(bad(
@@ -424,6 +445,14 @@ fn meridian_grid(p: &WheelParams, blocks: &[Block]) -> Result<(Vec<f64>, Vec<f64
         end_m: p.radius_m,
         size_m: hc,
     });
+    if p.web_bend_m != 0.0 {
+        // The bent web's mid-plane is resolved by at least 8 rows of elements.
+        spec.zones.push(FineZone {
+            start_m: p.hub_radius_m,
+            end_m: p.rim_inner_radius_m,
+            size_m: (p.rim_inner_radius_m - p.hub_radius_m) / 8.0,
+        });
+    }
     let rs = grade(&spec)?;
     Ok((ys, rs))
 }
@@ -467,7 +496,7 @@ fn meridian_cells(
                 let g = j * ny + i;
                 if used[g] == usize::MAX {
                     used[g] = meridian.len();
-                    meridian.push([ys[i], map_r(ys[i], rs[j])]);
+                    meridian.push([bent_y(p, ys[i], rs[j]), map_r(ys[i], rs[j])]);
                 }
                 q[c] = used[g];
             }
@@ -475,6 +504,39 @@ fn meridian_cells(
         }
     }
     (meridian, quads)
+}
+
+/// The axial position (m) of the meridian grid point `(y, r)` (grid coordinates, before the
+/// rim's cone map) once the web is bent by [`WheelParams::web_bend_m`]: in the web (hub radius < r <
+/// rim inner radius) the web's mid-plane shift `bend (1 − cos πt)/2`, a shear that keeps the
+/// axial thickness of every row of cells; in the rim a piecewise-linear remap of its y lines
+/// that takes the web's faces to their bent positions at the rim's inner radius, keeps the
+/// rim's faces, and fades linearly to none at the tread (the tread's nodes, and with them the
+/// contact zone, do not move). Rows keep their order, so no cell turns over, and the rim's
+/// region, hence ∫∫ r dA of the meridian, is unchanged. `y` itself for a straight web.
+fn bent_y(p: &WheelParams, y: f64, r: f64) -> f64 {
+    let d = p.web_bend_m;
+    if d == 0.0 {
+        return y;
+    }
+    let (rh, ri) = (p.hub_radius_m, p.rim_inner_radius_m);
+    let [w0, w1] = p.web_y_m;
+    let (a, b) = (p.rim_y_start_m, p.rim_y_end_m);
+    if r >= ri && y >= a && y <= b {
+        let remap = if y <= w0 {
+            d * (y - a) / (w0 - a)
+        } else if y <= w1 {
+            d
+        } else {
+            d * (b - y) / (b - w1)
+        };
+        y + remap * (p.radius_m - r) / (p.radius_m - ri)
+    } else if r > rh && r < ri && y >= w0 && y <= w1 {
+        let t = (r - rh) / (ri - rh);
+        y + d * 0.5 * (1.0 - (std::f64::consts::PI * t).cos())
+    } else {
+        y
+    }
 }
 
 /// The node angles θ (rad) in (−π, π]: arc length at the radius graded, fine near the
@@ -671,6 +733,67 @@ mod tests {
             }
         }
         assert_eq!(t.shifted(5).node(2, 3), t.node(2, 3) + 5);
+    }
+
+    /// A bent web: every element valid, the volume that of the straight web (the shear keeps
+    /// each row's axial width; the faceted solid is Σ sin Δθ / 2π of Pappus), the tread's
+    /// nodes where the straight wheel has them, and the web's mid-plane shifted by the bend
+    /// at the rim and by half of it half way up.
+    #[test]
+    fn a_bent_web_keeps_the_volume_and_the_tread() {
+        let straight = WheelParams::default();
+        let bent = WheelParams {
+            web_bend_m: 0.04,
+            ..straight.clone()
+        };
+        let (ms, ts) = wheel(&straight, 0).unwrap();
+        let (mb, tb) = wheel(&bent, 0).unwrap();
+        assert!(mb.check_jacobians().unwrap() > 0.0);
+        assert_eq!(bent.exact_volume_m3(), straight.exact_volume_m3());
+        let mut th = tb.thetas.clone();
+        th.insert(0, th[th.len() - 1] - 2.0 * std::f64::consts::PI);
+        let factor: f64 =
+            th.windows(2).map(|w| (w[1] - w[0]).sin()).sum::<f64>() / (2.0 * std::f64::consts::PI);
+        let v = mb.part_volume(Part::Wheel);
+        assert!(
+            (v / (bent.exact_volume_m3() * factor) - 1.0).abs() < 1e-10,
+            "{v}"
+        );
+        assert!(ms.part_volume(Part::Wheel) > 0.0);
+        let tread = |t: &WheelTopology| -> Vec<[f64; 2]> {
+            t.tread_meridian.iter().map(|&m| t.meridian[m]).collect()
+        };
+        assert_eq!(tread(&ts), tread(&tb));
+        let mid = |r: f64| {
+            let ys: Vec<f64> = tb
+                .meridian
+                .iter()
+                .filter(|q| (q[1] - r).abs() < 1e-12 && q[0].abs() < 0.2)
+                .map(|q| q[0])
+                .collect();
+            let lo = ys.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = ys.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            (0.5 * (lo + hi), hi - lo)
+        };
+        let s = |r: f64| 0.5 * (1.0 - (std::f64::consts::PI * (r - 0.15) / 0.24).cos());
+        let rows: std::collections::BTreeSet<u64> = tb
+            .meridian
+            .iter()
+            .filter(|q| q[1] > 0.15 && q[1] < 0.39 && q[0].abs() < 0.2)
+            .map(|q| q[1].to_bits())
+            .collect();
+        assert!(rows.len() >= 7, "{} rows in the web", rows.len());
+        for r in rows.into_iter().map(f64::from_bits) {
+            let (m, t) = mid(r);
+            assert!((t - 0.03).abs() < 1e-12, "{r}: {t}");
+            assert!((m - (-0.03 + 0.04 * s(r))).abs() < 1e-12, "{r}: {m}");
+        }
+        // Out of the rim at the rim: refused.
+        let out = WheelParams {
+            web_bend_m: 0.09,
+            ..straight
+        };
+        assert!(wheel(&out, 0).is_err());
     }
 
     #[test]

@@ -217,3 +217,73 @@ mod tests {
         assert!(same(&base, &t, IdentityScope::Wheel));
     }
 }
+
+#[cfg(test)]
+mod default_hash {
+    use super::*;
+    use crate::model::load_model;
+    use crate::model::ModelSource;
+
+    /// The default model's identities in every scope, hashed: the bytes behind its modal
+    /// cache keys and resume keys, as they were before the wheel's geometry keys (left out
+    /// when unset) existed. Its `[wheel]` is written with the same six keys.
+    #[test]
+    fn the_default_models_identities_are_unchanged() {
+        let m = crate::model::Model::default_model();
+        for (s, hex) in [
+            (
+                IdentityScope::Run,
+                "a2d67866409593e227ba3a12b80c1847e989e210effe560df578426f65c2ac83",
+            ),
+            (
+                IdentityScope::Modes,
+                "6317539b8bbfb5148bc41949981da7c563af4958fb97c1f8d942d6229cb4e6dd",
+            ),
+            (
+                IdentityScope::Track,
+                "3db14e25e856b80c01ec6d33d32f6ddd6461847121eac89740ee854c106b6d1e",
+            ),
+            (
+                IdentityScope::Wheel,
+                "bfef246b100aa898b373f10e96531d4ec46b73553e89d5d549521c8969b90c83",
+            ),
+        ] {
+            let h = blake3::hash(&model_identity(&m, s).unwrap()).to_hex();
+            assert_eq!(h.as_str(), hex, "{s:?}");
+        }
+        let v = serde_json::to_value(&m.wheel).unwrap();
+        assert_eq!(
+            v,
+            serde_json::json!({"radius": 0.46, "conicity": 0.025, "youngs_modulus": 210e9,
+                "poisson_ratio": 0.3, "density": 7800.0, "damping_ratio": 0.0})
+        );
+    }
+
+    /// A wheel geometry key changes the wheel's identity (its modal cache entry) and leaves
+    /// the track's.
+    #[test]
+    fn a_wheel_geometry_key_changes_the_wheel_identity_only() {
+        let base = crate::model::Model::default_model();
+        for set in [
+            "wheel.web_thickness=0.035",
+            "wheel.web_offset=-0.02",
+            "wheel.web_shape=\"curved\"",
+            "wheel.rim_width=0.14",
+            "wheel.rim_thickness=0.06",
+            "wheel.brake_disc=false",
+        ] {
+            let m = load_model(&ModelSource::Builtin, &[set.to_string()]).unwrap();
+            let id = |m: &crate::model::Model, s| model_identity(m, s).unwrap();
+            assert_ne!(
+                id(&base, IdentityScope::Wheel),
+                id(&m, IdentityScope::Wheel),
+                "{set}"
+            );
+            assert_eq!(
+                id(&base, IdentityScope::Track),
+                id(&m, IdentityScope::Track),
+                "{set}"
+            );
+        }
+    }
+}

@@ -36,6 +36,7 @@ use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 use crate::fe::material::IsotropicElastic;
+use crate::mesh::wheel::{BrakeDisc, WheelParams};
 
 /// Errors while reading or checking a model file. Each names the file and the key.
 #[derive(Debug, thiserror::Error)]
@@ -415,7 +416,9 @@ impl SpringDampers {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Wheel {
-    /// Nominal rolling radius (m), 0.2 to 0.8; default model 0.46.
+    /// Nominal rolling radius (m), 0.2 to 0.8; default model 0.46. The rim's inner radius
+    /// stays at 0.39 m unless `rim_thickness` is set, so without it the radius must be at
+    /// least 0.42 m (a rim of [`MIN_RIM_THICKNESS_M`]); with it, at least 0.23 m.
     pub radius: f64,
     /// Tread conicity (−): 0.025 = 1/40; 0 to 0.1.
     pub conicity: f64,
@@ -430,6 +433,131 @@ pub struct Wheel {
     /// damping in the steel). Measured railway wheels have ζ ≈ 1e-4–1e-3 for most modes.
     #[serde(default)]
     pub damping_ratio: f64,
+    /// Shape of the web (docs/theory.md §3.5): `"straight"` (default, a flat disc) or
+    /// `"curved"` (its mid-plane moves axially by `web_bend` from the hub to the rim along a
+    /// half cosine, meeting both at right angles, as an S-shaped web).
+    #[serde(default, skip_serializing_if = "WebShape::is_straight")]
+    pub web_shape: WebShape,
+    /// With `web_shape = "curved"`: axial shift of the web's mid-plane from the hub to the rim
+    /// (m, + towards the field side), −0.1 to 0.1 and not 0, the web's faces at the rim at
+    /// least [`WEB_RIM_CLEARANCE_M`] inside the rim's faces; default
+    /// [`DEFAULT_WEB_BEND_M`]. Refused with a straight web.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub web_bend: Option<f64>,
+    /// Axial thickness of the web (m), 0.01 to 0.1 and at most the rim width less twice
+    /// [`WEB_RIM_CLEARANCE_M`]; default [`DEFAULT_WEB_THICKNESS_M`] (30 mm).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub web_thickness: Option<f64>,
+    /// Axial position of the web's mid-plane at the hub, from the rolling-circle plane (m, +
+    /// towards the field side); default [`DEFAULT_WEB_OFFSET_M`] (30 mm towards the track
+    /// centre). The web's faces must lie within the hub (y −0.12 to 0.065 m) and, at the hub
+    /// and at the rim, at least [`WEB_RIM_CLEARANCE_M`] inside the rim's faces.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub web_offset: Option<f64>,
+    /// Axial width of the rim (m), 0.11 to 0.2; default [`DEFAULT_RIM_WIDTH_M`] (135 mm). The
+    /// rim's back face stays 70 mm from the rolling circle (y = −0.07 m); the width moves
+    /// its field-side face.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rim_width: Option<f64>,
+    /// Radial thickness of the rim, from the tread's rolling circle to its inner radius (m),
+    /// [`MIN_RIM_THICKNESS_M`] (0.03) to `radius − 0.2` (the web at least
+    /// [`MIN_WEB_HEIGHT_M`] high above the 0.15 m hub). Default: the rim's inner radius stays
+    /// at [`DEFAULT_RIM_INNER_RADIUS_M`] (0.39 m), 0.07 m on the default 0.46 m wheel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rim_thickness: Option<f64>,
+    /// Whether the axle carries the brake disc (a solid steel ring r 0.095–0.32 m, y −0.42 to
+    /// −0.36 m, about 137 kg); default true. `false` leaves the bare wheel and axle.
+    #[serde(default = "default_true", skip_serializing_if = "is_true")]
+    pub brake_disc: bool,
+}
+
+/// Shape of the wheel's web (`wheel.web_shape`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WebShape {
+    /// A flat disc between hub and rim.
+    #[default]
+    Straight,
+    /// Mid-plane shifted axially by `wheel.web_bend` from the hub to the rim (half cosine).
+    Curved,
+}
+
+impl WebShape {
+    /// Whether the web is straight (the default, left out when a model is written).
+    pub fn is_straight(&self) -> bool {
+        *self == WebShape::Straight
+    }
+}
+
+fn is_true(b: &bool) -> bool {
+    *b
+}
+
+/// Default `wheel.web_thickness` (m).
+pub const DEFAULT_WEB_THICKNESS_M: f64 = 0.030;
+/// Default `wheel.web_offset` (m).
+pub const DEFAULT_WEB_OFFSET_M: f64 = -0.030;
+/// Default `wheel.web_bend` of a curved web (m).
+pub const DEFAULT_WEB_BEND_M: f64 = 0.030;
+/// Default `wheel.rim_width` (m).
+pub const DEFAULT_RIM_WIDTH_M: f64 = 0.135;
+/// The rim's inner radius when `wheel.rim_thickness` is not given (m).
+pub const DEFAULT_RIM_INNER_RADIUS_M: f64 = 0.39;
+/// Smallest `wheel.rim_thickness` (m): the tread's fine contact zone reaches 30 mm deep.
+pub const MIN_RIM_THICKNESS_M: f64 = 0.03;
+/// Smallest radial height of the web, rim inner radius less hub radius (m).
+pub const MIN_WEB_HEIGHT_M: f64 = 0.05;
+/// Least axial distance from the web's faces to the rim's faces (m), at the hub and at the
+/// rim: the rim's cells beside the web keep a width.
+pub const WEB_RIM_CLEARANCE_M: f64 = 0.005;
+
+impl Wheel {
+    /// The web's faces at the hub (m, wheel frame y): `web_offset ∓ web_thickness/2`, or the
+    /// default wheel's −0.045 and −0.015 m when neither key is given.
+    pub fn web_y_m(&self) -> [f64; 2] {
+        if self.web_thickness.is_none() && self.web_offset.is_none() {
+            return WheelParams::default().web_y_m;
+        }
+        let t = self.web_thickness.unwrap_or(DEFAULT_WEB_THICKNESS_M);
+        let c = self.web_offset.unwrap_or(DEFAULT_WEB_OFFSET_M);
+        [c - 0.5 * t, c + 0.5 * t]
+    }
+
+    /// The web's axial bend from hub to rim (m): 0 for a straight web.
+    pub fn web_bend_m(&self) -> f64 {
+        match self.web_shape {
+            WebShape::Straight => 0.0,
+            WebShape::Curved => self.web_bend.unwrap_or(DEFAULT_WEB_BEND_M),
+        }
+    }
+
+    /// The rim's faces (m, wheel frame y): the back face at −0.07 m, the front face
+    /// `rim_width` from it (the default wheel's 0.065 m when not given).
+    pub fn rim_y_m(&self) -> [f64; 2] {
+        let d = WheelParams::default();
+        match self.rim_width {
+            None => [d.rim_y_start_m, d.rim_y_end_m],
+            Some(w) => [d.rim_y_start_m, d.rim_y_start_m + w],
+        }
+    }
+
+    /// The rim's inner radius (m): `radius − rim_thickness`, or
+    /// [`DEFAULT_RIM_INNER_RADIUS_M`] when the thickness is not given.
+    pub fn rim_inner_radius_m(&self) -> f64 {
+        match self.rim_thickness {
+            None => DEFAULT_RIM_INNER_RADIUS_M,
+            Some(t) => self.radius - t,
+        }
+    }
+
+    /// The axle's brake disc, if the wheel has one.
+    pub fn brake_disc(&self) -> Option<BrakeDisc> {
+        if self.brake_disc {
+            WheelParams::default().brake_disc
+        } else {
+            None
+        }
+    }
 }
 
 /// Vehicle above the wheel.

@@ -2,6 +2,7 @@
 //! error naming the file, the dotted key and what is allowed.
 
 use super::*;
+use crate::mesh::wheel::WheelParams;
 
 impl Model {
     /// Checks every value against its allowed range; `file` names the source in the error.
@@ -221,6 +222,140 @@ impl Model {
         c.range("wheel.conicity", w.conicity, 0.0, 0.1, "(-)")?;
         c.elastic("wheel", w.youngs_modulus, w.poisson_ratio, w.density)?;
         c.range("wheel.damping_ratio", w.damping_ratio, 0.0, 0.1, "(-)")?;
+        self.validate_wheel_geometry(c)
+    }
+
+    /// `[wheel]` geometry keys: each in its range, then the combinations the wheel mesh needs
+    /// (a rim thick enough for the contact zone over a web of some height, the web's faces
+    /// within the hub and inside the rim's faces at the hub and at the rim), so that a wheel
+    /// that cannot be meshed is refused here, naming a key the file set.
+    fn validate_wheel_geometry(&self, c: &mut Checker<'_>) -> Result<(), ModelError> {
+        let w = &self.wheel;
+        let d = WheelParams::default();
+        let gap = WEB_RIM_CLEARANCE_M;
+        // Rim thickness: the radial room between the hub and the tread.
+        let max_rim = w.radius - d.hub_radius_m - MIN_WEB_HEIGHT_M;
+        let room = format!(
+            "(at least {MIN_RIM_THICKNESS_M} m, the tread's fine contact zone; at most wheel.radius - {} m, so that the web stands {MIN_WEB_HEIGHT_M} m above the {} m hub)",
+            d.hub_radius_m + MIN_WEB_HEIGHT_M,
+            d.hub_radius_m
+        );
+        match w.rim_thickness {
+            Some(t) if max_rim < MIN_RIM_THICKNESS_M => {
+                return c.fail(
+                    "wheel.radius",
+                    w.radius.to_string(),
+                    format!(
+                        "at least {} m with wheel.rim_thickness = {t} m set {room}",
+                        d.hub_radius_m + MIN_WEB_HEIGHT_M + MIN_RIM_THICKNESS_M
+                    ),
+                )
+            }
+            Some(t) => c.range(
+                "wheel.rim_thickness",
+                t,
+                MIN_RIM_THICKNESS_M,
+                max_rim,
+                &format!("m {room}"),
+            )?,
+            None => {
+                let lo = DEFAULT_RIM_INNER_RADIUS_M + MIN_RIM_THICKNESS_M;
+                if w.radius < lo {
+                    return c.fail(
+                        "wheel.radius",
+                        w.radius.to_string(),
+                        format!(
+                            "{lo} to 0.8 m with the default rim (inner radius {DEFAULT_RIM_INNER_RADIUS_M} m, at least {MIN_RIM_THICKNESS_M} m thick); set wheel.rim_thickness for a smaller wheel"
+                        ),
+                    );
+                }
+            }
+        }
+        if let Some(width) = w.rim_width {
+            c.range(
+                "wheel.rim_width",
+                width,
+                0.11,
+                0.2,
+                "m (the rim's back face is 0.07 m from the rolling circle; its field-side face at least 0.04 m beyond it, past the tread's fine contact zone)",
+            )?;
+        }
+        let [ra, rb] = w.rim_y_m();
+        let [y0, y1] = w.web_y_m();
+        let (t, mid) = (y1 - y0, 0.5 * (y0 + y1));
+        if let Some(t) = w.web_thickness {
+            c.range(
+                "wheel.web_thickness",
+                t,
+                0.01,
+                (0.1f64).min(rb - ra - 2.0 * gap),
+                &format!(
+                    "m (at most 0.1 m and the rim's width {:.3} m less 2 x {gap} m)",
+                    rb - ra
+                ),
+            )?;
+        }
+        if let Some(o) = w.web_offset {
+            c.range("wheel.web_offset", o, -0.1, 0.1, "m")?;
+        }
+        if let Some(b) = w.web_bend {
+            if w.web_shape == WebShape::Straight {
+                return c.fail(
+                    "wheel.web_bend",
+                    b.to_string(),
+                    "only with wheel.web_shape = \"curved\" (this web is straight)".into(),
+                );
+            }
+            if b == 0.0 {
+                return c.fail(
+                    "wheel.web_bend",
+                    b.to_string(),
+                    "-0.1 to 0.1 m, not 0 (a curved web without a bend is the straight one: web_shape = \"straight\")".into(),
+                );
+            }
+            c.range("wheel.web_bend", b, -0.1, 0.1, "m")?;
+        }
+        // The web's faces at the hub: within the hub and inside the rim's faces (the mesh
+        // joins the web to the rim's y lines); at the rim, shifted by the bend, inside them.
+        let (lo, hi) = (d.hub_y_m[0].max(ra + gap), d.hub_y_m[1].min(rb - gap));
+        let why = format!(
+            "(the web's faces within the hub, y {} to {} m, and at least {gap} m inside the rim's faces, y {ra} to {rb} m)",
+            d.hub_y_m[0], d.hub_y_m[1]
+        );
+        if mid - 0.5 * t < lo || mid + 0.5 * t > hi {
+            let half_room = (mid - lo).min(hi - mid);
+            return if w.web_offset.is_some() || w.web_thickness.is_none() {
+                c.fail(
+                    "wheel.web_offset",
+                    mid.to_string(),
+                    format!(
+                        "{} to {} m with a web {t} m thick {why}",
+                        lo + 0.5 * t,
+                        hi - 0.5 * t
+                    ),
+                )
+            } else {
+                c.fail(
+                    "wheel.web_thickness",
+                    t.to_string(),
+                    format!(
+                        "0.01 to {:.4} m with the web's mid-plane at y = {mid} m {why}",
+                        2.0 * half_room
+                    ),
+                )
+            };
+        }
+        let bend = w.web_bend_m();
+        let (blo, bhi) = (ra + gap + 0.5 * t - mid, rb - gap - 0.5 * t - mid);
+        if bend < blo || bend > bhi {
+            return c.fail(
+                "wheel.web_bend",
+                format!("{bend}{}", if w.web_bend.is_none() { " (the default)" } else { "" }),
+                format!(
+                    "{blo:.4} to {bhi:.4} m, not 0, with the web's mid-plane at the hub at y = {mid} m and {t} m thick (its faces at the rim at least {gap} m inside the rim's faces, y {ra} to {rb} m)"
+                ),
+            );
+        }
         Ok(())
     }
 

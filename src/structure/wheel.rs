@@ -97,13 +97,23 @@ impl WheelStructure {
     }
 
     /// The wheel's geometry and mesh parameters of a model: its radius and conicity, the
+    /// web's shape, thickness and offset, the rim's width and thickness and the brake disc
+    /// (the `[wheel]` geometry keys; unset ones give the default wheel's values exactly), the
     /// mesh keys `mesh.wheel_segments` and `mesh.wheel_element_size` (the contact zone at
-    /// half that size), the rest of the geometry (rim, web, hub, axle, journal, brake disc)
-    /// the default wheel's.
+    /// half that size), the rest of the geometry (hub, axle, journal, the disc's size) the
+    /// default wheel's.
     pub fn params_of(m: &Model) -> WheelParams {
+        let w = &m.wheel;
+        let [rim_y_start_m, rim_y_end_m] = w.rim_y_m();
         WheelParams {
-            radius_m: m.wheel.radius,
-            conicity: m.wheel.conicity,
+            radius_m: w.radius,
+            conicity: w.conicity,
+            rim_inner_radius_m: w.rim_inner_radius_m(),
+            rim_y_start_m,
+            rim_y_end_m,
+            web_y_m: w.web_y_m(),
+            web_bend_m: w.web_bend_m(),
+            brake_disc: w.brake_disc(),
             circumferential_divisions: m.mesh.wheel_segments,
             axial_size_m: m.mesh.wheel_element_size,
             radial_size_m: m.mesh.wheel_element_size,

@@ -81,6 +81,13 @@ fn keys(scratch: &Path) -> Vec<(String, &'static str)> {
         ("track.absorbing_layer_length", "float"),
         ("track.absorbing_layer_rate", "float"),
         ("explicit.time_step", "float"),
+        ("wheel.web_shape", "str"),
+        ("wheel.web_bend", "float"),
+        ("wheel.web_thickness", "float"),
+        ("wheel.web_offset", "float"),
+        ("wheel.rim_width", "float"),
+        ("wheel.rim_thickness", "float"),
+        ("wheel.brake_disc", "bool"),
     ] {
         keys.push((k.to_string(), kind));
     }

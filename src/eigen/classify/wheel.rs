@@ -162,3 +162,51 @@ fn wheel_shape_class(wheel: &WheelStructure, u: &[f64], ew: f64, f_hz: f64) -> W
         rim_shares,
     }
 }
+
+/// The band of [`wheel_band_modes`]'s summary in the `modes` command (Hz): where a wheel's
+/// in-plane (radial) pair sets a wear floor in corrugation predictions (about 1060 Hz on the
+/// default wheel) and its lower out-of-plane (axial) modes lie.
+pub const WHEEL_SUMMARY_BAND_HZ: [f64; 2] = [500.0, 2000.0];
+
+/// A wheel's elastic modes in a band, in-plane and out-of-plane: what moves when the wheel's
+/// geometry keys change.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WheelBandModes {
+    /// The band [lo, hi) (Hz).
+    pub band_hz: [f64; 2],
+    /// In-plane mode frequencies (Hz), ascending: the rim moves mostly in the wheel's plane
+    /// (axial share of the rim's motion below one half: families [`WheelFamily::Radial`] and
+    /// [`WheelFamily::Other`], the latter e.g. the rim translating in its plane on the web,
+    /// half radial and half circumferential).
+    pub in_plane_hz: Vec<f64>,
+    /// Out-of-plane mode frequencies (Hz), ascending: axial rim motion
+    /// ([`WheelFamily::Axial`]).
+    pub out_of_plane_hz: Vec<f64>,
+}
+
+/// The elastic modes of `frequencies_hz` (Hz, with their `classes`) in `band_hz` = [lo, hi),
+/// in-plane and out-of-plane (rigid-body modes left out).
+pub fn wheel_band_modes(
+    frequencies_hz: &[f64],
+    classes: &[WheelModeClass],
+    band_hz: [f64; 2],
+) -> WheelBandModes {
+    let mut s = WheelBandModes {
+        band_hz,
+        in_plane_hz: Vec::new(),
+        out_of_plane_hz: Vec::new(),
+    };
+    for (&f, c) in frequencies_hz.iter().zip(classes) {
+        if !(f >= band_hz[0] && f < band_hz[1]) {
+            continue;
+        }
+        match c.family {
+            WheelFamily::Radial | WheelFamily::Other => s.in_plane_hz.push(f),
+            WheelFamily::Axial => s.out_of_plane_hz.push(f),
+            WheelFamily::Rigid => {}
+        }
+    }
+    s.in_plane_hz.sort_by(f64::total_cmp);
+    s.out_of_plane_hz.sort_by(f64::total_cmp);
+    s
+}
