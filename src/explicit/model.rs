@@ -384,3 +384,50 @@ impl ExplicitModel {
         Ok(plane_weights(&self.line.planes_x_m, x, self.patch_a_m)?)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::test_problems::{all_modes_model, all_modes_structures};
+
+    /// The railpad's longitudinal dampers reach the explicit path's damper forces: with the
+    /// rail moving at 1 m/s along x and everything else at rest, the forces `C v` of the
+    /// track operator on the rail sum to n·c for n fastenings of damping c (the model's only
+    /// dampers). The reduced path reads the same `C` (structure::node_line_tests).
+    #[test]
+    fn railpad_x_dampers_reach_the_explicit_damper_forces() {
+        let c_p = 7e3;
+        let damping = format!("fastening.longitudinal_damping={c_p:e}");
+        let model = all_modes_model(&[
+            "fastening.model=custom",
+            "fastening.custom.x={ rigid = \"none\" }",
+            "fastening.custom.y={ rigid = \"rows\", indices = [0, 1, 2, 3] }",
+            "fastening.custom.z={ rigid = \"none\" }",
+            "fastening.longitudinal_stiffness=1e6",
+            &damping,
+        ])
+        .unwrap();
+        let (track, wheel) = all_modes_structures(&model).unwrap();
+        let em = ExplicitModel::from_structures(
+            &model,
+            track,
+            wheel,
+            ExplicitOptions::from_model(&model),
+        )
+        .unwrap();
+        let t = &em.track_structure;
+        let mut v = vec![0.0; 3 * t.mesh.nodes.len()];
+        for i in 0..t.rail.n_planes() {
+            for j in 0..t.rail.n_section_nodes() {
+                v[3 * t.rail.node(i, j)] = 1.0;
+            }
+        }
+        let v = t.dofmap.restrict(&v).unwrap();
+        let mut cv = vec![0.0; v.len()];
+        em.track.op.apply_c(&v, &mut cv);
+        let on_rail: f64 = (0..v.len()).filter(|&i| v[i] == 1.0).map(|i| cv[i]).sum();
+        let want = model.track.bays as f64 * c_p;
+        println!("explicit C: Σ (C v) on the rail {on_rail:.6e} N s/m, n c = {want:e}");
+        assert!((on_rail - want).abs() <= 1e-9 * want, "{on_rail} vs {want}");
+    }
+}

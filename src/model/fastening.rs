@@ -150,12 +150,25 @@ pub enum RigidRegion {
     GridPoints,
 }
 
+impl RigidRegion {
+    /// Whether the region can be held on node lines (`node_lines = true`): columns and rows.
+    pub fn has_node_lines(self) -> bool {
+        matches!(self, RigidRegion::Columns | RigidRegion::Rows)
+    }
+}
+
 /// The hold of one direction: `{ rigid = "columns", indices = [1] }` fixes the region's DOFs;
 /// `{ elastic = "columns", indices = [1], stiffness = 1e9, damping = 0.0 }` instead ties them to
 /// the ground by spring-dampers whose stiffness (N/m) and damping (N·s/m) *per fastening* are
 /// spread over the region's nodes by tributary area (evenly over the grid points for
-/// `grid_points`; per bay of one sleeper spacing for `continuous`). Give one of `rigid` and
-/// `elastic`; an absent `rigid` means `"none"`.
+/// `grid_points`; per bay of one sleeper spacing for `continuous`). Columns and rows can
+/// instead be held on *node lines* (`node_lines = true`, docs/theory.md §3.3): the rail-foot
+/// nodes on the node plane through each listed column's centre (across the whole foot), or on
+/// the foot node line through each listed row's centre (over the footprint length), with no
+/// width; an elastic node-line hold takes its stiffness and damping *per held line*:
+/// `{ elastic = "columns", indices = [1], node_lines = true, line_stiffness = 3e8,
+/// line_damping = 0.0 }`, each line's spread over its nodes by tributary length. Give one of
+/// `rigid` and `elastic`; an absent `rigid` means `"none"`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DirectionHold {
@@ -176,10 +189,31 @@ pub struct DirectionHold {
     /// Elastic hold: damping per fastening (N·s/m), 0 to 1e12; default 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub damping: Option<f64>,
+    /// Columns or rows only: hold their node lines (the foot nodes on the node plane through
+    /// each column centre, or on the foot node line through each row centre within the
+    /// footprint; the mesh gets that plane or line) instead of strips of `strip_width`. A
+    /// hold of zero width, as the reference study's: mesh dependent (docs/theory.md §3.3).
+    /// Default false.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub node_lines: bool,
+    /// Elastic hold on node lines (`node_lines = true`) only: stiffness of each held
+    /// line (N/m per line; a fastening holding n lines holds with n times it),
+    /// [`MIN_HOLD_STIFFNESS`] to [`MAX_HOLD_STIFFNESS`], spread over the line's nodes by
+    /// tributary length. Required with an elastic node-line hold; no default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub line_stiffness: Option<f64>,
+    /// Elastic hold on node lines only: damping of each held line (N·s/m per line), 0 to
+    /// 1e12, spread as `line_stiffness`; default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub line_damping: Option<f64>,
 }
 
 fn region_none() -> RigidRegion {
     RigidRegion::None
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 /// Smallest stiffness per fastening of an elastic hold (N/m): 100 times below the softest
@@ -212,6 +246,9 @@ impl DirectionHold {
             indices,
             stiffness: None,
             damping: None,
+            node_lines: false,
+            line_stiffness: None,
+            line_damping: None,
         }
     }
 
@@ -220,10 +257,19 @@ impl DirectionHold {
         self.elastic.unwrap_or(self.rigid)
     }
 
-    /// Stiffness (N/m) and damping (N·s/m) per fastening of an elastic hold; `None` for a
-    /// rigid hold or none.
+    /// Whether the hold acts on node lines (`node_lines = true` on columns or rows).
+    pub fn on_node_lines(&self) -> bool {
+        self.node_lines && self.region().has_node_lines()
+    }
+
+    /// Stiffness (N/m) and damping (N·s/m) of an elastic hold: per fastening, or per held
+    /// line on node lines ([`Self::on_node_lines`]); `None` for a rigid hold or none.
     pub fn elastic_stiffness_damping(&self) -> Option<(f64, f64)> {
         match self.elastic {
+            Some(_) if self.on_node_lines() => Some((
+                self.line_stiffness.unwrap_or(0.0),
+                self.line_damping.unwrap_or(0.0),
+            )),
             Some(r) if r != RigidRegion::None => {
                 Some((self.stiffness.unwrap_or(0.0), self.damping.unwrap_or(0.0)))
             }
@@ -243,6 +289,9 @@ impl DirectionHold {
             indices: self.indices.clone(),
             stiffness: Some(k),
             damping: Some(c),
+            node_lines: self.node_lines,
+            line_stiffness: None,
+            line_damping: None,
         }
     }
 }

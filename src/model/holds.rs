@@ -32,8 +32,13 @@ impl Fastening {
                 elastic: Some(e),
             } => (*preset, e),
         };
-        check_stiffness(file, "fastening.hold_stiffness", e.stiffness)?;
-        check_damping(file, "fastening.hold_damping", e.damping)?;
+        check_stiffness(
+            file,
+            "fastening.hold_stiffness",
+            e.stiffness,
+            "N/m per fastening",
+        )?;
+        check_damping(file, "fastening.hold_damping", e.damping, false)?;
         if e.directions.as_ref().is_some_and(|d| d.is_empty()) {
             return Err(key_err(
                 "fastening.hold_directions",
@@ -66,6 +71,46 @@ impl Fastening {
             key: k,
             message,
         };
+        if h.node_lines && !h.region().has_node_lines() {
+            return Err(key_err(
+                format!("{key}.node_lines"),
+                "node lines are held for the regions \"columns\" and \"rows\" only".into(),
+            ));
+        }
+        // The stiffness keys of the region held elastically (per fastening, or per line on
+        // node lines), and those of the other kind, which are refused.
+        let lines = h.on_node_lines();
+        let (k_key, c_key, k_given, c_given) = if lines {
+            (
+                "line_stiffness",
+                "line_damping",
+                h.line_stiffness,
+                h.line_damping,
+            )
+        } else {
+            ("stiffness", "damping", h.stiffness, h.damping)
+        };
+        let (other_k, other_c, other_given) = if lines {
+            ("stiffness", "damping", [h.stiffness, h.damping])
+        } else {
+            (
+                "line_stiffness",
+                "line_damping",
+                [h.line_stiffness, h.line_damping],
+            )
+        };
+        if let Some((k, _)) = [other_k, other_c]
+            .into_iter()
+            .zip(other_given)
+            .find(|(_, v)| v.is_some())
+        {
+            let why = if lines {
+                "a hold on node lines takes line_stiffness and line_damping (N/m and N s/m per held line)"
+            } else {
+                "only allowed with an elastic hold on node lines (elastic = \"columns\" or \"rows\" with node_lines = true)"
+            };
+            return Err(key_err(format!("{key}.{k}"), why.into()));
+        }
         if let Some(e) = h.elastic {
             if h.rigid != RigidRegion::None {
                 return Err(key_err(
@@ -79,20 +124,21 @@ impl Fastening {
                     "an elastic hold needs a region: \"columns\", \"rows\", \"continuous\" or \"grid_points\" (for no hold write rigid = \"none\")".into(),
                 ));
             }
-            let Some(k) = h.stiffness else {
+            let unit = if lines {
+                "N/m per held line"
+            } else {
+                "N/m per fastening"
+            };
+            let Some(k) = k_given else {
                 return Err(key_err(
-                    format!("{key}.stiffness"),
-                    "an elastic hold needs stiffness (N/m per fastening)".into(),
+                    format!("{key}.{k_key}"),
+                    format!("an elastic hold needs {k_key} ({unit})"),
                 ));
             };
-            check_stiffness(file, &format!("{key}.stiffness"), k)?;
-            check_damping(file, &format!("{key}.damping"), h.damping)?;
-        } else if h.stiffness.is_some() || h.damping.is_some() {
-            let k = if h.stiffness.is_some() {
-                "stiffness"
-            } else {
-                "damping"
-            };
+            check_stiffness(file, &format!("{key}.{k_key}"), k, unit)?;
+            check_damping(file, &format!("{key}.{c_key}"), c_given, lines)?;
+        } else if k_given.is_some() || c_given.is_some() {
+            let k = if k_given.is_some() { k_key } else { c_key };
             return Err(key_err(
                 format!("{key}.{k}"),
                 "only allowed with an elastic hold (elastic = \"columns\" etc. instead of rigid)"
@@ -131,28 +177,34 @@ impl Fastening {
     }
 }
 
-fn check_stiffness(file: &str, key: &str, k: f64) -> Result<(), ModelError> {
+fn check_stiffness(file: &str, key: &str, k: f64, unit: &str) -> Result<(), ModelError> {
     if !(k.is_finite() && (MIN_HOLD_STIFFNESS..=MAX_HOLD_STIFFNESS).contains(&k)) {
         return Err(ModelError::OutOfRange {
             file: file.into(),
             key: key.into(),
             value: k.to_string(),
             allowed: format!(
-                "{MIN_HOLD_STIFFNESS:e} to {MAX_HOLD_STIFFNESS:e} N/m per fastening (an elastic hold stands for a fastening clip, 1e6 to 1e9 N/m; far below, the rail held by it alone in a direction is nearly free; a rigid hold: rigid = …)"
+                "{MIN_HOLD_STIFFNESS:e} to {MAX_HOLD_STIFFNESS:e} {unit} (an elastic hold stands for a fastening clip, 1e6 to 1e9 N/m; far below, the rail held by it alone in a direction is nearly free; a rigid hold: rigid = …)"
             ),
         });
     }
     Ok(())
 }
 
-fn check_damping(file: &str, key: &str, c: Option<f64>) -> Result<(), ModelError> {
+/// Damping of an elastic hold under `key`: per held line (`per_line`) or per fastening.
+fn check_damping(file: &str, key: &str, c: Option<f64>, per_line: bool) -> Result<(), ModelError> {
+    let unit = if per_line {
+        "N s/m per held line"
+    } else {
+        "N s/m per fastening"
+    };
     match c {
         Some(c) if !(c.is_finite() && (0.0..=MAX_HOLD_DAMPING).contains(&c)) => {
             Err(ModelError::OutOfRange {
                 file: file.into(),
                 key: key.into(),
                 value: c.to_string(),
-                allowed: format!("0 to {MAX_HOLD_DAMPING:e} N s/m per fastening"),
+                allowed: format!("0 to {MAX_HOLD_DAMPING:e} {unit}"),
             })
         }
         _ => Ok(()),

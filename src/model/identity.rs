@@ -102,7 +102,7 @@ fn remove_non_structural(o: &mut Object) {
             if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
                 for h in c.values_mut() {
                     if let Some(h) = h.as_object_mut() {
-                        h.remove("damping");
+                        h.retain(|k, _| !k.ends_with("damping"));
                     }
                 }
             }
@@ -171,6 +171,64 @@ mod tests {
         assert_eq!(v, serde_json::json!({"bays": 16, "sleeper_spacing": 0.6}));
         let v = serde_json::to_value(&with(&["track.ends=\"free\""]).track).unwrap();
         assert_eq!(v, serde_json::json!({"bays": 16, "sleeper_spacing": 0.6}));
+    }
+
+    /// The node-line keys are not written when not given: the fastening of existing models
+    /// (a preset, or a custom pattern of strips) has the keys, and so the identities, it had
+    /// before they existed. A line's damping leaves the modes' identity, its stiffness not.
+    #[test]
+    fn node_line_keys_leave_existing_identities_as_they_were() {
+        let keys = |v: &Value| {
+            let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+            k.sort();
+            k
+        };
+        let v = serde_json::to_value(&with(&[]).fastening).unwrap();
+        let mut want = [
+            "model",
+            "rows",
+            "columns",
+            "footprint_length",
+            "footprint_width",
+            "strip_width",
+            "pad_thickness",
+            "vertical_stiffness",
+            "vertical_damping",
+            "lateral_stiffness",
+            "lateral_damping",
+            "longitudinal_stiffness",
+            "longitudinal_damping",
+        ];
+        want.sort();
+        assert_eq!(keys(&v), want);
+        let custom = |x: &str| {
+            with(&[
+                "fastening.model=custom",
+                &format!("fastening.custom.x={x}"),
+                "fastening.custom.y={ rigid = \"rows\", indices = [0, 1, 2, 3] }",
+                "fastening.custom.z={ rigid = \"none\" }",
+            ])
+        };
+        let strips =
+            custom("{ elastic = \"columns\", indices = [1], stiffness = 1e9, damping = 3.0 }");
+        let v = serde_json::to_value(&strips.fastening).unwrap();
+        assert_eq!(
+            keys(&v["custom"]["x"]),
+            ["damping", "elastic", "indices", "rigid", "stiffness"]
+        );
+        assert_eq!(keys(&v["custom"]["y"]), ["indices", "rigid"]);
+        let line = |k: f64, c: f64| {
+            custom(&format!(
+                "{{ elastic = \"columns\", indices = [1], node_lines = true, line_stiffness = {k:e}, line_damping = {c:e} }}"
+            ))
+        };
+        let base = line(1e8, 0.0);
+        assert!(!same(&base, &strips, IdentityScope::Track));
+        for s in [IdentityScope::Modes, IdentityScope::Track] {
+            assert!(same(&base, &line(1e8, 5e3), s), "{s:?}");
+            assert!(!same(&base, &line(2e8, 0.0), s), "{s:?}");
+        }
+        assert!(!same(&base, &line(1e8, 5e3), IdentityScope::Run));
     }
 
     #[test]

@@ -547,3 +547,87 @@ fn an_absorbing_layer_in_the_wheels_travel_is_refused() {
     let e = err_text(dutch_with(&["track.ends=\"sponge\""]));
     assert!(e.contains("track.ends") || e.contains("ends"), "{e}");
 }
+
+#[test]
+fn node_line_holds_parse_and_nonsense_is_an_error_naming_the_key() {
+    let custom = |x: &str| {
+        dutch_with(&[
+            "fastening.model=custom",
+            &format!("fastening.custom.x={x}"),
+            "fastening.custom.y={ rigid = \"rows\", indices = [0, 1, 2, 3], node_lines = true }",
+            "fastening.custom.z={ rigid = \"none\" }",
+        ])
+    };
+    let m = custom("{ rigid = \"columns\", indices = [0, 1, 2], node_lines = true }").unwrap();
+    let p = m.fastening.hold_pattern();
+    assert!(p.x.on_node_lines() && p.y.on_node_lines() && !p.z.on_node_lines());
+    assert_eq!(p.x.elastic_stiffness_damping(), None);
+    let m = custom(
+        "{ elastic = \"columns\", indices = [1], node_lines = true, line_stiffness = 3e8, line_damping = 2.0 }",
+    )
+    .unwrap();
+    let p = m.fastening.hold_pattern();
+    assert_eq!(p.x.elastic_stiffness_damping(), Some((3e8, 2.0)));
+    // Without node_lines the strips keep their keys.
+    assert!(!Model::default_model()
+        .fastening
+        .hold_pattern()
+        .x
+        .on_node_lines());
+    for (x, key, what) in [
+        (
+            "{ elastic = \"columns\", indices = [1], node_lines = true }",
+            "fastening.custom.x.line_stiffness",
+            "N/m per held line",
+        ),
+        (
+            "{ elastic = \"columns\", indices = [1], node_lines = true, line_stiffness = 0.0 }",
+            "fastening.custom.x.line_stiffness",
+            "1e4 to 1e13 N/m per held line",
+        ),
+        (
+            "{ elastic = \"rows\", indices = [0], node_lines = true, line_stiffness = nan }",
+            "fastening.custom.x.line_stiffness",
+            "per held line",
+        ),
+        (
+            "{ elastic = \"columns\", indices = [1], node_lines = true, line_stiffness = 1e8, line_damping = -1.0 }",
+            "fastening.custom.x.line_damping",
+            "0 to 1e12 N s/m per held line",
+        ),
+        (
+            "{ elastic = \"columns\", indices = [1], node_lines = true, stiffness = 1e8 }",
+            "fastening.custom.x.stiffness",
+            "line_stiffness",
+        ),
+        (
+            "{ elastic = \"columns\", indices = [1], stiffness = 1e8, line_stiffness = 1e8 }",
+            "fastening.custom.x.line_stiffness",
+            "node_lines = true",
+        ),
+        (
+            "{ rigid = \"columns\", indices = [1], node_lines = true, line_stiffness = 1e8 }",
+            "fastening.custom.x.line_stiffness",
+            "only allowed with an elastic",
+        ),
+        (
+            "{ rigid = \"continuous\", node_lines = true }",
+            "fastening.custom.x.node_lines",
+            "\"columns\" and \"rows\" only",
+        ),
+        (
+            "{ rigid = \"columns\", indices = [3], node_lines = true }",
+            "fastening.custom.x.indices",
+            "0..=2",
+        ),
+        (
+            "{ rigid = \"columns\", indices = [1], node_lines = 1 }",
+            "fastening",
+            "bool",
+        ),
+    ] {
+        let e = err_text(custom(x));
+        assert!(e.contains(key) && e.contains(what), "{x}: {e}");
+        assert_eq!(e.lines().count(), 1, "{x}: {e}");
+    }
+}

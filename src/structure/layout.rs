@@ -8,7 +8,9 @@
 //! (rigid or elastic) *column* c is the strip `|x − x_c| ≤ w/2` across the whole foot; a held
 //! *row* r is the strip `|y − y_r| ≤ w/2` over the footprint length (w = `strip_width`). These
 //! regions have a physical size, so the held stiffness converges under mesh refinement
-//! (docs/theory.md §3.3); held *grid points* (one node per cell centre) do not.
+//! (docs/theory.md §3.3); held *grid points* (one node per cell centre) and *node lines* (the
+//! foot nodes on the node plane through a column centre, or on the foot node line through a
+//! row centre within the footprint) do not.
 
 use crate::model::{HoldPattern, Model, RigidRegion};
 
@@ -100,9 +102,9 @@ impl Layout {
     }
 
     /// x-coordinates that must be node planes of the rail mesh: the rail ends and the strip
-    /// edges of every held column of `hold` (rigid or elastic, any direction), the footprint
-    /// ends where rows are held and the column centres where grid points are held, sorted and
-    /// deduplicated. Spring cells need no node planes: their tributary weights are clipped to
+    /// edges of every held column of `hold` (rigid or elastic, any direction; its centre when
+    /// held on node lines), the footprint ends where rows are held and the column centres
+    /// where grid points are held, sorted and deduplicated. Spring cells need no node planes: their tributary weights are clipped to
     /// the cell exactly.
     pub fn x_breakpoints(&self, hold: &HoldPattern) -> Vec<f64> {
         let mut v = vec![0.0, self.length];
@@ -113,7 +115,12 @@ impl Layout {
             for &xs in &self.sleepers {
                 for &c in &h.indices {
                     let xc = self.column_centre(xs, c);
-                    v.extend([xc - 0.5 * self.strip_width, xc + 0.5 * self.strip_width]);
+                    if h.on_node_lines() {
+                        // A held column line is the node plane through the column centre.
+                        v.push(xc);
+                    } else {
+                        v.extend([xc - 0.5 * self.strip_width, xc + 0.5 * self.strip_width]);
+                    }
                 }
             }
         }
@@ -140,8 +147,8 @@ impl Layout {
     }
 
     /// y-coordinates (rail-section frame, upright) that must be node lines on the foot
-    /// underside: the strip edges of every held row of `hold` (rigid or elastic) and the row
-    /// centres where grid points are held.
+    /// underside: the strip edges of every held row of `hold` (rigid or elastic; its centre
+    /// when held on node lines) and the row centres where grid points are held.
     pub fn y_foot_lines(&self, hold: &HoldPattern) -> Vec<f64> {
         let mut v = Vec::new();
         for h in [&hold.x, &hold.y, &hold.z] {
@@ -149,7 +156,12 @@ impl Layout {
                 RigidRegion::Rows => {
                     for &r in &h.indices {
                         let yc = self.row_centre(r);
-                        v.extend([yc - 0.5 * self.strip_width, yc + 0.5 * self.strip_width]);
+                        if h.on_node_lines() {
+                            // A held row line is the foot node line through the row centre.
+                            v.push(yc);
+                        } else {
+                            v.extend([yc - 0.5 * self.strip_width, yc + 0.5 * self.strip_width]);
+                        }
                     }
                 }
                 RigidRegion::GridPoints => v.extend((0..self.rows).map(|r| self.row_centre(r))),

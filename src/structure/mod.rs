@@ -66,10 +66,10 @@ pub enum StructureError {
         /// Lateral node position (m).
         y_m: f64,
     },
-    /// A held strip or grid point of the fastening's hold pattern that meets no rail node.
+    /// A held strip, grid point or node line of the fastening's hold pattern that meets no rail node.
     #[error("supports: held {what} {index} at {axis} = {position_m} m contains no rail-foot node {lines}")]
     HoldMissesNodes {
-        /// `column`, `row`, `grid point of column`, `grid point of row`.
+        /// `column`, `row`, `grid point of column`, `grid point of row`, `column line`, `row line`.
         what: &'static str,
         /// Its index.
         index: usize,
@@ -145,3 +145,5 @@ pub(crate) fn too_large(part: &'static str, nodes: f64, reduce: String) -> Struc
 
 #[cfg(test)]
 mod hold_tests;
+#[cfg(test)]
+mod node_line_tests;

@@ -11,11 +11,14 @@
 //!   exactly, and the pad stiffness does not depend on the mesh.
 //! - **Rigid holds**: the fastening model's [`HoldPattern`](crate::model::HoldPattern) fixes
 //!   rail-foot underside DOFs to the ground, region by region (columns and rows are strips of
-//!   physical width; their edges are node lines, so the held set is exact).
+//!   physical width; their edges are node lines, so the held set is exact). Node-line regions
+//!   fix the foot nodes of one node plane (a column line) or one foot node line within the
+//!   footprint (a row line): a constraint of zero width, mesh dependent ([`node_line`]).
 //! - **Elastic holds**: a region held elastically is tied to the ground in its direction by
 //!   spring-dampers, the stiffness and damping per fastening spread over the region's nodes by
 //!   tributary area (per bay of one sleeper spacing for the continuous region; evenly over the
-//!   grid-point nodes). As k → ∞ they approach the rigid hold of the same region.
+//!   grid-point nodes; per held line, by tributary length along it, for node lines). As
+//!   k → ∞ they approach the rigid hold of the same region.
 //! - **Ballast**: per half sleeper, stiffness and damping in x, y, z spread over the
 //!   bottom-face nodes by tributary area, to the ground.
 //! - **Rail ends**: free, or absorbing by dashpots on the end faces (`track.ends`,
@@ -403,6 +406,15 @@ pub fn held_dofs(
     let planes = &rail.planes_x_m;
     let mut dofs = Vec::new();
     for (d, hold) in [&p.x, &p.y, &p.z].into_iter().enumerate() {
+        if hold.rigid != RigidRegion::None && hold.on_node_lines() {
+            for &xs in &layout.sleepers {
+                for &index in &hold.indices {
+                    let line = node_line(layout, rail, hold.rigid, xs, index)?;
+                    dofs.extend(line.iter().map(|&(_, node)| 3 * node + d));
+                }
+            }
+            continue;
+        }
         match hold.rigid {
             RigidRegion::None => {}
             RigidRegion::GridPoints => {
@@ -522,6 +534,59 @@ fn grid_point_nodes(
     Ok(out)
 }
 
+/// The rail-foot underside nodes of one held node line of the fastening on the sleeper at
+/// `xs`, with their tributary-length weights along the line (summing to 1): for
+/// [`RigidRegion::Columns`] the nodes on the node plane through the centre of column
+/// `index`, across the whole foot; for [`RigidRegion::Rows`] the nodes on the foot node
+/// line through the centre of row `index`, at the node planes within the footprint length. The
+/// mesh has that plane or line ([`Layout::x_breakpoints`], [`Layout::y_foot_lines`]).
+pub fn node_line(
+    layout: &Layout,
+    rail: &RailTopology,
+    region: RigidRegion,
+    xs: f64,
+    index: usize,
+) -> Result<Vec<(f64, usize)>, StructureError> {
+    let tol = 1e-7;
+    let foot = &rail.section.foot_underside;
+    let foot_s = &rail.section.foot_underside_s_m;
+    let normalised = |w: Vec<f64>, node: &dyn Fn(usize) -> usize| {
+        let total: f64 = w.iter().sum();
+        w.iter()
+            .enumerate()
+            .filter(|(_, &w)| w > 0.0)
+            .map(|(k, &w)| (w / total, node(k)))
+            .collect::<Vec<_>>()
+    };
+    if region == RigidRegion::Columns {
+        let xc = layout.column_centre(xs, index);
+        let i = nearest(&rail.planes_x_m, xc)
+            .filter(|&i| (rail.planes_x_m[i] - xc).abs() <= tol)
+            .ok_or(StructureError::HoldMissesNodes {
+                what: "column line",
+                index,
+                axis: "x",
+                position_m: xc,
+                lines: "plane",
+            })?;
+        let w = tributary_lengths(foot_s, f64::NEG_INFINITY, f64::INFINITY);
+        return Ok(normalised(w, &|k| rail.node(i, foot[k])));
+    }
+    let yr = layout.row_centre(index);
+    let k = nearest(foot_s, yr)
+        .filter(|&k| (foot_s[k] - yr).abs() <= tol)
+        .ok_or(StructureError::HoldMissesNodes {
+            what: "row line",
+            index,
+            axis: "y",
+            position_m: yr,
+            lines: "line",
+        })?;
+    let half = 0.5 * layout.footprint_length;
+    let w = tributary_lengths(&rail.planes_x_m, xs - half, xs + half);
+    Ok(normalised(w, &|i| rail.node(i, foot[k])))
+}
+
 fn nearest(v: &[f64], x: f64) -> Option<usize> {
     (0..v.len()).min_by(|&a, &b| (v[a] - x).abs().total_cmp(&(v[b] - x).abs()))
 }
@@ -529,7 +594,7 @@ fn nearest(v: &[f64], x: f64) -> Option<usize> {
 /// Grounded spring-dampers of the elastic holds of `p` (see the module docs): for each held
 /// direction, the stiffness and damping per fastening spread over the region's foot nodes.
 /// Per fastening the stiffnesses sum to the stated k (per sleeper spacing of rail for the
-/// continuous region).
+/// continuous region); for node lines each held line's sum to the stated k per line.
 pub fn add_elastic_holds(
     p: &HoldPattern,
     layout: &Layout,
@@ -578,6 +643,15 @@ pub fn add_elastic_holds(
         let Some((k, c)) = hold.elastic_stiffness_damping() else {
             continue;
         };
+        if hold.on_node_lines() {
+            // k and c per held line, spread along the line.
+            for &xs in &layout.sleepers {
+                for &index in &hold.indices {
+                    push(d, k, c, &node_line(layout, rail, hold.region(), xs, index)?);
+                }
+            }
+            continue;
+        }
         let half = 0.5 * layout.strip_width;
         match hold.region() {
             RigidRegion::None => {}
