@@ -117,6 +117,8 @@ impl ElasticHolds {
 }
 
 /// How the rail foot is held: a preset (rigid as published, or elastic), or a custom pattern.
+// One per model, read once: the custom pattern's size costs nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 pub enum Holds {
     /// One of RPM1–RPM5; `elastic` = `None` holds its regions rigidly.
