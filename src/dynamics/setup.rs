@@ -144,14 +144,33 @@ pub fn widen_grid(grid: GridSpec, w: GridWidening) -> GridSpec {
     }
 }
 
-/// The edge (`"x"` or `"y"`) at which the contact patch of a failed passage reached its grid,
-/// and the normal force then (N), if that is why it failed.
-pub fn patch_at_grid_edge(e: &DynamicsError) -> Option<(&'static str, f64)> {
+/// Where the contact patch of a failed passage reached its grid, if that is why it failed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridEdgeReached {
+    /// The edge: `"x"` or `"y"`.
+    pub edge: &'static str,
+    /// The normal force then (N).
+    pub normal_n: f64,
+    /// Time of the step (s).
+    pub t_s: f64,
+    /// Contact position of the step (m).
+    pub x_m: f64,
+}
+
+/// The edge at which the contact patch of a failed passage reached its grid, with the step's
+/// normal force, time and place, if that is why it failed.
+pub fn patch_at_grid_edge(e: &DynamicsError) -> Option<GridEdgeReached> {
     match e {
         DynamicsError::Contact {
+            t_s,
+            x_m,
             source: crate::contact::ContactError::PatchAtGridEdge { edge, normal_n },
-            ..
-        } => Some((edge, *normal_n)),
+        } => Some(GridEdgeReached {
+            edge,
+            normal_n: *normal_n,
+            t_s: *t_s,
+            x_m: *x_m,
+        }),
         _ => None,
     }
 }
@@ -232,14 +251,16 @@ pub fn run_widening_grid<T, E>(
             Ok(r) => return Ok((r, w)),
             Err(e) => e,
         };
-        let Some((edge, normal_n)) = dynamics(&e).and_then(patch_at_grid_edge) else {
+        let Some(GridEdgeReached {
+            edge,
+            normal_n,
+            t_s,
+            x_m,
+        }) = dynamics(&e).and_then(patch_at_grid_edge)
+        else {
             return Err(e);
         };
         if normal_n > MAX_WIDENING_LOAD_FACTOR * static_load_n {
-            let (t_s, x_m) = match dynamics(&e) {
-                Some(DynamicsError::Contact { t_s, x_m, .. }) => (*t_s, *x_m),
-                _ => (f64::NAN, f64::NAN),
-            };
             return Err(outgrown(DynamicsError::Diverged {
                 t_s,
                 x_m,
