@@ -10,25 +10,17 @@
 //! "docs/theory.md §N"); measured run times and the benchmark commands in
 //! `docs/performance.md`.
 //!
-//! The pipeline, one module per stage, data flowing one way (a stage never imports a later
-//! one):
+//! The pipeline, one module per concept, in layers (a module imports only its own layer or
+//! lower ones; the table of modules, files and theory sections is `ARCHITECTURE.md` of the
+//! repository):
 //!
-//! | module | what it models |
+//! | layer | modules |
 //! |---|---|
-//! | [`units`] | the one place where mm, µm and km/h are converted to SI |
-//! | [`io`] | atomic output files: CSV, `.npy`, text |
-//! | [`lists`] | list-valued inputs: a value given twice is refused |
-//! | [`model`] | the TOML model file: parameters with units, `extends`, `--set` overrides, validation |
-//! | [`mesh`] | UIC54 section, rail extrusion, sleepers, wheel of revolution |
-//! | [`fe`] | hexahedral elements, spring-dampers, constraints, sparse K/M/C assembly |
-//! | [`eigen`] | shift-invert Lanczos, Sturm check, mode classification, modal cache |
-//! | [`contact`] | Hertz, half-space normal contact, Kalker transient tangential contact, frictional work |
-//! | [`spectral`] | zero-phase band-pass, PSD in wavelength/frequency, peaks, deviations, phase |
-//! | [`dynamics`] | the reduced-order wheel passage: modal synthesis, moving contact, time integration, wear |
-//! | [`structure`] | the track and wheel substructures built from a model: supports, springs, holds |
-//! | [`growth`] | trial corrugation, consistency table (Case 1/2, light/dark green, grey), growth phase |
-//! | [`studies`] | speed sweeps (shards, resume, frequency-selection maps), initiation tables, design studies |
-//! | [`report`] | SVG/PNG line plots and heat maps, Markdown/HTML documents |
+//! | 0, the foundation | [`units`] (mm, µm, km/h converted to SI in one place), [`io`], [`lists`], [`progress`], [`spectral`], [`report`], [`mesh`], [`fe`], [`contact`] |
+//! | 1 | [`model`] (the TOML model file) → [`structure`] (track and wheel substructures) |
+//! | 2 | [`eigen`] (Lanczos, Sturm check, classification, modal cache) |
+//! | 3, the two passage engines | [`dynamics`] (reduced modal passage), [`explicit`] (full explicit FE passage) |
+//! | 4 | [`growth`] (trial corrugation, consistency, verdict), [`studies`] (sweeps, studies, initiation, `predict`) |
 //!
 //! Coordinates (global, SI): `x` along the rail (direction of travel), `y` lateral (positive
 //! away from the track centre, towards the field side), `z` vertical up. `z = 0` is the
