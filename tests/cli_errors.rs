@@ -566,3 +566,28 @@ fn help_texts_carry_no_rustdoc_links() {
         assert!(!help.contains("[`"), "{c} --help: {help}");
     }
 }
+
+/// `predict --speed 120` says how to set the prediction's speed instead of clap's suggestion
+/// of `--speeds` (the short sweep's speeds).
+#[test]
+fn predict_speed_points_to_the_model_key() {
+    assert_clean_error(
+        &["predict", "--speed", "120"],
+        &["--speed", "--set run.speed_kmh=120", "--speeds only sets"],
+    );
+}
+
+/// A railpad stiffness typed in MN/m (1300 for 1.3e9 N/m) runs, with a warning naming the
+/// key and the unit; the default model gets none.
+#[test]
+fn a_unit_slip_is_warned_about() {
+    let (code, _, err) = run(&["model", "--set", "fastening.vertical_stiffness=1300"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warning: builtin:dutch: fastening.vertical_stiffness = 1300 N/m"),
+        "{err}"
+    );
+    let (code, _, err) = run(&["model"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("warning"), "{err}");
+}

@@ -54,9 +54,18 @@ impl ModelArgs {
         }
     }
 
-    /// Loads and validates the model.
+    /// Loads and validates the model; warns on stderr about values whose magnitude looks
+    /// like a unit slip ([`Model::unit_slips`]).
     pub fn load(&self) -> anyhow::Result<Model> {
-        Ok(load_model(&self.source(), &self.set)?)
+        let m = load_model(&self.source(), &self.set)?;
+        let name = self
+            .model
+            .as_ref()
+            .map_or("builtin:dutch".to_string(), |p| p.display().to_string());
+        for slip in m.unit_slips() {
+            eprintln!("warning: {name}: {slip}");
+        }
+        Ok(m)
     }
 }
 

@@ -39,6 +39,10 @@ pub struct PredictCmd {
         value_name = "SPEEDS"
     )]
     speeds: String,
+    /// Not an option of `predict` (hidden): caught so that the error says how to set the
+    /// prediction's speed, where clap would suggest `--speeds` (the short sweep's).
+    #[arg(long, hide = true, allow_hyphen_values = true, value_name = "KMH")]
+    speed: Option<String>,
     /// Output directory.
     #[arg(long, default_value = "corrugation-out/predict", value_name = "DIR")]
     out: PathBuf,
@@ -62,6 +66,12 @@ fn fo(v: Option<f64>) -> String {
 
 impl PredictCmd {
     pub fn run(self) -> anyhow::Result<()> {
+        if let Some(v) = &self.speed {
+            anyhow::bail!(
+                "--speed: predict runs at the model's speed (run.speed_kmh, km/h): give \
+                 --set run.speed_kmh={v}; --speeds only sets the speeds of the short sweep"
+            );
+        }
         super::check_trial_amplitudes(&self.amplitudes_um)?;
         let m = self.model.load()?;
         super::check_trial_profile_grid(&self.amplitudes_um, &m)?;

@@ -19,6 +19,7 @@ mod fastening;
 mod holds;
 pub mod identity;
 mod load;
+pub mod plausibility;
 pub mod test_problems;
 mod validate;
 
