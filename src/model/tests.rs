@@ -631,3 +631,20 @@ fn node_line_holds_parse_and_nonsense_is_an_error_naming_the_key() {
         assert_eq!(e.lines().count(), 1, "{x}: {e}");
     }
 }
+
+/// Computed bounds print as a reader writes them: the default rim's smallest radius is
+/// 0.39 + 0.03 = 0.42 m (not 0.42000000000000004), the rim's thickest 0.46 - 0.2 = 0.26 m.
+#[test]
+fn computed_bounds_print_without_round_off_digits() {
+    let e = err_text(dutch_with(&["wheel.radius=0.3"]));
+    assert!(e.contains("allowed 0.42 to 0.8 m"), "{e}");
+    let e = err_text(dutch_with(&["wheel.rim_thickness=0.5"]));
+    assert!(e.contains("allowed 0.03 to 0.26 m"), "{e}");
+    for e in [
+        err_text(dutch_with(&["wheel.radius=0.3"])),
+        err_text(dutch_with(&["wheel.rim_thickness=0.5"])),
+        err_text(dutch_with(&["wheel.web_thickness=0.09"])),
+    ] {
+        assert!(!e.contains("0000000"), "{e}");
+    }
+}

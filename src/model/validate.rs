@@ -265,7 +265,8 @@ impl Model {
                         "wheel.radius",
                         w.radius.to_string(),
                         format!(
-                            "{lo} to 0.8 m with the default rim (inner radius {DEFAULT_RIM_INNER_RADIUS_M} m, at least {MIN_RIM_THICKNESS_M} m thick); set wheel.rim_thickness for a smaller wheel"
+                            "{} to 0.8 m with the default rim (inner radius {DEFAULT_RIM_INNER_RADIUS_M} m, at least {MIN_RIM_THICKNESS_M} m thick); set wheel.rim_thickness for a smaller wheel",
+                            num(lo)
                         ),
                     );
                 }
@@ -319,8 +320,11 @@ impl Model {
         // joins the web to the rim's y lines); at the rim, shifted by the bend, inside them.
         let (lo, hi) = (d.hub_y_m[0].max(ra + gap), d.hub_y_m[1].min(rb - gap));
         let why = format!(
-            "(the web's faces within the hub, y {} to {} m, and at least {gap} m inside the rim's faces, y {ra} to {rb} m)",
-            d.hub_y_m[0], d.hub_y_m[1]
+            "(the web's faces within the hub, y {} to {} m, and at least {gap} m inside the rim's faces, y {} to {} m)",
+            d.hub_y_m[0],
+            d.hub_y_m[1],
+            num(ra),
+            num(rb)
         );
         if mid - 0.5 * t < lo || mid + 0.5 * t > hi {
             let half_room = (mid - lo).min(hi - mid);
@@ -329,9 +333,10 @@ impl Model {
                     "wheel.web_offset",
                     mid.to_string(),
                     format!(
-                        "{} to {} m with a web {t} m thick {why}",
-                        lo + 0.5 * t,
-                        hi - 0.5 * t
+                        "{} to {} m with a web {} m thick {why}",
+                        num(lo + 0.5 * t),
+                        num(hi - 0.5 * t),
+                        num(t)
                     ),
                 )
             } else {
@@ -339,8 +344,9 @@ impl Model {
                     "wheel.web_thickness",
                     t.to_string(),
                     format!(
-                        "0.01 to {:.4} m with the web's mid-plane at y = {mid} m {why}",
-                        2.0 * half_room
+                        "0.01 to {} m with the web's mid-plane at y = {} m {why}",
+                        num(2.0 * half_room),
+                        num(mid)
                     ),
                 )
             };
@@ -587,6 +593,17 @@ pub const POISSON_RATIO: [f64; 2] = [0.0, 0.45];
 /// Allowed density of the rail, sleeper and wheel (kg/m³): steel 7800, concrete 2500.
 pub const DENSITY_KG_M3: [f64; 2] = [1000.0, 20000.0];
 
+/// A computed bound as a reader expects it: rounded to 12 significant digits and printed in
+/// the shortest form (0.39 + 0.03 prints 0.42, not 0.42000000000000004).
+fn num(x: f64) -> String {
+    if !x.is_finite() {
+        return x.to_string();
+    }
+    format!("{x:.11e}")
+        .parse::<f64>()
+        .map_or_else(|_| x.to_string(), |r| r.to_string())
+}
+
 struct Checker<'a> {
     file: &'a str,
 }
@@ -603,7 +620,11 @@ impl Checker<'_> {
     /// lo ≤ v ≤ hi, finite.
     fn range(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<(), ModelError> {
         if !(v.is_finite() && v >= lo && v <= hi) {
-            return self.fail(key, v.to_string(), format!("{lo} to {hi} {unit}"));
+            return self.fail(
+                key,
+                v.to_string(),
+                format!("{} to {} {unit}", num(lo), num(hi)),
+            );
         }
         Ok(())
     }
@@ -613,7 +634,7 @@ impl Checker<'_> {
             return self.fail(
                 key,
                 v.to_string(),
-                format!("greater than 0 and at most {hi} {unit}"),
+                format!("greater than 0 and at most {} {unit}", num(hi)),
             );
         }
         Ok(())
