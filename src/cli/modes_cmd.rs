@@ -32,6 +32,7 @@ use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::eigen::classify::{
     wheel_band_modes, TrackModeClass, WheelBandModes, WheelModeClass, WHEEL_SUMMARY_BAND_HZ,
 };
+use corrugation::eigen::RESIDUAL_FLOOR_HZ;
 use corrugation::io::{write_vtu, VtuField, VTK_HEXAHEDRON};
 use corrugation::mesh::Mesh;
 use corrugation::structure::{TrackStructure, WheelStructure};
@@ -117,7 +118,7 @@ pub struct SubSummary {
     pub count: usize,
     pub fmax_hz: f64,
     pub sturm_count: usize,
-    /// The largest relative residual of the modes above [`RESIDUAL_FLOOR_HZ`] (a rigid-body
+    /// The largest relative residual of the modes above [`RESIDUAL_FLOOR_HZ`] (1 Hz) (a rigid-body
     /// mode's relative residual is its eigenvalue's round-off over the measure's floor, up to
     /// about 1, and says nothing about its accuracy; `eigen` module doc).
     pub max_residual: f64,
@@ -207,11 +208,6 @@ impl ModesCmd {
         Ok(())
     }
 }
-
-/// Modes below this frequency (Hz) are rigid-body modes whose computed eigenvalue is
-/// round-off (the relative residual's eigenvalue floor is `(2π · 1 Hz)²`, `eigen` module doc);
-/// the printed largest residual leaves them out.
-const RESIDUAL_FLOOR_HZ: f64 = 1.0;
 
 /// The summary of basis `b` below `fmax_hz` whose modes have the family names `families`.
 fn sub_summary<'a, C>(

@@ -109,6 +109,12 @@ mod tests;
 
 pub use lanczos::solve;
 
+/// The frequency (Hz) whose eigenvalue `(2π f)²` is the floor λ_floor of the relative
+/// residual's denominator (module doc). Below it a mode is a rigid-body mode whose computed
+/// eigenvalue is round-off, and its relative residual (up to about 1) says nothing about its
+/// accuracy.
+pub const RESIDUAL_FLOOR_HZ: f64 = 1.0;
+
 use faer::Mat;
 
 /// Fill-reducing ordering for the sparse LDLᵀ.

@@ -3,8 +3,10 @@
 
 use super::*;
 
-/// λ_floor = (2π · 1 Hz)² in the relative-residual denominator (rad²/s²).
-pub(super) const LAMBDA_FLOOR: f64 = 39.478_417_604_357_43;
+/// λ_floor = (2π · [`crate::eigen::RESIDUAL_FLOOR_HZ`])² in the relative-residual
+/// denominator (rad²/s²).
+pub(super) const LAMBDA_FLOOR: f64 = (2.0 * std::f64::consts::PI * crate::eigen::RESIDUAL_FLOOR_HZ)
+    * (2.0 * std::f64::consts::PI * crate::eigen::RESIDUAL_FLOOR_HZ);
 
 /// Deterministic xorshift64* generator for start blocks.
 pub(super) struct Rng(pub(super) u64);
