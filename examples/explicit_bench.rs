@@ -48,12 +48,7 @@ fn main() -> anyhow::Result<()> {
     let em = ExplicitModel::new(&model, ExplicitOptions::from_model(&model))?;
     let setup_wall = t.elapsed().as_secs_f64();
     let setup_cpu = cpu_seconds().zip(cpu0).map(|(b, a)| b - a);
-    let rec = em.passage(
-        model.run.speed(),
-        None,
-        &PassageOptions::default(),
-        &mut |_, _| {},
-    )?;
+    let rec = em.passage(model.run.speed(), None, &PassageOptions::default(), None)?;
     let i = &rec.info;
     let s = summarise(&rec.record)?;
     let dof_steps = (i.dofs[0] * i.steps) as f64;

@@ -46,6 +46,7 @@ use corrugation::eigen::substructure::{
 };
 use corrugation::model::{load_model, ModelSource};
 use corrugation::structure::TrackStructure;
+use corrugation::studies::speeds::Shard;
 use corrugation::studies::study::{basis_plan, run_study, CaseRunners, Study};
 use corrugation::studies::BoxError;
 
@@ -102,7 +103,14 @@ fn study(args: &[String], key: &str, speed: f64) -> anyhow::Result<()> {
             times: passages.clone(),
         }))
     };
-    let out = run_study(&study, &factory, None, &dir, &corrugation::progress::Silent)?;
+    let out = run_study(
+        &study,
+        &factory,
+        None,
+        &dir,
+        Shard::ALL,
+        &corrugation::progress::Silent,
+    )?;
     let (wall, cpu) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
     let csv = std::fs::read(dir.join("study.csv")).context("study.csv")?;
     println!(

@@ -22,7 +22,18 @@ pub trait Progress: Sync {
     /// A warning for the user that does not stop the work (e.g. a cache entry that could not
     /// be stored). Default: dropped, for work nobody watches.
     fn warn(&self, _message: &str) {}
+    /// Whether the caller asks the work to stop (e.g. an interrupt in an interactive front
+    /// end). Long loops ask where they report their counts (a passage every 64 time steps, a
+    /// sweep before each speed) and stop with [`Cancelled`]. Default: never.
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
+
+/// The work was stopped because its [`Progress::cancelled`] said so.
+#[derive(Clone, Copy, Debug, thiserror::Error)]
+#[error("cancelled by the caller")]
+pub struct Cancelled;
 
 /// Progress that nobody watches (tests, library use without a front end).
 #[derive(Clone, Copy, Debug, Default)]
@@ -85,6 +96,23 @@ pub fn error_chain(e: &dyn std::error::Error) -> String {
         src = c.source();
     }
     s
+}
+
+/// An error and its causes on one line, `: `-separated, as the command-line program prints
+/// it after `error: `: a cause whose text the message already holds (an error that prints
+/// its source) is not repeated, and a message of several lines is joined with spaces.
+pub fn one_line(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut msg = e.to_string();
+    let mut src = e.source();
+    while let Some(cause) = src {
+        let c = cause.to_string();
+        if !msg.contains(&c) {
+            msg.push_str(": ");
+            msg.push_str(&c);
+        }
+        src = cause.source();
+    }
+    msg.lines().map(str::trim).collect::<Vec<_>>().join(" ")
 }
 
 /// CPU time (user + system) of this process (s), from `/proc/self/stat`; `None` elsewhere.

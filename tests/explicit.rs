@@ -341,9 +341,7 @@ fn coupled_passage_is_stable_where_the_held_force_is_not_and_balances_energy() {
     let m = passage_model();
     let opts = PassageOptions::default();
     let em = ExplicitModel::new(&m, ExplicitOptions::default()).unwrap();
-    let rec = em
-        .passage(m.run.speed(), None, &opts, &mut |_, _| {})
-        .unwrap();
+    let rec = em.passage(m.run.speed(), None, &opts, None).unwrap();
     let s = corrugation::dynamics::analysis::summarise(&rec.record).unwrap();
     let w = m.vehicle.wheel_load;
     let cos_a = m.rail.inclination.atan().cos();
@@ -378,7 +376,7 @@ fn coupled_passage_is_stable_where_the_held_force_is_not_and_balances_energy() {
         },
     )
     .unwrap();
-    match naive.passage(m.run.speed(), None, &opts, &mut |_, _| {}) {
+    match naive.passage(m.run.speed(), None, &opts, None) {
         Err(e) => {
             // The force grows until the patch leaves the contact grid or the state diverges.
             let t = e.to_string();
@@ -426,12 +424,7 @@ fn energy_ledger_matches_the_nodal_work_of_the_replayed_passage() {
     )
     .unwrap();
     let rec = em
-        .passage(
-            m.run.speed(),
-            None,
-            &PassageOptions::default(),
-            &mut |_, _| {},
-        )
+        .passage(m.run.speed(), None, &PassageOptions::default(), None)
         .unwrap();
     let e = &rec.record.energy;
     let a = rec.info.audit.expect("audit kept");

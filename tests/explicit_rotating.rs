@@ -366,9 +366,7 @@ fn rotating_passage_without_spin_is_the_fixed_passage() {
     let m = passage_model(&["run.solution_zone_length=0.1"]);
     let popts = PassageOptions::default();
     let fixed = ExplicitModel::new(&m, ExplicitOptions::default()).unwrap();
-    let a = fixed
-        .passage(m.run.speed(), None, &popts, &mut |_, _| {})
-        .unwrap();
+    let a = fixed.passage(m.run.speed(), None, &popts, None).unwrap();
     let rot = ExplicitModel::new(
         &m,
         ExplicitOptions {
@@ -378,9 +376,7 @@ fn rotating_passage_without_spin_is_the_fixed_passage() {
         },
     )
     .unwrap();
-    let b = rot
-        .passage(m.run.speed(), None, &popts, &mut |_, _| {})
-        .unwrap();
+    let b = rot.passage(m.run.speed(), None, &popts, None).unwrap();
     assert_eq!(b.info.wheel, "rotating");
     let (ha, hb) = (&a.record.histories, &b.record.histories);
     assert_eq!(ha.normal_n.len(), hb.normal_n.len());
@@ -430,12 +426,7 @@ fn rotating_ledger(lc: ExplicitLocalCompliance) -> EnergyBalance {
         ..ExplicitOptions::default()
     };
     let em = ExplicitModel::new(&m, opts).unwrap();
-    let rec = em.passage(
-        m.run.speed(),
-        None,
-        &PassageOptions::default(),
-        &mut |_, _| {},
-    );
+    let rec = em.passage(m.run.speed(), None, &PassageOptions::default(), None);
     let rec = rec.unwrap();
     let e = rec.record.energy;
     match lc {
@@ -509,12 +500,7 @@ fn rotating_passage_from_rest_rolls_freely_until_the_torque_steps_on() {
     };
     let em = ExplicitModel::new(&rest, opts).unwrap();
     let rec = em
-        .passage(
-            rest.run.speed(),
-            None,
-            &PassageOptions::default(),
-            &mut |_, _| {},
-        )
+        .passage(rest.run.speed(), None, &PassageOptions::default(), None)
         .unwrap();
     let h = &rec.record.histories;
     let mu_w = rest.contact.traction_coefficient * rest.vehicle.wheel_load;

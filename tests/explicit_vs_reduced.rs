@@ -272,7 +272,7 @@ fn compare_at(
     )
     .unwrap();
     let t0 = std::time::Instant::now();
-    let ex = em.passage(v, None, &popts, &mut |_, _| {}).unwrap();
+    let ex = em.passage(v, None, &popts, None).unwrap();
     let t_ex = t0.elapsed().as_secs_f64();
     run_in_difference(&red, &ex.record);
     let (xr, fnr, flr) = zone_forces(&red);

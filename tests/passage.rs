@@ -908,3 +908,63 @@ fn a_profile_off_the_wheels_travel_changes_nothing_or_is_refused() {
     assert!(matches!(e, DynamicsError::ProfileOffTravel { .. }), "{e}");
     assert!(e.to_string().contains("entirely off"), "{e}");
 }
+
+/// A passage whose progress asks it to stop ([`corrugation::progress::Progress::cancelled`])
+/// stops at the next report (every 64 steps) with "cancelled by the caller"; a sweep does not
+/// start the speeds left when it is cancelled.
+#[test]
+fn a_cancelled_progress_stops_the_passage_and_the_sweep() {
+    use corrugation::progress::Progress;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    /// Cancels once `after` units of its stage were reported; counts the reports.
+    struct StopAfter {
+        after: u64,
+        reports: AtomicU64,
+        last: AtomicU64,
+    }
+    impl Progress for StopAfter {
+        fn stage(&self, _: &str, _: u64) {}
+        fn done(&self, done: u64) {
+            self.reports.fetch_add(1, Ordering::Relaxed);
+            self.last.store(done, Ordering::Relaxed);
+        }
+        fn cancelled(&self) -> bool {
+            self.last.load(Ordering::Relaxed) >= self.after
+        }
+    }
+    let m = small_model();
+    let opts = PassageOptions::default();
+    let p = PreparedModel::new(&m, &cache(), &opts).expect("modal model");
+    let stop = StopAfter {
+        after: 128,
+        reports: AtomicU64::new(0),
+        last: AtomicU64::new(0),
+    };
+    let e = p
+        .engine
+        .passage(m.run.speed(), None, &opts, Some(&stop))
+        .expect_err("cancelled");
+    assert!(
+        matches!(e, corrugation::dynamics::DynamicsError::Cancelled(_)),
+        "{e}"
+    );
+    assert_eq!(e.to_string(), "cancelled by the caller");
+    assert_eq!(stop.last.load(Ordering::Relaxed), 128);
+    // a sweep cancelled before it starts runs no passage and writes no speed file
+    let dir = tempfile::tempdir().expect("temp dir");
+    let never = StopAfter {
+        after: 0,
+        reports: AtomicU64::new(0),
+        last: AtomicU64::new(0),
+    };
+    let r = corrugation::studies::sweep::run_passages(&p, &[100.0, 120.0], dir.path(), "k", &never);
+    let Err(corrugation::studies::StudiesError::Passages { failures }) = r else {
+        panic!("not refused: {r:?}");
+    };
+    assert_eq!(failures.len(), 2, "{failures:?}");
+    assert!(
+        failures[0].ends_with("cancelled by the caller"),
+        "{failures:?}"
+    );
+    assert!(!corrugation::studies::sweep::speed_file(dir.path(), 100.0).exists());
+}

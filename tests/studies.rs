@@ -782,14 +782,21 @@ fn study_runs_every_case_writes_table_and_plots_and_resumes() {
         )]))
     };
     // Growth requested but not available: an error naming the key, before anything runs.
-    let e = run_study(&study, &factory, None, &dir.join("out"), &Silent)
-        .unwrap_err()
-        .to_string();
+    let e = run_study(
+        &study,
+        &factory,
+        None,
+        &dir.join("out"),
+        Shard::ALL,
+        &Silent,
+    )
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("s.toml") && e.contains("`growth`"), "{e}");
     assert_eq!(built.load(Ordering::SeqCst), 0);
 
     let out = dir.join("out");
-    let o = run_study(&study, &factory, Some(&growth), &out, &Silent).unwrap();
+    let o = run_study(&study, &factory, Some(&growth), &out, Shard::ALL, &Silent).unwrap();
     assert_eq!((o.computed, o.reused), (6, 0));
     let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
@@ -829,13 +836,13 @@ fn study_runs_every_case_writes_table_and_plots_and_resumes() {
         .contains("study_relative_wear.png"));
     // Rerun: every case reused, no runner built.
     let before = built.load(Ordering::SeqCst);
-    let o2 = run_study(&study, &factory, Some(&growth), &out, &Silent).unwrap();
+    let o2 = run_study(&study, &factory, Some(&growth), &out, Shard::ALL, &Silent).unwrap();
     assert_eq!((o2.computed, o2.reused), (0, 6));
     assert_eq!(built.load(Ordering::SeqCst), before);
     // Other speeds: every case is recomputed, none is taken from the old files.
     let mut other = study.clone();
     other.speeds_kmh = Some(vec![120.0]);
-    let o3 = run_study(&other, &factory, Some(&growth), &out, &Silent).unwrap();
+    let o3 = run_study(&other, &factory, Some(&growth), &out, Shard::ALL, &Silent).unwrap();
     assert_eq!((o3.computed, o3.reused), (6, 0));
     std::fs::remove_dir_all(dir).ok();
 }

@@ -11,6 +11,7 @@ use corrugation::eigen::substructure::{
     passage_track_basis_timed, substructured_track_basis, track_components, ReducedShapes,
     SubstructureOptions,
 };
+use corrugation::studies::speeds::Shard;
 
 use corrugation::structure::TrackStructure;
 
@@ -154,7 +155,15 @@ fn a_concurrent_study_writes_the_serial_study_files() {
             Box<dyn PassageRunner>,
             corrugation::studies::BoxError,
         > { Ok(Box::new(runners.prepared(m)?)) };
-        let o = run_study(&study, &factory, None, &out, &corrugation::progress::Silent).unwrap();
+        let o = run_study(
+            &study,
+            &factory,
+            None,
+            &out,
+            Shard::ALL,
+            &corrugation::progress::Silent,
+        )
+        .unwrap();
         assert_eq!((o.computed, o.reused), (n, 0));
         let mut files = std::collections::BTreeMap::new();
         files.insert(

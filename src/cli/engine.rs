@@ -11,7 +11,6 @@ use corrugation::dynamics::PassageRunner;
 use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::explicit::{ExplicitModel, ExplicitOptions, ExplicitRunner};
-use corrugation::growth::procedure::trial_growth;
 use corrugation::model::Model;
 
 /// Which engine runs the passages (`--engine`).
@@ -80,12 +79,8 @@ pub fn runner_for(model: &Model, cache: Option<&Path>) -> anyhow::Result<Box<dyn
     Ok(Box::new(prepared(model, cache)?))
 }
 
-/// The growth loop of one study case (`growth = true` in a study file): the trial-amplitude
-/// procedure at the model's speed with the default amplitudes 10, 40, 80, 160 µm; columns
-/// `limiting_amplitude_um` (0 when no amplitude grows consistently),
-/// `consistent_amplitudes` (how many of the four grow consistently) and, when any of its
-/// passages ran on a widened contact grid, `widened_contact_grids` (how many).
-/// The runner's loaded modal bases are reused when it is a [`PreparedModel`]; otherwise the
+/// The growth loop of one study case ([`corrugation::studies::grow::study_growth`]). The
+/// runner's loaded modal bases are reused when it is a [`PreparedModel`]; otherwise the
 /// model is prepared from the cache in `cache` (default cache directory when `None`).
 pub fn study_growth(
     model: &Model,
@@ -100,35 +95,5 @@ pub fn study_growth(
             &owned
         }
     };
-    let modes = corrugation::studies::grow::mode_lines(p);
-    let g = trial_growth(
-        &p.engine,
-        model.run.speed(),
-        &corrugation::studies::grow::DEFAULT_AMPLITUDES_UM,
-        &modes,
-        |_| {},
-    )?;
-    if let Some(s) = &g.stopped {
-        anyhow::bail!(
-            "growth: the trial amplitude {} µm failed: {}",
-            s.amplitude_um,
-            s.reason
-        );
-    }
-    let mut out = BTreeMap::new();
-    out.insert(
-        "limiting_amplitude_um".to_string(),
-        g.limiting_amplitude_um.unwrap_or(0.0),
-    );
-    out.insert(
-        "consistent_amplitudes".to_string(),
-        g.amplitudes.iter().filter(|a| a.grows_consistently).count() as f64,
-    );
-    // passages rerun on a widened contact grid (docs/theory.md §6.8): a column only when some
-    // case has one
-    let widened = corrugation::studies::grow::widened_contact_grids(&g).len();
-    if widened > 0 {
-        out.insert("widened_contact_grids".to_string(), widened as f64);
-    }
-    Ok(out)
+    corrugation::studies::grow::study_growth(model, p).map_err(anyhow::Error::from_boxed)
 }

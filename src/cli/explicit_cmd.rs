@@ -109,10 +109,7 @@ pub fn run_explicit(
     pb.set_message("explicit passage (contact steps)");
     let opts = PassageOptions::default();
     let rec = em
-        .passage(m.run.speed(), profile, &opts, &mut |done, total| {
-            pb.set_length(total as u64);
-            pb.set_position(done as u64);
-        })
+        .passage(m.run.speed(), profile, &opts, Some(&pb))
         .context("running the explicit passage")?;
     pb.finish_and_clear();
     let summary = corrugation::dynamics::analysis::summarise(&rec.record)?;

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 
-use corrugation::dynamics::analysis::{analyse, wear_signal, zone_signal, Analysed};
+use corrugation::dynamics::analysis::{band_analyses, Analysed};
 use corrugation::dynamics::passage::PassageOptions;
 use corrugation::dynamics::summary::PassageSummary;
 use corrugation::io::{write_atomic, write_csv};
@@ -177,7 +177,7 @@ pub fn write_outputs(
         }),
     )?;
     let v = rec.speed_m_per_s;
-    let w = analyse(&wear_signal(rec)?, v)?;
+    let [w, fl, fnn] = band_analyses(rec)?;
     write_csv(
         &out.join("wear.csv"),
         &["x_m", "wf_j_per_m", "wf_band_j_per_m"],
@@ -194,22 +194,16 @@ pub fn write_outputs(
                 .map(|(u, &t)| vec![t, u[0], u[1], u[2]]),
         )?;
     }
-    let fl = analyse(&zone_signal(rec, &h.longitudinal_n)?, v)?;
-    let fnn = analyse(&zone_signal(rec, &h.normal_n)?, v)?;
     for (name, a) in [
         ("psd_wear.csv", &w),
         ("psd_fl.csv", &fl),
         ("psd_fn.csv", &fnn),
     ] {
+        let [l, f, p] = a.psd_columns(v);
         write_csv(
             &out.join(name),
             &["wavelength_m", "frequency_hz", "psd"],
-            a.psd
-                .wavenumber_per_m
-                .iter()
-                .zip(&a.psd.psd)
-                .filter(|(k, _)| **k > 0.0)
-                .map(|(k, p)| vec![1.0 / k, v * k, *p]),
+            (0..p.len()).map(|i| vec![l[i], f[i], p[i]]),
         )?;
     }
     write_plots(out, rec, &w, &fl, &fnn, element_length_m)?;

@@ -9,6 +9,7 @@ use clap::Args;
 use corrugation::dynamics::PassageRunner;
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::model::Model;
+use corrugation::studies::speeds::Shard;
 use corrugation::studies::study::{basis_plan, run_study, CaseRunners, Study};
 use corrugation::studies::BoxError;
 
@@ -29,6 +30,11 @@ pub struct StudyCmd {
     /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
+    /// Run only shard I of N (I = 0 … N−1): every N-th case from the I-th, saved into --out
+    /// without the table and report. After every shard has run into the same --out, a run
+    /// without --shard reuses all cases and writes the outputs (a cluster job array).
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
 }
 
 impl StudyCmd {
@@ -36,8 +42,26 @@ impl StudyCmd {
     pub fn run(self) -> anyhow::Result<()> {
         let t0 = Instant::now();
         let study = Study::load(&self.file)?;
+        let shard = match &self.shard {
+            Some(s) => Shard::parse(s)?,
+            None => Shard::ALL,
+        };
         // Every case's model is checked before any engine work.
-        let models = study.case_models()?;
+        let models: Vec<_> = study
+            .case_models()?
+            .into_iter()
+            .enumerate()
+            .filter(|(i, _)| shard.holds(*i))
+            .map(|(_, cm)| cm)
+            .collect();
+        if models.is_empty() {
+            anyhow::bail!(
+                "--shard {}/{}: no case of the study's {} falls in this shard; use fewer shards",
+                shard.index,
+                shard.count,
+                study.case_models()?.len()
+            );
+        }
         let cache_dir = self.cache.clone().unwrap_or_else(default_cache_dir);
         let out = self.out.clone().unwrap_or_else(|| {
             let stem = self
@@ -60,7 +84,7 @@ impl StudyCmd {
             engine::study_growth(m, r, cache).map_err(Into::<BoxError>::into)
         };
         let pb = super::progress::bar(&format!("study `{}`", study.title));
-        let o = run_study(&study, &factory, Some(&growth), &out, &pb)?;
+        let o = run_study(&study, &factory, Some(&growth), &out, shard, &pb)?;
         drop(pb);
         eprintln!(
             "study `{}`: {} case(s), {} computed, {} reused → {}",

@@ -7,9 +7,8 @@ use std::time::Instant;
 use clap::Args;
 
 use corrugation::studies::coupled::sweep_reference_speed_kmh;
-use corrugation::studies::grow::WHEEL_LINE_SHARE;
 use corrugation::studies::speeds::{parse_speeds, Shard};
-use corrugation::studies::sweep::{sweep_beside, write_shard_plan, MapOptions};
+use corrugation::studies::sweep::{map_options, sweep_beside, write_shard_plan, MapOptions};
 
 use super::{engine, ModelArgs};
 
@@ -75,18 +74,12 @@ impl SweepCmd {
         let v_c = sweep_reference_speed_kmh(model.run.speed_kmh, &all);
         let lines = || -> Result<MapOptions, corrugation::studies::BoxError> {
             let t_c = Instant::now();
-            let coupled = prepared.coupled_modes(corrugation::units::kmh_to_ms(v_c), &[])?;
+            let o = map_options(&prepared, v_c)?;
             eprintln!(
                 "sweep: coupled wheel–track modes at {v_c} km/h in {:.1} s (beside the passages)",
                 t_c.elapsed().as_secs_f64()
             );
-            Ok(MapOptions {
-                frequency_lines_hz: prepared.longitudinal_compression_hz(),
-                wheel_lines_hz: prepared.wheel_contact_modes_hz(WHEEL_LINE_SHARE),
-                coupled_speed_kmh: Some(v_c),
-                coupled_modes: coupled.visible(),
-                ..MapOptions::default()
-            })
+            Ok(o)
         };
         let explicit;
         let runner: &dyn corrugation::dynamics::PassageRunner = match self.engine {

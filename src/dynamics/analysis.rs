@@ -56,6 +56,36 @@ pub struct Analysed {
     pub raw_peaks: Vec<crate::spectral::Peak>,
 }
 
+impl Analysed {
+    /// The PSD of the band-passed signal at the positive wavenumbers `k` (1/m) as the
+    /// columns of the passage's `psd_*.csv`: wavelength `1/k` (m), frequency `v k` (Hz) at
+    /// speed `v` (m/s), and the one-sided PSD per unit wavenumber (signal² · m).
+    pub fn psd_columns(&self, v: f64) -> [Vec<f64>; 3] {
+        let mut c: [Vec<f64>; 3] = Default::default();
+        for (k, p) in self.psd.wavenumber_per_m.iter().zip(&self.psd.psd) {
+            if *k > 0.0 {
+                c[0].push(1.0 / k);
+                c[1].push(v * k);
+                c[2].push(*p);
+            }
+        }
+        c
+    }
+}
+
+/// The band analyses of a passage's wear along the rail (`W_f`, J/m) and of its `F_L` and
+/// `F_N` in the solution zone (N), in that order, at the passage's speed: what `passage`
+/// writes to `wear.csv` (band-passed wear) and `psd_wear.csv`, `psd_fl.csv`, `psd_fn.csv`.
+pub fn band_analyses(rec: &PassageRecord) -> Result<[Analysed; 3], DynamicsError> {
+    let v = rec.speed_m_per_s;
+    let h = &rec.histories;
+    Ok([
+        analyse(&wear_signal(rec)?, v)?,
+        analyse(&zone_signal(rec, &h.longitudinal_n)?, v)?,
+        analyse(&zone_signal(rec, &h.normal_n)?, v)?,
+    ])
+}
+
 /// Analyses one signal along the rail at speed `v` (m/s).
 pub fn analyse(sig: &Signal, v: f64) -> Result<Analysed, DynamicsError> {
     let mean = sig.values.iter().sum::<f64>() / sig.len() as f64;

@@ -120,6 +120,9 @@ pub enum DynamicsError {
         /// Steps of the passage.
         steps: usize,
     },
+    /// The caller stopped the passage ([`crate::progress::Progress::cancelled`]).
+    #[error(transparent)]
+    Cancelled(#[from] crate::progress::Cancelled),
     /// Building the track or the wheel substructure failed.
     #[error(transparent)]
     Structure(#[from] crate::structure::StructureError),

@@ -139,6 +139,9 @@ pub enum ExplicitError {
     /// An error of the shared passage machinery (contact, profile, structure).
     #[error(transparent)]
     Dynamics(#[from] crate::dynamics::DynamicsError),
+    /// The caller's progress asked the passage to stop ([`crate::progress::Progress::cancelled`]).
+    #[error(transparent)]
+    Cancelled(#[from] crate::progress::Cancelled),
     /// The model's structures could not be built.
     #[error(transparent)]
     Structure(#[from] crate::structure::StructureError),

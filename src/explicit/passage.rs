@@ -69,6 +69,7 @@ use crate::dynamics::{
 };
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
 use crate::model::{ExplicitWheel, Model};
+use crate::progress::{Cancelled, Progress};
 
 /// How the contact force couples the structures over a contact step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -185,7 +186,9 @@ pub struct ExplicitRecord {
 
 impl ExplicitModel {
     /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth);
-    /// `progress(done, total)` is called every few contact steps.
+    /// `progress` learns the number of contact steps ([`Progress::total`]) and the steps done
+    /// every few contact steps ([`Progress::done`]; the caller names the stage), and stops the
+    /// passage with [`ExplicitError::Cancelled`] when it is [cancelled](Progress::cancelled).
     ///
     /// Phases: the plan (steps and range), the static start, the set-up of the step loop
     /// (unit responses, scratch, energy ledger, recorder), the contact steps (predictor,
@@ -199,12 +202,12 @@ impl ExplicitModel {
         speed_m_per_s: f64,
         profile: Option<&RailProfile>,
         popts: &PassageOptions,
-        progress: &mut dyn FnMut(usize, usize),
+        progress: Option<&dyn Progress>,
     ) -> Result<ExplicitRecord, ExplicitError> {
         self.check_profile(speed_m_per_s, profile)?;
         let (mut rec, w) = run_widening_grid(
             self.model.vehicle.wheel_load,
-            |w| self.passage_on_grid(speed_m_per_s, profile, popts, &mut *progress, w),
+            |w| self.passage_on_grid(speed_m_per_s, profile, popts, progress, w),
             |e: &ExplicitError| match e {
                 ExplicitError::Dynamics(d) => Some(d),
                 _ => None,
@@ -308,7 +311,7 @@ impl ExplicitModel {
         speed_m_per_s: f64,
         profile: Option<&RailProfile>,
         popts: &PassageOptions,
-        progress: &mut dyn FnMut(usize, usize),
+        progress: Option<&dyn Progress>,
         widening: GridWidening,
     ) -> Result<ExplicitRecord, ExplicitError> {
         let mut contact = passage_contact(
@@ -326,14 +329,22 @@ impl ExplicitModel {
         let mut run = Stepper::new(self, plan, contact, heights, start, popts)?;
         let t_wall = Instant::now();
         let cpu0 = crate::progress::cpu_seconds();
-        progress(0, plan.n_steps);
+        if let Some(p) = progress {
+            p.total(plan.n_steps as u64);
+            p.done(0);
+        }
         // every 16 contact steps, and at least once a second when a step is slow (a small
         // explicit.time_step), so that the progress shows its rate and ETA from the start
         let mut reported = Instant::now();
         for n in 1..=plan.n_steps {
             run.step(n)?;
             if n % 16 == 0 || n == plan.n_steps || reported.elapsed().as_secs_f64() >= 1.0 {
-                progress(n, plan.n_steps);
+                if let Some(p) = progress {
+                    p.done(n as u64);
+                    if p.cancelled() {
+                        return Err(Cancelled.into());
+                    }
+                }
                 reported = Instant::now();
             }
         }
@@ -500,7 +511,7 @@ impl crate::dynamics::PassageRecorder for ExplicitModel {
             rail_point_offset_m: None,
             overlap: false,
         };
-        self.passage(speed_m_per_s, profile, &opts, &mut |_, _| {})
+        self.passage(speed_m_per_s, profile, &opts, None)
             .map(|r| r.record)
             .map_err(|e| match e {
                 ExplicitError::Dynamics(d) => d,

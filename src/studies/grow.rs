@@ -765,6 +765,48 @@ pub fn write_text_csv(
     crate::io::write_text_csv(path, header, rows).map_err(StudiesError::io(path))
 }
 
+/// The growth loop of one study case (`growth = true` in a study file) on the prepared
+/// reduced model `p` of `model`: the trial-amplitude procedure at the model's speed with
+/// [`DEFAULT_AMPLITUDES_UM`]; columns `limiting_amplitude_um` (µm, 0 when no amplitude grows
+/// consistently), `consistent_amplitudes` (how many of the four grow consistently) and, when
+/// any of its passages ran on a widened contact grid, `widened_contact_grids` (how many).
+pub fn study_growth(
+    model: &Model,
+    p: &PreparedModel,
+) -> Result<std::collections::BTreeMap<String, f64>, crate::studies::BoxError> {
+    let modes = mode_lines(p);
+    let g = trial_growth(
+        &p.engine,
+        model.run.speed(),
+        &DEFAULT_AMPLITUDES_UM,
+        &modes,
+        |_| {},
+    )?;
+    if let Some(s) = &g.stopped {
+        return Err(format!(
+            "growth: the trial amplitude {} µm failed: {}",
+            s.amplitude_um, s.reason
+        )
+        .into());
+    }
+    let mut out = std::collections::BTreeMap::new();
+    out.insert(
+        "limiting_amplitude_um".to_string(),
+        g.limiting_amplitude_um.unwrap_or(0.0),
+    );
+    out.insert(
+        "consistent_amplitudes".to_string(),
+        g.amplitudes.iter().filter(|a| a.grows_consistently).count() as f64,
+    );
+    // passages rerun on a widened contact grid (docs/theory.md §6.8): a column only when some
+    // case has one
+    let widened = widened_contact_grids(&g).len();
+    if widened > 0 {
+        out.insert("widened_contact_grids".to_string(), widened as f64);
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

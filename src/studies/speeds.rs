@@ -98,7 +98,8 @@ pub fn parse_speeds(spec: &str) -> Result<Vec<f64>, StudiesError> {
     Ok(speeds)
 }
 
-/// A shard `index/count` of a sweep.
+/// A shard `index/count` of a sweep's speeds or a study's cases: every `count`-th item from
+/// the `index`-th.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Shard {
     /// This shard's index, `0 … count−1`.
@@ -141,10 +142,20 @@ impl Shard {
     pub fn select(&self, speeds: &[f64]) -> Vec<f64> {
         speeds
             .iter()
-            .skip(self.index)
-            .step_by(self.count.max(1))
-            .copied()
+            .enumerate()
+            .filter(|(i, _)| self.holds(*i))
+            .map(|(_, &v)| v)
             .collect()
+    }
+
+    /// Whether position `i` (0-based) of the whole list belongs to this shard.
+    pub fn holds(&self, i: usize) -> bool {
+        i % self.count.max(1) == self.index
+    }
+
+    /// Whether this is the whole list (`0/1`).
+    pub fn is_all(&self) -> bool {
+        self.count <= 1
     }
 }
 

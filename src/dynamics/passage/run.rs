@@ -35,6 +35,9 @@ impl PassageEngine {
                 self.passage_step(&mut s, &k, n, pair)?;
                 if let Some(p) = progress.filter(|_| n % 64 == 0) {
                     p.done(n as u64);
+                    if p.cancelled() {
+                        return Err(crate::progress::Cancelled.into());
+                    }
                 }
             }
             Ok(())

@@ -95,6 +95,7 @@ use crate::model::ModelSource;
 pub mod bases;
 mod parse;
 mod report;
+pub use report::study_table;
 mod run;
 pub mod static_update;
 

@@ -175,20 +175,16 @@ pub(super) fn write_study(
     Ok(())
 }
 
-/// Writes `study.csv` (the case, its parameter values, the indicators and the growth keys
-/// `gk` per case and speed); returns the rows of the report's readable table.
-fn write_study_csv(
-    study: &Study,
-    cases: &[(Case, CaseResult)],
-    gk: &[String],
-    out: &Path,
-) -> Result<Vec<Vec<String>>, StudiesError> {
+/// The study's table as `study.csv` holds it: the header (`case`, the parameters' keys, the
+/// indicators' columns, the growth keys) and one row of text cells per case and speed
+/// (numbers as written; an empty cell where a value is undefined).
+pub fn study_table(study: &Study, cases: &[(Case, CaseResult)]) -> (Vec<String>, Vec<Vec<String>>) {
+    let gk = growth_keys(cases);
     let mut header = vec!["case".to_string()];
     header.extend(study.parameters.iter().map(|p| p.key.clone()));
     header.extend(indicator_header(study.peaks));
     header.extend(gk.iter().cloned());
     let mut rows = Vec::new();
-    let mut readable = Vec::new();
     for (c, r) in cases {
         for row in &r.rows {
             let mut cells = vec![c.index.to_string()];
@@ -199,6 +195,23 @@ fn write_study_csv(
                     .map(|k| r.growth.get(k).map(|v| v.to_string()).unwrap_or_default()),
             );
             rows.push(cells);
+        }
+    }
+    (header, rows)
+}
+
+/// Writes `study.csv` ([`study_table`]); returns the rows of the report's readable table
+/// (with the growth keys `gk`).
+fn write_study_csv(
+    study: &Study,
+    cases: &[(Case, CaseResult)],
+    gk: &[String],
+    out: &Path,
+) -> Result<Vec<Vec<String>>, StudiesError> {
+    let (header, rows) = study_table(study, cases);
+    let mut readable = Vec::new();
+    for (c, r) in cases {
+        for row in &r.rows {
             let mut rc = vec![c.index.to_string()];
             rc.extend(readable_cells(row));
             rc.extend(gk.iter().map(|k| {

@@ -12,6 +12,7 @@ use crate::dynamics::PassageRunner;
 use crate::model::Model;
 use crate::progress::{Counter, Progress};
 use crate::studies::initiation::{evaluate, InitiationRow};
+use crate::studies::speeds::Shard;
 use crate::studies::sweep::panic_text;
 use crate::studies::{BoxError, StudiesError};
 
@@ -208,12 +209,20 @@ fn in_order<T: Send>(n: usize, workers: usize, f: &(dyn Fn(usize) -> T + Sync)) 
 /// [`Study::concurrent_cases`] at a time, and the table, the report and the returned cases
 /// are in case order whatever the concurrency (each case's numbers are its own: the same
 /// with one case at a time). Finished cases are saved at once and reused by a rerun.
-/// Failing cases are reported together after the others ran.
+/// Failing cases are reported together after the others ran; a case not yet started when
+/// `progress` is [cancelled](Progress::cancelled) is not run (a failure "cancelled by the
+/// caller"; a rerun resumes it).
+///
+/// With a `shard` other than [`Shard::ALL`] only that shard's cases run (every N-th from the
+/// I-th, in case order) and their case files are saved, but no table, plot or report is
+/// written: the shards of a cluster job write into one shared `out`, and a last run of the
+/// whole study there reuses every case and writes the outputs (the same files as one run).
 pub fn run_study(
     study: &Study,
     factory: RunnerFactory<'_>,
     growth: Option<GrowthHook<'_>>,
     out: &Path,
+    shard: Shard,
     progress: &dyn Progress,
 ) -> Result<StudyOutcome, StudiesError> {
     if study.growth && growth.is_none() {
@@ -223,7 +232,13 @@ pub fn run_study(
             "the growth loop is not available to studies in this build; set growth = false",
         ));
     }
-    let models = study.case_models()?;
+    let models: Vec<_> = study
+        .case_models()?
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| shard.holds(*i))
+        .map(|(_, cm)| cm)
+        .collect();
     let bar = Counter::start(progress, "study cases", models.len() as u64);
     let ctx = CaseContext {
         study,
@@ -233,6 +248,15 @@ pub fn run_study(
     };
     let outcomes = in_order(models.len(), study.concurrent_cases, &|i| {
         let (case, model) = &models[i];
+        if progress.cancelled() {
+            bar.inc();
+            return Ok(CaseOutcome::Failed(format!(
+                "case {} ({}): {}",
+                case.index,
+                case.label(),
+                crate::progress::Cancelled
+            )));
+        }
         let r = ctx.run(case, model);
         bar.inc();
         r
@@ -257,7 +281,9 @@ pub fn run_study(
     if !failures.is_empty() {
         return Err(StudiesError::Passages { failures });
     }
-    write_study(study, &done, out)?;
+    if shard.is_all() {
+        write_study(study, &done, out)?;
+    }
     Ok(StudyOutcome {
         cases: done,
         computed,

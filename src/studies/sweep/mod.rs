@@ -249,6 +249,25 @@ pub struct SweepMaps {
     pub fl_frequency: Vec<f64>,
 }
 
+/// The map options of a sweep of the reduced engine `prepared`: the default grids, its
+/// longitudinal-compression eigenfrequencies and its wheel modes at the contact
+/// ([`crate::studies::grow::WHEEL_LINE_SHARE`]) as lines, and the coupled wheel–track modes
+/// at `coupled_speed_kmh` (km/h; [`crate::studies::coupled::sweep_reference_speed_kmh`]
+/// gives the sweep's) for the attribution (several seconds of serial work).
+pub fn map_options(
+    prepared: &crate::dynamics::prepared::PreparedModel,
+    coupled_speed_kmh: f64,
+) -> Result<MapOptions, crate::studies::BoxError> {
+    let coupled = prepared.coupled_modes(crate::units::kmh_to_ms(coupled_speed_kmh), &[])?;
+    Ok(MapOptions {
+        frequency_lines_hz: prepared.longitudinal_compression_hz(),
+        wheel_lines_hz: prepared.wheel_contact_modes_hz(crate::studies::grow::WHEEL_LINE_SHARE),
+        coupled_speed_kmh: Some(coupled_speed_kmh),
+        coupled_modes: coupled.visible(),
+        ..MapOptions::default()
+    })
+}
+
 /// The result of [`sweep`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepOutcome {

@@ -43,7 +43,9 @@ pub fn write_summary(path: &Path, s: &PassageSummary) -> Result<(), StudiesError
 /// Runs the passages of the speeds that have no complete file in `dir/speeds` yet, in
 /// parallel (rayon), each saved the moment it finishes; each finished passage is reported to
 /// `progress` (stage "sweep passages (speeds)"). A passage that fails or panics is reported in [`StudiesError::Passages`]
-/// after all others have finished and been saved.
+/// after all others have finished and been saved. A speed not yet started when
+/// `progress` is [cancelled](Progress::cancelled) is not run (a failure "cancelled by the
+/// caller"); a rerun resumes it.
 pub fn run_passages(
     runner: &dyn PassageRunner,
     speeds_kmh: &[f64],
@@ -65,6 +67,9 @@ pub fn run_passages(
     let results: Vec<Result<f64, String>> = todo
         .par_iter()
         .map(|&v| {
+            if progress.cancelled() {
+                return Err(format!("{v} km/h: {}", crate::progress::Cancelled));
+            }
             let out = catch_unwind(AssertUnwindSafe(|| {
                 runner.run(crate::units::Speed::from_kmh(v), None)
             }));
