@@ -20,7 +20,7 @@
 //! | 1 | [`model`] (the TOML model file) → [`structure`] (track and wheel substructures) |
 //! | 2 | [`eigen`] (Lanczos, Sturm check, classification, modal cache) |
 //! | 3, the two passage engines | [`dynamics`] (reduced modal passage), [`explicit`] (full explicit FE passage) |
-//! | 4 | [`growth`] (trial corrugation, consistency, verdict), [`studies`] (sweeps, studies, initiation, `predict`) |
+//! | 4 | [`growth`] (trial corrugation, consistency, verdict), [`roughness`] (measured roughness, bands, forecast), [`studies`] (sweeps, studies, initiation, `roughness`, `predict`) |
 //!
 //! Coordinates (global, SI): `x` along the rail (direction of travel), `y` lateral (positive
 //! away from the track centre, towards the field side), `z` vertical up. `z = 0` is the
@@ -39,6 +39,7 @@ pub mod mesh;
 pub mod model;
 pub mod progress;
 pub mod report;
+pub mod roughness;
 pub mod spectral;
 pub mod structure;
 pub mod studies;

@@ -48,6 +48,8 @@ impl Progress for Silent {
 pub struct Counter<'a> {
     sink: &'a dyn Progress,
     count: AtomicU64,
+    /// The stage's name and total when this counter began it ([`Counter::start`]).
+    stage: Option<(String, u64)>,
 }
 
 impl<'a> Counter<'a> {
@@ -57,6 +59,7 @@ impl<'a> Counter<'a> {
         Self {
             sink,
             count: AtomicU64::new(0),
+            stage: Some((name.to_string(), total)),
         }
     }
 
@@ -65,6 +68,18 @@ impl<'a> Counter<'a> {
         Self {
             sink,
             count: AtomicU64::new(0),
+            stage: None,
+        }
+    }
+
+    /// Begins this counter's stage again with its count so far, after work inside one unit
+    /// reported stages of its own to the same sink (a study case computing its modal bases
+    /// shows "track modes …"; then "study cases k/n" again). Nothing for a counter made by
+    /// [`Counter::within`].
+    pub fn resume(&self) {
+        if let Some((name, total)) = &self.stage {
+            self.sink.stage(name, *total);
+            self.sink.done(self.count.load(Ordering::Relaxed));
         }
     }
 

@@ -60,6 +60,27 @@ fn unknown_key() {
     );
 }
 
+/// A model file copied out of `models/` whose `extends` names a parent that is not beside
+/// it: the error names the key, the path it looked for, that the path is relative to the
+/// file, and the file's own typo as well (not hidden behind the missing parent).
+#[test]
+fn a_copied_file_whose_parent_is_missing_names_extends_and_its_own_typo() {
+    let (_dir, p) = tmp_file(
+        "copied.toml",
+        "extends = \"reference-described-base.toml\"\n[rail]\nyoungs_modulos = 2e11\n",
+    );
+    assert_clean_error(
+        &["model", "--model", p.to_str().unwrap()],
+        &[
+            "copied.toml",
+            "`extends`",
+            "reference-described-base.toml",
+            "relative to this file's directory",
+            "rail.youngs_modulos",
+        ],
+    );
+}
+
 #[test]
 fn negative_stiffness() {
     assert_clean_error(
@@ -590,4 +611,25 @@ fn a_unit_slip_is_warned_about() {
     let (code, _, err) = run(&["model"]);
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("warning"), "{err}");
+}
+
+/// A study case whose value looks like a unit slip is warned about, naming the file and the
+/// case, before any work (here the run stops at once: its --out is the modal cache).
+#[test]
+fn a_study_case_with_a_unit_slip_is_warned_about() {
+    let (dir, p) = tmp_file(
+        "slip.toml",
+        "title = \"pads\"\nmodel = \"builtin:dutch\"\n[[parameter]]\nkey = \"fastening.vertical_stiffness\"\nvalues = [1300.0, 1.3e9]\n",
+    );
+    let cache = dir.path().join("cache");
+    std::fs::create_dir_all(&cache).unwrap();
+    let c = cache.to_str().unwrap();
+    let (code, _, err) = run(&["study", p.to_str().unwrap(), "--cache", c, "--out", c]);
+    assert_ne!(code, 0, "{err}");
+    assert!(
+        err.contains("slip.toml case 0 (fastening.vertical_stiffness=1300.0)")
+            && err.contains("1300 N/m"),
+        "{err}"
+    );
+    assert!(!err.contains("case 1"), "{err}");
 }

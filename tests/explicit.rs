@@ -265,7 +265,7 @@ fn moving_load_matches_the_direct_implicit_solution() {
             x_start_m: 0.5 * l - 0.2,
             speed_m_per_s: v_train,
             dt_s: dt,
-            steps: (0.3 / (v_train * dt)).round() as usize,
+            steps: (0.15 / (v_train * dt)).round() as usize,
         };
         let p = nearest_plane(&line, 0.5 * l);
         let probe = Probe::contact_node(&line, p).unwrap();
@@ -408,6 +408,7 @@ fn coupled_passage_is_stable_where_the_held_force_is_not_and_balances_energy() {
 /// ledger's scale; the contact's own chain (its work on the relative displacement = friction
 /// + Hertz energy + series spring) closes within 0.5 %; and so the passage balances within 1 %.
 #[test]
+#[ignore = "heavy (about 2 minutes on 2 cores): a fine-mesh passage replayed for its nodal work; bash validation/run.sh explicit. The coupled-passage test keeps the ledger's 1 % balance in CI"]
 fn energy_ledger_matches_the_nodal_work_of_the_replayed_passage() {
     let m = small_track(&[
         "mesh.fine_element_length=0.01",

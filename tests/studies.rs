@@ -847,6 +847,91 @@ fn study_runs_every_case_writes_table_and_plots_and_resumes() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// A sharded study (2 shards into one directory) saves its cases and writes no table; the
+/// last unsharded run reuses every case and writes the same `study.csv` as one run; the
+/// report opens with a summary that names the cases of the lowest and highest wear; and a
+/// case whose runner reports stages of its own (its modal bases) leaves the sink in the
+/// "study cases" stage with the count so far.
+#[test]
+fn sharded_study_equals_one_run_and_stages_come_back_to_the_cases() {
+    let tmp = tmpdir("study-shard");
+    let dir = tmp.path().to_path_buf();
+    let file = dir.join("s.toml");
+    std::fs::write(
+        &file,
+        r#"
+        title = "pad"
+        model = "builtin:dutch"
+        speeds_kmh = [100.0]
+        [[parameter]]
+        key = "fastening.vertical_damping"
+        values = [15e3, 30e3, 45e3]
+        "#,
+    )
+    .unwrap();
+    let study = Study::load(&file).unwrap();
+    let stages = std::sync::Mutex::new(Vec::<(String, u64)>::new());
+    struct Rec<'a>(&'a std::sync::Mutex<Vec<(String, u64)>>);
+    impl corrugation::progress::Progress for Rec<'_> {
+        fn stage(&self, name: &str, _total: u64) {
+            self.0.lock().unwrap().push((name.to_string(), 0));
+        }
+        fn done(&self, done: u64) {
+            if let Some(l) = self.0.lock().unwrap().last_mut() {
+                l.1 = done;
+            }
+        }
+    }
+    let rec = Rec(&stages);
+    let factory = |m: &Model| -> Result<Box<dyn PassageRunner>, BoxError> {
+        // as a case computing its bases: a stage of its own on the same sink
+        corrugation::progress::Progress::stage(&rec, "track modes below 1500 Hz (Lanczos)", 0);
+        Ok(Box::new(DampingRunner(
+            m.fastening.springs.vertical_damping,
+        )))
+    };
+    let one = dir.join("one");
+    let o = run_study(&study, &factory, None, &one, Shard::ALL, &rec).unwrap();
+    assert_eq!(o.computed, 3);
+    let st = stages.lock().unwrap().clone();
+    assert_eq!(
+        st.last().unwrap(),
+        &("study cases".to_string(), 3),
+        "{st:?}"
+    );
+    assert!(
+        st.iter().any(|(n, _)| n.starts_with("track modes")),
+        "{st:?}"
+    );
+    let md = std::fs::read_to_string(one.join("study.md")).unwrap();
+    // relative wear grows with the damping (DampingRunner): lowest case 0, highest case 2
+    assert!(
+        md.contains("**Summary.** 3 case(s), 3 case–speed row(s)")
+            && md.contains("lowest wear band RMS")
+            && md.contains("case 0 (fastening.vertical_damping=15000.0, at 100 km/h)")
+            && md.contains("case 2 (fastening.vertical_damping=45000.0, at 100 km/h)"),
+        "{md}"
+    );
+
+    let shared = dir.join("shared");
+    for i in 0..2 {
+        let sh = Shard { index: i, count: 2 };
+        let o = run_study(&study, &factory, None, &shared, sh, &Silent).unwrap();
+        assert_eq!(o.computed, if i == 0 { 2 } else { 1 }, "shard {i}");
+        assert!(
+            !shared.join("study.csv").exists(),
+            "a shard writes no table"
+        );
+    }
+    let last = run_study(&study, &factory, None, &shared, Shard::ALL, &Silent).unwrap();
+    assert_eq!((last.computed, last.reused), (0, 3));
+    assert_eq!(
+        std::fs::read(shared.join("study.csv")).unwrap(),
+        std::fs::read(one.join("study.csv")).unwrap()
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
+
 /// The shipped studies parse and every case builds a valid model.
 #[test]
 fn shipped_studies_are_valid() {
@@ -976,11 +1061,13 @@ fn small_cli_args(cmd: &[&str], out: &Path) -> Vec<String> {
     a
 }
 
-fn run_small(cmd: &[&str], out: &Path) {
+/// Runs the CLI on the small model; returns its stdout.
+fn run_small(cmd: &[&str], out: &Path) -> String {
     let args = small_cli_args(cmd, out);
     let refs: Vec<&str> = args.iter().map(String::as_str).collect();
-    let (code, _, stderr) = common::run(&refs);
+    let (code, stdout, stderr) = common::run(&refs);
     assert_eq!(code, 0, "{cmd:?} failed: {stderr}");
+    stdout
 }
 
 /// On the small test model a sweep attributes every speed's dominant wear and F_L frequency
@@ -992,7 +1079,7 @@ fn run_small(cmd: &[&str], out: &Path) {
 fn sweep_and_grow_attribute_the_selected_frequencies_to_coupled_modes() {
     let tmp = tmpdir("coupled");
     let dir = tmp.path().to_path_buf();
-    run_small(&["sweep", "--speeds", "100,140,180"], &dir.join("sweep"));
+    let stdout = run_small(&["sweep", "--speeds", "100,140,180"], &dir.join("sweep"));
     let text = std::fs::read_to_string(dir.join("sweep/dominant.csv")).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -1006,6 +1093,25 @@ fn sweep_and_grow_attribute_the_selected_frequencies_to_coupled_modes() {
             .position(|c| *c == name)
             .unwrap_or_else(|| panic!("dominant.csv lacks {name}: {header:?}"))
     };
+    // stdout: the summary, its wavelength range that of dominant.csv, and the coupled mode
+    // of each speed range
+    let lam: Vec<f64> = rows
+        .iter()
+        .map(|r| r[col("dominant_wavelength_mm")])
+        .filter(|x| x.is_finite())
+        .collect();
+    let (lo, hi) = lam
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), &x| {
+            (l.min(x), u.max(x))
+        });
+    assert!(
+        stdout.starts_with(&format!(
+            "3 speed(s), 100–180 km/h: dominant wear wavelength {lo:.1}–{hi:.1} mm"
+        )) && stdout.contains("wavelength range ratio")
+            && stdout.contains("km/h: the wear selects the coupled mode at"),
+        "{stdout}"
+    );
     for p in ["", "fl_"] {
         let signal = if p.is_empty() {
             "dominant_frequency_hz".to_string()

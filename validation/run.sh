@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Heavy validation runs, kept out of CI (each is minutes on 2 cores). Run from the repo root:
 #   bash validation/run.sh            # everything
-#   bash validation/run.sh contact    # one group: contact | modes | moving | selection | bench
+#   bash validation/run.sh contact    # one group: contact | modes | moving | explicit | selection | bench
 # Results are printed; compare them with the expectations in validation/README.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,6 +25,11 @@ if [[ "$group" == all || "$group" == moving ]]; then
   # f_max list: 5 kHz fails on this coarse track (the eigensolver misses modes in 3.4-5 kHz).
   MOVING_LOAD_FMAX="${MOVING_LOAD_FMAX:-500,1000,2000,3000}" \
     cargo test --release --test moving_load -- --ignored --nocapture convergence_table
+fi
+if [[ "$group" == all || "$group" == explicit ]]; then
+  echo "== explicit: the energy ledger against the replayed nodal work (fine mesh), the rotating"
+  echo "   wheel without spin against the fixed wheel (the heavy tests kept out of CI)"
+  cargo test --profile test-opt --test explicit --test explicit_rotating -- --ignored --nocapture
 fi
 if [[ "$group" == all || "$group" == selection ]]; then
   echo "== selection: which modes set the frequency selection? (validation/frequency_selection.md)"

@@ -21,19 +21,67 @@ from ._native import (
     CorrugationError,
     Model,
     __version__,
+    band_spectrum,
     grow,
     modes,
     passage,
+    roughness,
     study,
     sweep,
 )
 
+
+
+class TqdmProgress:
+    """A ``progress`` callable that draws one tqdm bar per stage (``pip install tqdm``)::
+
+        with corrugation.TqdmProgress() as bar:
+            corrugation.sweep(model, "80:160:10", progress=bar)
+
+    A stage whose total is not known yet (0) shows a counter until the total arrives.
+    """
+
+    def __init__(self, **tqdm_kwargs):
+        from tqdm.auto import tqdm
+
+        self._tqdm = tqdm
+        self._kwargs = tqdm_kwargs
+        self._bar = None
+        self._stage = None
+
+    def __call__(self, stage, done, total):
+        if stage != self._stage:
+            self.close()
+            self._stage = stage
+            self._bar = self._tqdm(total=total or None, desc=stage, **self._kwargs)
+        bar = self._bar
+        if total and bar.total != total:
+            bar.total = total
+        bar.n = done
+        bar.refresh()
+
+    def close(self):
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+            self._stage = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
 __all__ = [
+    "TqdmProgress",
     "CorrugationError",
     "Model",
+    "band_spectrum",
     "grow",
     "modes",
     "passage",
+    "roughness",
     "study",
     "sweep",
     "__version__",

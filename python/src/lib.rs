@@ -983,7 +983,7 @@ fn study<'py>(
         study.case_models()?;
         std::fs::create_dir_all(&out)?;
         let cache_dir = cache.clone().unwrap_or_else(default_cache_dir);
-        let runners = CaseRunners::new(&study, &cache_dir);
+        let runners = CaseRunners::new(&study, &cache_dir).with_progress(p.clone());
         let factory = |m: &Model| -> Result<Box<dyn PassageRunner>, BoxError> {
             Ok(Box::new(runners.prepared(m)?))
         };
@@ -1031,6 +1031,208 @@ fn study<'py>(
     Ok(d)
 }
 
+// ---------------------------------------------------------------------------------------
+// Measured roughness
+
+/// A measured profile from a CSV path (`x_m, height_um`) or a pair `(x_m, height_um)`.
+fn measured_profile(
+    profile: &Bound<'_, PyAny>,
+) -> PyResult<corrugation::roughness::MeasuredProfile> {
+    use corrugation::roughness::MeasuredProfile;
+    let p = if let Ok(path) = profile.extract::<PathBuf>() {
+        MeasuredProfile::read_csv(&path)
+    } else {
+        let (x, h): (Vec<f64>, Vec<f64>) = profile.extract().map_err(|_| {
+            PyTypeError::new_err(
+                "profile: give a CSV path (x_m, height_um) or a pair (x_m, height_um) of arrays (m, µm; nan for a gap)",
+            )
+        })?;
+        let h = h.into_iter().map(corrugation::units::um_to_m).collect();
+        MeasuredProfile::new(x, h, "profile")
+    };
+    p.map_err(|e| py_err(&e.into()))
+}
+
+/// A band spectrum as a dict: `wavelength_m` (nominal band centres, m) and `level_db`
+/// (dB re 1 µm).
+fn bands_dict<'py>(
+    py: Python<'py>,
+    s: &corrugation::roughness::BandSpectrum,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item(
+        "wavelength_m",
+        array(py, s.bands.iter().map(|b| b.nominal_m()).collect()),
+    )?;
+    d.set_item("level_db", array(py, s.level_db.clone()))?;
+    Ok(d)
+}
+
+/// The one-third-octave band spectrum of a measured profile (`profile`: a CSV path `x_m,
+/// height_um`, or a pair `(x_m, height_um)` of arrays, m and µm, `nan` for a gap), processed
+/// as `corrugation roughness --profile` does (EN 15610's Fourier method; `segment_m`: the
+/// segment length, m, default 4). Returns `{"wavelength_m", "level_db"}` (dB re 1 µm) and
+/// `iso3095_limit_db` (NaN for bands without a limit).
+#[pyfunction]
+#[pyo3(signature = (profile, segment_m=4.0))]
+fn band_spectrum<'py>(
+    py: Python<'py>,
+    profile: &Bound<'py, PyAny>,
+    segment_m: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    use corrugation::roughness::{iso3095_limit_db, SpectrumOptions};
+    let p = measured_profile(profile)?;
+    let opts = SpectrumOptions {
+        segment_length_m: segment_m,
+        ..SpectrumOptions::default()
+    };
+    let s = p.band_spectrum(&opts).map_err(|e| py_err(&e.into()))?;
+    let d = bands_dict(py, &s)?;
+    d.set_item(
+        "iso3095_limit_db",
+        array(
+            py,
+            s.bands
+                .iter()
+                .map(|b| iso3095_limit_db(b.centre_m()).unwrap_or(f64::NAN))
+                .collect(),
+        ),
+    )?;
+    Ok(d)
+}
+
+/// A measured roughness carried forward by the model's growth-rate spectrum, as `corrugation
+/// roughness`: `profile` (as [`band_spectrum`]) or `spectrum` (a CSV path `wavelength_mm,
+/// level_db`, or a pair `(wavelength_m, level_db)` of band centres and levels), `speeds_kmh`
+/// (km/h, default the model's speed), the traffic as `passages` (wheel passages) or `mgt`
+/// (million gross tonnes, default 1).
+///
+/// Returns a dict: `wavelength_m`, `level_db` (measured bands), `iso3095_limit_db`, `passages`,
+/// and `forecasts`: one dict per speed with `speed_kmh`, `db_per_passage` and
+/// `level_after_db` per band (NaN outside the growth-rate spectrum) and `sentence` (the plain
+/// answer).
+#[pyfunction]
+#[pyo3(signature = (model, profile=None, spectrum=None, speeds_kmh=None, passages=None, mgt=None, cache=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn roughness<'py>(
+    py: Python<'py>,
+    model: &PyModel,
+    profile: Option<&Bound<'py, PyAny>>,
+    spectrum: Option<&Bound<'py, PyAny>>,
+    speeds_kmh: Option<Vec<f64>>,
+    passages: Option<f64>,
+    mgt: Option<f64>,
+    cache: Option<PathBuf>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    use corrugation::roughness::{iso3095_limit_db, passages_of_mgt, Band, BandSpectrum};
+    let m = &model.inner;
+    let (source, measured) = match (profile, spectrum) {
+        (Some(p), None) => {
+            let prof = measured_profile(p)?;
+            let s = prof
+                .band_spectrum(&Default::default())
+                .map_err(|e| py_err(&e.into()))?;
+            (format!("the profile {}", prof.name), s)
+        }
+        (None, Some(s)) => {
+            if let Ok(path) = s.extract::<PathBuf>() {
+                (
+                    format!("the band spectrum {}", path.display()),
+                    BandSpectrum::read_csv(&path).map_err(|e| py_err(&e.into()))?,
+                )
+            } else {
+                let (l, v): (Vec<f64>, Vec<f64>) = s.extract().map_err(|_| {
+                    PyTypeError::new_err("spectrum: give a CSV path or a pair (wavelength_m, level_db)")
+                })?;
+                let text: String = std::iter::once("wavelength_m, level_db\n".to_string())
+                    .chain(l.iter().zip(&v).map(|(a, b)| format!("{a:e}, {b:e}\n")))
+                    .collect();
+                (
+                    "the band spectrum given".to_string(),
+                    BandSpectrum::parse_csv(&text, "spectrum").map_err(|e| py_err(&e.into()))?,
+                )
+            }
+        }
+        _ => {
+            return Err(PyValueError::new_err(
+                "give one of profile= (a measured profile) or spectrum= (a one-third-octave band spectrum)",
+            ))
+        }
+    };
+    let n = match (passages, mgt) {
+        (Some(_), Some(_)) => {
+            return Err(PyValueError::new_err("give passages= or mgt=, not both"))
+        }
+        (Some(n), None) if n.is_finite() && (1.0..=1e12).contains(&n) => n,
+        (Some(n), None) => {
+            return Err(PyValueError::new_err(format!(
+                "passages {n}: out of range, allowed 1 to 1e12 wheel passages"
+            )))
+        }
+        (None, mgt) => {
+            let g = mgt.unwrap_or(1.0);
+            if !(g.is_finite() && g > 0.0 && g <= 1000.0) {
+                return Err(PyValueError::new_err(format!(
+                    "mgt {g}: out of range, allowed above 0 to 1000 million gross tonnes"
+                )));
+            }
+            passages_of_mgt(g, m.vehicle.wheel_load)
+        }
+    };
+    let speeds = speeds_kmh.unwrap_or_else(|| vec![m.run.speed_kmh]);
+    let p = PyProgress::new(progress);
+    let o = run(py, &p, || {
+        let c = cache_of(cache, &p);
+        let prepared = prepared(m, &c)?;
+        Ok(corrugation::studies::roughness::roughness_forecasts(
+            m,
+            &prepared,
+            &source,
+            &measured,
+            &speeds,
+            n,
+            p.as_ref(),
+        )?)
+    })?;
+    let d = bands_dict(py, &o.measured)?;
+    d.set_item(
+        "iso3095_limit_db",
+        array(
+            py,
+            o.measured
+                .bands
+                .iter()
+                .map(|b: &Band| iso3095_limit_db(b.centre_m()).unwrap_or(f64::NAN))
+                .collect(),
+        ),
+    )?;
+    d.set_item("passages", o.passages)?;
+    let fs = PyList::empty(py);
+    for f in &o.forecasts {
+        let fd = PyDict::new(py);
+        fd.set_item("speed_kmh", f.speed_kmh)?;
+        fd.set_item(
+            "db_per_passage",
+            opt_array(
+                py,
+                &f.bands.iter().map(|b| b.db_per_passage).collect::<Vec<_>>(),
+            ),
+        )?;
+        fd.set_item(
+            "level_after_db",
+            opt_array(
+                py,
+                &f.bands.iter().map(|b| b.level_after_db).collect::<Vec<_>>(),
+            ),
+        )?;
+        fd.set_item("sentence", f.sentence())?;
+        fs.append(fd)?;
+    }
+    d.set_item("forecasts", fs)?;
+    Ok(d)
+}
+
 /// A model from its resolved TOML text (`Model.to_toml()`), named `source` in messages: the
 /// reverse of pickling a [`PyModel`].
 #[pyfunction]
@@ -1051,6 +1253,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
     m.add_function(wrap_pyfunction!(study, m)?)?;
     m.add_function(wrap_pyfunction!(_model_from_toml, m)?)?;
+    m.add_function(wrap_pyfunction!(band_spectrum, m)?)?;
+    m.add_function(wrap_pyfunction!(roughness, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     use corrugation::model::test_problems::{SMALL_MODEL, SMALL_PASSAGE};
     // the library's small test models as override lists: Model(overrides=...)

@@ -256,6 +256,18 @@ def test_progress_is_reported_with_increasing_counts(small, cache):
     assert steps[-1][2] >= steps[-1][1] > 0  # total known and not exceeded
 
 
+def test_a_tqdm_bar_follows_the_stages(small, cache):
+    import io
+
+    buf = io.StringIO()
+    with corrugation.TqdmProgress(file=buf, mininterval=0) as bar:
+        corrugation.passage(small, cache=str(cache), progress=bar)
+        steps = bar._bar.n if bar._stage == "passage (time steps)" else None
+    text = buf.getvalue()
+    assert "passage (time steps)" in text
+    assert steps is not None and steps > 0
+
+
 def test_an_exception_in_the_callback_stops_the_work_and_propagates(small, cache):
     calls = []
 
@@ -320,6 +332,47 @@ def test_study_table_is_a_dict_of_columns(cache, tmp_path):
     # the same columns as study.csv
     header = (tmp_path / "out" / "study.csv").read_text().splitlines()[0].split(",")
     assert list(t) == header
+
+
+# --- Measured roughness ---------------------------------------------------------------------
+
+
+def test_band_spectrum_of_a_sinusoid_reads_its_own_level():
+    x = np.arange(0.0, 12.0, 1e-3)
+    h_um = 3.0 * np.cos(2 * np.pi * x / 0.04)  # 3 µm at 40 mm
+    s = corrugation.band_spectrum((x, h_um))
+    i = int(np.argmin(np.abs(s["wavelength_m"] - 0.04)))
+    assert abs(s["level_db"][i] - 10 * np.log10(4.5)) < 0.1
+    assert s["iso3095_limit_db"][i] == -3.2
+    with pytest.raises(corrugation.CorrugationError, match="ascend"):
+        corrugation.band_spectrum((x[::-1], h_um))
+
+
+def test_roughness_forecast_equals_the_cli_file(small, cache, tmp_path):
+    bands = tmp_path / "bands.csv"
+    bands.write_text("wavelength_mm, level_db\n80, 2\n63, 1\n50, 0\n40, -1\n31.5, -2\n25, -3\n20, -4\n")
+    r = corrugation.roughness(
+        small, spectrum=str(bands), speeds_kmh=[100.0, 140.0], mgt=2.0, cache=str(cache)
+    )
+    code, out, err = cli(
+        "roughness", *sets(SMALL), "--spectrum", str(bands), "--speeds", "100,140",
+        "--mgt", "2", "--cache", str(cache), "--out", str(tmp_path / "out"),
+    )
+    assert code == 0, err
+    csv = read_csv(tmp_path / "out" / "roughness.csv")
+    assert np.array_equal(r["level_db"], csv["measured_db"])
+    for f in r["forecasts"]:
+        v = f["speed_kmh"]
+        key = f"{v}kmh" if v != int(v) else f"{int(v)}kmh"
+        assert np.array_equal(f["level_after_db"], csv[f"after_db_{key}"], equal_nan=True)
+        assert np.array_equal(f["db_per_passage"], csv[f"db_per_passage_{key}"], equal_nan=True)
+        assert f["sentence"] in out
+    # the same spectrum given as arrays
+    r2 = corrugation.roughness(
+        small, spectrum=(r["wavelength_m"], r["level_db"]), speeds_kmh=[100.0], mgt=2.0,
+        cache=str(cache),
+    )
+    assert np.array_equal(r2["forecasts"][0]["level_after_db"], r["forecasts"][0]["level_after_db"], equal_nan=True)
 
 
 # --- Pickling and a Dask cluster ----------------------------------------------------------

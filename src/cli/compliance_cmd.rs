@@ -210,6 +210,7 @@ impl ComplianceCmd {
         for (name, k, sets) in &cases {
             let m = load_model(&self.model.source(), sets)
                 .with_context(|| format!("the model of --variants {name}"))?;
+            super::warn_unit_slips(&format!("--variants {name}"), &m);
             models.push((name.clone(), *k, m));
         }
         Ok(models)

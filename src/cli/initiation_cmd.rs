@@ -124,6 +124,7 @@ impl InitiationCmd {
                 set.push(format!("fastening.model=\"{}\"", v.trim()));
                 let m = load_model(&self.model.source(), &set)
                     .with_context(|| format!("the model of --variants {}", v.trim()))?;
+                super::warn_unit_slips(&format!("--variants {}", v.trim()), &m);
                 cases.push((v.trim().to_string(), m));
             }
         } else {
@@ -132,10 +133,9 @@ impl InitiationCmd {
                     .file_stem()
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_else(|| f.display().to_string());
-                cases.push((
-                    name,
-                    load_model(&ModelSource::File(f.clone()), &self.model.set)?,
-                ));
+                let m = load_model(&ModelSource::File(f.clone()), &self.model.set)?;
+                super::warn_unit_slips(&f.display().to_string(), &m);
+                cases.push((name, m));
             }
         }
         let mut rows = Vec::new();

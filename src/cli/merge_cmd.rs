@@ -33,6 +33,11 @@ impl MergeCmd {
             record.speeds_kmh.len(),
             self.out.display()
         );
+        if !self.json {
+            for line in corrugation::studies::sweep::summary_lines(&record) {
+                println!("{line}");
+            }
+        }
         if self.json {
             let mut j = serde_json::to_value(&record)?;
             // The coupled modes are in sweep.json; only their count here.

@@ -17,6 +17,7 @@ mod predict_cmd;
 mod progress;
 mod receptance_cmd;
 pub mod reference_outputs;
+mod roughness_cmd;
 mod study_cmd;
 mod sweep_cmd;
 
@@ -62,9 +63,7 @@ impl ModelArgs {
             .model
             .as_ref()
             .map_or("builtin:dutch".to_string(), |p| p.display().to_string());
-        for slip in m.unit_slips() {
-            eprintln!("warning: {name}: {slip}");
-        }
+        warn_unit_slips(&name, &m);
         Ok(m)
     }
 }
@@ -88,6 +87,14 @@ pub fn check_trial_amplitudes(amplitudes_um: &[f64]) -> anyhow::Result<()> {
     }
     corrugation::lists::check_no_repeats("--amplitudes-um", "µm", amplitudes_um)?;
     Ok(())
+}
+
+/// Warns on stderr about the values of `m` (named `name`) whose magnitude looks like a unit
+/// slip ([`Model::unit_slips`]).
+pub fn warn_unit_slips(name: &str, m: &Model) {
+    for slip in m.unit_slips() {
+        eprintln!("warning: {name}: {slip}");
+    }
 }
 
 /// Reads the rail profile of `--corrugation FILE` (x in m, height in µm) and checks, before
@@ -229,6 +236,10 @@ enum Command {
     Sweep(sweep_cmd::SweepCmd),
     /// Join the output directories of a sharded sweep into the unsharded result.
     Merge(merge_cmd::MergeCmd),
+    /// A measured rail roughness (profile or one-third-octave spectrum): which wavelengths
+    /// grow at which speeds, how fast, the levels after a traffic against the ISO 3095 limit.
+    #[command(allow_negative_numbers = true)]
+    Roughness(roughness_cmd::RoughnessCmd),
     /// Design study from a TOML file: parameters varied over a base model, indicators per case.
     Study(study_cmd::StudyCmd),
     /// Initiation table of RPM1–RPM5 (or any models) on the smooth rail.
@@ -261,6 +272,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Predict(c) => c.run(),
         Command::Sweep(c) => c.run(),
         Command::Merge(c) => c.run(),
+        Command::Roughness(c) => c.run(),
         Command::Study(c) => c.run(),
         Command::Initiation(c) => c.run(),
         Command::Compliance(c) => c.run(),

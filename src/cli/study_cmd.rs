@@ -54,6 +54,17 @@ impl StudyCmd {
             .filter(|(i, _)| shard.holds(*i))
             .map(|(_, cm)| cm)
             .collect();
+        for (case, m) in &models {
+            super::warn_unit_slips(
+                &format!(
+                    "{} case {} ({})",
+                    self.file.display(),
+                    case.index,
+                    case.label()
+                ),
+                m,
+            );
+        }
         if models.is_empty() {
             anyhow::bail!(
                 "--shard {}/{}: no case of the study's {} falls in this shard; use fewer shards",
@@ -76,16 +87,16 @@ impl StudyCmd {
         let plan = basis_plan(&study, &models, &ModalCache::new(&cache_dir))?;
         eprintln!("study `{}`: {plan}", study.title);
         let cache = self.cache.as_deref();
-        let runners = CaseRunners::new(&study, &cache_dir);
+        let pb = std::sync::Arc::new(super::progress::bar(&format!("study `{}`", study.title)));
+        let runners = CaseRunners::new(&study, &cache_dir).with_progress(pb.clone());
         let factory = |m: &Model| -> Result<Box<dyn PassageRunner>, BoxError> {
             Ok(Box::new(runners.prepared(m)?))
         };
         let growth = |m: &Model, r: &dyn PassageRunner| {
             engine::study_growth(m, r, cache).map_err(Into::<BoxError>::into)
         };
-        let pb = super::progress::bar(&format!("study `{}`", study.title));
-        let o = run_study(&study, &factory, Some(&growth), &out, shard, &pb)?;
-        drop(pb);
+        let o = run_study(&study, &factory, Some(&growth), &out, shard, &*pb)?;
+        pb.finish_and_clear();
         eprintln!(
             "study `{}`: {} case(s), {} computed, {} reused → {}",
             study.title,
@@ -94,6 +105,23 @@ impl StudyCmd {
             o.reused,
             out.display()
         );
+        if !self.json {
+            if shard.is_all() {
+                for line in corrugation::studies::study::summary_lines(&o.cases) {
+                    println!("{line}");
+                }
+            } else {
+                println!(
+                    "shard {}/{}: {} case(s) saved in {}; after every shard, run `corrugation study {} --out {}` there for the table and the report",
+                    shard.index,
+                    shard.count,
+                    o.cases.len(),
+                    out.display(),
+                    self.file.display(),
+                    out.display()
+                );
+            }
+        }
         if self.json {
             let cases: Vec<serde_json::Value> = o
                 .cases

@@ -115,6 +115,11 @@ impl SweepCmd {
                 .map_or("–".into(), |r| format!("{r:.3}")),
             self.out.display()
         );
+        if !self.json {
+            for line in corrugation::studies::sweep::summary_lines(&out.record) {
+                println!("{line}");
+            }
+        }
         if self.json {
             let mut j = serde_json::to_value(&out.record)?;
             // The coupled modes are in sweep.json; only their count here.

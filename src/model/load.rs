@@ -114,10 +114,43 @@ fn resolve_extends(
         let t = parse(BUILTIN_DUTCH, "builtin:dutch")?;
         resolve_extends(t, "builtin:dutch", Path::new("."), depth + 1)?
     } else {
-        read_table(&dir.join(&base), depth + 1)?
+        let parent = dir.join(&base);
+        match read_table(&parent, depth + 1) {
+            Ok(t) => t,
+            Err(ModelError::Io { file, source }) if file == parent => {
+                return Err(ModelError::Key {
+                    file: name.into(),
+                    key: "extends".into(),
+                    message: format!(
+                        "\"{base}\" is {}: {source}. The path is relative to this file's directory: copy the parent file beside this one, or give its full path{}",
+                        parent.display(),
+                        own_key_errors(&table)
+                    ),
+                });
+            }
+            Err(e) => return Err(e),
+        }
     };
     merge(&mut merged, table);
     Ok((merged, format!("{name} (extends {base_chain})")))
+}
+
+/// The key errors of a file's own keys when its parent cannot be read (so that a copied file
+/// with a wrong `extends` does not hide its typos): the keys merged over the embedded default
+/// model, whose unknown-key and type errors are told; range errors are not (they may depend
+/// on the missing parent's values). Empty when there are none.
+fn own_key_errors(table: &toml::Table) -> String {
+    let Ok(mut probe) = parse(BUILTIN_DUTCH, "builtin:dutch") else {
+        return String::new();
+    };
+    probe.remove("extends");
+    merge(&mut probe, table.clone());
+    match finish(probe, "this file", &[]) {
+        Err(ModelError::Key { key, message, .. }) => {
+            format!(". Besides, in this file's own keys: key `{key}`: {message}")
+        }
+        _ => String::new(),
+    }
 }
 
 /// Deep merge: tables merge key by key, any other value replaces.

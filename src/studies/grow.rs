@@ -636,6 +636,11 @@ pub fn write_growth_rate(out: &Path, s: &GrowthRateSpectrum) -> Result<(), Studi
         )
     };
     let stem = out.join("growth_rate");
+    let zero_x: Vec<f64> = [s.points.first(), s.points.last()]
+        .into_iter()
+        .flatten()
+        .map(|p| m_to_mm(p.wavelength_m))
+        .collect();
     crate::report::plot::line_plot(
         &stem,
         &format!(
@@ -648,6 +653,12 @@ pub fn write_growth_rate(out: &Path, s: &GrowthRateSpectrum) -> Result<(), Studi
             series("coupled wheel-track", &s.points),
             series("rigid structure", &s.rigid),
             series("normal receptance only", &s.normal_only),
+            // the line between growth and decay
+            crate::report::plot::Series::new(
+                "0: no growth",
+                zero_x.clone(),
+                vec![0.0; zero_x.len()],
+            ),
         ],
     )?;
     Ok(())

@@ -25,6 +25,7 @@ pub mod grow;
 pub mod initiation;
 pub mod predict;
 pub mod receptance;
+pub mod roughness;
 pub mod speeds;
 pub mod study;
 pub mod sweep;

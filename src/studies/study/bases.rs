@@ -197,6 +197,16 @@ impl CaseRunners {
         }
     }
 
+    /// The runners with the modal cache reporting to `progress` (the stages of the bases a
+    /// case computes: "track modes below … Hz (Lanczos)", the component bases, …).
+    pub fn with_progress(
+        mut self,
+        progress: std::sync::Arc<dyn crate::progress::Progress + Send>,
+    ) -> Self {
+        self.cache = self.cache.with_progress(progress);
+        self
+    }
+
     /// Whether a substructured study's cases get the track's static flexibility at the
     /// contact by updating one reference factorisation ([`StaticUpdater`]) or each from a
     /// factorisation of its own `K` (`false`, the default: on the default track a railpad

@@ -95,7 +95,7 @@ use crate::model::ModelSource;
 pub mod bases;
 mod parse;
 mod report;
-pub use report::study_table;
+pub use report::{study_table, summary_lines};
 mod run;
 pub mod static_update;
 

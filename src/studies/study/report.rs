@@ -140,6 +140,64 @@ fn study_criterion_text(c: &super::StudyCriterion) -> String {
 /// Writes a finished study into `out`: `study.csv` (one row per case and speed), the plots
 /// of every indicator against the first parameter, and the report `study` with the cases'
 /// table.
+/// The study's result in a few plain lines (what `corrugation study` prints on stdout and
+/// the report opens with): how many case–speed rows initiate corrugation by the study's
+/// criterion, and the cases of the lowest and the highest wear band RMS (and F_L band RMS)
+/// with their parameter values.
+pub fn summary_lines(cases: &[(Case, CaseResult)]) -> Vec<String> {
+    let rows: Vec<(&Case, &InitiationRow)> = cases
+        .iter()
+        .flat_map(|(c, r)| r.rows.iter().map(move |row| (c, row)))
+        .collect();
+    if rows.is_empty() {
+        return vec!["no case has a result".into()];
+    }
+    let initiating = rows.iter().filter(|(_, r)| r.initiates).count();
+    let mut out = vec![format!(
+        "{} case(s), {} case–speed row(s): corrugation initiates in {initiating} of them",
+        cases.len(),
+        rows.len()
+    )];
+    let label = |c: &Case, r: &InitiationRow| {
+        let l = c.label();
+        format!(
+            "case {} ({}{}at {} km/h)",
+            c.index,
+            l,
+            if l.is_empty() { "" } else { ", " },
+            r.speed_kmh
+        )
+    };
+    for (what, unit, get) in [
+        (
+            "wear band RMS",
+            "J/m",
+            (|r: &InitiationRow| r.wear_band_rms) as fn(&InitiationRow) -> f64,
+        ),
+        ("F_L band RMS", "N", |r: &InitiationRow| r.fl_band_rms_n),
+    ] {
+        let lo = rows.iter().min_by(|a, b| get(a.1).total_cmp(&get(b.1)));
+        let hi = rows.iter().max_by(|a, b| get(a.1).total_cmp(&get(b.1)));
+        if let (Some(lo), Some(hi)) = (lo, hi) {
+            if rows.len() > 1 {
+                out.push(format!(
+                    "lowest {what} {} {unit}: {}; highest {} {unit}: {}",
+                    crate::growth::verdict::sig(get(lo.1), 3),
+                    label(lo.0, lo.1),
+                    crate::growth::verdict::sig(get(hi.1), 3),
+                    label(hi.0, hi.1)
+                ));
+            } else {
+                out.push(format!(
+                    "{what} {} {unit}",
+                    crate::growth::verdict::sig(get(lo.1), 3)
+                ));
+            }
+        }
+    }
+    out
+}
+
 pub(super) fn write_study(
     study: &Study,
     cases: &[(Case, CaseResult)],
@@ -148,6 +206,7 @@ pub(super) fn write_study(
     let gk = growth_keys(cases);
     let readable = write_study_csv(study, cases, &gk, out)?;
     let mut doc = Document::new(format!("Design study: {}", study.title));
+    doc.paragraph(format!("**Summary.** {}.", summary_lines(cases).join(". ")));
     doc.paragraph(format!(
         "Study file {}; base model {}; {} case(s); parameters: {}.",
         study.file,
@@ -289,10 +348,13 @@ fn write_study_plots(
                 e.1.push(y.unwrap_or(f64::NAN));
             }
         }
-        let s: Vec<Series> = series
+        let mut s: Vec<Series> = series
             .into_iter()
             .map(|(n, (x, y))| Series::new(n, x, y))
             .collect();
+        if stem == "relative_wear" {
+            s.extend(threshold_line(cases, &s));
+        }
         let file = format!("study_{stem}");
         line_plot(
             &out.join(&file),
@@ -304,6 +366,32 @@ fn write_study_plots(
         doc.image(format!("{label} vs {}", first.key), format!("{file}.png"));
     }
     Ok(())
+}
+
+/// The initiation threshold on the relative-wear plot (%), a horizontal line over the
+/// plotted abscissae, when every row was judged against the same one.
+fn threshold_line(cases: &[(Case, CaseResult)], plotted: &[Series]) -> Option<Series> {
+    let mut t = cases
+        .iter()
+        .flat_map(|(_, r)| r.rows.iter().map(|row| row.threshold));
+    let first = t.next()??;
+    if !t.all(|x| x == Some(first)) {
+        return None;
+    }
+    let xs = plotted
+        .iter()
+        .flat_map(|s| s.x.iter().copied())
+        .filter(|x| x.is_finite());
+    let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+        (l.min(x), h.max(x))
+    });
+    (lo <= hi).then(|| {
+        Series::new(
+            format!("initiation threshold ({:.1} %)", 100.0 * first),
+            vec![lo, hi],
+            vec![100.0 * first; 2],
+        )
+    })
 }
 
 #[cfg(test)]

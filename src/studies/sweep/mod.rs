@@ -61,6 +61,7 @@ mod run;
 
 pub use maps::{assemble, psd_at_wavenumber};
 pub use merge::{merge, read_record, write_shard_plan, ShardPlan, SHARD_PLAN_FILE};
+pub use report::summary_lines;
 pub(crate) use run::panic_text;
 pub use run::{
     check_run_key, read_summary, run_passages, speed_file, sweep, sweep_beside, write_summary,

@@ -338,8 +338,67 @@ fn fmt_opt(v: Option<f64>, digits: usize) -> String {
     v.map_or_else(|| "–".into(), |x| format!("{x:.digits$}"))
 }
 
+/// The sweep's result in a few plain lines (what `corrugation sweep` prints on stdout and
+/// the report opens with): the speeds, the dominant wear wavelength and frequency ranges
+/// with the two range ratios, and the coupled mode that selects the wear over each speed
+/// range.
+pub fn summary_lines(r: &SweepRecord) -> Vec<String> {
+    let range = |v: &[Option<f64>]| {
+        let xs: Vec<f64> = v.iter().flatten().copied().collect();
+        (!xs.is_empty()).then(|| {
+            xs.iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), &x| {
+                    (l.min(x), u.max(x))
+                })
+        })
+    };
+    let n = r.speeds_kmh.len();
+    let mut out = Vec::new();
+    let speeds = format!(
+        "{} speed(s), {}–{} km/h",
+        n,
+        r.speeds_kmh[0],
+        r.speeds_kmh[n - 1]
+    );
+    match (
+        range(&r.dominant_wavelength_mm),
+        range(&r.dominant_frequency_hz),
+    ) {
+        (Some((l0, l1)), Some((f0, f1))) => out.push(format!(
+            "{speeds}: dominant wear wavelength {l0:.1}–{l1:.1} mm, frequency {f0:.0}–{f1:.0} Hz; \
+             wavelength range ratio {} against the speed range ratio {:.3}",
+            fmt_opt(r.wavelength_range_ratio, 3),
+            r.speed_range_ratio
+        )),
+        _ => out.push(format!(
+            "{speeds}: no speed has a wear component in the 20–80 mm band"
+        )),
+    }
+    let without = r
+        .dominant_wavelength_mm
+        .iter()
+        .filter(|x| x.is_none())
+        .count();
+    if without > 0 && without < n {
+        out.push(format!(
+            "{without} of {n} speeds have no wear component in the 20–80 mm band"
+        ));
+    }
+    for (i, j, a) in speed_ranges(&r.wear_coupled) {
+        out.push(format!(
+            "{}–{} km/h: the wear selects the coupled mode at {:.1} Hz (mostly {})",
+            r.speeds_kmh[i],
+            r.speeds_kmh[j],
+            a.mode_frequency_hz,
+            a.shares.family_label()
+        ));
+    }
+    out
+}
+
 fn write_report(dir: &Path, r: &SweepRecord) -> Result<(), StudiesError> {
     let mut d = Document::new("Speed sweep: frequency selection");
+    d.paragraph(format!("**Summary.** {}.", summary_lines(r).join(". ")));
     d.paragraph(format!(
         "{} speeds from {} to {} km/h. Speed range ratio {:.3}; wavelength range ratio of the \
          dominant wear wavelength {}. Frequency selection shows as a wavelength range ratio \
