@@ -633,3 +633,18 @@ fn a_study_case_with_a_unit_slip_is_warned_about() {
     );
     assert!(!err.contains("case 1"), "{err}");
 }
+
+/// The small explicit preset loads and is warned about: its 80 mm node planes put the mesh's
+/// element-passing ripple into the 20–80 mm band (the default model's 10 mm do not).
+#[test]
+fn the_small_explicit_preset_warns_that_its_mesh_is_in_the_band() {
+    let p = concat!(env!("CARGO_MANIFEST_DIR"), "/models/small-explicit.toml");
+    let (code, _, err) = run(&["model", "--model", p]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warning:")
+            && err.contains("mesh.fine_element_length = 0.08 m")
+            && err.contains("inside the 20–80 mm band"),
+        "{err}"
+    );
+}

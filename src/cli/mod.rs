@@ -90,10 +90,14 @@ pub fn check_trial_amplitudes(amplitudes_um: &[f64]) -> anyhow::Result<()> {
 }
 
 /// Warns on stderr about the values of `m` (named `name`) whose magnitude looks like a unit
-/// slip ([`Model::unit_slips`]).
+/// slip ([`Model::unit_slips`]) and about a solution-zone mesh whose element-passing ripple
+/// falls in the analysis band ([`Model::mesh_in_band`]).
 pub fn warn_unit_slips(name: &str, m: &Model) {
     for slip in m.unit_slips() {
         eprintln!("warning: {name}: {slip}");
+    }
+    if let Some(w) = m.mesh_in_band() {
+        eprintln!("warning: {name}: {w}");
     }
 }
 
