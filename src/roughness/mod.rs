@@ -13,7 +13,7 @@
 //!   into base-ten one-third-octave bands with the lines at a band edge shared by the part
 //!   of their width inside ([`bands`]);
 //! - carries the ISO 3095:2013 limit spectrum of a reference track ([`bands::iso3095_limit_db`]);
-//! - applies the model's growth-rate spectrum to a band spectrum ([`forecast`]): each band's
+//! - applies the model's growth-rate spectrum to a band spectrum ([`mod@forecast`]): each band's
 //!   level after `N` wheel passages, `L_N = L_0 + 10 lg⟨(1 + σ(λ))^{2N}⟩_band` with `σ` the
 //!   relative amplitude change per passage of the linear wear loop (docs/theory.md §10.6,
 //!   §10.7 for this module).
