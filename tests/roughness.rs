@@ -247,3 +247,22 @@ fn bad_profiles_are_refused_with_what_to_change() {
     let p = MeasuredProfile::parse_csv(&text, "nm.csv").unwrap();
     assert!(p.unit_slip().unwrap().contains("µm"));
 }
+
+/// Traffic in MGT becomes wheel passages over one rail as `MGT·1e9 kg / (2W/g)`: 1 MGT at
+/// W = 100 kN is 49 050 passages; out-of-range and doubly given traffic is refused; a band
+/// spectrum from arrays equals the one from its CSV.
+#[test]
+fn traffic_and_band_arrays() {
+    use corrugation::roughness::traffic_passages;
+    let n = traffic_passages(None, Some(1.0), 1e5).unwrap();
+    assert!((n - 1e9 * 9.81 / 2e5).abs() < 1e-6, "{n}");
+    assert_eq!(traffic_passages(Some(1e4), None, 1e5).unwrap(), 1e4);
+    assert_eq!(traffic_passages(None, None, 1e5).unwrap(), n);
+    for (p, g) in [(Some(0.5), None), (None, Some(0.0)), (Some(1e4), Some(1.0))] {
+        assert!(traffic_passages(p, g, 1e5).is_err(), "{p:?} {g:?}");
+    }
+    let a = BandSpectrum::from_levels(&[0.04, 0.0315], &[-3.0, -6.0], "a").unwrap();
+    let c = BandSpectrum::parse_csv("wavelength_m, level_db\n0.04, -3\n0.0315, -6\n", "c").unwrap();
+    assert_eq!(a, c);
+    assert!(BandSpectrum::from_levels(&[0.04], &[f64::NAN], "a").is_err());
+}

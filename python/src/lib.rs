@@ -1074,7 +1074,7 @@ fn bands_dict<'py>(
 /// segment length, m, default 4). Returns `{"wavelength_m", "level_db"}` (dB re 1 µm) and
 /// `iso3095_limit_db` (NaN for bands without a limit).
 #[pyfunction]
-#[pyo3(signature = (profile, segment_m=4.0))]
+#[pyo3(signature = (profile, segment_m=corrugation::roughness::profile::DEFAULT_SEGMENT_LENGTH_M))]
 fn band_spectrum<'py>(
     py: Python<'py>,
     profile: &Bound<'py, PyAny>,
@@ -1125,7 +1125,7 @@ fn roughness<'py>(
     cache: Option<PathBuf>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use corrugation::roughness::{iso3095_limit_db, passages_of_mgt, Band, BandSpectrum};
+    use corrugation::roughness::{iso3095_limit_db, Band, BandSpectrum};
     let m = &model.inner;
     let (source, measured) = match (profile, spectrum) {
         (Some(p), None) => {
@@ -1145,12 +1145,9 @@ fn roughness<'py>(
                 let (l, v): (Vec<f64>, Vec<f64>) = s.extract().map_err(|_| {
                     PyTypeError::new_err("spectrum: give a CSV path or a pair (wavelength_m, level_db)")
                 })?;
-                let text: String = std::iter::once("wavelength_m, level_db\n".to_string())
-                    .chain(l.iter().zip(&v).map(|(a, b)| format!("{a:e}, {b:e}\n")))
-                    .collect();
                 (
                     "the band spectrum given".to_string(),
-                    BandSpectrum::parse_csv(&text, "spectrum").map_err(|e| py_err(&e.into()))?,
+                    BandSpectrum::from_levels(&l, &v, "spectrum").map_err(|e| py_err(&e.into()))?,
                 )
             }
         }
@@ -1160,26 +1157,8 @@ fn roughness<'py>(
             ))
         }
     };
-    let n = match (passages, mgt) {
-        (Some(_), Some(_)) => {
-            return Err(PyValueError::new_err("give passages= or mgt=, not both"))
-        }
-        (Some(n), None) if n.is_finite() && (1.0..=1e12).contains(&n) => n,
-        (Some(n), None) => {
-            return Err(PyValueError::new_err(format!(
-                "passages {n}: out of range, allowed 1 to 1e12 wheel passages"
-            )))
-        }
-        (None, mgt) => {
-            let g = mgt.unwrap_or(1.0);
-            if !(g.is_finite() && g > 0.0 && g <= 1000.0) {
-                return Err(PyValueError::new_err(format!(
-                    "mgt {g}: out of range, allowed above 0 to 1000 million gross tonnes"
-                )));
-            }
-            passages_of_mgt(g, m.vehicle.wheel_load)
-        }
-    };
+    let n = corrugation::roughness::traffic_passages(passages, mgt, m.vehicle.wheel_load)
+        .map_err(|e| PyValueError::new_err(format!("passages / mgt: {e}")))?;
     let speeds = speeds_kmh.unwrap_or_else(|| vec![m.run.speed_kmh]);
     let p = PyProgress::new(progress);
     let o = run(py, &p, || {

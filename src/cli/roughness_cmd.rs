@@ -12,7 +12,7 @@ use anyhow::Context;
 use clap::Args;
 
 use corrugation::dynamics::passage::PassageOptions;
-use corrugation::roughness::{passages_of_mgt, BandSpectrum, MeasuredProfile, SpectrumOptions};
+use corrugation::roughness::{traffic_passages, BandSpectrum, MeasuredProfile, SpectrumOptions};
 use corrugation::studies::roughness::{roughness_forecasts, write_roughness};
 use corrugation::studies::speeds::parse_speeds;
 
@@ -46,7 +46,7 @@ pub struct RoughnessCmd {
     #[arg(long, value_name = "MGT")]
     mgt: Option<f64>,
     /// Segment length of the profile's band analysis (m), 0.1 to 20.
-    #[arg(long, default_value_t = 4.0, value_name = "M")]
+    #[arg(long, default_value_t = corrugation::roughness::profile::DEFAULT_SEGMENT_LENGTH_M, value_name = "M")]
     segment_m: f64,
     /// Skip the passage over the measured profile.
     #[arg(long)]
@@ -66,23 +66,8 @@ impl RoughnessCmd {
     /// Runs the command.
     pub fn run(self) -> anyhow::Result<()> {
         let m = self.model.load()?;
-        let passages = match (self.passages, self.mgt) {
-            (Some(n), _) => {
-                if !(n.is_finite() && (1.0..=1e12).contains(&n)) {
-                    anyhow::bail!("--passages {n}: out of range, allowed 1 to 1e12 wheel passages");
-                }
-                n
-            }
-            (None, mgt) => {
-                let mgt = mgt.unwrap_or(1.0);
-                if !(mgt.is_finite() && mgt > 0.0 && mgt <= 1000.0) {
-                    anyhow::bail!(
-                        "--mgt {mgt}: out of range, allowed above 0 to 1000 million gross tonnes"
-                    );
-                }
-                passages_of_mgt(mgt, m.vehicle.wheel_load)
-            }
-        };
+        let passages = traffic_passages(self.passages, self.mgt, m.vehicle.wheel_load)
+            .context("--passages / --mgt")?;
         let speeds = match &self.speeds {
             Some(s) => parse_speeds(s)?,
             None => vec![m.run.speed_kmh],

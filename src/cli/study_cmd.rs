@@ -47,13 +47,7 @@ impl StudyCmd {
             None => Shard::ALL,
         };
         // Every case's model is checked before any engine work.
-        let models: Vec<_> = study
-            .case_models()?
-            .into_iter()
-            .enumerate()
-            .filter(|(i, _)| shard.holds(*i))
-            .map(|(_, cm)| cm)
-            .collect();
+        let models = study.case_models_of(shard)?;
         for (case, m) in &models {
             super::warn_unit_slips(
                 &format!(
@@ -70,7 +64,7 @@ impl StudyCmd {
                 "--shard {}/{}: no case of the study's {} falls in this shard; use fewer shards",
                 shard.index,
                 shard.count,
-                study.case_models()?.len()
+                study.cases().len()
             );
         }
         let cache_dir = self.cache.clone().unwrap_or_else(default_cache_dir);

@@ -171,7 +171,7 @@ impl BandSpectrum {
                 header.join(", ")
             )));
         }
-        let mut rows: Vec<(Band, f64)> = Vec::new();
+        let (mut centres, mut levels) = (Vec::new(), Vec::new());
         for (i, line) in lines.into_iter().enumerate() {
             let cells: Vec<&str> = line.split(',').map(str::trim).collect();
             let num = |k: usize, what: &str| -> Result<f64, RoughnessError> {
@@ -187,8 +187,33 @@ impl BandSpectrum {
                         ))
                     })
             };
-            let l = to_m(num(0, "wavelength")?);
-            let level = num(1, "level (dB)")?;
+            centres.push(to_m(num(0, "wavelength")?));
+            levels.push(num(1, "level (dB)")?);
+        }
+        Self::from_levels(&centres, &levels, name)
+    }
+
+    /// A band spectrum from band centres `centres_m` (m; one-third-octave band centres,
+    /// nominal or exact, each once) and their levels `levels_db` (dB re 1 µm, −80 to 80);
+    /// `name` names the data in messages (row `i` is the `i+1`-th pair).
+    pub fn from_levels(
+        centres_m: &[f64],
+        levels_db: &[f64],
+        name: &str,
+    ) -> Result<Self, RoughnessError> {
+        let bad = |reason: String| RoughnessError::Format {
+            path: name.to_string(),
+            reason,
+        };
+        if centres_m.len() != levels_db.len() {
+            return Err(bad(format!(
+                "{} band centres but {} levels",
+                centres_m.len(),
+                levels_db.len()
+            )));
+        }
+        let mut rows: Vec<(Band, f64)> = Vec::new();
+        for (i, (&l, &level)) in centres_m.iter().zip(levels_db).enumerate() {
             let index = band_index(l).ok_or_else(|| {
                 bad(format!(
                     "data row {}: wavelength {} m is not a one-third-octave band centre (10^(−n/10) m, e.g. 0.0315 or 0.04 m)",
@@ -196,7 +221,7 @@ impl BandSpectrum {
                     l
                 ))
             })?;
-            if !(-80.0..=80.0).contains(&level) {
+            if !(level.is_finite() && (-80.0..=80.0).contains(&level)) {
                 return Err(bad(format!(
                     "data row {}: level {level} dB re 1 µm is out of range, allowed −80 to 80 dB (1e-4 to 1e4 µm rms)",
                     i + 1

@@ -192,3 +192,50 @@ pub fn passages_of_mgt(mgt: f64, wheel_load_n: f64) -> f64 {
     const G: f64 = 9.81;
     mgt * 1e9 / (2.0 * wheel_load_n / G)
 }
+
+/// Most wheel passages a forecast takes (−).
+pub const MAX_PASSAGES: f64 = 1e12;
+
+/// Most traffic a forecast takes (million gross tonnes).
+pub const MAX_MGT: f64 = 1000.0;
+
+/// Default traffic of a forecast when neither is given (million gross tonnes).
+pub const DEFAULT_MGT: f64 = 1.0;
+
+/// The wheel passages of a forecast from the traffic given as `passages` (1 to
+/// [`MAX_PASSAGES`]) or `mgt` (million gross tonnes, above 0 to [`MAX_MGT`]; default
+/// [`DEFAULT_MGT`]) at the wheel load `wheel_load_n` (N); not both.
+pub fn traffic_passages(
+    passages: Option<f64>,
+    mgt: Option<f64>,
+    wheel_load_n: f64,
+) -> Result<f64, super::RoughnessError> {
+    use super::RoughnessError::OutOfRange;
+    match (passages, mgt) {
+        (Some(_), Some(_)) => Err(OutOfRange {
+            what: "traffic",
+            value: f64::NAN,
+            expected: "give the passages or the MGT, not both".into(),
+        }),
+        (Some(n), None) if n.is_finite() && (1.0..=MAX_PASSAGES).contains(&n) => Ok(n),
+        (Some(n), None) => Err(OutOfRange {
+            what: "passages",
+            value: n,
+            expected: format!("out of range, allowed 1 to {MAX_PASSAGES:e} wheel passages"),
+        }),
+        (None, g) => {
+            let g = g.unwrap_or(DEFAULT_MGT);
+            if g.is_finite() && g > 0.0 && g <= MAX_MGT {
+                Ok(passages_of_mgt(g, wheel_load_n))
+            } else {
+                Err(OutOfRange {
+                    what: "mgt",
+                    value: g,
+                    expected: format!(
+                        "out of range, allowed above 0 to {MAX_MGT} million gross tonnes"
+                    ),
+                })
+            }
+        }
+    }
+}

@@ -35,6 +35,9 @@ const LINES_PER_BAND: f64 = 4.0 / 0.2306;
 /// irregular record loses about 2 % of the amplitude at 10 samples per wavelength).
 const SAMPLES_PER_WAVELENGTH: f64 = 10.0;
 
+/// Default segment length of the band analysis (m).
+pub const DEFAULT_SEGMENT_LENGTH_M: f64 = 4.0;
+
 /// Settings of the band analysis of a profile.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpectrumOptions {
@@ -48,7 +51,7 @@ pub struct SpectrumOptions {
 impl Default for SpectrumOptions {
     fn default() -> Self {
         Self {
-            segment_length_m: 4.0,
+            segment_length_m: DEFAULT_SEGMENT_LENGTH_M,
             gap_factor: 5.0,
         }
     }

@@ -432,6 +432,21 @@ impl Study {
         o
     }
 
+    /// The cases of `shard` with their models. Every case's model is built and checked, so
+    /// a bad value anywhere in the study stops every shard before any work.
+    pub fn case_models_of(
+        &self,
+        shard: crate::studies::speeds::Shard,
+    ) -> Result<Vec<(Case, Model)>, StudiesError> {
+        Ok(self
+            .case_models()?
+            .into_iter()
+            .enumerate()
+            .filter(|(i, _)| shard.holds(*i))
+            .map(|(_, cm)| cm)
+            .collect())
+    }
+
     /// Builds and validates every case's model (nothing runs until all are valid).
     pub fn case_models(&self) -> Result<Vec<(Case, Model)>, StudiesError> {
         self.cases()

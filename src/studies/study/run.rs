@@ -232,13 +232,7 @@ pub fn run_study(
             "the growth loop is not available to studies in this build; set growth = false",
         ));
     }
-    let models: Vec<_> = study
-        .case_models()?
-        .into_iter()
-        .enumerate()
-        .filter(|(i, _)| shard.holds(*i))
-        .map(|(_, cm)| cm)
-        .collect();
+    let models = study.case_models_of(shard)?;
     let bar = Counter::start(progress, "study cases", models.len() as u64);
     let ctx = CaseContext {
         study,
