@@ -23,8 +23,9 @@ ROOT = Path(__file__).resolve().parents[2]
 def _binary():
     env = os.environ.get("CORRUGATION_BIN")
     if env:
-        return Path(env)
-    target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
+        # absolute, because some tests run scripts from a temporary working directory
+        return Path(env).resolve()
+    target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")).resolve()
     for profile in ("test-opt", "release", "debug"):
         p = target / profile / "corrugation"
         if p.exists():
