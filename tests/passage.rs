@@ -799,7 +799,7 @@ fn a_failed_trial_stops_the_growth_and_keeps_the_smaller_amplitudes() {
 /// The track's damping product beside the contact step (`PassageOptions::overlap`, for a
 /// passage that runs alone): the same bits on one thread as on two (the split arithmetic does
 /// not depend on whether the second core takes its half), and the passage of the plain step
-/// within the tolerances stated for it in docs/performance.md §5.11 (the two differ only by
+/// within the tolerances stated for it in docs/log/performance.md §5.11 (the two differ only by
 /// the rounding of the split single-precision damping products): mean forces within 1e-6,
 /// band RMS within 1e-4, dominant wavelength within 1e-5 (relative).
 #[test]

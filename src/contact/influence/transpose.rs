@@ -5,7 +5,7 @@
 //! run time) the block is moved in tiles held in 256-bit registers: 4 × 4 elements of
 //! `Complex<f32>` (8 bytes each) or 2 × 2 of `Complex<f64>` (16 bytes), instead of one
 //! strided element at a time (the scalar form was about a tenth of a passage's time loop,
-//! docs/performance.md §5.16); the edges that do not fill a tile are moved one by one.
+//! docs/log/performance.md §5.16); the edges that do not fill a tile are moved one by one.
 
 use rustfft::num_complex::Complex;
 use rustfft::FftNum;

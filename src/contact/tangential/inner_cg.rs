@@ -2,7 +2,7 @@
 //! two exact whole-grid products, in a branching form (any algorithm and preconditioner) and a
 //! branch-free one (the Jacobi-preconditioned Newton CG: adhesion and slip as masks, the
 //! reductions in four interleaved partial sums), compiled for AVX2 when the CPU has it
-//! (docs/theory.md §6.5; docs/performance.md §5.13).
+//! (docs/theory.md §6.5; docs/log/performance.md §5.13).
 
 use super::*;
 

@@ -66,7 +66,7 @@ fn spring_block_entries(
 /// the sum is formed block by block: for each pair of blocks `(a, b)` joined by some springs,
 /// `P_b diag(k) P_aᵀ` over those springs only (`P_a`: their projections on block `a`), the
 /// diagonal blocks as lower triangles, then mirrored. On the default track this is about a
-/// tenth of the dense product over all springs (docs/performance.md §7.5); the result is
+/// tenth of the dense product over all springs (docs/log/performance.md §7.5); the result is
 /// exactly symmetric.
 pub fn reduced_stiffness(
     track: &TrackStructure,

@@ -211,7 +211,7 @@ impl CaseRunners {
     /// contact by updating one reference factorisation ([`StaticUpdater`]) or each from a
     /// factorisation of its own `K` (`false`, the default: on the default track a railpad
     /// stiffness changes several thousand springs, and solving them once costs about as much
-    /// as ten cases' own factorisations, docs/performance.md §7).
+    /// as ten cases' own factorisations, docs/log/performance.md §7.1).
     pub fn with_static_update(mut self, on: bool) -> Self {
         self.static_update = on;
         self
