@@ -26,6 +26,7 @@
 //! away from the track centre, towards the field side), `z` vertical up. `z = 0` is the
 //! underside of the rail foot at the rail centre line, `y = 0` is the rail centre line.
 #![warn(missing_docs)]
+#![deny(unsafe_op_in_unsafe_fn)]
 
 pub mod contact;
 pub mod dynamics;

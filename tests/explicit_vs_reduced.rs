@@ -19,10 +19,11 @@ use corrugation::dynamics::{
     prepared::PreparedModel,
 };
 use corrugation::eigen::cache::ModalCache;
-use corrugation::explicit::{passage::Coupling, ExplicitModel, ExplicitOptions};
+use corrugation::explicit::{coupling::Coupling, ExplicitModel, ExplicitOptions};
 use corrugation::fe::{assembly::FeMatrices, solve::dense_generalised_eigen};
-use corrugation::model::test_problems::{all_modes_model, all_modes_structures};
+use corrugation::model::test_problems::all_modes_model;
 use corrugation::model::{load_model, ExplicitLocalCompliance, LoadSpread, Model, ModelSource};
+use corrugation::structure::test_problems::all_modes_structures;
 use corrugation::structure::{TrackStructure, WheelStructure};
 use faer::Mat;
 

@@ -113,7 +113,12 @@ pub fn run_explicit(
         .context("running the explicit passage")?;
     pb.finish_and_clear();
     let summary = corrugation::dynamics::analysis::summarise(&rec.record)?;
-    super::passage_cmd::write_outputs(out, &rec.record, &summary, m.mesh.fine_element_length)?;
+    corrugation::studies::passage::write_passage(
+        out,
+        &rec.record,
+        &summary,
+        m.mesh.fine_element_length,
+    )?;
     write_explicit_json(out, &rec)?;
     if json {
         let mut v = serde_json::to_value(&summary)?;
@@ -126,7 +131,10 @@ pub fn run_explicit(
         }
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        super::passage_cmd::print_summary(&summary, &rec.record, out);
+        for line in corrugation::studies::passage::summary_lines(&summary, &rec.record) {
+            println!("{line}");
+        }
+        println!("  outputs in {}", out.display());
         let i = &rec.info;
         println!(
                 "  explicit: track {} + wheel {} DOFs ({} wheel{}); dt {:.3e} s (track, {} per contact step), {:.3e} s (wheel, {}); ω_max {:.4e} rad/s (Gershgorin bound {:.4e}); {} FE steps in {:.1} s wall{}",

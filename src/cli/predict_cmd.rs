@@ -15,7 +15,7 @@ use corrugation::growth::verdict::{sig, trim_zeros};
 use corrugation::studies::predict::{predict, PredictOptions};
 use corrugation::studies::speeds::parse_speeds;
 
-use super::{engine, grow_cmd, passage_cmd, ModelArgs};
+use super::{engine, grow_cmd, ModelArgs};
 
 /// The full prediction: modes, smooth passage, trial growth, short speed sweep, report.
 #[derive(Debug, Args)]
@@ -94,15 +94,8 @@ impl PredictCmd {
             amplitudes_um: self.amplitudes_um,
             sweep_speeds_kmh: speeds,
         };
-        let element_length_m = m.mesh.fine_element_length;
-        let passage_files = |dir: &std::path::Path,
-                             rec: &corrugation::dynamics::record::PassageRecord,
-                             s: &corrugation::dynamics::summary::PassageSummary|
-         -> Result<(), corrugation::studies::BoxError> {
-            passage_cmd::write_outputs(dir, rec, s, element_length_m).map_err(Into::into)
-        };
         let pb = super::progress::bar("prediction");
-        let p = predict(&m, &prepared, &opts, &self.out, &passage_files, &pb)?;
+        let p = predict(&m, &prepared, &opts, &self.out, &pb)?;
         pb.finish_and_clear();
         drop(pb);
         let j = &p.json;

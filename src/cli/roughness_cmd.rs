@@ -126,7 +126,12 @@ impl RoughnessCmd {
             pb.finish_and_clear();
             let summary = corrugation::dynamics::analysis::summarise(&rec)?;
             let dir = self.out.join("passage");
-            super::passage_cmd::write_outputs(&dir, &rec, &summary, m.mesh.fine_element_length)?;
+            corrugation::studies::passage::write_passage(
+                &dir,
+                &rec,
+                &summary,
+                m.mesh.fine_element_length,
+            )?;
             if !self.json {
                 println!(
                     "passage over the first {:.2} m of the measured profile's longest continuous part at {} km/h: F_L band RMS {:.1} N, dominant wear wavelength {} → {}",

@@ -452,7 +452,7 @@ impl Convolver {
     }
 
     /// Normal displacement difference `u = C_zz * p` (m) on the grid, `p` in Pa. Real-to-complex
-    /// transforms ([`RealFft2`]: half the work of a complex pair); rows of `p` that are zero
+    /// transforms (`RealFft2`: half the work of a complex pair); rows of `p` that are zero
     /// (outside the contact) are not transformed.
     pub fn normal(&mut self, p: &[f64], u: &mut [f64]) {
         let (nx, ny) = (self.nx, self.ny);
@@ -553,7 +553,7 @@ impl Convolver {
     /// direction (`b` the box's extent), exact for the offsets within the box, instead of the
     /// whole grid's `m1 × m2`. Elements of rows `r0..r1` outside the columns `c0..c1` get 0;
     /// the other rows of `ux, uy` are left as they are. The padded grids and their kernel
-    /// spectra are built with the convolver ([`box_grids`]); no allocation here.
+    /// spectra are built with the convolver (`box_grids`); no allocation here.
     ///
     /// The box product runs in **single precision** (tractions rounded to `f32`, `f32` FFTs
     /// and kernel spectra; about `10⁻⁷ λ_max ‖τ‖₂` of error): it serves the tangential
@@ -635,9 +635,10 @@ impl Convolver {
 
 /// `W = A Z + B conj Z(−k)` in the transposed spectral layout (`q = k2 · m1 + k1`) of an
 /// `m1 × m2` grid: the tangential kernel product of [`Convolver`] (type doc), in double or
-/// single precision. Compiled twice: for AVX2 (four `f64` or eight `f32` lanes), used when
-/// the CPU has it (checked at run time), and for the baseline; the same multiplications and
-/// additions in the same order (no fused multiply-add), so both give the same bits.
+/// single precision. Compiled for each instruction set pulp dispatches to (AVX2, AVX-512 or
+/// the baseline, chosen at run time); the same multiplications and additions in the same
+/// order (no fused multiply-add: the compiler does not contract them), so every instruction
+/// set gives the same bits.
 fn tangential_kernel_product<T: FftNum>(
     z: &[Complex<T>],
     ka: &[T],
@@ -646,28 +647,32 @@ fn tangential_kernel_product<T: FftNum>(
     m1: usize,
     m2: usize,
 ) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2 (checked just above), the only requirement of the
-        // `target_feature` function.
-        unsafe { tangential_kernel_product_avx2(z, ka, kb, work, m1, m2) };
-        return;
-    }
-    tangential_kernel_product_plain(z, ka, kb, work, m1, m2);
+    pulp::Arch::new().dispatch(KernelProduct {
+        z,
+        ka,
+        kb,
+        work,
+        m1,
+        m2,
+    });
 }
 
-/// [`tangential_kernel_product_plain`] compiled with AVX2 enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn tangential_kernel_product_avx2<T: FftNum>(
-    z: &[Complex<T>],
-    ka: &[T],
-    kb: &[Complex<T>],
-    work: &mut [Complex<T>],
+/// The arguments of [`tangential_kernel_product`], for pulp's dispatch.
+struct KernelProduct<'a, T: FftNum> {
+    z: &'a [Complex<T>],
+    ka: &'a [T],
+    kb: &'a [Complex<T>],
+    work: &'a mut [Complex<T>],
     m1: usize,
     m2: usize,
-) {
-    tangential_kernel_product_plain(z, ka, kb, work, m1, m2);
+}
+
+impl<T: FftNum> pulp::WithSimd for KernelProduct<'_, T> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        tangential_kernel_product_plain(self.z, self.ka, self.kb, self.work, self.m1, self.m2);
+    }
 }
 
 /// The kernel product of [`tangential_kernel_product`], for any instruction set.

@@ -54,6 +54,8 @@
 // Numerical kernels index several parallel arrays with one loop index.
 #![allow(clippy::needless_range_loop)]
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
 pub mod hertz;
 pub mod influence;
 pub mod normal;

@@ -23,6 +23,11 @@
 use super::influence::Convolver;
 use super::ContactError;
 
+/// Partial sums of the inner CG (`inner_cg.rs` and the AVX2 kernels `contact::avx2::cg`)'s reductions: element `i` of a segment goes to lane `i mod 4`
+/// of its blocks of four (the segment's last `n mod 4` elements to lane 0), so that the
+/// additions run in four independent chains (and vector lanes) instead of one.
+pub(in crate::contact) const LANES: usize = 4;
+
 mod inner_cg;
 
 /// How the slip directions are found (see [`TangentialSolver::solve`]).

@@ -33,7 +33,7 @@
 //! patch-integrated power equals `−V (ξ Fx + η Fy)` exactly up to the solver tolerance (with
 //! spin up to `O(Δx)`). Pairing the slip with the end-of-step traction alone (backward Euler
 //! along the path) loses `(V/Δx) τᵀ(C − C̄)τ ≥ 0` (`C̄` the one-cell shifted operator), a
-//! first-order error of relative size ≈ `Δx µ p0 / (G a ξ)`: 24 % on 32 × 24. [`WearAccumulator`] maps element `(i, j)` at contact position `x_c`
+//! first-order error of relative size ≈ `Δx µ p0 / (G a ξ)`: 24 % on 32 × 24. `WearAccumulator` maps element `(i, j)` at contact position `x_c`
 //! to the rail-fixed bin containing `x_c + x_i`.
 //!
 //! # Series compliance ([`TransientRolling::set_series_compliance`])

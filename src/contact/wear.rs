@@ -3,7 +3,7 @@
 //! response of the transient contact.
 
 use super::hertz::{HertzContact, HertzInput};
-use super::rolling::*;
+use super::rolling::{Longitudinal, NormalInput, StepInputs, TransientConfig};
 use super::transient::TransientRolling;
 use super::{check_positive, ContactError};
 

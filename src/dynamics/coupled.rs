@@ -691,7 +691,7 @@ pub fn attribution_text(a: &ModeAttribution) -> String {
 
 /// Relative size of the perturbations of the static state used to linearise the contact
 /// (of the static creepage, approach): small enough to stay in the linear range of partial
-/// slip, large enough for the solver's tolerance ([`super::passage::PASSAGE_TANGENTIAL_TOL`]).
+/// slip, large enough for the solver's tolerance ([`super::setup::PASSAGE_TANGENTIAL_TOL`]).
 pub const LINEARISATION_STEP: f64 = 0.02;
 
 /// The contact of `engine` at `v` (m/s, smooth rail, the engine's series compliance) brought

@@ -20,7 +20,7 @@
 //!   memory-bound (at 750 modes the full matrix is 4.5 MB), so only the deviation `E` from
 //!   the identity is stored, as the packed lower triangle (it is symmetric) in single
 //!   precision, and applied in single precision: `v = rhs + E·rhs` reads a quarter of the
-//!   full double-precision matrix ([`sym_packed_product_f32`]). `E = −½Δt C_q (I + ½Δt
+//!   full double-precision matrix (`sym_packed_product_f32`). `E = −½Δt C_q (I + ½Δt
 //!   C_q)⁻¹` is small (‖E‖ ≤ ½Δt‖C_q‖, about 1e-2 on the default track), so the single
 //!   precision changes `v` by at most about `m · 2⁻²⁴ · (|E| |rhs|)` per step, far below the
 //!   scheme's own error (docs/theory.md §7.2).
@@ -337,7 +337,7 @@ impl ModalVerlet {
     }
 
     /// `y = E x` in single precision (`E = (I + ½h C)⁻¹ − I`, `x` rounded to `f32`, the
-    /// product of [`sym_packed_product_f32`]), for [`Self::splits`] integrators; `x32` is
+    /// product of `sym_packed_product_f32`), for [`Self::splits`] integrators; `x32` is
     /// scratch of the mode count. `y` (1/s · modal units, as `x`) gets the result in `f64`.
     pub fn damping_correction(&self, x: &[f64], x32: &mut [f32], y32: &mut [f32], y: &mut [f64]) {
         let DampingInverse::Packed(e) = &self.d_inv else {

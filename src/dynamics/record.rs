@@ -117,7 +117,7 @@ pub struct EnergyBalance {
     pub contact_energy_change_j: f64,
     /// Change of the energy `½ c F²` of the residual (static-correction) spring in series
     /// with the contact, summed over x, t, n (J); `c` is constant along the rail (see
-    /// [`PassageEngine::series_compliance`]).
+    /// `PassageEngine::series_compliance`).
     pub residual_spring_energy_change_j: f64,
     /// Work of the contact forces on the two structures (J): = −(friction + contact energy).
     pub contact_work_j: f64,
@@ -183,7 +183,7 @@ pub struct PassageRecord {
     pub wear_j_per_m: Vec<f64>,
     /// The rail-point record.
     pub rail_point: Option<RailPointRecord>,
-    /// Energy balance (zeros unless [`PassageOptions::energy`]).
+    /// Energy balance (zeros unless `PassageOptions::energy`).
     pub energy: EnergyBalance,
     /// Static state: steady creepage ξ₀ (−) and approach δ₀ (m).
     pub static_creepage: f64,
@@ -200,5 +200,19 @@ pub struct PassageRecord {
     /// The contact grid the passage ran on when its contact patch reached the boundary of
     /// the model's grid and it was rerun on a wider one
     /// ([`crate::dynamics::setup::run_widening_grid`]); `None` on the model's grid.
-    pub contact_grid_widened: Option<crate::dynamics::setup::WidenedGrid>,
+    pub contact_grid_widened: Option<WidenedGrid>,
+}
+
+/// The contact grid a passage ran on when it was widened ([`super::setup::run_widening_grid`]): the
+/// patch reached the boundary of the grid of [`super::setup::passage_contact`] (under a dynamic load above
+/// what `contact.grid_margin` leaves room for, e.g. over a deep corrugation) and the passage
+/// was rerun on this one.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct WidenedGrid {
+    /// Widenings along x and y (−), each by [`super::setup::GRID_WIDENING`] in half-length.
+    pub widenings: [u32; 2],
+    /// Elements along x and y (−).
+    pub elements: [usize; 2],
+    /// Half-lengths along x and y (m).
+    pub half_lengths_m: [f64; 2],
 }

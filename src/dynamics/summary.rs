@@ -82,5 +82,5 @@ pub struct PassageSummary {
     /// model's grid and the passage was rerun on a wider one
     /// ([`crate::dynamics::setup::run_widening_grid`]); absent on the model's grid.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub contact_grid_widened: Option<super::setup::WidenedGrid>,
+    pub contact_grid_widened: Option<super::record::WidenedGrid>,
 }

@@ -678,9 +678,9 @@ impl TrackClassifier {
     /// (used by [`Self::classify`]; handy for synthetic fields).
     ///
     /// Phases: the sleepers' kinetic share, the rail's RMS displacement and the fit of the
-    /// section resultants ([`Self::rail_fit`]), the five resultant series along the rail
-    /// ([`Self::motion_series`]), the family of the largest one, its wavelength and the
-    /// pinned–pinned test ([`Self::is_pinned_pinned`]).
+    /// section resultants (`Self::rail_fit`), the five resultant series along the rail
+    /// (`Self::motion_series`), the family of the largest one, its wavelength and the
+    /// pinned–pinned test (`Self::is_pinned_pinned`).
     pub fn classify_shape(
         &self,
         u_full: &[f64],

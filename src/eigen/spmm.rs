@@ -3,7 +3,7 @@
 //!
 //! Because the matrix is stored with both triangles, column i of the CSC arrays is also row i,
 //! so `y[i, c] = Σ_k a_k x[row_k, c]` over column i is a gather dot product that needs no
-//! atomics and parallelises over i. Up to [`COLS`] (8, one Lanczos block) columns of `x`,
+//! atomics and parallelises over i. Up to `COLS` (8, one Lanczos block) columns of `x`,
 //! packed row-major, are handled in one sweep over the matrix, so the (memory-bound) matrix
 //! is read once per group instead of once per column.
 //!
@@ -30,14 +30,14 @@ const ROW_CHUNK: usize = 2048;
 const MIN_ROWS_PER_PART: usize = 8192;
 
 /// Row ranges of the row-split dense products of a tall block (at most; fewer when a range
-/// would hold fewer than [`MIN_ROWS_PER_PART`] rows). A constant, not the thread count, so
+/// would hold fewer than `MIN_ROWS_PER_PART` rows). A constant, not the thread count, so
 /// that the order of the reductions does not depend on the machine: more threads than
 /// ranges do not speed these products up.
 pub const ROW_PARTS: usize = 2;
 
 /// `y = A x` for symmetric `A` stored in full (both triangles).
 ///
-/// The columns of `x` are taken [`COLS`] at a time and packed row-major (`COLS` values of
+/// The columns of `x` are taken `COLS` at a time and packed row-major (`COLS` values of
 /// one row side by side, zero-padded), so every stored entry of `A` meets one contiguous
 /// run of `x` (one cache line) and the inner product vectorises across the columns.
 pub fn sym_spmm(a: SparseColMatRef<'_, usize, f64>, x: MatRef<'_, f64>, mut y: MatMut<'_, f64>) {

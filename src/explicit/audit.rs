@@ -5,7 +5,7 @@
 //! it, `Σ_k f_k · (u_{k+1} − u_{k−1})/2`. That work, the dampers' and the change of the
 //! central difference's conserved energy `½ v_{k+½}ᵀ M v_{k+½} + ½ u_kᵀ K u_{k+1}` close
 //! exactly (a conservation law of the scheme), so the audit tells which term of the
-//! [`super::ledger::Ledger`] carries an energy error: the structures' accounting, or the
+//! `super::ledger::Ledger` carries an energy error: the structures' accounting, or the
 //! contact's (the contact force's work on the relative displacement against the friction,
 //! the Hertz energy and the series spring). It doubles the structural cost of a passage and
 //! is off unless asked for ([`super::ExplicitOptions::audit`]).

@@ -28,6 +28,7 @@
 
 pub mod audit;
 pub mod contact_step;
+pub mod coupling;
 pub mod estimate;
 mod ledger;
 mod local;

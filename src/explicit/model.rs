@@ -7,12 +7,14 @@ use std::time::Instant;
 
 use faer::Mat;
 
+use super::coupling::Coupling;
 use super::local::LocalCompliance;
 use super::operator::ExplicitOperator;
-use super::passage::{static_contact_force, Coupling};
 use super::rotating::{tread_planes, WheelLocalCompliance};
 use super::stable::{StableStep, DEFAULT_SAFETY};
-use super::start::{add_line_force, solve_one, wheel_rigid_modes, ElasticWheel};
+use super::start::{
+    add_line_force, solve_one, static_contact_force, wheel_rigid_modes, ElasticWheel,
+};
 use super::ExplicitError;
 use crate::dynamics::patch::{plane_weights, PlaneWeights};
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
@@ -192,7 +194,7 @@ impl ExplicitModel {
     /// As [`Self::new`] on given track and wheel structures instead of the model's (the
     /// model gives the rail inclination, the contact and the loads; the wheel's start and the
     /// solution zone are the track structure's layout): the explicit path of the same
-    /// structures another engine runs on, e.g. meshes the model's keys do not reach ([`crate::model::test_problems::all_modes_structures`]).
+    /// structures another engine runs on, e.g. meshes the model's keys do not reach ([`crate::structure::test_problems::all_modes_structures`]).
     pub fn from_structures(
         model: &Model,
         track_structure: TrackStructure,
@@ -388,7 +390,8 @@ impl ExplicitModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::test_problems::{all_modes_model, all_modes_structures};
+    use crate::model::test_problems::all_modes_model;
+    use crate::structure::test_problems::all_modes_structures;
 
     /// The railpad's longitudinal dampers reach the explicit path's damper forces: with the
     /// rail moving at 1 m/s along x and everything else at rest, the forces `C v` of the

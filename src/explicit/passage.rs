@@ -14,7 +14,7 @@
 //!    solver then returns the force `F_{n+1}` that is consistent with the end-of-step
 //!    kinematics.
 //! 3. **Corrector.** Both structures get the response to the change `F_{n+1} − F_n`
-//!    applied as the coupling's [`Hold`] (unit-load response fields: the wheel's once per
+//!    applied as the coupling's hold (`response.rs`; unit-load response fields: the wheel's once per
 //!    passage, the rail's per node plane of the contact line, interpolated like the load).
 //!    Since the FE is linear, the state is then exactly the one under the hold's force
 //!    history. With the default mean hold that is `(F_n + F_{n+1})/2` held over the step:
@@ -22,11 +22,11 @@
 //!    energy balances, and the coupling stays stable however stiff the contact is against
 //!    the mass under it (on a contact mass it is the trapezoidal rule).
 //!
-//! The first-order hold ([`Coupling::RampCorrector`], the force interpolated linearly from
+//! The first-order hold ([`Coupling::RampCorrector`](super::coupling::Coupling::RampCorrector), the force interpolated linearly from
 //! `F_n` to `F_{n+1}`) is Newmark's linear-acceleration method on a contact mass: unstable
 //! once the contact–mass frequency times `Δt_c` exceeds 2√3, within reach of the grams of a
 //! fine mesh under the patch at the default contact step. The plain alternative, holding `F_n`
-//! without the corrector ([`Coupling::HeldForce`]), is explicit in the contact stiffness:
+//! without the corrector ([`Coupling::HeldForce`](super::coupling::Coupling::HeldForce)), is explicit in the contact stiffness:
 //! with `k_contact · G` of order one it is at the edge of stability. Both are kept to show
 //! that in tests. The held force acts where it was computed, at `x_n`, as in the reduced
 //! passage, which the all-modes comparison uses it for (docs/theory.md §8.6).
@@ -53,77 +53,23 @@ use super::estimate::{ExplicitEstimate, MAX_EXPLICIT_SECONDS};
 use super::ledger::State;
 use super::model::ExplicitModel;
 use super::operator::StepScratch;
-use super::response::{Hold, RailResponses, UnitResponse};
+use super::response::{RailResponses, UnitResponse};
 use super::rotating::{RotatingWheel, WheelParts};
+use super::start::static_contact_force;
 use super::ExplicitError;
 use crate::dynamics::patch::PlaneWeights;
-use crate::dynamics::reduced::{add_nodes_load, ContactFrame};
+use crate::dynamics::reduced::add_nodes_load;
 use crate::dynamics::{
     passage::PassageOptions,
-    record::{PassageRecord, RailPointRecord},
+    record::{PassageRecord, RailPointRecord, WidenedGrid},
     setup::{
         check_profile_on_travel, contact_config_for, passage_contact, passage_grid,
-        rail_under_contact_m, rigid_least_norm, run_widening_grid, start_longitudinal_force_n,
-        GridWidening, ProfileOnRail, WidenedGrid,
+        rail_under_contact_m, rigid_least_norm, run_widening_grid, GridWidening, ProfileOnRail,
     },
 };
 use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
-use crate::model::{ExplicitWheel, Model};
+use crate::model::ExplicitWheel;
 use crate::progress::{Cancelled, Progress};
-
-/// How the contact force couples the structures over a contact step.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Coupling {
-    /// Held-force predictor, contact solved with the one-step compliance, exact linear
-    /// corrector to the mean force `(F_n + F_{n+1})/2` held over the step (the default).
-    #[default]
-    PredictorCorrector,
-    /// As [`Coupling::PredictorCorrector`], but the corrector ramps the force linearly from
-    /// `F_n` to `F_{n+1}` (first-order hold; unstable when the contact–mass frequency times
-    /// the contact step exceeds 2√3; for tests).
-    RampCorrector,
-    /// The last contact force `F_n` held over the step where it was computed, at the
-    /// previous contact position `x_n` (as the reduced passage holds it), no corrector
-    /// (unstable when the contact stiffness times the one-step compliance is of order one;
-    /// for tests).
-    HeldForce,
-}
-
-impl Coupling {
-    /// Whether the contact is solved with the one-step compliance and the state corrected.
-    fn corrected(self) -> bool {
-        self != Coupling::HeldForce
-    }
-
-    /// How the corrector applies the force change over the step's sub-steps.
-    pub(super) fn hold(self) -> Hold {
-        match self {
-            Coupling::RampCorrector => Hold::Ramp,
-            _ => Hold::Mean,
-        }
-    }
-
-    /// The predictor's force (N) in a contact step's first sub-step, with `f` the force held
-    /// over the step and `f_prev` the previous step's ([`Hold::first_load`]; `f` when there
-    /// is no corrector).
-    fn first_load(self, f: [f64; 3], f_prev: [f64; 3]) -> [f64; 3] {
-        if self.corrected() {
-            self.hold().first_load(f, f_prev)
-        } else {
-            f
-        }
-    }
-
-    /// [`Self::first_load`] split into the part at the previous contact position and the
-    /// part at this one ([`Hold::boundary_split`]; all at this one without a corrector).
-    pub(super) fn boundary_split(self, f: [f64; 3], f_prev: [f64; 3]) -> [[f64; 3]; 2] {
-        if self.corrected() {
-            self.hold().boundary_split(f, f_prev)
-        } else {
-            [[0.0; 3], f]
-        }
-    }
-}
 
 /// What the explicit path reports besides the passage record.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -148,7 +94,7 @@ pub struct ExplicitInfo {
     pub steps: usize,
     /// Contact steps of the passage (−).
     pub contact_steps: usize,
-    /// Relative energy error of the passage (−; see [`EnergyBalance::relative_error`]); not
+    /// Relative energy error of the passage (−; see `EnergyBalance::relative_error`); not
     /// a number when the ledger is not kept (no energy option, or the rotating wheel).
     pub energy_error: f64,
     /// Wall time of the dynamic phase (s).
@@ -490,14 +436,6 @@ impl ExplicitModel {
             },
         ))
     }
-}
-
-/// The static contact force (N, on the wheel, contact frame x, t, n): `(F_L, 0, W/cos α)`,
-/// `F_L` the start's ([`start_longitudinal_force_n`]: `μ_t W` for the static start, 0 from
-/// rest).
-pub(super) fn static_contact_force(model: &Model, frame: &ContactFrame) -> [f64; 3] {
-    let w = model.vehicle.wheel_load;
-    [start_longitudinal_force_n(model), 0.0, w / frame.n[2]]
 }
 
 impl crate::dynamics::PassageRecorder for ExplicitModel {

@@ -9,6 +9,8 @@ use super::ExplicitError;
 use crate::dynamics::patch::PlaneWeights;
 use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine};
 use crate::dynamics::residual::StiffnessFactor;
+use crate::dynamics::setup::start_longitudinal_force_n;
+use crate::model::Model;
 use crate::structure::{TrackStructure, WheelStructure};
 
 /// Adds the load of a contact-frame force (N, on the rail) spread over the planes of `w`
@@ -253,4 +255,12 @@ impl ElasticWheel {
             self.elastic_part(u);
         }
     }
+}
+
+/// The static contact force (N, on the wheel, contact frame x, t, n): `(F_L, 0, W/cos α)`,
+/// `F_L` the start's ([`start_longitudinal_force_n`]: `μ_t W` for the static start, 0 from
+/// rest).
+pub(super) fn static_contact_force(model: &Model, frame: &ContactFrame) -> [f64; 3] {
+    let w = model.vehicle.wheel_load;
+    [start_longitudinal_force_n(model), 0.0, w / frame.n[2]]
 }

@@ -327,9 +327,9 @@ struct ElemBuf {
 /// to global node/DOF indices. Fails on inconsistent indices, inadmissible materials or
 /// springs, and inverted elements (the error names the element).
 ///
-/// Phases: the checks, the sparsity pattern ([`build_pattern`]), the elements' matrices
-/// scattered in parallel by column range ([`scatter_elements`]), then the springs and
-/// point masses ([`add_springs_and_masses`]).
+/// Phases: the checks, the sparsity pattern (`build_pattern`), the elements' matrices
+/// scattered in parallel by column range (`scatter_elements`), then the springs and
+/// point masses (`add_springs_and_masses`).
 pub fn assemble(
     mesh: &Mesh,
     materials: &[IsotropicElastic],

@@ -46,7 +46,7 @@ use crate::units::Speed;
 pub const INPUTS: [&str; 4] = ["roughness", "approach", "creepage_x", "creepage_t"];
 /// The contact outputs of a [`ContactTransfer`], in row order.
 pub const OUTPUTS: [&str; 4] = ["F_x", "F_t", "F_n", "W_f"];
-/// The parts of the wear response, in the order of [`RatePoint::wear_parts`].
+/// The parts of the wear response, in the order of `RatePoint::wear_parts`.
 pub const WEAR_PARTS: [&str; 4] = ["roughness", "approach", "creepage_x", "creepage_t"];
 
 /// The linearised rolling contact at one wavenumber: `t[o][j]` is the complex amplitude of

@@ -154,8 +154,8 @@ fn check_pos(name: &'static str, v: f64) -> Result<(), MeshError> {
 }
 
 /// Meshes a half sleeper (elements of [`Part::Sleeper`] with material index `material`):
-/// the checked parameters, the grid lines ([`sleeper_grid`]), the hexahedra
-/// ([`sleeper_hexes`]) and the top and bottom faces ([`sleeper_faces`]).
+/// the checked parameters, the grid lines (`sleeper_grid`), the hexahedra
+/// (`sleeper_hexes`) and the top and bottom faces (`sleeper_faces`).
 pub fn half_sleeper(
     p: &SleeperParams,
     material: usize,

@@ -390,10 +390,10 @@ impl WheelParams {
 
 /// Meshes the wheel and half axle (elements of [`Part::Wheel`], material index `material`).
 ///
-/// Phases: the graded axial and radial grid lines ([`meridian_grid`]), the meridian cells
-/// inside the blocks ([`meridian_cells`]), the graded angles ([`wheel_angles`]), the sweep
-/// of the meridian around the axle ([`sweep_meridian`]) and the surfaces
-/// ([`wheel_topology`]).
+/// Phases: the graded axial and radial grid lines (`meridian_grid`), the meridian cells
+/// inside the blocks (`meridian_cells`), the graded angles (`wheel_angles`), the sweep
+/// of the meridian around the axle (`sweep_meridian`) and the surfaces
+/// (`wheel_topology`).
 pub fn wheel(p: &WheelParams, material: usize) -> Result<(Mesh, WheelTopology), MeshError> {
     p.validate()?;
     let blocks = p.blocks();

@@ -1,7 +1,7 @@
 //! The fastening: railpad spring–dampers over a footprint grid and the hold pattern of the
 //! rail foot — the presets RPM1–RPM5 (docs/theory.md §3.2) or a custom pattern.
 
-use super::*;
+use super::{Deserialize, Serialize, SpringDampers};
 
 /// Named fastening models of docs/theory.md §3.2, or a custom hold pattern.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -1,7 +1,10 @@
 //! The range checks of a model: every numeric parameter against its stated range, each
 //! error naming the file, the dotted key and what is allowed.
 
-use super::*;
+use super::{
+    Model, ModelError, RailEnds, RigidRegion, StartKind, WebShape, DEFAULT_RIM_INNER_RADIUS_M,
+    MIN_RIM_THICKNESS_M, MIN_WEB_HEIGHT_M, WEB_RIM_CLEARANCE_M,
+};
 use crate::mesh::wheel::WheelParams;
 
 impl Model {

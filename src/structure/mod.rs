@@ -15,6 +15,7 @@
 
 pub mod ends;
 pub mod layout;
+pub mod test_problems;
 pub mod track;
 pub mod wheel;
 

@@ -9,7 +9,7 @@
 //!   area (trapezoidal weights), each node tied to the sleeper-top point straight below it
 //!   (bilinear interpolation on the top face). A uniform pad pressure is thus represented
 //!   exactly, and the pad stiffness does not depend on the mesh.
-//! - **Rigid holds**: the fastening model's [`HoldPattern`](crate::model::HoldPattern) fixes
+//! - **Rigid holds**: the fastening model's [`HoldPattern`] fixes
 //!   rail-foot underside DOFs to the ground, region by region (columns and rows are strips of
 //!   physical width; their edges are node lines, so the held set is exact). Node-line regions
 //!   fix the foot nodes of one node plane (a column line) or one foot node line within the
@@ -87,9 +87,9 @@ pub struct TrackStructure {
 }
 
 impl TrackStructure {
-    /// Builds the track substructure of a model: the rail section ([`rail_section`]),
-    /// extruded over the graded node planes ([`rail_planes`]), the half sleepers
-    /// ([`add_sleepers`]), the railpad, ballast and elastic-hold springs, and the held DOFs.
+    /// Builds the track substructure of a model: the rail section (`rail_section`),
+    /// extruded over the graded node planes (`rail_planes`), the half sleepers
+    /// (`add_sleepers`), the railpad, ballast and elastic-hold springs, and the held DOFs.
     pub fn build(m: &Model) -> Result<TrackStructure, StructureError> {
         let layout = Layout::new(m);
         let hold = m.fastening.hold_pattern();

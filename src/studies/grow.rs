@@ -30,7 +30,7 @@ use super::initiation::{evaluate, InitiationCriterion};
 use super::StudiesError;
 use crate::dynamics::coupled::{CoupledMode, ModeAttribution};
 use crate::dynamics::prepared::PreparedModel;
-use crate::dynamics::setup::WidenedGrid;
+use crate::dynamics::record::WidenedGrid;
 use crate::dynamics::summary::PassageSummary;
 use crate::dynamics::PassageRecorder;
 use crate::growth::procedure::{trial_growth, GrowthRound, ModeLines, ProcedureError, TrialGrowth};

@@ -23,7 +23,7 @@ use std::path::Path;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::sweep::panic_text;
+use super::panic_text;
 use super::StudiesError;
 use crate::dynamics::{PassageRunner, PassageSummary, WavelengthComponent};
 use crate::progress::{Counter, Progress};

@@ -23,6 +23,7 @@
 pub mod coupled;
 pub mod grow;
 pub mod initiation;
+pub mod passage;
 pub mod predict;
 pub mod receptance;
 pub mod roughness;
@@ -237,3 +238,12 @@ impl StudiesError {
 
 /// Error type of runner factories and hooks given by the caller (the CLI's engine).
 pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
+
+/// The message of a caught panic (a passage run under `catch_unwind` in a sweep or an
+/// initiation table), or "unknown panic" when its payload is not text.
+pub(crate) fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}

@@ -1,6 +1,6 @@
 //! The prediction product (`corrugation predict`): on one prepared model
-//! 1. one passage on the smooth rail (forces, wear, PSDs, plots) → `DIR/passage/`, written by
-//!    the caller's [`PassageFiles`] writer;
+//! 1. one passage on the smooth rail (forces, wear, PSDs, plots) → `DIR/passage/`
+//!    ([`super::passage::write_passage`], the `passage` command's files);
 //! 2. the trial-amplitude growth (consistency, phase, limiting amplitude) → `DIR/grow/`;
 //! 3. a short speed sweep (frequency-selection maps) → `DIR/sweep/`;
 //! 4. a report `DIR/report.md` and `DIR/report.html` with the tables and the plots;
@@ -19,11 +19,10 @@ use super::grow::{
     GrowJson, RateSummary,
 };
 use super::sweep::{sweep, MapOptions, SweepOutcome};
-use super::{BoxError, StudiesError};
+use super::StudiesError;
 use crate::dynamics::coupled::{attribution_text, CoupledMode, CoupledModes, ModeAttribution};
 use crate::dynamics::passage::PassageOptions;
 use crate::dynamics::prepared::PreparedModel;
-use crate::dynamics::record::PassageRecord;
 use crate::dynamics::summary::PassageSummary;
 use crate::dynamics::{DynamicsError, WavelengthComponent};
 use crate::growth::procedure::{ModeLines, ProcedureError, TrialGrowth};
@@ -41,9 +40,6 @@ pub enum PredictError {
     /// The smooth-rail passage or its analysis failed.
     #[error("smooth-rail passage: {0}")]
     Passage(#[from] DynamicsError),
-    /// The caller's writer of the smooth-passage files failed.
-    #[error("smooth-rail passage files: {0}")]
-    PassageFiles(#[source] BoxError),
     /// The trial-amplitude growth failed.
     #[error("trial-amplitude growth: {0}")]
     Growth(#[from] ProcedureError),
@@ -62,11 +58,6 @@ pub enum PredictError {
         source: std::io::Error,
     },
 }
-
-/// Writes the files of the smooth-rail passage into a directory (the `passage` command's
-/// outputs): `(dir, record, summary)`.
-pub type PassageFiles<'a> =
-    &'a dyn Fn(&Path, &PassageRecord, &PassageSummary) -> Result<(), BoxError>;
 
 /// What a prediction runs.
 #[derive(Clone, Debug, PartialEq)]
@@ -157,14 +148,13 @@ pub struct PredictJson {
 }
 
 /// Runs the prediction on `prepared` (the modal model of `m`) into `out` (created): the smooth
-/// passage (its files written by `passage_files` into `out/passage`), the growth into
+/// passage (its files into `out/passage`), the growth into
 /// `out/grow`, the short sweep into `out/sweep`, the report and `out/predict.json` (last).
 pub fn predict(
     m: &Model,
     prepared: &PreparedModel,
     opts: &PredictOptions,
     out: &Path,
-    passage_files: PassageFiles<'_>,
     progress: &dyn Progress,
 ) -> Result<Prediction, PredictError> {
     let t0 = Instant::now();
@@ -174,7 +164,7 @@ pub fn predict(
     })?;
     let dirs = StageDirs::in_dir(out);
     let lines = super::grow::mode_lines(prepared);
-    let smooth = smooth_passage(m, prepared, &dirs.passage, passage_files, progress)?;
+    let smooth = smooth_passage(m, prepared, &dirs.passage, progress)?;
     progress.stage("coupled wheel–track modes", 1);
     let coupled = prepared.coupled_modes(m.run.speed(), &[]);
     progress.finish();
@@ -277,7 +267,6 @@ fn smooth_passage(
     m: &Model,
     prepared: &PreparedModel,
     dir: &Path,
-    passage_files: PassageFiles<'_>,
     progress: &dyn Progress,
 ) -> Result<PassageSummary, PredictError> {
     progress.stage("smooth-rail passage (time steps)", 0);
@@ -290,7 +279,7 @@ fn smooth_passage(
     progress.finish();
     let rec = rec?;
     let smooth = crate::dynamics::analysis::summarise(&rec)?;
-    passage_files(dir, &rec, &smooth).map_err(PredictError::PassageFiles)?;
+    super::passage::write_passage(dir, &rec, &smooth, m.mesh.fine_element_length)?;
     Ok(smooth)
 }
 

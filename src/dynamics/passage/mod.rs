@@ -51,13 +51,13 @@ use std::time::Instant;
 use faer::Mat;
 
 use super::integrator::ModalVerlet;
-use super::record::{Histories, PassageRecord};
+use super::record::{Histories, PassageRecord, WidenedGrid};
 use super::reduced::{dot, ContactFrame, ModalSystem, RailContactLine, WheelContact};
 use super::residual::ResidualFlexibility;
 use super::setup::{
     check_profile_on_travel, check_speed, contact_config_for, passage_contact, passage_grid,
     rail_under_contact_m, rigid_least_norm, run_widening_grid, start_longitudinal_force_n,
-    steady_contact, torque_onset_m, GridWidening, ProfileOnRail, WheelLoads, WidenedGrid,
+    steady_contact, torque_onset_m, GridWidening, ProfileOnRail, WheelLoads,
 };
 use super::wheel_residual::WheelResidual;
 use ledger::{Ledger, LedgerStep};
@@ -77,14 +77,6 @@ use step::{check_finite, RoadAhead};
 
 /// Frequencies below this are rigid-body modes (Hz).
 pub const RIGID_HZ: f64 = 0.5;
-
-/// Relative tolerance of the tangential contact solver in a passage (−): the traction error
-/// is about this × µ p_max; default 1e-5 (the contact module's own default is 1e-6). Against
-/// a solve at 1e-6 on the default model (140 km/h, 2 and 5 kHz) the force histories differ by
-/// at most 6e-5 of the mean F_L, the band RMS of F_L and of the wear by 6e-4 (relative) and
-/// the dominant wavelength by less than 1e-5, for about three quarters of the tangential
-/// products per step (docs/performance.md §4).
-pub const PASSAGE_TANGENTIAL_TOL: f64 = 1e-5;
 
 /// What a passage records besides the wear.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -569,7 +561,7 @@ impl PassageEngine {
     }
 
     /// The contact configuration of a passage at `speed_m_per_s`: the model's grid around the
-    /// static Hertz patch, and the tangential tolerance [`PASSAGE_TANGENTIAL_TOL`].
+    /// static Hertz patch, and the tangential tolerance [`PASSAGE_TANGENTIAL_TOL`](super::setup::PASSAGE_TANGENTIAL_TOL).
     pub fn contact_config(&self, speed_m_per_s: f64) -> Result<TransientConfig, DynamicsError> {
         contact_config_for(&self.model, speed_m_per_s)
     }

@@ -6,7 +6,11 @@
 
 use super::super::record::RailPointRecord;
 use super::spin::SpinPair;
-use super::*;
+use super::{
+    check_finite, step, CreepageKind, DampingOverlap, DynamicsError, GridWidening, Histories,
+    Instant, Ledger, LedgerStep, ModalVerlet, PassageEngine, PassageOptions, PassageRecord,
+    RailProfile, RoadAhead, StartKind, TransientRolling, WearAccumulator,
+};
 
 impl PassageEngine {
     /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth) on

@@ -186,7 +186,7 @@ impl CacheSurvey {
 /// Most names of other items an error or a note quotes.
 pub const OTHERS_QUOTED: usize = 5;
 
-/// The first [`OTHERS_QUOTED`] of `names`, back-quoted and comma-separated, and how many more.
+/// The first `OTHERS_QUOTED` of `names`, back-quoted and comma-separated, and how many more.
 pub fn quote_names(names: &[String]) -> String {
     let mut s = names
         .iter()

@@ -1,7 +1,11 @@
 //! Spectrum slicing over one band, and the cut of the whole band into concurrent bands by
 //! a work model fitted to a Sturm count probe.
 
-use super::*;
+use super::slice::{lanczos_slice, SliceOut, SliceParams};
+use super::{
+    factorize, lambda_to_hz, Counter, Ctx, EigenError, EigenOptions, Instant, MatMut, MatRef,
+    ShiftFactor, SliceReport,
+};
 
 /// What one band `[lower bound of first, top)` found besides its eigenvectors (written into
 /// the band's columns of the solution).

@@ -1,7 +1,10 @@
 //! The Rayleigh–Ritz repair across band bounds, the verification of the residuals and the
 //! M-orthonormality, and the checks of the inputs.
 
-use super::*;
+use super::ctx::{dense_eig, mm, mul_m, LAMBDA_FLOOR};
+use super::{
+    sym_spmm, EigenError, EigenOptions, Mat, MatMut, Par, Problem, SparseColMat, SparseColMatRef,
+};
 
 /// Relative half-width in λ of the window of modes around a band bound that gets a joint
 /// Rayleigh–Ritz step.

@@ -1,7 +1,11 @@
 //! The work context of a solve (matrices, factor solves, block Gram–Schmidt, timing), its
 //! random start blocks, the dense helpers and the shift factorisation with zero-pivot moves.
 
-use super::*;
+use super::{
+    matmul, sym_spmm, tall_mul_add, tall_t_mul, tall_update_then_t_mul, Accum, AtomicOrdering,
+    AtomicUsize, EigenError, EigenTiming, Instant, Mat, MatMut, MatRef, Par, ShiftFactor,
+    ShiftedSystem, Side, SolveWorkspace, SparseColMatRef,
+};
 
 /// λ_floor = (2π · [`crate::eigen::RESIDUAL_FLOOR_HZ`])² in the relative-residual
 /// denominator (rad²/s²).

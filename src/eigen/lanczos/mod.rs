@@ -35,10 +35,11 @@ mod slice;
 #[cfg(test)]
 mod tests;
 
-use band::*;
-use check::*;
-use ctx::*;
-use slice::*;
+use band::{choose_splits, lambda_at, run_band, split_probe_x, BandOut, BandParams, GROUNDED_TEST};
+use check::{
+    drop_stored_zeros, rayleigh_ritz_window, validate, verify, BOUND_WINDOW, BOUND_WINDOW_MAX,
+};
+use ctx::{diagonal_of, factorize, Ctx, Rng};
 
 /// Smallest model (free DOFs) that is split into concurrent bands by default: below it the
 /// solves are cheap and not memory-bound, and one band is as fast.
@@ -99,11 +100,11 @@ type BandJob = (ShiftFactor, bool, (f64, usize));
 /// `progress`: optional sink for the caller's current stage; its total is set to the Sturm
 /// count and its count to the modes found so far.
 ///
-/// Phases: the factorisations at the ends of the band ([`factorize_ends`]), the Sturm counts
-/// and the cut into concurrent bands ([`plan_bands`]), the spectrum slicing of every band
-/// ([`run_bands`]), the Rayleigh–Ritz repair across the band bounds
-/// ([`repair_band_bounds`]) and the verification of the residuals and the M-orthonormality
-/// ([`verify`]).
+/// Phases: the factorisations at the ends of the band (`factorize_ends`), the Sturm counts
+/// and the cut into concurrent bands (`plan_bands`), the spectrum slicing of every band
+/// (`run_bands`), the Rayleigh–Ritz repair across the band bounds
+/// (`repair_band_bounds`) and the verification of the residuals and the M-orthonormality
+/// (`verify`).
 pub fn solve(
     k: SparseColMatRef<'_, usize, f64>,
     m: SparseColMatRef<'_, usize, f64>,

@@ -1,7 +1,11 @@
 //! One Lanczos slice: block Lanczos with thick restart at one shift, deflating the modes
 //! of the slices below, until its converged prefix holds the wanted pairs.
 
-use super::*;
+use super::ctx::{dense_eig, mm, mul_m, OrthoAgainst, EARLY_CHECK_BLOCKS};
+use super::{
+    lambda_to_hz, matmul, sym_spmm, tall_right_mul_in_place, Accum, Ctx, EigenError, EigenOptions,
+    Instant, Mat, MatMut, MatRef, Par, ShiftFactor, SolveWorkspace,
+};
 
 /// Result of one slice.
 pub(super) struct SliceOut {

@@ -1,6 +1,6 @@
 //! Unit tests of the Lanczos internals (the solver as a whole is tested in `eigen::tests`).
 
-use super::*;
+use super::band::{CAP_RATIO, TWO_SIDED_CAP_RATIO};
 
 /// Closed form: a two-sided slice `[lo, lo + w)` with `w = TWO_SIDED_CAP_RATIO · (lo − b)`
 /// has its shift at `m = lo + w/2`, and its half-width is exactly `CAP_RATIO` times the

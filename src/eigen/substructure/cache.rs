@@ -1,7 +1,10 @@
 //! The modal-cache entries of the component bases: their key (the track's structural key
 //! without the spring stiffnesses) and their storage.
 
-use super::*;
+use super::{
+    BasisError, CacheKey, CacheLookup, CacheMeta, ComponentBasis, ModalCache, Model,
+    SubstructureOptions,
+};
 
 /// Revision of the component construction (bump when the bases of an unchanged model change).
 pub const COMPONENT_REVISION: u64 = 2;
@@ -105,6 +108,7 @@ pub(super) fn load_component(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use faer::Mat;
 
     /// A component basis read back from the cache is the stored one bit for bit, its `ω̃²`
     /// included (they travel as JSON text): a study's first run, which uses the bases it

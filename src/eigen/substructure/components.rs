@@ -3,7 +3,12 @@
 //! attachment vectors of its spring attachment points, M-orthonormalised and Ritz-reduced
 //! (docs/theory.md §5.8).
 
-use super::*;
+use super::{
+    assemble, matmul, solve, sym_spmm, Accum, AssemblyOptions, BTreeMap, BasisError,
+    ComponentBasis, EigenError, EigenOptions, FeMatrices, FillOrdering, Mat, MatRef, Par,
+    ShiftedSystem, Side, SparseColMat, SparseColMatRef, SpringKind, SubstructureError,
+    TrackStructure, Triplet,
+};
 
 /// Free-DOF split of the track: the rail's free DOFs `0..rail_dofs`, then the sleepers, each
 /// `sleeper_dofs` long from its offset.

@@ -444,7 +444,10 @@ mod shapes;
 
 pub use cache::{component_key, COMPONENT_REVISION};
 use cache::{load_component, store_component};
-use components::*;
+use components::{
+    attachment_groups, identical_sleepers, patterns, rail_basis, sleeper_basis, solid_matrices,
+    sparse_block, split,
+};
 use reduced::expand_sleepers;
 pub use reduced::{expand, reduced_modes, reduced_stiffness};
 pub use shapes::{expand_rows, passage_track_basis_timed, ReducedShapes};

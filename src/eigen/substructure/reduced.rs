@@ -2,7 +2,11 @@
 //! on the component bases, the small reduced eigenproblem, and the expansion of its modes
 //! to the full track DOFs (docs/theory.md §5.8).
 
-use super::*;
+use super::components::{dense_symmetric_eigen, hz_to_omega2, locate, Split};
+use super::{
+    matmul, Accum, BTreeMap, EigenError, Mat, MatRef, Par, Side, SubstructureError,
+    TrackComponents, TrackStructure,
+};
 
 /// The component split of `comp` (rail rows first, then the sleepers').
 fn comp_split(comp: &TrackComponents) -> Split {
@@ -172,8 +176,8 @@ const INVERSE_ITERATION_SHIFT: f64 = 39.478_417_604_357_43;
 /// sleeper-on-ballast modes at 74–79 Hz came out with `‖K_red q − λ q‖ ≈ ‖K_red q‖` and a
 /// returned eigenvalue 1.6 % above the Rayleigh quotient of its own vector, below the full
 /// model's eigenvalues where a Ritz value cannot be. So the solver's lowest vectors (those
-/// below the bound and [`REFINE_MARGIN`] more) only start a subspace iteration:
-/// [`INVERSE_ITERATIONS`] steps of `U ← orth((K_red + αI)⁻¹ U)` (Cholesky, once) remove the
+/// below the bound and `REFINE_MARGIN` more) only start a subspace iteration:
+/// `INVERSE_ITERATIONS` steps of `U ← orth((K_red + αI)⁻¹ U)` (Cholesky, once) remove the
 /// stiff directions' contamination, and a Rayleigh–Ritz step on the result (`Uᵀ K_red U`,
 /// well scaled, solved again) gives the eigenpairs returned, each eigenvalue the Rayleigh
 /// quotient of its vector (Parlett, *The Symmetric Eigenvalue Problem*, §11.2, §14.4; test

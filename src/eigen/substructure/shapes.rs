@@ -13,7 +13,11 @@
 
 use rayon::prelude::*;
 
-use super::*;
+use super::{
+    expand_sleepers, matmul, solid_energies, timed_basis, Accum, BasisError, BasisPhases, Mat,
+    MatRef, ModalBasis, Par, SpringKind, SubstructureError, TrackClassifier, TrackComponents,
+    TrackModeClass, TrackStructure,
+};
 use crate::eigen::classify::{SectionMotion, ShapeNorms, TrackEnergyShares, SECTION_SUMS};
 
 /// Rows of the rail's basis per block of the Gram products in [`ReducedShapes::new`].
@@ -317,10 +321,10 @@ fn energy_shares(
 }
 
 /// The track's classified modes below `fmax_hz` for a passage: the reduced eigenproblem as in
-/// [`substructured_track_basis_timed`], the modes expanded only at the rows the passage reads
+/// `substructured_track_basis_timed`, the modes expanded only at the rows the passage reads
 /// ([`expand_rows`]; the other rows `NaN`) and classified from the component coordinates
 /// ([`ReducedShapes::classify`]). For a basis whose every row is read (output, cache) use
-/// [`substructured_track_basis`].
+/// `substructured_track_basis`.
 pub fn passage_track_basis_timed(
     track: &TrackStructure,
     comp: &TrackComponents,

@@ -1,6 +1,7 @@
 //! The substructured basis against the full track's Lanczos solution (independent solver on
 //! the assembled K, M) on a short track.
 
+use super::components::hz_to_omega2;
 use super::*;
 
 /// A 4-bay track with a coarse mesh (the tests' small model).

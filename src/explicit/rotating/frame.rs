@@ -3,7 +3,7 @@
 //! velocity per node), the rigid turn about the axle, and the turn of vectors between the
 //! ground and the spinning frame.
 
-use super::*;
+use super::{DofMap, ExplicitError, ExplicitOperator, SpinError, StepScratch};
 
 /// A substructure spinning at `Ω` (rad/s) about the y axis through the origin: the
 /// spinning nodes' x and z DOFs and their lumped masses, and the gyroscopic central

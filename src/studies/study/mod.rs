@@ -54,13 +54,14 @@
 //!   first parameter is not numeric.
 
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 #[cfg(test)]
 use super::StudiesError;
 #[cfg(test)]
 use std::path::{Path, PathBuf};
 
-use super::initiation::InitiationCriterion;
+use super::initiation::{InitiationCriterion, InitiationRow};
 
 /// The initiation criterion of a study (`[criterion]`): what the file sets, the rest from each
 /// case's model.
@@ -92,6 +93,21 @@ impl StudyCriterion {
 use crate::eigen::substructure::SubstructureOptions;
 use crate::model::ModelSource;
 
+/// The stored result of one case (`cases/<NNNN>.json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CaseResult {
+    /// The case's overrides (the study's `set`, then the case's own), to detect a changed
+    /// study on resume.
+    pub overrides: Vec<String>,
+    /// blake3 hash of the case's resolved model (serde_json) and the program version: a
+    /// changed base model is never taken for a finished case.
+    pub model_hash: String,
+    /// The indicators, one row per speed.
+    pub rows: Vec<InitiationRow>,
+    /// The growth hook's results (empty without growth).
+    pub growth: BTreeMap<String, f64>,
+}
+
 pub mod bases;
 mod parse;
 mod report;
@@ -101,7 +117,7 @@ pub mod static_update;
 
 pub use bases::{basis_plan, BasisPlan, CasePhases, CaseRunners, StudyBasis};
 pub use parse::expand_range;
-pub use run::{model_hash, run_study, CaseResult, GrowthHook, RunnerFactory, StudyOutcome};
+pub use run::{model_hash, run_study, GrowthHook, RunnerFactory, StudyOutcome};
 
 /// Most cases of one study.
 pub const MAX_CASES: usize = 10_000;

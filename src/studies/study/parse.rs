@@ -325,9 +325,9 @@ impl Study {
     /// Parses study TOML text; `file` names it in messages, `dir` resolves a relative model
     /// path, `default_title` is used without a `title` key.
     ///
-    /// Phases: the TOML and its schema ([`read_study_file`]), the parameters
-    /// ([`parameters`]) and the number of cases they make ([`check_case_count`]), the speeds
-    /// ([`check_speeds`]), the criterion and the peaks ([`check_criterion`]), the
+    /// Phases: the TOML and its schema (`read_study_file`), the parameters
+    /// (`parameters`) and the number of cases they make (`check_case_count`), the speeds
+    /// (`check_speeds`), the criterion and the peaks (`check_criterion`), the
     /// substructure options, the concurrency.
     pub fn parse_str(
         text: &str,

@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use super::run::CaseResult;
+use super::CaseResult;
 use super::{value_text, Case, Study};
 use crate::report::doc::Document;
 use crate::report::plot::{line_plot, Series};

@@ -3,17 +3,15 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
-
 use super::parse::key_error;
 use super::report::write_study;
-use super::{Case, Study};
+use super::{Case, CaseResult, Study};
 use crate::dynamics::PassageRunner;
 use crate::model::Model;
 use crate::progress::{Counter, Progress};
-use crate::studies::initiation::{evaluate, InitiationRow};
+use crate::studies::initiation::evaluate;
+use crate::studies::panic_text;
 use crate::studies::speeds::Shard;
-use crate::studies::sweep::panic_text;
 use crate::studies::{BoxError, StudiesError};
 
 /// Builds the passage runner of a model (the CLI passes its engine).
@@ -24,21 +22,6 @@ pub type RunnerFactory<'a> =
 /// as columns to the study table.
 pub type GrowthHook<'a> =
     &'a (dyn Fn(&Model, &dyn PassageRunner) -> Result<BTreeMap<String, f64>, BoxError> + Sync);
-
-/// The stored result of one case (`cases/<NNNN>.json`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CaseResult {
-    /// The case's overrides (the study's `set`, then the case's own), to detect a changed
-    /// study on resume.
-    pub overrides: Vec<String>,
-    /// blake3 hash of the case's resolved model (serde_json) and the program version: a
-    /// changed base model is never taken for a finished case.
-    pub model_hash: String,
-    /// The indicators, one row per speed.
-    pub rows: Vec<InitiationRow>,
-    /// The growth hook's results (empty without growth).
-    pub growth: BTreeMap<String, f64>,
-}
 
 /// The result of [`run_study`].
 #[derive(Clone, Debug, PartialEq)]

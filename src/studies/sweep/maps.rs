@@ -6,14 +6,8 @@ use crate::units::mm_to_m;
 
 use super::report::write_outputs;
 use super::run::same_speed;
-use super::{read_summary, speed_file, MapOptions, StudiesError, SweepMaps, SweepRecord};
+use super::{linspace, read_summary, speed_file, MapOptions, StudiesError, SweepMaps, SweepRecord};
 use crate::dynamics::{PassageSummary, WavelengthSpectrum};
-
-pub(super) fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
-    (0..n)
-        .map(|i| a + (b - a) * i as f64 / (n - 1) as f64)
-        .collect()
-}
 
 /// PSD per wavenumber of `s` at wavenumber `k` (1/m): linear interpolation in `k` between
 /// the spectrum's samples; 0 outside them.

@@ -2,7 +2,7 @@
 //! maps (docs/theory.md §2.3 and §11.2).
 //!
 //! # Files of a sweep directory `DIR`
-//! - `speeds/<stem>.json` — the [`PassageSummary`] of each speed ([`speed_file_stem`]), written
+//! - `speeds/<stem>.json` — the `PassageSummary` of each speed (`speed_file_stem`), written
 //!   atomically the moment the passage finishes. A rerun reuses every speed whose file parses
 //!   as a complete summary of that speed and recomputes only the others, so a killed sweep
 //!   resumes where it stopped. Temp files (`*.tmp.<pid>`) of a killed run never parse as a
@@ -51,8 +51,8 @@
 
 //!
 //! # Code
-//! [`run`] runs and resumes the passages, [`maps`] assembles the maps from the speed files,
-//! [`report`] writes the outputs, [`merge`] joins shard directories.
+//! `run` runs and resumes the passages, `maps` assembles the maps from the speed files,
+//! `report` writes the outputs, [`merge`] joins shard directories.
 
 mod maps;
 mod merge;
@@ -62,7 +62,6 @@ mod run;
 pub use maps::{assemble, psd_at_wavenumber};
 pub use merge::{merge, read_record, write_shard_plan, ShardPlan, SHARD_PLAN_FILE};
 pub use report::summary_lines;
-pub(crate) use run::panic_text;
 pub use run::{
     check_run_key, read_summary, run_passages, speed_file, sweep, sweep_beside, write_summary,
     RUN_KEY_FILE,
@@ -185,7 +184,7 @@ impl MapOptions {
 
     /// The wavelength grid (mm), ascending.
     pub fn wavelength_grid_mm(&self) -> Vec<f64> {
-        maps::linspace(
+        linspace(
             self.wavelength_min_mm,
             self.wavelength_max_mm,
             self.wavelength_points,
@@ -278,6 +277,13 @@ pub struct SweepOutcome {
     pub maps: SweepMaps,
     /// Computed and reused speeds.
     pub stats: PassageStats,
+}
+
+/// `n ≥ 2` points evenly spaced from `a` to `b`, both included.
+fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| a + (b - a) * i as f64 / (n - 1) as f64)
+        .collect()
 }
 
 #[cfg(test)]

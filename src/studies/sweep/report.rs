@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use super::maps::linspace;
+use super::linspace;
 use super::{StudiesError, SweepMaps, SweepRecord};
 use crate::dynamics::coupled::{seen_by_contact, ModeAttribution};
 use crate::report::doc::Document;

@@ -7,9 +7,10 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use super::super::speeds::speed_file_stem;
 use super::{assemble, MapOptions, PassageStats, StudiesError, SweepOutcome};
 use crate::dynamics::{PassageRunner, PassageSummary};
+use crate::studies::panic_text;
+use crate::studies::speeds::speed_file_stem;
 use crate::studies::BoxError;
 
 /// Path of a speed's summary file in a sweep directory.
@@ -108,13 +109,6 @@ pub fn run_passages(
     } else {
         Err(StudiesError::Passages { failures })
     }
-}
-
-pub(crate) fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
-    p.downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| p.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "unknown panic".into())
 }
 
 /// File (in `DIR/speeds`) naming what produced the speed files: see [`check_run_key`].
