@@ -12,7 +12,7 @@ use corrugation::dynamics::passage::PassageOptions;
 use corrugation::dynamics::reduced::line_load_vector;
 use corrugation::dynamics::reduced::{ContactFrame, RailContactLine};
 use corrugation::dynamics::residual::StiffnessFactor;
-use corrugation::explicit::passage::Coupling;
+use corrugation::explicit::coupling::Coupling;
 use corrugation::explicit::stable::critical_step;
 use corrugation::explicit::{ExplicitModel, ExplicitOperator, ExplicitOptions, StableStep};
 use corrugation::fe::assembly::{assemble, AssemblyOptions, DofMap, FeMatrices, MassKind};
@@ -320,34 +320,29 @@ fn moving_load_matches_the_direct_implicit_solution() {
 
 /// The small track with a solution zone of one sleeper pitch (the mean forces average the
 /// sleeper-passing variation), the default contact grid.
-fn passage_model() -> Model {
+/// The small track with a solution zone of `length_m` (m) from 0.2 m.
+fn passage_model(length_m: f64) -> Model {
     small_track(&[
         "run.solution_zone_offset=0.2",
-        "run.solution_zone_length=0.6",
+        &format!("run.solution_zone_length={length_m}"),
     ])
 }
 
-/// The coupling: with the predictor–corrector the explicit passage runs through and holds
-/// the static load (mean F_L = μ_t W within 1 %, mean F_N = W/cos α within 2 %); holding the last
-/// contact force over a contact step without the corrector, with the same step sizes, is
-/// unstable (it diverges or its normal force oscillates by more than the load itself; shown
-/// on a 0.1 m zone, since the instability grows from the start).
-/// The energy of the coupled passage balances: work of the wheel loads, the spin and the
-/// convective rolling work = change of stored energy + damper and frictional dissipation +
-/// change of the contact's elastic energy (with the series spring that removes the mesh's
-/// local compliance variation, docs/theory.md §8.6), within 1 %.
-#[test]
-fn coupled_passage_is_stable_where_the_held_force_is_not_and_balances_energy() {
-    let m = passage_model();
-    let opts = PassageOptions::default();
+/// The mean forces of a coupled explicit passage over a zone of `length_m` (m) against the
+/// static load (relative errors of F_N against W/cos α and of F_L against μ_t W), and the
+/// energy ledger's relative error.
+fn coupled_passage_errors(length_m: f64) -> (f64, f64, f64) {
+    let m = passage_model(length_m);
     let em = ExplicitModel::new(&m, ExplicitOptions::default()).unwrap();
-    let rec = em.passage(m.run.speed(), None, &opts, None).unwrap();
+    let rec = em
+        .passage(m.run.speed(), None, &PassageOptions::default(), None)
+        .unwrap();
     let s = corrugation::dynamics::analysis::summarise(&rec.record).unwrap();
     let w = m.vehicle.wheel_load;
     let cos_a = m.rail.inclination.atan().cos();
     let e = &rec.record.energy;
     eprintln!(
-        "explicit small passage: {} contact steps × {} track sub-steps, {:.1} s; mean F_N {:.0} N, F_L {:.0} N, band RMS F_N {:.1} N; energy error {:.3} % ({e:?})",
+        "explicit small passage over {length_m} m: {} contact steps × {} track sub-steps, {:.1} s; mean F_N {:.0} N, F_L {:.0} N, band RMS F_N {:.1} N; energy error {:.3} % ({e:?})",
         rec.info.contact_steps,
         rec.info.track_substeps,
         rec.info.seconds,
@@ -356,13 +351,45 @@ fn coupled_passage_is_stable_where_the_held_force_is_not_and_balances_energy() {
         s.fn_band_rms_n,
         100.0 * e.relative_error()
     );
-    assert!((s.mean_fn_n - w / cos_a).abs() / w < 0.02);
-    assert!((s.mean_fl_n - 0.15 * w).abs() / (0.15 * w) < 0.01);
-    assert!(
-        e.relative_error().abs() < 0.01,
-        "energy error {}",
-        e.relative_error()
-    );
+    (
+        (s.mean_fn_n - w / cos_a) / w,
+        (s.mean_fl_n - 0.15 * w) / (0.15 * w),
+        e.relative_error(),
+    )
+}
+
+/// The coupled passage over 0.6 m holds the static load: mean F_L = μ_t W within 1 %, mean F_N
+/// = W/cos α within 2 %, and balances its energy within 1 % (the CI version below runs 0.3 m).
+#[test]
+#[ignore = "heavy (about 3 minutes on 2 cores); bash validation/run.sh explicit. The CI test runs the same passage over 0.3 m"]
+fn coupled_passage_holds_the_static_load_over_0_6_m() {
+    let (fn_err, fl_err, energy) = coupled_passage_errors(0.6);
+    assert!(fn_err.abs() < 0.02, "mean F_N {fn_err}");
+    assert!(fl_err.abs() < 0.01, "mean F_L {fl_err}");
+    assert!(energy.abs() < 0.01, "energy error {energy}");
+}
+
+/// The coupling: with the predictor–corrector the explicit passage runs through and holds
+/// the static load; holding the last contact force over a contact step without the
+/// corrector, with the same step sizes, is unstable (it diverges or its normal force
+/// oscillates by more than the load itself; shown on a 0.1 m zone, since the instability
+/// grows from the start).
+/// The energy of the coupled passage balances: work of the wheel loads, the spin and the
+/// convective rolling work = change of stored energy + damper and frictional dissipation +
+/// change of the contact's elastic energy (with the series spring that removes the mesh's
+/// local compliance variation, docs/theory.md §8.6), within 1 %.
+/// On the 0.3 m zone of this test (7.7 ms at 140 km/h) the means hold within 2 % (F_N) and
+/// 3 % (F_L; measured −1.9 %): the zone is shorter than the slow oscillation the start
+/// leaves in F_L, which the 0.6 m passage of
+/// [`coupled_passage_holds_the_static_load_over_0_6_m`] averages to within 1 %.
+#[test]
+fn coupled_passage_is_stable_where_the_held_force_is_not_and_balances_energy() {
+    let (fn_err, fl_err, energy) = coupled_passage_errors(0.3);
+    assert!(fn_err.abs() < 0.02, "mean F_N {fn_err}");
+    assert!(fl_err.abs() < 0.03, "mean F_L {fl_err}");
+    assert!(energy.abs() < 0.01, "energy error {energy}");
+    let opts = PassageOptions::default();
+    let w = small_track(&[]).vehicle.wheel_load;
 
     let m = small_track(&[
         "run.solution_zone_offset=0.2",
@@ -470,7 +497,7 @@ fn energy_ledger_matches_the_nodal_work_of_the_replayed_passage() {
 /// of the check).
 #[test]
 fn a_fixed_time_step_is_refused_above_safety_times_the_critical_step() {
-    let m = passage_model();
+    let m = passage_model(0.6);
     let em = ExplicitModel::new(&m, ExplicitOptions::default()).unwrap();
     let [track, wheel] = em.stable_steps();
     let safety = 0.8;

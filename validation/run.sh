@@ -27,7 +27,7 @@ if [[ "$group" == all || "$group" == moving ]]; then
     cargo test --release --test moving_load -- --ignored --nocapture convergence_table
 fi
 if [[ "$group" == all || "$group" == explicit ]]; then
-  echo "== explicit: the energy ledger against the replayed nodal work (fine mesh), the rotating"
+  echo "== explicit: the energy ledger against the replayed nodal work (fine mesh), the coupled passage over 0.6 m, the rotating"
   echo "   wheel without spin against the fixed wheel (the heavy tests kept out of CI)"
   cargo test --profile test-opt --test explicit --test explicit_rotating -- --ignored --nocapture
 fi
