@@ -727,7 +727,7 @@ fn check_amplitudes(amplitudes_um: &[f64]) -> PyResult<()> {
 /// text) and `verdict_lines`; `initiates` (False when the smooth rail left no wear component
 /// to grow, then the table is empty); `grow` (the `grow --json` object, `grow.json`).
 #[pyfunction]
-#[pyo3(signature = (model, amplitudes_um=vec![10.0, 40.0, 80.0, 160.0], cache=None, progress=None))]
+#[pyo3(signature = (model, amplitudes_um=corrugation::studies::grow::DEFAULT_AMPLITUDES_UM.to_vec(), cache=None, progress=None))]
 fn grow<'py>(
     py: Python<'py>,
     model: &PyModel,

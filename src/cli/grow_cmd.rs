@@ -55,7 +55,7 @@ pub struct GrowCmd {
         allow_hyphen_values = true,
         long,
         value_delimiter = ',',
-        default_value = "10,40,80,160",
+        default_values_t = corrugation::studies::grow::DEFAULT_AMPLITUDES_UM,
         value_name = "UM,..."
     )]
     amplitudes_um: Vec<f64>,

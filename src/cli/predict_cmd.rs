@@ -27,7 +27,7 @@ pub struct PredictCmd {
         allow_hyphen_values = true,
         long,
         value_delimiter = ',',
-        default_value = "10,40,80,160",
+        default_values_t = corrugation::studies::grow::DEFAULT_AMPLITUDES_UM,
         value_name = "UM,..."
     )]
     amplitudes_um: Vec<f64>,
@@ -35,7 +35,7 @@ pub struct PredictCmd {
     #[arg(
         allow_hyphen_values = true,
         long,
-        default_value = "60:220:40",
+        default_value = corrugation::studies::predict::DEFAULT_PREDICT_SPEEDS,
         value_name = "SPEEDS"
     )]
     speeds: String,

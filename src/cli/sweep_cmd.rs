@@ -22,7 +22,7 @@ pub struct SweepCmd {
     #[arg(
         allow_hyphen_values = true,
         long,
-        default_value = "54.8:219:2",
+        default_value = corrugation::studies::speeds::DEFAULT_SWEEP_SPEEDS,
         value_name = "SPEEDS"
     )]
     speeds: String,

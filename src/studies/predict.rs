@@ -59,6 +59,10 @@ pub enum PredictError {
     },
 }
 
+/// The speeds of the prediction's short sweep when none are given (km/h): 60 to 220 km/h in
+/// steps of 40 km/h (five speeds, the range of a full sweep at a tenth of its cost).
+pub const DEFAULT_PREDICT_SPEEDS: &str = "60:220:40";
+
 /// What a prediction runs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PredictOptions {

@@ -19,6 +19,9 @@
 //! A speed's result file is named by [`speed_file_stem`]: the speed in km/h with six decimals,
 //! zero-padded to four integer digits (`0054.800000`), so names sort like speeds.
 
+/// The speeds of a `sweep` when none are given (km/h): 54.8 to 219 km/h in steps of 2 km/h
+/// (83 speeds), the range of the reference study's sweeps.
+pub const DEFAULT_SWEEP_SPEEDS: &str = "54.8:219:2";
 use super::StudiesError;
 
 /// Lowest accepted speed (km/h): that of `run.speed_kmh` ([`crate::model::SPEED_KMH`]).
