@@ -1,6 +1,7 @@
 //! Checks of list-valued inputs (a flag's comma-separated or repeated values, a file key's
 //! array): a value given twice is refused, naming the list and the value, since it would
-//! silently run or write the same case twice (or once, overwriting itself).
+//! silently run or write the same case twice (or once, overwriting itself); positions along
+//! the rail must ascend strictly.
 
 use std::fmt::Display;
 
@@ -42,6 +43,20 @@ pub fn check_no_repeats_by_key<T: Display, K: Ord>(
     }
 }
 
+/// The first place where `x_m` (positions along the rail, m) fails to ascend strictly, as a
+/// message naming the two positions and their 1-based rows; `None` when it ascends. Shared by
+/// the rail profiles a passage runs over and the measured roughness profiles.
+pub fn strictly_ascending_error(x_m: &[f64]) -> Option<String> {
+    let i = x_m.windows(2).position(|w| w[1] <= w[0])?;
+    Some(format!(
+        "positions must ascend strictly: x = {} m then {} m (rows {} and {})",
+        x_m[i],
+        x_m[i + 1],
+        i + 1,
+        i + 2
+    ))
+}
+
 fn repeated<T: Display>(list: &str, unit: &str, v: &T) -> RepeatedValue {
     let value = if unit.is_empty() {
         v.to_string()
@@ -73,5 +88,16 @@ mod tests {
         assert_eq!(e.unwrap_err().value, "60.000000001 km/h");
         let empty: [f64; 0] = [];
         assert_eq!(check_no_repeats("--at", "m", &empty), Ok(()));
+    }
+
+    /// The first descent or repeat is named by its positions and rows; an ascending list and
+    /// the empty and one-element lists pass.
+    #[test]
+    fn the_first_position_that_does_not_ascend_is_named() {
+        assert_eq!(strictly_ascending_error(&[]), None);
+        assert_eq!(strictly_ascending_error(&[1.0]), None);
+        assert_eq!(strictly_ascending_error(&[0.0, 0.5, 2.0]), None);
+        let e = strictly_ascending_error(&[0.0, 0.5, 0.5, 0.2]).unwrap();
+        assert!(e.contains("x = 0.5 m then 0.5 m (rows 2 and 3)"), "{e}");
     }
 }

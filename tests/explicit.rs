@@ -389,12 +389,11 @@ fn coupled_passage_is_stable_where_the_held_force_is_not_and_balances_energy() {
     assert!(fl_err.abs() < 0.03, "mean F_L {fl_err}");
     assert!(energy.abs() < 0.01, "energy error {energy}");
     let opts = PassageOptions::default();
-    let w = small_track(&[]).vehicle.wheel_load;
-
     let m = small_track(&[
         "run.solution_zone_offset=0.2",
         "run.solution_zone_length=0.1",
     ]);
+    let w = m.vehicle.wheel_load;
     let naive = ExplicitModel::new(
         &m,
         ExplicitOptions {

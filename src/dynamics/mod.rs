@@ -403,11 +403,8 @@ impl RailProfile {
         if let Some(i) = (0..x_m.len()).find(|&i| !x_m[i].is_finite() || !height_m[i].is_finite()) {
             return Err(bad(format!("sample {i} is not a finite number")));
         }
-        if let Some(i) = (1..x_m.len()).find(|&i| x_m[i] <= x_m[i - 1]) {
-            return Err(bad(format!(
-                "x must be strictly ascending; sample {i} (x = {} m) is not",
-                x_m[i]
-            )));
+        if let Some(reason) = crate::lists::strictly_ascending_error(&x_m) {
+            return Err(bad(reason));
         }
         Ok(Self { x_m, height_m })
     }

@@ -86,14 +86,8 @@ impl MeasuredProfile {
         if let Some(i) = x_m.iter().position(|x| !x.is_finite()) {
             return Err(bad(format!("position {i} is not a finite number")));
         }
-        if let Some(i) = x_m.windows(2).position(|w| w[1] <= w[0]) {
-            return Err(bad(format!(
-                "positions must ascend strictly: x = {} m then {} m (rows {} and {})",
-                x_m[i],
-                x_m[i + 1],
-                i + 1,
-                i + 2
-            )));
+        if let Some(reason) = crate::lists::strictly_ascending_error(&x_m) {
+            return Err(bad(reason));
         }
         if let Some(h) = height_m.iter().find(|h| h.is_infinite()) {
             return Err(bad(format!(
