@@ -113,14 +113,47 @@ pub enum ExplicitError {
         /// What to change.
         advice: &'static str,
     },
-    /// A static solve failed.
-    #[error("static start of the {part}: {reason}")]
-    Static {
-        /// Which substructure.
-        part: &'static str,
-        /// What failed and what to change.
-        reason: String,
+    /// `explicit.safety` out of its range.
+    #[error("explicit.safety = {safety} is out of range: allowed above 0, at most 1 (the fraction of the critical step used)")]
+    Safety {
+        /// The value given (−).
+        safety: f64,
     },
+    /// A rigid-body mode of the wheel has no mass after orthogonalisation (the wheel's lumped
+    /// masses are zero where the mode moves).
+    #[error("rigid-body mode {mode} of the {part} has no mass: check the wheel's density (wheel.density)")]
+    RigidModeMassless {
+        /// `wheel` or `wheel body` (sprung mass removed).
+        part: &'static str,
+        /// The mode's index (0–2: x, z translations, rotation about y).
+        mode: usize,
+    },
+    /// A rigid-body mode of the wheel is resisted by its supports: the explicit path's
+    /// rigid-mode model of the static start does not hold.
+    #[error("rigid mode {mode} of the wheel is not free (relative elastic force {relative_force:.2e}): the wheel's supports are not those of the explicit path's rigid-mode model")]
+    RigidModeNotFree {
+        /// The mode's index.
+        mode: usize,
+        /// `‖M^{-½} K φ‖ / ω_bound²` of the M-normalised mode (−); above 1e-6 is refused.
+        relative_force: f64,
+    },
+    /// The wheel's contact node has its x or z DOF held.
+    #[error("the wheel's contact node has its x or z DOF held: the static start needs them free (check the wheel's supports)")]
+    ContactNodeHeld,
+    /// The wheel's stiffness has no stored diagonal entry at a support DOF (an assembly
+    /// inconsistency: the assembled pattern always holds the diagonal).
+    #[error("the wheel's stiffness has no stored diagonal entry at support DOF {dof} (free index): an assembly inconsistency, please report it")]
+    MissingDiagonal {
+        /// The DOF (free index).
+        dof: usize,
+    },
+    /// The wheel's static stiffness (with its supports doubled) could not be factorised.
+    #[error("static start of the wheel: its stiffness with the supports doubled")]
+    WheelStaticFactor(#[source] crate::dynamics::DynamicsError),
+    /// The rotating wheel's local tread compliance at the start angle is missing (an
+    /// internal inconsistency of the rotating wheel's set-up).
+    #[error("rotating wheel: the tread's local compliance at θ = 0 was not computed")]
+    LocalComplianceMissing,
     /// The passage diverged.
     #[error("the explicit passage diverged at t = {t_s:.6} s (x = {x_m:.4} m): the {part}'s state is not finite; lower explicit.safety or set a smaller explicit.time_step")]
     Diverged {

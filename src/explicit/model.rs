@@ -203,9 +203,8 @@ impl ExplicitModel {
     ) -> Result<Self, ExplicitError> {
         let t0 = Instant::now();
         if !(opts.safety > 0.0 && opts.safety <= 1.0) {
-            return Err(ExplicitError::Static {
-                part: "model",
-                reason: format!("explicit.safety = {} must be in (0, 1]", opts.safety),
+            return Err(ExplicitError::Safety {
+                safety: opts.safety,
             });
         }
         let frame = ContactFrame::for_inclination(model.rail.inclination);

@@ -75,9 +75,9 @@ pub(super) fn wheel_rigid_modes(
         }
         let nn = mdot(&modes[k], &modes[k]).sqrt();
         if nn.is_nan() || nn <= 0.0 {
-            return Err(ExplicitError::Static {
+            return Err(ExplicitError::RigidModeMassless {
                 part: "wheel",
-                reason: "a rigid-body mode of the wheel has no mass".into(),
+                mode: k,
             });
         }
         modes[k].iter_mut().for_each(|x| *x /= nn);
@@ -90,12 +90,9 @@ pub(super) fn wheel_rigid_modes(
         // ‖M^{-½} K r‖ / ‖M^{½} r‖ is an angular frequency squared: compare with ω_bound².
         let num: f64 = (0..n).map(|i| kr[i] * kr[i] / mass[i]).sum::<f64>().sqrt();
         if num > 1e-6 * scale * scale {
-            return Err(ExplicitError::Static {
-                part: "wheel",
-                reason: format!(
-                    "rigid mode {k} of the wheel is not free (relative elastic force {:.2e}): the wheel's supports are not those of the explicit path's rigid-mode model",
-                    num / (scale * scale)
-                ),
+            return Err(ExplicitError::RigidModeNotFree {
+                mode: k,
+                relative_force: num / (scale * scale),
             });
         }
     }
@@ -146,10 +143,7 @@ impl ElasticWheel {
             .filter_map(|&d| dm.free_index(d))
             .collect();
         if held.len() != 3 {
-            return Err(ExplicitError::Static {
-                part: "wheel",
-                reason: "the contact node's x/z DOFs are not free".into(),
-            });
+            return Err(ExplicitError::ContactNodeHeld);
         }
         let mut k = mats.k.clone();
         {
@@ -159,19 +153,13 @@ impl ElasticWheel {
             );
             let vals = k.val_mut();
             for &d in &held {
-                let p = (cp[d]..cp[d + 1]).find(|&p| ri[p] == d).ok_or_else(|| {
-                    ExplicitError::Static {
-                        part: "wheel",
-                        reason: "K has no diagonal entry at a support DOF".into(),
-                    }
-                })?;
+                let p = (cp[d]..cp[d + 1])
+                    .find(|&p| ri[p] == d)
+                    .ok_or(ExplicitError::MissingDiagonal { dof: d })?;
                 vals[p] *= 2.0;
             }
         }
-        let fac = StiffnessFactor::new(k.as_ref()).map_err(|e| ExplicitError::Static {
-            part: "wheel",
-            reason: e.to_string(),
-        })?;
+        let fac = StiffnessFactor::new(k.as_ref()).map_err(ExplicitError::WheelStaticFactor)?;
         Ok(ElasticWheel {
             fac,
             rigid: rigid.to_vec(),
@@ -202,9 +190,9 @@ impl ElasticWheel {
             }
             let nn = mdot(&self.rigid[k], &self.rigid[k]).sqrt();
             if nn.is_nan() || nn <= 0.0 {
-                return Err(ExplicitError::Static {
-                    part: "wheel",
-                    reason: "a rigid-body mode of the wheel body has no mass".into(),
+                return Err(ExplicitError::RigidModeMassless {
+                    part: "wheel body",
+                    mode: k,
                 });
             }
             self.rigid[k].iter_mut().for_each(|x| *x /= nn);

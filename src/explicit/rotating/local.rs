@@ -119,10 +119,7 @@ impl WheelLocalCompliance {
             },
         };
         let at0 = super::locate_angle(thetas, 0.0);
-        lc.reference = lc.g(at0).ok_or(ExplicitError::Static {
-            part: "wheel",
-            reason: "the tread's local compliance at θ = 0 was not computed".into(),
-        })?;
+        lc.reference = lc.g(at0).ok_or(ExplicitError::LocalComplianceMissing)?;
         Ok(lc)
     }
 
