@@ -88,6 +88,56 @@ pub fn coefficients(
     }
 }
 
+/// `∬ X/r² dX dY` (m) over a source rectangle of half-sizes `hx, hy` (m) centred at the origin,
+/// seen from field point `(x, y)`: the kernel of the normal–tangential coupling of one
+/// half-space. Antiderivative `½ Y ln(X² + Y²) + X atan(Y/X)` (the `−Y` term of the exact
+/// antiderivative cancels in the corner sum; `X atan(Y/X)` → 0 as `X` → 0).
+pub fn rectangle_integral_x_over_r2(x: f64, y: f64, hx: f64, hy: f64) -> f64 {
+    let f = |xx: f64, yy: f64| {
+        let r2 = xx * xx + yy * yy;
+        let log_part = if r2 > 0.0 { 0.5 * yy * r2.ln() } else { 0.0 };
+        let atan_part = if xx != 0.0 {
+            xx * (yy / xx).atan()
+        } else {
+            0.0
+        };
+        log_part + atan_part
+    };
+    corner_sum(f, x - hx, x + hx, y - hy, y + hy)
+}
+
+/// Influence coefficients (m/Pa) of **one** elastic half-space (Young's modulus `E` in Pa,
+/// Poisson ratio ν) for a uniform load on a `dx × dy` (m) rectangle, seen at a surface point
+/// offset `(x, y)` (m, field minus source centre): `c[i][j]` is the displacement component `i`
+/// per unit traction component `j`, components `(x, y, n)` with `n` the inward normal (the
+/// approach under a compressive pressure `p = t_n > 0`). Johnson (1985) eqs. 3.22 (Boussinesq)
+/// and 3.86 (Cerruti), integrated over the rectangle:
+///
+/// ```text
+/// c_nn = (1 − ν²)/(π E) ∬ 1/r,
+/// c_xx = 1/(2π G) ∬ [(1 − ν)/r + ν X²/r³],   c_yy likewise with Y,   c_xy = c_yx = ν/(2π G) ∬ XY/r³,
+/// c_xn = −(1 − 2ν)/(4π G) ∬ X/r²,   c_nx = −c_xn   (and y likewise),
+/// ```
+///
+/// `G = E/(2(1 + ν))`. The coupling terms cancel between two quasi-identical bodies, which is
+/// why [`coefficients`] (the pair) has none. This is the closed form the flat block of the
+/// local FE contact patch is checked against.
+pub fn single_body(x: f64, y: f64, dx: f64, dy: f64, youngs_pa: f64, nu: f64) -> [[f64; 3]; 3] {
+    let g = youngs_pa / (2.0 * (1.0 + nu));
+    let (hx, hy) = (0.5 * dx, 0.5 * dy);
+    let (i1, ixx, iyy, ixy) = rectangle_integrals(x, y, hx, hy);
+    let jx = rectangle_integral_x_over_r2(x, y, hx, hy);
+    // ∬ Y/r² is the same integral with the axes exchanged
+    let jy = rectangle_integral_x_over_r2(y, x, hy, hx);
+    let t = 1.0 / (2.0 * PI * g);
+    let c = (1.0 - 2.0 * nu) / (4.0 * PI * g);
+    let xx = t * ((1.0 - nu) * i1 + nu * ixx);
+    let yy = t * ((1.0 - nu) * i1 + nu * iyy);
+    let xy = t * nu * ixy;
+    let nn = (1.0 - nu * nu) / (PI * youngs_pa) * i1;
+    [[xx, xy, -c * jx], [xy, yy, -c * jy], [c * jx, c * jy, nn]]
+}
+
 /// 2D FFT of an `m1 × m2` row-major complex array (rows of length `m2`), with preallocated
 /// transpose buffer and scratch; in double (`T = f64`) or single precision (`T = f32`, the
 /// box products of [`Convolver::tangential_box`]).

@@ -15,16 +15,27 @@ pub fn block_node(nx: usize, ny: usize, i: usize, j: usize, k: usize) -> usize {
 /// A structured block mesh of `nx × ny × nz` hexahedra of size `lx/nx × ly/ny × lz/nz` (m),
 /// all with material index `material` and part `part`.
 pub fn block_mesh(n: [usize; 3], size_m: [f64; 3], material: usize, part: Part) -> Mesh {
-    let [nx, ny, nz] = n;
-    let mut nodes = Vec::with_capacity((nx + 1) * (ny + 1) * (nz + 1));
-    for k in 0..=nz {
-        for j in 0..=ny {
-            for i in 0..=nx {
-                nodes.push([
-                    size_m[0] * i as f64 / nx as f64,
-                    size_m[1] * j as f64 / ny as f64,
-                    size_m[2] * k as f64 / nz as f64,
-                ]);
+    let axis = |k: usize| -> Vec<f64> {
+        (0..=n[k])
+            .map(|i| size_m[k] * i as f64 / n[k] as f64)
+            .collect()
+    };
+    graded_block_mesh([&axis(0), &axis(1), &axis(2)], material, part)
+}
+
+/// A tensor-product block mesh on the node planes `x = xs[i]`, `y = ys[j]`, `z = zs[k]` (m,
+/// each strictly increasing, at least two values): `(xs.len() − 1) × (ys.len() − 1) ×
+/// (zs.len() − 1)` hexahedra, node `(i, j, k)` at index [`block_node`]`(nx, ny, i, j, k)`
+/// with `nx = xs.len() − 1`, `ny = ys.len() − 1`. Used for graded blocks (fine at a loaded
+/// face, coarse far away), e.g. the flat block of the local contact patch.
+pub fn graded_block_mesh(planes_m: [&[f64]; 3], material: usize, part: Part) -> Mesh {
+    let [xs, ys, zs] = planes_m;
+    let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
+    let mut nodes = Vec::with_capacity(xs.len() * ys.len() * zs.len());
+    for &z in zs {
+        for &y in ys {
+            for &x in xs {
+                nodes.push([x, y, z]);
             }
         }
     }

@@ -11,40 +11,77 @@ use faer::{Mat, Side};
 
 use super::FeError;
 
+/// A sparse Cholesky factorisation `K = L Lᵀ` of a stiffness over free DOFs, kept for many
+/// right-hand sides (the unit loads of a contact patch's influence coefficients).
+pub struct Cholesky {
+    llt: Llt<usize, f64>,
+    n: usize,
+}
+
+impl Cholesky {
+    /// Factorises `K` (N/m, square, symmetric; only the lower triangle is read). Fails with
+    /// [`FeError::NotPositiveDefinite`] when K is singular or indefinite (unconstrained
+    /// rigid-body motion), and [`FeError::DimensionMismatch`] when K is not square.
+    pub fn new(k: &SparseColMat<usize, f64>) -> Result<Self, FeError> {
+        let n = k.nrows();
+        if k.ncols() != n {
+            return Err(FeError::DimensionMismatch {
+                what: "stiffness columns vs rows".into(),
+                expected: n,
+                got: k.ncols(),
+            });
+        }
+        let symbolic = SymbolicLlt::try_new(k.symbolic(), Side::Lower)?;
+        let llt = Llt::try_new_with_symbolic(symbolic, k.as_ref(), Side::Lower).map_err(|e| {
+            FeError::NotPositiveDefinite {
+                detail: format!("{e:?}"),
+            }
+        })?;
+        Ok(Cholesky { llt, n })
+    }
+
+    /// Number of free DOFs.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Overwrites each column of `rhs` (loads, N; `dim()` rows) with the displacements (m).
+    /// Fails with [`FeError::DimensionMismatch`] on the row count and
+    /// [`FeError::NotPositiveDefinite`] when a solution is not finite.
+    pub fn solve_in_place(&self, rhs: &mut Mat<f64>) -> Result<(), FeError> {
+        if rhs.nrows() != self.n {
+            return Err(FeError::DimensionMismatch {
+                what: "load vectors".into(),
+                expected: self.n,
+                got: rhs.nrows(),
+            });
+        }
+        self.llt.solve_in_place(rhs.as_mut());
+        let finite = (0..rhs.ncols()).all(|c| (0..self.n).all(|i| rhs[(i, c)].is_finite()));
+        if !finite {
+            return Err(FeError::NotPositiveDefinite {
+                detail: "solution is not finite".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
 /// Solves `K u = f` (K in N/m over free DOFs, f in N) and returns `u` (m). Fails with
 /// [`FeError::NotPositiveDefinite`] when K is singular or indefinite (unconstrained
 /// rigid-body motion), and [`FeError::DimensionMismatch`] on sizes.
 pub fn static_solve(k: &SparseColMat<usize, f64>, f: &[f64]) -> Result<Vec<f64>, FeError> {
-    let n = k.nrows();
-    if k.ncols() != n {
-        return Err(FeError::DimensionMismatch {
-            what: "stiffness columns vs rows".into(),
-            expected: n,
-            got: k.ncols(),
-        });
-    }
-    if f.len() != n {
+    let factor = Cholesky::new(k)?;
+    if f.len() != factor.dim() {
         return Err(FeError::DimensionMismatch {
             what: "load vector".into(),
-            expected: n,
+            expected: factor.dim(),
             got: f.len(),
         });
     }
-    let symbolic = SymbolicLlt::try_new(k.symbolic(), Side::Lower)?;
-    let llt = Llt::try_new_with_symbolic(symbolic, k.as_ref(), Side::Lower).map_err(|e| {
-        FeError::NotPositiveDefinite {
-            detail: format!("{e:?}"),
-        }
-    })?;
-    let mut rhs = Mat::<f64>::from_fn(n, 1, |i, _| f[i]);
-    llt.solve_in_place(rhs.as_mut());
-    let u: Vec<f64> = (0..n).map(|i| rhs[(i, 0)]).collect();
-    if u.iter().any(|x| !x.is_finite()) {
-        return Err(FeError::NotPositiveDefinite {
-            detail: "solution is not finite".into(),
-        });
-    }
-    Ok(u)
+    let mut rhs = Mat::<f64>::from_fn(f.len(), 1, |i, _| f[i]);
+    factor.solve_in_place(&mut rhs)?;
+    Ok((0..f.len()).map(|i| rhs[(i, 0)]).collect())
 }
 
 /// Every generalised eigenpair of dense symmetric `(K, M)` (`K` positive semi-definite, `M`

@@ -13,6 +13,7 @@
 //! of a solid: point supports make the stiffness grow without bound under refinement
 //! (docs/theory.md §3.3).
 
+pub mod contact_patch;
 pub mod ends;
 pub mod layout;
 pub mod test_problems;
@@ -33,6 +34,24 @@ fn mass_kind(k: crate::model::MassKind) -> crate::fe::assembly::MassKind {
 /// Errors while building a substructure.
 #[derive(Debug, thiserror::Error)]
 pub enum StructureError {
+    /// A parameter of the local FE contact patch out of its range.
+    #[error("contact patch: {name} = {value} is out of range: allowed {allowed}")]
+    PatchParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// The allowed range.
+        allowed: &'static str,
+    },
+    /// A local FE contact patch too large to factorise on this kind of machine.
+    #[error("contact patch: the submodel would have {dofs} free DOFs, above the limit of {limit}: lower refine, half_elements or fine_depth_elements, or raise max_ratio")]
+    PatchTooLarge {
+        /// Free DOFs of the requested submodel.
+        dofs: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// Mesh generation failed.
     #[error(transparent)]
     Mesh(#[from] crate::mesh::MeshError),

@@ -257,3 +257,41 @@ fn real_normal_product_equals_dense_sum() {
         assert!(u.iter().all(|&v| v == 0.0));
     }
 }
+
+#[test]
+fn single_body_coefficients_approach_the_point_load_solutions() {
+    // far from a small loaded square the integrals tend to area × the point-load kernels of
+    // Boussinesq and Cerruti (Johnson 1985, eqs. 3.22 and 3.86 at the surface)
+    let (e, nu) = (210e9, 0.3);
+    let g = e / (2.0 * (1.0 + nu));
+    let d = 1e-4;
+    let area = d * d;
+    let (x, y): (f64, f64) = (3e-2, -2e-2);
+    let r = (x * x + y * y).sqrt();
+    let c = single_body(x, y, d, d, e, nu);
+    let pi = std::f64::consts::PI;
+    let close = |got: f64, want: f64| (got / want - 1.0).abs() < 1e-4;
+    assert!(close(c[2][2], area * (1.0 - nu * nu) / (pi * e * r)));
+    let t = area / (2.0 * pi * g);
+    assert!(close(
+        c[0][0],
+        t * ((1.0 - nu) / r + nu * x * x / r.powi(3))
+    ));
+    assert!(close(
+        c[1][1],
+        t * ((1.0 - nu) / r + nu * y * y / r.powi(3))
+    ));
+    assert!(close(c[0][1], t * nu * x * y / r.powi(3)));
+    // Boussinesq: the surface moves towards the load, u_x = −(1 − 2ν)(1 + ν) P x / (2π E r²)
+    let ux_p = -(1.0 - 2.0 * nu) * (1.0 + nu) * area * x / (2.0 * pi * e * r * r);
+    assert!(close(c[0][2], ux_p) && close(c[1][2], ux_p * y / x));
+    // Cerruti: u_n = (1 − 2ν) Q x / (4π G r²), and reciprocity c_nx(X) = c_xn(−X)
+    assert!(close(c[2][0], -ux_p) && close(c[2][1], -ux_p * y / x));
+    let m = single_body(-x, -y, d, d, e, nu);
+    assert!((m[0][2] - c[2][0]).abs() < 1e-12 * c[2][0].abs());
+    // the pair of two equal bodies is the quasi-identical half-space of `coefficients`
+    let pair = coefficients(x, y, d, d, e / (2.0 * (1.0 - nu * nu)), g, nu);
+    assert!((2.0 * c[2][2] / pair.zz - 1.0).abs() < 1e-12);
+    assert!((2.0 * c[0][0] / pair.xx - 1.0).abs() < 1e-12);
+    assert!((2.0 * c[0][1] / pair.xy - 1.0).abs() < 1e-12);
+}

@@ -1,0 +1,322 @@
+//! The local FE contact patch: influence coefficients of the contact grid condensed from a
+//! refined FE submodel instead of taken from the elastic half-space (theory §6.9).
+//!
+//! What it models: the surface displacement of a linear elastic body at the centre of each
+//! contact-grid element per unit uniform traction (pressure and the two shear tractions) on
+//! one source element, computed by a static FE solve of a submodel whose surface elements at
+//! the contact are a fraction of the grid element (`refine` FE faces per grid element along
+//! each axis), graded to coarse elements away from it. One sparse Cholesky factorisation
+//! serves the three unit loads. The result, a [`SurfaceKernel`], is translation-invariant
+//! over the offsets it holds (the body is a tensor-product block, uniform over the fine zone).
+//!
+//! This file holds the flat block: the check of the FE condensation against the closed forms
+//! of Boussinesq and Cerruti ([`crate::contact::influence::single_body`]). Assumptions: linear
+//! elasticity, small strain; the block's far faces (sides and bottom) are fixed, which stands
+//! for the half-space's vanishing displacement at infinity and leaves an error of order
+//! `r / extent` at distance `r` from the load (the reason the block is large and graded).
+//! Surface values at a grid element's centre are interpolated bilinearly on the FE surface
+//! face that contains it (the FE displacement is bilinear on a face; the incompatible modes
+//! are internal to an element).
+//!
+//! References: K. L. Johnson, *Contact Mechanics* (1985), §3.2 and §3.6; J. J. Kalker,
+//! *Three-Dimensional Elastic Bodies in Rolling Contact* (1990), ch. 5 (influence numbers).
+
+use faer::Mat;
+
+use crate::fe::assembly::{assemble, AssemblyOptions, DofMap};
+use crate::fe::block::{block_node, graded_block_mesh};
+use crate::fe::material::IsotropicElastic;
+use crate::fe::solve::Cholesky;
+use crate::mesh::grading::{grade, FineZone, GradingSpec};
+use crate::mesh::Part;
+
+use super::StructureError;
+
+/// The largest flat-block submodel built (free DOFs): about 6 GB of Cholesky factor on this
+/// kind of graded 3D block. Larger requests are refused, naming the parameter to lower.
+pub const MAX_PATCH_DOFS: usize = 1_500_000;
+
+/// A flat elastic block whose top face `z = 0` carries the contact grid, centred on the
+/// source element at `(x, y) = (0, 0)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlatBlockPatch {
+    /// The block's material (Pa, −, kg/m³; density unused).
+    pub material: IsotropicElastic,
+    /// Contact-grid element size `a` (m), square; 0.8 mm in the reference study. Range
+    /// 1e-5–1e-2 m.
+    pub element_m: f64,
+    /// FE faces per grid element along each axis over the source element and its neighbours
+    /// (≥ 1; 1–5 in practice); the rest of the fine zone has faces of at most `a`.
+    pub refine: usize,
+    /// FE faces per grid element along each axis over the rest of the fine zone (≥ 1, at
+    /// most `refine`; 1 by default).
+    pub zone_refine: usize,
+    /// Grid elements either side of the source element in the fine zone, along x and y
+    /// (≥ 1): the kernel holds offsets `−half..=half`.
+    pub half_elements: usize,
+    /// Depth of the fine zone in grid elements (≥ 1).
+    pub fine_depth_elements: usize,
+    /// Half-width of the block along x and y and its depth (m), ≫ `half_elements · a`.
+    pub extent_m: f64,
+    /// Largest ratio of neighbouring FE element sizes (> 1, ≤ 3).
+    pub max_ratio: f64,
+}
+
+impl FlatBlockPatch {
+    /// Steel, grid element `a` (m), three FE faces per grid element over the source, ±8 grid
+    /// elements, 8 deep, a block of 0.5 m, growth ratio 1.5.
+    pub fn steel(element_m: f64) -> Self {
+        FlatBlockPatch {
+            material: IsotropicElastic::STEEL,
+            element_m,
+            refine: 3,
+            zone_refine: 1,
+            half_elements: 8,
+            fine_depth_elements: 8,
+            extent_m: 0.5,
+            max_ratio: 1.5,
+        }
+    }
+
+    fn check(&self) -> Result<(), StructureError> {
+        let bad = |name: &'static str, value: f64, allowed: &'static str| {
+            Err(StructureError::PatchParameter {
+                name,
+                value,
+                allowed,
+            })
+        };
+        let a = self.element_m;
+        if !(1e-5..=1e-2).contains(&a) {
+            return bad("element_m", a, "1e-5 to 1e-2 m");
+        }
+        if self.refine == 0 {
+            return bad("refine", 0.0, "at least 1");
+        }
+        if self.zone_refine == 0 || self.zone_refine > self.refine {
+            return bad(
+                "zone_refine",
+                self.zone_refine as f64,
+                "at least 1, at most refine",
+            );
+        }
+        if self.half_elements == 0 {
+            return bad("half_elements", 0.0, "at least 1");
+        }
+        if self.fine_depth_elements == 0 {
+            return bad("fine_depth_elements", 0.0, "at least 1");
+        }
+        let fine = (self.half_elements as f64 + 0.5) * a;
+        if !self.extent_m.is_finite() || self.extent_m < 2.0 * fine {
+            return bad(
+                "extent_m",
+                self.extent_m,
+                "at least twice the fine zone's half-width (half_elements + 1/2) · element_m",
+            );
+        }
+        if !(self.max_ratio > 1.0 && self.max_ratio <= 3.0) {
+            return bad("max_ratio", self.max_ratio, "above 1, at most 3");
+        }
+        Ok(())
+    }
+
+    /// The FE node planes `[xs, ys, zs]` (m): faces of `a / refine` over the source element
+    /// and its neighbours (±1.5 a, and 1.5 a deep), at most `a / zone_refine` over the rest of
+    /// the fine zone
+    /// (±(half + ½) a, `fine_depth_elements · a` deep), graded with ratio `max_ratio` to sizes
+    /// of up to `extent / 4` at the far faces; the source element's edges `±a/2` are planes.
+    pub fn planes(&self) -> Result<[Vec<f64>; 3], StructureError> {
+        self.check()?;
+        let a = self.element_m;
+        let h = a / self.refine as f64;
+        let x_f = (self.half_elements as f64 + 0.5) * a;
+        let zone = |start_m: f64, end_m: f64, size_m: f64| FineZone {
+            start_m,
+            end_m,
+            size_m,
+        };
+        let mut across = GradingSpec::new(-self.extent_m, self.extent_m, self.extent_m / 4.0);
+        let h_zone = a / self.zone_refine as f64;
+        across.zones = vec![zone(-1.5 * a, 1.5 * a, h), zone(-x_f, x_f, h_zone)];
+        across.breakpoints_m = vec![-x_f, -0.5 * a, 0.5 * a, x_f];
+        across.max_ratio = self.max_ratio;
+        let across = grade(&across)?;
+        let depth_f = self.fine_depth_elements as f64 * a;
+        let mut down = GradingSpec::new(-self.extent_m, 0.0, self.extent_m / 4.0);
+        down.zones = vec![zone(-1.5 * a, 0.0, h), zone(-depth_f, 0.0, h_zone)];
+        down.breakpoints_m = vec![-depth_f];
+        down.max_ratio = self.max_ratio;
+        Ok([across.clone(), across, grade(&down)?])
+    }
+
+    /// Free DOFs of the submodel (nodes of the fixed far faces removed).
+    pub fn n_dofs(&self) -> Result<usize, StructureError> {
+        let [xs, ys, zs] = self.planes()?;
+        Ok(3 * (xs.len() - 2) * (ys.len() - 2) * (zs.len() - 1))
+    }
+
+    /// Builds and solves the submodel: the kernel for offsets `−half..=half` along x and y.
+    /// Refuses a submodel beyond [`MAX_PATCH_DOFS`] before building it.
+    pub fn kernel(&self) -> Result<SurfaceKernel, StructureError> {
+        let n_dofs = self.n_dofs()?;
+        if n_dofs > MAX_PATCH_DOFS {
+            return Err(StructureError::PatchTooLarge {
+                dofs: n_dofs,
+                limit: MAX_PATCH_DOFS,
+            });
+        }
+        let [xs, ys, zs] = self.planes()?;
+        let mesh = graded_block_mesh([&xs, &ys, &zs], 0, Part::Rail);
+        let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
+        let mut fixed = Vec::new();
+        for k in 0..=nz {
+            for j in 0..=ny {
+                for i in 0..=nx {
+                    let far = i == 0 || i == nx || j == 0 || j == ny || k == 0;
+                    if far {
+                        let n = block_node(nx, ny, i, j, k);
+                        fixed.extend([3 * n, 3 * n + 1, 3 * n + 2]);
+                    }
+                }
+            }
+        }
+        let dofmap = DofMap::with_constraints(mesh.nodes.len(), &fixed)?;
+        let fm = assemble(
+            &mesh,
+            &[self.material],
+            &[],
+            &[],
+            &dofmap,
+            AssemblyOptions::default(),
+        )?;
+        let factor = Cholesky::new(&fm.k)?;
+        // the unit tractions (1 Pa) on the source element's FE faces, in x, y and along the
+        // inward normal −z, each face's force shared equally by its four nodes
+        let a = self.element_m;
+        let top = nz;
+        let faces = fine_faces(&xs, &ys, -0.5 * a, 0.5 * a);
+        let mut rhs = Mat::<f64>::zeros(dofmap.n_free(), 3);
+        for &(i, j) in &faces {
+            let area = (xs[i + 1] - xs[i]) * (ys[j + 1] - ys[j]);
+            for (di, dj) in [(0, 0), (1, 0), (1, 1), (0, 1)] {
+                let node = block_node(nx, ny, i + di, j + dj, top);
+                for (col, (dir, sign)) in [(0, 1.0), (1, 1.0), (2, -1.0)].into_iter().enumerate() {
+                    if let Some(f) = dofmap.free_index(3 * node + dir) {
+                        rhs[(f, col)] += sign * 0.25 * area;
+                    }
+                }
+            }
+        }
+        factor.solve_in_place(&mut rhs)?;
+        let half = self.half_elements as isize;
+        let side = 2 * self.half_elements + 1;
+        let mut c = Vec::with_capacity(side * side);
+        for ox in -half..=half {
+            for oy in -half..=half {
+                let (px, py) = (ox as f64 * a, oy as f64 * a);
+                let mut cij = [[0.0; 3]; 3];
+                for (dir, row) in cij.iter_mut().enumerate() {
+                    // the inward normal is −z
+                    let sign = if dir == 2 { -1.0 } else { 1.0 };
+                    for (load, value) in row.iter_mut().enumerate() {
+                        *value = sign
+                            * surface_value(&xs, &ys, px, py, |i, j| {
+                                let node = block_node(nx, ny, i, j, top);
+                                dofmap
+                                    .free_index(3 * node + dir)
+                                    .map_or(0.0, |f| rhs[(f, load)])
+                            });
+                    }
+                }
+                c.push(cij);
+            }
+        }
+        Ok(SurfaceKernel {
+            half: self.half_elements,
+            element_m: a,
+            c,
+            n_dofs,
+        })
+    }
+}
+
+/// The FE top faces `(i, j)` whose centres lie in `[lo, hi]²` (m).
+fn fine_faces(xs: &[f64], ys: &[f64], lo: f64, hi: f64) -> Vec<(usize, usize)> {
+    let inside = |p: &[f64], i: usize| {
+        let c = 0.5 * (p[i] + p[i + 1]);
+        c > lo && c < hi
+    };
+    let mut out = Vec::new();
+    for i in 0..xs.len() - 1 {
+        for j in 0..ys.len() - 1 {
+            if inside(xs, i) && inside(ys, j) {
+                out.push((i, j));
+            }
+        }
+    }
+    out
+}
+
+/// The bilinear interpolation at `(px, py)` (m) of a nodal field on the top surface's
+/// tensor grid `xs × ys`, the nodal value given by `value(i, j)`.
+fn surface_value(
+    xs: &[f64],
+    ys: &[f64],
+    px: f64,
+    py: f64,
+    value: impl Fn(usize, usize) -> f64,
+) -> f64 {
+    let cell = |p: &[f64], v: f64| -> (usize, f64) {
+        let i = p.partition_point(|&q| q <= v).clamp(1, p.len() - 1) - 1;
+        (i, (v - p[i]) / (p[i + 1] - p[i]))
+    };
+    let (i, s) = cell(xs, px);
+    let (j, t) = cell(ys, py);
+    (1.0 - s) * (1.0 - t) * value(i, j)
+        + s * (1.0 - t) * value(i + 1, j)
+        + s * t * value(i + 1, j + 1)
+        + (1.0 - s) * t * value(i, j + 1)
+}
+
+/// Influence coefficients of one body on a square contact grid (m/Pa), translation-invariant
+/// over the offsets held: `get(ox, oy)[i][j]` is the displacement component `i` at the centre
+/// of the element offset by `(ox, oy)` elements from a source element carrying a unit uniform
+/// traction component `j`; components `(x, y, n)`, `n` the inward normal (approach under a
+/// compressive pressure), the convention of [`crate::contact::influence::single_body`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceKernel {
+    half: usize,
+    element_m: f64,
+    c: Vec<[[f64; 3]; 3]>,
+    n_dofs: usize,
+}
+
+impl SurfaceKernel {
+    /// Largest offset held along each axis (elements).
+    pub fn half(&self) -> usize {
+        self.half
+    }
+
+    /// The grid element size (m).
+    pub fn element_m(&self) -> f64 {
+        self.element_m
+    }
+
+    /// Free DOFs of the submodel it was condensed from.
+    pub fn n_dofs(&self) -> usize {
+        self.n_dofs
+    }
+
+    /// The 3 × 3 coefficients (m/Pa) at offset `(ox, oy)` (elements), `None` beyond `half`.
+    pub fn get(&self, ox: isize, oy: isize) -> Option<[[f64; 3]; 3]> {
+        let h = self.half as isize;
+        if ox.abs() > h || oy.abs() > h {
+            return None;
+        }
+        let side = 2 * h + 1;
+        Some(self.c[((ox + h) * side + (oy + h)) as usize])
+    }
+}
+
+#[cfg(test)]
+mod tests;
