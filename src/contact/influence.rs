@@ -28,6 +28,7 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 use transpose::transpose;
 
+pub mod strip;
 mod transpose;
 
 fn asinh_ratio(num: f64, den: f64) -> f64 {

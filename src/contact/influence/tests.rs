@@ -295,3 +295,112 @@ fn single_body_coefficients_approach_the_point_load_solutions() {
     assert!((2.0 * c[0][0] / pair.xx - 1.0).abs() < 1e-12);
     assert!((2.0 * c[0][1] / pair.xy - 1.0).abs() < 1e-12);
 }
+
+/// A kernel that is not Toeplitz across the rail and couples all three components: the
+/// half-space pair scaled by a factor depending on the field and source columns, with a
+/// normal–tangential coupling of one body's form.
+fn strip_test_kernel(o: isize, j: usize, jp: usize) -> [[f64; 3]; 3] {
+    let (dx, dy, e, nu) = (0.4e-3, 0.5e-3, 210e9, 0.3);
+    let c = single_body(o as f64 * dx, (j as f64 - jp as f64) * dy, dx, dy, e, nu);
+    let w = 1.0 + 0.1 * j as f64 + 0.03 * (jp * jp) as f64;
+    let mut k = c;
+    k.iter_mut().flatten().for_each(|v| *v *= w);
+    k
+}
+
+#[test]
+fn strip_products_equal_dense_sums() {
+    // independent check: the dense double sum over the grid, all three components, both the
+    // grid's rows and the rows shifted by one
+    for (nx, ny) in [(7, 4), (8, 5), (12, 3)] {
+        let mut strip = strip::StripConvolver::new(nx, ny, 3, strip_test_kernel);
+        let n = nx * ny;
+        let f: Vec<Vec<f64>> = (0..3)
+            .map(|b| {
+                (0..n)
+                    .map(|k| (((k + 3 * b) * 7919) % 13) as f64 * 1e6 - 4e6)
+                    .collect()
+            })
+            .collect();
+        for shift in 0..2 {
+            let mut u = vec![vec![0.0; n]; 3];
+            {
+                let fr: Vec<&[f64]> = f.iter().map(|v| v.as_slice()).collect();
+                let mut ur: Vec<&mut [f64]> = u.iter_mut().map(|v| v.as_mut_slice()).collect();
+                strip.product(&fr, &mut ur, shift);
+            }
+            let mut scale = 0.0_f64;
+            let mut worst = 0.0_f64;
+            for i in 0..nx {
+                for j in 0..ny {
+                    for a in 0..3 {
+                        let mut d = 0.0;
+                        for k in 0..nx {
+                            for l in 0..ny {
+                                let kb = strip_test_kernel(
+                                    i as isize + shift as isize - k as isize,
+                                    j,
+                                    l,
+                                );
+                                for (b, fb) in f.iter().enumerate() {
+                                    d += kb[a][b] * fb[k * ny + l];
+                                }
+                            }
+                        }
+                        scale = scale.max(d.abs());
+                        worst = worst.max((u[a][i * ny + j] - d).abs());
+                    }
+                }
+            }
+            assert!(
+                worst < 1e-12 * scale,
+                "{nx}×{ny} shift {shift}: {worst:e} of {scale:e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn strip_products_of_the_half_space_equal_the_convolver() {
+    let (nx, ny, dx, dy) = (16, 12, 0.45e-3, 0.5e-3);
+    let (es, g, nu) = (115e9, 80e9, 0.3);
+    let hs = |o: isize, j: usize, jp: usize| {
+        coefficients(
+            o as f64 * dx,
+            (j as f64 - jp as f64) * dy,
+            dx,
+            dy,
+            es,
+            g,
+            nu,
+        )
+    };
+    let mut conv = Convolver::new(nx, ny, dx, dy, es, g, nu);
+    let mut normal = strip::StripConvolver::new(nx, ny, 1, |o, j, jp| {
+        let mut k = [[0.0; 3]; 3];
+        k[0][0] = hs(o, j, jp).zz;
+        k
+    });
+    let mut tangential = strip::StripConvolver::new(nx, ny, 2, |o, j, jp| {
+        let c = hs(o, j, jp);
+        [[c.xx, c.xy, 0.0], [c.xy, c.yy, 0.0], [0.0; 3]]
+    });
+    let n = nx * ny;
+    let p: Vec<f64> = (0..n).map(|k| ((k * 31) % 17) as f64 * 1e6).collect();
+    let q: Vec<f64> = (0..n).map(|k| ((k * 13) % 7) as f64 * 1e6 - 3e6).collect();
+    let (mut u, mut us) = (vec![0.0; n], vec![0.0; n]);
+    conv.normal(&p, &mut u);
+    normal.product(&[&p], &mut [&mut us], 0);
+    let close = |a: &[f64], b: &[f64]| {
+        let scale = a.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12 * scale)
+    };
+    assert!(close(&u, &us));
+    for shift in 0..2 {
+        let (mut ux, mut uy) = (vec![0.0; n], vec![0.0; n]);
+        let (mut sx, mut sy) = (vec![0.0; n], vec![0.0; n]);
+        conv.tangential(&p, &q, &mut ux, &mut uy, shift);
+        tangential.product(&[&p, &q], &mut [&mut sx, &mut sy], shift);
+        assert!(close(&ux, &sx) && close(&uy, &sy), "shift {shift}");
+    }
+}

@@ -1,0 +1,183 @@
+//! Influence products for a kernel that is translation-invariant along the rail only: FFTs
+//! along x, dense blocks across (theory §6.9).
+//!
+//! The half-space kernel of [`super::Convolver`] depends on the offset in both directions, so
+//! its products are two-dimensional cyclic convolutions. A kernel condensed from an FE model
+//! of an extruded rail head (and a tread of revolution) is invariant along the rolling
+//! direction only: across the rail the field and source columns `j, j'` enter separately,
+//!
+//! ```text
+//! u_a(i, j) = Σ_{i', j', b} K_ab(i − i', j, j') f_b(i', j'),   a, b ∈ components,
+//! ```
+//!
+//! a Toeplitz structure along x with dense `(c·ny) × (c·ny)` blocks (`c` components: 1 for the
+//! normal problem, 2 for the tangential, 3 for the coupled one). The product is a cyclic
+//! convolution along x on a zero-padded length `m ≥ 2nx − 1` (exact for the linear
+//! convolution on rows `0..nx`): a real FFT of every source column, per frequency a dense
+//! complex matrix–vector product with the kernel's spectrum, an inverse real FFT.
+//! Assumption: the kernel is real; its spectra are computed once.
+
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use rustfft::num_complex::Complex64;
+use std::sync::Arc;
+
+use super::next_fast_len;
+
+/// FFT-along-x, dense-across influence products on an `nx × ny` grid (element `i * ny + j`,
+/// `i` along x) with `c` components per element.
+pub struct StripConvolver {
+    nx: usize,
+    ny: usize,
+    comps: usize,
+    m: usize,
+    /// `m/2 + 1` spectra, each a row-major `(c·ny) × (c·ny)` complex matrix (row: field
+    /// component and column `a·ny + j`; column: source `b·ny + j'`), divided by `m`.
+    spec: Vec<Complex64>,
+    forward: Arc<dyn RealToComplex<f64>>,
+    inverse: Arc<dyn ComplexToReal<f64>>,
+    line: Vec<f64>,
+    /// Source spectra, `(c·ny) × (m/2 + 1)`, one row per source column.
+    src: Vec<Complex64>,
+    /// Field spectra, the same layout.
+    field: Vec<Complex64>,
+    scratch: Vec<Complex64>,
+}
+
+impl StripConvolver {
+    /// The spectra of `kernel(offset, j, j')[a][b]` (m/Pa): the displacement component `a` at
+    /// column `j` per unit traction component `b` on an element of column `j'`, `offset` rows
+    /// behind it (field row minus source row, `−(nx−1)..=nx`). `comps` is 1 (normal, the
+    /// kernel's `[0][0]`), 2 or 3, and `nx, ny ≥ 1`.
+    pub fn new(
+        nx: usize,
+        ny: usize,
+        comps: usize,
+        kernel: impl Fn(isize, usize, usize) -> [[f64; 3]; 3],
+    ) -> Self {
+        assert!(nx >= 1 && ny >= 1 && (1..=3).contains(&comps));
+        let m = next_fast_len(2 * nx);
+        let nk = m / 2 + 1;
+        let mut planner = RealFftPlanner::<f64>::new();
+        let forward = planner.plan_fft_forward(m);
+        let inverse = planner.plan_fft_inverse(m);
+        let cn = comps * ny;
+        let mut spec = vec![Complex64::new(0.0, 0.0); nk * cn * cn];
+        let mut line = forward.make_input_vec();
+        let mut out = forward.make_output_vec();
+        let scale = 1.0 / m as f64;
+        // the offsets a linear convolution of rows 0..nx meets, and +nx (the row beyond the
+        // leading edge of transient rolling), at their periodic indices (distinct: m ≥ 2nx)
+        let offsets: Vec<(usize, isize)> = (0..m)
+            .filter_map(|q| {
+                let o = if q <= nx {
+                    q as isize
+                } else if q + nx > m {
+                    q as isize - m as isize
+                } else {
+                    return None;
+                };
+                Some((q, o))
+            })
+            .collect();
+        for j in 0..ny {
+            for jp in 0..ny {
+                let blocks: Vec<(usize, [[f64; 3]; 3])> = offsets
+                    .iter()
+                    .map(|&(q, o)| (q, kernel(o, j, jp)))
+                    .collect();
+                for a in 0..comps {
+                    for b in 0..comps {
+                        line.fill(0.0);
+                        for (q, k) in &blocks {
+                            line[*q] = k[a][b];
+                        }
+                        forward
+                            .process(&mut line, &mut out)
+                            .expect("lengths from the plan");
+                        let (row, col) = (a * ny + j, b * ny + jp);
+                        for (k, v) in out.iter().enumerate() {
+                            spec[(k * cn + row) * cn + col] = v * scale;
+                        }
+                    }
+                }
+            }
+        }
+        let scratch_len = forward
+            .get_scratch_len()
+            .max(inverse.get_scratch_len())
+            .max(1);
+        StripConvolver {
+            nx,
+            ny,
+            comps,
+            m,
+            spec,
+            line,
+            src: vec![Complex64::new(0.0, 0.0); cn * nk],
+            field: vec![Complex64::new(0.0, 0.0); cn * nk],
+            scratch: vec![Complex64::new(0.0, 0.0); scratch_len],
+            forward,
+            inverse,
+        }
+    }
+
+    /// Grid size `(nx, ny)` and the components per element.
+    pub fn dims(&self) -> (usize, usize, usize) {
+        (self.nx, self.ny, self.comps)
+    }
+
+    /// The padded length along x.
+    pub fn fft_len(&self) -> usize {
+        self.m
+    }
+
+    /// `u = K f` on the grid: `f[b]` the traction component `b` (Pa, `nx·ny` values each),
+    /// `u[a]` the displacement component `a` (m), for the `comps` components; with `shift` = 1
+    /// the field rows are `1..=nx` (one row beyond the grid's last, as transient rolling needs;
+    /// [`super::Convolver::tangential`]), with 0 the grid's own rows.
+    pub fn product(&mut self, f: &[&[f64]], u: &mut [&mut [f64]], shift: usize) {
+        let (nx, ny, c, m) = (self.nx, self.ny, self.comps, self.m);
+        let nk = m / 2 + 1;
+        let cn = c * ny;
+        assert!(f.len() == c && u.len() == c && shift <= 1);
+        for b in 0..c {
+            for jp in 0..ny {
+                self.line.fill(0.0);
+                for i in 0..nx {
+                    self.line[i] = f[b][i * ny + jp];
+                }
+                let row = &mut self.src[(b * ny + jp) * nk..(b * ny + jp + 1) * nk];
+                self.forward
+                    .process_with_scratch(&mut self.line, row, &mut self.scratch)
+                    .expect("lengths from the plan");
+            }
+        }
+        for k in 0..nk {
+            let block = &self.spec[k * cn * cn..(k + 1) * cn * cn];
+            for r in 0..cn {
+                let krow = &block[r * cn..(r + 1) * cn];
+                let mut acc = Complex64::new(0.0, 0.0);
+                for (s, kv) in krow.iter().enumerate() {
+                    acc += kv * self.src[s * nk + k];
+                }
+                self.field[r * nk + k] = acc;
+            }
+        }
+        for a in 0..c {
+            for j in 0..ny {
+                let row = &mut self.field[(a * ny + j) * nk..(a * ny + j + 1) * nk];
+                // the imaginary parts of the zero and Nyquist bins are round-off of a real kernel
+                row[0].im = 0.0;
+                if m % 2 == 0 {
+                    row[nk - 1].im = 0.0;
+                }
+                self.inverse
+                    .process_with_scratch(row, &mut self.line, &mut self.scratch)
+                    .expect("lengths from the plan");
+                for i in 0..nx {
+                    u[a][i * ny + j] = self.line[i + shift];
+                }
+            }
+        }
+    }
+}
