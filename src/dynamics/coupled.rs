@@ -426,9 +426,7 @@ fn real_eigen(a: &Mat<f64>) -> Result<(Vec<c64>, Mat<c64>), DynamicsError> {
         MemStack::new(&mut MemBuffer::new(scratch)),
         Default::default(),
     )
-    .map_err(|e| DynamicsError::CoupledEigen {
-        detail: format!("{e:?}"),
-    })?;
+    .map_err(|error| DynamicsError::CoupledEigen { error })?;
     let mut s = vec![c64::new(0.0, 0.0); n];
     let mut u = Mat::<c64>::zeros(n, n);
     let mut j = 0;

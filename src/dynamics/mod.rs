@@ -312,10 +312,10 @@ pub enum DynamicsError {
         reason: &'static str,
     },
     /// The dense eigensolver of the coupled wheel–track state matrix failed.
-    #[error("coupled modes: the dense eigensolver failed ({detail}); lower run.fmax to shrink the state matrix")]
+    #[error("coupled modes: the dense eigensolver failed ({error:?}); lower run.fmax to shrink the state matrix")]
     CoupledEigen {
-        /// The solver's own report.
-        detail: String,
+        /// faer's error (not a `std::error::Error`, so a field, not a source).
+        error: faer::linalg::evd::EvdError,
     },
     /// A passage engine built on this module (the explicit FE path) failed.
     #[error("{engine} passage: {source}")]

@@ -192,10 +192,7 @@ impl ShiftedSystem {
             }
         };
         factorize_symbolic_cholesky(sym, Side::Lower, ord, CholeskySymbolicParams::default())
-            .map_err(|e| EigenError::Factorization {
-                shift_rad2_s2: f64::NAN,
-                reason: format!("symbolic analysis failed: {e:?}"),
-            })
+            .map_err(EigenError::Symbolic)
     }
 
     /// Dimension n.

@@ -362,6 +362,30 @@ pub enum EigenError {
         /// cause
         reason: String,
     },
+    /// A dense symmetric eigensolver failed (faer's `EvdError` is not a `std::error::Error`,
+    /// so it is a field, not a source).
+    #[error("dense symmetric eigensolver of the {what}: {error:?}")]
+    DenseEigen {
+        /// Which matrix.
+        what: &'static str,
+        /// faer's error.
+        error: faer::linalg::evd::EvdError,
+    },
+    /// A dense Cholesky factorisation failed: the matrix is not positive definite.
+    #[error("dense Cholesky factorisation of the {what} failed (shift {shift_rad2_s2:e} rad²/s²): it is not positive definite; check the masses and supports")]
+    DenseCholesky {
+        /// Which matrix.
+        what: &'static str,
+        /// The shift added to it (rad²/s²; 0 if none).
+        shift_rad2_s2: f64,
+        /// faer's error.
+        #[source]
+        source: faer::linalg::cholesky::llt::factor::LltError,
+    },
+    /// The symbolic analysis of the sparse factorisation failed (index overflow or out of
+    /// memory: the model is too large for this machine; coarsen the mesh).
+    #[error("symbolic analysis of the sparse LDLᵀ failed: the model is too large for this machine; coarsen the mesh")]
+    Symbolic(#[source] faer::sparse::FaerError),
     /// K − σ₀M with σ₀ < 0 is not positive definite: K is not PSD or M not PD.
     #[error("K − σM at σ = {shift_rad2_s2:e} rad²/s² (< 0) has {negative_pivots} negative pivots: K must be positive semi-definite and M positive definite (check constraints, element orientation / negative Jacobians, negative springs or masses)")]
     NotSemiDefinite {

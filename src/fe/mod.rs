@@ -35,7 +35,7 @@ pub use spring::{Direction, PointMass, Spring};
 use thiserror::Error;
 
 /// Errors of the finite-element module. Every variant says what to change.
-#[derive(Debug, Error, Clone, PartialEq)]
+#[derive(Debug, Error, Clone)]
 pub enum FeError {
     /// The Jacobian determinant of a hexahedron is not positive at a point.
     #[error(
@@ -119,12 +119,37 @@ pub enum FeError {
     },
     /// The stiffness matrix is not positive definite (sparse Cholesky failed).
     #[error(
-        "stiffness matrix is not positive definite ({detail}): the model has rigid-body modes or \
+        "stiffness matrix is not positive definite: the model has rigid-body modes or \
          mechanisms; add constraints or ground springs"
     )]
-    NotPositiveDefinite {
-        /// Detail from the factorisation.
-        detail: String,
+    NotPositiveDefinite(#[source] faer::sparse::linalg::LltError),
+    /// A static solution is not finite (a stiffness that is singular to working precision).
+    #[error(
+        "the static solution is not finite: the stiffness is singular to working precision (a \
+         mechanism or a spring many orders of magnitude stiffer than the rest)"
+    )]
+    NotFinite,
+    /// `K + σM` of a dense generalised eigenproblem is not positive definite.
+    #[error("K + σM (σ = {sigma:e} 1/s²) of the dense eigenproblem is not positive definite: K must be positive semi-definite and M positive definite")]
+    DenseShiftNotPositiveDefinite {
+        /// The shift (1/s²).
+        sigma: f64,
+        /// faer's error.
+        #[source]
+        source: faer::linalg::cholesky::llt::factor::LltError,
+    },
+    /// The dense symmetric eigensolver failed (faer's `EvdError` is not a
+    /// `std::error::Error`, so it is a field, not a source).
+    #[error("dense symmetric eigensolver: {error:?}")]
+    DenseEigen {
+        /// faer's error.
+        error: faer::linalg::evd::EvdError,
+    },
+    /// The mass matrix of a dense generalised eigenproblem is not positive definite.
+    #[error("mass matrix of the dense eigenproblem is not positive definite: eigenvalue {eigenvalue:e} of L⁻¹ M L⁻ᵀ")]
+    DenseMassNotPositive {
+        /// The offending eigenvalue (s²).
+        eigenvalue: f64,
     },
     /// A sparse matrix could not be built from its triplets (index out of bounds, allocation).
     #[error("sparse matrix could not be built")]

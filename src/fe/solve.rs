@@ -32,11 +32,8 @@ impl Cholesky {
             });
         }
         let symbolic = SymbolicLlt::try_new(k.symbolic(), Side::Lower)?;
-        let llt = Llt::try_new_with_symbolic(symbolic, k.as_ref(), Side::Lower).map_err(|e| {
-            FeError::NotPositiveDefinite {
-                detail: format!("{e:?}"),
-            }
-        })?;
+        let llt = Llt::try_new_with_symbolic(symbolic, k.as_ref(), Side::Lower)
+            .map_err(FeError::NotPositiveDefinite)?;
         Ok(Cholesky { llt, n })
     }
 
@@ -47,7 +44,7 @@ impl Cholesky {
 
     /// Overwrites each column of `rhs` (loads, N; `dim()` rows) with the displacements (m).
     /// Fails with [`FeError::DimensionMismatch`] on the row count and
-    /// [`FeError::NotPositiveDefinite`] when a solution is not finite.
+    /// [`FeError::NotFinite`] when a solution is not finite.
     pub fn solve_in_place(&self, rhs: &mut Mat<f64>) -> Result<(), FeError> {
         if rhs.nrows() != self.n {
             return Err(FeError::DimensionMismatch {
@@ -59,9 +56,7 @@ impl Cholesky {
         self.llt.solve_in_place(rhs.as_mut());
         let finite = (0..rhs.ncols()).all(|c| (0..self.n).all(|i| rhs[(i, c)].is_finite()));
         if !finite {
-            return Err(FeError::NotPositiveDefinite {
-                detail: "solution is not finite".into(),
-            });
+            return Err(FeError::NotFinite);
         }
         Ok(())
     }
@@ -99,7 +94,9 @@ pub fn static_solve(k: &SparseColMat<usize, f64>, f: &[f64]) -> Result<Vec<f64>,
 /// keep `ε (ω² + σ)²/(σω²)`. With a complete basis `Σ φφᵀ/ω²` then reproduces `K⁻¹` of a
 /// supported structure to round-off. The shift keeps `K + σM` positive definite when `K`
 /// has rigid-body modes (their `ω²` come out within `ε σ` of zero, either sign). Fails with
-/// [`FeError::NotPositiveDefinite`] when `K + σM` or `M` is not positive definite.
+/// [`FeError::DenseShiftNotPositiveDefinite`] when `K + σM` is not positive definite,
+/// [`FeError::DenseMassNotPositive`] when `M` is not, and [`FeError::DenseEigen`] when the
+/// eigensolver fails.
 pub fn dense_generalised_eigen(
     k: &Mat<f64>,
     m: &Mat<f64>,
@@ -113,9 +110,7 @@ pub fn dense_generalised_eigen(
     let shifted = Mat::<f64>::from_fn(n, n, |i, j| k[(i, j)] + sigma * m[(i, j)]);
     let l = shifted
         .llt(Side::Lower)
-        .map_err(|e| FeError::NotPositiveDefinite {
-            detail: format!("K + σM (σ = {sigma:e} 1/s²) of the dense eigenproblem: {e:?}"),
-        })?
+        .map_err(|source| FeError::DenseShiftNotPositiveDefinite { sigma, source })?
         .L()
         .to_owned();
     let mut a = m.clone();
@@ -126,17 +121,10 @@ pub fn dense_generalised_eigen(
     drop((a, at));
     let evd = b
         .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| FeError::NotPositiveDefinite {
-            detail: format!("dense symmetric eigensolver: {e:?}"),
-        })?;
+        .map_err(|error| FeError::DenseEigen { error })?;
     let mu = evd.S().column_vector();
     if let Some(i) = (0..n).find(|&i| mu[i].is_nan() || mu[i] <= 0.0) {
-        return Err(FeError::NotPositiveDefinite {
-            detail: format!(
-                "mass matrix of the dense eigenproblem: eigenvalue {} of L⁻¹ M L⁻ᵀ",
-                mu[i]
-            ),
-        });
+        return Err(FeError::DenseMassNotPositive { eigenvalue: mu[i] });
     }
     let mut y = evd.U().to_owned();
     l.transpose().solve_upper_triangular_in_place(y.as_mut());

@@ -29,9 +29,9 @@ impl Rng {
 pub(super) fn dense_eig(a: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), EigenError> {
     let e = a
         .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| EigenError::Factorization {
-            shift_rad2_s2: f64::NAN,
-            reason: format!("dense symmetric eigensolver of a projected matrix failed: {e:?}"),
+        .map_err(|error| EigenError::DenseEigen {
+            what: "projected Lanczos matrix",
+            error,
         })?;
     let s = e.S();
     let vals: Vec<f64> = (0..a.nrows()).map(|i| s[i]).collect();

@@ -273,12 +273,9 @@ pub(super) fn dense_symmetric_eigen(
     what: &'static str,
 ) -> Result<faer::linalg::solvers::SelfAdjointEigen<f64>, SubstructureError> {
     a.self_adjoint_eigen(Side::Lower)
-        .map_err(|e| SubstructureError::Eigen {
+        .map_err(|error| SubstructureError::Eigen {
             what,
-            source: EigenError::Factorization {
-                shift_rad2_s2: f64::NAN,
-                reason: format!("dense symmetric eigensolver failed: {e:?}"),
-            },
+            source: EigenError::DenseEigen { what, error },
         })
 }
 
@@ -445,17 +442,20 @@ pub(super) fn sleeper_basis(
     cutoff_hz: f64,
 ) -> Result<ComponentBasis, SubstructureError> {
     let n = k.nrows();
-    let eig_err = |what: &'static str, reason: String| SubstructureError::Eigen {
-        what,
-        source: EigenError::Factorization {
-            shift_rad2_s2: f64::NAN,
-            reason,
-        },
+    let cholesky_err = |what: &'static str, shift_rad2_s2: f64| {
+        move |source| SubstructureError::Eigen {
+            what,
+            source: EigenError::DenseCholesky {
+                what,
+                shift_rad2_s2,
+                source,
+            },
+        }
     };
     // Generalised problem via M^{-1/2} (the lumped or consistent M is definite).
     let lm = m
         .llt(Side::Lower)
-        .map_err(|e| eig_err("sleeper mass", format!("{e:?}")))?;
+        .map_err(cholesky_err("sleeper mass", 0.0))?;
     let l = lm.L().to_owned();
     // A = L⁻¹ K L⁻ᵀ.
     use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
@@ -466,7 +466,13 @@ pub(super) fn sleeper_basis(
     let a = Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
     let e = a
         .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| eig_err("sleeper modes", format!("{e:?}")))?;
+        .map_err(|error| SubstructureError::Eigen {
+            what: "sleeper modes",
+            source: EigenError::DenseEigen {
+                what: "sleeper modes",
+                error,
+            },
+        })?;
     let lam_c = hz_to_omega2(cutoff_hz);
     let s = e.S().column_vector();
     let kept: Vec<usize> = (0..n).filter(|&i| s[i] < lam_c).collect();
@@ -478,7 +484,7 @@ pub(super) fn sleeper_basis(
     let shifted = Mat::from_fn(n, n, |i, j| k[(i, j)] + alpha * m[(i, j)]);
     let ls = shifted
         .llt(Side::Lower)
-        .map_err(|e| eig_err("sleeper attachment factorisation", format!("{e:?}")))?;
+        .map_err(cholesky_err("sleeper attachment factorisation", -alpha))?;
     use faer::linalg::solvers::Solve;
     let mut att = f;
     ls.solve_in_place(att.as_mut());

@@ -203,11 +203,12 @@ pub fn reduced_modes(
     });
     let chol = shift
         .llt(Side::Lower)
-        .map_err(|e| SubstructureError::Eigen {
+        .map_err(|source| SubstructureError::Eigen {
             what: "reduced track eigenproblem (inverse iteration)",
-            source: EigenError::Factorization {
+            source: EigenError::DenseCholesky {
+                what: "reduced stiffness K_red + αI",
                 shift_rad2_s2: -INVERSE_ITERATION_SHIFT,
-                reason: format!("K_red + αI is not positive definite: {e:?}"),
+                source,
             },
         })?;
     for _ in 0..INVERSE_ITERATIONS {
