@@ -190,47 +190,24 @@ impl FlatBlockPatch {
             AssemblyOptions::default(),
         )?;
         let factor = Cholesky::new(&fm.k)?;
-        // the unit tractions (1 Pa) on the source element's FE faces, in x, y and along the
-        // inward normal −z, each face's force shared equally by its four nodes
         let a = self.element_m;
-        let top = nz;
-        let faces = fine_faces(&xs, &ys, -0.5 * a, 0.5 * a);
-        let mut rhs = Mat::<f64>::zeros(dofmap.n_free(), 3);
-        for &(i, j) in &faces {
-            let area = (xs[i + 1] - xs[i]) * (ys[j + 1] - ys[j]);
-            for (di, dj) in [(0, 0), (1, 0), (1, 1), (0, 1)] {
-                let node = block_node(nx, ny, i + di, j + dj, top);
-                for (col, (dir, sign)) in [(0, 1.0), (1, 1.0), (2, -1.0)].into_iter().enumerate() {
-                    if let Some(f) = dofmap.free_index(3 * node + dir) {
-                        rhs[(f, col)] += sign * 0.25 * area;
-                    }
-                }
-            }
-        }
-        factor.solve_in_place(&mut rhs)?;
+        let surface = Surface {
+            xs: &xs,
+            ys: &ys,
+            node: &|i, j| block_node(nx, ny, i, j, nz),
+        };
         let half = self.half_elements as isize;
-        let side = 2 * self.half_elements + 1;
-        let mut c = Vec::with_capacity(side * side);
-        for ox in -half..=half {
-            for oy in -half..=half {
-                let (px, py) = (ox as f64 * a, oy as f64 * a);
-                let mut cij = [[0.0; 3]; 3];
-                for (dir, row) in cij.iter_mut().enumerate() {
-                    // the inward normal is −z
-                    let sign = if dir == 2 { -1.0 } else { 1.0 };
-                    for (load, value) in row.iter_mut().enumerate() {
-                        *value = sign
-                            * surface_value(&xs, &ys, px, py, |i, j| {
-                                let node = block_node(nx, ny, i, j, top);
-                                dofmap
-                                    .free_index(3 * node + dir)
-                                    .map_or(0.0, |f| rhs[(f, load)])
-                            });
-                    }
-                }
-                c.push(cij);
-            }
-        }
+        let field: Vec<[f64; 2]> = (-half..=half)
+            .flat_map(|ox| (-half..=half).map(move |oy| [ox as f64 * a, oy as f64 * a]))
+            .collect();
+        let mut c = condense(
+            &dofmap,
+            &factor,
+            &surface,
+            &[[-0.5 * a, 0.5 * a, -0.5 * a, 0.5 * a]],
+            &field,
+        )?;
+        let c = c.pop().expect("one source");
         Ok(SurfaceKernel {
             half: self.half_elements,
             element_m: a,
@@ -240,21 +217,89 @@ impl FlatBlockPatch {
     }
 }
 
-/// The FE top faces `(i, j)` whose centres lie in `[lo, hi]²` (m).
-fn fine_faces(xs: &[f64], ys: &[f64], lo: f64, hi: f64) -> Vec<(usize, usize)> {
-    let inside = |p: &[f64], i: usize| {
-        let c = 0.5 * (p[i] + p[i + 1]);
-        c > lo && c < hi
-    };
-    let mut out = Vec::new();
-    for i in 0..xs.len() - 1 {
-        for j in 0..ys.len() - 1 {
-            if inside(xs, i) && inside(ys, j) {
-                out.push((i, j));
+/// The contact surface of a submodel: FE nodes on the tensor grid `xs × ys` (m, the surface
+/// projected on the contact plane, `x` along the rail, `y` across), `node(i, j)` the global
+/// node at `(xs[i], ys[j])`; the inward normal is −z.
+pub(crate) struct Surface<'a> {
+    pub xs: &'a [f64],
+    pub ys: &'a [f64],
+    pub node: &'a dyn Fn(usize, usize) -> usize,
+}
+
+/// `∫ N_k` (m) over `[lo, hi]` of the 1D hat functions on the nodes `p`: `(k, integral)`.
+fn interval_weights(p: &[f64], lo: f64, hi: f64) -> Vec<(usize, f64)> {
+    let mut out: Vec<(usize, f64)> = Vec::new();
+    for k in 0..p.len() - 1 {
+        let (a, b) = (lo.max(p[k]), hi.min(p[k + 1]));
+        if b <= a {
+            continue;
+        }
+        let h = p[k + 1] - p[k];
+        let left = ((p[k + 1] - a).powi(2) - (p[k + 1] - b).powi(2)) / (2.0 * h);
+        let right = ((b - p[k]).powi(2) - (a - p[k]).powi(2)) / (2.0 * h);
+        for (node, w) in [(k, left), (k + 1, right)] {
+            match out.last_mut() {
+                Some(last) if last.0 == node => last.1 += w,
+                _ => out.push((node, w)),
             }
         }
     }
     out
+}
+
+/// The influence coefficients of `sources` (rectangles `[x0, x1, y0, y1]`, m) seen at
+/// `field` points (m): per source, per field point, `c[i][j]` the displacement `i` per unit
+/// uniform traction `j` (components x, y, inward normal). A unit traction's consistent nodal
+/// loads are the integrals of the surface's bilinear shape functions over the rectangle
+/// (exact on the projected tensor grid); the field values are interpolated bilinearly.
+pub(crate) fn condense(
+    dofmap: &DofMap,
+    factor: &Cholesky,
+    surface: &Surface<'_>,
+    sources: &[[f64; 4]],
+    field: &[[f64; 2]],
+) -> Result<Vec<Vec<[[f64; 3]; 3]>>, StructureError> {
+    // the inward normal is −z
+    const SIGN: [f64; 3] = [1.0, 1.0, -1.0];
+    let mut rhs = Mat::<f64>::zeros(dofmap.n_free(), 3 * sources.len());
+    for (s, r) in sources.iter().enumerate() {
+        let wx = interval_weights(surface.xs, r[0], r[1]);
+        let wy = interval_weights(surface.ys, r[2], r[3]);
+        for &(i, fx) in &wx {
+            for &(j, fy) in &wy {
+                let node = (surface.node)(i, j);
+                for (dir, sign) in SIGN.into_iter().enumerate() {
+                    if let Some(f) = dofmap.free_index(3 * node + dir) {
+                        rhs[(f, 3 * s + dir)] += sign * fx * fy;
+                    }
+                }
+            }
+        }
+    }
+    factor.solve_in_place(&mut rhs)?;
+    let out = (0..sources.len())
+        .map(|s| {
+            field
+                .iter()
+                .map(|&[px, py]| {
+                    let mut cij = [[0.0; 3]; 3];
+                    for (dir, row) in cij.iter_mut().enumerate() {
+                        for (load, value) in row.iter_mut().enumerate() {
+                            *value = SIGN[dir]
+                                * surface_value(surface.xs, surface.ys, px, py, |i, j| {
+                                    let node = (surface.node)(i, j);
+                                    dofmap
+                                        .free_index(3 * node + dir)
+                                        .map_or(0.0, |f| rhs[(f, 3 * s + load)])
+                                });
+                        }
+                    }
+                    cij
+                })
+                .collect()
+        })
+        .collect();
+    Ok(out)
 }
 
 /// The bilinear interpolation at `(px, py)` (m) of a nodal field on the top surface's
@@ -317,6 +362,8 @@ impl SurfaceKernel {
         Some(self.c[((ox + h) * side + (oy + h)) as usize])
     }
 }
+
+pub mod rail_head;
 
 #[cfg(test)]
 mod tests;

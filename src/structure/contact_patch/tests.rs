@@ -117,3 +117,114 @@ fn flat_block_convergence_table() {
         print_case(&patch);
     }
 }
+
+/// The rail-head kernel against the single-body half-space at the same offsets: the largest
+/// relative difference of the diagonal terms over the offsets `|o| ≤ near`, `|j − j'| ≤ near`,
+/// and over the whole grid.
+fn rail_head_vs_half_space(k: &rail_head::StripKernel, near: isize) -> (f64, f64) {
+    let (nx, ny) = k.dims();
+    let a = k.element_m();
+    let (e, nu) = (210e9, 0.3);
+    let (mut near_err, mut all_err) = (0.0_f64, 0.0_f64);
+    for o in -(nx as isize - 1)..=nx as isize {
+        for j in 0..ny {
+            for jp in 0..ny {
+                let fe = k.get(o, j, jp).unwrap();
+                let dy = j as isize - jp as isize;
+                let cf = single_body(o as f64 * a, dy as f64 * a, a, a, e, nu);
+                let err = (0..3)
+                    .map(|i| (fe[i][i] / cf[i][i] - 1.0).abs())
+                    .fold(0.0, f64::max);
+                all_err = all_err.max(err);
+                if o.abs() <= near && dy.abs() <= near {
+                    near_err = near_err.max(err);
+                }
+            }
+        }
+    }
+    (near_err, all_err)
+}
+
+#[test]
+fn rail_head_kernel_is_mirror_symmetric() {
+    // a small segment: the check is of the load placement and the field sampling across the
+    // rail, exact up to round-off; the kernel's values are the validation run's business
+    let mut patch = rail_head::RailHeadPatch::steel(0.8e-3, 2, 4);
+    patch.refine = 1;
+    patch.half_length_m = 0.05;
+    let k = patch.kernel().unwrap();
+    let (nx, ny) = k.dims();
+    // the upright UIC54 section is symmetric about y = 0: mirroring both columns keeps the
+    // normal and the x terms and flips the sign of the y couplings
+    for o in -(nx as isize - 1)..=nx as isize {
+        for j in 0..ny {
+            for jp in 0..ny {
+                let (c, m) = (
+                    k.get(o, j, jp).unwrap(),
+                    k.get(o, ny - 1 - j, ny - 1 - jp).unwrap(),
+                );
+                let scale = c[2][2].abs();
+                for (i, jj) in [(0, 0), (1, 1), (2, 2), (0, 2), (2, 0)] {
+                    assert!((c[i][jj] - m[i][jj]).abs() < 1e-6 * scale, "{o} {j} {jp}");
+                }
+                for (i, jj) in [(1, 2), (2, 1), (0, 1)] {
+                    assert!((c[i][jj] + m[i][jj]).abs() < 1e-6 * scale, "{o} {j} {jp}");
+                }
+            }
+        }
+    }
+    print_rail_head_ratios(&k);
+}
+
+/// The ratio of the rail head's diagonal terms to the half-space's at the source element and
+/// at the farthest offset along and across the grid.
+fn print_rail_head_ratios(k: &rail_head::StripKernel) {
+    let (nx, ny) = k.dims();
+    let a = k.element_m();
+    let ratio = |o: isize, j: usize, jp: usize| {
+        let fe = k.get(o, j, jp).unwrap();
+        let dy = (j as f64 - jp as f64) * a;
+        let cf = single_body(o as f64 * a, dy, a, a, 210e9, 0.3);
+        [0, 1, 2].map(|i| fe[i][i] / cf[i][i])
+    };
+    let mid = ny / 2;
+    println!(
+        "{} DOFs; FE / half-space (xx, yy, nn): at the source {:.3?}, {} rows on {:.3?}, across the grid {:.3?}",
+        k.n_dofs(),
+        ratio(0, mid, mid),
+        nx,
+        ratio(nx as isize, mid, mid),
+        ratio(0, ny - 1, 0)
+    );
+}
+
+/// The rail head's kernel against the half-space on a passage-sized grid (P2's first
+/// measurement in validation/contact_patch.md).
+#[test]
+#[ignore = "validation: the rail head's kernel (minutes)"]
+fn rail_head_kernel_against_the_half_space() {
+    let case = std::env::var("CASE").unwrap_or_else(|_| "0.8 3 16 12".into());
+    let v: Vec<f64> = case
+        .split_whitespace()
+        .map(|w| w.parse().unwrap())
+        .collect();
+    let mut patch = rail_head::RailHeadPatch::steel(v[0] * 1e-3, v[2] as usize, v[3] as usize);
+    patch.refine = v[1] as usize;
+    println!("{} DOFs", patch.n_dofs().unwrap());
+    let t = std::time::Instant::now();
+    let k = patch.kernel().unwrap();
+    let (near, all) = rail_head_vs_half_space(&k, 2);
+    print_rail_head_ratios(&k);
+    println!(
+        "a {} mm refine {} grid {}×{}: {} DOFs, {:.1} s: diagonal terms vs the half-space: \
+         within ±2 elements {:.2} %, over the grid {:.2} %",
+        v[0],
+        v[1],
+        v[2],
+        v[3],
+        k.n_dofs(),
+        t.elapsed().as_secs_f64(),
+        100.0 * near,
+        100.0 * all
+    );
+}
