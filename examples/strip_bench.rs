@@ -6,7 +6,8 @@
 //!
 //! Run: `cargo run --release --example strip_bench [repeats]` (default 2,000 products each).
 
-use corrugation::contact::influence::{coefficients, strip::StripConvolver, Convolver};
+use corrugation::contact::influence::strip::{half_space_kernel, StripConvolver};
+use corrugation::contact::influence::Convolver;
 use std::time::Instant;
 
 #[path = "common/mod.rs"]
@@ -54,31 +55,11 @@ fn main() -> anyhow::Result<()> {
     for (nx, ny) in [(32, 24), (44, 32)] {
         let (dx, dy) = (0.45e-3, 0.5e-3);
         let (es, g, nu) = (115e9, 80.8e9, 0.28);
-        let hs = move |o: isize, j: usize, jp: usize| {
-            coefficients(
-                o as f64 * dx,
-                (j as f64 - jp as f64) * dy,
-                dx,
-                dy,
-                es,
-                g,
-                nu,
-            )
-        };
         let mut conv = Convolver::new(nx, ny, dx, dy, es, g, nu);
-        let mut sn = StripConvolver::new(nx, ny, 1, |o, j, jp| {
-            let mut k = [[0.0; 3]; 3];
-            k[0][0] = hs(o, j, jp).zz;
-            k
-        });
-        let mut st = StripConvolver::new(nx, ny, 2, |o, j, jp| {
-            let c = hs(o, j, jp);
-            [[c.xx, c.xy, 0.0], [c.xy, c.yy, 0.0], [0.0; 3]]
-        });
-        let mut s3 = StripConvolver::new(nx, ny, 3, |o, j, jp| {
-            let c = hs(o, j, jp);
-            [[c.xx, c.xy, 0.0], [c.xy, c.yy, 0.0], [0.0, 0.0, c.zz]]
-        });
+        let kernel = |comps| half_space_kernel((dx, dy), (es, g, nu), comps);
+        let mut sn = StripConvolver::new(nx, ny, 1, kernel(1));
+        let mut st = StripConvolver::new(nx, ny, 2, kernel(2));
+        let mut s3 = StripConvolver::new(nx, ny, 3, kernel(3));
         let n = nx * ny;
         // a Hertz-like pressure over the middle of the grid and a traction of the same shape
         let p: Vec<f64> = (0..n)

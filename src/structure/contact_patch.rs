@@ -28,7 +28,7 @@ use crate::fe::block::{block_node, graded_block_mesh};
 use crate::fe::material::IsotropicElastic;
 use crate::fe::solve::Cholesky;
 use crate::mesh::grading::{grade, FineZone, GradingSpec};
-use crate::mesh::Part;
+use crate::mesh::{Mesh, Part};
 
 use super::StructureError;
 
@@ -79,13 +79,7 @@ impl FlatBlockPatch {
     }
 
     fn check(&self) -> Result<(), StructureError> {
-        let bad = |name: &'static str, value: f64, allowed: &'static str| {
-            Err(StructureError::PatchParameter {
-                name,
-                value,
-                allowed,
-            })
-        };
+        let bad = out_of_range;
         let a = self.element_m;
         if !(1e-5..=1e-2).contains(&a) {
             return bad("element_m", a, "1e-5 to 1e-2 m");
@@ -114,10 +108,7 @@ impl FlatBlockPatch {
                 "at least twice the fine zone's half-width (half_elements + 1/2) · element_m",
             );
         }
-        if !(self.max_ratio > 1.0 && self.max_ratio <= 3.0) {
-            return bad("max_ratio", self.max_ratio, "above 1, at most 3");
-        }
-        Ok(())
+        check_ratio(self.max_ratio)
     }
 
     /// The FE node planes `[xs, ys, zs]` (m): faces of `a / refine` over the source element
@@ -130,23 +121,23 @@ impl FlatBlockPatch {
         let a = self.element_m;
         let h = a / self.refine as f64;
         let x_f = (self.half_elements as f64 + 0.5) * a;
-        let zone = |start_m: f64, end_m: f64, size_m: f64| FineZone {
-            start_m,
-            end_m,
-            size_m,
-        };
-        let mut across = GradingSpec::new(-self.extent_m, self.extent_m, self.extent_m / 4.0);
         let h_zone = a / self.zone_refine as f64;
-        across.zones = vec![zone(-1.5 * a, 1.5 * a, h), zone(-x_f, x_f, h_zone)];
-        across.breakpoints_m = vec![-x_f, -0.5 * a, 0.5 * a, x_f];
-        across.max_ratio = self.max_ratio;
-        let across = grade(&across)?;
+        let across = graded_axis(
+            [-self.extent_m, self.extent_m],
+            self.extent_m / 4.0,
+            [(1.5 * a, h), (x_f, h_zone)],
+            vec![-x_f, -0.5 * a, 0.5 * a, x_f],
+            self.max_ratio,
+        )?;
         let depth_f = self.fine_depth_elements as f64 * a;
-        let mut down = GradingSpec::new(-self.extent_m, 0.0, self.extent_m / 4.0);
-        down.zones = vec![zone(-1.5 * a, 0.0, h), zone(-depth_f, 0.0, h_zone)];
-        down.breakpoints_m = vec![-depth_f];
-        down.max_ratio = self.max_ratio;
-        Ok([across.clone(), across, grade(&down)?])
+        let down = graded_axis(
+            [-self.extent_m, 0.0],
+            self.extent_m / 4.0,
+            [(1.5 * a, h), (depth_f, h_zone)],
+            vec![-depth_f],
+            self.max_ratio,
+        )?;
+        Ok([across.clone(), across, down])
     }
 
     /// Free DOFs of the submodel (nodes of the fixed far faces removed).
@@ -180,16 +171,7 @@ impl FlatBlockPatch {
                 }
             }
         }
-        let dofmap = DofMap::with_constraints(mesh.nodes.len(), &fixed)?;
-        let fm = assemble(
-            &mesh,
-            &[self.material],
-            &[],
-            &[],
-            &dofmap,
-            AssemblyOptions::default(),
-        )?;
-        let factor = Cholesky::new(&fm.k)?;
+        let (dofmap, factor) = factorise(&mesh, &fixed, self.material)?;
         let a = self.element_m;
         let surface = Surface {
             xs: &xs,
@@ -215,6 +197,72 @@ impl FlatBlockPatch {
             n_dofs,
         })
     }
+}
+
+/// The parameter error of a patch: `name = value`, allowed `allowed`.
+pub(crate) fn out_of_range<T>(
+    name: &'static str,
+    value: f64,
+    allowed: &'static str,
+) -> Result<T, StructureError> {
+    Err(StructureError::PatchParameter {
+        name,
+        value,
+        allowed,
+    })
+}
+
+/// The grading ratio's range check (> 1, ≤ 3).
+fn check_ratio(max_ratio: f64) -> Result<(), StructureError> {
+    if max_ratio > 1.0 && max_ratio <= 3.0 {
+        Ok(())
+    } else {
+        out_of_range("max_ratio", max_ratio, "above 1, at most 3")
+    }
+}
+
+/// The DOF map with the `fixed` DOFs held and the Cholesky factor of the stiffness of `mesh`
+/// (one material).
+fn factorise(
+    mesh: &Mesh,
+    fixed: &[usize],
+    material: IsotropicElastic,
+) -> Result<(DofMap, Cholesky), StructureError> {
+    let dofmap = DofMap::with_constraints(mesh.nodes.len(), fixed)?;
+    let fm = assemble(
+        mesh,
+        &[material],
+        &[],
+        &[],
+        &dofmap,
+        AssemblyOptions::default(),
+    )?;
+    let factor = Cholesky::new(&fm.k)?;
+    Ok((dofmap, factor))
+}
+
+/// Node positions (m) over `[start, end]`: elements of at most `size` within `±reach` of 0
+/// (clipped to the interval) for each `(reach, size)` of `zones`, graded with `max_ratio` to
+/// at most `coarse_m`, with the `breakpoints_m` as nodes.
+pub(crate) fn graded_axis(
+    [start_m, end_m]: [f64; 2],
+    coarse_m: f64,
+    zones: [(f64, f64); 2],
+    breakpoints_m: Vec<f64>,
+    max_ratio: f64,
+) -> Result<Vec<f64>, StructureError> {
+    let mut spec = GradingSpec::new(start_m, end_m, coarse_m);
+    spec.zones = zones
+        .iter()
+        .map(|&(reach, size_m)| FineZone {
+            start_m: (-reach).max(start_m),
+            end_m: reach.min(end_m),
+            size_m,
+        })
+        .collect();
+    spec.breakpoints_m = breakpoints_m;
+    spec.max_ratio = max_ratio;
+    Ok(grade(&spec)?)
 }
 
 /// The contact surface of a submodel: FE nodes on the tensor grid `xs × ys` (m, the surface

@@ -21,7 +21,34 @@ use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex64;
 use std::sync::Arc;
 
-use super::next_fast_len;
+use super::{coefficients, next_fast_len};
+
+/// The quasi-identical half-space's kernel ([`coefficients`]; element `dx × dy` in m, `E*`,
+/// `G` in Pa, ν) in the form [`StripConvolver::new`] takes, for `comps` components: 1 → the
+/// normal term; 2 → the tangential block (x, y); 3 → x, y and the normal, uncoupled. For
+/// checks and benchmarks of the strip products against [`super::Convolver`].
+pub fn half_space_kernel(
+    (dx, dy): (f64, f64),
+    (e_star, g, nu): (f64, f64, f64),
+    comps: usize,
+) -> impl Fn(isize, usize, usize) -> [[f64; 3]; 3] {
+    move |o, j, jp| {
+        let c = coefficients(
+            o as f64 * dx,
+            (j as f64 - jp as f64) * dy,
+            dx,
+            dy,
+            e_star,
+            g,
+            nu,
+        );
+        match comps {
+            1 => [[c.zz, 0.0, 0.0], [0.0; 3], [0.0; 3]],
+            2 => [[c.xx, c.xy, 0.0], [c.xy, c.yy, 0.0], [0.0; 3]],
+            _ => [[c.xx, c.xy, 0.0], [c.xy, c.yy, 0.0], [0.0, 0.0, c.zz]],
+        }
+    }
+}
 
 /// FFT-along-x, dense-across influence products on an `nx × ny` grid (element `i * ny + j`,
 /// `i` along x) with `c` components per element.

@@ -364,27 +364,10 @@ fn strip_products_equal_dense_sums() {
 fn strip_products_of_the_half_space_equal_the_convolver() {
     let (nx, ny, dx, dy) = (16, 12, 0.45e-3, 0.5e-3);
     let (es, g, nu) = (115e9, 80e9, 0.3);
-    let hs = |o: isize, j: usize, jp: usize| {
-        coefficients(
-            o as f64 * dx,
-            (j as f64 - jp as f64) * dy,
-            dx,
-            dy,
-            es,
-            g,
-            nu,
-        )
-    };
     let mut conv = Convolver::new(nx, ny, dx, dy, es, g, nu);
-    let mut normal = strip::StripConvolver::new(nx, ny, 1, |o, j, jp| {
-        let mut k = [[0.0; 3]; 3];
-        k[0][0] = hs(o, j, jp).zz;
-        k
-    });
-    let mut tangential = strip::StripConvolver::new(nx, ny, 2, |o, j, jp| {
-        let c = hs(o, j, jp);
-        [[c.xx, c.xy, 0.0], [c.xy, c.yy, 0.0], [0.0; 3]]
-    });
+    let kernel = |comps| strip::half_space_kernel((dx, dy), (es, g, nu), comps);
+    let mut normal = strip::StripConvolver::new(nx, ny, 1, kernel(1));
+    let mut tangential = strip::StripConvolver::new(nx, ny, 2, kernel(2));
     let n = nx * ny;
     let p: Vec<f64> = (0..n).map(|k| ((k * 31) % 17) as f64 * 1e6).collect();
     let q: Vec<f64> = (0..n).map(|k| ((k * 13) % 7) as f64 * 1e6 - 3e6).collect();

@@ -14,14 +14,14 @@
 //! inward normal is −z; the fixed foot and ends stand for the track's support and continuity,
 //! which the global model carries (the split against it is theory §6.9, not done here).
 
-use crate::fe::assembly::{assemble, AssemblyOptions, DofMap};
 use crate::fe::material::IsotropicElastic;
-use crate::fe::solve::Cholesky;
-use crate::mesh::grading::{grade, FineZone, GradingSpec};
 use crate::mesh::rail::extrude_rail;
 use crate::mesh::section::{SectionMesh, SectionParams};
 
-use super::{condense, StructureError, Surface, MAX_PATCH_DOFS};
+use super::{
+    check_ratio, condense, factorise, graded_axis, out_of_range, StructureError, Surface,
+    MAX_PATCH_DOFS,
+};
 
 /// A UIC54 rail-head segment carrying an `nx × ny` contact grid of square elements.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -98,13 +98,7 @@ impl RailHeadPatch {
     }
 
     fn check(&self) -> Result<(), StructureError> {
-        let bad = |name: &'static str, value: f64, allowed: &'static str| {
-            Err(StructureError::PatchParameter {
-                name,
-                value,
-                allowed,
-            })
-        };
+        let bad = out_of_range;
         if !(1e-4..=5e-3).contains(&self.element_m) {
             return bad("element_m", self.element_m, "1e-4 to 5e-3 m");
         }
@@ -130,10 +124,7 @@ impl RailHeadPatch {
                 "finite and at least 20 nx · element_m",
             );
         }
-        if !(self.max_ratio > 1.0 && self.max_ratio <= 3.0) {
-            return bad("max_ratio", self.max_ratio, "above 1, at most 3");
-        }
-        Ok(())
+        check_ratio(self.max_ratio)
     }
 
     /// The section mesh: the running-surface zone of faces `a / refine` covers the grid and
@@ -155,16 +146,13 @@ impl RailHeadPatch {
         let a = self.element_m;
         let h = a / self.refine as f64;
         let x_f = (self.nx as f64 + 0.5) * a;
-        let zone = |start_m: f64, end_m: f64, size_m: f64| FineZone {
-            start_m,
-            end_m,
-            size_m,
-        };
-        let mut spec = GradingSpec::new(-self.half_length_m, self.half_length_m, 0.02);
-        spec.zones = vec![zone(-1.5 * a, 1.5 * a, h), zone(-x_f, x_f, a)];
-        spec.breakpoints_m = vec![-x_f, -0.5 * a, 0.5 * a, x_f];
-        spec.max_ratio = self.max_ratio;
-        Ok(grade(&spec)?)
+        graded_axis(
+            [-self.half_length_m, self.half_length_m],
+            0.02,
+            [(1.5 * a, h), (x_f, a)],
+            vec![-x_f, -0.5 * a, 0.5 * a, x_f],
+            self.max_ratio,
+        )
     }
 
     /// Free DOFs of the submodel (before building it).
@@ -201,16 +189,7 @@ impl RailHeadPatch {
             };
             fixed.extend(held.iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]));
         }
-        let dofmap = DofMap::with_constraints(mesh.nodes.len(), &fixed)?;
-        let fm = assemble(
-            &mesh,
-            &[self.material],
-            &[],
-            &[],
-            &dofmap,
-            AssemblyOptions::default(),
-        )?;
-        let factor = Cholesky::new(&fm.k)?;
+        let (dofmap, factor) = factorise(&mesh, &fixed, self.material)?;
         let running = &section.running_surface;
         let ys: Vec<f64> = running.iter().map(|&j| section.nodes[j][0]).collect();
         let node = |i: usize, j: usize| topo.node(i, running[j]);
