@@ -32,8 +32,11 @@ use crate::mesh::{Mesh, Part};
 
 use super::StructureError;
 
-/// The largest flat-block submodel built (free DOFs): about 6 GB of Cholesky factor on this
-/// kind of graded 3D block. Larger requests are refused, naming the parameter to lower.
+/// The largest patch submodel built (free DOFs). The largest run so far, a 431,244-DOF flat
+/// block, took 8.5 minutes on two cores; the factor's fill grows faster than the DOFs, so
+/// this bound (about 3.5 times that) keeps a request from running for hours or exhausting a
+/// 24 GiB machine (not measured at the bound). Larger requests are refused, naming the
+/// parameters to lower.
 pub const MAX_PATCH_DOFS: usize = 1_500_000;
 
 /// A flat elastic block whose top face `z = 0` carries the contact grid, centred on the
