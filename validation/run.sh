@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Heavy validation runs, kept out of CI (each is minutes on 2 cores). Run from the repo root:
 #   bash validation/run.sh            # everything
-#   bash validation/run.sh contact    # one group: contact | modes | moving | explicit | selection | bench
+#   bash validation/run.sh contact    # one group: contact | patch | modes | moving | explicit | selection | bench
 # Results are printed; compare them with the expectations in validation/README.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,6 +10,12 @@ group="${1:-all}"
 if [[ "$group" == all || "$group" == contact ]]; then
   echo "== contact: Kalker creep coefficients on a 48x48 grid (within 2 %), Carter on 200 cells"
   cargo test --release --lib contact::tests -- --ignored --nocapture
+fi
+if [[ "$group" == all || "$group" == patch ]]; then
+  echo "== patch: the local FE contact patch (validation/contact_patch.md): the flat block against"
+  echo "   Boussinesq-Cerruti (P1, ~25 min, up to ~6 GB), the rail head's kernel against the half-space (P2b, ~7 min)"
+  cargo test --profile test-opt --lib flat_block_convergence_table -- --ignored --nocapture
+  CASE="0.8 3 4 4" cargo test --profile test-opt --lib rail_head_kernel_against_the_half_space -- --ignored --nocapture
 fi
 if [[ "$group" == all || "$group" == modes ]]; then
   echo "== modes: bar-like rail longitudinal modes vs n c/2L; pinned-pinned mode on rigid supports"
