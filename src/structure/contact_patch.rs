@@ -145,21 +145,16 @@ impl FlatBlockPatch {
 
     /// Free DOFs of the submodel (nodes of the fixed far faces removed).
     pub fn n_dofs(&self) -> Result<usize, StructureError> {
-        let [xs, ys, zs] = self.planes()?;
-        Ok(3 * (xs.len() - 2) * (ys.len() - 2) * (zs.len() - 1))
+        Ok(block_free_dofs(&self.planes()?))
     }
 
     /// Builds and solves the submodel: the kernel for offsets `−half..=half` along x and y.
     /// Refuses a submodel beyond [`MAX_PATCH_DOFS`] before building it.
     pub fn kernel(&self) -> Result<SurfaceKernel, StructureError> {
-        let n_dofs = self.n_dofs()?;
-        if n_dofs > MAX_PATCH_DOFS {
-            return Err(StructureError::PatchTooLarge {
-                dofs: n_dofs,
-                limit: MAX_PATCH_DOFS,
-            });
-        }
-        let [xs, ys, zs] = self.planes()?;
+        let planes = self.planes()?;
+        let n_dofs = block_free_dofs(&planes);
+        check_size(n_dofs)?;
+        let [xs, ys, zs] = planes;
         let mesh = graded_block_mesh([&xs, &ys, &zs], 0, Part::Rail);
         let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
         let mut fixed = Vec::new();
@@ -213,6 +208,22 @@ pub(crate) fn out_of_range<T>(
         value,
         allowed,
     })
+}
+
+/// Free DOFs of a block on the node planes `[xs, ys, zs]` whose sides and bottom are fixed.
+fn block_free_dofs([xs, ys, zs]: &[Vec<f64>; 3]) -> usize {
+    3 * (xs.len() - 2) * (ys.len() - 2) * (zs.len() - 1)
+}
+
+/// Refuses a submodel of more than [`MAX_PATCH_DOFS`] free DOFs, before it is built.
+fn check_size(n_dofs: usize) -> Result<(), StructureError> {
+    if n_dofs > MAX_PATCH_DOFS {
+        return Err(StructureError::PatchTooLarge {
+            dofs: n_dofs,
+            limit: MAX_PATCH_DOFS,
+        });
+    }
+    Ok(())
 }
 
 /// The grading ratio's range check (> 1, ≤ 3).

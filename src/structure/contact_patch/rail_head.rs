@@ -19,9 +19,14 @@ use crate::mesh::rail::extrude_rail;
 use crate::mesh::section::{SectionMesh, SectionParams};
 
 use super::{
-    check_ratio, condense, factorise, graded_axis, out_of_range, StructureError, Surface,
-    MAX_PATCH_DOFS,
+    check_ratio, check_size, condense, factorise, graded_axis, out_of_range, StructureError,
+    Surface,
 };
+
+/// Free DOFs of a segment: every section node of the inner planes but the foot's.
+fn free_dofs(section: &SectionMesh, planes: &[f64]) -> usize {
+    3 * (section.nodes.len() - section.foot_underside.len()) * (planes.len() - 2)
+}
 
 /// A UIC54 rail-head segment carrying an `nx × ny` contact grid of square elements.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -157,25 +162,22 @@ impl RailHeadPatch {
 
     /// Free DOFs of the submodel (before building it).
     pub fn n_dofs(&self) -> Result<usize, StructureError> {
+        let (section, planes) = self.geometry()?;
+        Ok(free_dofs(&section, &planes))
+    }
+
+    /// The checked parameters' section mesh and node planes.
+    fn geometry(&self) -> Result<(SectionMesh, Vec<f64>), StructureError> {
         self.check()?;
-        let section = self.section()?;
-        let planes = self.planes()?;
-        let free_per_plane = section.nodes.len() - section.foot_underside.len();
-        Ok(3 * free_per_plane * (planes.len() - 2))
+        Ok((self.section()?, self.planes()?))
     }
 
     /// Builds, factorises and condenses the segment. Refuses a submodel beyond
-    /// [`MAX_PATCH_DOFS`] before building it.
+    /// [`super::MAX_PATCH_DOFS`] before building it.
     pub fn kernel(&self) -> Result<StripKernel, StructureError> {
-        let n_dofs = self.n_dofs()?;
-        if n_dofs > MAX_PATCH_DOFS {
-            return Err(StructureError::PatchTooLarge {
-                dofs: n_dofs,
-                limit: MAX_PATCH_DOFS,
-            });
-        }
-        let section = self.section()?;
-        let planes = self.planes()?;
+        let (section, planes) = self.geometry()?;
+        let n_dofs = free_dofs(&section, &planes);
+        check_size(n_dofs)?;
         let (mesh, topo) = extrude_rail(&section, &planes, 0)?;
         let last = planes.len() - 1;
         let mut fixed = Vec::new();
