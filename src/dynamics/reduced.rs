@@ -34,6 +34,7 @@ use faer::sparse::SparseColMatRef;
 use faer::Mat;
 
 use super::DynamicsError;
+use crate::contact::hertz::lateral_weights;
 use crate::fe::assembly::DofMap;
 use crate::structure::{TrackStructure, WheelStructure};
 
@@ -225,55 +226,6 @@ fn project_damping(c: SparseColMatRef<'_, usize, f64>, modes: &Mat<f64>) -> Mat<
         }
     }
     phi_a.transpose() * cphi.as_ref()
-}
-
-/// Weights of nodes at lateral positions `s` (m, ascending) that interpolate the Hertz
-/// pressure `∝ √(1 − s²/b²)` centred at `s = 0` with linear hat functions. Falls back to
-/// linear interpolation of the point `s = 0` when fewer than two nodes lie within `b`.
-/// The weights sum to 1.
-pub fn lateral_weights(s: &[f64], b: f64) -> Vec<f64> {
-    let n = s.len();
-    let mut w = vec![0.0; n];
-    if n == 0 {
-        return w;
-    }
-    if n == 1 {
-        w[0] = 1.0;
-        return w;
-    }
-    let hat = |j: usize, x: f64| -> f64 {
-        if j > 0 && x >= s[j - 1] && x <= s[j] {
-            (x - s[j - 1]) / (s[j] - s[j - 1])
-        } else if j + 1 < n && x >= s[j] && x <= s[j + 1] {
-            (s[j + 1] - x) / (s[j + 1] - s[j])
-        } else if (j == 0 && x < s[0]) || (j == n - 1 && x > s[n - 1]) {
-            1.0
-        } else {
-            0.0
-        }
-    };
-    let inside = s.iter().filter(|&&v| v.abs() < b).count();
-    if b > 0.0 && inside >= 2 {
-        // Midpoint rule over the ellipse: 400 intervals is far below the mesh's error.
-        let k = 400;
-        let mut total = 0.0;
-        for q in 0..k {
-            let x = -b + (q as f64 + 0.5) * 2.0 * b / k as f64;
-            let p = (1.0 - (x / b).powi(2)).max(0.0).sqrt();
-            total += p;
-            for (j, wj) in w.iter_mut().enumerate() {
-                *wj += p * hat(j, x);
-            }
-        }
-        for wj in &mut w {
-            *wj /= total;
-        }
-    } else {
-        for (j, wj) in w.iter_mut().enumerate() {
-            *wj = hat(j, 0.0);
-        }
-    }
-    w
 }
 
 /// Modal rows of a weighted set of nodes: `rows[d·m + i] = Σ_k w_k n_d · φ_i(node_k)` for the
@@ -630,29 +582,5 @@ mod tests {
                 assert!((got[(i, j)] - want[(i, j)]).abs() < 1e-12, "{i} {j}");
             }
         }
-    }
-
-    #[test]
-    fn lateral_weights_sum_to_one_and_are_symmetric() {
-        let s: Vec<f64> = (-8..=8).map(|i| i as f64 * 0.0025).collect();
-        let w = lateral_weights(&s, 0.0054);
-        let total: f64 = w.iter().sum();
-        assert!((total - 1.0).abs() < 1e-12);
-        for i in 0..s.len() {
-            assert!((w[i] - w[s.len() - 1 - i]).abs() < 1e-12);
-        }
-        // First moment of the weights = first moment of the pressure (0 by symmetry), second
-        // moment of the elliptic pressure is b²/4; the hat interpolation adds h²/6·(share of
-        // nodes) at most.
-        let m2: f64 = w.iter().zip(&s).map(|(w, s)| w * s * s).sum();
-        let b: f64 = 0.0054;
-        assert!(m2 > b * b / 4.0 && m2 < b * b / 4.0 + 0.0025f64.powi(2) / 6.0 + 1e-12);
-    }
-
-    #[test]
-    fn lateral_weights_fall_back_to_point_interpolation() {
-        let s = [-0.03, 0.01, 0.05];
-        let w = lateral_weights(&s, 0.005);
-        assert!((w[0] - 0.25).abs() < 1e-12 && (w[1] - 0.75).abs() < 1e-12 && w[2] == 0.0);
     }
 }

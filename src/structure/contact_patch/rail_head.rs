@@ -14,9 +14,15 @@
 //! inward normal is −z; the fixed foot and ends stand for the track's support and continuity,
 //! which the global model carries (the split against it is theory §6.9, not done here).
 
+use faer::Mat;
+
+use crate::contact::hertz::lateral_weights;
+use crate::fe::assembly::DofMap;
 use crate::fe::material::IsotropicElastic;
-use crate::mesh::rail::extrude_rail;
+use crate::fe::solve::Cholesky;
+use crate::mesh::rail::{extrude_rail, RailTopology};
 use crate::mesh::section::{SectionMesh, SectionParams};
+use crate::model::Model;
 
 use super::{
     check_ratio, check_size, condense, factorise, graded_axis, out_of_range, StructureError,
@@ -26,6 +32,30 @@ use super::{
 /// Free DOFs of a segment: every section node of the inner planes but the foot's.
 fn free_dofs(section: &SectionMesh, planes: &[f64]) -> usize {
     3 * (section.nodes.len() - section.foot_underside.len()) * (planes.len() - 2)
+}
+
+/// The segment of `section` extruded through `planes`, its foot underside and both end
+/// planes held: the topology, the DOF map and the stiffness factor.
+fn segment(
+    section: &SectionMesh,
+    planes: &[f64],
+    material: IsotropicElastic,
+) -> Result<(RailTopology, DofMap, Cholesky), StructureError> {
+    let (mesh, topo) = extrude_rail(section, planes, 0)?;
+    let last = planes.len() - 1;
+    let mut fixed = Vec::new();
+    for p in 0..=last {
+        let held: Vec<usize> = if p == 0 || p == last {
+            (0..topo.n_section_nodes())
+                .map(|j| topo.node(p, j))
+                .collect()
+        } else {
+            topo.foot_underside_nodes(p)
+        };
+        fixed.extend(held.iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]));
+    }
+    let (dofmap, factor) = factorise(&mesh, &fixed, material)?;
+    Ok((topo, dofmap, factor))
 }
 
 /// A UIC54 rail-head segment carrying an `nx × ny` contact grid of square elements.
@@ -45,6 +75,10 @@ pub struct RailHeadPatch {
     pub half_length_m: f64,
     /// Largest ratio of neighbouring element sizes along the rail (> 1, ≤ 3).
     pub max_ratio: f64,
+    /// The global model's rail mesh: the section's foot and web and the element length along
+    /// the rail away from the grid are the global model's, so that the patch differs from
+    /// its global twin only near the contact.
+    pub global: GlobalRailMesh,
 }
 
 /// The kernel of a rail-head patch: `get(o, j, jp)[a][b]` (m/Pa) is the displacement `a` at the
@@ -76,6 +110,51 @@ impl StripKernel {
         self.n_dofs
     }
 
+    /// The kernel the contact uses beside a global model whose compliance at the contact is
+    /// `global` (m/N, components x, y, inward normal): every coefficient less `global · a²`,
+    /// the global twin's displacement under the force `a²` of a unit traction on one element
+    /// (theory §6.9, the split). `global` is [`RailHeadPatch::global_compliance`] of the same
+    /// segment.
+    pub fn split(&self, global: &[[f64; 3]; 3]) -> StripKernel {
+        let area = self.element_m * self.element_m;
+        let mut out = self.clone();
+        for c in &mut out.c {
+            for (row, g) in c.iter_mut().zip(global) {
+                for (v, gv) in row.iter_mut().zip(g) {
+                    *v -= gv * area;
+                }
+            }
+        }
+        out
+    }
+
+    /// The compliance (m/N) of a traction distribution of the given `shape` on the `nx × ny`
+    /// grid (row-major `i · ny + j`, `i` along x; non-negative, not all zero): `c[a][b]` is
+    /// the displacement `a`, averaged with the shape as weights (work-conjugate), per unit
+    /// total force of component `b` distributed as the shape. `None` if the shape's length is
+    /// not `nx · ny` or its sum is not positive.
+    pub fn patch_compliance(&self, shape: &[f64]) -> Option<[[f64; 3]; 3]> {
+        let (nx, ny) = (self.nx, self.ny);
+        let total: f64 = shape.iter().sum();
+        if shape.len() != nx * ny || total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        let mut c = [[0.0; 3]; 3];
+        for (f, &wf) in shape.iter().enumerate() {
+            for (s, &ws) in shape.iter().enumerate() {
+                let o = (f / ny) as isize - (s / ny) as isize;
+                let k = self.get(o, f % ny, s % ny)?;
+                for (row, krow) in c.iter_mut().zip(&k) {
+                    for (v, kv) in row.iter_mut().zip(krow) {
+                        *v += wf * ws * kv;
+                    }
+                }
+            }
+        }
+        let scale = 1.0 / (total * total * self.element_m * self.element_m);
+        Some(c.map(|row| row.map(|v| v * scale)))
+    }
+
     /// The coefficients at row offset `o` (`−(nx−1)..=nx`), field column `j`, source column
     /// `jp`; `None` outside.
     pub fn get(&self, o: isize, j: usize, jp: usize) -> Option<[[f64; 3]; 3]> {
@@ -87,9 +166,46 @@ impl StripKernel {
     }
 }
 
+/// How the global track model meshes the rail: the mesh a rail-head patch is graded to away
+/// from the contact, and the mesh of the split's global twin (theory §6.9).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GlobalRailMesh {
+    /// Target element size of the rail's foot and web (m), `mesh.section_size`; default
+    /// model 0.02.
+    pub section_size_m: f64,
+    /// Element size at the running surface (m), `mesh.head_size`, at most `section_size_m`;
+    /// default model 0.01.
+    pub head_size_m: f64,
+    /// Element length along the rail at the contact (m), `mesh.fine_element_length`; default
+    /// model 0.01.
+    pub element_length_m: f64,
+}
+
+impl Default for GlobalRailMesh {
+    /// The default model's rail mesh.
+    fn default() -> Self {
+        GlobalRailMesh {
+            section_size_m: 0.02,
+            head_size_m: 0.01,
+            element_length_m: 0.01,
+        }
+    }
+}
+
+impl GlobalRailMesh {
+    /// The mesh of `model`'s rail at the contact.
+    pub fn of(model: &Model) -> Self {
+        GlobalRailMesh {
+            section_size_m: model.mesh.section_size,
+            head_size_m: model.mesh.head_size,
+            element_length_m: model.mesh.fine_element_length,
+        }
+    }
+}
+
 impl RailHeadPatch {
     /// Steel, `a` (m), three FE faces per grid element, the given grid, a 0.6 m segment,
-    /// ratio 1.5.
+    /// ratio 1.5, graded to the default model's rail mesh.
     pub fn steel(element_m: f64, nx: usize, ny: usize) -> Self {
         RailHeadPatch {
             material: IsotropicElastic::STEEL,
@@ -99,6 +215,7 @@ impl RailHeadPatch {
             ny,
             half_length_m: 0.3,
             max_ratio: 1.5,
+            global: GlobalRailMesh::default(),
         }
     }
 
@@ -129,14 +246,30 @@ impl RailHeadPatch {
                 "finite and at least 20 nx · element_m",
             );
         }
+        let e = self.global.element_length_m;
+        if !(e > 0.0 && e <= 0.25 * self.half_length_m) {
+            return bad(
+                "global.element_length_m",
+                e,
+                "above 0, at most a quarter of half_length_m",
+            );
+        }
+        if !(e >= self.element_m) {
+            return bad(
+                "global.element_length_m",
+                e,
+                "at least the grid's element_m",
+            );
+        }
         check_ratio(self.max_ratio)
     }
 
     /// The section mesh: the running-surface zone of faces `a / refine` covers the grid and
-    /// one element beyond each side, `2 a` deep.
+    /// one element beyond each side, `2 a` deep; foot and web as the global model's.
     fn section(&self) -> Result<SectionMesh, StructureError> {
         let a = self.element_m;
         let params = SectionParams {
+            size_m: self.global.section_size_m,
             running_surface_size_m: a / self.refine as f64,
             running_surface_half_width_m: (0.5 * self.ny as f64 + 1.0) * a,
             running_surface_depth_m: 2.0 * a,
@@ -146,18 +279,98 @@ impl RailHeadPatch {
     }
 
     /// The node planes along the rail (m): `a / refine` over the source row and its
-    /// neighbours, at most `a` over the grid's offsets, graded to 20 mm at the ends.
+    /// neighbours, at most `a` over the grid's offsets, graded to the global model's element
+    /// length.
     fn planes(&self) -> Result<Vec<f64>, StructureError> {
         let a = self.element_m;
         let h = a / self.refine as f64;
         let x_f = (self.nx as f64 + 0.5) * a;
         graded_axis(
             [-self.half_length_m, self.half_length_m],
-            0.02,
+            self.global.element_length_m,
             [(1.5 * a, h), (x_f, a)],
             vec![-x_f, -0.5 * a, 0.5 * a, x_f],
             self.max_ratio,
         )
+    }
+
+    /// The global twin's compliance (m/N, components x, y, inward normal): the same segment,
+    /// held the same way, meshed as the global model meshes the rail ([`Self::global`]) and
+    /// loaded and read as its passage does: the force spread across the running surface with
+    /// the lateral weights of a Hertz pressure of semi-width `half_width_m` (m, above 0, below
+    /// 35 mm), along the rail halfway between two node planes (theory §6.9, §7.7).
+    /// [`StripKernel::split`] takes it off the refined kernel.
+    pub fn global_compliance(&self, half_width_m: f64) -> Result<[[f64; 3]; 3], StructureError> {
+        self.check()?;
+        if !(half_width_m > 0.0 && half_width_m < 0.035) {
+            return out_of_range("half_width_m", half_width_m, "above 0, below 35 mm");
+        }
+        let global = &self.global;
+        let params = SectionParams {
+            size_m: global.section_size_m,
+            running_surface_size_m: global.head_size_m,
+            ..SectionParams::default()
+        };
+        let section = SectionMesh::uic54(&params)?;
+        // node planes at ±(k + ½) e: the contact point x = 0 halfway between two
+        let e = global.element_length_m;
+        let n = (self.half_length_m / e - 0.5).round().max(1.0) as isize;
+        let planes: Vec<f64> = (-n - 1..=n).map(|k| (k as f64 + 0.5) * e).collect();
+        let n_dofs = free_dofs(&section, &planes);
+        check_size(n_dofs)?;
+        let (topo, dofmap, factor) = segment(&section, &planes, self.material)?;
+        // across: the running-surface nodes by their offset from the crown (the highest node)
+        let running = &section.running_surface;
+        let crown = running
+            .iter()
+            .map(|&j| section.nodes[j])
+            .max_by(|p, q| p[1].total_cmp(&q[1]))
+            .ok_or(StructureError::PatchParameter {
+                name: "global section",
+                value: 0.0,
+                allowed: "a section with running-surface nodes",
+            })?;
+        let mut across: Vec<(f64, usize)> = running
+            .iter()
+            .map(|&j| (section.nodes[j][0] - crown[0], j))
+            .collect();
+        across.sort_by(|p, q| p.0.total_cmp(&q.0));
+        let s: Vec<f64> = across.iter().map(|v| v.0).collect();
+        let w = lateral_weights(&s, half_width_m);
+        // the planes −e/2 and +e/2, each carrying half the load
+        let mut load: Vec<(usize, f64)> = Vec::new();
+        for p in [n as usize, n as usize + 1] {
+            for (&(_, j), &wk) in across.iter().zip(&w) {
+                if wk > 0.0 {
+                    load.push((topo.node(p, j), 0.5 * wk));
+                }
+            }
+        }
+        // the inward normal is −z
+        const SIGN: [f64; 3] = [1.0, 1.0, -1.0];
+        let mut rhs = Mat::<f64>::zeros(dofmap.n_free(), 3);
+        for &(node, wk) in &load {
+            for (dir, sign) in SIGN.into_iter().enumerate() {
+                if let Some(f) = dofmap.free_index(3 * node + dir) {
+                    rhs[(f, dir)] += sign * wk;
+                }
+            }
+        }
+        factor.solve_in_place(&mut rhs)?;
+        let mut g = [[0.0; 3]; 3];
+        for (a, row) in g.iter_mut().enumerate() {
+            for (b, v) in row.iter_mut().enumerate() {
+                *v = load
+                    .iter()
+                    .map(|&(node, wk)| {
+                        dofmap
+                            .free_index(3 * node + a)
+                            .map_or(0.0, |f| SIGN[a] * wk * rhs[(f, b)])
+                    })
+                    .sum();
+            }
+        }
+        Ok(g)
     }
 
     /// Free DOFs of the submodel (before building it).
@@ -178,20 +391,7 @@ impl RailHeadPatch {
         let (section, planes) = self.geometry()?;
         let n_dofs = free_dofs(&section, &planes);
         check_size(n_dofs)?;
-        let (mesh, topo) = extrude_rail(&section, &planes, 0)?;
-        let last = planes.len() - 1;
-        let mut fixed = Vec::new();
-        for p in 0..=last {
-            let held: Vec<usize> = if p == 0 || p == last {
-                (0..topo.n_section_nodes())
-                    .map(|j| topo.node(p, j))
-                    .collect()
-            } else {
-                topo.foot_underside_nodes(p)
-            };
-            fixed.extend(held.iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]));
-        }
-        let (dofmap, factor) = factorise(&mesh, &fixed, self.material)?;
+        let (topo, dofmap, factor) = segment(&section, &planes, self.material)?;
         let running = &section.running_surface;
         let ys: Vec<f64> = running.iter().map(|&j| section.nodes[j][0]).collect();
         let node = |i: usize, j: usize| topo.node(i, running[j]);

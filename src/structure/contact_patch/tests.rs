@@ -198,3 +198,134 @@ fn rail_head_kernel_against_the_half_space() {
     );
     print_rail_head_ratios(&k, patch.material);
 }
+
+/// The Hertz pressure's shape on an `nx × ny` grid of elements `a` (m) centred on the contact
+/// point (row-major, `i` along x): `√(1 − x²/ha² − y²/hb²)` at the element centres, and the
+/// grid size that holds the ellipse of semi-axes `ha`, `hb` (m).
+fn hertz_shape(ha: f64, hb: f64, a: f64) -> (usize, usize, Vec<f64>) {
+    let n = |h: f64| (2.0 * h / a).ceil() as usize;
+    let (nx, ny) = (n(ha), n(hb));
+    let c = |i: usize, n: usize| (i as f64 - 0.5 * (n as f64 - 1.0)) * a;
+    let shape = (0..nx)
+        .flat_map(|i| (0..ny).map(move |j| (i, j)))
+        .map(|(i, j)| {
+            (1.0 - (c(i, nx) / ha).powi(2) - (c(j, ny) / hb).powi(2))
+                .max(0.0)
+                .sqrt()
+        })
+        .collect();
+    (nx, ny, shape)
+}
+
+/// The split's check (P3 in validation/contact_patch.md): the compliance (m/N, x, y, n) of a
+/// Hertz pressure on a long refined segment (`full`), against the long segment's global twin
+/// plus a short refined segment's kernel split against its own twin, and against the naive
+/// sum without the split. Returns `(full, split, naive)`.
+#[derive(Debug)]
+struct SplitCheck {
+    full: [f64; 3],
+    split: [f64; 3],
+    naive: [f64; 3],
+}
+
+fn split_check(
+    element_m: f64,
+    refine: usize,
+    (ha, hb): (f64, f64),
+    (half_sub_m, half_full_m): (f64, f64),
+    half_width_m: f64,
+) -> SplitCheck {
+    let (nx, ny, shape) = hertz_shape(ha, hb, element_m);
+    let mut sub = rail_head::RailHeadPatch::steel(element_m, nx, ny);
+    sub.refine = refine;
+    sub.half_length_m = half_sub_m;
+    let full = rail_head::RailHeadPatch {
+        half_length_m: half_full_m,
+        ..sub
+    };
+    let diag = |c: [[f64; 3]; 3]| [c[0][0], c[1][1], c[2][2]];
+    let k_sub = sub.kernel().unwrap();
+    let g_sub = sub.global_compliance(half_width_m).unwrap();
+    let g_full = diag(full.global_compliance(half_width_m).unwrap());
+    let c_full = diag(full.kernel().unwrap().patch_compliance(&shape).unwrap());
+    let c_sub = diag(k_sub.patch_compliance(&shape).unwrap());
+    let c_split = diag(k_sub.split(&g_sub).patch_compliance(&shape).unwrap());
+    SplitCheck {
+        full: c_full,
+        split: [0, 1, 2].map(|i| g_full[i] + c_split[i]),
+        naive: [0, 1, 2].map(|i| g_full[i] + c_sub[i]),
+    }
+}
+
+/// The default model's static Hertz semi-axes (m) under a vertical load `load_n` (N).
+fn default_hertz(load_n: f64) -> (f64, f64) {
+    let m = crate::model::Model::default_model();
+    let h = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
+        radius_x_m: m.wheel.radius,
+        radius_y_m: m.contact.rail_crown_radius,
+        youngs_pa: IsotropicElastic::STEEL.youngs_modulus,
+        poisson: IsotropicElastic::STEEL.poisson_ratio,
+        load_n,
+    })
+    .unwrap();
+    (h.a_m, h.b_m)
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+#[test]
+fn split_matches_the_long_refined_segment() {
+    // a coarse grid keeps it quick; the split's identity does not depend on the grid
+    let (ha, hb) = default_hertz(15e3);
+    println!("Hertz semi-axes {ha:.5} {hb:.5} m");
+    let r = split_check(2e-3, 1, (ha, hb), (0.16, 0.48), hb);
+    println!("{r:?}");
+    for i in 0..3 {
+        assert!(rel(r.split[i], r.full[i]) < 0.02, "{i}: {r:?}");
+        assert!(
+            rel(r.naive[i], r.full[i]) > 0.1,
+            "the naive sum must fail: {i}"
+        );
+    }
+}
+
+/// P3 in validation/contact_patch.md: the split's check at the reference's grid
+/// (`CASE="a_mm refine load_kN half_sub_m half_full_m"`, default "0.8 3 15 0.3 0.9").
+#[test]
+#[ignore = "validation: the split against a long refined segment (minutes)"]
+fn split_case() {
+    let v = case_from_env("0.8 3 15 0.3 0.9");
+    let (a, refine) = (v[0] * 1e-3, v[1] as usize);
+    let (ha, hb) = default_hertz(v[2] * 1e3);
+    let (nx, ny, _) = hertz_shape(ha, hb, a);
+    for half in [v[3], v[4]] {
+        let mut p = rail_head::RailHeadPatch::steel(a, nx, ny);
+        p.refine = refine;
+        p.half_length_m = half;
+        println!("segment ±{half} m: {} DOFs", p.n_dofs().unwrap());
+    }
+    let t = std::time::Instant::now();
+    let r = split_check(a, refine, (ha, hb), (v[3], v[4]), hb);
+    println!(
+        "a {} mm, refine {refine}, {} kN (Hertz {:.2} × {:.2} mm, grid {nx} × {ny}), segments ±{} / ±{} m: {:.0} s",
+        v[0],
+        v[2],
+        ha * 1e3,
+        hb * 1e3,
+        v[3],
+        v[4],
+        t.elapsed().as_secs_f64()
+    );
+    for (i, name) in ["x", "y", "n"].iter().enumerate() {
+        println!(
+            "{name}: full {:.4e} m/N, split {:.4e} ({:+.2} %), naive {:.4e} ({:+.1} %)",
+            r.full[i],
+            r.split[i],
+            100.0 * (r.split[i] / r.full[i] - 1.0),
+            r.naive[i],
+            100.0 * (r.naive[i] / r.full[i] - 1.0)
+        );
+    }
+}
