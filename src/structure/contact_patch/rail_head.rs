@@ -71,7 +71,11 @@ pub struct RailHeadPatch {
     pub nx: usize,
     /// Grid elements across the rail (≥ 1), centred on the crown.
     pub ny: usize,
-    /// Half-length of the segment (m), ≥ 20 `nx · a`.
+    /// Half-length of the segment (m), at least `5 nx · a` and four global element lengths.
+    /// The segment's own structural flexibility (which depends on its length and its held
+    /// ends) is taken off by the split against its global twin ([`StripKernel::split`]), so
+    /// a short segment serves; the cost grows with it (every node plane carries the refined
+    /// section).
     pub half_length_m: f64,
     /// Largest ratio of neighbouring element sizes along the rail (> 1, ≤ 3).
     pub max_ratio: f64,
@@ -204,8 +208,8 @@ impl GlobalRailMesh {
 }
 
 impl RailHeadPatch {
-    /// Steel, `a` (m), three FE faces per grid element, the given grid, a 0.6 m segment,
-    /// ratio 1.5, graded to the default model's rail mesh.
+    /// Steel, `a` (m), three FE faces per grid element, the given grid, a segment of
+    /// half-length `max(5 nx · a, 0.05 m)`, ratio 1.5, graded to the default model's rail mesh.
     pub fn steel(element_m: f64, nx: usize, ny: usize) -> Self {
         RailHeadPatch {
             material: IsotropicElastic::STEEL,
@@ -213,7 +217,7 @@ impl RailHeadPatch {
             refine: 3,
             nx,
             ny,
-            half_length_m: 0.3,
+            half_length_m: (5.0 * nx as f64 * element_m).max(0.05),
             max_ratio: 1.5,
             global: GlobalRailMesh::default(),
         }
@@ -238,27 +242,21 @@ impl RailHeadPatch {
                 "ny · element_m at most 40 mm (the running surface)",
             );
         }
-        let shortest = 20.0 * self.nx as f64 * self.element_m;
+        let shortest =
+            (5.0 * self.nx as f64 * self.element_m).max(4.0 * self.global.element_length_m);
         if !self.half_length_m.is_finite() || self.half_length_m < shortest {
             return bad(
                 "half_length_m",
                 self.half_length_m,
-                "finite and at least 20 nx · element_m",
+                "finite, at least 5 nx · element_m and 4 global.element_length_m",
             );
         }
         let e = self.global.element_length_m;
-        if !(e > 0.0 && e <= 0.25 * self.half_length_m) {
+        if !(e >= self.element_m && e <= 0.25 * self.half_length_m) {
             return bad(
                 "global.element_length_m",
                 e,
-                "above 0, at most a quarter of half_length_m",
-            );
-        }
-        if !(e >= self.element_m) {
-            return bad(
-                "global.element_length_m",
-                e,
-                "at least the grid's element_m",
+                "at least element_m, at most a quarter of half_length_m",
             );
         }
         check_ratio(self.max_ratio)
