@@ -395,6 +395,26 @@ pub struct Convolver {
     pub diag_yy: f64,
 }
 
+/// The normal influence operator a normal contact solve needs ([`super::normal`]): the
+/// half-space's [`Convolver`] or the kernel of an FE contact patch invariant along the rail
+/// only ([`strip::StripNormal`]).
+pub trait NormalInfluence {
+    /// `u = C p` (m) on the grid, `p` in Pa (`nx · ny` values, element `i · ny + j`).
+    fn normal(&mut self, p: &[f64], u: &mut [f64]);
+    /// The largest self-influence `C_ii` (m/Pa).
+    fn diag_n(&self) -> f64;
+}
+
+impl NormalInfluence for Convolver {
+    fn normal(&mut self, p: &[f64], u: &mut [f64]) {
+        Convolver::normal(self, p, u)
+    }
+
+    fn diag_n(&self) -> f64 {
+        self.diag_n
+    }
+}
+
 impl Convolver {
     /// Build the kernels for element size `dx × dy` (m), moduli `E*`, `G` (Pa) and ν.
     pub fn new(nx: usize, ny: usize, dx: f64, dy: f64, e_star: f64, g: f64, nu: f64) -> Self {

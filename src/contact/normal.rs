@@ -3,7 +3,9 @@
 //!
 //! Unknowns: element pressures `p_i ≥ 0` (Pa). Deformed gap `g_i = h_i − δ + (C p)_i ≥ 0`
 //! (m) with `h` the undeformed gap, `δ` the rigid approach, `C` the normal influence
-//! operator ([`super::influence::Convolver::normal`]); complementarity `p_i g_i = 0`.
+//! operator ([`NormalInfluence`]: the half-space's [`super::influence::Convolver`] or an FE
+//! patch's kernel invariant along x, [`super::influence::strip::StripNormal`]); complementarity
+//! `p_i g_i = 0`.
 //! Either the total load `Σ p_i ΔA = P` is prescribed (δ is then the Lagrange multiplier,
 //! Polonsky & Keer's algorithm, their eqs. 6–13) or the approach δ is prescribed (the same
 //! CG without the load-balance step; a bound-constrained quadratic programme).
@@ -35,7 +37,7 @@
 //! for the next steps. The superposed pressure is exact to the 1e-12 of the unit responses,
 //! the CG's to its tolerance ([`NormalSolver::tol`]).
 
-use super::influence::Convolver;
+use super::influence::NormalInfluence;
 use super::ContactError;
 
 /// What is prescribed in the normal problem.
@@ -159,7 +161,7 @@ impl NormalSolver {
     /// when it does.
     pub fn solve(
         &mut self,
-        conv: &mut Convolver,
+        conv: &mut (impl NormalInfluence + ?Sized),
         h: &[f64],
         da: f64,
         mode: NormalMode,
@@ -221,7 +223,7 @@ impl NormalSolver {
 
     /// `out = (C + c ΔA 1 1ᵀ) x` (m) for `x` in Pa: the influence product plus the uniform
     /// displacement of the series compliance (`c_da = c_z ΔA`, m/Pa; 0 in load mode).
-    fn product(conv: &mut Convolver, c_da: f64, x: &[f64], out: &mut [f64]) {
+    fn product(conv: &mut (impl NormalInfluence + ?Sized), c_da: f64, x: &[f64], out: &mut [f64]) {
         conv.normal(x, out);
         if c_da != 0.0 {
             let u = c_da * x.iter().sum::<f64>();
@@ -238,7 +240,7 @@ impl NormalSolver {
     /// displacement `C p` (by recurrence while the set holds).
     fn solve_inner(
         &mut self,
-        conv: &mut Convolver,
+        conv: &mut (impl NormalInfluence + ?Sized),
         h: &[f64],
         da: f64,
         mode: NormalMode,
@@ -337,7 +339,13 @@ impl NormalSolver {
     /// The initial iterate: the warm start `p` as it is (scaled to the load in load mode),
     /// or from rest the overlap of the undeformed bodies (below the approach, or the lowest
     /// 30 % of `h` in load mode) scaled to the load or to a plausible magnitude.
-    fn initial_iterate(conv: &Convolver, h: &[f64], da: f64, mode: NormalMode, p: &mut [f64]) {
+    fn initial_iterate(
+        conv: &(impl NormalInfluence + ?Sized),
+        h: &[f64],
+        da: f64,
+        mode: NormalMode,
+        p: &mut [f64],
+    ) {
         let mut total: f64 = p.iter().sum::<f64>() * da;
         let cold = total <= 0.0 || !total.is_finite();
         if cold {
@@ -364,7 +372,7 @@ impl NormalSolver {
                 _ => 0.0,
             };
             let s = h.iter().map(|hv| (d - hv).max(0.0)).fold(0.0, f64::max)
-                / conv.diag_n.max(1e-300)
+                / conv.diag_n().max(1e-300)
                 / p.iter().cloned().fold(0.0, f64::max).max(1e-300);
             p.iter_mut().for_each(|v| *v *= s * 0.3);
         }
@@ -407,7 +415,13 @@ impl NormalSolver {
     /// The step length `τ` along the direction `t` with its product `r = C t` (its mean
     /// over the `cnt` contact elements removed in load mode); `1/C_ii` when the curvature
     /// is not positive.
-    fn step_length(&self, conv: &Convolver, mode: NormalMode, p: &[f64], cnt: usize) -> f64 {
+    fn step_length(
+        &self,
+        conv: &(impl NormalInfluence + ?Sized),
+        mode: NormalMode,
+        p: &[f64],
+        cnt: usize,
+    ) -> f64 {
         let n = p.len();
         let rbar = match mode {
             NormalMode::Load(_) => {
@@ -435,7 +449,7 @@ impl NormalSolver {
         if den > 0.0 {
             num / den
         } else {
-            1.0 / conv.diag_n
+            1.0 / conv.diag_n()
         }
     }
 
@@ -493,7 +507,12 @@ const FIXED_SET_TOL: f64 = 1e-12;
 impl FixedSet {
     /// The unit responses of the contact set `{p > 0}` for the gap `h` (Polonsky–Keer's
     /// solution `p`). Returns the influence products used.
-    fn build(&mut self, conv: &mut Convolver, h: &[f64], p: &[f64]) -> Result<usize, ContactError> {
+    fn build(
+        &mut self,
+        conv: &mut (impl NormalInfluence + ?Sized),
+        h: &[f64],
+        p: &[f64],
+    ) -> Result<usize, ContactError> {
         let was_valid = self.valid;
         self.valid = false;
         for (s, &pi) in self.in_set.iter_mut().zip(p) {
@@ -524,7 +543,7 @@ impl FixedSet {
     /// start). Returns the influence products used.
     fn solve_on_set(
         &mut self,
-        conv: &mut Convolver,
+        conv: &mut (impl NormalInfluence + ?Sized),
         b: impl Fn(usize) -> f64,
         x: &mut [f64],
     ) -> Result<usize, ContactError> {

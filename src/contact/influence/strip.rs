@@ -208,3 +208,35 @@ impl StripConvolver {
         }
     }
 }
+
+/// The normal influence operator of a kernel invariant along x only: a one-component
+/// [`StripConvolver`] and its largest self-influence, for [`super::NormalInfluence`].
+pub struct StripNormal {
+    conv: StripConvolver,
+    diag: f64,
+}
+
+impl StripNormal {
+    /// The operator of `kernel(offset, j, j')` (m/Pa): the normal displacement at column `j`
+    /// per unit pressure on an element of column `j'`, `offset` rows behind it
+    /// (`−(nx−1)..=nx`); `nx, ny ≥ 1`.
+    pub fn new(nx: usize, ny: usize, kernel: impl Fn(isize, usize, usize) -> f64) -> Self {
+        let diag = (0..ny).map(|j| kernel(0, j, j)).fold(f64::MIN, f64::max);
+        let conv = StripConvolver::new(nx, ny, 1, |o, j, jp| {
+            let mut k = [[0.0; 3]; 3];
+            k[0][0] = kernel(o, j, jp);
+            k
+        });
+        StripNormal { conv, diag }
+    }
+}
+
+impl super::NormalInfluence for StripNormal {
+    fn normal(&mut self, p: &[f64], u: &mut [f64]) {
+        self.conv.product(&[p], &mut [u], 0);
+    }
+
+    fn diag_n(&self) -> f64 {
+        self.diag
+    }
+}

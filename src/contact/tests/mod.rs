@@ -8,18 +8,15 @@ use super::{HertzContact, HertzInput};
 mod normal;
 mod rolling;
 
-/// The reference wheel-on-rail contact: a wheel of rolling radius 0.46 m (laterally flat)
-/// on a rail crown of radius 0.3 m, E = 210 GPa, ν = 0.3, 100 kN.
+/// The reference wheel-on-rail contact's input: a wheel of rolling radius 0.46 m (laterally
+/// flat) on a rail crown of radius 0.3 m, E = 210 GPa, ν = 0.3, 100 kN.
+fn reference_hertz_input() -> HertzInput {
+    HertzInput::wheel_on_rail(0.46, f64::INFINITY, 0.3, 210e9, 0.3, 100e3)
+}
+
+/// The reference contact's Hertz solution.
 fn reference_hertz() -> HertzContact {
-    HertzContact::solve(&HertzInput::wheel_on_rail(
-        0.46,
-        f64::INFINITY,
-        0.3,
-        210e9,
-        0.3,
-        100e3,
-    ))
-    .unwrap()
+    HertzContact::solve(&reference_hertz_input()).unwrap()
 }
 
 /// The reference case's grid configuration at 38.9 m/s with `nx × ny` elements and the

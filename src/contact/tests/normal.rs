@@ -3,7 +3,7 @@
 
 use super::super::transient::*;
 use super::super::*;
-use super::{reference_hertz, rolling_config};
+use super::{reference_hertz, reference_hertz_input, rolling_config};
 use std::f64::consts::PI;
 
 fn normal_only(nx: usize, ny: usize, margin: f64) -> (StepResult, f64, f64, f64) {
@@ -209,4 +209,53 @@ fn fixed_set_normal_solve_equals_polonsky_keer() {
     assert!(free_steps >= 25, "{free_steps}");
     // the jump of the approach changes the set: solved (by the CG), still equal
     assert!(a[30].1 > 0);
+}
+
+/// The Hertz problem of the reference case on an `nx × ny` grid of elements `d` (m) centred
+/// on the contact point: the element centres `(x, y)` (element `i · ny + j`) and the
+/// undeformed gap (m) `x²/(2 R_x) + y²/(2 R_y)`.
+fn hertz_gap(nx: usize, ny: usize, d: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let h = reference_hertz_input();
+    let c = |i: usize, n: usize| (i as f64 - 0.5 * (n as f64 - 1.0)) * d;
+    let (mut x, mut y, mut gap) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..nx {
+        for j in 0..ny {
+            let (xi, yj) = (c(i, nx), c(j, ny));
+            x.push(xi);
+            y.push(yj);
+            gap.push(xi * xi / (2.0 * h.radius_x_m) + yj * yj / (2.0 * h.radius_y_m));
+        }
+    }
+    (x, y, gap)
+}
+
+#[test]
+fn strip_normal_operator_solves_as_the_half_space_convolver() {
+    // The same half-space kernel through the FFT-along-x, dense-across products of an FE
+    // patch and through the 2D FFT convolver: the same pressures (an independent product).
+    use super::super::influence::strip::{half_space_kernel, StripNormal};
+    let (nx, ny, d) = (24, 18, 0.8e-3);
+    let inp = reference_hertz_input();
+    let (e, nu) = (inp.youngs_pa, inp.poisson);
+    let (e_star, g) = (combined_modulus(e, nu), shear_modulus(e, nu));
+    let (_, _, gap) = hertz_gap(nx, ny, d);
+    let mut conv = influence::Convolver::new(nx, ny, d, d, e_star, g, nu);
+    let k = half_space_kernel((d, d), (e_star, g, nu), 1);
+    let mut strip = StripNormal::new(nx, ny, |o, j, jp| k(o, j, jp)[0][0]);
+    let mode = normal::NormalMode::Load(100e3);
+    let (mut p1, mut p2) = (vec![0.0; nx * ny], vec![0.0; nx * ny]);
+    let o1 = normal::NormalSolver::new(nx * ny)
+        .solve(&mut conv, &gap, d * d, mode, &mut p1)
+        .unwrap();
+    let o2 = normal::NormalSolver::new(nx * ny)
+        .solve(&mut strip, &gap, d * d, mode, &mut p2)
+        .unwrap();
+    let pmax = p1.iter().cloned().fold(0.0, f64::max);
+    let diff = p1
+        .iter()
+        .zip(&p2)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(diff < 1e-8 * pmax, "{diff} of {pmax}");
+    approx::assert_relative_eq!(o1.approach_m, o2.approach_m, max_relative = 1e-9);
 }

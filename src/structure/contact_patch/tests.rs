@@ -350,3 +350,91 @@ fn split_case() {
         }
     }
 }
+
+/// The Hertz problem (the default model's wheel on the R300 crown, `load_n`) solved on an
+/// `nx × ny` grid of elements `a` with the normal kernel `kernel(o, j, j')` (m/Pa, both
+/// bodies): the moment-equivalent semi-axes (m), the peak pressure (Pa) and the approach (m).
+fn hertz_on_grid(
+    (nx, ny, a): (usize, usize, f64),
+    load_n: f64,
+    kernel: impl Fn(isize, usize, usize) -> f64,
+) -> [f64; 4] {
+    use crate::contact::influence::strip::StripNormal;
+    use crate::contact::normal::{NormalMode, NormalSolver};
+    let m = crate::model::Model::default_model();
+    let c = |i: usize, n: usize| (i as f64 - 0.5 * (n as f64 - 1.0)) * a;
+    let (mut x, mut y, mut gap) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..nx {
+        for j in 0..ny {
+            let (xi, yj) = (c(i, nx), c(j, ny));
+            x.push(xi);
+            y.push(yj);
+            gap.push(
+                xi * xi / (2.0 * m.wheel.radius) + yj * yj / (2.0 * m.contact.rail_crown_radius),
+            );
+        }
+    }
+    let mut op = StripNormal::new(nx, ny, kernel);
+    let mut p = vec![0.0; nx * ny];
+    let out = NormalSolver::new(nx * ny)
+        .solve(&mut op, &gap, a * a, NormalMode::Load(load_n), &mut p)
+        .unwrap();
+    let (sa, sb) = crate::contact::report::equivalent_semi_axes(&x, &y, &p);
+    let pmax = p.iter().cloned().fold(0.0, f64::max);
+    [sa, sb, pmax, out.approach_m]
+}
+
+/// P2 (rail side) in validation/contact_patch.md: the Hertz problem with the rail head's
+/// FE kernel and the wheel as a half-space, against Hertz and against both bodies as
+/// half-spaces on the same grid (`CASE="a_mm refine load_kN"`, default "0.8 3 15").
+#[test]
+#[ignore = "validation: Hertz on the rail head's fe-patch (minutes)"]
+fn hertz_on_the_rail_head_patch() {
+    let v = case_from_env("0.8 3 15");
+    let (a, refine, load) = (v[0] * 1e-3, v[1] as usize, v[2] * 1e3);
+    let (ha, hb) = default_hertz(load);
+    // the grid holds the patch with a margin of 1.4 on each semi-axis
+    let n = |h: f64| (2.8 * h / a).ceil() as usize;
+    let (nx, ny) = (n(ha), n(hb));
+    let mut patch = rail_head::RailHeadPatch::steel(a, nx, ny);
+    patch.refine = refine;
+    let t = std::time::Instant::now();
+    let rail = patch.kernel().unwrap();
+    println!(
+        "rail head ±{} m, {} DOFs: {:.0} s",
+        patch.half_length_m,
+        rail.n_dofs(),
+        t.elapsed().as_secs_f64()
+    );
+    let (e, nu) = (patch.material.youngs_modulus, patch.material.poisson_ratio);
+    let wheel = |o: isize, j: usize, jp: usize| {
+        single_body(o as f64 * a, (j as f64 - jp as f64) * a, a, a, e, nu)[2][2]
+    };
+    let fe = hertz_on_grid((nx, ny, a), load, |o, j, jp| {
+        rail.get(o, j, jp).unwrap()[2][2] + wheel(o, j, jp)
+    });
+    let hs = hertz_on_grid((nx, ny, a), load, |o, j, jp| 2.0 * wheel(o, j, jp));
+    let h = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
+        radius_x_m: crate::model::Model::default_model().wheel.radius,
+        radius_y_m: crate::model::Model::default_model()
+            .contact
+            .rail_crown_radius,
+        youngs_pa: e,
+        poisson: nu,
+        load_n: load,
+    })
+    .unwrap();
+    let closed = [h.a_m, h.b_m, h.p0_pa];
+    println!("grid {nx} × {ny} of {} mm, {} kN", v[0], v[2]);
+    for (i, name) in ["a", "b", "p0"].iter().enumerate() {
+        println!(
+            "{name}: Hertz {:.4e}, half-space grid {:.4e} ({:+.2} %), fe-patch {:.4e} ({:+.2} % of Hertz, {:+.2} % of the half-space)",
+            closed[i],
+            hs[i],
+            100.0 * (hs[i] / closed[i] - 1.0),
+            fe[i],
+            100.0 * (fe[i] / closed[i] - 1.0),
+            100.0 * (fe[i] / hs[i] - 1.0)
+        );
+    }
+}
