@@ -128,7 +128,7 @@ impl FlatBlockPatch {
         let across = graded_axis(
             [-self.extent_m, self.extent_m],
             self.extent_m / 4.0,
-            [(1.5 * a, h), (x_f, h_zone)],
+            &[(1.5 * a, h), (x_f, h_zone)],
             vec![-x_f, -0.5 * a, 0.5 * a, x_f],
             self.max_ratio,
         )?;
@@ -136,7 +136,7 @@ impl FlatBlockPatch {
         let down = graded_axis(
             [-self.extent_m, 0.0],
             self.extent_m / 4.0,
-            [(1.5 * a, h), (depth_f, h_zone)],
+            &[(1.5 * a, h), (depth_f, h_zone)],
             vec![-depth_f],
             self.max_ratio,
         )?;
@@ -261,7 +261,7 @@ fn factorise(
 pub(crate) fn graded_axis(
     [start_m, end_m]: [f64; 2],
     coarse_m: f64,
-    zones: [(f64, f64); 2],
+    zones: &[(f64, f64)],
     breakpoints_m: Vec<f64>,
     max_ratio: f64,
 ) -> Result<Vec<f64>, StructureError> {
@@ -425,7 +425,133 @@ impl SurfaceKernel {
     }
 }
 
+/// The kernel of a patch invariant along the rolling direction (a rail head or a tread):
+/// `get(o, j, jp)[a][b]` (m/Pa) is the displacement `a` at the centre of the element in row
+/// offset `o` and column `j` per unit traction `b` on the element of column `jp`; components x
+/// (rolling), y (the rail's lateral axis, columns ordered by it) and the body's inward normal.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StripKernel {
+    nx: usize,
+    ny: usize,
+    element_m: f64,
+    /// `[o + nx − 1][j][jp]`, flattened.
+    c: Vec<[[f64; 3]; 3]>,
+    n_dofs: usize,
+}
+
+impl StripKernel {
+    /// Grid size `(nx, ny)`.
+    pub fn dims(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+
+    /// The grid element size (m).
+    pub fn element_m(&self) -> f64 {
+        self.element_m
+    }
+
+    /// Free DOFs of the submodel.
+    pub fn n_dofs(&self) -> usize {
+        self.n_dofs
+    }
+
+    /// The kernel the contact uses beside a global model whose compliance at the contact is
+    /// `global` (m/N, components x, y, inward normal): every coefficient less `global · a²`,
+    /// the global twin's displacement under the force `a²` of a unit traction on one element
+    /// (theory §6.9, the split). `global` is the same patch's global twin's compliance
+    /// ([`rail_head::RailHeadPatch::global_compliance`], [`tread::TreadPatch::global_compliance`]).
+    pub fn split(&self, global: &[[f64; 3]; 3]) -> StripKernel {
+        let area = self.element_m * self.element_m;
+        let mut out = self.clone();
+        for c in &mut out.c {
+            for (row, g) in c.iter_mut().zip(global) {
+                for (v, gv) in row.iter_mut().zip(g) {
+                    *v -= gv * area;
+                }
+            }
+        }
+        out
+    }
+
+    /// The compliance (m/N) of a traction distribution of the given `shape` on the `nx × ny`
+    /// grid (row-major `i · ny + j`, `i` along x; non-negative, not all zero): `c[a][b]` is
+    /// the displacement `a`, averaged with the shape as weights (work-conjugate), per unit
+    /// total force of component `b` distributed as the shape. `None` if the shape's length is
+    /// not `nx · ny` or its sum is not positive.
+    pub fn patch_compliance(&self, shape: &[f64]) -> Option<[[f64; 3]; 3]> {
+        let (nx, ny) = (self.nx, self.ny);
+        let total: f64 = shape.iter().sum();
+        if shape.len() != nx * ny || total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        let mut c = [[0.0; 3]; 3];
+        for (f, &wf) in shape.iter().enumerate() {
+            for (s, &ws) in shape.iter().enumerate() {
+                let o = (f / ny) as isize - (s / ny) as isize;
+                let k = self.get(o, f % ny, s % ny)?;
+                for (row, krow) in c.iter_mut().zip(&k) {
+                    for (v, kv) in row.iter_mut().zip(krow) {
+                        *v += wf * ws * kv;
+                    }
+                }
+            }
+        }
+        let scale = 1.0 / (total * total * self.element_m * self.element_m);
+        Some(c.map(|row| row.map(|v| v * scale)))
+    }
+
+    /// The coefficients at row offset `o` (`−(nx−1)..=nx`), field column `j`, source column
+    /// `jp`; `None` outside.
+    pub fn get(&self, o: isize, j: usize, jp: usize) -> Option<[[f64; 3]; 3]> {
+        let (nx, ny) = (self.nx as isize, self.ny);
+        if o < -(nx - 1) || o > nx || j >= ny || jp >= ny {
+            return None;
+        }
+        Some(self.c[((o + nx - 1) as usize * ny + j) * ny + jp])
+    }
+}
+
+/// The strip kernel of a patch whose contact surface is `surface` (with its DOF map and
+/// factor): unit tractions on each grid element of row 0 of an `nx × ny` grid of elements `a`
+/// (m) centred on `(0, 0)`, the field read at the centres of rows `−(nx−1)..=nx`. With
+/// `y_sign = −1` the surface's y axis is the grid's mirrored (a body turned over about x,
+/// such as the tread): column `j` lies at surface `y = −y_j` and the y components change sign.
+fn strip_kernel(
+    (dofmap, factor, surface): (&DofMap, &Cholesky, &Surface<'_>),
+    (nx, ny, a): (usize, usize, f64),
+    y_sign: f64,
+    n_dofs: usize,
+) -> Result<StripKernel, StructureError> {
+    let y_of = |j: usize| y_sign * (j as f64 - 0.5 * (ny as f64 - 1.0)) * a;
+    let sources: Vec<[f64; 4]> = (0..ny)
+        .map(|jp| [-0.5 * a, 0.5 * a, y_of(jp) - 0.5 * a, y_of(jp) + 0.5 * a])
+        .collect();
+    let rows = -(nx as isize - 1)..=nx as isize;
+    let field: Vec<[f64; 2]> = rows
+        .flat_map(|o| (0..ny).map(move |j| [o as f64 * a, y_of(j)]))
+        .collect();
+    let per_source = condense(dofmap, factor, surface, &sources, &field)?;
+    let sign = [1.0, y_sign, 1.0];
+    // reorder [jp][o][j] → [o][j][jp]
+    let mut c = vec![[[0.0; 3]; 3]; 2 * nx * ny * ny];
+    for (jp, values) in per_source.iter().enumerate() {
+        for (k, v) in values.iter().enumerate() {
+            let (o, j) = (k / ny, k % ny);
+            c[(o * ny + j) * ny + jp] =
+                std::array::from_fn(|r| std::array::from_fn(|q| sign[r] * sign[q] * v[r][q]));
+        }
+    }
+    Ok(StripKernel {
+        nx,
+        ny,
+        element_m: a,
+        c,
+        n_dofs,
+    })
+}
+
 pub mod rail_head;
+pub mod tread;
 
 #[cfg(test)]
 mod tests;
