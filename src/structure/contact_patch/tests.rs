@@ -401,9 +401,10 @@ fn hertz_on_grid(
     [sa, sb, pmax, out.approach_m]
 }
 
-/// P2 (rail side) in validation/contact_patch.md: the Hertz problem with the rail head's
-/// FE kernel and the wheel as a half-space, against Hertz and against both bodies as
-/// half-spaces on the same grid (`CASE="a_mm refine load_kN"`, default "0.8 3 15").
+/// P2 in validation/contact_patch.md: the Hertz problem with the rail head's FE kernel and
+/// the wheel as a half-space, and with both FE kernels (rail head and tread), against Hertz
+/// and against both bodies as half-spaces on the same grid (`CASE="a_mm refine load_kN"`,
+/// default "0.8 3 15").
 #[test]
 #[ignore = "validation: Hertz on the rail head's fe-patch (minutes)"]
 fn hertz_on_the_rail_head_patch() {
@@ -431,6 +432,19 @@ fn hertz_on_the_rail_head_patch() {
         rail.get(o, j, jp).unwrap()[2][2] + wheel(o, j, jp)
     });
     let hs = hertz_on_grid((nx, ny, a), load, |o, j, jp| 2.0 * wheel(o, j, jp));
+    let mut tread_patch = tread::TreadPatch::steel(a, nx, ny);
+    tread_patch.refine = refine;
+    let t = std::time::Instant::now();
+    let tread = tread_patch.kernel().unwrap();
+    println!(
+        "tread ±{} m, {} DOFs: {:.0} s",
+        tread_patch.half_length_m,
+        tread.n_dofs(),
+        t.elapsed().as_secs_f64()
+    );
+    let both = hertz_on_grid((nx, ny, a), load, |o, j, jp| {
+        rail.get(o, j, jp).unwrap()[2][2] + tread.get(o, j, jp).unwrap()[2][2]
+    });
     let h = crate::contact::HertzContact::solve(&crate::contact::HertzInput {
         radius_x_m: crate::model::Model::default_model().wheel.radius,
         radius_y_m: crate::model::Model::default_model()
@@ -444,14 +458,18 @@ fn hertz_on_the_rail_head_patch() {
     let closed = [h.a_m, h.b_m, h.p0_pa];
     println!("grid {nx} × {ny} of {} mm, {} kN", v[0], v[2]);
     for (i, name) in ["a", "b", "p0"].iter().enumerate() {
+        let pct = |v: &[f64; 4], r: f64| 100.0 * (v[i] / r - 1.0);
         println!(
-            "{name}: Hertz {:.4e}, half-space grid {:.4e} ({:+.2} %), fe-patch {:.4e} ({:+.2} % of Hertz, {:+.2} % of the half-space)",
+            "{name}: Hertz {:.4e}; half-space grid {:.4e} ({:+.2} %); FE rail + half-space wheel {:.4e} ({:+.2} % of Hertz, {:+.2} % of the half-space grid); FE rail + FE tread {:.4e} ({:+.2} %, {:+.2} %)",
             closed[i],
             hs[i],
-            100.0 * (hs[i] / closed[i] - 1.0),
+            pct(&hs, closed[i]),
             fe[i],
-            100.0 * (fe[i] / closed[i] - 1.0),
-            100.0 * (fe[i] / hs[i] - 1.0)
+            pct(&fe, closed[i]),
+            pct(&fe, hs[i]),
+            both[i],
+            pct(&both, closed[i]),
+            pct(&both, hs[i]),
         );
     }
 }
