@@ -380,17 +380,16 @@ fn hertz_on_grid(
     use crate::contact::normal::{NormalMode, NormalSolver};
     let m = crate::model::Model::default_model();
     let c = |i: usize, n: usize| (i as f64 - 0.5 * (n as f64 - 1.0)) * a;
-    let (mut x, mut y, mut gap) = (Vec::new(), Vec::new(), Vec::new());
-    for i in 0..nx {
-        for j in 0..ny {
-            let (xi, yj) = (c(i, nx), c(j, ny));
-            x.push(xi);
-            y.push(yj);
-            gap.push(
-                xi * xi / (2.0 * m.wheel.radius) + yj * yj / (2.0 * m.contact.rail_crown_radius),
-            );
-        }
-    }
+    let x: Vec<f64> = (0..nx).map(|i| c(i, nx)).collect();
+    let y: Vec<f64> = (0..ny).map(|j| c(j, ny)).collect();
+    let gap: Vec<f64> = x
+        .iter()
+        .flat_map(|xi| {
+            y.iter().map(move |yj| {
+                xi * xi / (2.0 * m.wheel.radius) + yj * yj / (2.0 * m.contact.rail_crown_radius)
+            })
+        })
+        .collect();
     let mut op = StripNormal::new(nx, ny, kernel);
     let mut p = vec![0.0; nx * ny];
     let out = NormalSolver::new(nx * ny)
