@@ -617,3 +617,31 @@ fn tread_split_against_the_global_mesh() {
         );
     }
 }
+
+#[test]
+fn patch_parameters_out_of_range_are_refused_by_name() {
+    // checked before anything is built: a clear error naming the parameter, no panic
+    let name = |e: StructureError| match e {
+        StructureError::PatchParameter { name, .. } => name,
+        other => panic!("{other:?}"),
+    };
+    let mut rail = rail_head::RailHeadPatch::steel(0.8e-3, 10, 8);
+    rail.half_length_m = 0.01;
+    assert_eq!(name(rail.kernel().unwrap_err()), "half_length_m");
+    let mut rail = rail_head::RailHeadPatch::steel(0.8e-3, 10, 8);
+    rail.global.element_length_m = 0.5e-3;
+    assert_eq!(name(rail.n_dofs().unwrap_err()), "global.element_length_m");
+    let rail = rail_head::RailHeadPatch::steel(0.8e-3, 10, 8);
+    assert_eq!(
+        name(rail.global_compliance(0.0).unwrap_err()),
+        "half_width_m"
+    );
+    let tread = tread::TreadPatch::steel(2e-3, 4, 80);
+    assert_eq!(name(tread.kernel().unwrap_err()), "ny");
+    let mut tread = tread::TreadPatch::steel(2e-3, 4, 4);
+    tread.rim.web_y_m = [0.07, 0.08];
+    assert_eq!(name(tread.n_dofs().unwrap_err()), "rim.web_y_m");
+    let mut tread = tread::TreadPatch::steel(0.8e-3, 4, 4);
+    tread.global.contact_size_m = 0.5e-3;
+    assert_eq!(name(tread.kernel().unwrap_err()), "global.contact_size_m");
+}
