@@ -18,6 +18,7 @@ if [[ "$group" == all || "$group" == patch ]]; then
   cargo test --profile test-opt --lib flat_block_convergence_table -- --ignored --nocapture
   CASE="0.8 3 4 4" cargo test --profile test-opt --lib rail_head_kernel_against_the_half_space -- --ignored --nocapture
   CASE="0.8 3 15" cargo test --profile test-opt --lib hertz_on_the_rail_head_patch -- --ignored --nocapture
+  CASE="0.8 2 100" cargo test --profile test-opt --lib hertz_on_the_rail_head_patch -- --ignored --nocapture
   CASE="0.8 3 15 0.3 0.1 0.05" cargo test --profile test-opt --lib split_case -- --ignored --nocapture
   CASE="0.8 3 100 0.2 0.1" cargo test --profile test-opt --lib split_case -- --ignored --nocapture
   cargo test --profile test-opt --lib tread_split_against_the_global_mesh -- --ignored --nocapture
