@@ -645,3 +645,68 @@ fn patch_parameters_out_of_range_are_refused_by_name() {
     tread.global.contact_size_m = 0.5e-3;
     assert_eq!(name(tread.kernel().unwrap_err()), "global.contact_size_m");
 }
+
+/// The level of the local compliance (validation/contact_patch.md, P6): the compliance (x, y,
+/// n; m/N) of a Hertz pressure on the rail head's and the tread's split kernels (what the
+/// fe-patch adds to the global model) against two half-spaces' (what the contact adds today)
+/// (`CASE="a_mm refine load_kN"`, default "0.8 3 15").
+#[test]
+#[ignore = "validation: the local compliance against the half-space's (minutes)"]
+fn local_compliance_against_the_half_space() {
+    let v = case_from_env("0.8 3 15");
+    let (a, refine, load) = (v[0] * 1e-3, v[1] as usize, v[2] * 1e3);
+    let (ha, hb) = default_hertz(load);
+    let (nx, ny, shape) = hertz_shape(ha, hb, a);
+    let mut rail = rail_head::RailHeadPatch::steel(a, nx, ny);
+    rail.refine = refine;
+    let mut tread = tread::TreadPatch::steel(a, nx, ny);
+    tread.refine = refine;
+    let t = std::time::Instant::now();
+    let diag = |c: [[f64; 3]; 3]| [c[0][0], c[1][1], c[2][2]];
+    let c_rail = diag(
+        rail.kernel()
+            .unwrap()
+            .split(&rail.global_compliance(hb).unwrap())
+            .patch_compliance(&shape)
+            .unwrap(),
+    );
+    let c_tread = diag(
+        tread
+            .kernel()
+            .unwrap()
+            .split(&tread.global_compliance(hb).unwrap())
+            .patch_compliance(&shape)
+            .unwrap(),
+    );
+    // two half-spaces: the single body's coefficients twice (the couplings cancel)
+    let (e, nu) = (rail.material.youngs_modulus, rail.material.poisson_ratio);
+    let total: f64 = shape.iter().sum();
+    let mut c_hs = [0.0; 3];
+    for (f, &wf) in shape.iter().enumerate() {
+        for (s, &ws) in shape.iter().enumerate() {
+            let dx = ((f / ny) as f64 - (s / ny) as f64) * a;
+            let dy = ((f % ny) as f64 - (s % ny) as f64) * a;
+            let k = single_body(dx, dy, a, a, e, nu);
+            for (i, c) in c_hs.iter_mut().enumerate() {
+                *c += 2.0 * wf * ws * k[i][i];
+            }
+        }
+    }
+    let c_hs = c_hs.map(|c| c / (total * total * a * a));
+    println!(
+        "a {} mm, refine {refine}, {} kN, grid {nx} × {ny}: {:.0} s",
+        v[0],
+        v[2],
+        t.elapsed().as_secs_f64()
+    );
+    for (i, name) in ["x", "y", "n"].iter().enumerate() {
+        let fe = c_rail[i] + c_tread[i];
+        println!(
+            "{name}: two half-spaces {:.4e} m/N; fe-patch (split) rail {:.4e} + tread {:.4e} = {fe:.4e} ({:+.1} % of the half-spaces')",
+            c_hs[i],
+            c_rail[i],
+            c_tread[i],
+            100.0 * (fe / c_hs[i] - 1.0)
+        );
+    }
+}
