@@ -550,6 +550,41 @@ fn strip_kernel(
     })
 }
 
+/// The 3 × 3 compliance (m/N) of a global twin: a unit force in each direction shared among
+/// the `load` nodes `(node, weight)` (weights summing to 1), the displacement read with the same
+/// weights (work-conjugate). `sign[d]` maps the mesh's axis `d` onto the kernel's component `d`
+/// (x, y of the rail's frame, the body's inward normal): ±1.
+fn twin_compliance(
+    dofmap: &DofMap,
+    factor: &Cholesky,
+    load: &[(usize, f64)],
+    sign: [f64; 3],
+) -> Result<[[f64; 3]; 3], StructureError> {
+    let mut rhs = Mat::<f64>::zeros(dofmap.n_free(), 3);
+    for &(node, wk) in load {
+        for (dir, s) in sign.into_iter().enumerate() {
+            if let Some(f) = dofmap.free_index(3 * node + dir) {
+                rhs[(f, dir)] += s * wk;
+            }
+        }
+    }
+    factor.solve_in_place(&mut rhs)?;
+    let mut g = [[0.0; 3]; 3];
+    for (r, row) in g.iter_mut().enumerate() {
+        for (q, v) in row.iter_mut().enumerate() {
+            *v = load
+                .iter()
+                .map(|&(node, wk)| {
+                    dofmap
+                        .free_index(3 * node + r)
+                        .map_or(0.0, |f| sign[r] * wk * rhs[(f, q)])
+                })
+                .sum();
+        }
+    }
+    Ok(g)
+}
+
 pub mod rail_head;
 pub mod tread;
 

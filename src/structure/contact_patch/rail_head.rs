@@ -14,8 +14,6 @@
 //! inward normal is −z; the fixed foot and ends stand for the track's support and continuity,
 //! which the global model carries (the split against it is theory §6.9, not done here).
 
-use faer::Mat;
-
 use crate::contact::hertz::lateral_weights;
 use crate::fe::assembly::DofMap;
 use crate::fe::material::IsotropicElastic;
@@ -25,8 +23,8 @@ use crate::mesh::section::{SectionMesh, SectionParams};
 use crate::model::Model;
 
 use super::{
-    check_ratio, check_size, factorise, graded_axis, out_of_range, strip_kernel, StripKernel,
-    StructureError, Surface,
+    check_ratio, check_size, factorise, graded_axis, out_of_range, strip_kernel, twin_compliance,
+    StripKernel, StructureError, Surface,
 };
 
 /// Free DOFs of a segment: every section node of the inner planes but the foot's.
@@ -261,30 +259,7 @@ impl RailHeadPatch {
             }
         }
         // the inward normal is −z
-        const SIGN: [f64; 3] = [1.0, 1.0, -1.0];
-        let mut rhs = Mat::<f64>::zeros(dofmap.n_free(), 3);
-        for &(node, wk) in &load {
-            for (dir, sign) in SIGN.into_iter().enumerate() {
-                if let Some(f) = dofmap.free_index(3 * node + dir) {
-                    rhs[(f, dir)] += sign * wk;
-                }
-            }
-        }
-        factor.solve_in_place(&mut rhs)?;
-        let mut g = [[0.0; 3]; 3];
-        for (a, row) in g.iter_mut().enumerate() {
-            for (b, v) in row.iter_mut().enumerate() {
-                *v = load
-                    .iter()
-                    .map(|&(node, wk)| {
-                        dofmap
-                            .free_index(3 * node + a)
-                            .map_or(0.0, |f| SIGN[a] * wk * rhs[(f, b)])
-                    })
-                    .sum();
-            }
-        }
-        Ok(g)
+        twin_compliance(&dofmap, &factor, &load, [1.0, 1.0, -1.0])
     }
 
     /// Free DOFs of the submodel (before building it).

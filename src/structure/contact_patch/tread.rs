@@ -18,17 +18,17 @@
 //! (theory §6.9); the local part under the patch, a few millimetres from the load, sees
 //! neither the curvature nor the web 30 mm and more away.
 
-use faer::Mat;
-
 use crate::contact::hertz::lateral_weights;
+use crate::fe::assembly::DofMap;
 use crate::fe::block::{block_node, graded_block_mesh};
 use crate::fe::material::IsotropicElastic;
+use crate::fe::solve::Cholesky;
 use crate::mesh::Part;
 use crate::model::Model;
 
 use super::{
-    check_ratio, check_size, factorise, graded_axis, out_of_range, strip_kernel, StripKernel,
-    StructureError, Surface,
+    check_ratio, check_size, factorise, graded_axis, out_of_range, strip_kernel, twin_compliance,
+    StripKernel, StructureError, Surface,
 };
 
 /// The rim's cross-section (m, wheel frame: y along the axle towards the field side, the
@@ -127,7 +127,7 @@ pub struct TreadPatch {
 }
 
 /// The prism's node planes `[xs, ys, zs]` (m, block frame: `y` the wheel's mirrored, `z = 0`
-/// the tread, `z = −thickness` the rim's inner face) and the held nodes' test.
+/// the tread, `z = −thickness` the rim's inner face) and where the web holds it.
 struct Prism {
     planes: [Vec<f64>; 3],
     /// The web's junction in block coordinates `[start, end]` (m).
@@ -135,30 +135,40 @@ struct Prism {
 }
 
 impl Prism {
-    fn mesh_and_holds(&self) -> (crate::mesh::Mesh, Vec<usize>) {
+    /// The held DOFs: every node of the end planes and the rim's inner face under the web.
+    fn holds(&self) -> Vec<usize> {
         let [xs, ys, zs] = &self.planes;
-        let mesh = graded_block_mesh([xs, ys, zs], 0, Part::Wheel);
         let (nx, ny) = (xs.len() - 1, ys.len() - 1);
-        let mut fixed = Vec::new();
         let eps = 1e-9;
-        for (k, _) in zs.iter().enumerate() {
+        let mut fixed = Vec::new();
+        for k in 0..zs.len() {
             for (j, &y) in ys.iter().enumerate() {
-                for i in 0..xs.len() {
-                    let end = i == 0 || i == nx;
-                    let web = k == 0 && y >= self.web[0] - eps && y <= self.web[1] + eps;
-                    if end || web {
+                let web = k == 0 && y >= self.web[0] - eps && y <= self.web[1] + eps;
+                for i in 0..=nx {
+                    if i == 0 || i == nx || web {
                         let n = block_node(nx, ny, i, j, k);
                         fixed.extend([3 * n, 3 * n + 1, 3 * n + 2]);
                     }
                 }
             }
         }
-        (mesh, fixed)
+        fixed
+    }
+
+    fn mesh(&self) -> crate::mesh::Mesh {
+        let [xs, ys, zs] = &self.planes;
+        graded_block_mesh([xs, ys, zs], 0, Part::Wheel)
     }
 
     fn free_dofs(&self) -> usize {
-        let (mesh, fixed) = self.mesh_and_holds();
-        3 * mesh.nodes.len() - fixed.len()
+        let [xs, ys, zs] = &self.planes;
+        3 * xs.len() * ys.len() * zs.len() - self.holds().len()
+    }
+
+    /// The checked size, the mesh, and its DOF map and stiffness factor.
+    fn factorise(&self, material: IsotropicElastic) -> Result<(DofMap, Cholesky), StructureError> {
+        check_size(self.free_dofs())?;
+        factorise(&self.mesh(), &self.holds(), material)
     }
 }
 
@@ -331,9 +341,7 @@ impl TreadPatch {
     pub fn kernel(&self) -> Result<StripKernel, StructureError> {
         let prism = self.refined()?;
         let n_dofs = prism.free_dofs();
-        check_size(n_dofs)?;
-        let (mesh, fixed) = prism.mesh_and_holds();
-        let (dofmap, factor) = factorise(&mesh, &fixed, self.material)?;
+        let (dofmap, factor) = prism.factorise(self.material)?;
         let [xs, ys, zs] = &prism.planes;
         let (nbx, nby, nbz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
         let node = |i: usize, j: usize| block_node(nbx, nby, i, j, nbz);
@@ -360,9 +368,7 @@ impl TreadPatch {
             return out_of_range("half_width_m", half_width_m, "above 0, below 35 mm");
         }
         let prism = self.twin()?;
-        check_size(prism.free_dofs())?;
-        let (mesh, fixed) = prism.mesh_and_holds();
-        let (dofmap, factor) = factorise(&mesh, &fixed, self.material)?;
+        let (dofmap, factor) = prism.factorise(self.material)?;
         let [xs, ys, zs] = &prism.planes;
         let (nbx, nby, nbz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
         let i0 = xs
@@ -381,29 +387,6 @@ impl TreadPatch {
             .map(|(&(_, j), &wk)| (block_node(nbx, nby, i0, j, nbz), wk))
             .collect();
         // block frame → rail frame: y changes sign; the inward normal is the block's −z
-        const SIGN: [f64; 3] = [1.0, -1.0, -1.0];
-        let mut rhs = Mat::<f64>::zeros(dofmap.n_free(), 3);
-        for &(node, wk) in &load {
-            for (dir, sign) in SIGN.into_iter().enumerate() {
-                if let Some(f) = dofmap.free_index(3 * node + dir) {
-                    rhs[(f, dir)] += sign * wk;
-                }
-            }
-        }
-        factor.solve_in_place(&mut rhs)?;
-        let mut g = [[0.0; 3]; 3];
-        for (r, row) in g.iter_mut().enumerate() {
-            for (q, v) in row.iter_mut().enumerate() {
-                *v = load
-                    .iter()
-                    .map(|&(node, wk)| {
-                        dofmap
-                            .free_index(3 * node + r)
-                            .map_or(0.0, |f| SIGN[r] * wk * rhs[(f, q)])
-                    })
-                    .sum();
-            }
-        }
-        Ok(g)
+        twin_compliance(&dofmap, &factor, &load, [1.0, -1.0, -1.0])
     }
 }
