@@ -639,6 +639,35 @@ pub struct MeshParams {
     pub wheel_element_size: f64,
     /// Lumped or consistent mass.
     pub mass: MassKind,
+    /// Where the rail's node planes sit in the fine zone: `"graded"` (default) or
+    /// `"lattice"` (see [`NodePlanes`]).
+    #[serde(default, skip_serializing_if = "NodePlanes::is_graded")]
+    pub node_planes: NodePlanes,
+}
+
+/// Where the rail's node planes sit in the fine zone (`mesh.node_planes`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NodePlanes {
+    /// Graded through every hold breakpoint (strip edges, footprint ends): inside the fine
+    /// zone the spacing is at most `mesh.fine_element_length` and shrinks between breakpoints
+    /// that are not a whole number of elements apart, so it varies with the sleeper period.
+    #[default]
+    Graded,
+    /// Every node plane of the fine zone on one lattice, `x = k · mesh.fine_element_length`
+    /// (the zone's ends moved out to the lattice): a uniform spacing. Hold breakpoints inside
+    /// the zone that are off the lattice are not node planes; a held strip or footprint then
+    /// holds the lattice planes inside it (its held length differs by up to one element), and a
+    /// hold on node lines off the lattice is refused. For testing whether a result depends on
+    /// the spacing's variation along the rail (a mesh artefact).
+    Lattice,
+}
+
+impl NodePlanes {
+    /// Whether the planes are graded (the default, left out when a model is written).
+    pub fn is_graded(&self) -> bool {
+        *self == NodePlanes::Graded
+    }
 }
 
 /// Run parameters of a passage.

@@ -87,7 +87,7 @@ pub enum StructureError {
         y_m: f64,
     },
     /// A held strip, grid point or node line of the fastening's hold pattern that meets no rail node.
-    #[error("supports: held {what} {index} at {axis} = {position_m} m contains no rail-foot node {lines}")]
+    #[error("supports: held {what} {index} at {axis} = {position_m} m contains no rail-foot node {lines} (with mesh.node_planes = \"lattice\" only planes on the lattice of mesh.fine_element_length exist in the fine zone)")]
     HoldMissesNodes {
         /// `column`, `row`, `grid point of column`, `grid point of row`, `column line`, `row line`.
         what: &'static str,
@@ -165,5 +165,7 @@ pub(crate) fn too_large(part: &'static str, nodes: f64, reduce: String) -> Struc
 
 #[cfg(test)]
 mod hold_tests;
+#[cfg(test)]
+mod lattice_tests;
 #[cfg(test)]
 mod node_line_tests;

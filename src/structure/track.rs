@@ -35,7 +35,7 @@ use crate::mesh::rail::{extrude_rail, RailTopology};
 use crate::mesh::section::{SectionMesh, SectionParams};
 use crate::mesh::sleeper::{half_sleeper, SleeperParams, SleeperTopology};
 use crate::mesh::Mesh;
-use crate::model::{HoldPattern, Model, RailEnds, RigidRegion};
+use crate::model::{HoldPattern, Model, NodePlanes, RailEnds, RigidRegion};
 
 use super::ends::end_dashpots;
 
@@ -242,21 +242,81 @@ fn rail_planes(
         planes_estimate * section_nodes + sleeper_nodes,
         size_hint(planes_estimate),
     )?;
-    let planes = grade(&GradingSpec {
-        zones: vec![FineZone {
-            start_m: f0,
-            end_m: f1,
-            size_m: m.mesh.fine_element_length,
-        }],
-        breakpoints_m: layout.x_breakpoints(hold),
-        ..GradingSpec::new(0.0, layout.length, m.mesh.element_length)
-    })?;
+    let fine = FineZone {
+        start_m: f0,
+        end_m: f1,
+        size_m: m.mesh.fine_element_length,
+    };
+    let coarse = GradingSpec::new(0.0, layout.length, m.mesh.element_length);
+    let planes = match m.mesh.node_planes {
+        NodePlanes::Graded => grade(&GradingSpec {
+            zones: vec![fine],
+            breakpoints_m: layout.x_breakpoints(hold),
+            ..coarse
+        })?,
+        NodePlanes::Lattice => lattice_planes(&coarse, fine, &layout.x_breakpoints(hold))?,
+    };
     let planes_n = planes.len() as f64;
     super::check_size(
         "track",
         planes_n * section_nodes + sleeper_nodes,
         size_hint(planes_n),
     )?;
+    Ok(planes)
+}
+
+/// The node planes of [`NodePlanes::Lattice`] over `coarse`'s interval: the fine zone moved
+/// out to the lattice `x = k·e` (`e = fine.size_m`; clipped to the rail), every plane inside
+/// it on the lattice (the last element shorter only where the zone is clipped to a rail end off
+/// the lattice), the parts outside graded as [`NodePlanes::Graded`] grades them through their
+/// own breakpoints; breakpoints inside the zone are dropped.
+fn lattice_planes(
+    coarse: &GradingSpec,
+    fine: FineZone,
+    breakpoints: &[f64],
+) -> Result<Vec<f64>, crate::mesh::MeshError> {
+    let (x0, x1, e) = (coarse.start_m, coarse.end_m, fine.size_m);
+    let tol = 1e-9 * e;
+    let ka = ((fine.start_m - x0) / e + 1e-9).floor().max(0.0) as usize;
+    let a = x0 + ka as f64 * e;
+    let b = ((fine.end_m - x0) / e - 1e-9).ceil() * e + x0;
+    let b = b.min(x1);
+    let zone = FineZone {
+        start_m: a,
+        end_m: b,
+        size_m: e,
+    };
+    let part = |lo: f64, hi: f64| {
+        grade(&GradingSpec {
+            zones: vec![zone],
+            breakpoints_m: breakpoints
+                .iter()
+                .copied()
+                .filter(|&x| x > lo + tol && x < hi - tol)
+                .collect(),
+            ..GradingSpec::new(lo, hi, coarse.coarse_size_m)
+        })
+    };
+    let mut planes = if a > x0 + tol {
+        let mut left = part(x0, a)?;
+        left.pop();
+        left
+    } else {
+        Vec::new()
+    };
+    let mut k = ka;
+    loop {
+        let x = x0 + k as f64 * e;
+        if x >= b - tol {
+            break;
+        }
+        planes.push(x);
+        k += 1;
+    }
+    planes.push(b);
+    if b < x1 - tol {
+        planes.extend(part(b, x1)?.into_iter().skip(1));
+    }
     Ok(planes)
 }
 
