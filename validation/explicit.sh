@@ -3,7 +3,7 @@
 # repo root; each case is about 10 minutes on 2 cores (one explicit passage) plus the
 # reduced passages (seconds, once the modal bases are cached).
 #   bash validation/explicit.sh            # every case
-#   bash validation/explicit.sh rpm3-140   # one case: rpm3-140 rpm1-140 rpm4-140 rpm3-98
+#   bash validation/explicit.sh rpm3-140   # one case: rpm3-140 rpm1-140 rpm4-140 rpm5-140 rpm3-98
 #                                          #   rpm3-118 rpm3-heavy-wheel rpm3-trial10
 #                                          # growth: rpm3-grow (the trial-amplitude procedure
 #                                          #   on both engines, five explicit passages)
@@ -43,6 +43,7 @@ case_sets() {
     rpm3-140-node) echo "--set fastening.model=RPM3 --set run.speed_kmh=140 --set explicit.load_spread=\"node\"" ;;
     rpm1-140) echo "--set fastening.model=RPM1 --set run.speed_kmh=140" ;;
     rpm4-140) echo "--set fastening.model=RPM4 --set run.speed_kmh=140" ;;
+    rpm5-140) echo "--set fastening.model=RPM5 --set run.speed_kmh=140" ;;
     rpm3-98) echo "--set fastening.model=RPM3 --set run.speed_kmh=98" ;;
     rpm3-118) echo "--set fastening.model=RPM3 --set run.speed_kmh=118" ;;
     rpm3-heavy-wheel) echo "--set fastening.model=RPM3 --set run.speed_kmh=140 --set wheel.density=9000" ;;
