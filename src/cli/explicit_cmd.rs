@@ -12,8 +12,7 @@ use clap::Args;
 
 use corrugation::dynamics::passage::PassageOptions;
 use corrugation::dynamics::RailProfile;
-use corrugation::explicit::{ExplicitModel, ExplicitOptions, ExplicitRecord};
-use corrugation::io::write_atomic;
+use corrugation::explicit::{ExplicitModel, ExplicitOptions};
 use corrugation::model::ExplicitWheel;
 
 use super::ModelArgs;
@@ -119,7 +118,7 @@ pub fn run_explicit(
         &summary,
         m.mesh.fine_element_length,
     )?;
-    write_explicit_json(out, &rec)?;
+    corrugation::studies::passage::write_explicit_json(out, &rec)?;
     if json {
         let mut v = serde_json::to_value(&summary)?;
         if let (Some(o), serde_json::Value::Object(e)) =
@@ -158,17 +157,5 @@ pub fn run_explicit(
                     .map_or(String::new(), |c| format!(", {c:.1} s CPU"))
             );
     }
-    Ok(())
-}
-
-fn write_explicit_json(out: &Path, rec: &ExplicitRecord) -> anyhow::Result<()> {
-    // The explicit figures plus the energy ledger (J) of the passage.
-    let mut v = serde_json::to_value(&rec.info)?;
-    v["energy"] = serde_json::to_value(rec.record.energy)?;
-    let json = serde_json::to_string_pretty(&v)?;
-    write_atomic(&out.join("explicit.json"), |f| {
-        use std::io::Write;
-        f.write_all(json.as_bytes())
-    })?;
     Ok(())
 }

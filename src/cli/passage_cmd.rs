@@ -115,13 +115,13 @@ impl PassageCmd {
         } else {
             print_summary(&summary, &rec, &self.out);
         }
-        use super::reference_outputs::{coupled_attribution, nodal_outputs};
+        use super::reference_outputs::{coupled_attribution, nodal_outputs_printed};
         if !self.reference.no_coupled {
             coupled_attribution(&prepared, &summary, &self.out, self.json)?;
         }
         if !self.reference.no_nodal {
             let v = m.run.speed();
-            nodal_outputs(
+            nodal_outputs_printed(
                 &mut prepared,
                 v,
                 profile.as_ref(),

@@ -1,4 +1,4 @@
-//! Outputs of a passage that relate its frequencies to the structure: the coupled
+//! The printed side of the outputs of a passage that relate its frequencies to the structure: the coupled
 //! wheel–track mode each selected frequency belongs to (docs/theory.md §7.10), and the
 //! reference study's own procedure, the nodal spectrum of rail-top points (docs/theory.md
 //! §9.7), beside the longitudinal-compression eigenfrequencies.
@@ -15,17 +15,14 @@
 
 use std::path::Path;
 
-use anyhow::Context;
 use clap::Args;
-use serde::Serialize;
 
 use corrugation::dynamics::coupled::attribution_text;
+use corrugation::dynamics::prepared::PreparedModel;
 use corrugation::dynamics::summary::PassageSummary;
 use corrugation::dynamics::RailProfile;
-use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
-use corrugation::io::write_text;
-use corrugation::spectral::nodal::{nodal_spectrum, short_window_m, NodalHistory, NodalSpectrum};
 use corrugation::studies::coupled::{passage_attribution, SummaryAttribution};
+use corrugation::studies::nodal::{nodal_outputs, NodalPoint};
 
 /// Options of the structural outputs of a passage.
 #[derive(Debug, Clone, Args)]
@@ -70,19 +67,9 @@ pub fn coupled_attribution(
     Ok(a)
 }
 
-/// The nodal spectra of one rail-top point.
-#[derive(Debug, Serialize)]
-pub struct NodalPoint {
-    /// `sleeper`, `mid_span` or `x<m>`.
-    pub label: String,
-    /// The spectra (short record, solution zone).
-    pub spectra: Vec<NodalSpectrum>,
-}
-
-/// One passage per rail-top point with the point recorded, and the spectra of its
-/// longitudinal displacement; written to `nodal_spectrum.json` with the
-/// longitudinal-compression eigenfrequencies; prints one line per record.
-pub fn nodal_outputs(
+/// The nodal spectra of the rail-top points of `args` ([`nodal_outputs`], written to
+/// `nodal_spectrum.json`); prints one line per record unless `quiet`.
+pub fn nodal_outputs_printed(
     prepared: &mut PreparedModel,
     speed_m_per_s: f64,
     profile: Option<&RailProfile>,
@@ -90,57 +77,9 @@ pub fn nodal_outputs(
     out: &Path,
     quiet: bool,
 ) -> anyhow::Result<Vec<NodalPoint>> {
-    let points: Vec<(String, f64)> = if args.nodal_at_m.is_empty() {
-        let [mid, sl] = prepared.engine.midspan_and_sleeper_m();
-        vec![("sleeper".into(), sl), ("mid_span".into(), mid)]
-    } else {
-        args.nodal_at_m
-            .iter()
-            .map(|&x| (format!("x{x}"), x))
-            .collect()
-    };
-    let zone = prepared.engine.zone_m();
-    let band = [100.0, prepared.engine.model().run.fmax];
-    let opts = PassageOptions {
-        energy: false,
-        rail_point_offset_m: Some(0.0),
-        overlap: false,
-    };
-    let mut res = Vec::new();
-    for (label, x) in points {
-        prepared.engine.set_rail_point_at(x)?;
-        let rec = prepared
-            .engine
-            .passage(speed_m_per_s, profile, &opts, None)
-            .with_context(|| format!("passage recording the rail point at {x} m"))?;
-        let rp = rec
-            .rail_point
-            .as_ref()
-            .context("the passage did not record the rail point")?;
-        let ux: Vec<f64> = rp.displacement_m.iter().map(|u| u[0]).collect();
-        let h = NodalHistory {
-            point_x_m: rp.position_m[0],
-            t_s: &rec.histories.t_s,
-            x_contact_m: &rec.histories.x_m,
-            ux_m: &ux,
-        };
-        let spectra = vec![
-            nodal_spectrum(&h, "short", short_window_m(h.point_x_m), band, 6)
-                .with_context(|| format!("nodal spectrum (short record) at {x} m"))?,
-            nodal_spectrum(&h, "zone", zone, band, 6)
-                .with_context(|| format!("nodal spectrum (solution zone) at {x} m"))?,
-        ];
-        res.push(NodalPoint { label, spectra });
-    }
-    let lc = prepared.longitudinal_compression_hz();
-    let json = serde_json::json!({
-        "points": res,
-        "longitudinal_compression_hz": lc,
-    });
-    let text = serde_json::to_string_pretty(&json)?;
-    write_text(&out.join("nodal_spectrum.json"), &text)?;
+    let (res, lc) = nodal_outputs(prepared, speed_m_per_s, profile, &args.nodal_at_m, out)?;
     if !quiet {
-        print_nodal(&res, &lc, band[1]);
+        print_nodal(&res, &lc, prepared.engine.model().run.fmax);
     }
     Ok(res)
 }

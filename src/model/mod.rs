@@ -29,7 +29,7 @@ pub use fastening::{
 };
 pub use load::{apply_override, load_model, load_model_str, ModelSource, BUILTIN_DUTCH};
 pub use validate::{
-    DENSITY_KG_M3, MAX_GRID_WORK, MAX_WHEEL_LOAD_N, MIN_PRIMARY_STIFFNESS, POISSON_RATIO,
+    DENSITY_KG_M3, FMAX_HZ, MAX_GRID_WORK, MAX_WHEEL_LOAD_N, MIN_PRIMARY_STIFFNESS, POISSON_RATIO,
     SPEED_KMH, SPEED_KMH_WHY, YOUNGS_MODULUS_PA,
 };
 

@@ -491,7 +491,7 @@ impl Model {
             10.0,
             "m",
         )?;
-        c.range("run.fmax", run.fmax, 100.0, 20000.0, "Hz")?;
+        c.range("run.fmax", run.fmax, FMAX_HZ[0], FMAX_HZ[1], "Hz")?;
         Ok(())
     }
 
@@ -566,6 +566,9 @@ impl Model {
 /// `contact.grid_margin` cannot help. 40 km/h keeps a margin above that on the shipped
 /// models with either start.
 pub const SPEED_KMH: [f64; 2] = [40.0, 500.0];
+
+/// The range of `run.fmax` and of the `modes` command's upper frequency (Hz).
+pub const FMAX_HZ: [f64; 2] = [100.0, 20000.0];
 
 /// The unit of [`SPEED_KMH`] and why it starts at 40 km/h, for the range errors.
 pub const SPEED_KMH_WHY: &str = "km/h (below 40 km/h the passage's contact step, one contact-grid element over the speed, is too long for the explicit coupling of the contact and the structures: the normal force grows step by step until the patch leaves the contact grid)";

@@ -20,9 +20,13 @@
 //!
 //! [`PassageRunner`]: crate::dynamics::PassageRunner
 
+pub mod compliance;
 pub mod coupled;
 pub mod grow;
 pub mod initiation;
+pub mod mesh;
+pub mod modes;
+pub mod nodal;
 pub mod passage;
 pub mod predict;
 pub mod receptance;
@@ -218,6 +222,52 @@ pub enum StudiesError {
     /// The coupled wheel–track modes could not be computed.
     #[error("coupled wheel–track modes: {0}")]
     Coupled(#[from] crate::dynamics::DynamicsError),
+    /// A command argument that cannot be used.
+    #[error("{flag} {given}: {reason}")]
+    Argument {
+        /// The flag, e.g. `--elastic`.
+        flag: &'static str,
+        /// The value as given.
+        given: String,
+        /// What is wrong and what is allowed.
+        reason: String,
+    },
+    /// A list argument with a value given twice.
+    #[error(transparent)]
+    Repeated(#[from] crate::lists::RepeatedValue),
+    /// A variant of a multi-model study (its model, its structure or its solve) failed.
+    #[error("the model of --variants {name}: {source}")]
+    Variant {
+        /// The variant's name.
+        name: String,
+        /// The cause.
+        source: BoxError,
+    },
+    /// A passage recording a rail-top point, or its nodal spectrum, failed.
+    #[error("the nodal spectrum at {x_m} m: {source}")]
+    Nodal {
+        /// The point (m along the rail).
+        x_m: f64,
+        /// The cause.
+        source: BoxError,
+    },
+    /// A numeric argument outside its range.
+    #[error("{name} {value}: out of range, allowed {lo} to {hi} {unit}")]
+    OutOfRange {
+        /// The argument, e.g. `--fmax`.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// The smallest value allowed.
+        lo: f64,
+        /// The largest value allowed.
+        hi: f64,
+        /// The unit.
+        unit: &'static str,
+    },
+    /// A field could not be mapped between free and all DOFs (an inconsistent basis).
+    #[error("FE: {0}")]
+    Fe(#[from] crate::fe::FeError),
 }
 
 /// The first three failures, and how many more.

@@ -302,3 +302,25 @@ fn write_psd_plots(
     }
     Ok(())
 }
+
+/// Writes `explicit.json` into `out` (atomically): the explicit passage's figures
+/// ([`crate::explicit::ExplicitInfo`]: DOFs, steps, time steps, ω_max, wall and CPU time) and
+/// under `energy` the passage's energy ledger (J).
+pub fn write_explicit_json(
+    out: &Path,
+    rec: &crate::explicit::ExplicitRecord,
+) -> Result<(), StudiesError> {
+    let json = |source| StudiesError::Json {
+        what: "explicit.json",
+        source,
+    };
+    let mut v = serde_json::to_value(&rec.info).map_err(json)?;
+    v["energy"] = serde_json::to_value(rec.record.energy).map_err(json)?;
+    let text = serde_json::to_string_pretty(&v).map_err(json)?;
+    let path = out.join("explicit.json");
+    write_atomic(&path, |f| {
+        use std::io::Write;
+        f.write_all(text.as_bytes())
+    })
+    .map_err(StudiesError::io(&path))
+}
