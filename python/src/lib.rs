@@ -698,21 +698,9 @@ fn passage<'py>(
 // ---------------------------------------------------------------------------------------
 // Growth
 
-/// Largest trial amplitude 2A_max accepted (µm), as the command line's `--amplitudes-um`.
-const MAX_TRIAL_AMPLITUDE_UM: f64 = 5000.0;
-
-/// The trial amplitudes 2A_max (µm): at least one, each finite and in (0, 5000], none twice.
+/// The trial amplitudes 2A_max (µm) checked as the command line's `--amplitudes-um`.
 fn check_amplitudes(amplitudes_um: &[f64]) -> PyResult<()> {
-    let bad = amplitudes_um
-        .iter()
-        .find(|a| !(a.is_finite() && **a > 0.0 && **a <= MAX_TRIAL_AMPLITUDE_UM));
-    if amplitudes_um.is_empty() || bad.is_some() {
-        return Err(CorrugationError::new_err(format!(
-            "amplitudes_um: {} is outside (0, {MAX_TRIAL_AMPLITUDE_UM}] µm; give peak-to-trough amplitudes 2A_max in µm",
-            bad.map_or("an empty list".into(), |a| format!("{a} µm"))
-        )));
-    }
-    corrugation::lists::check_no_repeats("amplitudes_um", "µm", amplitudes_um)
+    corrugation::studies::grow::check_amplitudes("amplitudes_um", amplitudes_um)
         .map_err(|e| CorrugationError::new_err(e.to_string()))
 }
 

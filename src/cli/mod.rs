@@ -68,27 +68,6 @@ impl ModelArgs {
     }
 }
 
-/// Largest trial amplitude 2A_max accepted on the command line (µm): 5 mm peak-to-trough,
-/// far beyond any corrugation (they are tens of µm).
-pub const MAX_TRIAL_AMPLITUDE_UM: f64 = 5000.0;
-
-/// Checks the trial amplitudes 2A_max (µm) of `--amplitudes-um`: at least one, each finite
-/// and in (0, 5000].
-pub fn check_trial_amplitudes(amplitudes_um: &[f64]) -> anyhow::Result<()> {
-    let bad = amplitudes_um
-        .iter()
-        .find(|a| !(a.is_finite() && **a > 0.0 && **a <= MAX_TRIAL_AMPLITUDE_UM));
-    if amplitudes_um.is_empty() || bad.is_some() {
-        anyhow::bail!(
-            "--amplitudes-um: {} is outside (0, {MAX_TRIAL_AMPLITUDE_UM}] µm; give peak-to-trough \
-             amplitudes 2A_max in µm, comma separated",
-            bad.map_or("an empty list".into(), |a| format!("{a} µm"))
-        );
-    }
-    corrugation::lists::check_no_repeats("--amplitudes-um", "µm", amplitudes_um)?;
-    Ok(())
-}
-
 /// Warns on stderr about the values of `m` (named `name`) whose magnitude looks like a unit
 /// slip ([`Model::unit_slips`]) and about a solution-zone mesh whose element-passing ripple
 /// falls in the analysis band ([`Model::mesh_in_band`]).

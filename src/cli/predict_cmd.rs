@@ -72,7 +72,7 @@ impl PredictCmd {
                  --set run.speed_kmh={v}; --speeds only sets the speeds of the short sweep"
             );
         }
-        super::check_trial_amplitudes(&self.amplitudes_um)?;
+        corrugation::studies::grow::check_amplitudes("--amplitudes-um", &self.amplitudes_um)?;
         let m = self.model.load()?;
         super::check_trial_profile_grid(&self.amplitudes_um, &m)?;
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;

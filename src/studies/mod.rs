@@ -243,6 +243,12 @@ pub enum StudiesError {
         /// The cause.
         source: BoxError,
     },
+    /// The growth-rate spectrum could not be computed.
+    #[error("growth-rate spectrum: {0}")]
+    RateSpectrum(#[source] crate::dynamics::DynamicsError),
+    /// The trial-amplitude or iterative growth failed.
+    #[error(transparent)]
+    Growth(#[from] crate::growth::procedure::ProcedureError),
     /// A passage recording a rail-top point, or its nodal spectrum, failed.
     #[error("the nodal spectrum at {x_m} m: {source}")]
     Nodal {

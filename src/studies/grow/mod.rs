@@ -21,6 +21,13 @@
 //! * `grow.json` — [`GrowJson`] (with the growth-rate spectrum's summary, [`RateSummary`]),
 //!   written last.
 
+mod run;
+
+pub use run::{
+    check_amplitudes, run_grow, GrowOptions, GrowOutcome, GrowRun, RatePart,
+    DEFAULT_PASSAGES_PER_ROUND, MAX_ROUNDS, MAX_TRIAL_AMPLITUDE_UM, RATE_CHECK_BAND_MM,
+};
+
 use std::path::Path;
 
 use serde::Serialize;
