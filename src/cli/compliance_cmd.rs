@@ -24,7 +24,7 @@ pub struct ComplianceCmd {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "RPM1,RPM2,RPM3,RPM4,RPM5",
+        default_values = corrugation::model::PRESET_NAMES,
         value_name = "NAMES"
     )]
     variants: Vec<String>,
@@ -35,7 +35,7 @@ pub struct ComplianceCmd {
         allow_hyphen_values = true,
         long,
         value_delimiter = ',',
-        default_value = "1e9",
+        default_values_t = [format!("{:e}", corrugation::studies::compliance::DEFAULT_ELASTIC_N_PER_M)],
         value_name = "N_PER_M"
     )]
     elastic: Vec<String>,
@@ -43,7 +43,7 @@ pub struct ComplianceCmd {
     #[arg(
         allow_hyphen_values = true,
         long,
-        default_value_t = 100e3,
+        default_value_t = ComplianceLoad::default().vertical_n,
         value_name = "N"
     )]
     vertical: f64,
@@ -51,7 +51,7 @@ pub struct ComplianceCmd {
     #[arg(
         allow_hyphen_values = true,
         long,
-        default_value_t = 15e3,
+        default_value_t = ComplianceLoad::default().longitudinal_n,
         value_name = "N"
     )]
     longitudinal: f64,
@@ -62,7 +62,7 @@ pub struct ComplianceCmd {
     #[arg(
         allow_hyphen_values = true,
         long,
-        default_value_t = 0.1,
+        default_value_t = ComplianceLoad::default().ahead_m,
         value_name = "M"
     )]
     ahead: f64,

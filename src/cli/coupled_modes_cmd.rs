@@ -31,7 +31,7 @@ pub struct CoupledModesCmd {
     #[arg(
         allow_hyphen_values = true,
         long,
-        default_value_t = 3000.0,
+        default_value_t = corrugation::studies::coupled::DEFAULT_LIST_TO_HZ,
         value_name = "HZ"
     )]
     list_to_hz: f64,

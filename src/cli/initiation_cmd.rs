@@ -22,7 +22,7 @@ pub struct InitiationCmd {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "RPM1,RPM2,RPM3,RPM4,RPM5",
+        default_values = corrugation::model::PRESET_NAMES,
         value_name = "NAMES"
     )]
     variants: Vec<String>,
@@ -44,7 +44,7 @@ pub struct InitiationCmd {
     #[arg(
         allow_hyphen_values = true,
         long,
-        default_value_t = 3,
+        default_value_t = corrugation::studies::initiation::DEFAULT_PEAKS,
         value_name = "N"
     )]
     peaks: usize,

@@ -47,7 +47,7 @@ pub struct ModesCmd {
     #[arg(
         allow_hyphen_values = true,
         long,
-        default_value_t = 50,
+        default_value_t = corrugation::studies::modes::DEFAULT_VTU_MODES,
         value_name = "N"
     )]
     vtu_modes: usize,

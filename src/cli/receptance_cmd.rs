@@ -25,7 +25,7 @@ pub struct ReceptanceCmd {
     #[arg(
         allow_hyphen_values = true,
         long,
-        default_value_t = 20.0,
+        default_value_t = corrugation::studies::receptance::ReceptanceOptions::default().from_hz,
         value_name = "HZ"
     )]
     from_hz: f64,
@@ -39,7 +39,7 @@ pub struct ReceptanceCmd {
     #[arg(
         allow_hyphen_values = true,
         long,
-        default_value_t = 4.0,
+        default_value_t = corrugation::studies::receptance::ReceptanceOptions::default().step_hz,
         value_name = "HZ"
     )]
     step_hz: f64,

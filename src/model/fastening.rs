@@ -47,6 +47,10 @@ impl FasteningModel {
     }
 }
 
+/// The names of the published fastening models, in order (the default list of the commands
+/// that compare them).
+pub const PRESET_NAMES: [&str; 5] = ["RPM1", "RPM2", "RPM3", "RPM4", "RPM5"];
+
 /// The published fastening models RPM1–RPM5 (docs/theory.md §3.2): a [`FasteningModel`]
 /// that is not `custom`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

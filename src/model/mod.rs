@@ -25,7 +25,7 @@ mod validate;
 
 pub use fastening::{
     Axis, DirectionHold, ElasticHolds, Fastening, FasteningModel, HoldKind, HoldPattern, Holds,
-    Preset, RigidRegion, MAX_HOLD_STIFFNESS, MIN_HOLD_STIFFNESS,
+    Preset, RigidRegion, MAX_HOLD_STIFFNESS, MIN_HOLD_STIFFNESS, PRESET_NAMES,
 };
 pub use load::{apply_override, load_model, load_model_str, ModelSource, BUILTIN_DUTCH};
 pub use validate::{

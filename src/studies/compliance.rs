@@ -15,6 +15,10 @@ use crate::model::{load_model, Model, ModelSource, MAX_HOLD_STIFFNESS, MIN_HOLD_
 use crate::structure::TrackStructure;
 use crate::studies::StudiesError;
 
+/// The default elastic x-hold stiffness of the check (N/m per fastening), beside the rigid
+/// hold.
+pub const DEFAULT_ELASTIC_N_PER_M: f64 = 1e9;
+
 /// The largest force the check accepts (N), either component.
 pub const MAX_FORCE_N: f64 = 1e7;
 

@@ -14,6 +14,9 @@
 
 use std::path::Path;
 
+/// The default upper frequency (Hz) of the coupled modes listed by `coupled-modes`.
+pub const DEFAULT_LIST_TO_HZ: f64 = 3000.0;
+
 use serde::{Deserialize, Serialize};
 
 use super::StudiesError;

@@ -30,6 +30,9 @@ use crate::progress::{Counter, Progress};
 use crate::report::doc::Document;
 use crate::units::Speed;
 
+/// The default number of PSD peaks per signal in the initiation table.
+pub const DEFAULT_PEAKS: usize = 3;
+
 /// The stated initiation criterion (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

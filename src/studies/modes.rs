@@ -100,6 +100,9 @@ pub struct ModesSummary {
     pub cache_dir: String,
 }
 
+/// The default number of mode shapes written as `.vtu` files per substructure.
+pub const DEFAULT_VTU_MODES: usize = 50;
+
 /// The modes command's default upper frequency (Hz): the default model's `run.fmax`.
 pub const DEFAULT_FMAX_HZ: f64 = 5000.0;
 
