@@ -767,7 +767,8 @@ fn a_failed_trial_stops_the_growth_and_keeps_the_smaller_amplitudes() {
         assert_eq!(a.summary.fl_band_rms_n, b.summary.fl_band_rms_n);
     }
     assert!(p.engine.hertz_b_m() > 0.0);
-    let verdict = corrugation::growth::verdict::growth_verdict(&g, m.run.speed_kmh, &modes, None);
+    let verdict =
+        corrugation::growth::verdict::growth_verdict(&g, m.run.speed_kmh, &modes, None, None);
     assert!(
         verdict.lines[1].contains("80 µm") && verdict.lines[1].contains("not evaluated"),
         "{:?}",
@@ -782,7 +783,8 @@ fn a_failed_trial_stops_the_growth_and_keeps_the_smaller_amplitudes() {
     let g = trial_growth(&all_fail, v, &[10.0, 40.0], &modes, |_| {}).expect("growth");
     assert!(g.amplitudes.is_empty());
     assert_eq!(g.stopped.as_ref().map(|s| s.amplitude_um), Some(10.0));
-    let verdict = corrugation::growth::verdict::growth_verdict(&g, m.run.speed_kmh, &modes, None);
+    let verdict =
+        corrugation::growth::verdict::growth_verdict(&g, m.run.speed_kmh, &modes, None, None);
     assert_eq!(
         verdict.outcome,
         corrugation::growth::verdict::Outcome::NotEvaluated {

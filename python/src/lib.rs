@@ -752,6 +752,7 @@ fn grow<'py>(
                 m.run.speed_kmh,
                 &modes,
                 Some(initiation_check(m, &g.smooth)),
+                None,
             );
             grow_json(
                 &g,

@@ -171,15 +171,6 @@ impl ModeShares {
         v
     }
 
-    /// The largest share: `(label, value)`.
-    pub fn dominant(&self) -> (String, f64) {
-        Self::labels()
-            .into_iter()
-            .zip(self.values())
-            .max_by(|a, b| a.1.total_cmp(&b.1))
-            .unwrap_or_default()
-    }
-
     /// The rail's total share.
     pub fn rail_total(&self) -> f64 {
         self.rail.iter().sum()
@@ -190,23 +181,43 @@ impl ModeShares {
         self.wheel_elastic + self.wheel_rigid
     }
 
-    /// The part of the system holding the largest share, with the wheel's two parts taken
-    /// together: `wheel`, `rail LC`, `rail LS`, `rail VB`, `rail LB`, `rail torsion`,
-    /// `rail sleeper`, `rail local`, `rail other`, `support` or `contact` (a label of the
-    /// lines on the sweep maps).
-    pub fn family_label(&self) -> String {
-        let mut best = ("wheel".to_string(), self.wheel_total());
-        for (f, &v) in TrackFamily::ALL.iter().zip(&self.rail) {
+    /// The attribution's name of a mode (docs/theory.md §7.10): the part of the system that
+    /// holds the largest share of its energy, the wheel's elastic and rigid parts taken
+    /// together — `wheel`, `rail LC`, `rail LS`, `rail VB`, `rail LB`, `rail torsion`,
+    /// `rail sleeper`, `rail local`, `rail other`, `support` or `contact` — and that share.
+    /// Every output that names a mode (tables, maps, texts, the verdict) uses this.
+    pub fn dominant(&self) -> (String, f64) {
+        let (i, v) = self.dominant_part();
+        let name = match i {
+            0 => "wheel".to_string(),
+            10 => "support".to_string(),
+            11 => "contact".to_string(),
+            k => format!("rail {}", short_family(TrackFamily::ALL[k - 2])),
+        };
+        (name, v)
+    }
+
+    /// The part of [`Self::dominant`] as the index of its column in [`Self::labels`], 0
+    /// (`wheel_elastic`) standing for the wheel's two parts together.
+    pub fn dominant_index(&self) -> usize {
+        self.dominant_part().0
+    }
+
+    /// `(column, share)` of the largest part, the wheel's two parts together in column 0;
+    /// the first of equal shares.
+    fn dominant_part(&self) -> (usize, f64) {
+        let mut best = (0, self.wheel_total());
+        for (k, &v) in self.rail.iter().enumerate() {
             if v > best.1 {
-                best = (format!("rail {}", short_family(*f)), v);
+                best = (2 + k, v);
             }
         }
-        for (l, v) in [("support", self.support), ("contact", self.contact)] {
+        for (i, v) in [(10, self.support), (11, self.contact)] {
             if v > best.1 {
-                best = (l.to_string(), v);
+                best = (i, v);
             }
         }
-        best.0
+        best
     }
 }
 
@@ -232,7 +243,7 @@ pub struct CoupledMode {
     pub damping_ratio: f64,
     /// Energy shares.
     pub shares: ModeShares,
-    /// Largest share's label.
+    /// Its name by the attribution rule ([`ModeShares::dominant`]), e.g. `wheel`, `rail LC`.
     pub dominant: String,
     /// Amplitudes at the contact per square root of the mode's energy measure (m/√J, with
     /// `Σ e = 1 J`): rail x, rail n, wheel x, wheel n.
@@ -588,7 +599,7 @@ pub struct ModeAttribution {
     pub damping_ratio: f64,
     /// The contact position it was computed at (m).
     pub position_m: f64,
-    /// Its largest energy share's label.
+    /// Its name by the attribution rule ([`ModeShares::dominant`]).
     pub dominant: String,
     /// Its energy shares.
     pub shares: ModeShares,

@@ -21,6 +21,7 @@ use serde::Serialize;
 
 use super::procedure::{ModeLines, TrialGrowth};
 use super::PhaseRelation;
+use crate::dynamics::coupled::{ModeAttribution, ATTRIBUTION_WINDOW};
 
 /// One trial amplitude as the verdict needs it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -79,8 +80,11 @@ pub struct VerdictInput<'a> {
     pub trials: &'a [TrialOutcome],
     /// Strongest smooth-rail wear component: (wavelength mm, frequency Hz).
     pub strongest_wear: Option<(f64, f64)>,
-    /// The mode nearest to the strongest wear component.
+    /// The uncoupled eigenfrequency (wheel, LC, VB) nearest to the strongest wear component.
     pub nearest_mode: Option<&'a NearestMode>,
+    /// The coupled wheel–track mode the strongest wear component is attributed to
+    /// (docs/theory.md §7.10), when the coupled modes were computed.
+    pub coupled: Option<&'a ModeAttribution>,
     /// The initiation check of the smooth rail, when evaluated.
     pub initiation: Option<InitiationCheck>,
 }
@@ -279,9 +283,33 @@ pub fn verdict(input: &VerdictInput<'_>) -> Verdict {
             sig(wl, 3),
             sig(f, 4)
         );
+        if let Some(a) = input.coupled {
+            let (part, share) = a.shares.dominant();
+            if a.is_distant() {
+                s.push_str(&format!(
+                    "; no coupled wheel–track mode within {} % (the nearest the contact sees, {} Hz, \
+                     {} % away, has most of its energy in the {part}: {} %)",
+                    sig(100.0 * ATTRIBUTION_WINDOW, 2),
+                    sig(a.mode_frequency_hz, 4),
+                    sig(100.0 * a.relative_offset(), 2),
+                    sig(100.0 * share, 2)
+                ));
+            } else {
+                s.push_str(&format!(
+                    "; coupled wheel–track mode {} Hz, most of its energy in the {part} ({} %)",
+                    sig(a.mode_frequency_hz, 4),
+                    sig(100.0 * share, 2)
+                ));
+            }
+        }
+        let uncoupled = if input.coupled.is_some() {
+            "nearest uncoupled eigenfrequency"
+        } else {
+            "nearest mode"
+        };
         match input.nearest_mode {
             Some(m) => s.push_str(&format!(
-                "; nearest mode: {}, {} Hz ({} % away).",
+                "; {uncoupled}: {}, {} Hz ({} % away).",
                 m.family,
                 sig(m.frequency_hz, 4),
                 sig(100.0 * m.difference, 2)
@@ -342,12 +370,15 @@ pub fn families(modes: &ModeLines) -> [(&'static str, &[f64]); 3] {
 }
 
 /// The verdict of the trial-amplitude growth `g` at `speed_kmh` (km/h): its strongest
-/// smooth-rail wear component, the mode of `modes` nearest to it, and `initiation` when given.
+/// smooth-rail wear component, the coupled mode it is attributed to (`coupled`, when the
+/// coupled modes were computed), the uncoupled eigenfrequency of `modes` nearest to it, and
+/// `initiation` when given.
 pub fn growth_verdict(
     g: &TrialGrowth,
     speed_kmh: f64,
     modes: &ModeLines,
     initiation: Option<InitiationCheck>,
+    coupled: Option<&ModeAttribution>,
 ) -> Verdict {
     let trials: Vec<TrialOutcome> = g
         .amplitudes
@@ -368,6 +399,7 @@ pub fn growth_verdict(
         trials: &trials,
         strongest_wear: strongest,
         nearest_mode: near.as_ref(),
+        coupled,
         initiation,
     });
     if let (Some(s), true) = (&g.stopped, g.amplitudes.is_empty()) {
@@ -404,6 +436,7 @@ pub fn no_initiation_verdict(speed_kmh: f64, initiation: Option<InitiationCheck>
         trials: &[],
         strongest_wear: None,
         nearest_mode: None,
+        coupled: None,
         initiation,
     })
 }
@@ -454,6 +487,74 @@ mod tests {
         assert!(nearest_mode(100.0, &[("wheel", &[])]).is_none());
     }
 
+    /// A coupled mode with the shares `wheel_elastic`, `wheel_rigid`, `support` (the rest
+    /// rail LC) at `mode_hz`, attributed to 1066.3 Hz.
+    fn coupled(
+        mode_hz: f64,
+        wheel_elastic: f64,
+        wheel_rigid: f64,
+        support: f64,
+    ) -> ModeAttribution {
+        use crate::dynamics::coupled::ModeShares;
+        let mut rail = [0.0; 8];
+        rail[0] = 1.0 - wheel_elastic - wheel_rigid - support;
+        ModeAttribution {
+            frequency_hz: 1066.3,
+            mode_frequency_hz: mode_hz,
+            damping_ratio: 0.01,
+            position_m: 4.8,
+            dominant: String::new(),
+            shares: ModeShares {
+                wheel_elastic,
+                wheel_rigid,
+                rail,
+                support,
+                contact: 0.0,
+            },
+            rail_x_to_n: 0.1,
+        }
+    }
+
+    /// The verdict names the strongest component's coupled mode by the one rule of
+    /// `ModeShares::dominant` (the wheel's two parts together: 0.30 + 0.15 beat the support's
+    /// 0.40), says when it lies outside the 3 % window, and keeps the uncoupled
+    /// eigenfrequency beside it under its own name.
+    #[test]
+    fn the_verdict_names_the_coupled_mode_by_the_attribution_rule() {
+        use PhaseRelation::InPhase;
+        let trials = [t(10.0, false, InPhase)];
+        let m = wheel();
+        let near = coupled(1065.0, 0.30, 0.15, 0.40);
+        let line = |a: &ModeAttribution| {
+            verdict(&VerdictInput {
+                speed_kmh: 140.0,
+                trials: &trials,
+                strongest_wear: Some((36.4821, 1066.3)),
+                nearest_mode: Some(&m),
+                coupled: Some(a),
+                initiation: None,
+            })
+            .lines[1]
+                .clone()
+        };
+        assert_eq!(
+            line(&near),
+            "Strongest wear component 36.5 mm / 1066 Hz; coupled wheel–track mode 1065 Hz, most \
+             of its energy in the wheel (45 %); nearest uncoupled eigenfrequency: wheel, 1060 Hz \
+             (0.58 % away)."
+        );
+        let (part, share) = near.shares.dominant();
+        assert_eq!(part, "wheel");
+        assert!((share - 0.45).abs() < 1e-12);
+        let far = coupled(1200.0, 0.10, 0.05, 0.60);
+        let l = line(&far);
+        assert!(
+            l.contains("no coupled wheel–track mode within 3.0 %")
+                && l.contains("1200 Hz, 13 % away, has most of its energy in the support: 60 %"),
+            "{l}"
+        );
+    }
+
     #[test]
     fn decaying_growth_says_so_and_names_the_component_and_mode() {
         use PhaseRelation::InPhase;
@@ -469,6 +570,7 @@ mod tests {
             trials: &trials,
             strongest_wear: Some((36.4821, 1066.3)),
             nearest_mode: Some(&m),
+            coupled: None,
             initiation: None,
         });
         assert_eq!(v.outcome, Outcome::Decays);
@@ -500,6 +602,7 @@ mod tests {
             trials: &trials,
             strongest_wear: Some((40.0, 694.4)),
             nearest_mode: None,
+            coupled: None,
             initiation: None,
         });
         assert_eq!(v.outcome, Outcome::Decays);
@@ -528,6 +631,7 @@ mod tests {
             trials: &trials,
             strongest_wear: Some((36.5, 1066.0)),
             nearest_mode: None,
+            coupled: None,
             initiation: None,
         });
         assert_eq!(
@@ -554,6 +658,7 @@ mod tests {
             trials: &trials,
             strongest_wear: Some((36.5, 1066.0)),
             nearest_mode: None,
+            coupled: None,
             initiation: Some(InitiationCheck {
                 relative_wear: Some(0.004123),
                 threshold: 0.01,
@@ -584,6 +689,7 @@ mod tests {
             trials: &[],
             strongest_wear: None,
             nearest_mode: None,
+            coupled: None,
             initiation: Some(InitiationCheck {
                 relative_wear: Some(0.02),
                 threshold: 0.01,

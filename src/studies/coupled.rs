@@ -6,16 +6,15 @@
 //! * `coupled_modes.csv` — one row per mode: `position_m, frequency_hz, damping_ratio`, the
 //!   shares (`wheel_elastic, wheel_rigid, rail_<family>…, support, contact`),
 //!   `rail_x_to_n`, `rail_x_m_per_sqrt_j, rail_n_m_per_sqrt_j, wheel_x_m_per_sqrt_j,
-//!   wheel_n_m_per_sqrt_j`, and `dominant` as the index in the share columns;
+//!   wheel_n_m_per_sqrt_j`, and `dominant`: the mode's name by the attribution rule
+//!   (`ModeShares::dominant`) as the index of its share column, 0 (`wheel_elastic`) standing
+//!   for the wheel's two parts together;
 //!   `coupled_modes.npy` the same numbers; `coupled_modes.json` the linearisation, positions
 //!   and modes ([`write_coupled_modes`]);
 //! * `coupled_attribution.json` of a passage — `{wear, fl, fn}`: each component's frequency
 //!   attributed to a coupled mode with its energy shares ([`passage_attribution`]).
 
 use std::path::Path;
-
-/// The default upper frequency (Hz) of the coupled modes listed by `coupled-modes`.
-pub const DEFAULT_LIST_TO_HZ: f64 = 3000.0;
 
 use serde::{Deserialize, Serialize};
 
@@ -26,6 +25,9 @@ use crate::dynamics::summary::PassageSummary;
 use crate::dynamics::WavelengthComponent;
 use crate::eigen::classify::TrackFamily;
 use crate::io::{write_csv, write_npy, write_text};
+
+/// The default upper frequency (Hz) of the coupled modes listed by `coupled-modes`.
+pub const DEFAULT_LIST_TO_HZ: f64 = 3000.0;
 
 /// The components of a passage summary attributed to coupled modes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -118,13 +120,8 @@ pub fn coupled_mode_columns() -> Vec<String> {
 /// One row of `coupled_modes.csv` (see [`coupled_mode_columns`]).
 fn coupled_mode_row(m: &CoupledMode) -> Vec<f64> {
     let mut r = vec![m.position_m, m.frequency_hz, m.damping_ratio];
-    let shares = m.shares.values();
-    let dom = shares
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .map_or(0, |(i, _)| i);
-    r.extend(shares);
+    let dom = m.shares.dominant_index();
+    r.extend(m.shares.values());
     r.push(m.rail_x_to_n);
     r.extend(m.contact_amplitudes_m_per_sqrt_j);
     r.push(dom as f64);
@@ -272,8 +269,21 @@ mod tests {
         );
         assert!(!crate::dynamics::coupled::attribution_text(&b).contains("no coupled mode"));
         assert!(attribution_values(None).iter().all(|v| v.is_nan()));
-        assert_eq!(b.shares.family_label(), "rail LC");
-        assert_eq!(a.shares.family_label(), "wheel");
+        assert_eq!(b.shares.dominant().0, "rail LC");
+        assert_eq!(a.shares.dominant().0, "wheel");
+        // The CSV's `dominant` column is the same rule: rail LC's column, the wheel as 0.
+        assert_eq!(b.shares.dominant_index(), 2);
+        assert_eq!(a.shares.dominant_index(), 0);
+        // The wheel's two parts count together against a larger single share elsewhere.
+        let split = ModeShares {
+            wheel_elastic: 0.3,
+            wheel_rigid: 0.2,
+            support: 0.4,
+            contact: 0.1,
+            ..ModeShares::default()
+        };
+        assert_eq!(split.dominant().0, "wheel");
+        assert_eq!(split.dominant_index(), 0);
     }
 
     /// The seen modes: residue share ≥ 3 % of the largest, in the band, duplicates within

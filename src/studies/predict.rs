@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::coupled::{write_passage_attribution, SummaryAttribution};
+use super::coupled::{attribute_one, write_passage_attribution, SummaryAttribution};
 use super::grow::{
     grow_json, growth_attribution, initiation_check, trial_growth_if_any, write_growth_files,
     GrowJson, RateSummary,
@@ -183,7 +183,13 @@ pub fn predict(
         progress,
     )?;
     let verdict = match &growth {
-        Some(g) => growth_verdict(g, m.run.speed_kmh, &lines, Some(check)),
+        Some(g) => growth_verdict(
+            g,
+            m.run.speed_kmh,
+            &lines,
+            Some(check),
+            attribute_one(&coupled.modes, g.smooth.dominant_frequency_hz).as_ref(),
+        ),
         None => no_initiation_verdict(m.run.speed_kmh, Some(check)),
     };
     let rate = super::grow::growth_rate(m, prepared, m.run.requested_speed(), progress)?;

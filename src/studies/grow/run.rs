@@ -18,7 +18,7 @@ use crate::growth::verdict::{growth_verdict, no_initiation_verdict, Verdict};
 use crate::io::write_csv;
 use crate::model::Model;
 use crate::progress::Progress;
-use crate::studies::coupled::write_coupled_modes;
+use crate::studies::coupled::{attribute_one, write_coupled_modes};
 use crate::studies::StudiesError;
 use crate::units::{mm_to_m, um_to_m};
 
@@ -227,11 +227,13 @@ pub fn run_grow(
             json_text,
         });
     };
+    let strongest = attribute_one(&coupled, g.smooth.dominant_frequency_hz);
     let verdict = growth_verdict(
         &g,
         m.run.speed_kmh,
         &modes,
         Some(initiation_check(m, &g.smooth)),
+        strongest.as_ref(),
     );
     write_growth_files(out, &g)?;
     let rounds = if opts.rounds > 0 {

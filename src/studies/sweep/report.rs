@@ -172,11 +172,7 @@ impl ModeLines {
             )
             .chain(seen_by_contact(&r.map.coupled_modes, band).iter().map(|c| {
                 (
-                    format!(
-                        "coupled {} {:.0} Hz",
-                        c.shares.family_label(),
-                        c.frequency_hz
-                    ),
+                    format!("coupled {} {:.0} Hz", c.shares.dominant().0, c.frequency_hz),
                     c.frequency_hz,
                     LineStyle::Dotted,
                 )
@@ -390,7 +386,7 @@ pub fn summary_lines(r: &SweepRecord) -> Vec<String> {
             r.speeds_kmh[i],
             r.speeds_kmh[j],
             a.mode_frequency_hz,
-            a.shares.family_label()
+            a.shares.dominant().0
         ));
     }
     out
@@ -544,7 +540,7 @@ fn coupled_section(d: &mut Document, r: &SweepRecord) {
                         a.mode_frequency_hz,
                         if distant { " †" } else { "" }
                     ),
-                    a.shares.family_label(),
+                    a.shares.dominant().0,
                     shares
                         .iter()
                         .map(|(l, v)| format!("{l} {:.0} %", 100.0 * v))
