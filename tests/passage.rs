@@ -457,7 +457,8 @@ fn verdict_lines(stdout: &str) -> Vec<&str> {
 }
 
 /// `grow` and `predict` end with the plain-language verdict (one of the four headline forms,
-/// then the strongest wear component and its nearest mode, then the initiation check against
+/// then the strongest wear component, its coupled mode and the nearest uncoupled
+/// eigenfrequency, then the initiation check against
 /// the threshold); the report opens with the same verdict, explains the consistency classes,
 /// compares with the wheel modes and names the fastening model as in model files. With
 /// stderr not a terminal, every long stage prints plain progress lines (its name, a count
@@ -480,7 +481,12 @@ fn grow_and_predict_print_a_verdict_and_plain_progress() {
     assert!(!out.contains("limiting amplitude none"), "{out}");
     if !v[0].starts_with(heads[2]) {
         assert!(v[1].starts_with("Strongest wear component "), "{out}");
-        assert!(v[1].contains("; nearest mode: "), "{out}");
+        // The coupled mode by the attribution rule, and the uncoupled comparison beside it.
+        assert!(
+            v[1].contains("coupled wheel–track mode")
+                && v[1].contains("; nearest uncoupled eigenfrequency: "),
+            "{out}"
+        );
     }
     assert!(
         v.last().unwrap().starts_with("Initiation criterion: ")
