@@ -348,6 +348,17 @@ pub fn case_label(c: super::ConsistencyCase) -> &'static str {
     }
 }
 
+/// The colour of a consistency class in the reports' HTML tables (CSS), keyed by
+/// [`class_label`]'s words: light green, dark green, grey; `None` for other text.
+pub fn class_colour(label: &str) -> Option<&'static str> {
+    match label {
+        "light green" => Some("#c8f0c8"),
+        "dark green" => Some("#6fbf6f"),
+        "grey" => Some("#d0d0d0"),
+        _ => None,
+    }
+}
+
 /// The consistency class in words: "light green", "dark green" or "grey".
 pub fn class_label(c: super::ConsistencyClass) -> &'static str {
     match c {

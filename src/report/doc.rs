@@ -27,6 +27,10 @@ pub enum Block {
         header: Vec<String>,
         /// Rows of cells.
         rows: Vec<Vec<String>>,
+        /// Background colour per cell in the HTML (CSS colour, e.g. `#c8f0c8`), by row and
+        /// column; missing or `None` = none. Markdown has no cell colours: the cell's text
+        /// must say what its colour shows.
+        backgrounds: Vec<Vec<Option<&'static str>>>,
     },
     /// An image by relative path, with its alternative text (also the caption).
     Image {
@@ -83,9 +87,26 @@ impl Document {
 
     /// Appends a table.
     pub fn table<S: AsRef<str>>(&mut self, header: &[S], rows: Vec<Vec<String>>) -> &mut Self {
+        self.table_shaded(header, rows, |_, _, _| None)
+    }
+
+    /// Appends a table whose HTML cells get the background `shade(row, column, text)` (a CSS
+    /// colour) where it is `Some`.
+    pub fn table_shaded<S: AsRef<str>>(
+        &mut self,
+        header: &[S],
+        rows: Vec<Vec<String>>,
+        shade: impl Fn(usize, usize, &str) -> Option<&'static str>,
+    ) -> &mut Self {
+        let backgrounds = rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| r.iter().enumerate().map(|(j, c)| shade(i, j, c)).collect())
+            .collect();
         self.blocks.push(Block::Table {
             header: header.iter().map(|h| h.as_ref().to_string()).collect(),
             rows,
+            backgrounds,
         });
         self
     }
@@ -121,7 +142,7 @@ impl Document {
                     out.push_str(t);
                     out.push('\n');
                 }
-                Block::Table { header, rows } => {
+                Block::Table { header, rows, .. } => {
                     let cell = |s: &str| s.replace('|', "\\|").replace('\n', " ");
                     let line = |cells: &mut dyn Iterator<Item = String>| {
                         let v: Vec<String> = cells.collect();
@@ -170,17 +191,28 @@ impl Document {
                     out.push_str(&format!("<h{level}>{}</h{level}>\n", escape(text)));
                 }
                 Block::Paragraph(t) => out.push_str(&format!("<p>{}</p>\n", escape(t))),
-                Block::Table { header, rows } => {
+                Block::Table {
+                    header,
+                    rows,
+                    backgrounds,
+                } => {
                     out.push_str("<table>\n<tr>");
                     for h in header {
                         out.push_str(&format!("<th>{}</th>", escape(h)));
                     }
                     out.push_str("</tr>\n");
-                    for r in rows {
+                    for (k, r) in rows.iter().enumerate() {
                         out.push_str("<tr>");
                         for i in 0..header.len().max(r.len()) {
                             let c = r.get(i).map_or("", |s| s.as_str());
-                            out.push_str(&format!("<td>{}</td>", escape(c)));
+                            match backgrounds.get(k).and_then(|b| b.get(i)).copied().flatten() {
+                                Some(bg) => out.push_str(&format!(
+                                    "<td style=\"background:{}\">{}</td>",
+                                    escape(bg),
+                                    escape(c)
+                                )),
+                                None => out.push_str(&format!("<td>{}</td>", escape(c))),
+                            }
                         }
                         out.push_str("</tr>\n");
                     }
@@ -267,6 +299,24 @@ mod tests {
         assert!(h.contains("<td>z</td><td></td>"));
         assert!(h.contains("<img src=\"plots/map.png\""));
         assert!(h.contains("<style>") && !h.contains("<link") && !h.contains("<script"));
+    }
+
+    /// A shaded cell carries its background in the HTML only; the Markdown keeps its text.
+    #[test]
+    fn shaded_cells_are_coloured_in_html_only() {
+        let mut d = Document::new("t");
+        d.table_shaded(
+            &["amplitude", "class"],
+            vec![
+                vec!["10".into(), "light green".into()],
+                vec!["40".into(), "grey".into()],
+            ],
+            |_, j, c| (j == 1 && c == "light green").then_some("#c8f0c8"),
+        );
+        let h = d.to_html();
+        assert!(h.contains("<td>10</td><td style=\"background:#c8f0c8\">light green</td>"));
+        assert!(h.contains("<td>40</td><td>grey</td>"));
+        assert!(d.to_markdown().contains("| 10 | light green |"));
     }
 
     #[test]

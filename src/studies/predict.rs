@@ -27,8 +27,8 @@ use crate::dynamics::summary::PassageSummary;
 use crate::dynamics::{DynamicsError, WavelengthComponent};
 use crate::growth::procedure::{ModeLines, ProcedureError, TrialGrowth};
 use crate::growth::verdict::{
-    case_label, class_label, growth_verdict, no_initiation_verdict, sig, trim_zeros, Verdict,
-    CONSISTENCY_LEGEND,
+    case_label, class_colour, class_label, growth_verdict, no_initiation_verdict, sig, trim_zeros,
+    Verdict, CONSISTENCY_LEGEND,
 };
 use crate::model::Model;
 use crate::progress::Progress;
@@ -593,7 +593,8 @@ fn growth_section(d: &mut Document, g: &TrialGrowth, gj: &GrowJson) {
             ]);
         }
     }
-    d.table(
+    // The class column (6) in its colour in the HTML.
+    d.table_shaded(
         &[
             "2A_max (µm)",
             "λ_ref (mm)",
@@ -604,6 +605,7 @@ fn growth_section(d: &mut Document, g: &TrialGrowth, gj: &GrowJson) {
             "class",
         ],
         rows,
+        |_, j, c| if j == 6 { class_colour(c) } else { None },
     );
     eigen_section(d, g);
 }
@@ -629,7 +631,8 @@ fn eigen_section(d: &mut Document, g: &TrialGrowth) {
     d.paragraph(
         "Each component's frequency against the nearest eigenfrequency of three families: the \
          track's longitudinal-compression (LC) and vertical-bending (VB) modes and the wheel modes \
-         the contact sees. The relative difference is |f − f_mode| / f_mode.",
+         the contact sees. The relative difference is |f − f_mode| / f_mode. The strongest \
+         component of each signal per passage; every component is in grow/eigen_comparison.csv.",
     );
     d.table(
         &[
@@ -644,8 +647,7 @@ fn eigen_section(d: &mut Document, g: &TrialGrowth) {
             "nearest wheel (Hz)",
             "rel. difference wheel",
         ],
-        g.eigen
-            .iter()
+        strongest_per_passage(&g.eigen)
             .map(|e| {
                 vec![
                     e.signal.clone(),
@@ -662,6 +664,19 @@ fn eigen_section(d: &mut Document, g: &TrialGrowth) {
             })
             .collect(),
     );
+}
+
+/// The first (strongest) component of each signal of each passage: the components of a
+/// passage's signal come strongest first.
+fn strongest_per_passage(
+    eigen: &[crate::growth::procedure::EigenComparison],
+) -> impl Iterator<Item = &crate::growth::procedure::EigenComparison> {
+    eigen.iter().enumerate().filter_map(move |(i, e)| {
+        let first = eigen[..i]
+            .iter()
+            .all(|p| p.signal != e.signal || p.amplitude_um != e.amplitude_um);
+        first.then_some(e)
+    })
 }
 
 /// The short sweep: dominant wavelength per speed and the maps.
