@@ -1,11 +1,11 @@
 """Content of F_L at the sleeper-passing harmonics (experiment F of
 validation/reference_regime.md).
 
-Usage: python3 validation/sleeper_harmonics.py [--zone X0 X1] [--spacing S] DIR...
+Usage: python3 validation/sleeper_harmonics.py [--zone X0 X1] [--spacing S] [--signal fl_n|fn_n] DIR...
 Each DIR holds a passage's forces.csv (`corrugation passage` or `corrugation explicit`).
 
 For each DIR, over the solution zone [X0, X1] (m; default model 4.3 to 5.3), with the mean
-and linear trend removed and a Hann window, the one-sided mean square of F_L per DFT bin
+and linear trend removed and a Hann window, the one-sided mean square of F_L (or `--signal fn_n`: F_N) per DFT bin
 (bins of 1/L cycles per metre, L the zone's length) is summed
 - over the harmonics band: wavenumbers (n - 1/2)/S to (n + 1/2)/S for n = 10..13 (S the
   sleeper spacing, default 0.6 m), i.e. wavelengths 44.4-63.2 mm, 615-875 Hz at 140 km/h;
@@ -20,15 +20,15 @@ import math
 import sys
 
 
-def load(path, x0, x1):
-    xs, fl = [], []
+def load(path, x0, x1, signal):
+    xs, ys = [], []
     with open(path) as f:
         for row in csv.DictReader(f):
             x = float(row["x_m"])
             if x0 <= x <= x1:
                 xs.append(x)
-                fl.append(float(row["fl_n"]))
-    return xs, fl
+                ys.append(float(row[signal]))
+    return xs, ys
 
 
 def detrend(xs, ys):
@@ -58,12 +58,16 @@ def band_rms(xs, ys, k_lo, k_hi):
 
 def main(argv):
     x0, x1, s = 4.3, 5.3, 0.6
+    signal = "fl_n"
     dirs = []
     i = 0
     while i < len(argv):
         if argv[i] == "--zone":
             x0, x1 = float(argv[i + 1]), float(argv[i + 2])
             i += 3
+        elif argv[i] == "--signal":
+            signal = argv[i + 1]
+            i += 2
         elif argv[i] == "--spacing":
             s = float(argv[i + 1])
             i += 2
@@ -72,11 +76,12 @@ def main(argv):
             i += 1
     print(f"zone {x0}-{x1} m, sleeper spacing {s} m; harmonics band n = 10..13 "
           f"({s / 13.5 * 1e3:.1f}-{s / 9.5 * 1e3:.1f} mm); wear band 20-80 mm")
-    print("| run | samples | F_L RMS, harmonics band (N) | F_L RMS, 20-80 mm band (N) | share |")
+    name = {"fl_n": "F_L", "fn_n": "F_N"}.get(signal, signal)
+    print(f"| run | samples | {name} RMS, harmonics band (N) | {name} RMS, 20-80 mm band (N) | share |")
     print("|---|---|---|---|---|")
     for d in dirs:
-        xs, fl = load(f"{d}/forces.csv", x0, x1)
-        y = detrend(xs, fl)
+        xs, ys = load(f"{d}/forces.csv", x0, x1, signal)
+        y = detrend(xs, ys)
         h, _ = band_rms(xs, y, 9.5 / s, 13.5 / s)
         b, _ = band_rms(xs, y, 1 / 0.08, 1 / 0.02)
         print(f"| {d} | {len(xs)} | {h:.3f} | {b:.3f} | {h / b:.2f} |")
