@@ -9,7 +9,9 @@ use anyhow::Context;
 use clap::Args;
 
 use corrugation::model::{load_model, ModelSource};
-use corrugation::studies::initiation::{run_initiation, write_initiation, InitiationCriterion};
+use corrugation::studies::initiation::{
+    check_peaks, check_speed_kmh, run_initiation, write_initiation, InitiationCriterion,
+};
 
 use super::{engine, ModelArgs};
 
@@ -84,15 +86,15 @@ impl InitiationCmd {
         let t0 = Instant::now();
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
-        if let Some(v) = self.min_relative_wear {
-            if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
-                anyhow::bail!("--min-relative-wear must be a number from 0 to 1 (got {v})");
-            }
+        // The criterion as the flags set it (each model's own threshold is checked with it).
+        InitiationCriterion {
+            min_relative_wear: self
+                .min_relative_wear
+                .unwrap_or(InitiationCriterion::DEFAULT_MIN_RELATIVE_WEAR),
+            max_wavelength_deviation: self.max_wavelength_deviation,
         }
-        let v = self.max_wavelength_deviation;
-        if !(v.is_finite() && v >= 0.0) {
-            anyhow::bail!("--max-wavelength-deviation must be a finite number ≥ 0 (got {v})");
-        }
+        .check()?;
+        check_peaks(self.peaks)?;
         let variants: Vec<&str> = self.variants.iter().map(|v| v.trim()).collect();
         corrugation::lists::check_no_repeats("--variants", "", &variants)?;
         let models: Vec<String> = self
@@ -108,9 +110,6 @@ impl InitiationCmd {
                 .unwrap_or(m.wear.initiation_threshold),
             max_wavelength_deviation: self.max_wavelength_deviation,
         };
-        if !(1..=20).contains(&self.peaks) {
-            anyhow::bail!("--peaks must be 1 … 20 (got {})", self.peaks);
-        }
         if !self.models.is_empty() && self.model.model.is_some() {
             anyhow::bail!(
                 "--model and --models: give either one model file (its fastening variants are compared) or the files to compare"
@@ -141,12 +140,7 @@ impl InitiationCmd {
         let mut rows = Vec::new();
         for (name, model) in &cases {
             let speed = self.speed.unwrap_or(model.run.speed_kmh);
-            let [lo, hi] = corrugation::model::SPEED_KMH;
-            if !(speed.is_finite() && (lo..=hi).contains(&speed)) {
-                anyhow::bail!(
-                    "--speed {speed}: out of range, allowed {lo} to {hi} km/h (as run.speed_kmh)"
-                );
-            }
+            check_speed_kmh(speed)?;
             // One engine at a time: each holds its modal basis.
             let runner = engine::runner_for_engine(model, self.cache.as_deref(), self.engine)?;
             rows.extend(run_initiation(

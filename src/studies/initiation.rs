@@ -58,6 +58,58 @@ impl InitiationCriterion {
     }
     /// Default wavelength match tolerance (3 %, docs/theory.md §10.2).
     pub const DEFAULT_MAX_WAVELENGTH_DEVIATION: f64 = 0.03;
+
+    /// Checks the criterion: the relative-wear threshold in [0, 1], the wavelength tolerance
+    /// finite and ≥ 0 (named by the `initiation` command's flags).
+    pub fn check(&self) -> Result<(), StudiesError> {
+        let v = self.min_relative_wear;
+        if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
+            return Err(StudiesError::Argument {
+                flag: "--min-relative-wear",
+                given: v.to_string(),
+                reason: "must be a number from 0 to 1".into(),
+            });
+        }
+        let v = self.max_wavelength_deviation;
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(StudiesError::Argument {
+                flag: "--max-wavelength-deviation",
+                given: v.to_string(),
+                reason: "must be a finite number ≥ 0".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Most PSD peaks per signal in the initiation table.
+pub const MAX_PEAKS: usize = 20;
+
+/// Checks the number of PSD peaks per signal: 1 to [`MAX_PEAKS`].
+pub fn check_peaks(peaks: usize) -> Result<(), StudiesError> {
+    if (1..=MAX_PEAKS).contains(&peaks) {
+        return Ok(());
+    }
+    Err(StudiesError::Argument {
+        flag: "--peaks",
+        given: peaks.to_string(),
+        reason: format!("must be 1 … {MAX_PEAKS}"),
+    })
+}
+
+/// Checks a speed of the initiation table (km/h): the range of `run.speed_kmh`.
+pub fn check_speed_kmh(speed_kmh: f64) -> Result<(), StudiesError> {
+    let [lo, hi] = crate::model::SPEED_KMH;
+    if speed_kmh.is_finite() && (lo..=hi).contains(&speed_kmh) {
+        return Ok(());
+    }
+    Err(StudiesError::OutOfRange {
+        name: "--speed",
+        value: speed_kmh,
+        lo,
+        hi,
+        unit: "km/h (as run.speed_kmh)",
+    })
 }
 
 impl Default for InitiationCriterion {
@@ -193,6 +245,9 @@ pub fn run_initiation(
     peaks: usize,
     progress: &dyn Progress,
 ) -> Result<Vec<InitiationRow>, StudiesError> {
+    criterion.check()?;
+    check_peaks(peaks)?;
+    check_speed_kmh(speed_kmh)?;
     let bar = Counter::start(progress, "initiation passages (models)", cases.len() as u64);
     let out: Vec<Result<InitiationRow, String>> = cases
         .par_iter()
@@ -388,4 +443,33 @@ pub fn criterion_text(c: &InitiationCriterion) -> String {
         100.0 * c.min_relative_wear,
         100.0 * c.max_wavelength_deviation
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The library refuses a criterion, a peak count or a speed out of range, naming the flag
+    /// and the range, whoever calls it.
+    #[test]
+    fn criterion_peaks_and_speed_are_checked_by_the_library() {
+        assert!(InitiationCriterion::default().check().is_ok());
+        let bad = InitiationCriterion {
+            min_relative_wear: 1.5,
+            ..InitiationCriterion::default()
+        };
+        let e = bad.check().unwrap_err().to_string();
+        assert!(e.contains("--min-relative-wear 1.5") && e.contains("0 to 1"), "{e}");
+        let bad = InitiationCriterion {
+            max_wavelength_deviation: f64::NAN,
+            ..InitiationCriterion::default()
+        };
+        assert!(bad.check().is_err());
+        assert!(check_peaks(1).is_ok() && check_peaks(MAX_PEAKS).is_ok());
+        assert!(check_peaks(0).is_err() && check_peaks(MAX_PEAKS + 1).is_err());
+        let e = check_speed_kmh(600.0).unwrap_err().to_string();
+        assert!(e.contains("40 to 500 km/h"), "{e}");
+        let e = run_initiation(&[], 140.0, &bad, 3, &crate::progress::Silent).unwrap_err();
+        assert!(e.to_string().contains("--max-wavelength-deviation"), "{e}");
+    }
 }
