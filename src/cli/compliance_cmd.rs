@@ -97,8 +97,8 @@ impl ComplianceCmd {
             super::warn_unit_slips(&format!("--variants {name}"), m);
             // the library's default load position, mid-track
             let x = self.x.unwrap_or(0.5 * m.track_length());
-            super::check_on_track("--x", &[x], m)?;
-            super::check_on_track("--x + --ahead", &[x + self.ahead], m)?;
+            m.check_on_track("--x", &[x])?;
+            m.check_on_track("--x + --ahead", &[x + self.ahead])?;
         }
         let rows = compliance_rows(&models, &load)?;
         let (csv_path, json) = write_compliance(&self.out, &load, &rows)?;

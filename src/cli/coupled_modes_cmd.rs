@@ -60,7 +60,7 @@ impl CoupledModesCmd {
         }
         corrugation::lists::check_no_repeats("--at", "m", &self.at_m)?;
         let m = self.model.load()?;
-        super::check_on_track("--at", &self.at_m, &m)?;
+        m.check_on_track("--at", &self.at_m)?;
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let t0 = std::time::Instant::now();

@@ -114,21 +114,6 @@ pub fn check_trial_profile_grid(amplitudes_um: &[f64], m: &Model) -> anyhow::Res
     Ok(())
 }
 
-/// Refuses, before any work, a position of `flag` (m along the rail) off the track of `m`:
-/// 0 to the track's length, `track.bays × track.sleeper_spacing`.
-pub fn check_on_track(flag: &str, xs: &[f64], m: &Model) -> anyhow::Result<()> {
-    let length = m.track_length();
-    if let Some(x) = xs
-        .iter()
-        .find(|x| !(x.is_finite() && (0.0..=length).contains(*x)))
-    {
-        anyhow::bail!(
-            "{flag} {x}: off the track: a position in m along the rail, 0 to {length} m (the track's length, track.bays × track.sleeper_spacing)"
-        );
-    }
-    Ok(())
-}
-
 /// Refuses an `--out` that is the modal cache's directory (`--cache`, or the default one) or
 /// lies inside it, before anything is created or computed (see
 /// [`corrugation::eigen::cache::ensure_outside_cache`]).

@@ -65,7 +65,7 @@ impl ReceptanceCmd {
         super::check_out_outside_cache(&self.out, self.cache.as_deref())?;
         super::check_out_dir(&self.out)?;
         let m = self.model.load()?;
-        super::check_on_track("--at", &self.at_m, &m)?;
+        m.check_on_track("--at", &self.at_m)?;
         let opts = ReceptanceOptions {
             from_hz: self.from_hz,
             to_hz: self.to_hz,

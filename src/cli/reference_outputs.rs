@@ -45,7 +45,7 @@ impl ReferenceArgs {
     /// to the track's length, `track.bays × track.sleeper_spacing`, m).
     pub fn check(&self, m: &corrugation::model::Model) -> anyhow::Result<()> {
         corrugation::lists::check_no_repeats("--nodal-at", "m", &self.nodal_at_m)?;
-        super::check_on_track("--nodal-at", &self.nodal_at_m, m)
+        Ok(m.check_on_track("--nodal-at", &self.nodal_at_m)?)
     }
 }
 

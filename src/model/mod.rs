@@ -42,6 +42,16 @@ use crate::mesh::wheel::{BrakeDisc, WheelParams};
 /// Errors while reading or checking a model file. Each names the file and the key.
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
+    /// A position along the rail (an argument `what`, e.g. `--at`) off the model's track.
+    #[error("{what} {x_m}: off the track: a position in m along the rail, 0 to {length_m} m (the track's length, track.bays × track.sleeper_spacing)")]
+    OffTrack {
+        /// What the position is (the flag or key that gave it).
+        what: String,
+        /// The position (m).
+        x_m: f64,
+        /// The track's length (m).
+        length_m: f64,
+    },
     /// The file could not be read.
     #[error("{file}: cannot read model file: {source}")]
     Io {
@@ -802,6 +812,23 @@ impl Run {
 }
 
 impl Model {
+    /// Refuses a position of `xs` (m along the rail, given as `what`) off the track: each must
+    /// be finite and within 0 to [`Model::track_length`].
+    pub fn check_on_track(&self, what: &str, xs: &[f64]) -> Result<(), ModelError> {
+        let length_m = self.track_length();
+        match xs
+            .iter()
+            .find(|x| !(x.is_finite() && (0.0..=length_m).contains(*x)))
+        {
+            Some(&x_m) => Err(ModelError::OffTrack {
+                what: what.to_string(),
+                x_m,
+                length_m,
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// The embedded default model (Dutch track, RPM3).
     pub fn default_model() -> Model {
         load_model_str(BUILTIN_DUTCH, "builtin:dutch", &[]).expect("embedded model is valid")

@@ -648,3 +648,19 @@ fn computed_bounds_print_without_round_off_digits() {
         assert!(!e.contains("0000000"), "{e}");
     }
 }
+
+/// A position off the track is refused by the model, naming what gave it and the track's
+/// length; the ends are on the track.
+#[test]
+fn positions_off_the_track_are_refused_by_the_model() {
+    let m = crate::model::test_problems::small_model(&[]).unwrap();
+    let l = m.track_length();
+    assert!(m.check_on_track("--at", &[0.0, 0.5 * l, l]).is_ok());
+    for bad in [-0.1, l + 0.1, f64::NAN] {
+        let e = m
+            .check_on_track("--at", &[1.0, bad])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--at") && e.contains("off the track"), "{e}");
+    }
+}

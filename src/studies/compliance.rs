@@ -170,6 +170,10 @@ pub fn compliance_rows(
             name: name.clone(),
             source: e,
         };
+        // The library's default load position is mid-track.
+        let x = load.x_m.unwrap_or(0.5 * m.track_length());
+        m.check_on_track("--x", &[x])?;
+        m.check_on_track("--x + --ahead", &[x + load.ahead_m])?;
         let track = TrackStructure::build(m).map_err(|e| variant(Box::new(e)))?;
         let r = longitudinal_compliance(m, &track, load).map_err(|e| variant(Box::new(e)))?;
         rows.push(ComplianceRow {

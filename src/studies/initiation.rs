@@ -459,7 +459,10 @@ mod tests {
             ..InitiationCriterion::default()
         };
         let e = bad.check().unwrap_err().to_string();
-        assert!(e.contains("--min-relative-wear 1.5") && e.contains("0 to 1"), "{e}");
+        assert!(
+            e.contains("--min-relative-wear 1.5") && e.contains("0 to 1"),
+            "{e}"
+        );
         let bad = InitiationCriterion {
             max_wavelength_deviation: f64::NAN,
             ..InitiationCriterion::default()

@@ -257,6 +257,9 @@ pub enum StudiesError {
         /// The cause.
         source: BoxError,
     },
+    /// A model that cannot be used as given (e.g. a position off its track).
+    #[error(transparent)]
+    Model(#[from] crate::model::ModelError),
     /// A numeric argument outside its range.
     #[error("{name} {value}: out of range, allowed {lo} to {hi} {unit}")]
     OutOfRange {

@@ -37,6 +37,7 @@ pub fn nodal_outputs(
     at_m: &[f64],
     out: &Path,
 ) -> Result<(Vec<NodalPoint>, Vec<f64>), StudiesError> {
+    prepared.engine.model().check_on_track("--nodal-at", at_m)?;
     let points: Vec<(String, f64)> = if at_m.is_empty() {
         let [mid, sl] = prepared.engine.midspan_and_sleeper_m();
         vec![("sleeper".into(), sl), ("mid_span".into(), mid)]

@@ -69,6 +69,9 @@ pub enum ReceptanceError {
     /// The summary could not be serialised.
     #[error("receptance.json: {0}")]
     Json(#[from] serde_json::Error),
+    /// A position off the track.
+    #[error(transparent)]
+    Position(#[from] crate::model::ModelError),
 }
 
 /// What a receptance run computes.
@@ -243,6 +246,7 @@ pub fn receptances(
     started: Instant,
 ) -> Result<Receptances, ReceptanceError> {
     let eng = &prepared.engine;
+    eng.model().check_on_track("--at", &opts.at_m)?;
     let freqs = &grid.frequencies_hz;
     let (labels, positions): (Vec<String>, Vec<f64>) = if opts.at_m.is_empty() {
         let [mid, sl] = eng.midspan_and_sleeper_m();
