@@ -21,6 +21,7 @@ use std::sync::Once;
 
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::FontStyle;
@@ -132,6 +133,9 @@ pub struct HeatMap<'a> {
     pub lines: &'a [OverlayLine],
     /// Logarithmic colour scale (values `≤ 0` are shown as "no data").
     pub log_colour: bool,
+    /// What each line style stands for, drawn as a legend in the plot's lower right corner
+    /// (e.g. `(LineStyle::Dotted, "coupled wheel–track modes")`); empty: no legend.
+    pub line_legend: &'a [(LineStyle, &'a str)],
 }
 
 /// The two files of one plot.
@@ -589,6 +593,29 @@ pub fn colour_map(t: f64) -> RGBColor {
 /// Decades shown below the maximum on a log colour scale.
 pub const LOG_DECADES: f64 = 6.0;
 
+/// Most columns a heat map's axis is wide: a column (one abscissa) is at most the axis span
+/// over this, so that a few speeds far apart are drawn as narrow columns with "no data"
+/// between them, not as wide blocks claiming the speeds between.
+pub const MIN_COLUMNS: f64 = 80.0;
+
+/// The x-interval `[lo, hi]` of each column of the abscissae `v` (ascending): half-way to its
+/// neighbours (half a spacing outside at the ends), narrowed to at most `s / MIN_COLUMNS`
+/// either side of the value, `s` the span of the axis those bounds give.
+pub fn column_bounds(v: &[f64]) -> Vec<[f64; 2]> {
+    let e = edges(v);
+    let span = v[v.len() - 1] - v[0];
+    // The half-width cap h satisfies h = (span + 2h) / (2 MIN_COLUMNS).
+    let cap = if span > 0.0 {
+        span / (2.0 * MIN_COLUMNS - 2.0)
+    } else {
+        f64::INFINITY
+    };
+    v.iter()
+        .enumerate()
+        .map(|(i, &x)| [e[i].max(x - cap), e[i + 1].min(x + cap)])
+        .collect()
+}
+
 /// Cell edges of a rectilinear grid: half-way between neighbours, half a spacing outside.
 fn edges(v: &[f64]) -> Vec<f64> {
     let n = v.len();
@@ -620,9 +647,11 @@ fn heat_on<DB: DrawingBackend>(
     if map.log_colour {
         c0 = c0.max(c1 - LOG_DECADES);
     }
-    let (xe, ye) = (edges(map.x), edges(map.y));
-    let mut chart = heat_cells(&main, map, (&xe, &ye), (c0, c1))?;
+    let (xc, ye) = (column_bounds(map.x), edges(map.y));
+    let xe = [xc[0][0], xc[xc.len() - 1][1]];
+    let mut chart = heat_cells(&main, map, (&xc, &ye), (c0, c1))?;
     overlay_lines(&main, &mut chart, map, (&xe, &ye))?;
+    line_legend(&main, map)?;
     colour_bar(&bar, map, (c0, c1))
 }
 
@@ -639,24 +668,32 @@ fn colour_coordinate(map: &HeatMap<'_>, z: f64) -> Option<f64> {
     }
 }
 
-/// The map's chart on `main` with the cells between the edges `(xe, ye)`, coloured over the
-/// colour range `(c0, c1)`, and the axes.
+/// The map's chart on `main` with the cells of the columns `xc` (x-intervals) between the
+/// y-edges `ye`, coloured over the colour range `(c0, c1)` on a "no data" ground, and the axes.
 fn heat_cells<'a, DB: DrawingBackend>(
     main: &'a DrawingArea<DB, Shift>,
     map: &HeatMap<'_>,
-    (xe, ye): (&[f64], &[f64]),
+    (xc, ye): (&[[f64; 2]], &[f64]),
     (c0, c1): (f64, f64),
 ) -> Result<HeatChart<'a, DB>, String> {
     let es = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let (xa, xb) = (xc[0][0], xc[xc.len() - 1][1]);
+    let (ya, yb) = (ye[0], ye[ye.len() - 1]);
     let mut chart = ChartBuilder::on(main)
         .caption(map.title, (FONT_FAMILY, 22))
         .margin(15)
         .x_label_area_size(50)
         .y_label_area_size(70)
-        .build_cartesian_2d(xe[0]..xe[xe.len() - 1], ye[0]..ye[ye.len() - 1])
+        .build_cartesian_2d(xa..xb, ya..yb)
         .map_err(es)?;
     let ny = map.y.len();
     let nodata = RGBColor(225, 225, 225);
+    chart
+        .draw_series(std::iter::once(Rectangle::new(
+            [(xa, ya), (xb, yb)],
+            nodata.filled(),
+        )))
+        .map_err(es)?;
     chart
         .draw_series((0..map.x.len()).flat_map(|i| {
             (0..ny).map(move |j| {
@@ -664,7 +701,7 @@ fn heat_cells<'a, DB: DrawingBackend>(
                     Some(c) => colour_map((c - c0) / (c1 - c0)),
                     None => nodata,
                 };
-                Rectangle::new([(xe[i], ye[j]), (xe[i + 1], ye[j + 1])], colour.filled())
+                Rectangle::new([(xc[i][0], ye[j]), (xc[i][1], ye[j + 1])], colour.filled())
             })
         }))
         .map_err(es)?;
@@ -675,11 +712,72 @@ fn heat_cells<'a, DB: DrawingBackend>(
         .y_desc(map.y_label)
         .label_style((FONT_FAMILY, 14))
         .axis_desc_style((FONT_FAMILY, 16))
-        .x_label_formatter(&linear_labels(xe[0], xe[xe.len() - 1], TICKS))
-        .y_label_formatter(&linear_labels(ye[0], ye[ye.len() - 1], TICKS))
+        .x_label_formatter(&linear_labels(xa, xb, TICKS))
+        .y_label_formatter(&linear_labels(ya, yb, TICKS))
         .draw()
         .map_err(es)?;
     Ok(chart)
+}
+
+/// The legend of the line styles of `map` in the lower right corner of its plot area: one row
+/// per style in `map.line_legend` that a line of the map uses, a short stroke in the style and
+/// its meaning, on a dark box like the line labels.
+fn line_legend<DB: DrawingBackend>(
+    main: &DrawingArea<DB, Shift>,
+    map: &HeatMap<'_>,
+) -> Result<(), String> {
+    let es = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let rows: Vec<&(LineStyle, &str)> = map
+        .line_legend
+        .iter()
+        .filter(|(st, _)| map.lines.iter().any(|l| l.style == *st))
+        .collect();
+    if rows.is_empty() {
+        return Ok(());
+    }
+    let font = (FONT_FAMILY, 13).into_font().color(&WHITE);
+    let widths: Vec<u32> = rows
+        .iter()
+        .map(|(_, t)| main.estimate_text_size(t, &font).map(|(w, _)| w))
+        .collect::<Result<_, _>>()
+        .map_err(es)?;
+    let text_w = widths.into_iter().max().unwrap_or(0) as i32;
+    let (w, h) = main.dim_in_pixel();
+    let (row_h, stroke_w, pad) = (18, 30, 6);
+    let box_w = stroke_w + text_w + 3 * pad;
+    let box_h = row_h * rows.len() as i32 + pad;
+    // Inside the plot area: clear of the x labels (50 px) and the right margin (15 px).
+    let (x1, y1) = (w as i32 - 15 - 8, h as i32 - 50 - 15 - 8);
+    let (x0, y0) = (x1 - box_w, y1 - box_h);
+    main.draw(&Rectangle::new([(x0, y0), (x1, y1)], BLACK.mix(0.6).filled()))
+        .map_err(es)?;
+    for (k, (st, text)) in rows.iter().enumerate() {
+        let y = y0 + pad + row_h * k as i32 + row_h / 2 - 2;
+        let (a, b) = ((x0 + pad, y), (x0 + pad + stroke_w, y));
+        match st {
+            LineStyle::Solid => main.draw(&PathElement::new(vec![a, b], WHITE.stroke_width(2))),
+            LineStyle::Dashed => main.draw(&DashedPathElement::new(
+                vec![a, b],
+                6,
+                5,
+                WHITE.mix(0.85).stroke_width(1),
+            )),
+            LineStyle::Dotted => main.draw(&DashedPathElement::new(
+                vec![a, b],
+                3,
+                4,
+                RGBColor(255, 120, 120).stroke_width(2),
+            )),
+        }
+        .map_err(es)?;
+        main.draw(&Text::new(
+            text.to_string(),
+            (x0 + 2 * pad + stroke_w, y),
+            font.clone().pos(Pos::new(HPos::Left, VPos::Center)),
+        ))
+        .map_err(es)?;
+    }
+    Ok(())
 }
 
 /// The map's overlay lines on `chart` (solid, then dotted, then dashed; clipped to the

@@ -165,6 +165,7 @@ fn heat_map_writes_both_files_and_checks_its_input() {
         z: &z,
         lines: &lines,
         log_colour: true,
+        line_legend: &[],
     };
     let f = heat_map(&d.join("map"), &map).unwrap();
     assert_eq!(png_size(&std::fs::read(&f.png).unwrap()), HEAT_MAP_SIZE);
@@ -205,6 +206,7 @@ fn crowded_line_labels_are_thinned_and_dashed_lines_are_broken() {
         z: &z,
         lines: &lines,
         log_colour: false,
+        line_legend: &[],
     };
     let f = heat_map(&d.join("map"), &map).unwrap();
     let svg = std::fs::read_to_string(&f.svg).unwrap();
@@ -232,3 +234,55 @@ fn colour_map_ends_and_edges() {
     assert_eq!(colour_map(f64::NAN), RGBColor(68, 1, 84));
     assert_eq!(edges(&[1.0, 2.0, 4.0]), vec![0.5, 1.5, 3.0, 5.0]);
 }
+
+/// A few abscissae far apart are narrow columns (at most 1/`MIN_COLUMNS` of the axis either
+/// side), a dense grid keeps cells that touch half-way between neighbours.
+#[test]
+fn sparse_columns_are_narrow_and_dense_ones_touch() {
+    let sparse = column_bounds(&[100.0, 140.0]);
+    let span = sparse[1][1] - sparse[0][0];
+    for (c, x) in sparse.iter().zip([100.0, 140.0]) {
+        assert!((c[1] - c[0] - 2.0 * span / (2.0 * MIN_COLUMNS)).abs() < 1e-9, "{c:?}");
+        assert!((0.5 * (c[0] + c[1]) - x).abs() < 1e-12);
+    }
+    let dense: Vec<f64> = (0..165).map(|i| 54.8 + i as f64).collect();
+    let c = column_bounds(&dense);
+    for w in c.windows(2) {
+        assert!((w[0][1] - w[1][0]).abs() < 1e-9, "cells touch");
+    }
+    assert!((c[0][0] - 54.3).abs() < 1e-9 && (c[164][1] - 219.3).abs() < 1e-9);
+}
+
+/// The legend names each line style the map uses, and only those.
+#[test]
+fn the_line_legend_names_the_styles_in_use() {
+    let d = tmpdir("heat_legend");
+    let x = [100.0, 140.0];
+    let y: Vec<f64> = (0..10).map(|j| 20.0 + 5.0 * j as f64).collect();
+    let z = vec![1.0; x.len() * y.len()];
+    let mut dotted = OverlayLine::horizontal("coupled 30", 30.0, 100.0, 140.0);
+    dotted.style = LineStyle::Dotted;
+    let lines = [OverlayLine::horizontal("LC 40", 40.0, 100.0, 140.0), dotted];
+    let map = HeatMap {
+        title: "legend",
+        x_label: "v (km/h)",
+        y_label: "f (Hz)",
+        colour_label: "PSD",
+        x: &x,
+        y: &y,
+        z: &z,
+        lines: &lines,
+        log_colour: false,
+        line_legend: &[
+            (LineStyle::Solid, "solid_meaning"),
+            (LineStyle::Dashed, "dashed_meaning"),
+            (LineStyle::Dotted, "dotted_meaning"),
+        ],
+    };
+    let f = heat_map(&d.join("map"), &map).unwrap();
+    let svg = std::fs::read_to_string(&f.svg).unwrap();
+    assert!(svg.contains("solid_meaning") && svg.contains("dotted_meaning"));
+    assert!(!svg.contains("dashed_meaning"), "a style no line uses is left out");
+    std::fs::remove_dir_all(d).ok();
+}
+

@@ -257,6 +257,11 @@ fn draw_heat_maps(dir: &Path, m: &SweepMaps, lines: &ModeLines) -> Result<(), St
                 z,
                 lines,
                 log_colour: true,
+                line_legend: &[
+                    (LineStyle::Solid, "uncoupled rail LC modes"),
+                    (LineStyle::Dashed, "uncoupled wheel modes the contact sees"),
+                    (LineStyle::Dotted, "coupled wheel–track modes"),
+                ],
             },
         )?;
     }
