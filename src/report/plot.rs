@@ -421,6 +421,10 @@ fn linear_labels(lo: f64, hi: f64, n: usize) -> impl Fn(&f64) -> String {
     let sig = ((a / step).log10().floor() as i64 + 2).clamp(2, 12) as usize;
     let dec = (-step.log10().floor() as i64).clamp(0, 12) as usize;
     move |v: &f64| {
+        // A tick at zero computed as a round-off residue (e.g. 8.5e-22 on a 5e-7 step) is 0.
+        if v.abs() < 1e-9 * step {
+            return "0".into();
+        }
         if sci {
             return format!("{:.*e}", sig - 1, v);
         }

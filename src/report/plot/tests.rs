@@ -39,6 +39,9 @@ fn neighbouring_tick_labels_differ() {
         linear_labels(98_960.0, 101_060.0, TICKS)(&99_200.0),
         "99200"
     );
+    // A zero tick left as a round-off residue on a scientific axis prints as 0.
+    assert_eq!(linear_labels(-4.5e-6, 0.0, TICKS)(&8.5e-22), "0");
+    assert_ne!(linear_labels(-4.5e-6, 0.0, TICKS)(&-5.0e-7), "0");
 }
 use super::*;
 
