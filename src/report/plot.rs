@@ -561,8 +561,10 @@ fn lines_on<DB: DrawingBackend>(
         }
     }
     if any_legend {
+        let position = legend_position(root, &chart, spec, &point).map_err(es)?;
         chart
             .configure_series_labels()
+            .position(position)
             .label_font((FONT_FAMILY, 14))
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
@@ -570,6 +572,97 @@ fn lines_on<DB: DrawingBackend>(
             .map_err(es)?;
     }
     Ok(())
+}
+
+/// Where the legend of a line plot covers the least data: of the legend's eight places around
+/// the plot area's edges, the one whose box (sized as plotters sizes it: the labels' text, a
+/// 30 px sample, 10 px margins) holds the fewest points of the series and of eight points
+/// along each of their segments; the upper right on a tie.
+fn legend_position<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    chart: &ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    spec: &LineSpec<'_>,
+    point: &dyn Fn(f64, f64) -> Option<(f64, f64)>,
+) -> Result<SeriesLabelPosition, DrawingAreaErrorKind<DB::ErrorType>> {
+    let font: TextStyle = (FONT_FAMILY, 14).into_font().into();
+    let (mut tw, mut th) = (0, 0);
+    for s in spec.series.iter().filter(|s| !s.name.is_empty()) {
+        let (w, h) = root.estimate_text_size(&s.name, &font)?;
+        tw = tw.max(w as i32);
+        th += (1.25 * h as f64).ceil() as i32;
+    }
+    let (bw, bh) = (tw + 30 + 20, th + 20);
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    // Pixel points of the data: every point and eight along each segment.
+    let mut px = Vec::new();
+    for s in spec.series {
+        let pts: Vec<Option<(f64, f64)>> =
+            s.x.iter().zip(&s.y).map(|(&x, &y)| point(x, y)).collect();
+        for w in pts.windows(2) {
+            if let (Some(a), Some(b)) = (w[0], w[1]) {
+                for k in 0..8 {
+                    let t = k as f64 / 8.0;
+                    px.push(chart.backend_coord(&(a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1))));
+                }
+            }
+        }
+        if let Some(Some(p)) = pts.last() {
+            px.push(chart.backend_coord(p));
+        }
+    }
+    Ok(least_covered(
+        &px,
+        (xr.start, yr.start, xr.end - xr.start, yr.end - yr.start),
+        (bw, bh),
+    ))
+}
+
+/// Of a legend box `(bw, bh)` (px) at its eight places in the plot area `(x, y, w, h)` (px, as
+/// plotters places it, 5 px from the edges), the place covering the fewest of the pixel
+/// points `px`; the upper right on a tie.
+pub fn least_covered(
+    px: &[(i32, i32)],
+    (ax, ay, aw, ah): (i32, i32, i32, i32),
+    (bw, bh): (i32, i32),
+) -> SeriesLabelPosition {
+    use SeriesLabelPosition::*;
+    let place = |p: &SeriesLabelPosition| -> (i32, i32) {
+        let x = match p {
+            UpperLeft | MiddleLeft | LowerLeft => 5,
+            UpperMiddle | LowerMiddle => (aw - bw) / 2,
+            _ => aw - bw - 5,
+        };
+        let y = match p {
+            UpperLeft | UpperMiddle | UpperRight => 5,
+            MiddleLeft | MiddleRight => (ah - bh) / 2,
+            _ => ah - bh - 5,
+        };
+        (ax + x, ay + y)
+    };
+    let covered = |p: &SeriesLabelPosition| {
+        let (x0, y0) = place(p);
+        px.iter()
+            .filter(|&&(x, y)| x >= x0 && x <= x0 + bw && y >= y0 && y <= y0 + bh)
+            .count()
+    };
+    let candidates = [
+        UpperRight,
+        UpperLeft,
+        LowerRight,
+        LowerLeft,
+        MiddleRight,
+        MiddleLeft,
+        UpperMiddle,
+        LowerMiddle,
+    ];
+    let mut best = (UpperRight, usize::MAX);
+    for p in candidates {
+        let c = covered(&p);
+        if c < best.1 {
+            best = (p, c);
+        }
+    }
+    best.0
 }
 
 /// A viridis-like colour map: `t` in `[0, 1]`.
@@ -753,8 +846,11 @@ fn line_legend<DB: DrawingBackend>(
     // Inside the plot area: clear of the x labels (50 px) and the right margin (15 px).
     let (x1, y1) = (w as i32 - 15 - 8, h as i32 - 50 - 15 - 8);
     let (x0, y0) = (x1 - box_w, y1 - box_h);
-    main.draw(&Rectangle::new([(x0, y0), (x1, y1)], BLACK.mix(0.6).filled()))
-        .map_err(es)?;
+    main.draw(&Rectangle::new(
+        [(x0, y0), (x1, y1)],
+        BLACK.mix(0.6).filled(),
+    ))
+    .map_err(es)?;
     for (k, (st, text)) in rows.iter().enumerate() {
         let y = y0 + pad + row_h * k as i32 + row_h / 2 - 2;
         let (a, b) = ((x0 + pad, y), (x0 + pad + stroke_w, y));

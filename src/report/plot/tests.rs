@@ -245,7 +245,10 @@ fn sparse_columns_are_narrow_and_dense_ones_touch() {
     let sparse = column_bounds(&[100.0, 140.0]);
     let span = sparse[1][1] - sparse[0][0];
     for (c, x) in sparse.iter().zip([100.0, 140.0]) {
-        assert!((c[1] - c[0] - 2.0 * span / (2.0 * MIN_COLUMNS)).abs() < 1e-9, "{c:?}");
+        assert!(
+            (c[1] - c[0] - 2.0 * span / (2.0 * MIN_COLUMNS)).abs() < 1e-9,
+            "{c:?}"
+        );
         assert!((0.5 * (c[0] + c[1]) - x).abs() < 1e-12);
     }
     let dense: Vec<f64> = (0..165).map(|i| 54.8 + i as f64).collect();
@@ -285,7 +288,30 @@ fn the_line_legend_names_the_styles_in_use() {
     let f = heat_map(&d.join("map"), &map).unwrap();
     let svg = std::fs::read_to_string(&f.svg).unwrap();
     assert!(svg.contains("solid_meaning") && svg.contains("dotted_meaning"));
-    assert!(!svg.contains("dashed_meaning"), "a style no line uses is left out");
+    assert!(
+        !svg.contains("dashed_meaning"),
+        "a style no line uses is left out"
+    );
     std::fs::remove_dir_all(d).ok();
 }
 
+/// The legend goes where the data is not: a rising diagonal leaves the upper left free; data
+/// everywhere but the lower right sends it there; no data keeps the upper right.
+#[test]
+fn the_legend_avoids_the_data() {
+    use plotters::chart::SeriesLabelPosition as P;
+    let area = (100, 50, 800, 500);
+    let b = (200, 80);
+    let diagonal: Vec<(i32, i32)> = (0..=100).map(|k| (100 + 8 * k, 550 - 5 * k)).collect();
+    assert!(matches!(least_covered(&diagonal, area, b), P::UpperLeft));
+    let mut most: Vec<(i32, i32)> = Vec::new();
+    for x in (100..900).step_by(10) {
+        for y in (50..550).step_by(10) {
+            if !(x > 680 && y > 450) {
+                most.push((x, y));
+            }
+        }
+    }
+    assert!(matches!(least_covered(&most, area, b), P::LowerRight));
+    assert!(matches!(least_covered(&[], area, b), P::UpperRight));
+}
