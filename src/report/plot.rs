@@ -133,7 +133,7 @@ pub struct HeatMap<'a> {
     pub lines: &'a [OverlayLine],
     /// Logarithmic colour scale (values `≤ 0` are shown as "no data").
     pub log_colour: bool,
-    /// What each line style stands for, drawn as a legend in the plot's lower right corner
+    /// What each line style stands for, drawn as a legend in the plot's lower left corner
     /// (e.g. `(LineStyle::Dotted, "coupled wheel–track modes")`); empty: no legend.
     pub line_legend: &'a [(LineStyle, &'a str)],
 }
@@ -690,13 +690,13 @@ pub fn colour_map(t: f64) -> RGBColor {
 /// Decades shown below the maximum on a log colour scale.
 pub const LOG_DECADES: f64 = 6.0;
 
-/// Most columns a heat map's axis is wide: a column (one abscissa) is at most the axis span
-/// over this, so that a few speeds far apart are drawn as narrow columns with "no data"
-/// between them, not as wide blocks claiming the speeds between.
-pub const MIN_COLUMNS: f64 = 80.0;
+/// A heat map's column (one abscissa) is at most the axis span over this wide, so that a few
+/// speeds far apart are drawn as narrow columns with "no data" between them, not as wide
+/// blocks claiming the speeds between (a dense grid's cells, narrower, touch as before).
+pub const MIN_COLUMNS: f64 = 40.0;
 
 /// The x-interval `[lo, hi]` of each column of the abscissae `v` (ascending): half-way to its
-/// neighbours (half a spacing outside at the ends), narrowed to at most `s / MIN_COLUMNS`
+/// neighbours (half a spacing outside at the ends), narrowed to at most `s / (2 MIN_COLUMNS)`
 /// either side of the value, `s` the span of the axis those bounds give.
 pub fn column_bounds(v: &[f64]) -> Vec<[f64; 2]> {
     let e = edges(v);
@@ -816,7 +816,7 @@ fn heat_cells<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
-/// The legend of the line styles of `map` in the lower right corner of its plot area: one row
+/// The legend of the line styles of `map` in the lower left corner of its plot area: one row
 /// per style in `map.line_legend` that a line of the map uses, a short stroke in the style and
 /// its meaning, on a dark box like the line labels.
 fn line_legend<DB: DrawingBackend>(
@@ -839,13 +839,14 @@ fn line_legend<DB: DrawingBackend>(
         .collect::<Result<_, _>>()
         .map_err(es)?;
     let text_w = widths.into_iter().max().unwrap_or(0) as i32;
-    let (w, h) = main.dim_in_pixel();
+    let (_, h) = main.dim_in_pixel();
     let (row_h, stroke_w, pad) = (18, 30, 6);
     let box_w = stroke_w + text_w + 3 * pad;
     let box_h = row_h * rows.len() as i32 + pad;
-    // Inside the plot area: clear of the x labels (50 px) and the right margin (15 px).
-    let (x1, y1) = (w as i32 - 15 - 8, h as i32 - 50 - 15 - 8);
-    let (x0, y0) = (x1 - box_w, y1 - box_h);
+    // Inside the plot area's lower left corner (the line labels stand at the lines' right
+    // ends): clear of the margin (15 px), the y labels (70 px) and the x labels (50 px).
+    let (x0, y1) = (15 + 70 + 8, h as i32 - 50 - 15 - 8);
+    let (x1, y0) = (x0 + box_w, y1 - box_h);
     main.draw(&Rectangle::new(
         [(x0, y0), (x1, y1)],
         BLACK.mix(0.6).filled(),

@@ -238,8 +238,8 @@ fn colour_map_ends_and_edges() {
     assert_eq!(edges(&[1.0, 2.0, 4.0]), vec![0.5, 1.5, 3.0, 5.0]);
 }
 
-/// A few abscissae far apart are narrow columns (at most 1/`MIN_COLUMNS` of the axis either
-/// side), a dense grid keeps cells that touch half-way between neighbours.
+/// A few abscissae far apart are narrow columns (at most 1/`MIN_COLUMNS` of the axis wide), a
+/// dense grid keeps cells that touch half-way between neighbours.
 #[test]
 fn sparse_columns_are_narrow_and_dense_ones_touch() {
     let sparse = column_bounds(&[100.0, 140.0]);
