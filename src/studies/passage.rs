@@ -304,7 +304,7 @@ fn write_psd_plots(
 }
 
 /// Writes `explicit.json` into `out` (atomically): the explicit passage's figures
-/// ([`crate::explicit::ExplicitInfo`]: DOFs, steps, time steps, ω_max, wall and CPU time) and
+/// ([`crate::explicit::passage::ExplicitInfo`]: DOFs, steps, time steps, ω_max, wall and CPU time) and
 /// under `energy` the passage's energy ledger (J).
 pub fn write_explicit_json(
     out: &Path,
