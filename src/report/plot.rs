@@ -697,8 +697,12 @@ pub const MIN_COLUMNS: f64 = 40.0;
 
 /// The x-interval `[lo, hi]` of each column of the abscissae `v` (ascending): half-way to its
 /// neighbours (half a spacing outside at the ends), narrowed to at most `s / (2 MIN_COLUMNS)`
-/// either side of the value, `s` the span of the axis those bounds give.
+/// either side of the value, `s` the span of the axis those bounds give; none for no
+/// abscissae.
 pub fn column_bounds(v: &[f64]) -> Vec<[f64; 2]> {
+    if v.is_empty() {
+        return Vec::new();
+    }
     let e = edges(v);
     let span = v[v.len() - 1] - v[0];
     // The half-width cap h satisfies h = (span + 2h) / (2 MIN_COLUMNS).

@@ -257,6 +257,9 @@ fn sparse_columns_are_narrow_and_dense_ones_touch() {
         assert!((w[0][1] - w[1][0]).abs() < 1e-9, "cells touch");
     }
     assert!((c[0][0] - 54.3).abs() < 1e-9 && (c[164][1] - 219.3).abs() < 1e-9);
+    assert!(column_bounds(&[]).is_empty());
+    let one = column_bounds(&[140.0]);
+    assert!(one[0][0] < 140.0 && one[0][1] > 140.0);
 }
 
 /// The legend names each line style the map uses, and only those.
