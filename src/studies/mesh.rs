@@ -8,7 +8,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use crate::fe::assembly::{mass_per_part, FeMatrices};
+use crate::fe::assembly::{mass_per_part, DofMap, FeMatrices};
 use crate::fe::mtx;
 use crate::io::{write_csv, write_vtu, VtuField, VTK_HEXAHEDRON, VTK_LINE};
 use crate::mesh::Part;
@@ -132,24 +132,10 @@ pub fn write_track_matrices(
     mats: &FeMatrices,
     dir: &Path,
 ) -> Result<(), StudiesError> {
-    std::fs::create_dir_all(dir).map_err(StudiesError::io(dir))?;
-    mtx::write_symmetric(&dir.join("K.mtx"), &mats.k)?;
-    mtx::write_symmetric(&dir.join("M.mtx"), &mats.m)?;
-    mtx::write_symmetric(&dir.join("C.mtx"), &mats.c)?;
     let part_of_node = node_parts(track);
-    let rows = (0..track.dofmap.n_free()).map(|f| {
-        let g = track.dofmap.global_dof(f);
-        let (n, d) = (g / 3, g % 3);
-        let [x, y, z] = track.mesh.nodes[n];
-        vec![f as f64, n as f64, d as f64, x, y, z, part_of_node[n]]
-    });
-    let path = dir.join("dofs.csv");
-    write_csv(
-        &path,
-        &["free_dof", "node", "direction", "x_m", "y_m", "z_m", "part"],
-        rows,
-    )
-    .map_err(StudiesError::io(&path))
+    write_matrices(dir, "", mats, &track.dofmap, &track.mesh.nodes, |n| {
+        part_of_node[n]
+    })
 }
 
 /// Writes the wheel's `wheel_K.mtx`, `wheel_M.mtx`, `wheel_C.mtx` and `wheel_dofs.csv` (part
@@ -159,18 +145,37 @@ pub fn write_wheel_matrices(
     mats: &FeMatrices,
     dir: &Path,
 ) -> Result<(), StudiesError> {
+    let sprung = wheel.sprung_node;
+    write_matrices(dir, "wheel_", mats, &wheel.dofmap, &wheel.mesh.nodes, |n| {
+        if n == sprung {
+            3.0
+        } else {
+            2.0
+        }
+    })
+}
+
+/// `{prefix}K.mtx`, `{prefix}M.mtx`, `{prefix}C.mtx` and `{prefix}dofs.csv` (one row per free
+/// DOF: its node, direction, the node's coordinates in m and `part(node)`) into `dir`.
+fn write_matrices(
+    dir: &Path,
+    prefix: &str,
+    mats: &FeMatrices,
+    dofmap: &DofMap,
+    nodes: &[[f64; 3]],
+    part: impl Fn(usize) -> f64,
+) -> Result<(), StudiesError> {
     std::fs::create_dir_all(dir).map_err(StudiesError::io(dir))?;
-    mtx::write_symmetric(&dir.join("wheel_K.mtx"), &mats.k)?;
-    mtx::write_symmetric(&dir.join("wheel_M.mtx"), &mats.m)?;
-    mtx::write_symmetric(&dir.join("wheel_C.mtx"), &mats.c)?;
-    let rows = (0..wheel.dofmap.n_free()).map(|f| {
-        let g = wheel.dofmap.global_dof(f);
+    for (name, a) in [("K", &mats.k), ("M", &mats.m), ("C", &mats.c)] {
+        mtx::write_symmetric(&dir.join(format!("{prefix}{name}.mtx")), a)?;
+    }
+    let rows = (0..dofmap.n_free()).map(|f| {
+        let g = dofmap.global_dof(f);
         let (n, d) = (g / 3, g % 3);
-        let [x, y, z] = wheel.mesh.nodes[n];
-        let part = if n == wheel.sprung_node { 3.0 } else { 2.0 };
-        vec![f as f64, n as f64, d as f64, x, y, z, part]
+        let [x, y, z] = nodes[n];
+        vec![f as f64, n as f64, d as f64, x, y, z, part(n)]
     });
-    let path = dir.join("wheel_dofs.csv");
+    let path = dir.join(format!("{prefix}dofs.csv"));
     write_csv(
         &path,
         &["free_dof", "node", "direction", "x_m", "y_m", "z_m", "part"],
