@@ -2,6 +2,7 @@
 validation/reference_regime.md).
 
 Usage: python3 validation/sleeper_harmonics.py [--zone X0 X1] [--spacing S] [--signal fl_n|fn_n] DIR...
+       python3 validation/sleeper_harmonics.py --selftest   (a sinusoid of known amplitude)
 Each DIR holds a passage's forces.csv (`corrugation passage` or `corrugation explicit`).
 
 For each DIR, over the solution zone [X0, X1] (m; default model 4.3 to 5.3), with the mean
@@ -56,7 +57,24 @@ def band_rms(xs, ys, k_lo, k_hi):
     return math.sqrt(total), (m_lo, m_hi)
 
 
+def selftest():
+    """A sinusoid of amplitude 10 N at the 12th sleeper harmonic, over the default zone and its
+    sampling, has the RMS 10/sqrt(2) = 7.071 N in the harmonics band (Parseval; the Hann
+    window's leakage stays inside the band) and nothing at the 20th harmonic's band."""
+    s, n = 0.6, 6384
+    xs = [4.3 + i / (n - 1) for i in range(n)]
+    ys = [10.0 * math.sin(2 * math.pi * 12 * x / s + 0.3) for x in xs]
+    h, _ = band_rms(xs, detrend(xs, ys), 9.5 / s, 13.5 / s)
+    far, _ = band_rms(xs, detrend(xs, ys), 19.5 / s, 23.5 / s)
+    assert abs(h - 10 / math.sqrt(2)) < 0.02, h
+    assert far < 0.01, far
+    print(f"selftest ok: {h:.4f} N against {10 / math.sqrt(2):.4f} N; outside the band {far:.2e} N")
+
+
 def main(argv):
+    if argv == ["--selftest"]:
+        selftest()
+        return
     x0, x1, s = 4.3, 5.3, 0.6
     signal = "fl_n"
     dirs = []
