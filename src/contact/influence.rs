@@ -415,6 +415,172 @@ impl NormalInfluence for Convolver {
     }
 }
 
+/// The tangential influence operator the tangential solver needs
+/// ([`super::tangential::TangentialSolver`]): the half-space's [`Convolver`] or the kernel of an
+/// FE contact patch invariant along the rail only ([`strip::StripInfluence`]). Components x
+/// (rolling) and y (lateral) of the displacement difference (m) per traction (Pa), on an
+/// `nx × ny` grid (element `i · ny + j`); symmetric positive definite.
+pub trait TangentialInfluence {
+    /// Grid size `(nx, ny)`.
+    fn dims(&self) -> (usize, usize);
+    /// The largest self-influence `C_xx` (m/Pa).
+    fn diag_xx(&self) -> f64;
+    /// The largest self-influence `C_yy` (m/Pa).
+    fn diag_yy(&self) -> f64;
+    /// The mean of [`Self::diag_xx`] and [`Self::diag_yy`] (m/Pa).
+    fn diag_t(&self) -> f64 {
+        0.5 * (self.diag_xx() + self.diag_yy())
+    }
+    /// An upper bound of the largest eigenvalue of the tangential operator (m/Pa).
+    fn lambda_max_t(&self) -> f64;
+    /// `u[i] = (C τ)(i + shift)` on the grid's rows (`shift` 0 or 1; [`Convolver::tangential`]).
+    fn tangential(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64], shift: usize);
+    /// `C τ` on the extended rows `0..=nx` (`ux, uy` of length `(nx + 1) · ny`;
+    /// [`Convolver::tangential_ext`]).
+    fn tangential_ext(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64]);
+    /// `C τ` for a traction zero outside the box of rows `r0..r1`, columns `c0..c1`, on that
+    /// box only: rows `r0..r1` outside the columns get 0, the other rows are left as they are
+    /// ([`Convolver::tangential_box`]; it may be computed in single precision).
+    fn tangential_box(
+        &mut self,
+        tx: &[f64],
+        ty: &[f64],
+        ux: &mut [f64],
+        uy: &mut [f64],
+        rows: (usize, usize),
+        cols: (usize, usize),
+    );
+}
+
+/// The influence operators of a contact grid: the quasi-identical half-spaces' (the default)
+/// or an FE contact patch's kernel invariant along the rail only (theory §6.9). Both solvers
+/// take either.
+#[derive(Clone)]
+pub enum Influence {
+    /// Kalker's two quasi-identical elastic half-spaces.
+    HalfSpace(Convolver),
+    /// The rail head's and the tread's FE kernels, split against the global model.
+    Strip(strip::StripInfluence),
+}
+
+impl Influence {
+    /// Grid size `(nx, ny)`.
+    pub fn dims(&self) -> (usize, usize) {
+        TangentialInfluence::dims(self)
+    }
+}
+
+impl NormalInfluence for Influence {
+    fn normal(&mut self, p: &[f64], u: &mut [f64]) {
+        match self {
+            Influence::HalfSpace(c) => NormalInfluence::normal(c, p, u),
+            Influence::Strip(c) => c.normal(p, u),
+        }
+    }
+    fn diag_n(&self) -> f64 {
+        match self {
+            Influence::HalfSpace(c) => c.diag_n,
+            Influence::Strip(c) => c.diag_n(),
+        }
+    }
+}
+
+impl TangentialInfluence for Influence {
+    fn dims(&self) -> (usize, usize) {
+        match self {
+            Influence::HalfSpace(c) => Convolver::dims(c),
+            Influence::Strip(c) => TangentialInfluence::dims(c),
+        }
+    }
+    fn diag_xx(&self) -> f64 {
+        match self {
+            Influence::HalfSpace(c) => c.diag_xx,
+            Influence::Strip(c) => c.diag_xx(),
+        }
+    }
+    fn diag_yy(&self) -> f64 {
+        match self {
+            Influence::HalfSpace(c) => c.diag_yy,
+            Influence::Strip(c) => c.diag_yy(),
+        }
+    }
+    fn diag_t(&self) -> f64 {
+        match self {
+            Influence::HalfSpace(c) => c.diag_t,
+            Influence::Strip(c) => c.diag_t(),
+        }
+    }
+    fn lambda_max_t(&self) -> f64 {
+        match self {
+            Influence::HalfSpace(c) => c.lambda_max_t,
+            Influence::Strip(c) => c.lambda_max_t(),
+        }
+    }
+    fn tangential(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64], shift: usize) {
+        match self {
+            Influence::HalfSpace(c) => Convolver::tangential(c, tx, ty, ux, uy, shift),
+            Influence::Strip(c) => TangentialInfluence::tangential(c, tx, ty, ux, uy, shift),
+        }
+    }
+    fn tangential_ext(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64]) {
+        match self {
+            Influence::HalfSpace(c) => Convolver::tangential_ext(c, tx, ty, ux, uy),
+            Influence::Strip(c) => TangentialInfluence::tangential_ext(c, tx, ty, ux, uy),
+        }
+    }
+    fn tangential_box(
+        &mut self,
+        tx: &[f64],
+        ty: &[f64],
+        ux: &mut [f64],
+        uy: &mut [f64],
+        rows: (usize, usize),
+        cols: (usize, usize),
+    ) {
+        match self {
+            Influence::HalfSpace(c) => Convolver::tangential_box(c, tx, ty, ux, uy, rows, cols),
+            Influence::Strip(c) => {
+                TangentialInfluence::tangential_box(c, tx, ty, ux, uy, rows, cols)
+            }
+        }
+    }
+}
+
+impl TangentialInfluence for Convolver {
+    fn dims(&self) -> (usize, usize) {
+        Convolver::dims(self)
+    }
+    fn diag_xx(&self) -> f64 {
+        self.diag_xx
+    }
+    fn diag_yy(&self) -> f64 {
+        self.diag_yy
+    }
+    fn diag_t(&self) -> f64 {
+        self.diag_t
+    }
+    fn lambda_max_t(&self) -> f64 {
+        self.lambda_max_t
+    }
+    fn tangential(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64], shift: usize) {
+        Convolver::tangential(self, tx, ty, ux, uy, shift)
+    }
+    fn tangential_ext(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64]) {
+        Convolver::tangential_ext(self, tx, ty, ux, uy)
+    }
+    fn tangential_box(
+        &mut self,
+        tx: &[f64],
+        ty: &[f64],
+        ux: &mut [f64],
+        uy: &mut [f64],
+        rows: (usize, usize),
+        cols: (usize, usize),
+    ) {
+        Convolver::tangential_box(self, tx, ty, ux, uy, rows, cols)
+    }
+}
+
 impl Convolver {
     /// Build the kernels for element size `dx × dy` (m), moduli `E*`, `G` (Pa) and ν.
     pub fn new(nx: usize, ny: usize, dx: f64, dy: f64, e_star: f64, g: f64, nu: f64) -> Self {

@@ -20,7 +20,7 @@
 //! symmetric positive definite, so the problem stays the same convex programme
 //! ([`TangentialSolver::uniform_x_m_per_pa`]).
 
-use super::influence::Convolver;
+use super::influence::TangentialInfluence;
 use super::ContactError;
 
 /// Partial sums of the inner CG (`inner_cg.rs` and the AVX2 kernels `contact::avx2::cg`)'s reductions: element `i` of a segment goes to lane `i mod 4`
@@ -98,7 +98,7 @@ pub struct TangentialSolver {
     last_conv: (usize, usize, f64, f64),
     /// The start's slip by linearity (default `true`): `S = C τ_last + C (τ₀ − τ_last) + e`
     /// with `C τ_last` the last solve's exact product and the difference as a box product
-    /// ([`Convolver::tangential_box`]), instead of a whole-grid product of the start `τ₀`.
+    /// ([`TangentialInfluence::tangential_box`]), instead of a whole-grid product of the start `τ₀`.
     /// Every solve still ends on an exact whole-grid product. It needs the same convolver as
     /// the last solve (checked by its dimensions and self-influences; otherwise the whole-grid
     /// product is taken).
@@ -113,7 +113,7 @@ pub struct TangentialSolver {
     /// Slip distance S_y of the last solve (m).
     pub sy: Vec<f64>,
     /// `(C τ)_x` of the final traction on the extended rows `0..=nx` (m), see
-    /// [`Convolver::tangential_ext`]; rows `1..=nx` are the upstream displacements of the next
+    /// [`TangentialInfluence::tangential_ext`]; rows `1..=nx` are the upstream displacements of the next
     /// transient step.
     pub ux_ext: Vec<f64>,
     /// `(C τ)_y` of the final traction on the extended rows `0..=nx` (m).
@@ -201,7 +201,14 @@ impl TangentialSolver {
 
     /// `S = C τ + c ΔA Σ τ + e` exactly (one FFT pair), with the extended displacement rows
     /// (of `C τ` alone) kept.
-    fn exact(&mut self, conv: &mut Convolver, ex: &[f64], ey: &[f64], tx: &[f64], ty: &[f64]) {
+    fn exact(
+        &mut self,
+        conv: &mut (impl TangentialInfluence + ?Sized),
+        ex: &[f64],
+        ey: &[f64],
+        tx: &[f64],
+        ty: &[f64],
+    ) {
         conv.tangential_ext(tx, ty, &mut self.ux_ext, &mut self.uy_ext);
         let (cux, cuy) = self.uniform(tx, ty);
         let n = ex.len();
@@ -220,7 +227,7 @@ impl TangentialSolver {
     /// the solve's convergence is confirmed by a whole-grid product.
     fn start_by_linearity(
         &mut self,
-        conv: &mut Convolver,
+        conv: &mut (impl TangentialInfluence + ?Sized),
         ex: &[f64],
         ey: &[f64],
         tx: &[f64],
@@ -341,7 +348,7 @@ impl TangentialSolver {
     /// model (`curvature`, `precondition`) and `inner_cg`; the FISTA fallback last.
     pub fn solve(
         &mut self,
-        conv: &mut Convolver,
+        conv: &mut (impl TangentialInfluence + ?Sized),
         g: &[f64],
         ex: &[f64],
         ey: &[f64],
@@ -364,15 +371,15 @@ impl TangentialSolver {
 
     /// The convolver's dimensions and self-influences (m/Pa): the linear start's check that
     /// the last solve's product belongs to the same operator.
-    fn fingerprint(conv: &Convolver) -> (usize, usize, f64, f64) {
+    fn fingerprint(conv: &(impl TangentialInfluence + ?Sized)) -> (usize, usize, f64, f64) {
         let (nx, ny) = conv.dims();
-        (nx, ny, conv.diag_xx, conv.diag_yy)
+        (nx, ny, conv.diag_xx(), conv.diag_yy())
     }
 
     /// [`Self::solve`] without the bookkeeping of the last solve.
     fn solve_from_start(
         &mut self,
-        conv: &mut Convolver,
+        conv: &mut (impl TangentialInfluence + ?Sized),
         g: &[f64],
         ex: &[f64],
         ey: &[f64],
@@ -394,7 +401,7 @@ impl TangentialSolver {
         self.start(conv, g, tx, ty);
         self.last_box = (self.rows, self.cols);
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
-        let s_tol = self.tol * gmax * conv.diag_t;
+        let s_tol = self.tol * gmax * conv.diag_t();
         if self.linear_start && self.last_valid && self.last_conv == Self::fingerprint(conv) {
             self.start_by_linearity(conv, ex, ey, tx, ty, last_box);
         } else {
@@ -453,7 +460,13 @@ impl TangentialSolver {
     /// the residual and the search direction are zero, and the CG needs neither its slip nor
     /// its displacement: every solve ends with an exact product over the whole grid) and the
     /// box of its rows and columns on which the CG's products run (a padded grid).
-    fn start(&mut self, conv: &Convolver, g: &[f64], tx: &mut [f64], ty: &mut [f64]) {
+    fn start(
+        &mut self,
+        conv: &(impl TangentialInfluence + ?Sized),
+        g: &[f64],
+        tx: &mut [f64],
+        ty: &mut [f64],
+    ) {
         for i in 0..g.len() {
             project(&mut tx[i], &mut ty[i], g[i]);
             self.slip[i] =
@@ -491,14 +504,14 @@ impl TangentialSolver {
     /// elements. Returns whether an element was released and the largest turn (Pa).
     fn element_test(
         &mut self,
-        conv: &Convolver,
+        conv: &(impl TangentialInfluence + ?Sized),
         g: &[f64],
         gmax: f64,
         tx: &mut [f64],
         ty: &mut [f64],
     ) -> (bool, f64) {
         let norot = self.algorithm == TangentialAlgorithm::ElementTest;
-        let (cdx, cdy) = (conv.diag_xx, conv.diag_yy);
+        let (cdx, cdy) = (conv.diag_xx(), conv.diag_yy());
         let mut changed = false;
         let mut dmax = 0.0_f64;
         for i in self.lo..self.hi {
@@ -549,8 +562,8 @@ impl TangentialSolver {
     /// The Jacobi preconditioner: the inverse diagonal of the model Hessian into
     /// `(mix, miy)`, the search direction scaled by it (`z = M⁻¹ r`), and the adhesion and
     /// slip masks `(wa, ws)` of the branch-free CG step. Returns `r·z`.
-    fn precondition(&mut self, conv: &Convolver, g: &[f64]) -> f64 {
-        let (cdx, cdy) = (conv.diag_xx, conv.diag_yy);
+    fn precondition(&mut self, conv: &(impl TangentialInfluence + ?Sized), g: &[f64]) -> f64 {
+        let (cdx, cdy) = (conv.diag_xx(), conv.diag_yy());
         let (hx, hy) = (cdx + self.uniform_x_m_per_pa, cdy + self.uniform_y_m_per_pa);
         let mut rr = 0.0;
         for i in self.lo..self.hi {
@@ -577,7 +590,7 @@ impl TangentialSolver {
     /// robust fallback; step `1/λ_max(C)`, projection onto the discs.
     fn solve_fista(
         &mut self,
-        conv: &mut Convolver,
+        conv: &mut (impl TangentialInfluence + ?Sized),
         g: &[f64],
         ex: &[f64],
         ey: &[f64],
@@ -588,7 +601,7 @@ impl TangentialSolver {
         let gmax = g.iter().cloned().fold(0.0, f64::max);
         // the rank-one terms add at most c ΔA n to the largest eigenvalue
         let c_max = self.uniform_x_m_per_pa.max(self.uniform_y_m_per_pa);
-        let step = 1.0 / (conv.lambda_max_t + c_max * n as f64);
+        let step = 1.0 / (conv.lambda_max_t() + c_max * n as f64);
         // reuse the CG scratch: (dx_, dy_) = extrapolated point y, (qx, qy) = new iterate
         self.dx_.copy_from_slice(tx);
         self.dy_.copy_from_slice(ty);
@@ -664,6 +677,7 @@ fn project(x: &mut f64, y: &mut f64, g: f64) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::influence::Convolver;
     use super::*;
 
     /// A 16 × 12 grid (0.5 mm elements, steel) and an elliptic traction bound `µ p` (Pa)
@@ -721,8 +735,11 @@ mod tests {
             .sum::<f64>()
             .sqrt();
         // the box holds both contacts: rows 0..16 at most, columns 0..12 (padded 32 × 24)
-        let bound =
-            10.0 * (32.0 * 24.0_f64).log2() * f64::from(f32::EPSILON) * conv.lambda_max_t * change;
+        let bound = 10.0
+            * (32.0 * 24.0_f64).log2()
+            * f64::from(f32::EPSILON)
+            * conv.lambda_max_t()
+            * change;
         let (mut worst, mut largest) = (0.0_f64, 0.0_f64);
         // the elements with a positive bound (elsewhere the solver reads no slip)
         for e in (s.lo..s.hi).filter(|&e| g2[e] > 0.0) {
@@ -742,7 +759,11 @@ mod tests {
     }
 
     /// `C τ` on the extended rows `0..=nx` (the solver's `ux_ext, uy_ext`).
-    fn exact_ext_of(conv: &mut Convolver, tx: &[f64], ty: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    fn exact_ext_of(
+        conv: &mut (impl TangentialInfluence + ?Sized),
+        tx: &[f64],
+        ty: &[f64],
+    ) -> (Vec<f64>, Vec<f64>) {
         let (nx, ny) = conv.dims();
         let (mut ux, mut uy) = (vec![0.0; (nx + 1) * ny], vec![0.0; (nx + 1) * ny]);
         conv.tangential_ext(tx, ty, &mut ux, &mut uy);

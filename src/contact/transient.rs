@@ -51,7 +51,7 @@
 //! is minus the rate of change of the spring energy `½ c_x F_x²` (counted only where the
 //! elements slip; it telescopes to zero over a closed force cycle).
 
-use super::influence::Convolver;
+use super::influence::{Convolver, Influence};
 use super::normal::{NormalMode, NormalSolver};
 use super::tangential::{TangentialAlgorithm, TangentialSolver};
 use super::{check_positive, combined_modulus, shear_modulus, ContactError};
@@ -70,7 +70,7 @@ pub struct TransientRolling {
     da: f64,
     pub(super) xs: Vec<f64>,
     ys: Vec<f64>,
-    conv: Convolver,
+    conv: Influence,
     normal: NormalSolver,
     tang: TangentialSolver,
     h: Vec<f64>,
@@ -102,15 +102,32 @@ pub struct TransientRolling {
 }
 
 impl TransientRolling {
-    /// Allocate the engine and its influence kernels.
+    /// Allocate the engine and its influence kernels: Kalker's quasi-identical half-spaces.
     pub fn new(cfg: TransientConfig) -> Result<Self, ContactError> {
         cfg.validate()?;
-        let (nx, ny) = (cfg.grid.nx, cfg.grid.ny);
-        let n = nx * ny;
         let (dx, dy) = (cfg.grid.dx(), cfg.grid.dy());
         let es = combined_modulus(cfg.youngs_pa, cfg.poisson);
         let gm = shear_modulus(cfg.youngs_pa, cfg.poisson);
-        let conv = Convolver::new(nx, ny, dx, dy, es, gm, cfg.poisson);
+        let conv = Convolver::new(cfg.grid.nx, cfg.grid.ny, dx, dy, es, gm, cfg.poisson);
+        Self::with_influence(cfg, Influence::HalfSpace(conv))
+    }
+
+    /// Allocate the engine on the given influence operators (an FE contact patch's,
+    /// [`Influence::Strip`], or the half-spaces'), refused unless they are on the grid of
+    /// `cfg` (`nx × ny`).
+    pub fn with_influence(cfg: TransientConfig, conv: Influence) -> Result<Self, ContactError> {
+        cfg.validate()?;
+        let (nx, ny) = (cfg.grid.nx, cfg.grid.ny);
+        if conv.dims() != (nx, ny) {
+            return Err(ContactError::InvalidParameter {
+                name: "influence grid",
+                value: (conv.dims().0 * conv.dims().1) as f64,
+                reason: "the influence operators must be on the contact grid (nx × ny elements)",
+            });
+        }
+        let n = nx * ny;
+        let (dx, dy) = (cfg.grid.dx(), cfg.grid.dy());
+        let gm = shear_modulus(cfg.youngs_pa, cfg.poisson);
         let mut normal = NormalSolver::new(n);
         normal.tol = cfg.normal_tol;
         let mut tang = TangentialSolver::new(n, nx);

@@ -51,7 +51,8 @@ pub fn half_space_kernel(
 }
 
 /// FFT-along-x, dense-across influence products on an `nx × ny` grid (element `i * ny + j`,
-/// `i` along x) with `c` components per element.
+/// `i` along x) with `c` components per element. A clone shares the FFT plans.
+#[derive(Clone)]
 pub struct StripConvolver {
     nx: usize,
     ny: usize,
@@ -163,10 +164,18 @@ impl StripConvolver {
     /// the field rows are `1..=nx` (one row beyond the grid's last, as transient rolling needs;
     /// [`super::Convolver::tangential`]), with 0 the grid's own rows.
     pub fn product(&mut self, f: &[&[f64]], u: &mut [&mut [f64]], shift: usize) {
+        assert!(shift <= 1);
+        self.product_rows(f, u, shift, self.nx);
+    }
+
+    /// `u = K f` on the `rows` field rows from row `shift` on (`shift + rows ≤ nx + 1`; `u[a]`
+    /// holds `rows · ny` values): [`Self::product`] with the number of rows free, so that
+    /// the extended rows `0..=nx` of transient rolling come from one product.
+    pub fn product_rows(&mut self, f: &[&[f64]], u: &mut [&mut [f64]], shift: usize, rows: usize) {
         let (nx, ny, c, m) = (self.nx, self.ny, self.comps, self.m);
         let nk = m / 2 + 1;
         let cn = c * ny;
-        assert!(f.len() == c && u.len() == c && shift <= 1);
+        assert!(f.len() == c && u.len() == c && shift + rows <= nx + 1);
         for b in 0..c {
             for jp in 0..ny {
                 self.line.fill(0.0);
@@ -201,7 +210,7 @@ impl StripConvolver {
                 self.inverse
                     .process_with_scratch(row, &mut self.line, &mut self.scratch)
                     .expect("lengths from the plan");
-                for i in 0..nx {
+                for i in 0..rows {
                     u[a][i * ny + j] = self.line[i + shift];
                 }
             }
@@ -211,6 +220,7 @@ impl StripConvolver {
 
 /// The normal influence operator of a kernel invariant along x only: a one-component
 /// [`StripConvolver`] and its largest self-influence, for [`super::NormalInfluence`].
+#[derive(Clone)]
 pub struct StripNormal {
     conv: StripConvolver,
     diag: f64,
@@ -238,5 +248,136 @@ impl super::NormalInfluence for StripNormal {
 
     fn diag_n(&self) -> f64 {
         self.diag
+    }
+}
+
+/// The normal and tangential influence operators of a three-component kernel invariant
+/// along x only (an FE contact patch, theory §6.9): the normal term `K_nn` for
+/// [`super::NormalInfluence`], the tangential block `K_xx, K_xy, K_yx, K_yy` for
+/// [`super::TangentialInfluence`]. The normal–tangential couplings `K_xn, K_yn, K_nx, K_ny`
+/// are not used: the normal and the tangential problems are solved one after the other, as
+/// for quasi-identical bodies (the couplings' size is reported by
+/// [`StripInfluence::coupling_ratio`]).
+#[derive(Clone)]
+pub struct StripInfluence {
+    normal: StripNormal,
+    tangential: StripConvolver,
+    diag: [f64; 2],
+    lambda_t: f64,
+    coupling: f64,
+    /// Scratch of the box and extended products, `(nx + 1) · ny` each.
+    bx: Vec<f64>,
+    by: Vec<f64>,
+}
+
+impl StripInfluence {
+    /// The operators of `kernel(offset, j, j')[a][b]` (m/Pa; components x, y, normal; the
+    /// displacement difference `a` at column `j` per unit traction `b` on an element of column
+    /// `j'`, `offset` rows behind it, `−(nx−1)..=nx`); `nx, ny ≥ 1`. The largest eigenvalue
+    /// of the tangential operator is bounded by its largest absolute row sum (Gershgorin).
+    pub fn new(
+        nx: usize,
+        ny: usize,
+        kernel: impl Fn(isize, usize, usize) -> [[f64; 3]; 3],
+    ) -> Self {
+        let normal = StripNormal::new(nx, ny, |o, j, jp| kernel(o, j, jp)[2][2]);
+        let tangential = StripConvolver::new(nx, ny, 2, &kernel);
+        let mut diag = [f64::MIN; 2];
+        let mut rows = vec![0.0_f64; 2 * ny];
+        let (mut coupled, mut direct) = (0.0_f64, 0.0_f64);
+        for o in -(nx as isize - 1)..nx as isize {
+            for j in 0..ny {
+                for jp in 0..ny {
+                    let k = kernel(o, j, jp);
+                    for a in 0..2 {
+                        rows[a * ny + j] += k[a][0].abs() + k[a][1].abs();
+                        coupled = coupled.max(k[a][2].abs()).max(k[2][a].abs());
+                        direct = direct.max(k[a][a].abs());
+                    }
+                    if o == 0 && j == jp {
+                        diag[0] = diag[0].max(k[0][0]);
+                        diag[1] = diag[1].max(k[1][1]);
+                    }
+                }
+            }
+        }
+        let lambda_t = rows.iter().fold(0.0_f64, |m, &v| m.max(v));
+        StripInfluence {
+            normal,
+            tangential,
+            diag,
+            lambda_t,
+            coupling: if direct > 0.0 { coupled / direct } else { 0.0 },
+            bx: vec![0.0; (nx + 1) * ny],
+            by: vec![0.0; (nx + 1) * ny],
+        }
+    }
+
+    /// The largest normal–tangential coupling coefficient over the largest direct tangential
+    /// one (−): the size of what [`StripInfluence`] leaves out (0 for quasi-identical bodies).
+    pub fn coupling_ratio(&self) -> f64 {
+        self.coupling
+    }
+}
+
+impl super::NormalInfluence for StripInfluence {
+    fn normal(&mut self, p: &[f64], u: &mut [f64]) {
+        self.normal.normal(p, u);
+    }
+
+    fn diag_n(&self) -> f64 {
+        self.normal.diag_n()
+    }
+}
+
+impl super::TangentialInfluence for StripInfluence {
+    fn dims(&self) -> (usize, usize) {
+        let (nx, ny, _) = self.tangential.dims();
+        (nx, ny)
+    }
+    fn diag_xx(&self) -> f64 {
+        self.diag[0]
+    }
+    fn diag_yy(&self) -> f64 {
+        self.diag[1]
+    }
+    fn lambda_max_t(&self) -> f64 {
+        self.lambda_t
+    }
+    fn tangential(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64], shift: usize) {
+        self.tangential.product(&[tx, ty], &mut [ux, uy], shift);
+    }
+    fn tangential_ext(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64]) {
+        let n = (self.tangential.nx + 1) * self.tangential.ny;
+        self.tangential.product_rows(
+            &[tx, ty],
+            &mut [&mut ux[..n], &mut uy[..n]],
+            0,
+            self.tangential.nx + 1,
+        );
+    }
+    fn tangential_box(
+        &mut self,
+        tx: &[f64],
+        ty: &[f64],
+        ux: &mut [f64],
+        uy: &mut [f64],
+        (r0, r1): (usize, usize),
+        (c0, c1): (usize, usize),
+    ) {
+        let (nx, ny, _) = self.tangential.dims();
+        let (r1, c1) = (r1.min(nx), c1.min(ny));
+        let (r0, c0) = (r0.min(r1), c0.min(c1));
+        let (bx, by) = (&mut self.bx[..nx * ny], &mut self.by[..nx * ny]);
+        self.tangential
+            .product_rows(&[tx, ty], &mut [bx, by], 0, nx);
+        for i in r0..r1 {
+            for j in 0..ny {
+                let e = i * ny + j;
+                let inside = (c0..c1).contains(&j);
+                ux[e] = if inside { self.bx[e] } else { 0.0 };
+                uy[e] = if inside { self.by[e] } else { 0.0 };
+            }
+        }
     }
 }

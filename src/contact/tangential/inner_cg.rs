@@ -4,7 +4,8 @@
 //! reductions in four interleaved partial sums), compiled for AVX2 when the CPU has it
 //! (docs/theory.md §6.5; docs/log/performance.md §5.13).
 
-use super::{project, Convolver, Problem, TangentialAlgorithm, TangentialSolver, LANES};
+use super::super::influence::TangentialInfluence;
+use super::{project, Problem, TangentialAlgorithm, TangentialSolver, LANES};
 
 /// `body` for `i` in `0..n` with its lane `l`, in blocks of four (`LANES`; the remainder on
 /// lane 0). The slices named after `mut` and `ref` (each of length `n`) are re-sliced to the
@@ -73,7 +74,7 @@ impl TangentialSolver {
     /// give the same bits).
     pub(super) fn inner_cg(
         &mut self,
-        conv: &mut Convolver,
+        conv: &mut (impl TangentialInfluence + ?Sized),
         pb: &Problem<'_>,
         tx: &mut [f64],
         ty: &mut [f64],
@@ -100,7 +101,7 @@ impl TangentialSolver {
     #[target_feature(enable = "avx2")]
     fn inner_cg_avx2(
         &mut self,
-        conv: &mut Convolver,
+        conv: &mut (impl TangentialInfluence + ?Sized),
         pb: &Problem<'_>,
         tx: &mut [f64],
         ty: &mut [f64],
@@ -116,7 +117,7 @@ impl TangentialSolver {
     #[inline(always)]
     fn inner_cg_body<const SIMD: bool>(
         &mut self,
-        conv: &mut Convolver,
+        conv: &mut (impl TangentialInfluence + ?Sized),
         pb: &Problem<'_>,
         tx: &mut [f64],
         ty: &mut [f64],
