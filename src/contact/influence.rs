@@ -468,6 +468,15 @@ impl Influence {
     pub fn dims(&self) -> (usize, usize) {
         TangentialInfluence::dims(self)
     }
+
+    /// The uniform compliance under the whole patch that goes with the operators (m/N; x,
+    /// y, normal): 0 for the half-space, [`strip::StripInfluence::uniform`] for an FE patch.
+    pub fn uniform(&self) -> [f64; 3] {
+        match self {
+            Influence::HalfSpace(_) => [0.0; 3],
+            Influence::Strip(c) => c.uniform(),
+        }
+    }
 }
 
 impl NormalInfluence for Influence {

@@ -619,7 +619,13 @@ impl FixedSet {
         let (a, delta, c_da) = match mode {
             NormalMode::Approach(d) => {
                 let c_da = c * da;
-                ((d + c_da * self.sum_z) / (1.0 + c_da * self.sum_w), d, c_da)
+                let den = 1.0 + c_da * self.sum_w;
+                if den <= 0.0 {
+                    // a negative uniform compliance (the fe-patch's split) larger than the
+                    // set's own: not positive definite; the CG decides
+                    return None;
+                }
+                ((d + c_da * self.sum_z) / den, d, c_da)
             }
             NormalMode::Load(f) => {
                 let a = (f / da + self.sum_z) / self.sum_w;

@@ -132,7 +132,7 @@ impl TransientRolling {
         normal.tol = cfg.normal_tol;
         let mut tang = TangentialSolver::new(n, nx);
         tang.tol = cfg.tangential_tol;
-        Ok(TransientRolling {
+        let mut engine = TransientRolling {
             nx,
             ny,
             dx,
@@ -165,7 +165,9 @@ impl TransientRolling {
             series_c: [0.0; 3],
             circle_start: true,
             cfg,
-        })
+        };
+        engine.apply_series_compliance();
+        Ok(engine)
     }
 
     /// Set the uniform series compliance `c = (c_x, c_y, c_z)` (m/N; contact frame: x rolling,
@@ -188,10 +190,25 @@ impl TransientRolling {
             }
         }
         self.series_c = c_m_per_n;
-        self.normal.series_compliance_m_per_n = c_m_per_n[2];
-        self.tang.uniform_x_m_per_pa = c_m_per_n[0] * self.da;
-        self.tang.uniform_y_m_per_pa = c_m_per_n[1] * self.da;
+        self.apply_series_compliance();
         Ok(())
+    }
+
+    /// The uniform compliance under the patch the solvers see (m/N): the series compliance
+    /// plus the influence operators' own uniform term ([`Influence::uniform`]; the fe-patch's
+    /// split, negative). The sum may be negative; the operator with it must stay positive
+    /// definite on the contact (the global model's compliance the split was taken from is
+    /// part of the series compliance), which the solvers check.
+    fn effective_series(&self) -> [f64; 3] {
+        let u = self.conv.uniform();
+        [0, 1, 2].map(|d| self.series_c[d] + u[d])
+    }
+
+    fn apply_series_compliance(&mut self) {
+        let c = self.effective_series();
+        self.normal.series_compliance_m_per_n = c[2];
+        self.tang.uniform_x_m_per_pa = c[0] * self.da;
+        self.tang.uniform_y_m_per_pa = c[1] * self.da;
     }
 
     /// Choose the tangential algorithm (default [`TangentialAlgorithm::Newton`];
@@ -598,9 +615,10 @@ impl TransientRolling {
         // uniform displacement of the series compliance at the start of the step,
         // −c F(t − Δt) (zero from rest: tx_prev is zero after a reset)
         let (ucx, ucy) = if self.steps > 0 {
+            let c = self.effective_series();
             (
-                self.series_c[0] * self.tx_prev.iter().sum::<f64>() * self.da,
-                self.series_c[1] * self.ty_prev.iter().sum::<f64>() * self.da,
+                c[0] * self.tx_prev.iter().sum::<f64>() * self.da,
+                c[1] * self.ty_prev.iter().sum::<f64>() * self.da,
             )
         } else {
             (0.0, 0.0)

@@ -13,6 +13,7 @@
 pub mod analysis;
 pub mod compliance;
 pub mod coupled;
+pub mod fe_patch;
 pub mod integrator;
 pub mod passage;
 pub mod patch;

@@ -741,8 +741,10 @@ pub fn check_profile_on_travel(
 /// The transient contact of a passage of `model` at `speed_m_per_s` (m/s, finite and > 0):
 /// [`contact_config_for`], with the grid lengthened for a rail profile by
 /// [`grid_for_profile`] (for the part of it the contact meets: [`passage_grid`]), then widened
-/// by `widening` ([`widen_grid`]; the default leaves it). The reduced and the explicit
-/// passage use it alike.
+/// by `widening` ([`widen_grid`]; the default leaves it), on the influence operators of
+/// `contact.influence` ([`super::fe_patch::passage_influence`]: the half-spaces, or the
+/// fe-patch of that grid, built on first use). The reduced and the explicit passage use it
+/// alike.
 pub fn passage_contact(
     model: &Model,
     speed_m_per_s: f64,
@@ -752,7 +754,11 @@ pub fn passage_contact(
     check_speed(speed_m_per_s)?;
     let mut cfg = contact_config_for(model, speed_m_per_s)?;
     cfg.grid = passage_grid(&cfg, profile, widening)?;
-    TransientRolling::new(cfg).map_err(DynamicsError::ContactGrid)
+    match super::fe_patch::passage_influence(model, &cfg, None)? {
+        None => TransientRolling::new(cfg),
+        Some(op) => TransientRolling::with_influence(cfg, op),
+    }
+    .map_err(DynamicsError::ContactGrid)
 }
 
 /// The grid of [`passage_contact`] from the model's contact configuration `cfg`

@@ -612,6 +612,34 @@ pub struct Contact {
     /// grid's edge is rerun on a grid widened along that edge (`dynamics::setup::widen_grid`,
     /// docs/theory.md §6.8).
     pub grid_margin: f64,
+    /// The influence coefficients the contact is solved with: `"half-space"` (default) or
+    /// `"fe-patch"` (see [`ContactInfluence`]).
+    #[serde(default, skip_serializing_if = "ContactInfluence::is_half_space")]
+    pub influence: ContactInfluence,
+}
+
+/// The influence coefficients of the contact grid (`contact.influence`, docs/theory.md §6.9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ContactInfluence {
+    /// Kalker's two quasi-identical elastic half-spaces (Boussinesq–Cerruti), the FE model
+    /// entering only through the contact's load rows and the series compliance.
+    #[default]
+    HalfSpace,
+    /// The local FE contact patch: the rail head's (the model's UIC54 section) and the
+    /// tread's (the model's rim) influence coefficients condensed from refined FE submodels
+    /// on the contact grid, each less its global twin's compliance (what the global model
+    /// already carries at the contact), summed. Built once per contact grid (minutes, several
+    /// GB) and cached beside the modes. The normal–tangential couplings of the two different
+    /// bodies are left out, as for quasi-identical bodies.
+    FePatch,
+}
+
+impl ContactInfluence {
+    /// Whether it is the half-space (the default, left out when a model is written).
+    pub fn is_half_space(&self) -> bool {
+        *self == ContactInfluence::HalfSpace
+    }
 }
 
 /// Mass matrix kind.

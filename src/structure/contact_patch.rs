@@ -434,6 +434,7 @@ pub struct StripKernel {
     nx: usize,
     ny: usize,
     element_m: f64,
+    element_y_m: f64,
     /// `[o + nx − 1][j][jp]`, flattened.
     c: Vec<[[f64; 3]; 3]>,
     n_dofs: usize,
@@ -445,14 +446,69 @@ impl StripKernel {
         (self.nx, self.ny)
     }
 
-    /// The grid element size (m).
+    /// The grid element's length along x (m).
     pub fn element_m(&self) -> f64 {
         self.element_m
+    }
+
+    /// The grid element's width across (m).
+    pub fn element_y_m(&self) -> f64 {
+        self.element_y_m
     }
 
     /// Free DOFs of the submodel.
     pub fn n_dofs(&self) -> usize {
         self.n_dofs
+    }
+
+    /// The coefficients in storage order `[o + nx − 1][j][jp]` (m/Pa), for writing them out.
+    pub fn values(&self) -> &[[[f64; 3]; 3]] {
+        &self.c
+    }
+
+    /// A kernel from [`Self::values`] of a grid `nx × ny` of elements `dx × dy` (m) condensed
+    /// from `n_dofs` free DOFs; `None` unless `values` has `2 nx ny²` entries, all finite.
+    pub fn from_values(
+        (nx, ny): (usize, usize),
+        (dx, dy): (f64, f64),
+        values: Vec<[[f64; 3]; 3]>,
+        n_dofs: usize,
+    ) -> Option<StripKernel> {
+        let finite = values.iter().flatten().flatten().all(|v| v.is_finite());
+        (values.len() == 2 * nx * ny * ny && finite && dx > 0.0 && dy > 0.0).then_some(
+            StripKernel {
+                nx,
+                ny,
+                element_m: dx,
+                element_y_m: dy,
+                c: values,
+                n_dofs,
+            },
+        )
+    }
+
+    /// The sum of two kernels on the same grid (m/Pa): the displacement difference of two
+    /// bodies pressed together, each kernel in the rail's frame with the traction on the rail
+    /// (the tread's turned over, [`tread::TreadPatch::kernel`]). The normal–tangential
+    /// couplings add as they are: each body's is stated for its own inward normal, so the sum
+    /// is the coupling of the approach. `None` if the grids differ.
+    pub fn sum(&self, other: &StripKernel) -> Option<StripKernel> {
+        if (self.nx, self.ny) != (other.nx, other.ny)
+            || self.element_m != other.element_m
+            || self.element_y_m != other.element_y_m
+        {
+            return None;
+        }
+        let mut out = self.clone();
+        for (c, o) in out.c.iter_mut().zip(&other.c) {
+            for (row, orow) in c.iter_mut().zip(o) {
+                for (v, ov) in row.iter_mut().zip(orow) {
+                    *v += ov;
+                }
+            }
+        }
+        out.n_dofs += other.n_dofs;
+        Some(out)
     }
 
     /// The kernel the contact uses beside a global model whose compliance at the contact is
@@ -461,7 +517,7 @@ impl StripKernel {
     /// (theory §6.9, the split). `global` is the same patch's global twin's compliance
     /// ([`rail_head::RailHeadPatch::global_compliance`], [`tread::TreadPatch::global_compliance`]).
     pub fn split(&self, global: &[[f64; 3]; 3]) -> StripKernel {
-        let area = self.element_m * self.element_m;
+        let area = self.element_m * self.element_y_m;
         let mut out = self.clone();
         for c in &mut out.c {
             for (row, g) in c.iter_mut().zip(global) {
@@ -496,7 +552,7 @@ impl StripKernel {
                 }
             }
         }
-        let scale = 1.0 / (total * total * self.element_m * self.element_m);
+        let scale = 1.0 / (total * total * self.element_m * self.element_y_m);
         Some(c.map(|row| row.map(|v| v * scale)))
     }
 
@@ -512,19 +568,19 @@ impl StripKernel {
 }
 
 /// The strip kernel of a patch whose contact surface is `surface` (with its DOF map and
-/// factor): unit tractions on each grid element of row 0 of an `nx × ny` grid of elements `a`
-/// (m) centred on `(0, 0)`, the field read at the centres of rows `−(nx−1)..=nx`. With
+/// factor): unit tractions on each grid element of row 0 of an `nx × ny` grid of elements
+/// `a × b` (m) centred on `(0, 0)`, the field read at the centres of rows `−(nx−1)..=nx`. With
 /// `y_sign = −1` the surface's y axis is the grid's mirrored (a body turned over about x,
 /// such as the tread): column `j` lies at surface `y = −y_j` and the y components change sign.
 fn strip_kernel(
     (dofmap, factor, surface): (&DofMap, &Cholesky, &Surface<'_>),
-    (nx, ny, a): (usize, usize, f64),
+    (nx, ny, a, b): (usize, usize, f64, f64),
     y_sign: f64,
     n_dofs: usize,
 ) -> Result<StripKernel, StructureError> {
-    let y_of = |j: usize| y_sign * (j as f64 - 0.5 * (ny as f64 - 1.0)) * a;
+    let y_of = |j: usize| y_sign * (j as f64 - 0.5 * (ny as f64 - 1.0)) * b;
     let sources: Vec<[f64; 4]> = (0..ny)
-        .map(|jp| [-0.5 * a, 0.5 * a, y_of(jp) - 0.5 * a, y_of(jp) + 0.5 * a])
+        .map(|jp| [-0.5 * a, 0.5 * a, y_of(jp) - 0.5 * b, y_of(jp) + 0.5 * b])
         .collect();
     let rows = -(nx as isize - 1)..=nx as isize;
     let field: Vec<[f64; 2]> = rows
@@ -545,6 +601,7 @@ fn strip_kernel(
         nx,
         ny,
         element_m: a,
+        element_y_m: b,
         c,
         n_dofs,
     })
@@ -585,6 +642,7 @@ fn twin_compliance(
     Ok(g)
 }
 
+pub mod of_model;
 pub mod rail_head;
 pub mod tread;
 

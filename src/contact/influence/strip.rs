@@ -265,6 +265,7 @@ pub struct StripInfluence {
     diag: [f64; 2],
     lambda_t: f64,
     coupling: f64,
+    uniform: [f64; 3],
     /// Scratch of the box and extended products, `(nx + 1) · ny` each.
     bx: Vec<f64>,
     by: Vec<f64>,
@@ -308,9 +309,25 @@ impl StripInfluence {
             diag,
             lambda_t,
             coupling: if direct > 0.0 { coupled / direct } else { 0.0 },
+            uniform: [0.0; 3],
             bx: vec![0.0; (nx + 1) * ny],
             by: vec![0.0; (nx + 1) * ny],
         }
+    }
+
+    /// These operators with a uniform compliance `c = (c_x, c_y, c_n)` (m/N, finite, of
+    /// either sign) under the whole patch: the displacement `c_d F_d` of every element per
+    /// total force `F_d`, i.e. `c_d ΔA` added to every coefficient of component `d`. The
+    /// contact adds it to its series compliance ([`crate::contact::TransientRolling`]); the
+    /// fe-patch's split against the global model is such a term, negative (theory §6.9).
+    pub fn with_uniform(mut self, c_m_per_n: [f64; 3]) -> Self {
+        self.uniform = c_m_per_n;
+        self
+    }
+
+    /// The uniform compliance of [`Self::with_uniform`] (m/N; 0 unless set).
+    pub fn uniform(&self) -> [f64; 3] {
+        self.uniform
     }
 
     /// The largest normal–tangential coupling coefficient over the largest direct tangential

@@ -727,3 +727,39 @@ fn strip_operators_of_the_half_space_kernel_give_the_half_space_solution() {
     );
     assert!(TransientRolling::with_influence(cfg, Influence::Strip(other)).is_err());
 }
+
+#[test]
+fn a_negative_uniform_term_of_the_operators_adds_to_the_series_compliance() {
+    // The fe-patch's split is a negative uniform compliance beside its kernel: the solvers
+    // must see the sum. Half-space with series compliance c against the strip operators of
+    // the half-space kernel with the uniform term −u and series compliance c + u.
+    use super::super::influence::strip::{half_space_kernel, StripInfluence};
+    use super::super::influence::Influence;
+    let cfg = rolling_config(24, 18, 1.4);
+    let (nx, ny, dx, dy) = (cfg.grid.nx, cfg.grid.ny, cfg.grid.dx(), cfg.grid.dy());
+    let (es, gm) = (
+        combined_modulus(cfg.youngs_pa, cfg.poisson),
+        shear_modulus(cfg.youngs_pa, cfg.poisson),
+    );
+    let c = [2e-10, 2.5e-10, 3e-10];
+    let u = [1.5e-10, 1.0e-10, 2e-10];
+    let strip = StripInfluence::new(
+        nx,
+        ny,
+        half_space_kernel((dx, dy), (es, gm, cfg.poisson), 3),
+    )
+    .with_uniform(u.map(|v| -v));
+    let creep = |k: usize| -1.5e-3 + 2e-4 * (0.3 * k as f64).sin();
+    let mut half = TransientRolling::new(cfg).unwrap();
+    half.set_series_compliance(c).unwrap();
+    let mut fe = TransientRolling::with_influence(cfg, Influence::Strip(strip)).unwrap();
+    fe.set_series_compliance([0, 1, 2].map(|d| c[d] + u[d]))
+        .unwrap();
+    let a = transient_sequence(&mut half, dx, 60, 0, creep);
+    let b = transient_sequence(&mut fe, dx, 60, 0, creep);
+    let (f, p) = force_power_difference(&b.0, &a.0);
+    println!(
+        "strip with −u, series c + u vs half-space with c: force/µN {f:.2e}, power rel. {p:.2e}"
+    );
+    assert!(f < 2e-6 && p < 2e-5, "{f:e} {p:e}");
+}

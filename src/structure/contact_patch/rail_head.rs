@@ -61,8 +61,11 @@ fn segment(
 pub struct RailHeadPatch {
     /// The rail's material.
     pub material: IsotropicElastic,
-    /// Contact-grid element size `a` (m), 1e-4–5e-3.
+    /// Contact-grid element length along x, `a` (m), 1e-4–5e-3.
     pub element_m: f64,
+    /// Contact-grid element width across, `b` (m), within a factor 2 of `a`; [`Self::steel`]
+    /// makes it `a` (square elements).
+    pub element_y_m: f64,
     /// FE faces per grid element over the source row and across the running band (≥ 1).
     pub refine: usize,
     /// Grid elements along the rail (≥ 1): offsets `−(nx−1)..=nx`.
@@ -128,6 +131,7 @@ impl RailHeadPatch {
         RailHeadPatch {
             material: IsotropicElastic::STEEL,
             element_m,
+            element_y_m: element_m,
             refine: 3,
             nx,
             ny,
@@ -142,6 +146,10 @@ impl RailHeadPatch {
         if !(1e-4..=5e-3).contains(&self.element_m) {
             return bad("element_m", self.element_m, "1e-4 to 5e-3 m");
         }
+        let r = self.element_y_m / self.element_m;
+        if !(0.5..=2.0).contains(&r) {
+            return bad("element_y_m", self.element_y_m, "0.5 to 2 element_m");
+        }
         if self.refine == 0 {
             return bad("refine", 0.0, "at least 1");
         }
@@ -149,11 +157,11 @@ impl RailHeadPatch {
             return bad("nx, ny", 0.0, "at least 1");
         }
         // the grid must lie on the head's top (UIC54: 70 mm wide)
-        if self.ny as f64 * self.element_m > 0.04 {
+        if self.ny as f64 * self.element_y_m > 0.04 {
             return bad(
                 "ny",
                 self.ny as f64,
-                "ny · element_m at most 40 mm (the running surface)",
+                "ny · element_y_m at most 40 mm (the running surface)",
             );
         }
         let shortest =
@@ -179,12 +187,12 @@ impl RailHeadPatch {
     /// The section mesh: the running-surface zone of faces `a / refine` covers the grid and
     /// one element beyond each side, `2 a` deep; foot and web as the global model's.
     fn section(&self) -> Result<SectionMesh, StructureError> {
-        let a = self.element_m;
+        let (a, b) = (self.element_m, self.element_y_m);
         let params = SectionParams {
             size_m: self.global.section_size_m,
-            running_surface_size_m: a / self.refine as f64,
-            running_surface_half_width_m: (0.5 * self.ny as f64 + 1.0) * a,
-            running_surface_depth_m: 2.0 * a,
+            running_surface_size_m: a.min(b) / self.refine as f64,
+            running_surface_half_width_m: (0.5 * self.ny as f64 + 1.0) * b,
+            running_surface_depth_m: 2.0 * a.max(b),
             ..SectionParams::default()
         };
         Ok(SectionMesh::uic54(&params)?)
@@ -195,7 +203,7 @@ impl RailHeadPatch {
     /// length.
     fn planes(&self) -> Result<Vec<f64>, StructureError> {
         let a = self.element_m;
-        let h = a / self.refine as f64;
+        let h = a.min(self.element_y_m) / self.refine as f64;
         let x_f = (self.nx as f64 + 0.5) * a;
         graded_axis(
             [-self.half_length_m, self.half_length_m],
@@ -291,7 +299,7 @@ impl RailHeadPatch {
         };
         strip_kernel(
             (&dofmap, &factor, &surface),
-            (self.nx, self.ny, self.element_m),
+            (self.nx, self.ny, self.element_m, self.element_y_m),
             1.0,
             n_dofs,
         )

@@ -108,8 +108,11 @@ impl GlobalWheelMesh {
 pub struct TreadPatch {
     /// The wheel's material.
     pub material: IsotropicElastic,
-    /// Contact-grid element size `a` (m), 1e-4–5e-3.
+    /// Contact-grid element length along x, `a` (m), 1e-4–5e-3.
     pub element_m: f64,
+    /// Contact-grid element width across, `b` (m), within a factor 2 of `a`; [`Self::steel`]
+    /// makes it `a` (square elements).
+    pub element_y_m: f64,
     /// FE faces per grid element over the source row and across the grid (≥ 1).
     pub refine: usize,
     /// Grid elements along the rolling direction (≥ 1): offsets `−(nx−1)..=nx`.
@@ -179,6 +182,7 @@ impl TreadPatch {
         TreadPatch {
             material: IsotropicElastic::STEEL,
             element_m,
+            element_y_m: element_m,
             refine: 3,
             nx,
             ny,
@@ -195,6 +199,10 @@ impl TreadPatch {
         if !(1e-4..=5e-3).contains(&a) {
             return bad("element_m", a, "1e-4 to 5e-3 m");
         }
+        let r = self.element_y_m / a;
+        if !(0.5..=2.0).contains(&r) {
+            return bad("element_y_m", self.element_y_m, "0.5 to 2 element_m");
+        }
         if self.refine == 0 {
             return bad("refine", 0.0, "at least 1");
         }
@@ -210,7 +218,7 @@ impl TreadPatch {
                 "back face < web start < web end < front face, back < 0 < front",
             );
         }
-        let half_width = (0.5 * self.ny as f64 + 2.0) * a;
+        let half_width = (0.5 * self.ny as f64 + 2.0) * self.element_y_m;
         if half_width > (-back).min(front) {
             return bad(
                 "ny",
@@ -258,8 +266,8 @@ impl TreadPatch {
     /// faces and the grid's column edges are node lines.
     fn refined(&self) -> Result<Prism, StructureError> {
         self.check()?;
-        let a = self.element_m;
-        let h = a / self.refine as f64;
+        let (a, b) = (self.element_m, self.element_y_m);
+        let h = a.min(b) / self.refine as f64;
         let g = &self.global;
         let global_zone = (g.contact_half_width_m, g.contact_size_m);
         let x_f = (self.nx as f64 + 0.5) * a;
@@ -271,15 +279,15 @@ impl TreadPatch {
             self.max_ratio,
         )?;
         let (faces, web) = self.block_y();
-        let w = (0.5 * self.ny as f64 + 1.0) * a;
+        let w = (0.5 * self.ny as f64 + 1.0) * b;
         let mut y_breaks: Vec<f64> = (0..=self.ny)
-            .map(|j| (j as f64 - 0.5 * self.ny as f64) * a)
+            .map(|j| (j as f64 - 0.5 * self.ny as f64) * b)
             .collect();
         y_breaks.extend(web);
         let ys = graded_axis(
             faces,
             g.size_m,
-            &[(w, h), (w + 4.0 * a, a), global_zone],
+            &[(w, h), (w + 4.0 * b, b), global_zone],
             y_breaks,
             self.max_ratio,
         )?;
@@ -287,7 +295,7 @@ impl TreadPatch {
         let zs = graded_axis(
             [-t, 0.0],
             g.size_m,
-            &[(2.0 * a, h), (8.0 * a, a), global_zone],
+            &[(2.0 * a.max(b), h), (8.0 * a.max(b), a.max(b)), global_zone],
             vec![-2.0 * a],
             self.max_ratio,
         )?;
@@ -352,7 +360,7 @@ impl TreadPatch {
         };
         strip_kernel(
             (&dofmap, &factor, &surface),
-            (self.nx, self.ny, self.element_m),
+            (self.nx, self.ny, self.element_m, self.element_y_m),
             -1.0,
             n_dofs,
         )

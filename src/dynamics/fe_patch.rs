@@ -1,0 +1,223 @@
+//! The influence operators of a passage's contact grid with `contact.influence = "fe-patch"`
+//! (theory §6.9), shared by both engines: the model's fe-patch on the grid
+//! ([`crate::structure::contact_patch::of_model`]) as strip operators with the split as a
+//! negative uniform compliance ([`StripInfluence::with_uniform`]).
+//!
+//! A patch is built once per model and grid (four sparse factorisations, minutes) and kept:
+//! in memory for the process, and on disk in `fe-patch/<key>/` of the directory given to
+//! [`use_cache_dir`] (the modal cache's; [`crate::dynamics::prepared::PreparedModel`] sets
+//! it), written atomically with its completion marker last. The key is the hash of
+//! everything the patch is built from (the two submodels' parameters — materials, grid,
+//! meshes, rim — and the twins' Hertz semi-width), so a model change that does not touch
+//! them keeps the entry. A grid that changes in a passage (lengthened over a corrugated rail,
+//! widened when the patch reaches its edge) is another grid and another patch.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+use crate::contact::influence::strip::StripInfluence;
+use crate::contact::influence::Influence;
+use crate::contact::transient::TransientConfig;
+use crate::model::{ContactInfluence, Model};
+use crate::progress::Progress;
+use crate::structure::contact_patch::of_model::{
+    model_patch, patch_dofs, patches, ModelPatch, PatchGrid, PASSAGE_REFINE,
+};
+use crate::structure::contact_patch::StripKernel;
+
+use super::DynamicsError;
+
+/// Measured cost of a patch submodel per free DOF on two cores: wall time (s) and peak
+/// memory (bytes) of the larger submodel — a 26 × 19 grid's rail head (373,002 DOFs) took
+/// 262 s and the two submodels, built one after the other, peaked at 11.2 GB
+/// (validation/contact_patch.md, P2 at 100 kN).
+const SECONDS_PER_DOF: f64 = 7.0e-4;
+const PEAK_BYTES_PER_DOF: f64 = 3.0e4;
+
+/// The patches built or read in this process, by key.
+static MEMO: Mutex<Option<HashMap<String, Arc<ModelPatch>>>> = Mutex::new(None);
+/// Where patches are kept on disk (`None`: memory only).
+static DIR: Mutex<Option<PathBuf>> = Mutex::new(None);
+
+/// Keep fe-patches on disk under `dir/fe-patch/` from now on in this process.
+pub fn use_cache_dir(dir: &Path) {
+    *DIR.lock().unwrap_or_else(|e| e.into_inner()) = Some(dir.to_path_buf());
+}
+
+/// The fe-patch grid of a passage's contact configuration `cfg` for `model`.
+pub fn patch_grid(model: &Model, cfg: &TransientConfig) -> Result<PatchGrid, DynamicsError> {
+    let hertz = super::setup::static_hertz(model, model.vehicle.wheel_load)?;
+    Ok(PatchGrid {
+        nx: cfg.grid.nx,
+        ny: cfg.grid.ny,
+        dx_m: cfg.grid.dx(),
+        dy_m: cfg.grid.dy(),
+        hertz_half_width_m: hertz.b_m,
+        refine: PASSAGE_REFINE,
+    })
+}
+
+/// The estimated wall time (s) and peak memory (GB) of building the patch of `grid`.
+pub fn build_estimate(model: &Model, grid: &PatchGrid) -> Result<(f64, f64), DynamicsError> {
+    let (r, t) = patch_dofs(model, grid)?;
+    let n = (r + t) as f64;
+    Ok((
+        n * SECONDS_PER_DOF,
+        r.max(t) as f64 * PEAK_BYTES_PER_DOF / 1e9,
+    ))
+}
+
+/// The key of the patch of `model` on `grid`: a hash of what it is built from.
+fn key(model: &Model, grid: &PatchGrid) -> String {
+    let (rail, tread) = patches(model, grid);
+    let text = format!("{rail:?}|{tread:?}|{:?}", grid.hertz_half_width_m.to_bits());
+    blake3::hash(text.as_bytes()).to_hex()[..32].to_string()
+}
+
+/// The fe-patch of `model` on `grid`: from memory, from disk, or built (reported to
+/// `progress` with its estimate first).
+pub fn model_patch_cached(
+    model: &Model,
+    grid: &PatchGrid,
+    progress: Option<&dyn Progress>,
+) -> Result<Arc<ModelPatch>, DynamicsError> {
+    let k = key(model, grid);
+    let mut memo = MEMO.lock().unwrap_or_else(|e| e.into_inner());
+    let memo = memo.get_or_insert_with(HashMap::new);
+    if let Some(p) = memo.get(&k) {
+        return Ok(p.clone());
+    }
+    let dir = DIR
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .clone()
+        .map(|d| d.join("fe-patch").join(&k));
+    if let Some(p) = dir.as_deref().and_then(|d| read(d, grid)) {
+        let p = Arc::new(p);
+        memo.insert(k, p.clone());
+        return Ok(p);
+    }
+    let (seconds, gb) = build_estimate(model, grid)?;
+    if let Some(pr) = progress {
+        pr.warn(&format!(
+            "building the fe-patch of the {} x {} contact grid (rail head and tread submodels): \
+             about {:.0} s and {:.1} GB, once per model and grid",
+            grid.nx, grid.ny, seconds, gb
+        ));
+        pr.stage("fe-patch influence coefficients", 1);
+    }
+    let p = Arc::new(model_patch(model, grid)?);
+    if let Some(pr) = progress {
+        pr.done(1);
+        pr.finish();
+    }
+    if let Some(d) = dir.as_deref() {
+        if let Err(e) = write(d, &p) {
+            if let Some(pr) = progress {
+                pr.warn(&format!("fe-patch not cached in {}: {e}", d.display()));
+            }
+        }
+    }
+    memo.insert(k, p.clone());
+    Ok(p)
+}
+
+/// The influence operators of a passage's contact on `cfg`'s grid: `None` for the
+/// half-space (the contact builds its own), the fe-patch's otherwise.
+pub fn passage_influence(
+    model: &Model,
+    cfg: &TransientConfig,
+    progress: Option<&dyn Progress>,
+) -> Result<Option<Influence>, DynamicsError> {
+    if model.contact.influence == ContactInfluence::HalfSpace {
+        return Ok(None);
+    }
+    let grid = patch_grid(model, cfg)?;
+    let p = model_patch_cached(model, &grid, progress)?;
+    Ok(Some(influence_of(&p)))
+}
+
+/// The strip operators of a model patch: the refined kernel, the twins' diagonal as a
+/// negative uniform compliance (their couplings, zero for a patch centred on the crown and
+/// the rolling circle to round-off, are left out with the kernel's normal–tangential ones).
+pub fn influence_of(p: &ModelPatch) -> Influence {
+    let k = &p.refined;
+    let (nx, ny) = k.dims();
+    let op = StripInfluence::new(nx, ny, |o, j, jp| {
+        k.get(o, j, jp).expect("offsets within the kernel")
+    });
+    let t = p.twins_m_per_n;
+    Influence::Strip(op.with_uniform([-t[0][0], -t[1][1], -t[2][2]]))
+}
+
+const MARKER: &str = "complete";
+
+/// Writes `p` into `dir`: the refined kernel `[2 nx, ny, ny, 3, 3]` (m/Pa), the twins
+/// `[2, 3, 3]` (m/N; rail, wheel), the grid and DOFs, the marker last.
+fn write(dir: &Path, p: &ModelPatch) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let k = &p.refined;
+    let (nx, ny) = k.dims();
+    let flat: Vec<f64> = k.values().iter().flatten().flatten().copied().collect();
+    crate::io::write_npy(&dir.join("kernel.npy"), &[2 * nx, ny, ny, 3, 3], &flat)?;
+    let twins: Vec<f64> = [p.rail_twin_m_per_n, p.wheel_twin_m_per_n]
+        .iter()
+        .flatten()
+        .flatten()
+        .copied()
+        .collect();
+    crate::io::write_npy(&dir.join("twins.npy"), &[2, 3, 3], &twins)?;
+    let meta = format!(
+        "{} {} {:e} {:e} {}\n",
+        nx,
+        ny,
+        k.element_m(),
+        k.element_y_m(),
+        k.n_dofs()
+    );
+    crate::io::write_text(&dir.join("grid.txt"), &meta)?;
+    crate::io::write_text(&dir.join(MARKER), "")
+}
+
+/// Reads a complete entry written by [`write`] for `grid`; `None` if absent, incomplete or
+/// not of this grid (it is then rebuilt and rewritten).
+fn read(dir: &Path, grid: &PatchGrid) -> Option<ModelPatch> {
+    if !dir.join(MARKER).is_file() {
+        return None;
+    }
+    let meta = std::fs::read_to_string(dir.join("grid.txt")).ok()?;
+    let f: Vec<&str> = meta.split_whitespace().collect();
+    let (nx, ny): (usize, usize) = (f.first()?.parse().ok()?, f.get(1)?.parse().ok()?);
+    let n_dofs: usize = f.get(4)?.parse().ok()?;
+    if (nx, ny) != (grid.nx, grid.ny) {
+        return None;
+    }
+    let load = |name: &str| -> Option<Vec<f64>> {
+        let bytes = std::fs::read(dir.join(name)).ok()?;
+        npyz::NpyFile::new(&bytes[..]).ok()?.into_vec().ok()
+    };
+    let flat = load("kernel.npy")?;
+    let values: Vec<[[f64; 3]; 3]> = flat
+        .chunks_exact(9)
+        .map(|c| std::array::from_fn(|a| std::array::from_fn(|b| c[3 * a + b])))
+        .collect();
+    let refined = StripKernel::from_values((nx, ny), (grid.dx_m, grid.dy_m), values, n_dofs)?;
+    let t = load("twins.npy")?;
+    if t.len() != 18 {
+        return None;
+    }
+    let m = |o: usize| -> [[f64; 3]; 3] {
+        std::array::from_fn(|a| std::array::from_fn(|b| t[o + 3 * a + b]))
+    };
+    let (rail, wheel) = (m(0), m(9));
+    Some(ModelPatch {
+        refined,
+        twins_m_per_n: std::array::from_fn(|a| std::array::from_fn(|b| rail[a][b] + wheel[a][b])),
+        rail_twin_m_per_n: rail,
+        wheel_twin_m_per_n: wheel,
+    })
+}
+
+#[cfg(test)]
+mod tests;

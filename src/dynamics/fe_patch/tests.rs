@@ -1,0 +1,102 @@
+//! The fe-patch of a passage: its disk entry reads back what was written, and the operators
+//! carry the split as a negative uniform compliance.
+
+use super::*;
+use crate::structure::contact_patch::of_model::ModelPatch;
+
+/// A small patch made up of known values (not an FE result): enough to check the storage.
+fn made_up_patch(nx: usize, ny: usize) -> ModelPatch {
+    let values: Vec<[[f64; 3]; 3]> = (0..2 * nx * ny * ny)
+        .map(|k| {
+            std::array::from_fn(|a| {
+                std::array::from_fn(|b| {
+                    let diag = if a == b { 1e-12 } else { 0.0 };
+                    diag + 1e-15 * (k as f64 + 0.1 * (3 * a + b) as f64)
+                })
+            })
+        })
+        .collect();
+    let refined = StripKernel::from_values((nx, ny), (0.6e-3, 0.5e-3), values, 1234).unwrap();
+    let rail = [[3e-10, 1e-13, 0.0], [1e-13, 4e-10, 0.0], [0.0, 0.0, 5e-10]];
+    let wheel = [[1e-10, 0.0, 2e-13], [0.0, 2e-10, 0.0], [2e-13, 0.0, 3e-10]];
+    ModelPatch {
+        refined,
+        twins_m_per_n: std::array::from_fn(|a| std::array::from_fn(|b| rail[a][b] + wheel[a][b])),
+        rail_twin_m_per_n: rail,
+        wheel_twin_m_per_n: wheel,
+    }
+}
+
+#[test]
+fn a_written_patch_reads_back_bit_for_bit_and_only_for_its_grid() {
+    let (nx, ny) = (3, 2);
+    let p = made_up_patch(nx, ny);
+    let dir = std::env::temp_dir().join(format!("corrugation-fe-patch-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let grid = PatchGrid {
+        nx,
+        ny,
+        dx_m: 0.6e-3,
+        dy_m: 0.5e-3,
+        hertz_half_width_m: 5e-3,
+        refine: 2,
+    };
+    assert!(read(&dir, &grid).is_none(), "nothing written yet");
+    write(&dir, &p).unwrap();
+    assert_eq!(read(&dir, &grid).unwrap(), p);
+    // another grid is not this entry
+    assert!(read(&dir, &PatchGrid { nx: 4, ..grid }).is_none());
+    // without the completion marker the entry does not count
+    std::fs::remove_file(dir.join(MARKER)).unwrap();
+    assert!(read(&dir, &grid).is_none());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_operators_carry_the_twins_as_a_negative_uniform_compliance() {
+    use crate::contact::influence::{NormalInfluence, TangentialInfluence};
+    let p = made_up_patch(3, 2);
+    let mut op = influence_of(&p);
+    let t = p.twins_m_per_n;
+    assert_eq!(op.uniform(), [-t[0][0], -t[1][1], -t[2][2]]);
+    // the normal product is the kernel's nn term: a unit pressure on element (0, 0) read
+    // at element (1, 1) is K_nn(1, 1, 0)
+    let mut pr = vec![0.0; 6];
+    pr[0] = 1.0;
+    let mut u = vec![0.0; 6];
+    op.normal(&pr, &mut u);
+    let k = p.refined.get(1, 1, 0).unwrap();
+    assert!(
+        (u[3] - k[2][2]).abs() < 1e-9 * k[2][2].abs(),
+        "{} {}",
+        u[3],
+        k[2][2]
+    );
+    assert_eq!(TangentialInfluence::dims(&op), (3, 2));
+}
+
+/// The default model's fe-patch: its grid, submodel sizes and estimate for `refine` 1–3
+/// (printed; no build). `cargo test --profile test-opt --lib default_patch_sizes -- --ignored
+/// --nocapture`
+#[test]
+#[ignore = "prints the default fe-patch's sizes (about 10 s)"]
+fn default_patch_sizes() {
+    let m = Model::default_model();
+    let cfg = crate::dynamics::setup::contact_config_for(&m, m.run.speed()).unwrap();
+    for refine in 1..=3 {
+        let grid = PatchGrid {
+            refine,
+            ..patch_grid(&m, &cfg).unwrap()
+        };
+        let (r, t) = patch_dofs(&m, &grid).unwrap();
+        let (s, gb) = build_estimate(&m, &grid).unwrap();
+        println!(
+            "refine {refine}: grid {} x {} of {:.3} x {:.3} mm, b {:.2} mm; rail {r} DOFs, tread {t}; about {s:.0} s, {gb:.1} GB",
+            grid.nx,
+            grid.ny,
+            grid.dx_m * 1e3,
+            grid.dy_m * 1e3,
+            grid.hertz_half_width_m * 1e3
+        );
+    }
+}
