@@ -563,7 +563,8 @@ fn profile_of(
 /// per time step (`forces.csv`): `t_s` (s), `x_m` (contact position along the rail, m),
 /// `fn_n`, `fl_n`, `flat_n` (normal, longitudinal, lateral force on the wheel, N; F_L > 0
 /// forward), `creepage`, `approach_m`, `contact_length_m`, `slip_fraction`,
-/// `frictional_power_w` (W); along the rail in the solution zone (`wear.csv`): `wear_x_m`,
+/// `frictional_power_w` (W), `peak_pressure_pa` (the patch's largest element pressure, Pa);
+/// along the rail in the solution zone (`wear.csv`): `wear_x_m`,
 /// `wf_j_per_m` (frictional work per metre of rail, J/m), `wf_band_j_per_m` (its 20–80 mm
 /// band-passed part); `psd_wear`, `psd_fl`, `psd_fn` (`psd_*.csv`): dicts of `wavelength_m`,
 /// `frequency_hz`, `psd` (one-sided per unit wavenumber of the band-passed signal);
@@ -656,6 +657,7 @@ fn passage<'py>(
     d.set_item("contact_length_m", array(py, h.contact_length_m))?;
     d.set_item("slip_fraction", array(py, h.slip_fraction))?;
     d.set_item("frictional_power_w", array(py, h.frictional_power_w))?;
+    d.set_item("peak_pressure_pa", array(py, h.peak_pressure_pa))?;
     let [w, fl, fnn] = analyses;
     d.set_item("wear_x_m", array(py, rec.wear_x_m))?;
     d.set_item("wf_j_per_m", array(py, rec.wear_j_per_m))?;

@@ -176,6 +176,7 @@ def test_passage_arrays_equal_the_cli_files_bit_for_bit(small, cache, tmp_path):
         "contact_length_m": "contact_length_m",
         "slip_fraction": "slip_fraction",
         "frictional_power_w": "frictional_power_w",
+        "peak_pressure_pa": "peak_pressure_pa",
     }
     for k, col in keys.items():
         assert r[k].dtype == np.float64

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 
-use corrugation::contact::report::{solve_case, ContactCase, TangentialLoading};
+use corrugation::contact::report::{case_config, solve_case_on, ContactCase, TangentialLoading};
 
 use super::ModelArgs;
 use corrugation::model::MAX_WHEEL_LOAD_N;
@@ -118,7 +118,18 @@ impl ContactCmd {
         if let Some(dir) = &self.out {
             super::check_out_dir(dir)?;
         }
-        let sol = solve_case(&case).context("solving the contact")?;
+        // the model's influence coefficients (`contact.influence`): the fe-patch's refined
+        // submodels, built on first use and kept beside the modes
+        let cfg = case_config(&case).context("the contact grid")?;
+        let progress = super::progress::bar("contact");
+        let op = corrugation::dynamics::fe_patch::influence_for(
+            &m,
+            &cfg,
+            corrugation::dynamics::fe_patch::Beside::Nothing,
+            Some(&progress),
+        )
+        .context("the contact's influence coefficients")?;
+        let sol = solve_case_on(&case, op).context("solving the contact")?;
         let s = sol.summary();
         if let Some(dir) = &self.out {
             // the error names the file

@@ -3,7 +3,8 @@
 //!
 //! Outputs in `--out DIR` (default `corrugation-out/passage`), all written atomically:
 //! * `forces.csv` — per time step: `t_s, x_m, fn_n, fl_n, flat_n, creepage, approach_m,
-//!   contact_length_m, slip_fraction, frictional_power_w` (forces on the wheel; F_L > 0 forward);
+//!   contact_length_m, slip_fraction, frictional_power_w, peak_pressure_pa` (forces on the
+//!   wheel; F_L > 0 forward);
 //! * `wear.csv` — `x_m, wf_j_per_m, wf_band_j_per_m` in the solution zone (W_f integrated
 //!   across the rail head, and its 20–80 mm band-passed part);
 //! * `rail_point.csv` — `t_s, ux_m, uy_m, uz_m` of the rail-top node nearest 0.6 m into the

@@ -186,19 +186,16 @@ pub fn equivalent_semi_axes(x: &[f64], y: &[f64], p: &[f64]) -> (f64, f64) {
     ((5.0 * vx / s).sqrt(), (5.0 * vy / s).sqrt())
 }
 
-/// Solve a case (see the module doc for steady vs transient).
+/// Solve a case (see the module doc for steady vs transient) on the half-spaces.
 pub fn solve_case(case: &ContactCase) -> Result<ContactSolution, ContactError> {
-    if case.steps == 0 {
-        return Err(ContactError::InvalidParameter {
-            name: "steps",
-            value: 0.0,
-            reason: "must be ≥ 1 (1 = steady state)",
-        });
-    }
-    let hertz = case.hertz()?;
-    // size the grid on the Hertz patch (or on a nominal 1 kN patch if unloaded)
+    solve_case_on(case, None)
+}
+
+/// The contact configuration of a case: its grid sized on the Hertz patch of its normal load
+/// (or of 1 kN when unloaded).
+pub fn case_config(case: &ContactCase) -> Result<TransientConfig, ContactError> {
     let sizing_load = case.normal_load_n.max(1e3);
-    let cfg = TransientConfig::around_hertz(&HertzGridParams {
+    TransientConfig::around_hertz(&HertzGridParams {
         radius_x_m: case.wheel_radius_m,
         radius_y_m: case.relative_lateral_radius_m(),
         youngs_pa: case.youngs_pa,
@@ -209,8 +206,28 @@ pub fn solve_case(case: &ContactCase) -> Result<ContactSolution, ContactError> {
         nx: case.grid_nx,
         ny: case.grid_ny,
         margin: case.grid_margin,
-    })?;
-    let mut eng = TransientRolling::new(cfg)?;
+    })
+}
+
+/// Solve a case on the given influence operators (on the grid of [`case_config`]; `None`:
+/// the half-spaces).
+pub fn solve_case_on(
+    case: &ContactCase,
+    influence: Option<super::influence::Influence>,
+) -> Result<ContactSolution, ContactError> {
+    if case.steps == 0 {
+        return Err(ContactError::InvalidParameter {
+            name: "steps",
+            value: 0.0,
+            reason: "must be ≥ 1 (1 = steady state)",
+        });
+    }
+    let hertz = case.hertz()?;
+    let cfg = case_config(case)?;
+    let mut eng = match influence {
+        None => TransientRolling::new(cfg)?,
+        Some(op) => TransientRolling::with_influence(cfg, op)?,
+    };
     let longitudinal = match case.tangential {
         TangentialLoading::Creepage(x) => Longitudinal::Creepage(x),
         TangentialLoading::TractionCoefficient(t) => Longitudinal::Force(t * case.normal_load_n),

@@ -37,7 +37,8 @@ const PEAK_BYTES_PER_DOF: f64 = 3.0e4;
 
 /// The patches built or read in this process, by key.
 static MEMO: Mutex<Option<HashMap<String, Arc<ModelPatch>>>> = Mutex::new(None);
-/// Where patches are kept on disk (`None`: memory only).
+/// Where patches are kept on disk (`None`: the default cache directory,
+/// [`crate::eigen::cache::default_cache_dir`]).
 static DIR: Mutex<Option<PathBuf>> = Mutex::new(None);
 
 /// Keep fe-patches on disk under `dir/fe-patch/` from now on in this process.
@@ -92,7 +93,10 @@ pub fn model_patch_cached(
         .lock()
         .unwrap_or_else(|e| e.into_inner())
         .clone()
-        .map(|d| d.join("fe-patch").join(&k));
+        .unwrap_or_else(crate::eigen::cache::default_cache_dir)
+        .join("fe-patch")
+        .join(&k);
+    let dir = Some(dir);
     if let Some(p) = dir.as_deref().and_then(|d| read(d, grid)) {
         let p = Arc::new(p);
         memo.insert(k, p.clone());
@@ -123,32 +127,69 @@ pub fn model_patch_cached(
     Ok(p)
 }
 
-/// The influence operators of a passage's contact on `cfg`'s grid: `None` for the
-/// half-space (the contact builds its own), the fe-patch's otherwise.
-pub fn passage_influence(
+/// Builds (or reads) the fe-patch of the model's own contact grid before any passage, with
+/// `progress`; nothing for the half-space. The passages then find it in memory.
+pub fn prepare(model: &Model, progress: Option<&dyn Progress>) -> Result<(), DynamicsError> {
+    if model.contact.influence == ContactInfluence::HalfSpace {
+        return Ok(());
+    }
+    let cfg = super::setup::contact_config_for(model, model.run.speed())?;
+    model_patch_cached(model, &patch_grid(model, &cfg)?, progress)?;
+    Ok(())
+}
+
+/// What an fe-patch's operators stand beside.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Beside {
+    /// A passage's global model (modes and series compliance): the split is applied
+    /// ([`influence_of`]).
+    GlobalModel,
+    /// Nothing (the `contact` command): the refined submodels alone ([`refined_influence`]).
+    Nothing,
+}
+
+/// The influence operators of a contact on `cfg`'s grid: `None` for the half-space (the
+/// contact builds its own), the model's fe-patch otherwise, split or not as `beside` says.
+pub fn influence_for(
     model: &Model,
     cfg: &TransientConfig,
+    beside: Beside,
     progress: Option<&dyn Progress>,
 ) -> Result<Option<Influence>, DynamicsError> {
     if model.contact.influence == ContactInfluence::HalfSpace {
         return Ok(None);
     }
-    let grid = patch_grid(model, cfg)?;
-    let p = model_patch_cached(model, &grid, progress)?;
-    Ok(Some(influence_of(&p)))
+    let p = model_patch_cached(model, &patch_grid(model, cfg)?, progress)?;
+    Ok(Some(match beside {
+        Beside::GlobalModel => influence_of(&p),
+        Beside::Nothing => refined_influence(&p),
+    }))
 }
 
-/// The strip operators of a model patch: the refined kernel, the twins' diagonal as a
-/// negative uniform compliance (their couplings, zero for a patch centred on the crown and
-/// the rolling circle to round-off, are left out with the kernel's normal–tangential ones).
+/// The strip operators of a model patch in a passage: the refined kernel, the twins'
+/// diagonal as a negative uniform compliance (their couplings, zero for a patch centred on the
+/// crown and the rolling circle to round-off, are left out with the kernel's
+/// normal–tangential ones). Positive definite only beside the global model's compliance at
+/// the contact (the passage's series compliance), from which the twins' share was split.
 pub fn influence_of(p: &ModelPatch) -> Influence {
+    let t = p.twins_m_per_n;
+    match refined_influence(p) {
+        Influence::Strip(op) => Influence::Strip(op.with_uniform([-t[0][0], -t[1][1], -t[2][2]])),
+        other => other,
+    }
+}
+
+/// The strip operators of the two refined submodels alone, without the split: the contact of
+/// the rail head and the tread with no global model beside them (the `contact` command). Their
+/// approach includes the submodels' own structural flexibility; the patch's pressure and
+/// traction are those of the passage's fe-patch in steady rolling (a uniform compliance
+/// changes neither under a prescribed load and creepage).
+pub fn refined_influence(p: &ModelPatch) -> Influence {
     let k = &p.refined;
     let (nx, ny) = k.dims();
-    let op = StripInfluence::new(nx, ny, |o, j, jp| {
+    Influence::Strip(StripInfluence::new(nx, ny, |o, j, jp| {
         k.get(o, j, jp).expect("offsets within the kernel")
-    });
-    let t = p.twins_m_per_n;
-    Influence::Strip(op.with_uniform([-t[0][0], -t[1][1], -t[2][2]]))
+    }))
 }
 
 const MARKER: &str = "complete";

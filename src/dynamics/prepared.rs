@@ -234,14 +234,9 @@ impl PreparedModel {
             wheel: w,
             mut times,
         } = parts;
-        if model.contact.influence == crate::model::ContactInfluence::FePatch {
-            // the fe-patch of the model's grid, built (or read) here with the cache's
-            // progress, kept with the modes; the passages then find it in memory
-            super::fe_patch::use_cache_dir(cache.dir());
-            let cfg = super::setup::contact_config_for(model, model.run.speed())?;
-            let grid = super::fe_patch::patch_grid(model, &cfg)?;
-            super::fe_patch::model_patch_cached(model, &grid, Some(cache.progress()))?;
-        }
+        // the fe-patch (if the model asks for it), kept with the modes
+        super::fe_patch::use_cache_dir(cache.dir());
+        super::fe_patch::prepare(model, Some(cache.progress()))?;
         let mut engine = timed(&mut times.engine, || {
             PassageEngine::new(
                 model,

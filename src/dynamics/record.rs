@@ -24,6 +24,8 @@ pub struct Histories {
     pub approach_m: Vec<f64>,
     /// Contact length along the rail: grid columns with contact × Δx (m).
     pub contact_length_m: Vec<f64>,
+    /// Largest element pressure of the patch (Pa).
+    pub peak_pressure_pa: Vec<f64>,
     /// Slip-area fraction (−).
     pub slip_fraction: Vec<f64>,
     /// Frictional power (W).
@@ -43,6 +45,7 @@ impl Histories {
             &mut h.creepage,
             &mut h.approach_m,
             &mut h.contact_length_m,
+            &mut h.peak_pressure_pa,
             &mut h.slip_fraction,
             &mut h.frictional_power_w,
         ] {
@@ -52,7 +55,8 @@ impl Histories {
     }
 
     /// Appends one contact step: `[t (s), x_c (m), ξ (−), approach (m)]`, the contact
-    /// result, and the contact length (grid columns along x with any pressure × `dx`, m).
+    /// result, the contact length (grid columns along x with any pressure × `dx`, m) and the
+    /// peak pressure.
     pub fn push_step(
         &mut self,
         contact: &TransientRolling,
@@ -74,6 +78,8 @@ impl Histories {
             .filter(|row| row.iter().any(|&p| p > 0.0))
             .count();
         self.contact_length_m.push(cols as f64 * dx);
+        let peak = contact.pressure_pa().iter().copied().fold(0.0, f64::max);
+        self.peak_pressure_pa.push(peak);
         self.slip_fraction.push(r.slip_area_fraction());
         self.frictional_power_w.push(r.frictional_power_w);
     }

@@ -742,7 +742,7 @@ pub fn check_profile_on_travel(
 /// [`contact_config_for`], with the grid lengthened for a rail profile by
 /// [`grid_for_profile`] (for the part of it the contact meets: [`passage_grid`]), then widened
 /// by `widening` ([`widen_grid`]; the default leaves it), on the influence operators of
-/// `contact.influence` ([`super::fe_patch::passage_influence`]: the half-spaces, or the
+/// `contact.influence` ([`super::fe_patch::influence_for`]: the half-spaces, or the
 /// fe-patch of that grid, built on first use). The reduced and the explicit passage use it
 /// alike.
 pub fn passage_contact(
@@ -754,7 +754,7 @@ pub fn passage_contact(
     check_speed(speed_m_per_s)?;
     let mut cfg = contact_config_for(model, speed_m_per_s)?;
     cfg.grid = passage_grid(&cfg, profile, widening)?;
-    match super::fe_patch::passage_influence(model, &cfg, None)? {
+    match super::fe_patch::influence_for(model, &cfg, super::fe_patch::Beside::GlobalModel, None)? {
         None => TransientRolling::new(cfg),
         Some(op) => TransientRolling::with_influence(cfg, op),
     }

@@ -41,6 +41,7 @@ pub fn write_passage(
             "contact_length_m",
             "slip_fraction",
             "frictional_power_w",
+            "peak_pressure_pa",
         ],
         (0..h.t_s.len()).map(|i| {
             vec![
@@ -54,6 +55,7 @@ pub fn write_passage(
                 h.contact_length_m[i],
                 h.slip_fraction[i],
                 h.frictional_power_w[i],
+                h.peak_pressure_pa[i],
             ]
         }),
     )

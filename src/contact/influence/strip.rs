@@ -52,23 +52,58 @@ pub fn half_space_kernel(
 
 /// FFT-along-x, dense-across influence products on an `nx × ny` grid (element `i * ny + j`,
 /// `i` along x) with `c` components per element. A clone shares the FFT plans.
+///
+/// Layout: the kernel spectra and the source spectra are stored as separate real and
+/// imaginary arrays, frequency-major (`[k][row][source]` and `[k][source]`), so that the
+/// dense product of one frequency is a run of contiguous dot products over the source
+/// columns that carry traction (four partial sums each, [`complex_dot`]).
 #[derive(Clone)]
 pub struct StripConvolver {
     nx: usize,
     ny: usize,
     comps: usize,
     m: usize,
-    /// `m/2 + 1` spectra, each a row-major `(c·ny) × (c·ny)` complex matrix (row: field
-    /// component and column `a·ny + j`; column: source `b·ny + j'`), divided by `m`.
-    spec: Vec<Complex64>,
+    /// `m/2 + 1` spectra, each a row-major `(c·ny) × (c·ny)` matrix (row: field component and
+    /// column `a·ny + j`; column: source `b·ny + j'`), divided by `m`: real and imaginary parts.
+    spec_re: Vec<f64>,
+    spec_im: Vec<f64>,
     forward: Arc<dyn RealToComplex<f64>>,
     inverse: Arc<dyn ComplexToReal<f64>>,
     line: Vec<f64>,
-    /// Source spectra, `(c·ny) × (m/2 + 1)`, one row per source column.
-    src: Vec<Complex64>,
-    /// Field spectra, the same layout.
+    /// One column's spectrum (`m/2 + 1`).
+    spectrum: Vec<Complex64>,
+    /// Source spectra `[k][b·ny + j']`, real and imaginary parts.
+    src_re: Vec<f64>,
+    src_im: Vec<f64>,
+    /// Field spectra, one row of `m/2 + 1` per field column `a·ny + j`.
     field: Vec<Complex64>,
     scratch: Vec<Complex64>,
+}
+
+/// `Σ (a_re + i a_im)(b_re + i b_im)` over equal-length slices, in four interleaved partial
+/// sums (element `i` to lane `i mod 4`; the last `len mod 4` to lane 0), so that the
+/// additions run in independent chains and vector lanes.
+fn complex_dot(a_re: &[f64], a_im: &[f64], b_re: &[f64], b_im: &[f64]) -> Complex64 {
+    let (mut sr, mut si) = ([0.0_f64; 4], [0.0_f64; 4]);
+    let n4 = a_re.len() / 4 * 4;
+    let chunks = a_re[..n4]
+        .chunks_exact(4)
+        .zip(a_im[..n4].chunks_exact(4))
+        .zip(b_re[..n4].chunks_exact(4).zip(b_im[..n4].chunks_exact(4)));
+    for ((ar, ai), (br, bi)) in chunks {
+        for l in 0..4 {
+            sr[l] += ar[l] * br[l] - ai[l] * bi[l];
+            si[l] += ar[l] * bi[l] + ai[l] * br[l];
+        }
+    }
+    for i in n4..a_re.len() {
+        sr[0] += a_re[i] * b_re[i] - a_im[i] * b_im[i];
+        si[0] += a_re[i] * b_im[i] + a_im[i] * b_re[i];
+    }
+    Complex64::new(
+        (sr[0] + sr[1]) + (sr[2] + sr[3]),
+        (si[0] + si[1]) + (si[2] + si[3]),
+    )
 }
 
 impl StripConvolver {
@@ -89,7 +124,8 @@ impl StripConvolver {
         let forward = planner.plan_fft_forward(m);
         let inverse = planner.plan_fft_inverse(m);
         let cn = comps * ny;
-        let mut spec = vec![Complex64::new(0.0, 0.0); nk * cn * cn];
+        let mut spec_re = vec![0.0; nk * cn * cn];
+        let mut spec_im = vec![0.0; nk * cn * cn];
         let mut line = forward.make_input_vec();
         let mut out = forward.make_output_vec();
         let scale = 1.0 / m as f64;
@@ -124,7 +160,9 @@ impl StripConvolver {
                             .expect("lengths from the plan");
                         let (row, col) = (a * ny + j, b * ny + jp);
                         for (k, v) in out.iter().enumerate() {
-                            spec[(k * cn + row) * cn + col] = v * scale;
+                            let e = (k * cn + row) * cn + col;
+                            spec_re[e] = v.re * scale;
+                            spec_im[e] = v.im * scale;
                         }
                     }
                 }
@@ -139,9 +177,12 @@ impl StripConvolver {
             ny,
             comps,
             m,
-            spec,
+            spec_re,
+            spec_im,
             line,
-            src: vec![Complex64::new(0.0, 0.0); cn * nk],
+            spectrum: vec![Complex64::new(0.0, 0.0); nk],
+            src_re: vec![0.0; nk * cn],
+            src_im: vec![0.0; nk * cn],
             field: vec![Complex64::new(0.0, 0.0); cn * nk],
             scratch: vec![Complex64::new(0.0, 0.0); scratch_len],
             forward,
@@ -170,37 +211,75 @@ impl StripConvolver {
 
     /// `u = K f` on the `rows` field rows from row `shift` on (`shift + rows ≤ nx + 1`; `u[a]`
     /// holds `rows · ny` values): [`Self::product`] with the number of rows free, so that
-    /// the extended rows `0..=nx` of transient rolling come from one product.
+    /// the extended rows `0..=nx` of transient rolling come from one product. Source columns
+    /// without traction (outside the contact) are skipped.
     pub fn product_rows(&mut self, f: &[&[f64]], u: &mut [&mut [f64]], shift: usize, rows: usize) {
+        let (nx, ny) = (self.nx, self.ny);
+        let nonzero = |j: usize| f.iter().any(|fb| (0..nx).any(|i| fb[i * ny + j] != 0.0));
+        let src = match (0..ny).find(|&j| nonzero(j)) {
+            Some(c0) => (c0, (c0..ny).rev().find(|&j| nonzero(j)).unwrap_or(c0) + 1),
+            None => (0, 0),
+        };
+        self.product_cols(f, u, (shift, rows), src, (0, ny));
+    }
+
+    /// `u = K f` for a traction zero outside the source columns `src = (c0, c1)`, on the field
+    /// columns `field = (d0, d1)` of the field rows `shift..shift + rows` (`shift + rows ≤
+    /// nx + 1`; `u[a]` holds `rows · ny` values; its other columns are left as they are).
+    pub fn product_cols(
+        &mut self,
+        f: &[&[f64]],
+        u: &mut [&mut [f64]],
+        (shift, rows): (usize, usize),
+        (c0, c1): (usize, usize),
+        (d0, d1): (usize, usize),
+    ) {
         let (nx, ny, c, m) = (self.nx, self.ny, self.comps, self.m);
         let nk = m / 2 + 1;
         let cn = c * ny;
         assert!(f.len() == c && u.len() == c && shift + rows <= nx + 1);
+        assert!(c0 <= c1 && c1 <= ny && d0 <= d1 && d1 <= ny);
         for b in 0..c {
-            for jp in 0..ny {
+            for jp in c0..c1 {
                 self.line.fill(0.0);
                 for i in 0..nx {
                     self.line[i] = f[b][i * ny + jp];
                 }
-                let row = &mut self.src[(b * ny + jp) * nk..(b * ny + jp + 1) * nk];
                 self.forward
-                    .process_with_scratch(&mut self.line, row, &mut self.scratch)
+                    .process_with_scratch(&mut self.line, &mut self.spectrum, &mut self.scratch)
                     .expect("lengths from the plan");
+                let s = b * ny + jp;
+                for (k, v) in self.spectrum.iter().enumerate() {
+                    self.src_re[k * cn + s] = v.re;
+                    self.src_im[k * cn + s] = v.im;
+                }
             }
         }
         for k in 0..nk {
-            let block = &self.spec[k * cn * cn..(k + 1) * cn * cn];
-            for r in 0..cn {
-                let krow = &block[r * cn..(r + 1) * cn];
-                let mut acc = Complex64::new(0.0, 0.0);
-                for (s, kv) in krow.iter().enumerate() {
-                    acc += kv * self.src[s * nk + k];
+            let (sr, si) = (
+                &self.src_re[k * cn..(k + 1) * cn],
+                &self.src_im[k * cn..(k + 1) * cn],
+            );
+            for a in 0..c {
+                for j in d0..d1 {
+                    let r = a * ny + j;
+                    let e = (k * cn + r) * cn;
+                    let mut acc = Complex64::new(0.0, 0.0);
+                    for b in 0..c {
+                        let (s0, s1) = (b * ny + c0, b * ny + c1);
+                        acc += complex_dot(
+                            &self.spec_re[e + s0..e + s1],
+                            &self.spec_im[e + s0..e + s1],
+                            &sr[s0..s1],
+                            &si[s0..s1],
+                        );
+                    }
+                    self.field[r * nk + k] = acc;
                 }
-                self.field[r * nk + k] = acc;
             }
         }
         for a in 0..c {
-            for j in 0..ny {
+            for j in d0..d1 {
                 let row = &mut self.field[(a * ny + j) * nk..(a * ny + j + 1) * nk];
                 // the imaginary parts of the zero and Nyquist bins are round-off of a real kernel
                 row[0].im = 0.0;
@@ -387,7 +466,7 @@ impl super::TangentialInfluence for StripInfluence {
         let (r0, c0) = (r0.min(r1), c0.min(c1));
         let (bx, by) = (&mut self.bx[..nx * ny], &mut self.by[..nx * ny]);
         self.tangential
-            .product_rows(&[tx, ty], &mut [bx, by], 0, nx);
+            .product_cols(&[tx, ty], &mut [bx, by], (0, nx), (c0, c1), (c0, c1));
         for i in r0..r1 {
             for j in 0..ny {
                 let e = i * ny + j;

@@ -100,3 +100,76 @@ fn default_patch_sizes() {
         );
     }
 }
+
+/// The steady creep curve and the normal patch of the default model at its wheel load on
+/// the fe-patch against the half-space on the same grid (validation/contact_patch.md, the
+/// creep curve: registered within 3 %). Builds the default fe-patch (about 13 minutes, 18 GB)
+/// unless it is cached. `cargo test --profile test-opt --lib creep_curve_on_the_fe_patch --
+/// --ignored --nocapture`
+#[test]
+#[ignore = "builds or reads the default model's fe-patch (minutes, up to 18 GB)"]
+fn creep_curve_on_the_fe_patch() {
+    use crate::contact::report::{case_config, solve_case_on, ContactCase, TangentialLoading};
+    let m = Model::default_model();
+    let (youngs_pa, poisson) = crate::dynamics::setup::contact_steel(&m);
+    let case = |xi: f64| ContactCase {
+        wheel_radius_m: m.wheel.radius,
+        crown_radius_m: m.contact.rail_crown_radius,
+        youngs_pa,
+        poisson,
+        normal_load_n: m.vehicle.wheel_load,
+        friction: m.contact.friction,
+        tangential: TangentialLoading::Creepage(xi),
+        speed_m_per_s: m.run.speed(),
+        steps: 1,
+        grid_nx: m.contact.grid_nx,
+        grid_ny: m.contact.grid_ny,
+        grid_margin: m.contact.grid_margin,
+        ..ContactCase::default()
+    };
+    let cfg = case_config(&case(0.0)).unwrap();
+    let grid = patch_grid(&m, &cfg).unwrap();
+    let p = model_patch_cached(&m, &grid, None).unwrap();
+    let Influence::Strip(op) = refined_influence(&p) else {
+        unreachable!()
+    };
+    println!(
+        "grid {} x {}; normal-tangential coupling / direct: {:.3}; twins (m/N) rail {:?} wheel {:?}",
+        grid.nx,
+        grid.ny,
+        op.coupling_ratio(),
+        p.rail_twin_m_per_n,
+        p.wheel_twin_m_per_n
+    );
+    let mut worst = 0.0_f64;
+    for xi in [-1e-4, -2e-4, -5e-4, -1e-3, -2e-3, -4e-3, -8e-3] {
+        let hs = solve_case_on(&case(xi), None).unwrap();
+        let fe = match solve_case_on(&case(xi), Some(Influence::Strip(op.clone()))) {
+            Ok(s) => s,
+            Err(e) => panic!("fe-patch at xi {xi}: {e}"),
+        };
+        let d = fe.result.fx_n / hs.result.fx_n - 1.0;
+        worst = worst.max(d.abs());
+        println!(
+            "xi {xi:+.1e}: F_x half-space {:9.1} N, fe-patch {:9.1} N ({:+.2} %); a {:.3}/{:.3} mm, b {:.3}/{:.3} mm, p0 {:.1}/{:.1} MPa, approach {:.2}/{:.2} um, slip {:.3}/{:.3}",
+            hs.result.fx_n,
+            fe.result.fx_n,
+            100.0 * d,
+            hs.a_m * 1e3,
+            fe.a_m * 1e3,
+            hs.b_m * 1e3,
+            fe.b_m * 1e3,
+            hs.p_max_pa / 1e6,
+            fe.p_max_pa / 1e6,
+            hs.result.approach_m * 1e6,
+            fe.result.approach_m * 1e6,
+            hs.result.slip_elements as f64 / hs.result.contact_elements as f64,
+            fe.result.slip_elements as f64 / fe.result.contact_elements as f64,
+        );
+    }
+    println!("largest difference of F_x: {:.2} %", 100.0 * worst);
+    assert!(
+        worst < 0.03,
+        "creep curve on the fe-patch differs by {worst}"
+    );
+}
