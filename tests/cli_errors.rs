@@ -648,3 +648,21 @@ fn the_small_explicit_preset_warns_that_its_mesh_is_in_the_band() {
         "{err}"
     );
 }
+
+/// The fe-patch is the reduced engine's: the explicit engine refuses it by its key before any
+/// work (no patch is built), by `explicit` and by `passage --engine explicit` alike.
+#[test]
+fn the_explicit_engine_refuses_the_fe_patch_by_its_key() {
+    for args in [
+        &["explicit", "--set", "contact.influence=fe-patch"][..],
+        &[
+            "passage",
+            "--engine",
+            "explicit",
+            "--set",
+            "contact.influence=fe-patch",
+        ][..],
+    ] {
+        assert_clean_error(args, &["contact.influence", "fe-patch", "reduced engine"]);
+    }
+}

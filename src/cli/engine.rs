@@ -32,9 +32,6 @@ pub fn explicit_model(model: &Model) -> anyhow::Result<ExplicitModel> {
     {
         eprintln!("warning: {w}");
     }
-    let pb = super::progress::bar("fe-patch");
-    corrugation::dynamics::fe_patch::prepare(model, Some(&pb)).context("the contact's fe-patch")?;
-    drop(pb);
     ExplicitModel::new(model, ExplicitOptions::from_model(model))
         .context("building the explicit FE model")
 }

@@ -90,7 +90,6 @@ pub fn run_explicit(
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let pb = super::progress::bar("explicit: set-up (assembly, static solves, stable step)");
-    corrugation::dynamics::fe_patch::prepare(m, Some(&pb)).context("the contact's fe-patch")?;
     let em = ExplicitModel::new(m, opts).context("building the explicit model")?;
     if let Some(w) = em
         .check_profile(m.run.speed(), profile)

@@ -113,6 +113,9 @@ pub enum ExplicitError {
         /// What to change.
         advice: &'static str,
     },
+    /// `contact.influence = "fe-patch"` asked of the explicit engine.
+    #[error("contact.influence = \"fe-patch\": not available on the explicit engine (its contact sees only the structures' one-step compliance, beside which the fe-patch's split, a negative uniform compliance of the global mesh's local share, is not positive definite; docs/theory.md §6.9): run the reduced engine, or set contact.influence = \"half-space\"")]
+    FePatch,
     /// `explicit.safety` out of its range.
     #[error("explicit.safety = {safety} is out of range: allowed above 0, at most 1 (the fraction of the critical step used)")]
     Safety {

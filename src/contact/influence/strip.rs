@@ -56,7 +56,7 @@ pub fn half_space_kernel(
 /// Layout: the kernel spectra and the source spectra are stored as separate real and
 /// imaginary arrays, frequency-major (`[k][row][source]` and `[k][source]`), so that the
 /// dense product of one frequency is a run of contiguous dot products over the source
-/// columns that carry traction (four partial sums each, [`complex_dot`]).
+/// columns that carry traction (four partial sums each).
 #[derive(Clone)]
 pub struct StripConvolver {
     nx: usize,
