@@ -666,3 +666,22 @@ fn the_explicit_engine_refuses_the_fe_patch_by_its_key() {
         assert_clean_error(args, &["contact.influence", "fe-patch", "reduced engine"]);
     }
 }
+
+/// An fe-patch whose submodels would not fit (beyond the submodels' DOF bound, or the
+/// machine's memory) is refused before it is built, naming the grid keys (a 64 × 64 grid:
+/// about 2.4 M DOFs and 90 GB by the estimate).
+#[test]
+fn an_fe_patch_beyond_the_machine_is_refused_before_it_is_built() {
+    assert_clean_error(
+        &[
+            "contact",
+            "--set",
+            "contact.influence=fe-patch",
+            "--set",
+            "contact.grid_nx=64",
+            "--set",
+            "contact.grid_ny=64",
+        ],
+        &["fe-patch", "GB", "contact.grid_nx", "half-space"],
+    );
+}

@@ -82,6 +82,14 @@ impl CacheCmd {
                 corrugation::eigen::cache::quote_names(&survey.others)
             );
         }
+        if survey.fe_patches > 0 {
+            eprintln!(
+                "fe-patches in {}: {} ({:.3} GB; contact.influence = \"fe-patch\", rebuilt when removed by hand)",
+                cache.dir().join(corrugation::eigen::cache::FE_PATCH_DIR).display(),
+                survey.fe_patches,
+                bytes_to_gb(survey.fe_patch_bytes)
+            );
+        }
         let entries = cache.entries()?;
         let total: u64 = entries.iter().map(|e| e.bytes).sum();
         eprintln!(

@@ -25,16 +25,29 @@ use crate::progress::Progress;
 use crate::structure::contact_patch::of_model::{
     model_patch, patch_dofs, patches, ModelPatch, PatchGrid, PASSAGE_REFINE,
 };
-use crate::structure::contact_patch::StripKernel;
+use crate::structure::contact_patch::{StripKernel, MAX_PATCH_DOFS};
 
 use super::DynamicsError;
 
-/// Measured cost of a patch submodel per free DOF on two cores: wall time (s) and peak
-/// memory (bytes) of the larger submodel — a 26 × 19 grid's rail head (373,002 DOFs) took
-/// 262 s and the two submodels, built one after the other, peaked at 11.2 GB
-/// (validation/contact_patch.md, P2 at 100 kN).
-const SECONDS_PER_DOF: f64 = 7.0e-4;
-const PEAK_BYTES_PER_DOF: f64 = 3.0e4;
+/// Measured cost of a patch per free DOF on two cores: wall time (s) per DOF of both
+/// submodels together, and peak memory (bytes) per DOF of the larger — the default model's
+/// 32 × 24 grid (rail head 519,555 DOFs, tread 592,740; FE faces 0.31 mm) took 392 s and
+/// peaked at 19.8 GB while the rail head's factor was held, 38 kB per its DOF
+/// (validation/contact_patch.md, P5).
+const SECONDS_PER_DOF: f64 = 3.6e-4;
+const PEAK_BYTES_PER_DOF: f64 = 3.8e4;
+
+/// The share of the machine's memory (`MemTotal`) a patch build may be estimated to need;
+/// beyond it the build is refused before it starts.
+const MEMORY_SHARE: f64 = 0.9;
+
+/// The machine's memory (GB) from `/proc/meminfo`, where the system gives it.
+fn machine_memory_gb() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0 / 1e9)
+}
 
 /// The patches built or read in this process, by key.
 static MEMO: Mutex<Option<HashMap<String, Arc<ModelPatch>>>> = Mutex::new(None);
@@ -95,7 +108,7 @@ pub fn model_patch_cached(
         .unwrap_or_else(|e| e.into_inner())
         .clone()
         .unwrap_or_else(crate::eigen::cache::default_cache_dir)
-        .join("fe-patch")
+        .join(crate::eigen::cache::FE_PATCH_DIR)
         .join(&k);
     let dir = Some(dir);
     if let Some(p) = dir.as_deref().and_then(|d| read(d, grid)) {
@@ -104,6 +117,29 @@ pub fn model_patch_cached(
         return Ok(p);
     }
     let (seconds, gb) = build_estimate(model, grid)?;
+    let dofs = {
+        let (r, t) = patch_dofs(model, grid)?;
+        r.max(t)
+    };
+    let reason = if dofs > MAX_PATCH_DOFS {
+        Some(format!(
+            "beyond the {MAX_PATCH_DOFS} DOFs of a patch submodel"
+        ))
+    } else {
+        machine_memory_gb()
+            .filter(|&m| gb > MEMORY_SHARE * m)
+            .map(|m| format!("more than this machine's {m:.1} GB allows"))
+    };
+    if let Some(reason) = reason {
+        return Err(DynamicsError::FePatchTooLarge {
+            nx: grid.nx,
+            ny: grid.ny,
+            gb,
+            dofs,
+            seconds,
+            reason,
+        });
+    }
     if let Some(pr) = progress {
         pr.warn(&format!(
             "building the fe-patch of the {} x {} contact grid (rail head and tread submodels): \
@@ -193,7 +229,12 @@ pub fn refined_influence(p: &ModelPatch) -> Influence {
     }))
 }
 
-const MARKER: &str = "complete";
+/// The completion marker, written last; the files are the cache's
+/// ([`crate::eigen::cache::FE_PATCH_FILES`]: what it recognises as its own).
+const MARKER: &str = crate::eigen::cache::FE_PATCH_FILES[3];
+const KERNEL_FILE: &str = crate::eigen::cache::FE_PATCH_FILES[0];
+const TWINS_FILE: &str = crate::eigen::cache::FE_PATCH_FILES[1];
+const GRID_FILE: &str = crate::eigen::cache::FE_PATCH_FILES[2];
 
 /// Writes `p` into `dir`: the refined kernel `[2 nx, ny, ny, 3, 3]` (m/Pa), the twins
 /// `[2, 3, 3]` (m/N; rail, wheel), the grid and DOFs, the marker last.
@@ -202,14 +243,14 @@ fn write(dir: &Path, p: &ModelPatch) -> std::io::Result<()> {
     let k = &p.refined;
     let (nx, ny) = k.dims();
     let flat: Vec<f64> = k.values().iter().flatten().flatten().copied().collect();
-    crate::io::write_npy(&dir.join("kernel.npy"), &[2 * nx, ny, ny, 3, 3], &flat)?;
+    crate::io::write_npy(&dir.join(KERNEL_FILE), &[2 * nx, ny, ny, 3, 3], &flat)?;
     let twins: Vec<f64> = [p.rail_twin_m_per_n, p.wheel_twin_m_per_n]
         .iter()
         .flatten()
         .flatten()
         .copied()
         .collect();
-    crate::io::write_npy(&dir.join("twins.npy"), &[2, 3, 3], &twins)?;
+    crate::io::write_npy(&dir.join(TWINS_FILE), &[2, 3, 3], &twins)?;
     let meta = format!(
         "{} {} {:e} {:e} {}\n",
         nx,
@@ -218,7 +259,7 @@ fn write(dir: &Path, p: &ModelPatch) -> std::io::Result<()> {
         k.element_y_m(),
         k.n_dofs()
     );
-    crate::io::write_text(&dir.join("grid.txt"), &meta)?;
+    crate::io::write_text(&dir.join(GRID_FILE), &meta)?;
     crate::io::write_text(&dir.join(MARKER), "")
 }
 
@@ -228,7 +269,7 @@ fn read(dir: &Path, grid: &PatchGrid) -> Option<ModelPatch> {
     if !dir.join(MARKER).is_file() {
         return None;
     }
-    let meta = std::fs::read_to_string(dir.join("grid.txt")).ok()?;
+    let meta = std::fs::read_to_string(dir.join(GRID_FILE)).ok()?;
     let f: Vec<&str> = meta.split_whitespace().collect();
     let (nx, ny): (usize, usize) = (f.first()?.parse().ok()?, f.get(1)?.parse().ok()?);
     let n_dofs: usize = f.get(4)?.parse().ok()?;
@@ -239,13 +280,13 @@ fn read(dir: &Path, grid: &PatchGrid) -> Option<ModelPatch> {
         let bytes = std::fs::read(dir.join(name)).ok()?;
         npyz::NpyFile::new(&bytes[..]).ok()?.into_vec().ok()
     };
-    let flat = load("kernel.npy")?;
+    let flat = load(KERNEL_FILE)?;
     let values: Vec<[[f64; 3]; 3]> = flat
         .chunks_exact(9)
         .map(|c| std::array::from_fn(|a| std::array::from_fn(|b| c[3 * a + b])))
         .collect();
     let refined = StripKernel::from_values((nx, ny), (grid.dx_m, grid.dy_m), values, n_dofs)?;
-    let t = load("twins.npy")?;
+    let t = load(TWINS_FILE)?;
     if t.len() != 18 {
         return None;
     }

@@ -142,6 +142,23 @@ pub enum DynamicsError {
     /// The static Hertz contact under the wheel load failed.
     #[error("static Hertz contact: {0}")]
     StaticHertz(#[source] crate::contact::ContactError),
+    /// The fe-patch of a contact grid would need more memory than the machine has; refused
+    /// before it is built.
+    #[error("contact.influence = \"fe-patch\" on a {nx} x {ny} contact grid: its submodels would need about {gb:.1} GB, {dofs} DOFs and {seconds:.0} s, {reason}: coarsen the grid (contact.grid_nx, contact.grid_ny; a larger contact.grid_margin makes the elements larger) or use contact.influence = \"half-space\"")]
+    FePatchTooLarge {
+        /// Grid elements along x.
+        nx: usize,
+        /// Grid elements across.
+        ny: usize,
+        /// Estimated peak memory (GB).
+        gb: f64,
+        /// Free DOFs of the larger submodel.
+        dofs: usize,
+        /// Estimated wall time (s).
+        seconds: f64,
+        /// Which bound it exceeds.
+        reason: String,
+    },
     /// The transient contact grid of the passage could not be set up.
     #[error("contact grid: {0}")]
     ContactGrid(#[source] crate::contact::ContactError),

@@ -60,7 +60,10 @@ mod manifest;
 mod owned;
 mod read;
 pub use admin::{CacheEntryInfo, PrunePolicy, PruneReport, LEFTOVER_AGE_S};
-pub use owned::{ensure_outside_cache, quote_names, CacheSurvey, TAG_FILE, TAG_SIGNATURE};
+pub use owned::{
+    ensure_outside_cache, quote_names, CacheSurvey, FE_PATCH_DIR, FE_PATCH_FILES, TAG_FILE,
+    TAG_SIGNATURE,
+};
 
 /// An entry's frequencies (Hz), a 1-D `.npy` array.
 pub const FREQUENCIES_FILE: &str = "frequencies_hz.npy";

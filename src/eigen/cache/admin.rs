@@ -220,7 +220,7 @@ pub(super) fn touch(dir: &Path) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eigen::cache::CacheKey;
+    use crate::eigen::cache::{CacheKey, FE_PATCH_DIR};
     use faer::Mat;
 
     fn cache(name: &str) -> (ModalCache, PathBuf) {
@@ -492,6 +492,38 @@ mod tests {
             c.load(&key),
             crate::eigen::cache::CacheLookup::Hit(_)
         ));
+        fs::remove_dir_all(d).ok();
+    }
+
+    /// The store of fe-patches is the cache's: counted, not an "other" item, and it does not
+    /// keep an untagged directory from being tagged; with a foreign file inside it, it is
+    /// another item, left alone.
+    #[test]
+    fn the_fe_patch_store_is_the_caches_own() {
+        let (c, d) = cache("fe-patch");
+        let p = d
+            .join(FE_PATCH_DIR)
+            .join("0123456789abcdef0123456789abcdef");
+        fs::create_dir_all(&p).unwrap();
+        for f in crate::eigen::cache::FE_PATCH_FILES {
+            fs::write(p.join(f), b"x").unwrap();
+        }
+        fs::write(p.join("kernel.npy.tmp.123"), b"xy").unwrap();
+        let s = c.survey().unwrap();
+        assert!(
+            s.others.is_empty() && (s.fe_patches, s.fe_patch_bytes) == (1, 6),
+            "{s:?}"
+        );
+        assert!(
+            c.tag_if_cache().unwrap(),
+            "an fe-patch store keeps a cache taggable"
+        );
+        fs::write(p.join("notes.txt"), b"x").unwrap();
+        let s = c.survey().unwrap();
+        assert_eq!(
+            (s.others.clone(), s.fe_patches),
+            (vec![FE_PATCH_DIR.to_string()], 0)
+        );
         fs::remove_dir_all(d).ok();
     }
 }

@@ -11,7 +11,11 @@
 //!   hidden temporary files of auxiliary writes (`.tmp-<name>-<pid>-<n>`);
 //! * its *leftovers*: directories named `.tmp-<key>-<pid>-<n>` or `.old-<key>-<pid>-<n>` (an
 //!   interrupted write or removal) that hold nothing but such files;
-//! * its tag, the file `CACHEDIR.TAG`.
+//! * its tag, the file `CACHEDIR.TAG`;
+//! * the store of fe-patches ([`FE_PATCH_DIR`], `crate::dynamics::fe_patch`): a directory
+//!   named `fe-patch` holding nothing but patch directories (32 lower-case hex digits) that
+//!   hold nothing but the files a patch is written as (`kernel.npy`, `twins.npy`, `grid.txt`,
+//!   `complete`, and the temporary files of their atomic writes, `<name>.tmp.<pid>`).
 //!
 //! Anything else — any other file, link or directory, a key-named directory holding a
 //! subdirectory or a file of another kind — is not the cache's: it is never listed, never
@@ -38,6 +42,12 @@ use super::{
 /// Name of the cache directory's tag file.
 pub const TAG_FILE: &str = "CACHEDIR.TAG";
 
+/// Name of the store of fe-patches in the cache directory (see the module doc).
+pub const FE_PATCH_DIR: &str = "fe-patch";
+
+/// The files of one fe-patch (see the module doc).
+pub const FE_PATCH_FILES: [&str; 4] = ["kernel.npy", "twins.npy", "grid.txt", "complete"];
+
 /// The Cache Directory Tagging signature: the first line of a valid [`TAG_FILE`].
 pub const TAG_SIGNATURE: &str = "Signature: 8a477f597d28d172789f06886806bc55";
 
@@ -58,8 +68,39 @@ pub(super) enum Item {
     Entry,
     /// A `.tmp-<key>-*`/`.old-<key>-*` leftover of an interrupted write or removal.
     Leftover,
+    /// The store of fe-patches.
+    FePatches,
     /// Not the cache's: never touched.
     Other,
+}
+
+/// Whether `dir` holds nothing but fe-patch directories of fe-patch files (module doc).
+fn holds_only_fe_patches(dir: &Path) -> bool {
+    let is_patch_file = |name: &str| {
+        FE_PATCH_FILES.contains(&name)
+            || FE_PATCH_FILES.iter().any(|f| {
+                name.strip_prefix(f)
+                    .and_then(|r| r.strip_prefix(".tmp."))
+                    .is_some_and(|pid| !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit()))
+            })
+    };
+    let only = |d: &Path, ok: &dyn Fn(&fs::DirEntry) -> bool| {
+        fs::read_dir(d).is_ok_and(|rd| rd.into_iter().all(|e| e.is_ok_and(|e| ok(&e))))
+    };
+    only(dir, &|e| {
+        let name = e.file_name();
+        let Some(name) = name.to_str() else {
+            return false;
+        };
+        let hex32 =
+            name.len() == 32 && name.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'));
+        hex32
+            && e.file_type().is_ok_and(|t| t.is_dir())
+            && only(&e.path(), &|f| {
+                f.file_type().is_ok_and(|t| t.is_file())
+                    && f.file_name().to_str().is_some_and(is_patch_file)
+            })
+    })
 }
 
 /// Whether `s` is `-<digits>-<digits>`, the `-<pid>-<counter>` ending of the cache's
@@ -146,6 +187,8 @@ pub(super) fn classify(e: &fs::DirEntry) -> Item {
         Item::Entry
     } else if is_leftover_name(name) && holds_only_cache_files(&p) {
         Item::Leftover
+    } else if name == FE_PATCH_DIR && holds_only_fe_patches(&p) {
+        Item::FePatches
     } else {
         Item::Other
     }
@@ -170,6 +213,10 @@ pub struct CacheSurvey {
     pub entries: usize,
     /// Number of leftovers of interrupted writes or removals.
     pub leftovers: usize,
+    /// Number of stored fe-patches and their size (bytes).
+    pub fe_patches: usize,
+    /// Bytes of the stored fe-patches.
+    pub fe_patch_bytes: u64,
     /// Names of the items that are not the cache's (never touched), sorted.
     pub others: Vec<String>,
 }
@@ -220,6 +267,14 @@ impl ModalCache {
                 Item::Tag => {}
                 Item::Entry => s.entries += 1,
                 Item::Leftover => s.leftovers += 1,
+                Item::FePatches => {
+                    for p in fs::read_dir(e.path()).into_iter().flatten().flatten() {
+                        s.fe_patches += 1;
+                        for f in fs::read_dir(p.path()).into_iter().flatten().flatten() {
+                            s.fe_patch_bytes += f.metadata().map_or(0, |m| m.len());
+                        }
+                    }
+                }
                 Item::Other => s.others.push(e.file_name().to_string_lossy().into_owned()),
             }
         }
