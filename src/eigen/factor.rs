@@ -181,7 +181,7 @@ impl ShiftedSystem {
         let (fwd, inv): (Vec<usize>, Vec<usize>) = match ordering {
             FillOrdering::Identity => ((0..n).collect(), (0..n).collect()),
             FillOrdering::Metis => {
-                super::ordering::nested_dissection(n, sym.col_ptr(), sym.row_idx())?
+                crate::fe::ordering::nested_dissection(n, sym.col_ptr(), sym.row_idx())?
             }
             FillOrdering::Amd | FillOrdering::Auto => (Vec::new(), Vec::new()),
         };

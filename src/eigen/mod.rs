@@ -100,7 +100,6 @@ pub mod cache;
 pub mod classify;
 pub mod factor;
 pub mod lanczos;
-pub mod ordering;
 pub mod spmm;
 pub mod substructure;
 
@@ -129,7 +128,7 @@ pub enum FillOrdering {
     Amd,
     /// Keep the DOF numbering (good when nodes are numbered along a slender rail).
     Identity,
-    /// METIS multilevel nested dissection ([`ordering`]).
+    /// METIS multilevel nested dissection ([`crate::fe::ordering`]).
     Metis,
 }
 
@@ -353,7 +352,7 @@ pub enum EigenError {
     },
     /// The nested-dissection fill-reducing ordering failed.
     #[error("nested-dissection ordering failed: {0}")]
-    Ordering(#[from] ordering::OrderingError),
+    Ordering(#[from] crate::fe::ordering::OrderingError),
     /// The sparse factorisation failed.
     #[error("factorisation of K − σM failed at σ = {shift_rad2_s2:e} rad²/s²: {reason}")]
     Factorization {

@@ -21,6 +21,7 @@ pub mod hex8;
 pub mod interp;
 pub mod material;
 pub mod mtx;
+pub mod ordering;
 pub mod solve;
 pub mod spring;
 

@@ -1,27 +1,52 @@
 //! Direct sparse solution of `K u = f` for a symmetric positive definite stiffness.
 //!
-//! Sparse Cholesky `K = L Lᵀ` (faer supernodal/simplicial, fill-reducing ordering chosen
-//! by faer): symbolic analysis, then numeric factorisation, then two triangular solves.
-//! Used for static checks (deflections, reactions). Only the lower triangle of `K` is read.
+//! Sparse Cholesky `K = L Lᵀ` (faer's supernodal/simplicial factorisation): a symbolic
+//! analysis under the sparser of two fill-reducing orderings — METIS nested dissection
+//! ([`super::ordering`]) and faer's approximate minimum degree — then the numeric factorisation,
+//! then two triangular solves per right-hand side. Used for static checks (deflections,
+//! reactions) and for the contact patch's submodels, whose factors are the largest this
+//! program builds (tens of GB at the contact's element size: the ordering matters). Only the
+//! lower triangle of `K` is read.
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
+};
 use faer::sparse::SparseColMat;
-use faer::{Mat, Side};
+use faer::{Conj, Mat, Side, Spec};
 
 use super::FeError;
 
 /// A sparse Cholesky factorisation `K = L Lᵀ` of a stiffness over free DOFs, kept for many
 /// right-hand sides (the unit loads of a contact patch's influence coefficients).
 pub struct Cholesky {
-    llt: Llt<usize, f64>,
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
     n: usize,
+}
+
+/// The lower triangle's pattern (rows ≥ column) of `k` in CSC: what the ordering reads.
+fn lower_pattern(k: &SparseColMat<usize, f64>) -> (Vec<usize>, Vec<usize>) {
+    let n = k.ncols();
+    let (cp, ri) = (k.symbolic().col_ptr(), k.symbolic().row_idx());
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    let mut row_idx = Vec::with_capacity(ri.len() / 2 + n);
+    col_ptr.push(0);
+    for j in 0..n {
+        row_idx.extend(ri[cp[j]..cp[j + 1]].iter().filter(|&&r| r >= j));
+        col_ptr.push(row_idx.len());
+    }
+    (col_ptr, row_idx)
 }
 
 impl Cholesky {
     /// Factorises `K` (N/m, square, symmetric; only the lower triangle is read). Fails with
     /// [`FeError::NotPositiveDefinite`] when K is singular or indefinite (unconstrained
-    /// rigid-body motion), and [`FeError::DimensionMismatch`] when K is not square.
+    /// rigid-body motion), and [`FeError::DimensionMismatch`] when K is not square. The
+    /// ordering is whichever of nested dissection and minimum degree gives the smaller factor
+    /// (minimum degree alone when METIS cannot order the graph).
     pub fn new(k: &SparseColMat<usize, f64>) -> Result<Self, FeError> {
         let n = k.nrows();
         if k.ncols() != n {
@@ -31,15 +56,64 @@ impl Cholesky {
                 got: k.ncols(),
             });
         }
-        let symbolic = SymbolicLlt::try_new(k.symbolic(), Side::Lower)?;
-        let llt = Llt::try_new_with_symbolic(symbolic, k.as_ref(), Side::Lower)
-            .map_err(FeError::NotPositiveDefinite)?;
-        Ok(Cholesky { llt, n })
+        let analyse = |ordering| {
+            factorize_symbolic_cholesky(
+                k.symbolic(),
+                Side::Lower,
+                ordering,
+                CholeskySymbolicParams::default(),
+            )
+        };
+        let amd = analyse(SymmetricOrdering::Amd)?;
+        let (cp, ri) = lower_pattern(k);
+        let symbolic = match super::ordering::nested_dissection(n, &cp, &ri) {
+            Ok((fwd, inv)) => {
+                let perm = faer::perm::PermRef::new_checked(&fwd, &inv, n);
+                let nd = analyse(SymmetricOrdering::Custom(perm))?;
+                if nd.len_val() < amd.len_val() {
+                    nd
+                } else {
+                    amd
+                }
+            }
+            Err(_) => amd,
+        };
+        drop((cp, ri));
+        let par = faer::get_global_parallelism();
+        let mut values = Vec::new();
+        values
+            .try_reserve_exact(symbolic.len_val())
+            .map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
+        values.resize(symbolic.len_val(), 0.0);
+        let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Spec::default());
+        let mut mem =
+            MemBuffer::try_new(req).map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
+        symbolic
+            .factorize_numeric_llt(
+                &mut values,
+                k.as_ref(),
+                Side::Lower,
+                LltRegularization::default(),
+                par,
+                MemStack::new(&mut mem),
+                Spec::default(),
+            )
+            .map_err(|e| FeError::NotPositiveDefinite(faer::sparse::linalg::LltError::Numeric(e)))?;
+        Ok(Cholesky {
+            symbolic,
+            values,
+            n,
+        })
     }
 
     /// Number of free DOFs.
     pub fn dim(&self) -> usize {
         self.n
+    }
+
+    /// Entries of the factor `L` (its memory is eight bytes each).
+    pub fn factor_len(&self) -> usize {
+        self.values.len()
     }
 
     /// Overwrites each column of `rhs` (loads, N; `dim()` rows) with the displacements (m).
@@ -53,7 +127,16 @@ impl Cholesky {
                 got: rhs.nrows(),
             });
         }
-        self.llt.solve_in_place(rhs.as_mut());
+        let par = faer::get_global_parallelism();
+        let req = self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), par);
+        let mut mem =
+            MemBuffer::try_new(req).map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            rhs.as_mut(),
+            par,
+            MemStack::new(&mut mem),
+        );
         let finite = (0..rhs.ncols()).all(|c| (0..self.n).all(|i| rhs[(i, c)].is_finite()));
         if !finite {
             return Err(FeError::NotFinite);

@@ -1,11 +1,12 @@
-//! Nested-dissection fill-reducing ordering (METIS `METIS_NodeND`) for the sparse LDLᵀ of
-//! `K − σM`.
+//! Nested-dissection fill-reducing ordering (METIS `METIS_NodeND`) for the sparse
+//! factorisations of both the eigen-solver (the LDLᵀ of `K − σM`, `crate::eigen::factor`) and
+//! the static solves ([`super::solve::Cholesky`]: the contact patch's submodels).
 //!
 //! George's nested dissection (SIAM J. Numer. Anal. 10 (1973) 345–363) in the multilevel form
 //! of Karypis & Kumar (SIAM J. Sci. Comput. 20 (1998) 359–392): recursively remove a small
 //! vertex separator of the matrix graph and number it last. On the slender rail the
 //! separators are rail cross-sections and sleepers, and the factor of the default track holds
-//! 17 % fewer entries than with AMD (figures in [`super::factor`]).
+//! 17 % fewer entries than with AMD (figures in `crate::eigen::factor`).
 //!
 //! METIS (Apache-2.0) is compiled from the sources vendored in the `metis-sys` crate (C, built
 //! with `cc`; no system library needed). METIS compresses vertices with identical closed
