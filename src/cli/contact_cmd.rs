@@ -121,10 +121,11 @@ impl ContactCmd {
         // the model's influence coefficients (`contact.influence`): the fe-patch's refined
         // submodels, built on first use and kept beside the modes
         let cfg = case_config(&case).context("the contact grid")?;
+        let hertz_b_m = corrugation::dynamics::setup::static_hertz(&m, m.vehicle.wheel_load)?.b_m;
         let progress = super::progress::bar("contact");
         let op = corrugation::dynamics::fe_patch::influence_for(
             &m,
-            &cfg,
+            (&cfg, hertz_b_m),
             corrugation::dynamics::fe_patch::Beside::Nothing,
             Some(&progress),
         )

@@ -60,17 +60,18 @@ pub fn use_cache_dir(dir: &Path) {
     *DIR.lock().unwrap_or_else(|e| e.into_inner()) = Some(dir.to_path_buf());
 }
 
-/// The fe-patch grid of a passage's contact configuration `cfg` for `model`.
-pub fn patch_grid(model: &Model, cfg: &TransientConfig) -> Result<PatchGrid, DynamicsError> {
-    let hertz = super::setup::static_hertz(model, model.vehicle.wheel_load)?;
-    Ok(PatchGrid {
+/// The fe-patch grid of a passage's contact configuration `cfg`, its twins loaded with the
+/// lateral weights of the static Hertz patch of semi-axis `hertz_b_m` (m; the model's at its
+/// wheel load, `dynamics::setup::static_hertz`).
+pub fn patch_grid(cfg: &TransientConfig, hertz_b_m: f64) -> PatchGrid {
+    PatchGrid {
         nx: cfg.grid.nx,
         ny: cfg.grid.ny,
         dx_m: cfg.grid.dx(),
         dy_m: cfg.grid.dy(),
-        hertz_half_width_m: hertz.b_m,
+        hertz_half_width_m: hertz_b_m,
         refine: PASSAGE_REFINE,
-    })
+    }
 }
 
 /// The estimated wall time (s) and peak memory (GB) of building the patch of `grid`.
@@ -164,14 +165,19 @@ pub fn model_patch_cached(
     Ok(p)
 }
 
-/// Builds (or reads) the fe-patch of the model's own contact grid before any passage, with
-/// `progress`; nothing for the half-space. The passages then find it in memory.
-pub fn prepare(model: &Model, progress: Option<&dyn Progress>) -> Result<(), DynamicsError> {
+/// Builds (or reads) the fe-patch of the model's own contact configuration `cfg` (static
+/// Hertz semi-axis `hertz_b_m`, m) before any passage, with `progress`; nothing for the
+/// half-space. The passages then find it in memory.
+pub fn prepare(
+    model: &Model,
+    cfg: &TransientConfig,
+    hertz_b_m: f64,
+    progress: Option<&dyn Progress>,
+) -> Result<(), DynamicsError> {
     if model.contact.influence == ContactInfluence::HalfSpace {
         return Ok(());
     }
-    let cfg = super::setup::contact_config_for(model, model.run.speed())?;
-    model_patch_cached(model, &patch_grid(model, &cfg)?, progress)?;
+    model_patch_cached(model, &patch_grid(cfg, hertz_b_m), progress)?;
     Ok(())
 }
 
@@ -185,18 +191,19 @@ pub enum Beside {
     Nothing,
 }
 
-/// The influence operators of a contact on `cfg`'s grid: `None` for the half-space (the
-/// contact builds its own), the model's fe-patch otherwise, split or not as `beside` says.
+/// The influence operators of a contact on `cfg`'s grid (its twins loaded as the static
+/// Hertz patch of semi-axis `hertz_b_m`, m): `None` for the half-space (the contact builds its
+/// own), the model's fe-patch otherwise, split or not as `beside` says.
 pub fn influence_for(
     model: &Model,
-    cfg: &TransientConfig,
+    (cfg, hertz_b_m): (&TransientConfig, f64),
     beside: Beside,
     progress: Option<&dyn Progress>,
 ) -> Result<Option<Influence>, DynamicsError> {
     if model.contact.influence == ContactInfluence::HalfSpace {
         return Ok(None);
     }
-    let p = model_patch_cached(model, &patch_grid(model, cfg)?, progress)?;
+    let p = model_patch_cached(model, &patch_grid(cfg, hertz_b_m), progress)?;
     Ok(Some(match beside {
         Beside::GlobalModel => influence_of(&p),
         Beside::Nothing => refined_influence(&p),

@@ -754,7 +754,9 @@ pub fn passage_contact(
     check_speed(speed_m_per_s)?;
     let mut cfg = contact_config_for(model, speed_m_per_s)?;
     cfg.grid = passage_grid(&cfg, profile, widening)?;
-    match super::fe_patch::influence_for(model, &cfg, super::fe_patch::Beside::GlobalModel, None)? {
+    let hertz_b_m = static_hertz(model, model.vehicle.wheel_load)?.b_m;
+    let beside = super::fe_patch::Beside::GlobalModel;
+    match super::fe_patch::influence_for(model, (&cfg, hertz_b_m), beside, None)? {
         None => TransientRolling::new(cfg),
         Some(op) => TransientRolling::with_influence(cfg, op),
     }

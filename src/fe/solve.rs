@@ -86,8 +86,7 @@ impl Cholesky {
             .map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
         values.resize(symbolic.len_val(), 0.0);
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Spec::default());
-        let mut mem =
-            MemBuffer::try_new(req).map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
+        let mut mem = MemBuffer::try_new(req).map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
         symbolic
             .factorize_numeric_llt(
                 &mut values,
@@ -98,7 +97,9 @@ impl Cholesky {
                 MemStack::new(&mut mem),
                 Spec::default(),
             )
-            .map_err(|e| FeError::NotPositiveDefinite(faer::sparse::linalg::LltError::Numeric(e)))?;
+            .map_err(|e| {
+                FeError::NotPositiveDefinite(faer::sparse::linalg::LltError::Numeric(e))
+            })?;
         Ok(Cholesky {
             symbolic,
             values,
@@ -128,9 +129,10 @@ impl Cholesky {
             });
         }
         let par = faer::get_global_parallelism();
-        let req = self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), par);
-        let mut mem =
-            MemBuffer::try_new(req).map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
+        let req = self
+            .symbolic
+            .solve_in_place_scratch::<f64>(rhs.ncols(), par);
+        let mut mem = MemBuffer::try_new(req).map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
         LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
             Conj::No,
             rhs.as_mut(),

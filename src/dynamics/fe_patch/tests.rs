@@ -83,10 +83,13 @@ fn the_operators_carry_the_twins_as_a_negative_uniform_compliance() {
 fn default_patch_sizes() {
     let m = Model::default_model();
     let cfg = crate::dynamics::setup::contact_config_for(&m, m.run.speed()).unwrap();
+    let b = crate::dynamics::setup::static_hertz(&m, m.vehicle.wheel_load)
+        .unwrap()
+        .b_m;
     for refine in 1..=3 {
         let grid = PatchGrid {
             refine,
-            ..patch_grid(&m, &cfg).unwrap()
+            ..patch_grid(&cfg, b)
         };
         let (r, t) = patch_dofs(&m, &grid).unwrap();
         let (s, gb) = build_estimate(&m, &grid).unwrap();
@@ -128,7 +131,10 @@ fn creep_curve_on_the_fe_patch() {
         ..ContactCase::default()
     };
     let cfg = case_config(&case(0.0)).unwrap();
-    let grid = patch_grid(&m, &cfg).unwrap();
+    let b = crate::dynamics::setup::static_hertz(&m, m.vehicle.wheel_load)
+        .unwrap()
+        .b_m;
+    let grid = patch_grid(&cfg, b);
     let p = model_patch_cached(&m, &grid, None).unwrap();
     let Influence::Strip(op) = refined_influence(&p) else {
         unreachable!()
