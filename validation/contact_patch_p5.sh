@@ -3,8 +3,8 @@
 # default model (RPM3) and its RPM1 variant, 140 km/h, smooth rail and the 10 um trial.
 # Usage: bash validation/contact_patch_p5.sh [OUT] (default validation/out/contact_patch), then
 # python3 validation/contact_patch_p5.py OUT. Build first: cargo build --release.
-# Cost: the first fe-patch run builds the patch of the 32 x 24 grid (about 6.5 minutes, 20 GB
-# peak); each grow on the fe-patch builds one more for its lengthened grid.
+# Cost: the first fe-patch run builds the patch of the 32 x 24 grid (about 95 s, 10 GB peak);
+# each grow on the fe-patch builds one more for its lengthened grid.
 set -u
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 B=${CORRUGATION_BIN:-$ROOT/target/release/corrugation}

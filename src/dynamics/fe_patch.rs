@@ -31,11 +31,12 @@ use super::DynamicsError;
 
 /// Measured cost of a patch per free DOF on two cores: wall time (s) per DOF of both
 /// submodels together, and peak memory (bytes) per DOF of the larger — the default model's
-/// 32 × 24 grid (rail head 519,555 DOFs, tread 592,740; FE faces 0.31 mm) took 392 s and
-/// peaked at 19.8 GB while the rail head's factor was held, 38 kB per its DOF
-/// (validation/contact_patch.md, P5).
-const SECONDS_PER_DOF: f64 = 3.6e-4;
-const PEAK_BYTES_PER_DOF: f64 = 3.8e4;
+/// 32 × 24 grid (rail head 519,555 DOFs, tread 592,740; FE faces 0.31 mm) took 94.9 s and
+/// peaked at 9.74 GB with the nested-dissection ordering (392 s and 19.8 GB with minimum
+/// degree; validation/contact_patch.md, P5): 8.5e-5 s per DOF and 16.4 kB per DOF of the
+/// tread, rounded up.
+const SECONDS_PER_DOF: f64 = 9.0e-5;
+const PEAK_BYTES_PER_DOF: f64 = 1.8e4;
 
 /// The share of the machine's memory (`MemTotal`) a patch build may be estimated to need;
 /// beyond it the build is refused before it starts.
