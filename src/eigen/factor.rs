@@ -14,7 +14,7 @@
 //! `λ = ω²` of `K φ = λ M φ` with `λ < σ`.
 //!
 //! **Ordering and solves.** The fill-reducing ordering is METIS nested dissection
-//! ([`super::ordering`]), AMD or the given numbering; `Auto` keeps the one with the smallest
+//! ([`crate::fe::ordering`]), AMD or the given numbering; `Auto` keeps the one with the smallest
 //! factor. Block solves split their right-hand sides into concurrent column groups
 //! (`column_groups`). Measured factor sizes and solve costs: docs/performance.md §3.1.
 //!
