@@ -685,3 +685,23 @@ fn an_fe_patch_beyond_the_machine_is_refused_before_it_is_built() {
         &["fe-patch", "GB", "contact.grid_nx", "half-space"],
     );
 }
+
+/// The fe-patch needs the residual flexibilities (its split takes the global mesh's share of
+/// the local compliance off the contact, and that share is in them): refused with the key at
+/// the model's load, before any work.
+#[test]
+fn the_fe_patch_without_the_residual_flexibility_is_refused_by_its_key() {
+    for key in ["run.residual_flexibility", "run.wheel_residual_flexibility"] {
+        let set = format!("{key}=false");
+        assert_clean_error(
+            &[
+                "passage",
+                "--set",
+                "contact.influence=fe-patch",
+                "--set",
+                &set,
+            ],
+            &[key, "fe-patch"],
+        );
+    }
+}

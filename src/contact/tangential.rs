@@ -127,10 +127,11 @@ pub struct TangentialSolver {
     pub cg_iterations: usize,
     /// Influence products (FFT pairs) used by the last solve.
     pub products: usize,
-    /// `c_x ΔA` (m/Pa, ≥ 0): uniform x displacement per unit traction summed over the grid
-    /// (series compliance times element area, module doc); 0 = none.
+    /// `c_x ΔA` (m/Pa): uniform x displacement per unit traction summed over the grid
+    /// (series compliance times element area, module doc; negative with the fe-patch's split,
+    /// the operator then positive definite only with the patch's own compliance); 0 = none.
     pub uniform_x_m_per_pa: f64,
-    /// `c_y ΔA` (m/Pa, ≥ 0), as [`Self::uniform_x_m_per_pa`] for y.
+    /// `c_y ΔA` (m/Pa), as [`Self::uniform_x_m_per_pa`] for y.
     pub uniform_y_m_per_pa: f64,
 }
 
@@ -599,8 +600,12 @@ impl TangentialSolver {
     ) -> Result<usize, ContactError> {
         let n = g.len();
         let gmax = g.iter().cloned().fold(0.0, f64::max);
-        // the rank-one terms add at most c ΔA n to the largest eigenvalue
-        let c_max = self.uniform_x_m_per_pa.max(self.uniform_y_m_per_pa);
+        // the rank-one terms add at most c ΔA n to the largest eigenvalue (a negative one, the
+        // fe-patch's split, only lowers it: the bound without it stays a bound)
+        let c_max = self
+            .uniform_x_m_per_pa
+            .max(self.uniform_y_m_per_pa)
+            .max(0.0);
         let step = 1.0 / (conv.lambda_max_t() + c_max * n as f64);
         // reuse the CG scratch: (dx_, dy_) = extrapolated point y, (qx, qy) = new iterate
         self.dx_.copy_from_slice(tx);

@@ -248,6 +248,13 @@ impl TransientRolling {
         Ok(())
     }
 
+    /// The influence operators' own uniform compliance (m/N; x, y, normal): 0 on the
+    /// half-space, the fe-patch's split (negative) on its operators ([`Influence::uniform`]);
+    /// the solvers add it to the series compliance.
+    pub fn uniform_compliance(&self) -> [f64; 3] {
+        self.conv.uniform()
+    }
+
     /// The series compliance `(c_x, c_y, c_z)` (m/N) set by [`Self::set_series_compliance`].
     pub fn series_compliance(&self) -> [f64; 3] {
         self.series_c

@@ -50,8 +50,13 @@ fn machine_memory_gb() -> Option<f64> {
     Some(kb * 1024.0 / 1e9)
 }
 
-/// The patches built or read in this process, by key.
-static MEMO: Mutex<Option<HashMap<String, Arc<ModelPatch>>>> = Mutex::new(None);
+/// One key's patch: empty until built or read; locked while it is being built, so that a
+/// second passage needing the same patch waits for it instead of building it again.
+type Slot = Arc<Mutex<Option<Arc<ModelPatch>>>>;
+
+/// The patches built or read in this process, by key (the map's lock is held only to find or
+/// add a slot, never across a build).
+static MEMO: Mutex<Option<HashMap<String, Slot>>> = Mutex::new(None);
 /// Where patches are kept on disk (`None`: the default cache directory,
 /// [`crate::eigen::cache::default_cache_dir`]).
 static DIR: Mutex<Option<PathBuf>> = Mutex::new(None);
@@ -88,7 +93,12 @@ pub fn build_estimate(model: &Model, grid: &PatchGrid) -> Result<(f64, f64), Dyn
 /// The key of the patch of `model` on `grid`: a hash of what it is built from.
 fn key(model: &Model, grid: &PatchGrid) -> String {
     let (rail, tread) = patches(model, grid);
-    let text = format!("{rail:?}|{tread:?}|{:?}", grid.hertz_half_width_m.to_bits());
+    // the program version: a change to the meshers or the condensation makes a new entry
+    let text = format!(
+        "{}|{rail:?}|{tread:?}|{:?}",
+        env!("CARGO_PKG_VERSION"),
+        grid.hertz_half_width_m.to_bits()
+    );
     blake3::hash(text.as_bytes()).to_hex()[..32].to_string()
 }
 
@@ -100,9 +110,18 @@ pub fn model_patch_cached(
     progress: Option<&dyn Progress>,
 ) -> Result<Arc<ModelPatch>, DynamicsError> {
     let k = key(model, grid);
-    let mut memo = MEMO.lock().unwrap_or_else(|e| e.into_inner());
-    let memo = memo.get_or_insert_with(HashMap::new);
-    if let Some(p) = memo.get(&k) {
+    let slot: Slot = MEMO
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .get_or_insert_with(HashMap::new)
+        .entry(k.clone())
+        .or_default()
+        .clone();
+    // Held across the build. The build runs on its own thread and thread pool (below), so
+    // this thread blocks here without taking other rayon work (a sweep's next passage, which
+    // might want this very slot).
+    let mut slot = slot.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(p) = slot.as_ref() {
         return Ok(p.clone());
     }
     let dir = DIR
@@ -115,7 +134,7 @@ pub fn model_patch_cached(
     let dir = Some(dir);
     if let Some(p) = dir.as_deref().and_then(|d| read(d, grid)) {
         let p = Arc::new(p);
-        memo.insert(k, p.clone());
+        *slot = Some(p.clone());
         return Ok(p);
     }
     let (seconds, gb) = build_estimate(model, grid)?;
@@ -150,7 +169,7 @@ pub fn model_patch_cached(
         ));
         pr.stage("fe-patch influence coefficients", 1);
     }
-    let p = Arc::new(model_patch(model, grid)?);
+    let p = Arc::new(build_apart(model, grid)?);
     if let Some(pr) = progress {
         pr.done(1);
         pr.finish();
@@ -162,8 +181,28 @@ pub fn model_patch_cached(
             }
         }
     }
-    memo.insert(k, p.clone());
+    *slot = Some(p.clone());
     Ok(p)
+}
+
+/// [`model_patch`] on a thread of its own with a thread pool of its own (as many threads as
+/// the global pool): its factorisations' parallel work never runs the caller's pending rayon
+/// tasks, nor the caller theirs.
+fn build_apart(model: &Model, grid: &PatchGrid) -> Result<ModelPatch, DynamicsError> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(rayon::current_num_threads())
+        .build()
+        .map_err(|_| DynamicsError::OutOfRange {
+            name: "fe-patch build threads",
+            value: rayon::current_num_threads() as f64,
+            expected: "threads the system can start",
+        })?;
+    std::thread::scope(|s| {
+        s.spawn(|| pool.install(|| model_patch(model, grid)))
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e))
+    })
+    .map_err(DynamicsError::from)
 }
 
 /// Builds (or reads) the fe-patch of the model's own contact configuration `cfg` (static
@@ -179,6 +218,29 @@ pub fn prepare(
         return Ok(());
     }
     model_patch_cached(model, &patch_grid(cfg, hertz_b_m), progress)?;
+    Ok(())
+}
+
+/// The split takes the global twins' share of the local compliance off the contact; that
+/// share is in the passage's series compliance only with both residual flexibilities on (the
+/// rail's and the wheel's static corrections of the truncated modes). Without them the
+/// contact operator would not be positive definite: refused, naming the keys.
+fn check_global_compliance(model: &Model) -> Result<(), DynamicsError> {
+    for (name, on) in [
+        ("run.residual_flexibility", model.run.residual_flexibility),
+        (
+            "run.wheel_residual_flexibility",
+            model.run.wheel_residual_flexibility,
+        ),
+    ] {
+        if !on {
+            return Err(DynamicsError::OutOfRange {
+                name,
+                value: 0.0,
+                expected: "true with contact.influence = \"fe-patch\" (the split takes the global mesh's share of the local compliance off the contact, and that share is in the residual flexibility)",
+            });
+        }
+    }
     Ok(())
 }
 
@@ -203,6 +265,9 @@ pub fn influence_for(
 ) -> Result<Option<Influence>, DynamicsError> {
     if model.contact.influence == ContactInfluence::HalfSpace {
         return Ok(None);
+    }
+    if beside == Beside::GlobalModel {
+        check_global_compliance(model)?;
     }
     let p = model_patch_cached(model, &patch_grid(cfg, hertz_b_m), progress)?;
     Ok(Some(match beside {
@@ -295,7 +360,7 @@ fn read(dir: &Path, grid: &PatchGrid) -> Option<ModelPatch> {
         .collect();
     let refined = StripKernel::from_values((nx, ny), (grid.dx_m, grid.dy_m), values, n_dofs)?;
     let t = load(TWINS_FILE)?;
-    if t.len() != 18 {
+    if t.len() != 18 || !t.iter().all(|v| v.is_finite()) {
         return None;
     }
     let m = |o: usize| -> [[f64; 3]; 3] {

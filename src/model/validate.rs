@@ -432,6 +432,25 @@ impl Model {
             );
         }
         c.range("contact.grid_margin", k.grid_margin, 1.05, 3.0, "(-)")?;
+        // The fe-patch's split takes the global mesh's share of the local compliance off the
+        // contact; that share is in the residual flexibilities (docs/theory.md §6.9).
+        if k.influence == super::ContactInfluence::FePatch {
+            for (key, on) in [
+                ("run.residual_flexibility", self.run.residual_flexibility),
+                (
+                    "run.wheel_residual_flexibility",
+                    self.run.wheel_residual_flexibility,
+                ),
+            ] {
+                if !on {
+                    return c.fail(
+                        key,
+                        "false".to_string(),
+                        "true with contact.influence = \"fe-patch\" (its split takes the global mesh's share of the local contact compliance off the contact, and that share is in the residual flexibility)".to_string(),
+                    );
+                }
+            }
+        }
         Ok(())
     }
 

@@ -487,11 +487,13 @@ impl StripKernel {
         )
     }
 
-    /// The sum of two kernels on the same grid (m/Pa): the displacement difference of two
-    /// bodies pressed together, each kernel in the rail's frame with the traction on the rail
-    /// (the tread's turned over, [`tread::TreadPatch::kernel`]). The normal–tangential
-    /// couplings add as they are: each body's is stated for its own inward normal, so the sum
-    /// is the coupling of the approach. `None` if the grids differ.
+    /// The kernel of two bodies pressed together (m/Pa): the displacement difference per
+    /// traction on the first body (the rail), each kernel in the rail's frame (the tread's
+    /// turned over, [`tread::TreadPatch::kernel`]) with its own inward normal. The second body
+    /// carries the opposite tangential traction and the same pressure, so the tangential and
+    /// the normal terms add (`K¹_tt + K²_tt`, `K¹_nn + K²_nn`) and the normal–tangential
+    /// couplings subtract (`K¹_tn − K²_tn`, `K¹_nt − K²_nt`): they cancel for two identical
+    /// bodies (Kalker's quasi-identity). `None` if the grids differ.
     pub fn sum(&self, other: &StripKernel) -> Option<StripKernel> {
         if (self.nx, self.ny) != (other.nx, other.ny)
             || self.element_m != other.element_m
@@ -501,9 +503,11 @@ impl StripKernel {
         }
         let mut out = self.clone();
         for (c, o) in out.c.iter_mut().zip(&other.c) {
-            for (row, orow) in c.iter_mut().zip(o) {
-                for (v, ov) in row.iter_mut().zip(orow) {
-                    *v += ov;
+            for (a, (row, orow)) in c.iter_mut().zip(o).enumerate() {
+                for (b, (v, ov)) in row.iter_mut().zip(orow).enumerate() {
+                    // a coupling is one tangential and one normal component
+                    let coupling = (a == 2) != (b == 2);
+                    *v += if coupling { -ov } else { *ov };
                 }
             }
         }

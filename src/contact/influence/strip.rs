@@ -344,6 +344,7 @@ pub struct StripInfluence {
     diag: [f64; 2],
     lambda_t: f64,
     coupling: f64,
+    asymmetry: f64,
     uniform: [f64; 3],
     /// Scratch of the box and extended products, `(nx + 1) · ny` each.
     bx: Vec<f64>,
@@ -360,8 +361,35 @@ impl StripInfluence {
         ny: usize,
         kernel: impl Fn(isize, usize, usize) -> [[f64; 3]; 3],
     ) -> Self {
+        // The solvers need a symmetric operator (reciprocity, `K_ab(o, j, j') = K_ba(−o, j',
+        // j)`); an FE kernel collocated at element centres under uniform element loads holds
+        // it only to its discretisation: its symmetric part is used (offsets within the grid;
+        // `+nx` reaches the row beyond it only), and the departure is reported.
+        let mut asym = 0.0_f64;
+        let mut largest = 0.0_f64;
+        for o in -(nx as isize - 1)..nx as isize {
+            for j in 0..ny {
+                for jp in 0..ny {
+                    let (k, m) = (kernel(o, j, jp), kernel(-o, jp, j));
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            asym = asym.max((k[a][b] - m[b][a]).abs());
+                            largest = largest.max(k[a][b].abs());
+                        }
+                    }
+                }
+            }
+        }
+        let kernel = |o: isize, j: usize, jp: usize| -> [[f64; 3]; 3] {
+            let k = kernel(o, j, jp);
+            if o.unsigned_abs() >= nx {
+                return k;
+            }
+            let m = kernel(-o, jp, j);
+            std::array::from_fn(|a| std::array::from_fn(|b| 0.5 * (k[a][b] + m[b][a])))
+        };
         let normal = StripNormal::new(nx, ny, |o, j, jp| kernel(o, j, jp)[2][2]);
-        let tangential = StripConvolver::new(nx, ny, 2, &kernel);
+        let tangential = StripConvolver::new(nx, ny, 2, kernel);
         let mut diag = [f64::MIN; 2];
         let mut rows = vec![0.0_f64; 2 * ny];
         let (mut coupled, mut direct) = (0.0_f64, 0.0_f64);
@@ -388,6 +416,7 @@ impl StripInfluence {
             diag,
             lambda_t,
             coupling: if direct > 0.0 { coupled / direct } else { 0.0 },
+            asymmetry: if largest > 0.0 { asym / largest } else { 0.0 },
             uniform: [0.0; 3],
             bx: vec![0.0; (nx + 1) * ny],
             by: vec![0.0; (nx + 1) * ny],
@@ -407,6 +436,13 @@ impl StripInfluence {
     /// The uniform compliance of [`Self::with_uniform`] (m/N; 0 unless set).
     pub fn uniform(&self) -> [f64; 3] {
         self.uniform
+    }
+
+    /// The largest departure of the given kernel from reciprocity, `|K_ab(o, j, j') − K_ba(−o,
+    /// j', j)|`, over its largest coefficient (−): what symmetrising it changed (0 for the
+    /// half-space).
+    pub fn asymmetry(&self) -> f64 {
+        self.asymmetry
     }
 
     /// The largest normal–tangential coupling coefficient over the largest direct tangential

@@ -711,6 +711,7 @@ fn strip_operators_of_the_half_space_kernel_give_the_half_space_solution() {
         half_space_kernel((dx, dy), (es, gm, cfg.poisson), 3),
     );
     assert_eq!(strip.coupling_ratio(), 0.0);
+    assert!(strip.asymmetry() < 1e-12, "{}", strip.asymmetry());
     let creep = |k: usize| -1.5e-3 + 2e-4 * (0.3 * k as f64).sin();
     let mut half = TransientRolling::new(cfg).unwrap();
     let mut fe = TransientRolling::with_influence(cfg, Influence::Strip(strip)).unwrap();

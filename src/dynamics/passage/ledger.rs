@@ -58,15 +58,17 @@ fn hertz_energy(f: f64, d: f64, cz: f64) -> f64 {
 }
 
 impl Ledger {
-    /// The ledger at the static start `st`; `f_l0` (N) the static longitudinal force.
+    /// The ledger at the static start `st`; `f_l0` (N) the static longitudinal force;
+    /// `uniform` (m/N) the contact operators' own uniform compliance (the fe-patch's split,
+    /// [`crate::contact::TransientRolling::uniform_compliance`]), part of the series springs.
     pub(super) fn start(
         e: &PassageEngine,
         (tr, wh): (&ModalVerlet, &ModalVerlet),
         st: &crate::contact::StepResult,
-        energy: bool,
+        (energy, uniform): (bool, [f64; 3]),
         f_l0: f64,
     ) -> Self {
-        let series_c = e.series_compliance;
+        let series_c = [0, 1, 2].map(|d| e.series_compliance[d] + uniform[d]);
         let mw = wh.len();
         Ledger {
             eb: EnergyBalance::default(),

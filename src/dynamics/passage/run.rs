@@ -115,7 +115,13 @@ impl PassageEngine {
         let rail_point = self.rail_point_record(n_steps);
         let nbins = ((z1 - z0) / dx).round().max(1.0) as usize;
         let wear = WearAccumulator::new(&contact, z0, nbins);
-        let ledger = Ledger::start(self, (&tr, &wh), &st, opts.energy, f0[0]);
+        let ledger = Ledger::start(
+            self,
+            (&tr, &wh),
+            &st,
+            (opts.energy, contact.uniform_compliance()),
+            f0[0],
+        );
         // the damping product's planes up to the last step's interval, with two steps to
         // spare against rounding
         let overlap = (opts.overlap && tr.splits())

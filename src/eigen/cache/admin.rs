@@ -524,6 +524,10 @@ mod tests {
             (s.others.clone(), s.fe_patches),
             (vec![FE_PATCH_DIR.to_string()], 0)
         );
+        // an empty store is not taken for the cache's
+        fs::remove_dir_all(d.join(FE_PATCH_DIR)).unwrap();
+        fs::create_dir_all(d.join(FE_PATCH_DIR)).unwrap();
+        assert_eq!(c.survey().unwrap().others, vec![FE_PATCH_DIR.to_string()]);
         fs::remove_dir_all(d).ok();
     }
 }

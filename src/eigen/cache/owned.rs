@@ -13,8 +13,8 @@
 //!   interrupted write or removal) that hold nothing but such files;
 //! * its tag, the file `CACHEDIR.TAG`;
 //! * the store of fe-patches ([`FE_PATCH_DIR`], `crate::dynamics::fe_patch`): a directory
-//!   named `fe-patch` holding nothing but patch directories (32 lower-case hex digits) that
-//!   hold nothing but the files a patch is written as (`kernel.npy`, `twins.npy`, `grid.txt`,
+//!   named `fe-patch` holding one or more patch directories (32 lower-case hex digits) and
+//!   nothing else, each holding one or more of the files a patch is written as and nothing else (`kernel.npy`, `twins.npy`, `grid.txt`,
 //!   `complete`, and the temporary files of their atomic writes, `<name>.tmp.<pid>`).
 //!
 //! Anything else — any other file, link or directory, a key-named directory holding a
@@ -74,7 +74,9 @@ pub(super) enum Item {
     Other,
 }
 
-/// Whether `dir` holds nothing but fe-patch directories of fe-patch files (module doc).
+/// Whether `dir` holds at least one fe-patch directory and nothing but fe-patch directories,
+/// each holding at least one fe-patch file and nothing else (module doc): empty folders are
+/// not taken for the cache's.
 fn holds_only_fe_patches(dir: &Path) -> bool {
     let is_patch_file = |name: &str| {
         FE_PATCH_FILES.contains(&name)
@@ -85,7 +87,10 @@ fn holds_only_fe_patches(dir: &Path) -> bool {
             })
     };
     let only = |d: &Path, ok: &dyn Fn(&fs::DirEntry) -> bool| {
-        fs::read_dir(d).is_ok_and(|rd| rd.into_iter().all(|e| e.is_ok_and(|e| ok(&e))))
+        fs::read_dir(d).is_ok_and(|rd| {
+            let items: Vec<_> = rd.collect();
+            !items.is_empty() && items.into_iter().all(|e| e.is_ok_and(|e| ok(&e)))
+        })
     };
     only(dir, &|e| {
         let name = e.file_name();

@@ -227,7 +227,7 @@ impl TreadPatch {
             );
         }
         let thick = self.rim.thickness_m;
-        if thick.is_nan() || thick <= 10.0 * a {
+        if thick.is_nan() || thick <= 10.0 * a.max(self.element_y_m) {
             return bad(
                 "rim.thickness_m",
                 self.rim.thickness_m,
