@@ -34,9 +34,11 @@ use super::DynamicsError;
 /// 32 × 24 grid (rail head 519,555 DOFs, tread 592,740; FE faces 0.31 mm) took 94.9 s and
 /// peaked at 9.74 GB with the nested-dissection ordering (392 s and 19.8 GB with minimum
 /// degree; validation/contact_patch.md, P5): 8.5e-5 s per DOF and 16.4 kB per DOF of the
-/// tread, rounded up.
+/// tread. The factor's fill grows faster than the DOFs: `predict` on the fe-patch, building the
+/// 40 µm trial's 37 × 24 patch (672,660 DOFs) beside its modal bases, peaked at 15.0 GB, about
+/// 20 kB per DOF with the bases' share taken off; hence 22 kB.
 const SECONDS_PER_DOF: f64 = 9.0e-5;
-const PEAK_BYTES_PER_DOF: f64 = 1.8e4;
+const PEAK_BYTES_PER_DOF: f64 = 2.2e4;
 
 /// The share of the machine's memory (`MemTotal`) a patch build may be estimated to need;
 /// beyond it the build is refused before it starts.
