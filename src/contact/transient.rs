@@ -349,7 +349,7 @@ impl TransientRolling {
         let mode = normal_mode(inp.normal)?;
         let nres = self
             .normal
-            .solve(&mut self.conv, &self.h, self.da, mode, &mut self.p)?;
+            .solve(self.conv.ops_mut(), &self.h, self.da, mode, &mut self.p)?;
         let contact = self.contact_elements(nres.load_n)?;
         let mu = self.cfg.friction;
         for (g, p) in self.g.iter_mut().zip(&self.p) {
@@ -638,7 +638,7 @@ impl TransientRolling {
             }
         }
         self.tang.solve(
-            &mut self.conv,
+            self.conv.ops_mut(),
             &self.g,
             &self.ex,
             &self.ey,

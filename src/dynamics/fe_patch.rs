@@ -82,13 +82,16 @@ pub fn patch_grid(cfg: &TransientConfig, hertz_b_m: f64) -> PatchGrid {
     }
 }
 
-/// The estimated wall time (s) and peak memory (GB) of building the patch of `grid`.
-pub fn build_estimate(model: &Model, grid: &PatchGrid) -> Result<(f64, f64), DynamicsError> {
+/// The estimated cost of building the patch of `grid`: wall time (s), peak memory (GB) and
+/// the free DOFs of the larger submodel.
+pub fn build_estimate(model: &Model, grid: &PatchGrid) -> Result<(f64, f64, usize), DynamicsError> {
     let (r, t) = patch_dofs(model, grid)?;
     let n = (r + t) as f64;
+    let larger = r.max(t);
     Ok((
         n * SECONDS_PER_DOF,
-        r.max(t) as f64 * PEAK_BYTES_PER_DOF / 1e9,
+        larger as f64 * PEAK_BYTES_PER_DOF / 1e9,
+        larger,
     ))
 }
 
@@ -139,11 +142,7 @@ pub fn model_patch_cached(
         *slot = Some(p.clone());
         return Ok(p);
     }
-    let (seconds, gb) = build_estimate(model, grid)?;
-    let dofs = {
-        let (r, t) = patch_dofs(model, grid)?;
-        r.max(t)
-    };
+    let (seconds, gb, dofs) = build_estimate(model, grid)?;
     let reason = if dofs > MAX_PATCH_DOFS {
         Some(format!(
             "beyond the {MAX_PATCH_DOFS} DOFs of a patch submodel"
@@ -223,34 +222,12 @@ pub fn prepare(
     Ok(())
 }
 
-/// The split takes the global twins' share of the local compliance off the contact; that
-/// share is in the passage's series compliance only with both residual flexibilities on (the
-/// rail's and the wheel's static corrections of the truncated modes). Without them the
-/// contact operator would not be positive definite: refused, naming the keys.
-fn check_global_compliance(model: &Model) -> Result<(), DynamicsError> {
-    for (name, on) in [
-        ("run.residual_flexibility", model.run.residual_flexibility),
-        (
-            "run.wheel_residual_flexibility",
-            model.run.wheel_residual_flexibility,
-        ),
-    ] {
-        if !on {
-            return Err(DynamicsError::OutOfRange {
-                name,
-                value: 0.0,
-                expected: "true with contact.influence = \"fe-patch\" (the split takes the global mesh's share of the local compliance off the contact, and that share is in the residual flexibility)",
-            });
-        }
-    }
-    Ok(())
-}
-
 /// What an fe-patch's operators stand beside.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Beside {
     /// A passage's global model (modes and series compliance): the split is applied
-    /// ([`influence_of`]).
+    /// ([`influence_of`]); the model's validation has made sure the residual flexibilities,
+    /// which carry the share the split takes off, are on.
     GlobalModel,
     /// Nothing (the `contact` command): the refined submodels alone ([`refined_influence`]).
     Nothing,
@@ -267,9 +244,6 @@ pub fn influence_for(
 ) -> Result<Option<Influence>, DynamicsError> {
     if model.contact.influence == ContactInfluence::HalfSpace {
         return Ok(None);
-    }
-    if beside == Beside::GlobalModel {
-        check_global_compliance(model)?;
     }
     let p = model_patch_cached(model, &patch_grid(cfg, hertz_b_m), progress)?;
     Ok(Some(match beside {

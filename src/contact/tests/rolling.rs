@@ -2,6 +2,8 @@
 //! Cattaneo–Mindlin, saturation, power balance and the transient response, the series
 //! compliance in rolling, and the tangential solvers against each other.
 
+use super::super::influence::strip::{half_space_kernel, StripInfluence};
+use super::super::influence::Influence;
 use super::super::transient::*;
 use super::super::*;
 use super::{reference_hertz, rolling_config};
@@ -690,6 +692,31 @@ fn force_power_difference(a: &[(f64, f64, f64)], b: &[(f64, f64, f64)]) -> (f64,
     (f, p)
 }
 
+/// The 24 × 18 grid of the solver comparisons and the strip operators of the quasi-identical
+/// half-space's kernel on it, `extra_rows` rows longer (0: the same grid).
+fn half_space_strip(extra_rows: usize) -> (TransientConfig, StripInfluence) {
+    let cfg = rolling_config(24, 18, 1.4);
+    let (nx, ny, dx, dy) = (cfg.grid.nx, cfg.grid.ny, cfg.grid.dx(), cfg.grid.dy());
+    let (es, gm) = (
+        combined_modulus(cfg.youngs_pa, cfg.poisson),
+        shear_modulus(cfg.youngs_pa, cfg.poisson),
+    );
+    let kernel = half_space_kernel((dx, dy), (es, gm, cfg.poisson), 3);
+    (cfg, StripInfluence::new(nx + extra_rows, ny, kernel))
+}
+
+/// The transient sequence of the solver comparisons (60 steps) on the half-space engine with
+/// series compliance `c` and on `fe`: (max |ΔF|/µN, max relative Δ power).
+fn against_the_half_space(c: [f64; 3], fe: &mut TransientRolling) -> (f64, f64) {
+    let cfg = *fe.config();
+    let creep = |k: usize| -1.5e-3 + 2e-4 * (0.3 * k as f64).sin();
+    let mut half = TransientRolling::new(cfg).unwrap();
+    half.set_series_compliance(c).unwrap();
+    let a = transient_sequence(&mut half, cfg.grid.dx(), 60, 0, creep);
+    let b = transient_sequence(fe, cfg.grid.dx(), 60, 0, creep);
+    force_power_difference(&b.0, &a.0)
+}
+
 #[test]
 fn strip_operators_of_the_half_space_kernel_give_the_half_space_solution() {
     // The same transient sequence (normal load varying ±10 %, a 5 µm corrugation, creepage,
@@ -697,35 +724,15 @@ fn strip_operators_of_the_half_space_kernel_give_the_half_space_solution() {
     // operators (FFT along x, dense blocks across: an independent product) built from the
     // same half-space coefficients: the solvers take either through one interface, so the
     // forces and the frictional power agree to the solvers' tolerance.
-    use super::super::influence::strip::{half_space_kernel, StripInfluence};
-    use super::super::influence::Influence;
-    let cfg = rolling_config(24, 18, 1.4);
-    let (nx, ny, dx, dy) = (cfg.grid.nx, cfg.grid.ny, cfg.grid.dx(), cfg.grid.dy());
-    let (es, gm) = (
-        combined_modulus(cfg.youngs_pa, cfg.poisson),
-        shear_modulus(cfg.youngs_pa, cfg.poisson),
-    );
-    let strip = StripInfluence::new(
-        nx,
-        ny,
-        half_space_kernel((dx, dy), (es, gm, cfg.poisson), 3),
-    );
+    let (cfg, strip) = half_space_strip(0);
     assert_eq!(strip.coupling_ratio(), 0.0);
     assert!(strip.asymmetry() < 1e-12, "{}", strip.asymmetry());
-    let creep = |k: usize| -1.5e-3 + 2e-4 * (0.3 * k as f64).sin();
-    let mut half = TransientRolling::new(cfg).unwrap();
     let mut fe = TransientRolling::with_influence(cfg, Influence::Strip(strip)).unwrap();
-    let a = transient_sequence(&mut half, dx, 60, 0, creep);
-    let b = transient_sequence(&mut fe, dx, 60, 0, creep);
-    let (f, p) = force_power_difference(&b.0, &a.0);
+    let (f, p) = against_the_half_space([0.0; 3], &mut fe);
     println!("strip vs half-space: force/µN {f:.2e}, power rel. {p:.2e}");
     assert!(f < 2e-6 && p < 2e-5, "{f:e} {p:e}");
     // an operator on another grid is refused
-    let other = StripInfluence::new(
-        nx + 1,
-        ny,
-        half_space_kernel((dx, dy), (es, gm, cfg.poisson), 3),
-    );
+    let (_, other) = half_space_strip(1);
     assert!(TransientRolling::with_influence(cfg, Influence::Strip(other)).is_err());
 }
 
@@ -734,31 +741,14 @@ fn a_negative_uniform_term_of_the_operators_adds_to_the_series_compliance() {
     // The fe-patch's split is a negative uniform compliance beside its kernel: the solvers
     // must see the sum. Half-space with series compliance c against the strip operators of
     // the half-space kernel with the uniform term −u and series compliance c + u.
-    use super::super::influence::strip::{half_space_kernel, StripInfluence};
-    use super::super::influence::Influence;
-    let cfg = rolling_config(24, 18, 1.4);
-    let (nx, ny, dx, dy) = (cfg.grid.nx, cfg.grid.ny, cfg.grid.dx(), cfg.grid.dy());
-    let (es, gm) = (
-        combined_modulus(cfg.youngs_pa, cfg.poisson),
-        shear_modulus(cfg.youngs_pa, cfg.poisson),
-    );
     let c = [2e-10, 2.5e-10, 3e-10];
     let u = [1.5e-10, 1.0e-10, 2e-10];
-    let strip = StripInfluence::new(
-        nx,
-        ny,
-        half_space_kernel((dx, dy), (es, gm, cfg.poisson), 3),
-    )
-    .with_uniform(u.map(|v| -v));
-    let creep = |k: usize| -1.5e-3 + 2e-4 * (0.3 * k as f64).sin();
-    let mut half = TransientRolling::new(cfg).unwrap();
-    half.set_series_compliance(c).unwrap();
+    let (cfg, strip) = half_space_strip(0);
+    let strip = strip.with_uniform(u.map(|v| -v));
     let mut fe = TransientRolling::with_influence(cfg, Influence::Strip(strip)).unwrap();
     fe.set_series_compliance([0, 1, 2].map(|d| c[d] + u[d]))
         .unwrap();
-    let a = transient_sequence(&mut half, dx, 60, 0, creep);
-    let b = transient_sequence(&mut fe, dx, 60, 0, creep);
-    let (f, p) = force_power_difference(&b.0, &a.0);
+    let (f, p) = against_the_half_space(c, &mut fe);
     println!(
         "strip with −u, series c + u vs half-space with c: force/µN {f:.2e}, power rel. {p:.2e}"
     );
