@@ -266,3 +266,148 @@ fn traffic_and_band_arrays() {
     assert_eq!(a, c);
     assert!(BandSpectrum::from_levels(&[0.04], &[f64::NAN], "a").is_err());
 }
+
+/// A standard normal deviate (Box–Muller) from the test's generator.
+fn normal(rng: &mut Lcg) -> f64 {
+    let u = 1.0 - rng.next();
+    (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * rng.next()).cos()
+}
+
+/// The random-process roughness of validation/roughness.md: one-sided spectrum
+/// `S(k) = A·k⁻³` (m²·m) from 2 to 120 1/m, the 40 mm band at 0 dB re 1 µm.
+struct PowerLaw {
+    /// Level constant `A` (m²/m²).
+    a: f64,
+}
+
+impl PowerLaw {
+    const K_MIN: f64 = 2.0;
+    const K_MAX: f64 = 120.0;
+
+    fn new() -> Self {
+        let [k0, k1] = Band { index: 14 }.wavenumbers(); // 39.8 mm, the 40 mm band
+        Self {
+            a: 2.0e-12 / (k0.powi(-2) - k1.powi(-2)),
+        }
+    }
+
+    fn density(&self, k: f64) -> f64 {
+        if (Self::K_MIN..=Self::K_MAX).contains(&k) {
+            self.a * k.powi(-3)
+        } else {
+            0.0
+        }
+    }
+
+    /// The band's true level (dB re 1 µm): `10 lg(A/2·(k₀⁻² − k₁⁻²) / r₀²)`.
+    fn level_db(&self, b: &Band) -> f64 {
+        let [k0, k1] = b.wavenumbers();
+        10.0 * (self.a / 2.0 * (k0.powi(-2) - k1.powi(-2)) / 1e-12).log10()
+    }
+
+    /// One record of `length_m` sampled every millimetre: `Σ_j a_j cos(2πk_j x) + b_j
+    /// sin(2πk_j x)` over the record's lines `k_j = j/length`, `a_j, b_j ~ N(0, S(k_j)/length)`,
+    /// by one inverse FFT.
+    fn record(&self, length_m: f64, rng: &mut Lcg) -> MeasuredProfile {
+        use rustfft::{num_complex::Complex64, FftPlanner};
+        let n = (length_m / 1e-3).round() as usize;
+        let dk = 1.0 / length_m;
+        let mut c = vec![Complex64::new(0.0, 0.0); n];
+        for (j, cj) in c.iter_mut().enumerate().take(n / 2).skip(1) {
+            let s = (self.density(j as f64 * dk) * dk).sqrt();
+            *cj = Complex64::new(s * normal(rng), -s * normal(rng));
+        }
+        FftPlanner::<f64>::new().plan_fft_inverse(n).process(&mut c);
+        let xs = (0..n).map(|i| i as f64 * 1e-3).collect();
+        let hs = c.iter().map(|z| z.re).collect();
+        MeasuredProfile::new(xs, hs, "random process").unwrap()
+    }
+}
+
+/// The estimator's predicted standard deviation of a band level (dB) for `segments`
+/// half-overlapping Hann segments of 4 m: `4.34·√(2.6/(n·K))`, `n` the lines in the band.
+fn predicted_sigma_db(b: &Band, segments: usize) -> f64 {
+    let [k0, k1] = b.wavenumbers();
+    let lines = (k1 - k0) * SpectrumOptions::default().segment_length_m;
+    10.0 / std::f64::consts::LN_10 * (2.6 / (lines * segments as f64)).sqrt()
+}
+
+/// R1 and R2 of validation/roughness.md: over 20 independent 40 m records of a random-process
+/// roughness, the band analysis is unbiased (mean error within 0.3 dB in every band from
+/// 160 mm to 12.5 mm) and its spread is what the record length predicts (0.5–1.6 × σ).
+#[test]
+fn a_random_process_s_band_levels_are_estimated_without_bias_and_with_the_predicted_spread() {
+    let process = PowerLaw::new();
+    let bands = third_octave_bands(0.16, 0.0125);
+    let mut rng = Lcg(20_261_130);
+    let records = 20;
+    let errors: Vec<Vec<f64>> = (0..records)
+        .map(|_| {
+            let s = process
+                .record(40.0, &mut rng)
+                .band_spectrum(&SpectrumOptions::default())
+                .unwrap();
+            bands
+                .iter()
+                .map(|b| s.level_at(b.centre_m()).unwrap() - process.level_db(b))
+                .collect()
+        })
+        .collect();
+    println!("band (mm)  true (dB)  mean error  std  predicted σ  ratio");
+    let mut misses = Vec::new();
+    for (i, b) in bands.iter().enumerate() {
+        let e: Vec<f64> = errors.iter().map(|r| r[i]).collect();
+        let mean = e.iter().sum::<f64>() / records as f64;
+        let std = (e.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (records - 1) as f64).sqrt();
+        let sigma = predicted_sigma_db(b, 19);
+        println!(
+            "{:>8.1}  {:>9.2}  {mean:>+10.3}  {std:.3}  {sigma:>11.3}  {:.2}",
+            corrugation::units::m_to_mm(b.nominal_m()),
+            process.level_db(b),
+            std / sigma
+        );
+        if mean.abs() > 0.3 {
+            misses.push(format!(
+                "{} mm: mean error {mean:+.3} dB",
+                b.nominal_m() * 1e3
+            ));
+        }
+        if !(0.5..=1.6).contains(&(std / sigma)) {
+            misses.push(format!(
+                "{} mm: spread {std:.3} dB against σ {sigma:.3} dB",
+                b.nominal_m() * 1e3
+            ));
+        }
+    }
+    assert!(misses.is_empty(), "{misses:?}");
+}
+
+/// R3 of validation/roughness.md: one 400 m record of the random-process roughness gives
+/// every band whose predicted σ is at most 0.17 dB within 0.5 dB of its true level.
+#[test]
+fn a_long_random_record_s_band_levels_are_within_half_a_decibel() {
+    let process = PowerLaw::new();
+    let mut rng = Lcg(400);
+    let s = process
+        .record(400.0, &mut rng)
+        .band_spectrum(&SpectrumOptions::default())
+        .unwrap();
+    let mut tested = 0;
+    for b in third_octave_bands(0.16, 0.0125) {
+        let error = s.level_at(b.centre_m()).unwrap() - process.level_db(&b);
+        let sigma = predicted_sigma_db(&b, 199);
+        println!(
+            "{:>6.1} mm: error {error:+.3} dB, predicted σ {sigma:.3} dB",
+            corrugation::units::m_to_mm(b.nominal_m())
+        );
+        if sigma <= 0.17 {
+            tested += 1;
+            assert!(
+                error.abs() <= 0.5,
+                "{} mm: {error:+.3} dB",
+                b.nominal_m() * 1e3
+            );
+        }
+    }
+    assert!(tested >= 10, "only {tested} bands have σ ≤ 0.17 dB");
+}
