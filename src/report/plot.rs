@@ -38,8 +38,8 @@ pub const MARKER_LIMIT: usize = 60;
 /// Size of a line plot (px) in the PNG and the SVG.
 pub const LINE_PLOT_SIZE: (u32, u32) = (900, 600);
 
-/// Size of a heat map (px) in the PNG and the SVG.
-pub const HEAT_MAP_SIZE: (u32, u32) = (1000, 650);
+/// Size of a heat map (px) in the PNG and the SVG, the strip of its style legend included.
+pub const HEAT_MAP_SIZE: (u32, u32) = (1000, 680);
 
 /// One named curve of a line plot.
 #[derive(Clone, Debug, PartialEq)]

@@ -89,8 +89,16 @@ pub(super) fn heat_on<DB: DrawingBackend>(
 ) -> Result<(), String> {
     let es = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(es)?;
-    let (w, _) = root.dim_in_pixel();
-    let (main, bar) = root.split_horizontally(w.saturating_sub(130));
+    let (w, h) = root.dim_in_pixel();
+    let rows = legend_rows(map);
+    // The style legend in a strip beneath the whole figure, so that it covers no data.
+    let (upper, strip) = if rows.is_empty() {
+        (root.clone(), None)
+    } else {
+        let (u, s) = root.split_vertically(h.saturating_sub(LEGEND_STRIP_PX));
+        (u, Some(s))
+    };
+    let (main, bar) = upper.split_horizontally(w.saturating_sub(130));
     let (mut c0, c1) =
         finite_range(map.z.iter().filter_map(|&z| colour_coordinate(map, z))).unwrap_or((0.0, 1.0));
     if map.log_colour {
@@ -100,8 +108,21 @@ pub(super) fn heat_on<DB: DrawingBackend>(
     let xe = [xc[0][0], xc[xc.len() - 1][1]];
     let mut chart = heat_cells(&main, map, (&xc, &ye), (c0, c1))?;
     overlay_lines(&main, &mut chart, map, (&xe, &ye))?;
-    line_legend(&main, map)?;
+    if let Some(strip) = strip {
+        line_legend(&strip, &rows)?;
+    }
     colour_bar(&bar, map, (c0, c1))
+}
+
+/// Height (px) of the strip beneath a heat map that holds the legend of its line styles.
+pub const LEGEND_STRIP_PX: u32 = 30;
+
+/// The rows of the style legend: each style of `map.line_legend` that a line of the map uses.
+fn legend_rows<'m>(map: &'m HeatMap<'_>) -> Vec<&'m (LineStyle, &'m str)> {
+    map.line_legend
+        .iter()
+        .filter(|(st, _)| map.lines.iter().any(|l| l.style == *st))
+        .collect()
 }
 
 /// The chart of a heat map's cells and lines (linear axes in data coordinates).
@@ -168,54 +189,46 @@ fn heat_cells<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
-/// The legend of the line styles of `map` in the lower left corner of its plot area: one row
-/// per style in `map.line_legend` that a line of the map uses, a short stroke in the style and
-/// its meaning, on a dark box like the line labels.
+/// The legend of the line styles `rows` on `strip` (the strip beneath the map): one entry
+/// per style, a short stroke in the style and its meaning, side by side on a dark box like the
+/// line labels, starting under the plot area's left edge.
 fn line_legend<DB: DrawingBackend>(
-    main: &DrawingArea<DB, Shift>,
-    map: &HeatMap<'_>,
+    strip: &DrawingArea<DB, Shift>,
+    rows: &[&(LineStyle, &str)],
 ) -> Result<(), String> {
     let es = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
-    let rows: Vec<&(LineStyle, &str)> = map
-        .line_legend
-        .iter()
-        .filter(|(st, _)| map.lines.iter().any(|l| l.style == *st))
-        .collect();
-    if rows.is_empty() {
-        return Ok(());
-    }
     let font = (FONT_FAMILY, 13).into_font().color(&WHITE);
-    let widths: Vec<u32> = rows
+    let widths: Vec<i32> = rows
         .iter()
-        .map(|(_, t)| main.estimate_text_size(t, &font).map(|(w, _)| w))
+        .map(|(_, t)| strip.estimate_text_size(t, &font).map(|(w, _)| w as i32))
         .collect::<Result<_, _>>()
         .map_err(es)?;
-    let text_w = widths.into_iter().max().unwrap_or(0) as i32;
-    let (_, h) = main.dim_in_pixel();
-    let (row_h, stroke_w, pad) = (18, 30, 6);
-    let box_w = stroke_w + text_w + 3 * pad;
-    let box_h = row_h * rows.len() as i32 + pad;
-    // Inside the plot area's lower left corner (the line labels stand at the lines' right
-    // ends): clear of the margin (15 px), the y labels (70 px) and the x labels (50 px).
-    let (x0, y1) = (15 + 70 + 8, h as i32 - 50 - 15 - 8);
-    let (x1, y0) = (x0 + box_w, y1 - box_h);
-    main.draw(&Rectangle::new(
-        [(x0, y0), (x1, y1)],
-        BLACK.mix(0.6).filled(),
-    ))
-    .map_err(es)?;
-    for (k, (st, text)) in rows.iter().enumerate() {
-        let y = y0 + pad + row_h * k as i32 + row_h / 2 - 2;
-        let (a, b) = ((x0 + pad, y), (x0 + pad + stroke_w, y));
+    let (stroke_w, pad, gap) = (30, 6, 18);
+    let box_w: i32 = widths.iter().map(|w| stroke_w + w + 2 * pad).sum::<i32>()
+        + gap * (rows.len() as i32 - 1)
+        + 2 * pad;
+    // Under the plot area: clear of the margin (15 px) and the y labels (70 px).
+    let (x0, y0) = (15 + 70, 4);
+    let y1 = LEGEND_STRIP_PX as i32 - 4;
+    strip
+        .draw(&Rectangle::new(
+            [(x0, y0), (x0 + box_w, y1)],
+            BLACK.mix(0.6).filled(),
+        ))
+        .map_err(es)?;
+    let y = (y0 + y1) / 2;
+    let mut x = x0 + pad;
+    for ((st, text), w) in rows.iter().zip(&widths) {
+        let (a, b) = ((x, y), (x + stroke_w, y));
         match st {
-            LineStyle::Solid => main.draw(&PathElement::new(vec![a, b], WHITE.stroke_width(2))),
-            LineStyle::Dashed => main.draw(&DashedPathElement::new(
+            LineStyle::Solid => strip.draw(&PathElement::new(vec![a, b], WHITE.stroke_width(2))),
+            LineStyle::Dashed => strip.draw(&DashedPathElement::new(
                 vec![a, b],
                 6,
                 5,
                 WHITE.mix(0.85).stroke_width(1),
             )),
-            LineStyle::Dotted => main.draw(&DashedPathElement::new(
+            LineStyle::Dotted => strip.draw(&DashedPathElement::new(
                 vec![a, b],
                 3,
                 4,
@@ -223,12 +236,14 @@ fn line_legend<DB: DrawingBackend>(
             )),
         }
         .map_err(es)?;
-        main.draw(&Text::new(
-            text.to_string(),
-            (x0 + 2 * pad + stroke_w, y),
-            font.clone().pos(Pos::new(HPos::Left, VPos::Center)),
-        ))
-        .map_err(es)?;
+        strip
+            .draw(&Text::new(
+                text.to_string(),
+                (x + stroke_w + pad, y),
+                font.clone().pos(Pos::new(HPos::Left, VPos::Center)),
+            ))
+            .map_err(es)?;
+        x += stroke_w + w + 2 * pad + gap;
     }
     Ok(())
 }

@@ -295,7 +295,24 @@ fn the_line_legend_names_the_styles_in_use() {
         !svg.contains("dashed_meaning"),
         "a style no line uses is left out"
     );
+    // The legend stands in the strip beneath the figure, outside the plot area.
+    for name in ["solid_meaning", "dotted_meaning"] {
+        let y = svg_text_y(&svg, name).unwrap_or_else(|| panic!("no y for {name}"));
+        assert!(
+            y >= (HEAT_MAP_SIZE.1 - super::heat::LEGEND_STRIP_PX) as f64,
+            "{name} at y = {y} px, inside the plot area"
+        );
+    }
     std::fs::remove_dir_all(d).ok();
+}
+
+/// The `y` attribute (px) of the SVG text element whose content is `text`.
+fn svg_text_y(svg: &str, text: &str) -> Option<f64> {
+    let end = svg.find(text)?;
+    let start = svg[..end].rfind("<text")?;
+    let tag = &svg[start..end];
+    let at = tag.find(" y=\"")? + 4;
+    tag[at..].split('"').next()?.parse().ok()
 }
 
 /// The legend goes where the data is not: a rising diagonal leaves the upper left free; data
