@@ -907,7 +907,7 @@ fn sharded_study_equals_one_run_and_stages_come_back_to_the_cases() {
     // relative wear grows with the damping (DampingRunner): lowest case 0, highest case 2
     assert!(
         md.contains("**Summary.** 3 case(s), 3 case–speed row(s)")
-            && md.contains("lowest wear band RMS")
+            && md.contains("Lowest wear band RMS")
             && md.contains("case 0 (fastening.vertical_damping=15000.0, at 100 km/h)")
             && md.contains("case 2 (fastening.vertical_damping=45000.0, at 100 km/h)"),
         "{md}"

@@ -180,7 +180,8 @@ impl Document {
         out.push_str(&format!("<title>{}</title>\n", escape(&self.title)));
         out.push_str(
             "<style>\nbody{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;line-height:1.45}\n\
-             table{border-collapse:collapse;margin:1em 0}th,td{border:1px solid #bbb;padding:3px 8px;text-align:right}\n\
+             table{border-collapse:collapse;margin:1em 0}th,td{border:1px solid #bbb;padding:3px 8px;text-align:left}\n\
+             th.n,td.n{text-align:right}\n\
              th{background:#eee}img{max-width:100%}figure{margin:1em 0}figcaption{color:#555;font-size:90%}\n\
              pre{background:#f4f4f4;padding:.6em;overflow-x:auto}\n</style>\n</head>\n<body>\n",
         );
@@ -190,28 +191,42 @@ impl Document {
                 Block::Heading { level, text } => {
                     out.push_str(&format!("<h{level}>{}</h{level}>\n", escape(text)));
                 }
-                Block::Paragraph(t) => out.push_str(&format!("<p>{}</p>\n", escape(t))),
+                Block::Paragraph(t) => out.push_str(&format!("<p>{}</p>\n", inline_html(t))),
                 Block::Table {
                     header,
                     rows,
                     backgrounds,
                 } => {
+                    let width = rows.iter().map(Vec::len).fold(header.len(), usize::max);
+                    // A column of numbers is right-aligned, any other left-aligned.
+                    let class: Vec<&str> = (0..width)
+                        .map(|i| {
+                            let mut cells = rows.iter().filter_map(|r| r.get(i)).peekable();
+                            let numbers = cells.peek().is_some()
+                                && cells.all(|c| c.trim().is_empty() || is_number(c));
+                            if numbers {
+                                " class=\"n\""
+                            } else {
+                                ""
+                            }
+                        })
+                        .collect();
                     out.push_str("<table>\n<tr>");
-                    for h in header {
-                        out.push_str(&format!("<th>{}</th>", escape(h)));
+                    for (i, h) in header.iter().enumerate() {
+                        out.push_str(&format!("<th{}>{}</th>", class[i], escape(h)));
                     }
                     out.push_str("</tr>\n");
                     for (k, r) in rows.iter().enumerate() {
                         out.push_str("<tr>");
-                        for i in 0..header.len().max(r.len()) {
+                        for (i, cls) in class.iter().enumerate().take(header.len().max(r.len())) {
                             let c = r.get(i).map_or("", |s| s.as_str());
                             match backgrounds.get(k).and_then(|b| b.get(i)).copied().flatten() {
                                 Some(bg) => out.push_str(&format!(
-                                    "<td style=\"background:{}\">{}</td>",
+                                    "<td{cls} style=\"background:{}\">{}</td>",
                                     escape(bg),
                                     escape(c)
                                 )),
-                                None => out.push_str(&format!("<td>{}</td>", escape(c))),
+                                None => out.push_str(&format!("<td{cls}>{}</td>", escape(c))),
                             }
                         }
                         out.push_str("</tr>\n");
@@ -247,6 +262,55 @@ impl Document {
         }
         Ok(DocFiles { markdown: md, html })
     }
+}
+
+/// Summary lines (as a command prints them, one per line, lower-case starts allowed) as one
+/// paragraph of sentences: each line's first letter in upper case, joined by `". "`, ended
+/// by a full stop.
+pub fn sentences(lines: &[String]) -> String {
+    let mut out = String::new();
+    for (i, l) in lines.iter().enumerate() {
+        if i > 0 {
+            out.push_str(". ");
+        }
+        let mut c = l.chars();
+        if let Some(first) = c.next() {
+            out.extend(first.to_uppercase());
+            out.push_str(c.as_str());
+        }
+    }
+    if !out.is_empty() && !out.ends_with('.') {
+        out.push('.');
+    }
+    out
+}
+
+/// Whether a table cell reads as one number: a decimal or exponent number, optionally signed,
+/// optionally followed by a percent sign (`42`, `+0.47`, `1.0e-5`, `0.110 %`).
+fn is_number(cell: &str) -> bool {
+    let t = cell.trim();
+    let t = t.strip_suffix('%').map_or(t, str::trim_end);
+    !t.is_empty() && t.parse::<f64>().is_ok_and(f64::is_finite)
+}
+
+/// A paragraph's text for HTML: escaped, and `**…**` pairs (the Markdown's bold) as
+/// `<strong>…</strong>`; an unpaired `**` stays as written.
+fn inline_html(text: &str) -> String {
+    let parts: Vec<&str> = text.split("**").collect();
+    if parts.len() % 2 == 0 {
+        return escape(text);
+    }
+    parts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            if i % 2 == 1 {
+                format!("<strong>{}</strong>", escape(p))
+            } else {
+                escape(p)
+            }
+        })
+        .collect()
 }
 
 /// Escapes text for HTML.
@@ -295,10 +359,41 @@ mod tests {
         let h = sample().to_html();
         assert!(h.contains("<title>Report &lt;1&gt;</title>"));
         assert!(h.contains("<p>a &amp; b</p>"));
-        assert!(h.contains("<td>x|y</td><td>42</td>"));
-        assert!(h.contains("<td>z</td><td></td>"));
+        assert!(h.contains("<td>x|y</td><td class=\"n\">42</td>"));
+        assert!(h.contains("<td>z</td><td class=\"n\"></td>"));
         assert!(h.contains("<img src=\"plots/map.png\""));
         assert!(h.contains("<style>") && !h.contains("<link") && !h.contains("<script"));
+    }
+
+    /// Columns of numbers are right-aligned, text columns left-aligned; `**bold**` in a
+    /// paragraph is bold in the HTML, an unpaired `**` is kept.
+    #[test]
+    fn numbers_right_text_left_and_bold() {
+        assert!(is_number("42") && is_number("+0.47") && is_number("1.0e-5"));
+        assert!(is_number("0.110 %") && is_number("-3%"));
+        assert!(!is_number("36.5 mm / 1065 Hz") && !is_number("no") && !is_number("%"));
+        assert!(!is_number("nan") && !is_number(""));
+        let mut d = Document::new("t");
+        d.paragraph("**Summary.** 2 < 3").paragraph("a ** b").table(
+            &["case", "name", "r"],
+            vec![
+                vec!["0".into(), "k=1".into(), "0.5 %".into()],
+                vec!["1".into(), "k=2".into(), "".into()],
+            ],
+        );
+        let h = d.to_html();
+        assert!(h.contains("<p><strong>Summary.</strong> 2 &lt; 3</p>"));
+        assert!(h.contains("<p>a ** b</p>"));
+        assert!(h.contains("<th class=\"n\">case</th><th>name</th><th class=\"n\">r</th>"));
+        assert!(h.contains("<td class=\"n\">1</td><td>k=2</td><td class=\"n\"></td>"));
+    }
+
+    #[test]
+    fn summary_lines_become_sentences() {
+        let l = vec!["2 case(s)".to_string(), "lowest F_L 8.5 N".into()];
+        assert_eq!(sentences(&l), "2 case(s). Lowest F_L 8.5 N.");
+        assert_eq!(sentences(&["done.".to_string()]), "Done.");
+        assert_eq!(sentences(&[]), "");
     }
 
     /// A shaded cell carries its background in the HTML only; the Markdown keeps its text.
@@ -314,8 +409,10 @@ mod tests {
             |_, j, c| (j == 1 && c == "light green").then_some("#c8f0c8"),
         );
         let h = d.to_html();
-        assert!(h.contains("<td>10</td><td style=\"background:#c8f0c8\">light green</td>"));
-        assert!(h.contains("<td>40</td><td>grey</td>"));
+        assert!(
+            h.contains("<td class=\"n\">10</td><td style=\"background:#c8f0c8\">light green</td>")
+        );
+        assert!(h.contains("<td class=\"n\">40</td><td>grey</td>"));
         assert!(d.to_markdown().contains("| 10 | light green |"));
     }
 

@@ -513,6 +513,8 @@ fn lines_on<DB: DrawingBackend>(
     let mut chart = ChartBuilder::on(root)
         .caption(spec.title, (FONT_FAMILY, 22))
         .margin(15)
+        // room for the last x label, centred on the axis's right end
+        .margin_right(35)
         .x_label_area_size(50)
         .y_label_area_size(85)
         .build_cartesian_2d(x0..x1, (y0 - ypad)..(y1 + ypad))

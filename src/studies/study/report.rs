@@ -5,7 +5,7 @@ use std::path::Path;
 
 use super::CaseResult;
 use super::{value_text, Case, Study};
-use crate::report::doc::Document;
+use crate::report::doc::{sentences, Document};
 use crate::report::plot::{line_plot, Series};
 use crate::studies::initiation::{
     criterion_text, indicator_cells, indicator_header, readable_cells, readable_header,
@@ -206,7 +206,7 @@ pub(super) fn write_study(
     let gk = growth_keys(cases);
     let readable = write_study_csv(study, cases, &gk, out)?;
     let mut doc = Document::new(format!("Design study: {}", study.title));
-    doc.paragraph(format!("**Summary.** {}.", summary_lines(cases).join(". ")));
+    doc.paragraph(format!("**Summary.** {}", sentences(&summary_lines(cases))));
     doc.paragraph(format!(
         "Study file {}; base model {}; {} case(s); parameters: {}.",
         study.file,

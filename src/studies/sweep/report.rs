@@ -6,7 +6,7 @@ use std::path::Path;
 use super::linspace;
 use super::{StudiesError, SweepMaps, SweepRecord};
 use crate::dynamics::coupled::{seen_by_contact, ModeAttribution};
-use crate::report::doc::Document;
+use crate::report::doc::{sentences, Document};
 use crate::report::plot::{heat_map, line_plot, HeatMap, LineStyle, OverlayLine, Series};
 use crate::studies::coupled::{attribution_columns, attribution_values};
 
@@ -399,7 +399,7 @@ pub fn summary_lines(r: &SweepRecord) -> Vec<String> {
 
 fn write_report(dir: &Path, r: &SweepRecord) -> Result<(), StudiesError> {
     let mut d = Document::new("Speed sweep: frequency selection");
-    d.paragraph(format!("**Summary.** {}.", summary_lines(r).join(". ")));
+    d.paragraph(format!("**Summary.** {}", sentences(&summary_lines(r))));
     d.paragraph(format!(
         "{} speeds from {} to {} km/h. Speed range ratio {:.3}; wavelength range ratio of the \
          dominant wear wavelength {}. Frequency selection shows as a wavelength range ratio \
