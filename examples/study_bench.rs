@@ -162,10 +162,6 @@ impl<R: PassageRunner> PassageRunner for Timed<R> {
         }
         r
     }
-
-    fn prepared(&self) -> Option<&PreparedModel> {
-        self.inner.prepared()
-    }
 }
 
 /// The step times of each substructured case and their sums (wall and process CPU, s).

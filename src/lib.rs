@@ -19,8 +19,9 @@
 //! | 0, the foundation | [`units`] (mm, µm, km/h converted to SI in one place), [`io`], [`lists`], [`progress`], [`spectral`], [`report`], [`mesh`], [`fe`], [`contact`] |
 //! | 1 | [`model`] (the TOML model file) → [`structure`] (track and wheel substructures) |
 //! | 2 | [`eigen`] (Lanczos, Sturm check, classification, modal cache) |
-//! | 3, the two passage engines | [`dynamics`] (reduced modal passage), [`explicit`] (full explicit FE passage) |
-//! | 4 | [`growth`] (trial corrugation, consistency, verdict), [`roughness`] (measured roughness, bands, forecast), [`studies`] (sweeps, studies, initiation, `roughness`, `predict`) |
+//! | 3, the passage floor | [`passage`] (what a passage is, whichever engine runs it: runner traits, rail profile, records, contact line, set-up, statics) |
+//! | 4, the two passage engines | [`dynamics`] (reduced modal passage), [`explicit`] (full explicit FE passage) |
+//! | 5 | [`growth`] (trial corrugation, consistency, verdict), [`roughness`] (measured roughness, bands, forecast), [`studies`] (sweeps, studies, initiation, `roughness`, `predict`) |
 //!
 //! Coordinates (global, SI): `x` along the rail (direction of travel), `y` lateral (positive
 //! away from the track centre, towards the field side), `z` vertical up. `z = 0` is the
@@ -38,6 +39,7 @@ pub mod io;
 pub mod lists;
 pub mod mesh;
 pub mod model;
+pub mod passage;
 pub mod progress;
 pub mod report;
 pub mod roughness;

@@ -720,7 +720,7 @@ struct FailsWhenDeep<'a> {
 impl corrugation::dynamics::PassageRecorder for FailsWhenDeep<'_> {
     fn record(
         &self,
-        speed_m_per_s: f64,
+        speed: corrugation::units::Speed,
         profile: Option<&corrugation::dynamics::RailProfile>,
     ) -> Result<corrugation::dynamics::record::PassageRecord, corrugation::dynamics::DynamicsError>
     {
@@ -732,7 +732,7 @@ impl corrugation::dynamics::PassageRecorder for FailsWhenDeep<'_> {
                     what: "a test failure over a deep profile".to_string(),
                 })
             }
-            _ => self.inner.record(speed_m_per_s, profile),
+            _ => self.inner.record(speed, profile),
         }
     }
 

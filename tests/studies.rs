@@ -768,13 +768,11 @@ fn study_runs_every_case_writes_table_and_plots_and_resumes() {
     let study = Study::load(&file).unwrap();
     assert_eq!(study.cases().len(), 6);
     let built = AtomicUsize::new(0);
-    let factory = |m: &Model| -> Result<Box<dyn PassageRunner>, BoxError> {
+    let factory = |m: &Model| -> Result<DampingRunner, BoxError> {
         built.fetch_add(1, Ordering::SeqCst);
-        Ok(Box::new(DampingRunner(
-            m.fastening.springs.vertical_damping,
-        )))
+        Ok(DampingRunner(m.fastening.springs.vertical_damping))
     };
-    let growth = |m: &Model, r: &dyn PassageRunner| -> Result<BTreeMap<String, f64>, BoxError> {
+    let growth = |m: &Model, r: &DampingRunner| -> Result<BTreeMap<String, f64>, BoxError> {
         let s = r.run(corrugation::units::Speed::from_kmh(140.0), None)?;
         Ok(BTreeMap::from([(
             "limiting_amplitude_um".to_string(),

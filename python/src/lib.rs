@@ -953,7 +953,7 @@ fn study<'py>(
     shard: Option<(usize, usize)>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use corrugation::dynamics::PassageRunner;
+    use corrugation::dynamics::prepared::PreparedModel;
     use corrugation::studies::speeds::Shard;
     let shard = match shard {
         Some((i, n)) => Shard::parse(&format!("{i}/{n}")).map_err(|e| py_err(&e.into()))?,
@@ -975,20 +975,10 @@ fn study<'py>(
         std::fs::create_dir_all(&out)?;
         let cache_dir = cache.clone().unwrap_or_else(default_cache_dir);
         let runners = CaseRunners::new(&study, &cache_dir).with_progress(p.clone());
-        let factory = |m: &Model| -> Result<Box<dyn PassageRunner>, BoxError> {
-            Ok(Box::new(runners.prepared(m)?))
-        };
+        let factory = |m: &Model| -> Result<PreparedModel, BoxError> { runners.prepared(m) };
         let growth = |m: &Model,
-                      r: &dyn PassageRunner|
+                      pm: &PreparedModel|
          -> Result<std::collections::BTreeMap<String, f64>, BoxError> {
-            let owned;
-            let pm = match r.prepared() {
-                Some(pm) => pm,
-                None => {
-                    owned = prepared(m, &cache_of(cache.clone(), &p))?;
-                    &owned
-                }
-            };
             corrugation::studies::grow::study_growth(m, pm)
         };
         let o = run_study(&study, &factory, Some(&growth), &out, shard, p.as_ref())?;

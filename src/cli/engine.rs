@@ -3,7 +3,6 @@
 //! per model), or with `--engine explicit` the full explicit FE path
 //! ([`corrugation::explicit::ExplicitModel`], docs/theory.md §8).
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use anyhow::Context;
@@ -77,23 +76,4 @@ pub fn prepared(model: &Model, cache: Option<&Path>) -> anyhow::Result<PreparedM
 /// directory when `None`), built once, then any number of passages.
 pub fn runner_for(model: &Model, cache: Option<&Path>) -> anyhow::Result<Box<dyn PassageRunner>> {
     Ok(Box::new(prepared(model, cache)?))
-}
-
-/// The growth loop of one study case ([`corrugation::studies::grow::study_growth`]). The
-/// runner's loaded modal bases are reused when it is a [`PreparedModel`]; otherwise the
-/// model is prepared from the cache in `cache` (default cache directory when `None`).
-pub fn study_growth(
-    model: &Model,
-    runner: &dyn PassageRunner,
-    cache: Option<&Path>,
-) -> anyhow::Result<BTreeMap<String, f64>> {
-    let owned;
-    let p = match runner.prepared() {
-        Some(p) => p,
-        None => {
-            owned = prepared(model, cache)?;
-            &owned
-        }
-    };
-    corrugation::studies::grow::study_growth(model, p).map_err(anyhow::Error::from_boxed)
 }

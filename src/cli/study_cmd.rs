@@ -6,14 +6,13 @@ use std::time::Instant;
 
 use clap::Args;
 
-use corrugation::dynamics::PassageRunner;
+use corrugation::dynamics::prepared::PreparedModel;
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
 use corrugation::model::Model;
+use corrugation::studies::grow::study_growth;
 use corrugation::studies::speeds::Shard;
 use corrugation::studies::study::{basis_plan, run_study, CaseRunners, Study};
 use corrugation::studies::BoxError;
-
-use super::engine;
 
 /// Design study: initiation indicators (and optionally growth) for every case of a study file.
 #[derive(Debug, Args)]
@@ -80,15 +79,10 @@ impl StudyCmd {
         super::check_out_dir(&out)?;
         let plan = basis_plan(&study, &models, &ModalCache::new(&cache_dir))?;
         eprintln!("study `{}`: {plan}", study.title);
-        let cache = self.cache.as_deref();
         let pb = std::sync::Arc::new(super::progress::bar(&format!("study `{}`", study.title)));
         let runners = CaseRunners::new(&study, &cache_dir).with_progress(pb.clone());
-        let factory = |m: &Model| -> Result<Box<dyn PassageRunner>, BoxError> {
-            Ok(Box::new(runners.prepared(m)?))
-        };
-        let growth = |m: &Model, r: &dyn PassageRunner| {
-            engine::study_growth(m, r, cache).map_err(Into::<BoxError>::into)
-        };
+        let factory = |m: &Model| -> Result<PreparedModel, BoxError> { runners.prepared(m) };
+        let growth = |m: &Model, p: &PreparedModel| study_growth(m, p);
         let o = run_study(&study, &factory, Some(&growth), &out, shard, &*pb)?;
         pb.finish_and_clear();
         eprintln!(

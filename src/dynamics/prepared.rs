@@ -396,10 +396,6 @@ fn wheel_residual(
 }
 
 impl super::PassageRunner for PreparedModel {
-    fn prepared(&self) -> Option<&PreparedModel> {
-        Some(self)
-    }
-
     fn run(
         &self,
         speed: crate::units::Speed,

@@ -15,8 +15,8 @@ use super::model::ExplicitModel;
 use super::operator::{ExplicitOperator, StepScratch};
 use super::response::Hold;
 use super::start::add_line_force;
-use crate::dynamics::patch::PlaneWeights;
-use crate::dynamics::reduced::add_nodes_load;
+use crate::passage::contact_line::add_nodes_load;
+use crate::passage::planes::PlaneWeights;
 
 /// The audit's sums over a passage (J unless stated).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]

@@ -10,9 +10,9 @@
 //! (validation/explicit.md). The reduced passage is converged at the default grid (its
 //! residual flexibility stands in for the local stiffness), so only the explicit path warns.
 
-use crate::dynamics::setup::contact_config_for;
-use crate::dynamics::DynamicsError;
 use crate::model::Model;
+use crate::passage::setup::contact_config_for;
+use crate::passage::PassageError;
 use crate::units::ms_to_kmh;
 
 /// The longest contact step `Δx/V` (s) at which the explicit path's frequency selection has
@@ -26,7 +26,7 @@ pub const CONVERGED_CONTACT_STEP_S: f64 = 8.1e-6;
 pub fn unconverged_contact_step(
     model: &Model,
     speed_m_per_s: f64,
-) -> Result<Option<String>, DynamicsError> {
+) -> Result<Option<String>, PassageError> {
     let grid = contact_config_for(model, speed_m_per_s)?.grid;
     let dt_c = grid.dx() / speed_m_per_s;
     if dt_c <= CONVERGED_CONTACT_STEP_S {

@@ -4,7 +4,7 @@
 use super::model::ExplicitModel;
 use super::rotating::RotatingWheel;
 use super::ExplicitError;
-use crate::dynamics::record::EnergyBalance;
+use crate::passage::record::EnergyBalance;
 
 /// The state of both substructures: displacements (m) and half-step velocities (m/s).
 pub(super) struct State {

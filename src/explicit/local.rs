@@ -16,9 +16,9 @@
 //! constant along the rail in the same sense.
 
 use super::ExplicitError;
-use crate::dynamics::patch::{max_planes, plane_weights, PlaneWeights};
-use crate::dynamics::reduced::{ContactFrame, RailContactLine};
-use crate::dynamics::residual::{for_each_plane_solution, nodes_dot, StiffnessFactor};
+use crate::passage::contact_line::{ContactFrame, RailContactLine};
+use crate::passage::planes::{max_planes, plane_weights, PlaneWeights};
+use crate::passage::statics::{for_each_plane_solution, nodes_dot, StiffnessFactor};
 use crate::structure::TrackStructure;
 
 /// Sub-intervals per element of the element means of `g`.
@@ -168,8 +168,8 @@ impl LocalCompliance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dynamics::reduced::add_nodes_load;
     use crate::model::{load_model, ModelSource};
+    use crate::passage::contact_line::add_nodes_load;
     use faer::Mat;
 
     /// The small test track with 40 mm elements along the rail.

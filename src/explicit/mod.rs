@@ -152,7 +152,7 @@ pub enum ExplicitError {
     },
     /// The wheel's static stiffness (with its supports doubled) could not be factorised.
     #[error("static start of the wheel: its stiffness with the supports doubled")]
-    WheelStaticFactor(#[source] crate::dynamics::DynamicsError),
+    WheelStaticFactor(#[source] crate::passage::PassageError),
     /// The rotating wheel's local tread compliance at the start angle is missing (an
     /// internal inconsistency of the rotating wheel's set-up).
     #[error("rotating wheel: the tread's local compliance at θ = 0 was not computed")]
@@ -169,13 +169,13 @@ pub enum ExplicitError {
     },
     /// The contact patch's node-plane weights could not be formed.
     #[error(transparent)]
-    Patch(#[from] crate::dynamics::patch::PatchError),
+    Patch(#[from] crate::passage::planes::PatchError),
     /// The rotating wheel cannot be set up.
     #[error("rotating wheel (explicit.wheel = \"rotating\")")]
     Rotating(#[from] rotating::SpinError),
     /// An error of the shared passage machinery (contact, profile, structure).
     #[error(transparent)]
-    Dynamics(#[from] crate::dynamics::DynamicsError),
+    Passage(#[from] crate::passage::PassageError),
     /// The caller's progress asked the passage to stop ([`crate::progress::Progress::cancelled`]).
     #[error(transparent)]
     Cancelled(#[from] crate::progress::Cancelled),

@@ -16,11 +16,11 @@ use super::start::{
     add_line_force, solve_one, static_contact_force, wheel_rigid_modes, ElasticWheel,
 };
 use super::ExplicitError;
-use crate::dynamics::patch::{plane_weights, PlaneWeights};
-use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
-use crate::dynamics::residual::{nodes_dot, StiffnessFactor};
-use crate::dynamics::setup::WheelLoads;
 use crate::model::{ExplicitLocalCompliance, ExplicitWheel, LoadSpread, Model, StartKind};
+use crate::passage::contact_line::{add_nodes_load, ContactFrame, RailContactLine, WheelContact};
+use crate::passage::planes::{plane_weights, PlaneWeights};
+use crate::passage::setup::WheelLoads;
+use crate::passage::statics::{nodes_dot, StiffnessFactor};
 use crate::structure::{TrackStructure, WheelStructure};
 
 /// Options of the explicit path.
@@ -215,7 +215,7 @@ impl ExplicitModel {
         let (wm, _) = wheel_structure.assemble()?;
         let track = Part::new(&tm, &opts, "track")?;
         let wheel = Part::new(&wm, &opts, "wheel")?;
-        let hertz = crate::dynamics::setup::static_hertz(model, model.vehicle.wheel_load)?;
+        let hertz = crate::passage::setup::static_hertz(model, model.vehicle.wheel_load)?;
         let n_t = track_structure.dofmap.n_free();
         let line = RailContactLine::new(&track_structure, &Mat::zeros(n_t, 0), &frame, hertz.b_m)?;
         let rigid = wheel_rigid_modes(&wheel_structure, &wheel.op)?;

@@ -39,7 +39,7 @@
 //! With `run.start = "rest"` the same in free rolling: no longitudinal force and no driving
 //! torque or resistance in the static solves; both step on at the contact step whose end
 //! reaches `run.rest_start_distance` before the zone
-//! ([`crate::dynamics::setup::torque_onset_m`]), as in the reduced
+//! ([`crate::passage::setup::torque_onset_m`]), as in the reduced
 //! passage (docs/theory.md §7.5).
 
 mod stepper;
@@ -57,18 +57,18 @@ use super::response::{RailResponses, UnitResponse};
 use super::rotating::{RotatingWheel, WheelParts};
 use super::start::static_contact_force;
 use super::ExplicitError;
-use crate::dynamics::patch::PlaneWeights;
-use crate::dynamics::reduced::add_nodes_load;
-use crate::dynamics::{
-    passage::PassageOptions,
+use crate::model::ExplicitWheel;
+use crate::passage::contact_line::add_nodes_load;
+use crate::passage::planes::PlaneWeights;
+use crate::passage::{
     record::{PassageRecord, RailPointRecord, WidenedGrid},
     setup::{
         check_profile_on_travel, contact_config_for, passage_contact, passage_grid,
         rail_under_contact_m, rigid_least_norm, run_widening_grid, GridWidening, ProfileOnRail,
     },
+    PassageOptions,
 };
-use crate::dynamics::{DynamicsError, PassageSummary, RailProfile};
-use crate::model::ExplicitWheel;
+use crate::passage::{PassageError, PassageSummary, RailProfile};
 use crate::progress::{Cancelled, Progress};
 
 /// What the explicit path reports besides the passage record.
@@ -155,10 +155,10 @@ impl ExplicitModel {
             self.model.vehicle.wheel_load,
             |w| self.passage_on_grid(speed_m_per_s, profile, popts, progress, w),
             |e: &ExplicitError| match e {
-                ExplicitError::Dynamics(d) => Some(d),
+                ExplicitError::Passage(d) => Some(d),
                 _ => None,
             },
-            ExplicitError::Dynamics,
+            ExplicitError::Passage,
             |_, _| {},
         )?;
         if w.any() {
@@ -438,12 +438,13 @@ impl ExplicitModel {
     }
 }
 
-impl crate::dynamics::PassageRecorder for ExplicitModel {
+impl crate::passage::PassageRecorder for ExplicitModel {
     fn record(
         &self,
-        speed_m_per_s: f64,
+        speed: crate::units::Speed,
         profile: Option<&RailProfile>,
-    ) -> Result<PassageRecord, DynamicsError> {
+    ) -> Result<PassageRecord, PassageError> {
+        let speed_m_per_s = speed.m_per_s();
         let opts = PassageOptions {
             energy: false,
             rail_point_offset_m: None,
@@ -452,8 +453,8 @@ impl crate::dynamics::PassageRecorder for ExplicitModel {
         self.passage(speed_m_per_s, profile, &opts, None)
             .map(|r| r.record)
             .map_err(|e| match e {
-                ExplicitError::Dynamics(d) => d,
-                other => DynamicsError::Engine {
+                ExplicitError::Passage(d) => d,
+                other => PassageError::Engine {
                     engine: "explicit",
                     source: Box::new(other),
                 },
@@ -465,21 +466,21 @@ impl crate::dynamics::PassageRecorder for ExplicitModel {
     }
 }
 
-/// Runs explicit passages of one model behind the [`crate::dynamics::PassageRunner`]
+/// Runs explicit passages of one model behind the [`crate::passage::PassageRunner`]
 /// interface, so that sweeps, growth and studies take `--engine explicit`.
 pub struct ExplicitRunner {
     /// The explicit model.
     pub model: ExplicitModel,
 }
 
-impl crate::dynamics::PassageRunner for ExplicitRunner {
+impl crate::passage::PassageRunner for ExplicitRunner {
     fn run(
         &self,
         speed: crate::units::Speed,
         profile: Option<&RailProfile>,
-    ) -> Result<PassageSummary, DynamicsError> {
-        use crate::dynamics::PassageRecorder;
-        let rec = self.model.record(speed.m_per_s(), profile)?;
-        crate::dynamics::analysis::summarise_at(&rec, speed)
+    ) -> Result<PassageSummary, PassageError> {
+        use crate::passage::PassageRecorder;
+        let rec = self.model.record(speed, profile)?;
+        crate::passage::analysis::summarise_at(&rec, speed)
     }
 }

@@ -38,9 +38,9 @@ pub(crate) use local::WheelLocalCompliance;
 use super::operator::{ExplicitOperator, StepScratch};
 use super::response::{Hold, UnitResponse};
 use super::ExplicitError;
-use crate::dynamics::reduced::ContactFrame;
-use crate::dynamics::setup::WheelLoads;
 use crate::fe::assembly::DofMap;
+use crate::passage::contact_line::ContactFrame;
+use crate::passage::setup::WheelLoads;
 use crate::structure::WheelStructure;
 
 /// Why a spinning frame cannot be set up.

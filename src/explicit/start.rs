@@ -6,11 +6,11 @@ use faer::Mat;
 
 use super::operator::ExplicitOperator;
 use super::ExplicitError;
-use crate::dynamics::patch::PlaneWeights;
-use crate::dynamics::reduced::{add_nodes_load, ContactFrame, RailContactLine};
-use crate::dynamics::residual::StiffnessFactor;
-use crate::dynamics::setup::start_longitudinal_force_n;
 use crate::model::Model;
+use crate::passage::contact_line::{add_nodes_load, ContactFrame, RailContactLine};
+use crate::passage::planes::PlaneWeights;
+use crate::passage::setup::start_longitudinal_force_n;
+use crate::passage::statics::StiffnessFactor;
 use crate::structure::{TrackStructure, WheelStructure};
 
 /// Adds the load of a contact-frame force (N, on the rail) spread over the planes of `w`

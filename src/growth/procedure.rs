@@ -42,6 +42,7 @@ use crate::dynamics::summary::{PassageSummary, WavelengthComponent};
 use crate::dynamics::PassageRecorder;
 use crate::dynamics::{DynamicsError, RailProfile};
 use crate::spectral::{band_pass, relative_difference, BandPass, Signal};
+use crate::units::Speed;
 
 /// Errors of the growth procedures.
 #[derive(Debug, thiserror::Error)]
@@ -201,7 +202,7 @@ pub fn trial_growth(
     mut on_passage: impl FnMut(usize),
 ) -> Result<TrialGrowth, ProcedureError> {
     let thresholds = ConsistencyThresholds::default();
-    let rec0 = engine.record(speed_m_per_s, None)?;
+    let rec0 = engine.record(Speed::from_m_per_s(speed_m_per_s), None)?;
     on_passage(0);
     let smooth = crate::dynamics::analysis::summarise(&rec0)?;
     let (w0, _, _) = analyse_record(&rec0)?;
@@ -223,7 +224,7 @@ pub fn trial_growth(
             .map(|i| trial.height.x_m(i))
             .collect();
         let profile = RailProfile::new(x, trial.height.values.clone())?;
-        let rec = match engine.record(speed_m_per_s, Some(&profile)) {
+        let rec = match engine.record(Speed::from_m_per_s(speed_m_per_s), Some(&profile)) {
             Ok(rec) => rec,
             Err(e) => {
                 stopped = Some(StoppedTrial {
@@ -315,7 +316,7 @@ pub fn iterative_growth(
     let mut rounds = Vec::new();
     let mut last_amp = 0.0;
     for round in 1..=opts.max_rounds {
-        let rec = engine.record(speed_m_per_s, profile.as_ref())?;
+        let rec = engine.record(Speed::from_m_per_s(speed_m_per_s), profile.as_ref())?;
         let w = wear_signal(&rec)?;
         let wb = band_pass(&w, &BandPass::default()).map_err(GrowthError::from)?;
         let scale = opts.passages_per_round as f64 * opts.wear_coefficient_m3_per_j / width;

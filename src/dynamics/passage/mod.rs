@@ -78,36 +78,7 @@ use step::{check_finite, RoadAhead};
 /// Frequencies below this are rigid-body modes (Hz).
 pub const RIGID_HZ: f64 = 0.5;
 
-/// What a passage records besides the wear.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PassageOptions {
-    /// Keep the energy balance (O(modes) per step: the damper power comes with the
-    /// integrator's implicit solve).
-    pub energy: bool,
-    /// Distance after the solution-zone start of the rail-top node whose displacement is
-    /// recorded (m); `None` = no rail-point record. Default 0.6 m.
-    pub rail_point_offset_m: Option<f64>,
-    /// Run the track's implicit damping product on a second core beside the contact step
-    /// (module `overlap`; for a passage that runs alone: it adds the damping products of
-    /// the node planes the contact crosses, about a third more of that product's CPU; the
-    /// second thread waits by spinning for at most 1 ms, then parks, and the passage falls
-    /// back to one thread while the machine is oversubscribed, module `spin`; it is used
-    /// when the thread pool has at least two threads, e.g. not with `RAYON_NUM_THREADS=1`).
-    /// The results do not depend on the thread count, and differ from those without it by
-    /// the rounding of the split single-precision products. Default `false` (sweeps and
-    /// studies, whose passages already fill the cores).
-    pub overlap: bool,
-}
-
-impl Default for PassageOptions {
-    fn default() -> Self {
-        Self {
-            energy: true,
-            rail_point_offset_m: Some(0.6),
-            overlap: false,
-        }
-    }
-}
+pub use crate::passage::PassageOptions;
 
 /// The reduced-order engine of one model: modal systems, contact interpolation, loads.
 pub struct PassageEngine {

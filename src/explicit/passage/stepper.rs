@@ -8,15 +8,6 @@ use super::{ExplicitInfo, ExplicitRecord};
 use crate::contact::{
     Longitudinal, NormalInput, StepInputs, StepResult, TransientRolling, WearAccumulator,
 };
-use crate::dynamics::patch::{max_planes, PlaneWeights};
-use crate::dynamics::reduced::add_nodes_load;
-use crate::dynamics::setup::{start_longitudinal_force_n, torque_onset_m};
-use crate::dynamics::{
-    passage::PassageOptions,
-    record::{Histories, PassageRecord, RailPointRecord},
-    setup::{rigid_least_norm, steady_contact},
-};
-use crate::dynamics::{DynamicsError, RailProfile};
 use crate::explicit::audit::{Audit, StepForces};
 use crate::explicit::ledger::{Ledger, LedgerStep, State};
 use crate::explicit::model::ExplicitModel;
@@ -25,6 +16,15 @@ use crate::explicit::response::{advance_held, Hold, RailResponses, UnitResponse}
 use crate::explicit::rotating::RotatingWheel;
 use crate::explicit::start::add_line_force;
 use crate::explicit::ExplicitError;
+use crate::passage::contact_line::add_nodes_load;
+use crate::passage::planes::{max_planes, PlaneWeights};
+use crate::passage::setup::{start_longitudinal_force_n, torque_onset_m};
+use crate::passage::{
+    record::{Histories, PassageRecord, RailPointRecord},
+    setup::{rigid_least_norm, steady_contact},
+    PassageOptions,
+};
+use crate::passage::{PassageError, RailProfile};
 
 impl ExplicitModel {
     /// The plan of a passage at `v` (m/s) with the passage's contact engine: the contact step
@@ -559,7 +559,7 @@ impl<'a> Stepper<'a> {
             self.series =
                 m.one_step_compliance(&mut self.rail_resp, &mut self.sc_t, pw, pred.g_wheel);
         }
-        let to_contact = |source| DynamicsError::Contact {
+        let to_contact = |source| PassageError::Contact {
             t_s: t,
             x_m: xc,
             source,

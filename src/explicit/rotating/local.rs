@@ -219,10 +219,10 @@ impl WheelLocalCompliance {
 #[cfg(test)]
 mod tests {
     use super::super::{locate_angle, to_spinning, PlaneNodes};
-    use crate::dynamics::reduced::add_nodes_load;
-    use crate::dynamics::wheel_residual::{elastic_flexibility, FreeBody};
     use crate::explicit::{ExplicitModel, ExplicitOptions};
     use crate::model::{load_model, test_problems::SMALL_MODEL, ExplicitWheel, ModelSource};
+    use crate::passage::contact_line::add_nodes_load;
+    use crate::passage::free_body::{elastic_flexibility, FreeBody};
     use faer::Mat;
 
     /// The small model's rotating-wheel explicit model (local compliance removed).

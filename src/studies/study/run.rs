@@ -14,14 +14,14 @@ use crate::studies::panic_text;
 use crate::studies::speeds::Shard;
 use crate::studies::{BoxError, StudiesError};
 
-/// Builds the passage runner of a model (the CLI passes its engine).
-pub type RunnerFactory<'a> =
-    &'a (dyn Fn(&Model) -> Result<Box<dyn PassageRunner>, BoxError> + Sync);
+/// Builds the passage runner `R` of a model (the CLI passes its engine's prepared model).
+pub type RunnerFactory<'a, R> = &'a (dyn Fn(&Model) -> Result<R, BoxError> + Sync);
 
-/// The growth loop of one case: named scalar results (e.g. `limiting_amplitude_um`), added
-/// as columns to the study table.
-pub type GrowthHook<'a> =
-    &'a (dyn Fn(&Model, &dyn PassageRunner) -> Result<BTreeMap<String, f64>, BoxError> + Sync);
+/// The growth loop of one case, handed the case's runner as the factory built it (so a
+/// prepared model's loaded modal bases are reused): named scalar results (e.g.
+/// `limiting_amplitude_um`), added as columns to the study table.
+pub type GrowthHook<'a, R> =
+    &'a (dyn Fn(&Model, &R) -> Result<BTreeMap<String, f64>, BoxError> + Sync);
 
 /// The result of [`run_study`].
 #[derive(Clone, Debug, PartialEq)]
@@ -64,14 +64,14 @@ enum CaseOutcome {
 }
 
 /// The parts of [`run_study`] every case reads.
-struct CaseContext<'a> {
+struct CaseContext<'a, R> {
     study: &'a Study,
-    factory: RunnerFactory<'a>,
-    growth: Option<GrowthHook<'a>>,
+    factory: RunnerFactory<'a, R>,
+    growth: Option<GrowthHook<'a, R>>,
     out: &'a Path,
 }
 
-impl CaseContext<'_> {
+impl<R: PassageRunner> CaseContext<'_, R> {
     /// The case's result: reused from its case file when that matches, else computed and
     /// saved (a failure or a panic becomes [`CaseOutcome::Failed`]).
     fn run(&self, case: &Case, model: &Model) -> Result<CaseOutcome, StudiesError> {
@@ -109,7 +109,7 @@ impl CaseContext<'_> {
                 rows.push(evaluate(&case.label(), &s, &criterion, study.peaks));
             }
             let g = match (study.growth, self.growth) {
-                (true, Some(h)) => h(model, runner.as_ref()).map_err(|e| format!("growth: {e}"))?,
+                (true, Some(h)) => h(model, &runner).map_err(|e| format!("growth: {e}"))?,
                 _ => BTreeMap::new(),
             };
             Ok(CaseResult {
@@ -200,10 +200,10 @@ fn in_order<T: Send>(n: usize, workers: usize, f: &(dyn Fn(usize) -> T + Sync)) 
 /// I-th, in case order) and their case files are saved, but no table, plot or report is
 /// written: the shards of a cluster job write into one shared `out`, and a last run of the
 /// whole study there reuses every case and writes the outputs (the same files as one run).
-pub fn run_study(
+pub fn run_study<R: PassageRunner>(
     study: &Study,
-    factory: RunnerFactory<'_>,
-    growth: Option<GrowthHook<'_>>,
+    factory: RunnerFactory<'_, R>,
+    growth: Option<GrowthHook<'_, R>>,
     out: &Path,
     shard: Shard,
     progress: &dyn Progress,

@@ -1,6 +1,6 @@
 //! What a passage records (docs/theory.md §7): the per-step histories of the contact, the
 //! wear along the rail, the energy ledger and the rail points' displacements. Produced by
-//! the reduced passage ([`super::passage`]) and the explicit FE path alike, and read by the
+//! the reduced passage ([`crate::dynamics::passage`]) and the explicit FE path alike, and read by the
 //! summary analysis ([`super::analysis`]).
 
 use crate::contact::TransientRolling;
@@ -209,13 +209,13 @@ pub struct PassageRecord {
     pub contact_grid_widened: Option<WidenedGrid>,
 }
 
-/// The contact grid a passage ran on when it was widened ([`super::setup::run_widening_grid`]): the
-/// patch reached the boundary of the grid of [`super::setup::passage_contact`] (under a dynamic load above
+/// The contact grid a passage ran on when it was widened ([`crate::dynamics::setup::run_widening_grid`]): the
+/// patch reached the boundary of the grid of [`crate::dynamics::setup::passage_contact`] (under a dynamic load above
 /// what `contact.grid_margin` leaves room for, e.g. over a deep corrugation) and the passage
 /// was rerun on this one.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WidenedGrid {
-    /// Widenings along x and y (−), each by [`super::setup::GRID_WIDENING`] in half-length.
+    /// Widenings along x and y (−), each by [`crate::dynamics::setup::GRID_WIDENING`] in half-length.
     pub widenings: [u32; 2],
     /// Elements along x and y (−).
     pub elements: [usize; 2],

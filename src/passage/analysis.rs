@@ -8,18 +8,18 @@
 
 use super::record::PassageRecord;
 use super::summary::{PassageSummary, WavelengthComponent, WavelengthSpectrum};
-use super::DynamicsError;
+use super::PassageError;
 use crate::spectral::{band_pass, find_peaks, BandPass, PeakOptions, Psd, PsdOptions, Signal};
 use crate::units::{m_to_mm, Speed};
 
 /// A signal of the record restricted to the solution zone.
-pub fn zone_signal(rec: &PassageRecord, values: &[f64]) -> Result<Signal, DynamicsError> {
+pub fn zone_signal(rec: &PassageRecord, values: &[f64]) -> Result<Signal, PassageError> {
     let [z0, z1] = rec.zone_m;
     let h = &rec.histories;
     let i0 = h.x_m.partition_point(|&x| x < z0);
     let i1 = h.x_m.partition_point(|&x| x <= z1);
     if i1 <= i0 + 8 {
-        return Err(DynamicsError::SolutionZoneTooShort {
+        return Err(PassageError::SolutionZoneTooShort {
             steps: i1.saturating_sub(i0),
         });
     }
@@ -28,7 +28,7 @@ pub fn zone_signal(rec: &PassageRecord, values: &[f64]) -> Result<Signal, Dynami
 }
 
 /// The wear `W_f(x)` of the record as a signal (J/m).
-pub fn wear_signal(rec: &PassageRecord) -> Result<Signal, DynamicsError> {
+pub fn wear_signal(rec: &PassageRecord) -> Result<Signal, PassageError> {
     let dx = if rec.wear_x_m.len() > 1 {
         rec.wear_x_m[1] - rec.wear_x_m[0]
     } else {
@@ -76,7 +76,7 @@ impl Analysed {
 /// The band analyses of a passage's wear along the rail (`W_f`, J/m) and of its `F_L` and
 /// `F_N` in the solution zone (N), in that order, at the passage's speed: what `passage`
 /// writes to `wear.csv` (band-passed wear) and `psd_wear.csv`, `psd_fl.csv`, `psd_fn.csv`.
-pub fn band_analyses(rec: &PassageRecord) -> Result<[Analysed; 3], DynamicsError> {
+pub fn band_analyses(rec: &PassageRecord) -> Result<[Analysed; 3], PassageError> {
     let v = rec.speed_m_per_s;
     let h = &rec.histories;
     Ok([
@@ -87,7 +87,7 @@ pub fn band_analyses(rec: &PassageRecord) -> Result<[Analysed; 3], DynamicsError
 }
 
 /// Analyses one signal along the rail at speed `v` (m/s).
-pub fn analyse(sig: &Signal, v: f64) -> Result<Analysed, DynamicsError> {
+pub fn analyse(sig: &Signal, v: f64) -> Result<Analysed, PassageError> {
     let mean = sig.values.iter().sum::<f64>() / sig.len() as f64;
     let band = band_pass(sig, &BandPass::default())?;
     let rms = |s: &Signal| (s.values.iter().map(|x| x * x).sum::<f64>() / s.len() as f64).sqrt();
@@ -134,15 +134,15 @@ pub fn band_spectrum(psd: &Psd) -> WavelengthSpectrum {
     out
 }
 
-/// [`DynamicsError::ContactLost`] when the normal force is zero (or not positive) at any step:
+/// [`PassageError::ContactLost`] when the normal force is zero (or not positive) at any step:
 /// a wheel off the rail transmits no force and wears nothing, which is no rolling result.
-pub fn check_contact(h: &crate::dynamics::record::Histories) -> Result<(), DynamicsError> {
+pub fn check_contact(h: &crate::passage::record::Histories) -> Result<(), PassageError> {
     let lost: Vec<usize> = (0..h.normal_n.len())
         .filter(|&i| h.normal_n[i].is_nan() || h.normal_n[i] <= 0.0)
         .collect();
     match lost.first() {
         None => Ok(()),
-        Some(&i) => Err(DynamicsError::ContactLost {
+        Some(&i) => Err(PassageError::ContactLost {
             t_s: h.t_s[i],
             x_m: h.x_m[i],
             lost: lost.len(),
@@ -152,13 +152,13 @@ pub fn check_contact(h: &crate::dynamics::record::Histories) -> Result<(), Dynam
 }
 
 /// The summary of a passage record, at the record's speed (m/s) converted to km/h.
-pub fn summarise(rec: &PassageRecord) -> Result<PassageSummary, DynamicsError> {
+pub fn summarise(rec: &PassageRecord) -> Result<PassageSummary, PassageError> {
     summarise_at(rec, Speed::from_m_per_s(rec.speed_m_per_s))
 }
 
 /// The summary of a passage record run at `speed` (`speed.m_per_s()` is the record's
 /// `speed_m_per_s`): its `speed_kmh` is `speed.kmh()` exactly, the speed as the caller gave it.
-pub fn summarise_at(rec: &PassageRecord, speed: Speed) -> Result<PassageSummary, DynamicsError> {
+pub fn summarise_at(rec: &PassageRecord, speed: Speed) -> Result<PassageSummary, PassageError> {
     check_contact(&rec.histories)?;
     let v = speed.m_per_s();
     let h = &rec.histories;
@@ -194,7 +194,7 @@ pub fn summarise_at(rec: &PassageRecord, speed: Speed) -> Result<PassageSummary,
 #[cfg(test)]
 mod contact_tests {
     use super::*;
-    use crate::dynamics::record::Histories;
+    use crate::passage::record::Histories;
 
     fn histories(normal_n: &[f64]) -> Histories {
         let n = normal_n.len();
@@ -211,7 +211,7 @@ mod contact_tests {
         assert!(check_contact(&histories(&[1e5, 9e4, 1.1e5])).is_ok());
         // Steps 2 and 3 of 4 at zero force: the first is at t = 2e-4 s, x = 1.002 m.
         match check_contact(&histories(&[1e5, 2e4, 0.0, 0.0])) {
-            Err(DynamicsError::ContactLost {
+            Err(PassageError::ContactLost {
                 lost: 2, steps: 4, ..
             }) => {}
             other => panic!("{other:?}"),

@@ -4,7 +4,7 @@
 //! least-norm placement of the wheel's rigid modes.
 
 use super::record::WidenedGrid;
-use super::{DynamicsError, RailProfile};
+use super::{PassageError, RailProfile};
 use crate::contact::{
     GridSpec, HertzGridParams, Longitudinal, NormalInput, StepInputs, TransientConfig,
     TransientRolling,
@@ -57,14 +57,14 @@ pub fn implausible_profile(ptp_m: f64) -> Option<String> {
 /// `L_x ≥ √(2 R_x (δ_H + ptp))` with the **same element size** (hence the same time step
 /// `Δt = Δx/V`, so passages over different trial amplitudes stay comparable). Never shrinks
 /// the grid; the lateral extent is unchanged (the profile varies along x only). A grid whose
-/// work is beyond [`MAX_PROFILE_GRID_WORK`] is refused ([`DynamicsError::ProfileGrid`], with
+/// work is beyond [`MAX_PROFILE_GRID_WORK`] is refused ([`PassageError::ProfileGrid`], with
 /// its elements, memory and work) before anything is allocated.
 pub fn grid_for_profile(
     grid: GridSpec,
     radius_x_m: f64,
     approach_m: f64,
     ptp_m: f64,
-) -> Result<GridSpec, DynamicsError> {
+) -> Result<GridSpec, PassageError> {
     let need = (2.0 * radius_x_m * (approach_m + ptp_m.max(0.0))).sqrt();
     if !(need.is_finite() && need > grid.half_length_x_m) {
         return Ok(grid);
@@ -75,7 +75,7 @@ pub fn grid_for_profile(
     let work = grid.nx as f64 * nx_f * grid.ny as f64;
     if work.is_nan() || work > MAX_PROFILE_GRID_WORK as f64 {
         let elements = nx_f * grid.ny as f64;
-        return Err(DynamicsError::ProfileGrid {
+        return Err(PassageError::ProfileGrid {
             ptp_um: crate::units::m_to_um(ptp_m),
             nx: nx_f,
             ny: grid.ny,
@@ -96,7 +96,7 @@ pub fn grid_for_profile(
 /// `ptp_m` (m) has a contact grid within [`MAX_PROFILE_GRID_WORK`] ([`grid_for_profile`] at
 /// the static Hertz approach under the wheel load; the grid's element size does not depend on
 /// the speed); returns the warning of [`implausible_profile`], if any.
-pub fn check_profile_grid(model: &Model, ptp_m: f64) -> Result<Option<String>, DynamicsError> {
+pub fn check_profile_grid(model: &Model, ptp_m: f64) -> Result<Option<String>, PassageError> {
     let cfg = contact_config_for(model, model.run.speed())?;
     let hertz = static_hertz(model, model.vehicle.wheel_load)?;
     grid_for_profile(cfg.grid, cfg.radius_x_m, hertz.approach_m, ptp_m)?;
@@ -167,9 +167,9 @@ pub struct GridEdgeReached {
 
 /// The edge at which the contact patch of a failed passage reached its grid, with the step's
 /// normal force, time and place, if that is why it failed.
-pub fn patch_at_grid_edge(e: &DynamicsError) -> Option<GridEdgeReached> {
+pub fn patch_at_grid_edge(e: &PassageError) -> Option<GridEdgeReached> {
     match e {
-        DynamicsError::Contact {
+        PassageError::Contact {
             t_s,
             x_m,
             source: crate::contact::ContactError::PatchAtGridEdge { edge, normal_n },
@@ -188,7 +188,7 @@ pub fn patch_at_grid_edge(e: &DynamicsError) -> Option<GridEdgeReached> {
 /// rerun on a widened grid. Measured dynamic wheel–rail forces stay below about three times
 /// the static load even at dipped joints and wheel flats; a force beyond twice that is a
 /// passage whose contact coupling has gone unstable, and a wider grid would only let it run
-/// longer. Such a passage is reported as diverged ([`DynamicsError::Diverged`]).
+/// longer. Such a passage is reported as diverged ([`PassageError::Diverged`]).
 pub const MAX_WIDENING_LOAD_FACTOR: f64 = 6.0;
 
 impl WidenedGrid {
@@ -229,14 +229,14 @@ impl std::fmt::Display for WidenedGrid {
 /// reaches the boundary runs once, on the model's grid, exactly as without this. `on_rerun(edge,
 /// widening)` is told before each rerun. Returns the result and its widening; a passage that
 /// still reaches the boundary after the last widening returns
-/// [`DynamicsError::GridOutgrown`] (through `outgrown`). A patch that reaches the boundary
+/// [`PassageError::GridOutgrown`] (through `outgrown`). A patch that reaches the boundary
 /// under a normal force above [`MAX_WIDENING_LOAD_FACTOR`] times `static_load_n` (N) is not
-/// rerun: the passage diverged, and [`DynamicsError::Diverged`] says so (through `outgrown`).
+/// rerun: the passage diverged, and [`PassageError::Diverged`] says so (through `outgrown`).
 pub fn run_widening_grid<T, E>(
     static_load_n: f64,
     mut passage: impl FnMut(GridWidening) -> Result<T, E>,
-    dynamics: impl Fn(&E) -> Option<&DynamicsError>,
-    outgrown: impl FnOnce(DynamicsError) -> E,
+    dynamics: impl Fn(&E) -> Option<&PassageError>,
+    outgrown: impl FnOnce(PassageError) -> E,
     mut on_rerun: impl FnMut(&'static str, GridWidening),
 ) -> Result<(T, GridWidening), E> {
     let mut w = GridWidening::default();
@@ -255,7 +255,7 @@ pub fn run_widening_grid<T, E>(
             return Err(e);
         };
         if normal_n > MAX_WIDENING_LOAD_FACTOR * static_load_n {
-            return Err(outgrown(DynamicsError::Diverged {
+            return Err(outgrown(PassageError::Diverged {
                 t_s,
                 x_m,
                 what: format!(
@@ -267,7 +267,7 @@ pub fn run_widening_grid<T, E>(
         let k = if edge == "x" { &mut w.x } else { &mut w.y };
         if *k >= MAX_GRID_WIDENINGS {
             let reason = dynamics(&e).map_or_else(String::new, ToString::to_string);
-            return Err(outgrown(DynamicsError::GridOutgrown {
+            return Err(outgrown(PassageError::GridOutgrown {
                 widenings: MAX_GRID_WIDENINGS,
                 edge,
                 reason,
@@ -339,13 +339,13 @@ mod tests {
     #[test]
     fn passages_rerun_on_a_widened_grid_only_when_the_patch_reaches_its_edge() {
         const LOAD: f64 = 1e5;
-        let edge_at = |edge, normal_n| DynamicsError::Contact {
+        let edge_at = |edge, normal_n| PassageError::Contact {
             t_s: 0.01,
             x_m: 0.2,
             source: crate::contact::ContactError::PatchAtGridEdge { edge, normal_n },
         };
         let edge = |edge| edge_at(edge, 3.0 * LOAD);
-        fn dynamics(e: &DynamicsError) -> Option<&DynamicsError> {
+        fn dynamics(e: &PassageError) -> Option<&PassageError> {
             Some(e)
         }
         let mut calls = Vec::new();
@@ -353,7 +353,7 @@ mod tests {
             LOAD,
             |w| {
                 calls.push(w);
-                Ok::<_, DynamicsError>(1)
+                Ok::<_, PassageError>(1)
             },
             dynamics,
             |e| e,
@@ -386,12 +386,12 @@ mod tests {
         // another error is not retried
         let e = run_widening_grid(
             LOAD,
-            |_| Err::<(), _>(DynamicsError::MissingNodes { what: "x" }),
+            |_| Err::<(), _>(PassageError::MissingNodes { what: "x" }),
             dynamics,
             |e| e,
             |_, _| panic!("no rerun"),
         );
-        assert!(matches!(e, Err(DynamicsError::MissingNodes { .. })));
+        assert!(matches!(e, Err(PassageError::MissingNodes { .. })));
         // the edge reached every time: MAX_GRID_WIDENINGS reruns, then the error
         let mut n = 0;
         let e = run_widening_grid(
@@ -404,7 +404,7 @@ mod tests {
         .unwrap_err();
         assert_eq!(n, MAX_GRID_WIDENINGS);
         let msg = e.to_string();
-        assert!(matches!(e, DynamicsError::GridOutgrown { .. }), "{msg}");
+        assert!(matches!(e, PassageError::GridOutgrown { .. }), "{msg}");
         assert!(
             msg.contains("contact.grid_margin") && msg.contains("(y)"),
             "{msg}"
@@ -421,7 +421,7 @@ mod tests {
         .unwrap_err();
         let msg = e.to_string();
         assert!(
-            matches!(e, DynamicsError::Diverged { t_s, x_m, .. } if t_s == 0.01 && x_m == 0.2),
+            matches!(e, PassageError::Diverged { t_s, x_m, .. } if t_s == 0.01 && x_m == 0.2),
             "{msg}"
         );
         assert!(msg.contains("6.5 times the static wheel load"), "{msg}");
@@ -481,7 +481,7 @@ mod tests {
         assert!(grid_for_profile(g, r, delta, 5e-3).is_ok());
         for ptp in [1e3, 1e9, f64::MAX] {
             match grid_for_profile(g, r, delta, ptp) {
-                Err(DynamicsError::ProfileGrid { nx, memory_gb, .. }) => {
+                Err(PassageError::ProfileGrid { nx, memory_gb, .. }) => {
                     assert!(nx > 5e4 && memory_gb > 1.0, "{ptp}: {nx} {memory_gb}")
                 }
                 other => panic!("{ptp}: {other:?}"),
@@ -501,7 +501,7 @@ mod tests {
         };
         let off = p(3.01, 4.0, [0.0, 1e-4, 0.0]);
         let e = check_profile_on_travel(&off, travel).unwrap_err();
-        assert!(matches!(e, DynamicsError::ProfileOffTravel { .. }), "{e}");
+        assert!(matches!(e, PassageError::ProfileOffTravel { .. }), "{e}");
         let text = e.to_string();
         assert!(
             text.contains("3.0100 … 4.0000 m") && text.contains("1.0000 … 3.0000 m"),
@@ -553,7 +553,7 @@ impl WheelLoads {
         model: &Model,
         wheel: &WheelStructure,
         wheel_mats: &crate::fe::assembly::FeMatrices,
-    ) -> Result<Self, DynamicsError> {
+    ) -> Result<Self, PassageError> {
         let nf = wheel.dofmap.n_free();
         // Gravity: M · (−g e_z) over the free DOFs (mass matrix row sums in z).
         let g = model.vehicle.gravity;
@@ -594,7 +594,7 @@ impl WheelLoads {
             })
             .sum();
         if r2 <= 0.0 {
-            return Err(DynamicsError::JournalsOnAxis);
+            return Err(PassageError::JournalsOnAxis);
         }
         let t_y = f_l0 * radius;
         let (mut sx, mut sz) = (0.0, 0.0);
@@ -652,7 +652,7 @@ pub fn contact_steel(model: &Model) -> (f64, f64) {
 pub fn contact_config_for(
     model: &Model,
     speed_m_per_s: f64,
-) -> Result<TransientConfig, DynamicsError> {
+) -> Result<TransientConfig, PassageError> {
     let m = model;
     let (youngs_pa, poisson) = contact_steel(m);
     let mut cfg = TransientConfig::around_hertz(&HertzGridParams {
@@ -667,7 +667,7 @@ pub fn contact_config_for(
         ny: m.contact.grid_ny,
         margin: m.contact.grid_margin,
     })
-    .map_err(DynamicsError::ContactGrid)?;
+    .map_err(PassageError::ContactGrid)?;
     cfg.tangential_tol = PASSAGE_TANGENTIAL_TOL;
     Ok(cfg)
 }
@@ -715,17 +715,17 @@ pub fn rail_under_contact_m(x_start_m: f64, zone_end_m: f64, grid: &GridSpec) ->
 }
 
 /// Checks a rail profile against the rail the contact passes over (`travel_m`,
-/// [`rail_under_contact_m`]): [`DynamicsError::ProfileOffTravel`] when its samples lie
+/// [`rail_under_contact_m`]): [`PassageError::ProfileOffTravel`] when its samples lie
 /// entirely off it; the warning to give when they only partly overlap it (the heights off
 /// it are never met), `None` when they lie on it.
 pub fn check_profile_on_travel(
     profile: &RailProfile,
     travel_m: [f64; 2],
-) -> Result<Option<String>, DynamicsError> {
+) -> Result<Option<String>, PassageError> {
     let x = &profile.x_m;
     let span = [x[0], x[x.len() - 1]];
     if span[1] < travel_m[0] || span[0] > travel_m[1] {
-        return Err(DynamicsError::ProfileOffTravel {
+        return Err(PassageError::ProfileOffTravel {
             profile_m: span,
             travel_m,
         });
@@ -750,7 +750,7 @@ pub fn passage_contact(
     speed_m_per_s: f64,
     profile: Option<ProfileOnRail<'_>>,
     widening: GridWidening,
-) -> Result<TransientRolling, DynamicsError> {
+) -> Result<TransientRolling, PassageError> {
     check_speed(speed_m_per_s)?;
     let mut cfg = contact_config_for(model, speed_m_per_s)?;
     cfg.grid = passage_grid(&cfg, profile, widening)?;
@@ -760,7 +760,7 @@ pub fn passage_contact(
         None => TransientRolling::new(cfg),
         Some(op) => TransientRolling::with_influence(cfg, op),
     }
-    .map_err(DynamicsError::ContactGrid)
+    .map_err(PassageError::ContactGrid)
 }
 
 /// The grid of [`passage_contact`] from the model's contact configuration `cfg`
@@ -772,7 +772,7 @@ pub fn passage_grid(
     cfg: &TransientConfig,
     profile: Option<ProfileOnRail<'_>>,
     widening: GridWidening,
-) -> Result<GridSpec, DynamicsError> {
+) -> Result<GridSpec, PassageError> {
     let grid = match profile {
         Some(p) => grid_for_profile(
             cfg.grid,
@@ -791,7 +791,7 @@ pub fn passage_grid(
 pub fn static_hertz(
     model: &Model,
     load_n: f64,
-) -> Result<crate::contact::HertzContact, DynamicsError> {
+) -> Result<crate::contact::HertzContact, PassageError> {
     let (youngs_pa, poisson) = contact_steel(model);
     crate::contact::HertzContact::solve(&crate::contact::HertzInput {
         radius_x_m: model.wheel.radius,
@@ -800,7 +800,7 @@ pub fn static_hertz(
         poisson,
         load_n,
     })
-    .map_err(DynamicsError::StaticHertz)
+    .map_err(PassageError::StaticHertz)
 }
 
 /// Position along the rail (m) from which the driving torque and the train's resistance act,
@@ -811,13 +811,13 @@ pub fn torque_onset_m(
     model: &Model,
     x_start_m: f64,
     zone_start_m: f64,
-) -> Result<f64, DynamicsError> {
+) -> Result<f64, PassageError> {
     match model.run.start {
         crate::model::StartKind::Static => Ok(f64::NEG_INFINITY),
         crate::model::StartKind::Rest => {
             let x = zone_start_m - model.run.rest_start_distance;
             if x < x_start_m - 1e-9 {
-                return Err(DynamicsError::OutOfRange {
+                return Err(PassageError::OutOfRange {
                     name: "run.rest_start_distance (m)",
                     value: model.run.rest_start_distance,
                     expected: "at most the run-in, the distance from the wheel's start to the solution zone (raise run.solution_zone_offset, and track.bays if the track is too short)",
@@ -841,11 +841,11 @@ pub fn start_longitudinal_force_n(model: &Model) -> f64 {
 }
 
 /// A passage's speed must be finite and > 0 (m/s).
-pub(super) fn check_speed(speed_m_per_s: f64) -> Result<(), DynamicsError> {
+pub(crate) fn check_speed(speed_m_per_s: f64) -> Result<(), PassageError> {
     if speed_m_per_s > 0.0 && speed_m_per_s.is_finite() {
         Ok(())
     } else {
-        Err(DynamicsError::OutOfRange {
+        Err(PassageError::OutOfRange {
             name: "speed (m/s)",
             value: speed_m_per_s,
             expected: "finite and > 0",
@@ -863,7 +863,7 @@ pub fn steady_contact(
     spin_per_m: f64,
     heights: Option<&[f64]>,
     x0: f64,
-) -> Result<crate::contact::StepResult, DynamicsError> {
+) -> Result<crate::contact::StepResult, PassageError> {
     let nx = contact.config().grid.nx;
     let mut res = None;
     let mut prev_xi = f64::NAN;
@@ -876,7 +876,7 @@ pub fn steady_contact(
                 spin_per_m,
                 rail_height_m: heights,
             })
-            .map_err(|source| DynamicsError::Contact {
+            .map_err(|source| PassageError::Contact {
                 t_s: 0.0,
                 x_m: x0,
                 source,
@@ -888,7 +888,7 @@ pub fn steady_contact(
             break;
         }
     }
-    res.ok_or(DynamicsError::MissingNodes {
+    res.ok_or(PassageError::MissingNodes {
         what: "columns in the contact grid",
     })
 }

@@ -90,8 +90,8 @@ fn the_operators_carry_the_twins_as_a_negative_uniform_compliance() {
 #[ignore = "prints the default fe-patch's sizes (about 10 s)"]
 fn default_patch_sizes() {
     let m = Model::default_model();
-    let cfg = crate::dynamics::setup::contact_config_for(&m, m.run.speed()).unwrap();
-    let b = crate::dynamics::setup::static_hertz(&m, m.vehicle.wheel_load)
+    let cfg = crate::passage::setup::contact_config_for(&m, m.run.speed()).unwrap();
+    let b = crate::passage::setup::static_hertz(&m, m.vehicle.wheel_load)
         .unwrap()
         .b_m;
     for refine in 1..=3 {
@@ -122,7 +122,7 @@ fn default_patch_sizes() {
 fn creep_curve_on_the_fe_patch() {
     use crate::contact::report::{case_config, solve_case_on, ContactCase, TangentialLoading};
     let m = Model::default_model();
-    let (youngs_pa, poisson) = crate::dynamics::setup::contact_steel(&m);
+    let (youngs_pa, poisson) = crate::passage::setup::contact_steel(&m);
     let case = |xi: f64| ContactCase {
         wheel_radius_m: m.wheel.radius,
         crown_radius_m: m.contact.rail_crown_radius,
@@ -139,7 +139,7 @@ fn creep_curve_on_the_fe_patch() {
         ..ContactCase::default()
     };
     let cfg = case_config(&case(0.0)).unwrap();
-    let b = crate::dynamics::setup::static_hertz(&m, m.vehicle.wheel_load)
+    let b = crate::passage::setup::static_hertz(&m, m.vehicle.wheel_load)
         .unwrap()
         .b_m;
     let grid = patch_grid(&cfg, b);

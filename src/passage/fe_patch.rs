@@ -27,7 +27,7 @@ use crate::structure::contact_patch::of_model::{
 };
 use crate::structure::contact_patch::{StripKernel, MAX_PATCH_DOFS};
 
-use super::DynamicsError;
+use super::PassageError;
 
 /// Measured cost of a patch per free DOF on two cores: wall time (s) per DOF of both
 /// submodels together, and peak memory (bytes) per DOF of the larger — the default model's
@@ -84,7 +84,7 @@ pub fn patch_grid(cfg: &TransientConfig, hertz_b_m: f64) -> PatchGrid {
 
 /// The estimated cost of building the patch of `grid`: wall time (s), peak memory (GB) and
 /// the free DOFs of the larger submodel.
-pub fn build_estimate(model: &Model, grid: &PatchGrid) -> Result<(f64, f64, usize), DynamicsError> {
+pub fn build_estimate(model: &Model, grid: &PatchGrid) -> Result<(f64, f64, usize), PassageError> {
     let (r, t) = patch_dofs(model, grid)?;
     let n = (r + t) as f64;
     let larger = r.max(t);
@@ -113,7 +113,7 @@ pub fn model_patch_cached(
     model: &Model,
     grid: &PatchGrid,
     progress: Option<&dyn Progress>,
-) -> Result<Arc<ModelPatch>, DynamicsError> {
+) -> Result<Arc<ModelPatch>, PassageError> {
     let k = key(model, grid);
     let slot: Slot = MEMO
         .lock()
@@ -153,7 +153,7 @@ pub fn model_patch_cached(
             .map(|m| format!("more than this machine's {m:.1} GB allows"))
     };
     if let Some(reason) = reason {
-        return Err(DynamicsError::FePatchTooLarge {
+        return Err(PassageError::FePatchTooLarge {
             nx: grid.nx,
             ny: grid.ny,
             gb,
@@ -189,11 +189,11 @@ pub fn model_patch_cached(
 /// [`model_patch`] on a thread of its own with a thread pool of its own (as many threads as
 /// the global pool): its factorisations' parallel work never runs the caller's pending rayon
 /// tasks, nor the caller theirs.
-fn build_apart(model: &Model, grid: &PatchGrid) -> Result<ModelPatch, DynamicsError> {
+fn build_apart(model: &Model, grid: &PatchGrid) -> Result<ModelPatch, PassageError> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(rayon::current_num_threads())
         .build()
-        .map_err(|_| DynamicsError::OutOfRange {
+        .map_err(|_| PassageError::OutOfRange {
             name: "fe-patch build threads",
             value: rayon::current_num_threads() as f64,
             expected: "threads the system can start",
@@ -203,7 +203,7 @@ fn build_apart(model: &Model, grid: &PatchGrid) -> Result<ModelPatch, DynamicsEr
             .join()
             .unwrap_or_else(|e| std::panic::resume_unwind(e))
     })
-    .map_err(DynamicsError::from)
+    .map_err(PassageError::from)
 }
 
 /// Builds (or reads) the fe-patch of the model's own contact configuration `cfg` (static
@@ -214,7 +214,7 @@ pub fn prepare(
     cfg: &TransientConfig,
     hertz_b_m: f64,
     progress: Option<&dyn Progress>,
-) -> Result<(), DynamicsError> {
+) -> Result<(), PassageError> {
     if model.contact.influence == ContactInfluence::HalfSpace {
         return Ok(());
     }
@@ -241,7 +241,7 @@ pub fn influence_for(
     (cfg, hertz_b_m): (&TransientConfig, f64),
     beside: Beside,
     progress: Option<&dyn Progress>,
-) -> Result<Option<Influence>, DynamicsError> {
+) -> Result<Option<Influence>, PassageError> {
     if model.contact.influence == ContactInfluence::HalfSpace {
         return Ok(None);
     }
