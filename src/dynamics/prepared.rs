@@ -4,8 +4,10 @@
 
 use super::passage::{PassageEngine, PassageOptions, TrackInput, WheelInput};
 use super::{DynamicsError, RailProfile};
-use crate::eigen::basis::ModalBasis;
-use crate::eigen::cache::ModalCache;
+use crate::eigen::basis::{
+    cache_key, track_basis_keyed, wheel_basis_keyed, ModalBasis, Substructure,
+};
+use crate::eigen::cache::{CacheKey, ModalCache};
 use crate::eigen::classify::{TrackModeClass, WheelModeClass};
 use crate::fe::assembly::FeMatrices;
 use crate::model::Model;
@@ -91,6 +93,8 @@ pub struct PreparedModel {
 
 /// The wheel's side of the preparation: structure, basis, matrices, Rayleigh frequencies.
 struct WheelSide {
+    /// The wheel basis's cache key (the wheel's residual flexibility is cached beside it).
+    key: CacheKey,
     wheel: WheelStructure,
     basis: ModalBasis<WheelModeClass>,
     mats: FeMatrices,
@@ -103,9 +107,10 @@ impl WheelSide {
         cache: &ModalCache,
         times: &mut PreparationTimes,
     ) -> Result<Self, DynamicsError> {
+        let key = cache_key(model, model.run.fmax, Substructure::Wheel)?;
         let wheel = timed(&mut times.wheel_mesh, || WheelStructure::build(model))?;
         let basis = timed(&mut times.wheel_basis, || {
-            crate::eigen::basis::wheel_basis(model, &wheel, cache, model.run.fmax)
+            wheel_basis_keyed(&key, &wheel, cache, model.run.fmax)
         })?;
         let (mats, _) = timed(&mut times.wheel_assembly, || wheel.assemble())?;
         // The wheel floats: its rigid modes' frequencies from the Rayleigh quotient, which is
@@ -114,6 +119,7 @@ impl WheelSide {
             super::reduced::rayleigh_frequencies_hz(mats.k.as_ref(), &basis.modes)
         });
         Ok(WheelSide {
+            key,
             wheel,
             basis,
             mats,
@@ -145,12 +151,12 @@ impl PreparedModel {
     ) -> Result<Self, DynamicsError> {
         let t = std::time::Instant::now();
         let fmax = model.run.fmax;
-        let key = crate::eigen::basis::cache_key(model, fmax, "track")?;
+        let key = cache_key(model, fmax, Substructure::Track)?;
         let (mut tt, mut tw) = (PreparationTimes::default(), PreparationTimes::default());
         let wheel = WheelSide::prepare(model, cache, &mut tw)?;
         let track = timed(&mut tt.track_mesh, || TrackStructure::build(model))?;
         let basis = timed(&mut tt.track_basis, || {
-            crate::eigen::basis::track_basis(model, &track, cache, fmax)
+            track_basis_keyed(&key, &track, cache, fmax)
         })?;
         let damping = timed(&mut tt.track_damping, || track.assemble_damping())?;
         let parts = Parts {
@@ -382,7 +388,6 @@ fn wheel_residual(
     if !model.run.wheel_residual_flexibility {
         return Ok(None);
     }
-    let key = crate::eigen::basis::cache_key(model, model.run.fmax, "wheel")?;
     let wm = WheelModes {
         wheel: &w.wheel,
         k: w.mats.k.as_ref(),
@@ -392,7 +397,7 @@ fn wheel_residual(
         frame: &engine.frame,
         half_width_m: engine.hertz_b_m,
     };
-    Ok(Some(WheelResidual::cached(cache, &key, wm)?.0))
+    Ok(Some(WheelResidual::cached(cache, &w.key, wm)?.0))
 }
 
 impl super::PassageRunner for PreparedModel {

@@ -36,8 +36,8 @@ pub enum BasisError {
     /// The eigensolver failed.
     #[error("eigenmodes of the {substructure}: {source}")]
     Eigen {
-        /// "track" or "wheel".
-        substructure: &'static str,
+        /// The substructure whose eigenproblem failed.
+        substructure: Substructure,
         /// The solver error (says what to change).
         source: EigenError,
     },
@@ -78,22 +78,54 @@ pub struct ModalBasis<C> {
 /// 2: journal-node weights of the primary suspension balanced about the axle axis.
 pub const PHYSICS_REVISION: u64 = 2;
 
+/// The substructure a modal basis belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Substructure {
+    /// The track (rails, fastenings, sleepers, ballast).
+    Track,
+    /// The wheel with the sprung mass on its primary suspension.
+    Wheel,
+}
+
+impl Substructure {
+    /// Its name in cache keys and messages: `"track"` or `"wheel"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Substructure::Track => "track",
+            Substructure::Wheel => "wheel",
+        }
+    }
+
+    /// The part of the model its K and M read.
+    pub fn scope(self) -> IdentityScope {
+        match self {
+            Substructure::Track => IdentityScope::Track,
+            Substructure::Wheel => IdentityScope::Wheel,
+        }
+    }
+}
+
+impl std::fmt::Display for Substructure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The cache key of one substructure's modal basis (see the module doc for what it covers):
-/// the model's identity in the substructure's scope ([`IdentityScope::Track`] for `track`,
-/// [`IdentityScope::Wheel`] for `wheel`, [`IdentityScope::Modes`] otherwise), f_max (Hz), the
-/// substructure name and [`PHYSICS_REVISION`].
-pub fn cache_key(m: &Model, fmax_hz: f64, substructure: &str) -> Result<CacheKey, BasisError> {
-    let scope = match substructure {
-        "track" => IdentityScope::Track,
-        "wheel" => IdentityScope::Wheel,
-        _ => IdentityScope::Modes,
-    };
-    let bytes = model_identity(m, scope)?;
+/// the model's identity in the substructure's scope ([`Substructure::scope`]), f_max (Hz),
+/// the substructure's name and [`PHYSICS_REVISION`]. Compute it once per model and pass it
+/// on ([`track_basis_keyed`], [`wheel_basis_keyed`], the residual flexibilities).
+pub fn cache_key(
+    m: &Model,
+    fmax_hz: f64,
+    substructure: Substructure,
+) -> Result<CacheKey, BasisError> {
+    let bytes = model_identity(m, substructure.scope())?;
     Ok(CacheKey::new()
         .u64("physics_revision", PHYSICS_REVISION)
         .bytes("model", &bytes)
         .f64("f_max_hz", fmax_hz)
-        .str("substructure", substructure))
+        .str("substructure", substructure.name()))
 }
 
 fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {
@@ -137,7 +169,7 @@ pub(crate) fn classify_in_chunks<C: Send>(
 fn basis<C: Serialize + DeserializeOwned + Send>(
     cache: &ModalCache,
     key: &CacheKey,
-    name: &'static str,
+    name: Substructure,
     fmax: f64,
     mats: impl FnOnce() -> Result<FeMatrices, BasisError>,
     classify: impl Fn(&[&[f64]], &[f64]) -> Result<Vec<C>, BasisError> + Sync,
@@ -217,9 +249,20 @@ fn basis<C: Serialize + DeserializeOwned + Send>(
     })
 }
 
-/// The track's classified modes below `fmax_hz` (cached).
+/// The track's classified modes below `fmax_hz` (cached under [`cache_key`] of `m`).
 pub fn track_basis(
     m: &Model,
+    track: &TrackStructure,
+    cache: &ModalCache,
+    fmax_hz: f64,
+) -> Result<ModalBasis<TrackModeClass>, BasisError> {
+    let key = cache_key(m, fmax_hz, Substructure::Track)?;
+    track_basis_keyed(&key, track, cache, fmax_hz)
+}
+
+/// [`track_basis`] under a key already computed (`cache_key(m, fmax_hz, Substructure::Track)`).
+pub fn track_basis_keyed(
+    key: &CacheKey,
     track: &TrackStructure,
     cache: &ModalCache,
     fmax_hz: f64,
@@ -227,25 +270,37 @@ pub fn track_basis(
     let classifier = TrackClassifier::new(track)?;
     basis(
         cache,
-        &cache_key(m, fmax_hz, "track")?,
-        "track",
+        key,
+        Substructure::Track,
         fmax_hz,
         || Ok(track.assemble()?.0),
         |u, _| Ok(classifier.classify_many(track, u)?),
     )
 }
 
-/// The wheel's classified modes below `fmax_hz` (cached), rigid-body modes included.
+/// The wheel's classified modes below `fmax_hz` (cached under [`cache_key`] of `m`),
+/// rigid-body modes included.
 pub fn wheel_basis(
     m: &Model,
     wheel: &WheelStructure,
     cache: &ModalCache,
     fmax_hz: f64,
 ) -> Result<ModalBasis<WheelModeClass>, BasisError> {
+    let key = cache_key(m, fmax_hz, Substructure::Wheel)?;
+    wheel_basis_keyed(&key, wheel, cache, fmax_hz)
+}
+
+/// [`wheel_basis`] under a key already computed (`cache_key(m, fmax_hz, Substructure::Wheel)`).
+pub fn wheel_basis_keyed(
+    key: &CacheKey,
+    wheel: &WheelStructure,
+    cache: &ModalCache,
+    fmax_hz: f64,
+) -> Result<ModalBasis<WheelModeClass>, BasisError> {
     basis(
         cache,
-        &cache_key(m, fmax_hz, "wheel")?,
-        "wheel",
+        key,
+        Substructure::Wheel,
         fmax_hz,
         || Ok(wheel.assemble()?.0),
         |u, f| Ok(classify_wheel_modes(wheel, u, f)?),
@@ -274,8 +329,26 @@ mod key_tests {
         load_model(&ModelSource::Builtin, &sets).unwrap()
     }
 
+    const TRACK_5KHZ: &str = "e0b954c7a1be358d5b886e34dadf76db1b63998ddd8e65456e9a94f688df1344";
+    const WHEEL_5KHZ: &str = "d64f584be6144d9f52b158545295c5d05de966c3c038bc390bad0a66d442fbf1";
+
     fn key(m: &Model, sub: &str) -> String {
+        let sub = match sub {
+            "track" => Substructure::Track,
+            _ => Substructure::Wheel,
+        };
         cache_key(m, 2000.0, sub).unwrap().hex()
+    }
+
+    /// Regression guard: the default model's cache keys at 5 kHz, the names of the modal
+    /// cache's entries for it, are those the string-named substructures gave (the cache
+    /// computed before [`Substructure`] still loads).
+    #[test]
+    fn the_default_model_s_cache_keys_are_unchanged() {
+        let m = Model::default_model();
+        let hex = |s| cache_key(&m, 5000.0, s).unwrap().hex();
+        assert_eq!(hex(Substructure::Track), TRACK_5KHZ);
+        assert_eq!(hex(Substructure::Wheel), WHEEL_5KHZ);
     }
 
     /// The track's key ignores the wheel, the vehicle and the wheel mesh — and the track's

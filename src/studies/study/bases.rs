@@ -16,7 +16,7 @@ use crate::dynamics::{
     passage::PassageOptions,
     prepared::{PreparedModel, TrackStatic},
 };
-use crate::eigen::basis::cache_key;
+use crate::eigen::basis::{cache_key, Substructure};
 use crate::eigen::cache::{CacheKey, ModalCache};
 use crate::eigen::substructure::{
     component_key, passage_track_basis_timed, process_cpu_s, track_components, BasisPhases,
@@ -101,7 +101,7 @@ pub fn basis_plan(
     };
     for (_, m) in models {
         let f = m.run.fmax;
-        let w = key(cache_key(m, f, "wheel"))?;
+        let w = key(cache_key(m, f, Substructure::Wheel))?;
         if wheel.insert(w.hex()) {
             *if cached(cache, &w) {
                 &mut plan.wheel_cached
@@ -111,7 +111,7 @@ pub fn basis_plan(
         }
         match study.basis {
             StudyBasis::Full => {
-                let t = key(cache_key(m, f, "track"))?;
+                let t = key(cache_key(m, f, Substructure::Track))?;
                 if track.insert(t.hex()) {
                     *if cached(cache, &t) {
                         &mut plan.track_cached
