@@ -15,7 +15,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
 use corrugation::eigen::cache::{default_cache_dir, ModalCache};
-use corrugation::model::{load_model, Model, ModelSource};
+use corrugation::model::{load_model, load_model_assigned, Assignment, Model, ModelSource};
 use corrugation::progress::{one_line, Progress};
 
 pyo3::create_exception!(
@@ -260,28 +260,42 @@ fn py_to_toml(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
     )))
 }
 
-/// The `--set KEY=VALUE` arguments of `overrides`: a dict `{key: value}` (values converted to
-/// TOML values) or a list of `"key=value"` strings (TOML syntax, as on the command line).
-fn override_args(overrides: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
+/// The assignments of `overrides`: a dict `{key: value}` (values converted to TOML values
+/// directly) or a list of `"key=value"` strings (TOML syntax, parsed as the command line's
+/// `--set`; messages quote them as given).
+fn override_assignments(overrides: Option<&Bound<'_, PyAny>>) -> PyResult<Overrides> {
     let Some(o) = overrides else {
-        return Ok(Vec::new());
+        return Ok(Overrides::Typed(Vec::new()));
     };
     if let Ok(d) = o.cast::<PyDict>() {
         let mut out = Vec::new();
         for (k, v) in d.iter() {
-            let k: String = k.extract().map_err(|_| {
+            let key: String = k.extract().map_err(|_| {
                 PyTypeError::new_err("overrides: the keys are dotted model keys (str)")
             })?;
-            out.push(format!("{k}={}", py_to_toml(&k, &v)?));
+            let value = py_to_toml(&key, &v)?;
+            out.push(Assignment { key, value });
         }
-        return Ok(out);
+        return Ok(Overrides::Typed(out));
     }
     if o.is_instance_of::<PyString>() {
         return Err(PyTypeError::new_err(
             "overrides: give a dict {\"track.bays\": 6} or a list of \"key=value\" strings",
         ));
     }
-    o.try_iter()?.map(|x| x?.extract::<String>()).collect()
+    Ok(Overrides::Text(
+        o.try_iter()?
+            .map(|x| x?.extract::<String>())
+            .collect::<PyResult<_>>()?,
+    ))
+}
+
+/// A model's overrides as Python gave them.
+enum Overrides {
+    /// From a dict: typed values.
+    Typed(Vec<Assignment>),
+    /// From a list of `"key=value"` strings.
+    Text(Vec<String>),
 }
 
 // ---------------------------------------------------------------------------------------
@@ -304,12 +318,16 @@ impl PyModel {
     #[new]
     #[pyo3(signature = (path=None, overrides=None))]
     fn new(path: Option<PathBuf>, overrides: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        let set = override_args(overrides)?;
+        let set = override_assignments(overrides)?;
         let source = match path {
             Some(p) => ModelSource::File(p),
             None => ModelSource::Builtin,
         };
-        let inner = load_model(&source, &set).map_err(|e| py_err(&e.into()))?;
+        let inner = match &set {
+            Overrides::Typed(a) => load_model_assigned(&source, a),
+            Overrides::Text(t) => load_model(&source, t),
+        }
+        .map_err(|e| py_err(&e.into()))?;
         Ok(Self {
             inner,
             source: source.display(),

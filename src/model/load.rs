@@ -28,14 +28,89 @@ impl ModelSource {
 
 const MAX_DEPTH: usize = 8;
 
+/// One override of a model value: a dotted key path (`fastening.vertical_stiffness`) and its
+/// TOML value. The command line's `--set key=value` is parsed into one
+/// ([`Assignment::parse`]); a study's parameters and the Python module's dict build them
+/// directly, so their values are never printed and parsed again.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Assignment {
+    /// Dotted key path, each part non-empty.
+    pub key: String,
+    /// The value.
+    pub value: toml::Value,
+}
+
+impl Assignment {
+    /// `dotted.key=value` as on the command line. The value is TOML (`1.3e9`, `"RPM1"`,
+    /// `[4, 10, 2]`, `true`); a bare word that is not valid TOML is taken as a string, so
+    /// `fastening.model=RPM1` works.
+    pub fn parse(arg: &str) -> Result<Self, ModelError> {
+        let err = |message: &str| ModelError::Override {
+            arg: arg.to_string(),
+            message: message.to_string(),
+        };
+        let (key, raw) = arg
+            .split_once('=')
+            .ok_or_else(|| err("expected dotted.key=value, e.g. fastening.model=\"RPM1\""))?;
+        let (key, raw) = (key.trim(), raw.trim());
+        if key.is_empty() || key.split('.').any(str::is_empty) {
+            return Err(err("empty key"));
+        }
+        let value = match format!("v = {raw}").parse::<toml::Table>() {
+            Ok(mut t) => t.remove("v").expect("parsed key"),
+            Err(_) if !raw.is_empty() && !raw.contains(['"', '\'', '[', '{', '=']) => {
+                toml::Value::String(raw.to_string())
+            }
+            Err(e) => return Err(err(&format!("value is not TOML: {}", e.message()))),
+        };
+        Ok(Self {
+            key: key.to_string(),
+            value,
+        })
+    }
+}
+
+/// `key=value` with the value as TOML text (`fastening.vertical_stiffness=1300000000.0`).
+impl std::fmt::Display for Assignment {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}={}", self.key, self.value)
+    }
+}
+
 /// Loads a model from its source, merging `extends` bases and then `overrides`
-/// (`dotted.key=value` strings), and validates it.
+/// (`dotted.key=value` strings, parsed by [`Assignment::parse`]), and validates it.
 pub fn load_model(source: &ModelSource, overrides: &[String]) -> Result<Model, ModelError> {
+    load_shown(source, &parse_overrides(overrides)?)
+}
+
+/// Loads a model from its source, merging `extends` bases and then the `assignments` in
+/// order, and validates it.
+pub fn load_model_assigned(
+    source: &ModelSource,
+    assignments: &[Assignment],
+) -> Result<Model, ModelError> {
+    let shown: Vec<(Assignment, String)> = assignments
+        .iter()
+        .map(|a| (a.clone(), a.to_string()))
+        .collect();
+    load_shown(source, &shown)
+}
+
+/// [`load_model_assigned`] with each assignment's text for messages (the `--set` argument as
+/// the user gave it, or the assignment printed).
+fn load_shown(
+    source: &ModelSource,
+    assignments: &[(Assignment, String)],
+) -> Result<Model, ModelError> {
     match source {
-        ModelSource::Builtin => load_model_str(BUILTIN_DUTCH, "builtin:dutch", overrides),
+        ModelSource::Builtin => {
+            let table = parse(BUILTIN_DUTCH, "builtin:dutch")?;
+            let (table, chain) = resolve_extends(table, "builtin:dutch", Path::new("."), 0)?;
+            finish(table, &chain, assignments)
+        }
         ModelSource::File(path) => {
             let (table, chain) = read_table(path, 0)?;
-            finish(table, &chain, overrides)
+            finish(table, &chain, assignments)
         }
     }
 }
@@ -43,14 +118,27 @@ pub fn load_model(source: &ModelSource, overrides: &[String]) -> Result<Model, M
 /// Loads a model from TOML text (`name` is used in messages; `extends` in the text is resolved
 /// relative to the current directory), then applies overrides and validates.
 pub fn load_model_str(text: &str, name: &str, overrides: &[String]) -> Result<Model, ModelError> {
+    let assignments = parse_overrides(overrides)?;
     let table = parse(text, name)?;
     let (table, chain) = resolve_extends(table, name, Path::new("."), 0)?;
-    finish(table, &chain, overrides)
+    finish(table, &chain, &assignments)
 }
 
-fn finish(mut table: toml::Table, chain: &str, overrides: &[String]) -> Result<Model, ModelError> {
-    for arg in overrides {
-        apply_override(&mut table, arg)?;
+/// Each `dotted.key=value` override parsed, in order, with its text as given.
+fn parse_overrides(overrides: &[String]) -> Result<Vec<(Assignment, String)>, ModelError> {
+    overrides
+        .iter()
+        .map(|a| Ok((Assignment::parse(a)?, a.clone())))
+        .collect()
+}
+
+fn finish(
+    mut table: toml::Table,
+    chain: &str,
+    overrides: &[(Assignment, String)],
+) -> Result<Model, ModelError> {
+    for (a, shown) in overrides {
+        apply_as(&mut table, a, shown)?;
     }
     let chain = if overrides.is_empty() {
         chain.to_string()
@@ -165,31 +253,29 @@ fn merge(base: &mut toml::Table, over: toml::Table) {
     }
 }
 
-/// Applies one `dotted.key=value` override to a model table. The value is TOML
-/// (`1.3e9`, `"RPM1"`, `[4, 10, 2]`, `true`); a bare word that is not valid TOML is taken as a
-/// string, so `--set fastening.model=RPM1` works. Only existing tables can be entered, so a
-/// misspelt section is an error; a misspelt leaf key is caught by `deny_unknown_fields`.
+/// Applies one `dotted.key=value` override to a model table ([`Assignment::parse`], then
+/// [`apply_assignment`]).
 pub fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(), ModelError> {
+    apply_as(table, &Assignment::parse(arg)?, arg)
+}
+
+/// Applies one assignment to a model table. Only existing tables can be entered (a
+/// `fastening.custom` hold table is created), so a misspelt section is an error; a misspelt
+/// leaf key is caught by `deny_unknown_fields`.
+pub fn apply_assignment(table: &mut toml::Table, a: &Assignment) -> Result<(), ModelError> {
+    apply_as(table, a, &a.to_string())
+}
+
+/// [`apply_assignment`], its errors naming the assignment as `shown`.
+fn apply_as(table: &mut toml::Table, a: &Assignment, shown: &str) -> Result<(), ModelError> {
     let err = |message: &str| ModelError::Override {
-        arg: arg.to_string(),
+        arg: shown.to_string(),
         message: message.to_string(),
     };
-    let (key, raw) = arg
-        .split_once('=')
-        .ok_or_else(|| err("expected dotted.key=value, e.g. fastening.model=\"RPM1\""))?;
-    let key = key.trim();
-    let raw = raw.trim();
-    if key.is_empty() || key.split('.').any(str::is_empty) {
+    if a.key.is_empty() || a.key.split('.').any(str::is_empty) {
         return Err(err("empty key"));
     }
-    let value = match format!("v = {raw}").parse::<toml::Table>() {
-        Ok(mut t) => t.remove("v").expect("parsed key"),
-        Err(_) if !raw.is_empty() && !raw.contains(['"', '\'', '[', '{', '=']) => {
-            toml::Value::String(raw.to_string())
-        }
-        Err(e) => return Err(err(&format!("value is not TOML: {}", e.message()))),
-    };
-    let parts: Vec<&str> = key.split('.').collect();
+    let parts: Vec<&str> = a.key.split('.').collect();
     let (leaf, path) = parts.split_last().expect("non-empty");
     let mut cur = table;
     let mut walked = String::new();
@@ -208,6 +294,6 @@ pub fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(), ModelErr
             None => return Err(err(&format!("unknown section `{walked}`"))),
         };
     }
-    cur.insert(leaf.to_string(), value);
+    cur.insert(leaf.to_string(), a.value.clone());
     Ok(())
 }

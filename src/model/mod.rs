@@ -27,7 +27,10 @@ pub use fastening::{
     Axis, DirectionHold, ElasticHolds, Fastening, FasteningModel, HoldKind, HoldPattern, Holds,
     Preset, RigidRegion, MAX_HOLD_STIFFNESS, MIN_HOLD_STIFFNESS, PRESET_NAMES,
 };
-pub use load::{apply_override, load_model, load_model_str, ModelSource, BUILTIN_DUTCH};
+pub use load::{
+    apply_assignment, apply_override, load_model, load_model_assigned, load_model_str, Assignment,
+    ModelSource, BUILTIN_DUTCH,
+};
 pub use validate::{
     DENSITY_KG_M3, FMAX_HZ, MAX_GRID_WORK, MAX_WHEEL_LOAD_N, MIN_PRIMARY_STIFFNESS, POISSON_RATIO,
     SPEED_KMH, SPEED_KMH_WHY, YOUNGS_MODULUS_PA,

@@ -664,3 +664,44 @@ fn positions_off_the_track_are_refused_by_the_model() {
         assert!(e.contains("--at") && e.contains("off the track"), "{e}");
     }
 }
+
+/// An override parsed into an assignment and applied gives the table the text override
+/// gives; printed and parsed again it is the same assignment (values of every TOML kind).
+#[test]
+fn assignments_equal_their_text_overrides() {
+    use super::{apply_assignment, apply_override, Assignment};
+    for arg in [
+        "fastening.vertical_stiffness=1.3e9",
+        "fastening.model=RPM1",
+        "fastening.model=\"RPM2\"",
+        "track.bays=12",
+        "run.residual_flexibility=false",
+        "mesh.sleeper_elements=[4, 3, 2]",
+        "fastening.custom.x={ rigid = \"none\" }",
+        "run.speed_kmh=-5",
+    ] {
+        let a = Assignment::parse(arg).unwrap();
+        assert_eq!(Assignment::parse(&a.to_string()).unwrap(), a, "{arg}");
+        let mut by_text: toml::Table = super::BUILTIN_DUTCH.parse().unwrap();
+        let mut typed = by_text.clone();
+        apply_override(&mut by_text, arg).unwrap();
+        apply_assignment(&mut typed, &a).unwrap();
+        assert_eq!(by_text, typed, "{arg}");
+    }
+    for bad in ["track.bays", "=3", "a..b=1", "x=[1,"] {
+        assert!(Assignment::parse(bad).is_err(), "{bad}");
+    }
+    let e = apply_assignment(
+        &mut toml::Table::new(),
+        &Assignment {
+            key: "fastening.railpad.k".into(),
+            value: toml::Value::Float(6e8),
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("fastening.railpad.k=600000000.0") && e.contains("unknown section"),
+        "{e}"
+    );
+}

@@ -91,7 +91,7 @@ impl StudyCriterion {
     }
 }
 use crate::eigen::substructure::SubstructureOptions;
-use crate::model::ModelSource;
+use crate::model::{Assignment, ModelSource};
 
 /// The stored result of one case (`cases/<NNNN>.json`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -192,8 +192,11 @@ pub struct Study {
     pub title: String,
     /// The base model.
     pub base: ModelSource,
-    /// Overrides applied to every case before the case's own.
-    pub set: Vec<String>,
+    /// Overrides applied to every case before the case's own, parsed once from the file's
+    /// `key=value` strings.
+    pub set: Vec<Assignment>,
+    /// The `set` strings as the file gives them (the case files record them so).
+    pub set_text: Vec<String>,
     /// Speeds (km/h); `None` = the model's `run.speed_kmh`.
     pub speeds_kmh: Option<Vec<f64>>,
     /// How parameters combine.
@@ -345,6 +348,42 @@ mod tests {
         let e = bad.case_models().unwrap_err().to_string();
         assert!(
             e.contains("s.toml: case 0") && e.contains("vertical_stifness"),
+            "{e}"
+        );
+    }
+
+    /// A case's model, built from its typed assignments, equals the model the command line
+    /// builds from the same overrides as text (`--set`); a `set` entry that is not
+    /// `key=value` TOML is refused when the study is read, naming `set`.
+    #[test]
+    fn typed_case_assignments_give_the_command_line_s_model() {
+        let s = parse(
+            r#"
+            model = "builtin:dutch"
+            set = ["fastening.model=RPM1", "run.speed_kmh=120"]
+            [[parameter]]
+            key = "fastening.vertical_stiffness"
+            values = [1.3e9, 6.5e8]
+            [[parameter]]
+            key = "wheel.web_shape"
+            values = ["curved", "straight"]
+            [[parameter]]
+            key = "mesh.sleeper_elements"
+            values = [[4, 3, 2]]
+            "#,
+        )
+        .unwrap();
+        for (c, m) in s.case_models().unwrap() {
+            let text = s.case_overrides(&c);
+            let cli = crate::model::load_model(&ModelSource::Builtin, &text).unwrap();
+            assert_eq!(m, cli, "{text:?}");
+        }
+        assert_eq!(s.set_text, ["fastening.model=RPM1", "run.speed_kmh=120"]);
+        let e = parse("model = \"builtin:dutch\"\nset = [\"track.bays\"]\n[[parameter]]\nkey = \"track.bays\"\nvalues = [4]\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("s.toml: key `set`") && e.contains("dotted.key=value"),
             "{e}"
         );
     }

@@ -11,7 +11,7 @@ use super::{Case, Combine, Parameter, Range, Study, StudyBasis, MAX_CASES};
 /// engine in memory).
 const MAX_CONCURRENT_CASES: usize = 4;
 use crate::eigen::substructure::SubstructureOptions;
-use crate::model::{load_model, Model, ModelSource};
+use crate::model::{load_model_assigned, Assignment, Model, ModelSource};
 use crate::studies::StudiesError;
 
 #[derive(Debug, Deserialize)]
@@ -341,6 +341,11 @@ impl Study {
         } else {
             ModelSource::File(dir.join(&raw.model))
         };
+        let set = raw
+            .set
+            .iter()
+            .map(|a| Assignment::parse(a).map_err(|e| key_error(file, "set", e.to_string())))
+            .collect::<Result<Vec<_>, _>>()?;
         let parameters = parameters(&raw, file)?;
         let n_cases = check_case_count(&parameters, raw.combine, file)?;
         if let Some(v) = &raw.speeds_kmh {
@@ -379,7 +384,8 @@ impl Study {
             file: file.to_string(),
             title: raw.title.unwrap_or_else(|| default_title.to_string()),
             base,
-            set: raw.set,
+            set,
+            set_text: raw.set,
             speeds_kmh: raw.speeds_kmh,
             combine: raw.combine,
             growth: raw.growth,
@@ -425,11 +431,22 @@ impl Study {
         }
     }
 
-    /// The overrides of a case: the study's `set`, then the case's own.
+    /// The overrides of a case as text, recorded in its case file: the study's `set` as the
+    /// file gives it, then the case's own.
     pub fn case_overrides(&self, case: &Case) -> Vec<String> {
-        let mut o = self.set.clone();
+        let mut o = self.set_text.clone();
         o.extend(case.overrides());
         o
+    }
+
+    /// The assignments of a case: the study's `set`, then the case's own parameters' values.
+    pub fn case_assignments(&self, case: &Case) -> Vec<Assignment> {
+        let mut a = self.set.clone();
+        a.extend(case.assignments.iter().map(|(key, value)| Assignment {
+            key: key.clone(),
+            value: value.clone(),
+        }));
+        a
     }
 
     /// The cases of `shard` with their models. Every case's model is built and checked, so
@@ -452,13 +469,14 @@ impl Study {
         self.cases()
             .into_iter()
             .map(|c| {
-                let m = load_model(&self.base, &self.case_overrides(&c)).map_err(|e| {
-                    StudiesError::StudyCase {
-                        file: self.file.clone(),
-                        case: format!("{} ({})", c.index, c.label()),
-                        message: e.to_string(),
-                    }
-                })?;
+                let m =
+                    load_model_assigned(&self.base, &self.case_assignments(&c)).map_err(|e| {
+                        StudiesError::StudyCase {
+                            file: self.file.clone(),
+                            case: format!("{} ({})", c.index, c.label()),
+                            message: e.to_string(),
+                        }
+                    })?;
                 Ok((c, m))
             })
             .collect()

@@ -220,7 +220,10 @@ pub(super) fn write_study(
             .join(", ")
     ));
     if !study.set.is_empty() {
-        doc.paragraph(format!("Overrides of every case: {}.", study.set.join(" ")));
+        doc.paragraph(format!(
+            "Overrides of every case: {}.",
+            study.set_text.join(" ")
+        ));
     }
     doc.paragraph(study_criterion_text(&study.criterion));
     doc.heading(2, "Indicators vs parameters");
