@@ -165,6 +165,24 @@ fn omega_max_estimate_matches_the_dense_solver() {
     );
     assert!((est.omega_max_estimate - exact).abs() / exact < 1e-3);
     assert!(est.omega_max_bound >= exact * (1.0 - 1e-12));
+    // The mode behind it is the dense solver's highest mode (|cos| of the mass-weighted
+    // angle within 1e-3 of 1).
+    let (_, u) = corrugation::explicit::stable::highest_mode(&op).unwrap();
+    let top = &common::dense_modes(&op).1[vals.len() - 1];
+    let m = op.mass();
+    let dot = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .zip(m)
+            .map(|((x, y), w)| x * y * w)
+            .sum::<f64>()
+    };
+    let cos = dot(&u, top) / (dot(&u, &u) * dot(top, top)).sqrt();
+    assert!(
+        cos.abs() > 1.0 - 1e-3,
+        "highest mode: |cos| = {}",
+        cos.abs()
+    );
     // The damped critical step: ξ = 0 gives 2/ω; ξ > 0 lowers it (closed form).
     assert!((critical_step(2.0, 0.0) - 1.0).abs() < 1e-15);
     assert!((critical_step(2.0, 0.1) - ((1.01f64).sqrt() - 0.1)).abs() < 1e-15);

@@ -42,6 +42,11 @@ impl StableStep {
     /// Estimates the stable step of `op` (no safety factor applied: see
     /// [`Self::with_safety`]).
     pub fn estimate(op: &ExplicitOperator) -> Result<Self, ExplicitError> {
+        Ok(Self::with_ritz_vector(op)?.0)
+    }
+
+    /// The estimate and its Ritz vector `z` (of `M^{-½}KM^{-½}`, unit length).
+    fn with_ritz_vector(op: &ExplicitOperator) -> Result<(Self, Vec<f64>), ExplicitError> {
         let (theta, z, steps) = lanczos_largest(op, LANCZOS_STEPS)?;
         let omega = theta.sqrt();
         let bound = op.gershgorin_omega2().sqrt();
@@ -51,19 +56,29 @@ impl StableStep {
         } else {
             0.0
         };
-        Ok(StableStep {
+        let step = StableStep {
             omega_max_estimate: omega,
             omega_max_bound: bound,
             damping_ratio: xi,
             critical_s: critical_step(omega, xi),
             lanczos_steps: steps,
-        })
+        };
+        Ok((step, z))
     }
 
     /// The step to use (s): `safety × critical_s`, `safety` in (0, 1].
     pub fn with_safety(&self, safety: f64) -> f64 {
         safety * self.critical_s
     }
+}
+
+/// The highest mode as the estimate finds it: its [`StableStep`] and its displacement over
+/// the free DOFs (m per unit `zᵀz`, `u = M^{-½} z` of the Ritz vector `z`), to see which part
+/// of a structure sets the stable step (the mode's kinetic share of DOF `i` is `m_i u_i²`).
+pub fn highest_mode(op: &ExplicitOperator) -> Result<(StableStep, Vec<f64>), ExplicitError> {
+    let (step, z) = StableStep::with_ritz_vector(op)?;
+    let u = z.iter().zip(op.mass()).map(|(z, m)| z / m.sqrt()).collect();
+    Ok((step, u))
 }
 
 /// The central difference's critical step `(2/ω)(√(1+ξ²) − ξ)` (s) for a mode of angular
