@@ -11,10 +11,10 @@
 
 use std::time::Instant;
 
-use corrugation::dynamics::analysis::summarise;
 use corrugation::dynamics::passage::PassageOptions;
 use corrugation::explicit::{ExplicitModel, ExplicitOptions};
 use corrugation::model::{load_model, ModelSource};
+use corrugation::passage::analysis::summarise;
 use corrugation::progress::cpu_seconds;
 
 /// The small test track of the test suite (80 mm elements, 4 bays).

@@ -20,11 +20,11 @@
 mod common;
 
 use common::{bits_digest, cpu_seconds, machine_load, summary_line};
-use corrugation::dynamics::analysis::summarise;
 use corrugation::dynamics::integrator::ModalVerlet;
 use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
 use corrugation::eigen::cache::ModalCache;
 use corrugation::model::{load_model, ModelSource};
+use corrugation::passage::analysis::summarise;
 use std::time::Instant;
 
 fn main() -> anyhow::Result<()> {

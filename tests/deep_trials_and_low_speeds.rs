@@ -5,7 +5,7 @@
 //! - `grow` from rest (`run.start = "rest"`) with the default trial amplitudes stopped at
 //!   160 µm with "contact patch reaches the grid boundary (y)": the dynamic load over the deep
 //!   trial outgrows the room `contact.grid_margin` leaves. The passage is now rerun on a
-//!   widened grid (`dynamics::setup::run_widening_grid`) and the output names the grid.
+//!   widened grid (`passage::setup::run_widening_grid`) and the output names the grid.
 //! - `run.speed_kmh` of 1–10 km/h failed the same way at any grid margin: the contact step
 //!   `Δx/V` is then too long for the explicit contact coupling. Such speeds are refused with
 //!   the key, its unit and the range, and the range's lowest speed runs.

@@ -355,7 +355,7 @@ fn coupled_passage_errors(length_m: f64) -> (f64, f64, f64) {
     let rec = em
         .passage(m.run.speed(), None, &PassageOptions::default(), None)
         .unwrap();
-    let s = corrugation::dynamics::analysis::summarise(&rec.record).unwrap();
+    let s = corrugation::passage::analysis::summarise(&rec.record).unwrap();
     let w = m.vehicle.wheel_load;
     let cos_a = m.rail.inclination.atan().cos();
     let e = &rec.record.energy;

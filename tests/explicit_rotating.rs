@@ -7,13 +7,13 @@ mod common;
 use std::f64::consts::PI;
 
 use corrugation::dynamics::passage::PassageOptions;
-use corrugation::dynamics::record::EnergyBalance;
 use corrugation::explicit::rotating::SpinFrame;
 use corrugation::explicit::{ExplicitModel, ExplicitOperator, ExplicitOptions, StableStep};
 use corrugation::fe::assembly::{assemble, AssemblyOptions, DofMap, MassKind};
 use corrugation::fe::material::IsotropicElastic;
 use corrugation::mesh::{Hex8, Mesh, Part};
 use corrugation::model::{load_model, ExplicitLocalCompliance, ExplicitWheel, Model, ModelSource};
+use corrugation::passage::record::EnergyBalance;
 use corrugation::structure::WheelStructure;
 
 const STEEL: IsotropicElastic = IsotropicElastic {

@@ -70,7 +70,7 @@ fn wheel_rigid_modes_stay_rigid_at_a_high_fmax() {
     let rigid: Vec<f64> = f.iter().copied().filter(|&x| x < RIGID_HZ).collect();
     assert_eq!(rigid.len(), 3, "wheel modes below {RIGID_HZ} Hz: {rigid:?}");
     let rec = p.engine.passage(m.run.speed(), None, &opts, None).unwrap();
-    let s = corrugation::dynamics::analysis::summarise(&rec).unwrap();
+    let s = corrugation::passage::analysis::summarise(&rec).unwrap();
     let w = m.vehicle.wheel_load;
     let cos_a = m.rail.inclination.atan().cos();
     eprintln!(

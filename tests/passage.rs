@@ -12,7 +12,7 @@ fn small_model() -> corrugation::model::Model {
 }
 
 /// One passage of `m` over the smooth rail with the default options.
-fn smooth_passage(m: &corrugation::model::Model) -> corrugation::dynamics::record::PassageRecord {
+fn smooth_passage(m: &corrugation::model::Model) -> corrugation::passage::record::PassageRecord {
     let opts = PassageOptions::default();
     let p = PreparedModel::new(m, &cache(), &opts).expect("modal model");
     p.engine
@@ -30,14 +30,14 @@ fn run_passage(
     m: &corrugation::model::Model,
     opts: &PassageOptions,
 ) -> (
-    corrugation::dynamics::record::PassageRecord,
+    corrugation::passage::record::PassageRecord,
     corrugation::dynamics::PassageSummary,
 ) {
     let rec = p
         .engine
         .passage(m.run.speed(), None, opts, None)
         .expect("passage runs");
-    let s = corrugation::dynamics::analysis::summarise(&rec).unwrap();
+    let s = corrugation::passage::analysis::summarise(&rec).unwrap();
     (rec, s)
 }
 
@@ -46,7 +46,7 @@ fn run_passage(
 fn assert_load_traction_and_energy(
     m: &corrugation::model::Model,
     s: &corrugation::dynamics::PassageSummary,
-    e: &corrugation::dynamics::record::EnergyBalance,
+    e: &corrugation::passage::record::EnergyBalance,
 ) {
     let w = m.vehicle.wheel_load;
     let cos_a = m.rail.inclination.atan().cos();
@@ -74,7 +74,7 @@ fn assert_load_traction_and_energy(
 fn passage_holds_the_static_load_and_the_traction_and_balances_energy() {
     let m = small_model();
     let rec = smooth_passage(&m);
-    let s = corrugation::dynamics::analysis::summarise(&rec).unwrap();
+    let s = corrugation::passage::analysis::summarise(&rec).unwrap();
     let w = m.vehicle.wheel_load;
     let cos_a = m.rail.inclination.atan().cos();
     let fn_err = (s.mean_fn_n - w / cos_a).abs() / w;
@@ -378,11 +378,11 @@ fn receptance_command_and_wheel_lines() {
 /// validation/frequency_selection.md.)
 #[test]
 fn smooth_rail_wear_follows_the_longitudinal_force() {
-    use corrugation::dynamics::analysis::{analyse, wear_signal, zone_signal};
+    use corrugation::passage::analysis::{analyse, wear_signal, zone_signal};
     use corrugation::spectral::{correlation_coefficient, resample_linear, Signal};
     let m = small_model();
     let rec = smooth_passage(&m);
-    let s = corrugation::dynamics::analysis::summarise(&rec).unwrap();
+    let s = corrugation::passage::analysis::summarise(&rec).unwrap();
     let v = rec.speed_m_per_s;
     let h = &rec.histories;
     let w = analyse(&wear_signal(&rec).unwrap(), v).unwrap().band;
@@ -722,7 +722,7 @@ impl corrugation::dynamics::PassageRecorder for FailsWhenDeep<'_> {
         &self,
         speed: corrugation::units::Speed,
         profile: Option<&corrugation::dynamics::RailProfile>,
-    ) -> Result<corrugation::dynamics::record::PassageRecord, corrugation::dynamics::DynamicsError>
+    ) -> Result<corrugation::passage::record::PassageRecord, corrugation::dynamics::DynamicsError>
     {
         match profile {
             Some(p) if p.peak_to_trough_m() > self.limit_m => {
@@ -902,7 +902,7 @@ fn a_profile_off_the_wheels_travel_changes_nothing_or_is_refused() {
             .engine
             .passage(v, profile, &opts, None)
             .expect("passage runs");
-        let mut s = corrugation::dynamics::analysis::summarise(&rec).unwrap();
+        let mut s = corrugation::passage::analysis::summarise(&rec).unwrap();
         s.seconds = 0.0; // wall-clock time
         s
     };

@@ -566,7 +566,7 @@ fn profile_of(
         let p = corrugation::dynamics::RailProfile::new(x, h).map_err(|e| py_err(&e.into()))?;
         (p, "roughness".to_string())
     };
-    corrugation::dynamics::setup::check_profile_grid(m, p.peak_to_trough_m())
+    corrugation::passage::setup::check_profile_grid(m, p.peak_to_trough_m())
         .map_err(|e| CorrugationError::new_err(format!("{name}: {e}")))?;
     Ok(Some(p))
 }
@@ -602,7 +602,7 @@ fn passage<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     use anyhow::Context;
-    use corrugation::dynamics::analysis::{band_analyses, summarise};
+    use corrugation::passage::analysis::{band_analyses, summarise};
     let m = &model.inner;
     let explicit = match engine {
         "reduced" => false,
@@ -750,7 +750,7 @@ fn grow<'py>(
     let m = &model.inner;
     check_amplitudes(&amplitudes_um)?;
     if let Some(a) = amplitudes_um.iter().copied().reduce(f64::max) {
-        corrugation::dynamics::setup::check_profile_grid(m, corrugation::units::um_to_m(a))
+        corrugation::passage::setup::check_profile_grid(m, corrugation::units::um_to_m(a))
             .map_err(|e| CorrugationError::new_err(format!("amplitudes_um {a}: {e}")))?;
     }
     let p = PyProgress::new(progress);

@@ -99,7 +99,7 @@ impl ContactCmd {
             (None, Some(t)) => TangentialLoading::TractionCoefficient(t),
             (None, None) => TangentialLoading::TractionCoefficient(m.contact.traction_coefficient),
         };
-        let (youngs_pa, poisson) = corrugation::dynamics::setup::contact_steel(&m);
+        let (youngs_pa, poisson) = corrugation::passage::setup::contact_steel(&m);
         let case = ContactCase {
             wheel_radius_m: m.wheel.radius,
             crown_radius_m: m.contact.rail_crown_radius,
@@ -121,12 +121,12 @@ impl ContactCmd {
         // the model's influence coefficients (`contact.influence`): the fe-patch's refined
         // submodels, built on first use and kept beside the modes
         let cfg = case_config(&case).context("the contact grid")?;
-        let hertz_b_m = corrugation::dynamics::setup::static_hertz(&m, m.vehicle.wheel_load)?.b_m;
+        let hertz_b_m = corrugation::passage::setup::static_hertz(&m, m.vehicle.wheel_load)?.b_m;
         let progress = super::progress::bar("contact");
-        let op = corrugation::dynamics::fe_patch::influence_for(
+        let op = corrugation::passage::fe_patch::influence_for(
             &m,
             (&cfg, hertz_b_m),
-            corrugation::dynamics::fe_patch::Beside::Nothing,
+            corrugation::passage::fe_patch::Beside::Nothing,
             Some(&progress),
         )
         .context("the contact's influence coefficients")?;

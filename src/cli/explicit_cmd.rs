@@ -111,7 +111,7 @@ pub fn run_explicit(
         .passage(m.run.speed(), profile, &opts, Some(&pb))
         .context("running the explicit passage")?;
     pb.finish_and_clear();
-    let summary = corrugation::dynamics::analysis::summarise(&rec.record)?;
+    let summary = corrugation::passage::analysis::summarise(&rec.record)?;
     corrugation::studies::passage::write_passage(
         out,
         &rec.record,

@@ -82,14 +82,14 @@ pub fn warn_unit_slips(name: &str, m: &Model) {
 
 /// Reads the rail profile of `--corrugation FILE` (x in m, height in µm) and checks, before
 /// any work, that the contact grid a passage of `m` over it needs is within its bound
-/// ([`corrugation::dynamics::setup::check_profile_grid`]); warns when its depth looks like a
+/// ([`corrugation::passage::setup::check_profile_grid`]); warns when its depth looks like a
 /// unit slip.
 pub fn read_profile(
     path: &std::path::Path,
     m: &Model,
 ) -> anyhow::Result<corrugation::dynamics::RailProfile> {
     let p = corrugation::dynamics::RailProfile::read_csv_um(path)?;
-    let warning = corrugation::dynamics::setup::check_profile_grid(m, p.peak_to_trough_m())
+    let warning = corrugation::passage::setup::check_profile_grid(m, p.peak_to_trough_m())
         .map_err(|e| anyhow::anyhow!("--corrugation {}: {e}", path.display()))?;
     if let Some(w) = warning {
         eprintln!("warning: --corrugation {}: {w}", path.display());
@@ -99,14 +99,14 @@ pub fn read_profile(
 
 /// Checks, before any work, that the largest trial amplitude of `--amplitudes-um` (µm,
 /// peak-to-trough) gives a contact grid within its bound on the model `m`
-/// ([`corrugation::dynamics::setup::check_profile_grid`]); warns when it looks like a unit
+/// ([`corrugation::passage::setup::check_profile_grid`]); warns when it looks like a unit
 /// slip.
 pub fn check_trial_profile_grid(amplitudes_um: &[f64], m: &Model) -> anyhow::Result<()> {
     let Some(a) = amplitudes_um.iter().copied().reduce(f64::max) else {
         return Ok(());
     };
     let ptp = corrugation::units::um_to_m(a);
-    if let Some(w) = corrugation::dynamics::setup::check_profile_grid(m, ptp)
+    if let Some(w) = corrugation::passage::setup::check_profile_grid(m, ptp)
         .map_err(|e| anyhow::anyhow!("--amplitudes-um {a}: {e}"))?
     {
         eprintln!("warning: --amplitudes-um {a}: {w}");

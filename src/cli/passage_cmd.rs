@@ -20,8 +20,8 @@ use anyhow::Context;
 use clap::Args;
 
 use corrugation::dynamics::passage::PassageOptions;
-use corrugation::dynamics::record::PassageRecord;
-use corrugation::dynamics::summary::PassageSummary;
+use corrugation::passage::record::PassageRecord;
+use corrugation::passage::summary::PassageSummary;
 use corrugation::studies::passage::{summary_lines, write_passage};
 
 use super::ModelArgs;
@@ -100,7 +100,7 @@ impl PassageCmd {
         let mut prepared = super::engine::prepared(&m, self.cache.as_deref())?;
         if let (Some(p), Some(path)) = (&profile, &self.corrugation) {
             let travel = prepared.engine.rail_under_contact_m(m.run.speed())?;
-            corrugation::dynamics::setup::check_profile_on_travel(p, travel)
+            corrugation::passage::setup::check_profile_on_travel(p, travel)
                 .with_context(|| format!("--corrugation {}", path.display()))?;
         }
         let pb = super::progress::bar("passage (time steps)");
@@ -109,7 +109,7 @@ impl PassageCmd {
             .passage(m.run.speed(), profile.as_ref(), &opts, Some(&pb))
             .context("running the passage")?;
         pb.finish_and_clear();
-        let summary = corrugation::dynamics::analysis::summarise(&rec)?;
+        let summary = corrugation::passage::analysis::summarise(&rec)?;
         write_passage(&self.out, &rec, &summary, m.mesh.fine_element_length)?;
         if self.json {
             println!("{}", serde_json::to_string_pretty(&summary)?);

@@ -19,8 +19,8 @@ use clap::Args;
 
 use corrugation::dynamics::coupled::attribution_text;
 use corrugation::dynamics::prepared::PreparedModel;
-use corrugation::dynamics::summary::PassageSummary;
 use corrugation::dynamics::RailProfile;
+use corrugation::passage::summary::PassageSummary;
 use corrugation::studies::coupled::{passage_attribution, SummaryAttribution};
 use corrugation::studies::nodal::{nodal_outputs, NodalPoint};
 

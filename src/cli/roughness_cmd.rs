@@ -109,7 +109,7 @@ impl RoughnessCmd {
                 .longest_part_on_track(a, b - a, &opts)
                 .context("the profile has no continuous part to run a passage over")?;
             if let Some(w) =
-                corrugation::dynamics::setup::check_profile_grid(&m, rail.peak_to_trough_m())?
+                corrugation::passage::setup::check_profile_grid(&m, rail.peak_to_trough_m())?
             {
                 eprintln!("warning: --profile: {w}");
             }
@@ -124,7 +124,7 @@ impl RoughnessCmd {
                 )
                 .context("running the passage over the measured profile")?;
             pb.finish_and_clear();
-            let summary = corrugation::dynamics::analysis::summarise(&rec)?;
+            let summary = corrugation::passage::analysis::summarise(&rec)?;
             let dir = self.out.join("passage");
             corrugation::studies::passage::write_passage(
                 &dir,

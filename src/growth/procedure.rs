@@ -36,11 +36,11 @@ use super::{
     consistency_table, growth_phase, trial_corrugation, ConsistencyRow, ConsistencyThresholds,
     GrowthError, GrowthPhase,
 };
-use crate::dynamics::analysis::{analyse, wear_signal, zone_signal, Analysed};
-use crate::dynamics::record::PassageRecord;
-use crate::dynamics::summary::{PassageSummary, WavelengthComponent};
 use crate::dynamics::PassageRecorder;
 use crate::dynamics::{DynamicsError, RailProfile};
+use crate::passage::analysis::{analyse, wear_signal, zone_signal, Analysed};
+use crate::passage::record::PassageRecord;
+use crate::passage::summary::{PassageSummary, WavelengthComponent};
 use crate::spectral::{band_pass, relative_difference, BandPass, Signal};
 use crate::units::Speed;
 
@@ -204,7 +204,7 @@ pub fn trial_growth(
     let thresholds = ConsistencyThresholds::default();
     let rec0 = engine.record(Speed::from_m_per_s(speed_m_per_s), None)?;
     on_passage(0);
-    let smooth = crate::dynamics::analysis::summarise(&rec0)?;
+    let smooth = crate::passage::analysis::summarise(&rec0)?;
     let (w0, _, _) = analyse_record(&rec0)?;
     let reference: Vec<f64> = w0.raw_peaks.iter().map(|p| p.wavelength_m).collect();
     if reference.is_empty() {
@@ -235,7 +235,7 @@ pub fn trial_growth(
             }
         };
         on_passage(k + 1);
-        let summary = crate::dynamics::analysis::summarise(&rec)?;
+        let summary = crate::passage::analysis::summarise(&rec)?;
         let (w, fl, fnn) = analyse_record(&rec)?;
         let rows = consistency_table(
             trial.two_a_max_m,

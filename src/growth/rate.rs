@@ -38,8 +38,8 @@ use serde::Serialize;
 
 use crate::contact::{Longitudinal, NormalInput, StepInputs, TransientRolling, WearAccumulator};
 use crate::dynamics::passage::{PassageEngine, PassageOptions};
-use crate::dynamics::record::PassageRecord;
 use crate::dynamics::{DynamicsError, RailProfile};
+use crate::passage::record::PassageRecord;
 use crate::units::Speed;
 
 /// The contact inputs of a [`ContactTransfer`], in column order.

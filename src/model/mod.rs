@@ -611,8 +611,8 @@ pub struct Contact {
     /// 1.4): the grid covers
     /// `grid_margin · a` by `grid_margin · b`; larger when the normal load varies strongly.
     /// Over a corrugated rail the passage lengthens it along x at the same element size
-    /// (`dynamics::setup::grid_for_profile`); a passage whose contact patch still reaches the
-    /// grid's edge is rerun on a grid widened along that edge (`dynamics::setup::widen_grid`,
+    /// (`passage::setup::grid_for_profile`); a passage whose contact patch still reaches the
+    /// grid's edge is rerun on a grid widened along that edge (`passage::setup::widen_grid`,
     /// docs/theory.md §6.8).
     pub grid_margin: f64,
     /// The influence coefficients the contact is solved with: `"half-space"` (default) or

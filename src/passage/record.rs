@@ -200,22 +200,22 @@ pub struct PassageRecord {
     /// Wall time of the dynamic phase (s).
     pub seconds: f64,
     /// Steps whose track damping product ran on a second thread beside the contact step (−;
-    /// 0 without [`crate::dynamics::passage::PassageOptions::overlap`], with one thread, on the
+    /// 0 without [`super::PassageOptions::overlap`], with one thread, on the
     /// explicit path, or while the machine was oversubscribed). The results do not depend on it.
     pub split_steps: usize,
     /// The contact grid the passage ran on when its contact patch reached the boundary of
     /// the model's grid and it was rerun on a wider one
-    /// ([`crate::dynamics::setup::run_widening_grid`]); `None` on the model's grid.
+    /// ([`super::setup::run_widening_grid`]); `None` on the model's grid.
     pub contact_grid_widened: Option<WidenedGrid>,
 }
 
-/// The contact grid a passage ran on when it was widened ([`crate::dynamics::setup::run_widening_grid`]): the
-/// patch reached the boundary of the grid of [`crate::dynamics::setup::passage_contact`] (under a dynamic load above
+/// The contact grid a passage ran on when it was widened ([`super::setup::run_widening_grid`]): the
+/// patch reached the boundary of the grid of [`super::setup::passage_contact`] (under a dynamic load above
 /// what `contact.grid_margin` leaves room for, e.g. over a deep corrugation) and the passage
 /// was rerun on this one.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WidenedGrid {
-    /// Widenings along x and y (−), each by [`crate::dynamics::setup::GRID_WIDENING`] in half-length.
+    /// Widenings along x and y (−), each by [`super::setup::GRID_WIDENING`] in half-length.
     pub widenings: [u32; 2],
     /// Elements along x and y (−).
     pub elements: [usize; 2],

@@ -80,7 +80,7 @@ pub struct PassageSummary {
     pub seconds: f64,
     /// The contact grid the passage ran on when its contact patch reached the boundary of the
     /// model's grid and the passage was rerun on a wider one
-    /// ([`crate::dynamics::setup::run_widening_grid`]); absent on the model's grid.
+    /// ([`super::setup::run_widening_grid`]); absent on the model's grid.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact_grid_widened: Option<super::record::WidenedGrid>,
 }

@@ -131,7 +131,7 @@ pub struct HeatMap<'a> {
     pub lines: &'a [OverlayLine],
     /// Logarithmic colour scale (values `≤ 0` are shown as "no data").
     pub log_colour: bool,
-    /// What each line style stands for, drawn as a legend in the plot's lower left corner
+    /// What each line style stands for, drawn as a legend in a strip beneath the figure
     /// (e.g. `(LineStyle::Dotted, "coupled wheel–track modes")`); empty: no legend.
     pub line_legend: &'a [(LineStyle, &'a str)],
 }

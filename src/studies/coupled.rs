@@ -21,10 +21,10 @@ use serde::{Deserialize, Serialize};
 use super::StudiesError;
 use crate::dynamics::coupled::{CoupledMode, CoupledModes, ModeAttribution, ModeShares};
 use crate::dynamics::prepared::PreparedModel;
-use crate::dynamics::summary::PassageSummary;
 use crate::dynamics::WavelengthComponent;
 use crate::eigen::classify::TrackFamily;
 use crate::io::{write_csv, write_npy, write_text};
+use crate::passage::summary::PassageSummary;
 
 /// The default upper frequency (Hz) of the coupled modes listed by `coupled-modes`.
 pub const DEFAULT_LIST_TO_HZ: f64 = 3000.0;

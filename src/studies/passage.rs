@@ -5,10 +5,10 @@
 
 use std::path::Path;
 
-use crate::dynamics::analysis::{band_analyses, Analysed};
-use crate::dynamics::record::PassageRecord;
-use crate::dynamics::summary::PassageSummary;
 use crate::io::{write_atomic, write_csv};
+use crate::passage::analysis::{band_analyses, Analysed};
+use crate::passage::record::PassageRecord;
+use crate::passage::summary::PassageSummary;
 use crate::report::plot::{line_plot, line_plot_log_y, Series};
 use crate::studies::StudiesError;
 

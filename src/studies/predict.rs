@@ -23,7 +23,6 @@ use super::StudiesError;
 use crate::dynamics::coupled::{attribution_text, CoupledMode, CoupledModes, ModeAttribution};
 use crate::dynamics::passage::PassageOptions;
 use crate::dynamics::prepared::PreparedModel;
-use crate::dynamics::summary::PassageSummary;
 use crate::dynamics::{DynamicsError, WavelengthComponent};
 use crate::growth::procedure::{ModeLines, ProcedureError, TrialGrowth};
 use crate::growth::verdict::{
@@ -31,6 +30,7 @@ use crate::growth::verdict::{
     Verdict, CONSISTENCY_LEGEND,
 };
 use crate::model::Model;
+use crate::passage::summary::PassageSummary;
 use crate::progress::Progress;
 use crate::report::doc::Document;
 
@@ -288,7 +288,7 @@ fn smooth_passage(
     );
     progress.finish();
     let rec = rec?;
-    let smooth = crate::dynamics::analysis::summarise(&rec)?;
+    let smooth = crate::passage::analysis::summarise(&rec)?;
     super::passage::write_passage(dir, &rec, &smooth, m.mesh.fine_element_length)?;
     Ok(smooth)
 }

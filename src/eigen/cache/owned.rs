@@ -12,7 +12,7 @@
 //! * its *leftovers*: directories named `.tmp-<key>-<pid>-<n>` or `.old-<key>-<pid>-<n>` (an
 //!   interrupted write or removal) that hold nothing but such files;
 //! * its tag, the file `CACHEDIR.TAG`;
-//! * the store of fe-patches ([`FE_PATCH_DIR`], `crate::dynamics::fe_patch`): a directory
+//! * the store of fe-patches ([`FE_PATCH_DIR`], `crate::passage::fe_patch`): a directory
 //!   named `fe-patch` holding one or more patch directories (32 lower-case hex digits) and
 //!   nothing else, each holding one or more of the files a patch is written as and nothing else (`kernel.npy`, `twins.npy`, `grid.txt`,
 //!   `complete`, and the temporary files of their atomic writes, `<name>.tmp.<pid>`).

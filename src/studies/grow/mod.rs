@@ -37,8 +37,6 @@ use super::initiation::{evaluate, InitiationCriterion};
 use super::StudiesError;
 use crate::dynamics::coupled::{CoupledMode, ModeAttribution};
 use crate::dynamics::prepared::PreparedModel;
-use crate::dynamics::record::WidenedGrid;
-use crate::dynamics::summary::PassageSummary;
 use crate::dynamics::PassageRecorder;
 use crate::growth::procedure::{trial_growth, GrowthRound, ModeLines, ProcedureError, TrialGrowth};
 use crate::growth::rate::{growth_rate_spectrum, GrowthRateSpectrum, RateOptions};
@@ -46,6 +44,8 @@ use crate::growth::verdict::{InitiationCheck, Verdict};
 use crate::growth::PhaseRelation;
 use crate::io::write_csv;
 use crate::model::Model;
+use crate::passage::record::WidenedGrid;
+use crate::passage::summary::PassageSummary;
 use crate::progress::Progress;
 use crate::units::m_to_mm;
 
@@ -162,7 +162,7 @@ pub struct GrowJson {
 }
 
 /// A passage of the growth that ran on a widened contact grid
-/// ([`crate::dynamics::setup::run_widening_grid`]).
+/// ([`crate::passage::setup::run_widening_grid`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct WidenedPassageGrid {
     /// Trial amplitude 2A_max (µm); 0 for the smooth rail.
