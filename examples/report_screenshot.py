@@ -50,7 +50,7 @@ def main() -> int:
     )
     a = ap.parse_args()
     if not a.report.is_file():
-        sys.exit(f"{a.report}: no such file (predict writes report.html, sweep sweep/report.html, study study.html, each in its --out folder)")
+        sys.exit(f"{a.report}: no such file (in its --out folder predict writes report.html, sweep report.html, study study.html)")
     if not pathlib.Path(a.browser).is_file():
         sys.exit(f"{a.browser}: no Chromium there (apt-get install chromium, or --browser PATH)")
     if not 320 <= a.width <= 4000:

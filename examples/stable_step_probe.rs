@@ -1,5 +1,5 @@
-//! Which part of a track sets the explicit path's stable step (validation/reference_regime.md,
-//! E4): the highest mode of the track's central-difference operator as the step's estimate
+//! Which part of a track sets the explicit path's stable step (a diagnosis recorded in
+//! validation/log/reference_regime.md): the highest mode of the track's central-difference operator as the step's estimate
 //! finds it (`explicit::stable::highest_mode`), its strain energy split over the rail's and the
 //! sleepers' elements and each kind of spring, and the nodes that carry most of its kinetic
 //! energy, with their position and the springs that hold them.

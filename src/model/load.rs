@@ -78,13 +78,14 @@ impl std::fmt::Display for Assignment {
 }
 
 /// Loads a model from its source, merging `extends` bases and then `overrides`
-/// (`dotted.key=value` strings, parsed by [`Assignment::parse`]), and validates it.
+/// (`dotted.key=value` strings, each parsed by [`Assignment::parse`] and applied in turn), and
+/// validates it.
 pub fn load_model(source: &ModelSource, overrides: &[String]) -> Result<Model, ModelError> {
-    load_shown(source, &parse_overrides(overrides)?)
+    load_with(source, Overrides::Text(overrides))
 }
 
 /// Loads a model from its source, merging `extends` bases and then the `assignments` in
-/// order, and validates it.
+/// order, and validates it; messages name an assignment as it prints (`key=value`).
 pub fn load_model_assigned(
     source: &ModelSource,
     assignments: &[Assignment],
@@ -93,24 +94,52 @@ pub fn load_model_assigned(
         .iter()
         .map(|a| (a.clone(), a.to_string()))
         .collect();
-    load_shown(source, &shown)
+    load_model_shown(source, &shown)
 }
 
-/// [`load_model_assigned`] with each assignment's text for messages (the `--set` argument as
-/// the user gave it, or the assignment printed).
-fn load_shown(
+/// [`load_model_assigned`] with each assignment's text for messages (e.g. a study file's `set`
+/// entry as written).
+pub fn load_model_shown(
     source: &ModelSource,
     assignments: &[(Assignment, String)],
 ) -> Result<Model, ModelError> {
-    match source {
-        ModelSource::Builtin => {
-            let table = parse(BUILTIN_DUTCH, "builtin:dutch")?;
-            let (table, chain) = resolve_extends(table, "builtin:dutch", Path::new("."), 0)?;
-            finish(table, &chain, assignments)
+    load_with(source, Overrides::Shown(assignments))
+}
+
+/// Overrides as the caller has them: text to parse one by one (after the model is read, as
+/// the command line's `--set`), or assignments with their text for messages.
+#[derive(Clone, Copy)]
+enum Overrides<'a> {
+    Text(&'a [String]),
+    Shown(&'a [(Assignment, String)]),
+}
+
+impl Overrides<'_> {
+    fn is_empty(&self) -> bool {
+        match self {
+            Overrides::Text(t) => t.is_empty(),
+            Overrides::Shown(a) => a.is_empty(),
         }
+    }
+
+    /// Applies each override in order; text is parsed just before it is applied, so the
+    /// first bad override is the one reported.
+    fn apply(&self, table: &mut toml::Table) -> Result<(), ModelError> {
+        match self {
+            Overrides::Text(t) => t.iter().try_for_each(|arg| apply_override(table, arg)),
+            Overrides::Shown(a) => a
+                .iter()
+                .try_for_each(|(a, shown)| apply_as(table, a, shown)),
+        }
+    }
+}
+
+fn load_with(source: &ModelSource, overrides: Overrides<'_>) -> Result<Model, ModelError> {
+    match source {
+        ModelSource::Builtin => load_str_with(BUILTIN_DUTCH, "builtin:dutch", overrides),
         ModelSource::File(path) => {
             let (table, chain) = read_table(path, 0)?;
-            finish(table, &chain, assignments)
+            finish(table, &chain, overrides)
         }
     }
 }
@@ -118,28 +147,21 @@ fn load_shown(
 /// Loads a model from TOML text (`name` is used in messages; `extends` in the text is resolved
 /// relative to the current directory), then applies overrides and validates.
 pub fn load_model_str(text: &str, name: &str, overrides: &[String]) -> Result<Model, ModelError> {
-    let assignments = parse_overrides(overrides)?;
-    let table = parse(text, name)?;
-    let (table, chain) = resolve_extends(table, name, Path::new("."), 0)?;
-    finish(table, &chain, &assignments)
+    load_str_with(text, name, Overrides::Text(overrides))
 }
 
-/// Each `dotted.key=value` override parsed, in order, with its text as given.
-fn parse_overrides(overrides: &[String]) -> Result<Vec<(Assignment, String)>, ModelError> {
-    overrides
-        .iter()
-        .map(|a| Ok((Assignment::parse(a)?, a.clone())))
-        .collect()
+fn load_str_with(text: &str, name: &str, overrides: Overrides<'_>) -> Result<Model, ModelError> {
+    let table = parse(text, name)?;
+    let (table, chain) = resolve_extends(table, name, Path::new("."), 0)?;
+    finish(table, &chain, overrides)
 }
 
 fn finish(
     mut table: toml::Table,
     chain: &str,
-    overrides: &[(Assignment, String)],
+    overrides: Overrides<'_>,
 ) -> Result<Model, ModelError> {
-    for (a, shown) in overrides {
-        apply_as(&mut table, a, shown)?;
-    }
+    overrides.apply(&mut table)?;
     let chain = if overrides.is_empty() {
         chain.to_string()
     } else {
@@ -233,7 +255,7 @@ fn own_key_errors(table: &toml::Table) -> String {
     };
     probe.remove("extends");
     merge(&mut probe, table.clone());
-    match finish(probe, "this file", &[]) {
+    match finish(probe, "this file", Overrides::Text(&[])) {
         Err(ModelError::Key { key, message, .. }) => {
             format!(". Besides, in this file's own keys: key `{key}`: {message}")
         }

@@ -28,8 +28,8 @@ pub use fastening::{
     Preset, RigidRegion, MAX_HOLD_STIFFNESS, MIN_HOLD_STIFFNESS, PRESET_NAMES,
 };
 pub use load::{
-    apply_assignment, apply_override, load_model, load_model_assigned, load_model_str, Assignment,
-    ModelSource, BUILTIN_DUTCH,
+    apply_assignment, apply_override, load_model, load_model_assigned, load_model_shown,
+    load_model_str, Assignment, ModelSource, BUILTIN_DUTCH,
 };
 pub use validate::{
     DENSITY_KG_M3, FMAX_HZ, MAX_GRID_WORK, MAX_WHEEL_LOAD_N, MIN_PRIMARY_STIFFNESS, POISSON_RATIO,

@@ -665,28 +665,61 @@ fn positions_off_the_track_are_refused_by_the_model() {
     }
 }
 
-/// An override parsed into an assignment and applied gives the table the text override
-/// gives; printed and parsed again it is the same assignment (values of every TOML kind).
+/// An override parses into its key path and TOML value (every kind; a bare word is a string),
+/// prints and parses back to itself, and applied puts its value at its key path.
 #[test]
 fn assignments_equal_their_text_overrides() {
-    use super::{apply_assignment, apply_override, Assignment};
-    for arg in [
-        "fastening.vertical_stiffness=1.3e9",
-        "fastening.model=RPM1",
-        "fastening.model=\"RPM2\"",
-        "track.bays=12",
-        "run.residual_flexibility=false",
-        "mesh.sleeper_elements=[4, 3, 2]",
-        "fastening.custom.x={ rigid = \"none\" }",
-        "run.speed_kmh=-5",
+    use super::{apply_assignment, Assignment};
+    use toml::Value;
+    let mut hold = toml::Table::new();
+    hold.insert("rigid".into(), Value::String("none".into()));
+    for (arg, key, want) in [
+        (
+            "fastening.vertical_stiffness=1.3e9",
+            "fastening.vertical_stiffness",
+            Value::Float(1.3e9),
+        ),
+        (
+            "fastening.model=RPM1",
+            "fastening.model",
+            Value::String("RPM1".into()),
+        ),
+        (
+            "fastening.model=\"RPM2\"",
+            "fastening.model",
+            Value::String("RPM2".into()),
+        ),
+        (" track.bays = 12 ", "track.bays", Value::Integer(12)),
+        (
+            "run.residual_flexibility=false",
+            "run.residual_flexibility",
+            Value::Boolean(false),
+        ),
+        (
+            "mesh.sleeper_elements=[4, 3, 2]",
+            "mesh.sleeper_elements",
+            Value::Array(vec![
+                Value::Integer(4),
+                Value::Integer(3),
+                Value::Integer(2),
+            ]),
+        ),
+        (
+            "fastening.custom.x={ rigid = \"none\" }",
+            "fastening.custom.x",
+            Value::Table(hold.clone()),
+        ),
+        ("run.speed_kmh=-5", "run.speed_kmh", Value::Integer(-5)),
     ] {
         let a = Assignment::parse(arg).unwrap();
+        assert_eq!((a.key.as_str(), &a.value), (key, &want), "{arg}");
         assert_eq!(Assignment::parse(&a.to_string()).unwrap(), a, "{arg}");
-        let mut by_text: toml::Table = super::BUILTIN_DUTCH.parse().unwrap();
-        let mut typed = by_text.clone();
-        apply_override(&mut by_text, arg).unwrap();
-        apply_assignment(&mut typed, &a).unwrap();
-        assert_eq!(by_text, typed, "{arg}");
+        // applied, the value stands at its key path of the table
+        let mut t: toml::Table = super::BUILTIN_DUTCH.parse().unwrap();
+        apply_assignment(&mut t, &a).unwrap();
+        let (path, leaf) = key.rsplit_once('.').unwrap();
+        let section = path.split('.').fold(&t, |t, p| t[p].as_table().unwrap());
+        assert_eq!(section[leaf], want, "{arg}");
     }
     for bad in ["track.bays", "=3", "a..b=1", "x=[1,"] {
         assert!(Assignment::parse(bad).is_err(), "{bad}");

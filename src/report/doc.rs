@@ -203,7 +203,7 @@ impl Document {
                         .map(|i| {
                             let mut cells = rows.iter().filter_map(|r| r.get(i)).peekable();
                             let numbers = cells.peek().is_some()
-                                && cells.all(|c| c.trim().is_empty() || is_number(c));
+                                && cells.all(|c| is_placeholder(c) || is_number(c));
                             if numbers {
                                 " class=\"n\""
                             } else {
@@ -283,6 +283,11 @@ pub fn sentences(lines: &[String]) -> String {
         out.push('.');
     }
     out
+}
+
+/// Whether a table cell holds no value: empty, or a dash standing for none (`–`, `—`, `-`).
+fn is_placeholder(cell: &str) -> bool {
+    matches!(cell.trim(), "" | "–" | "—" | "-")
 }
 
 /// Whether a table cell reads as one number: a decimal or exponent number, optionally signed,
@@ -379,6 +384,7 @@ mod tests {
             vec![
                 vec!["0".into(), "k=1".into(), "0.5 %".into()],
                 vec!["1".into(), "k=2".into(), "".into()],
+                vec!["2".into(), "k=3".into(), "–".into()],
             ],
         );
         let h = d.to_html();

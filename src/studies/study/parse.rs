@@ -11,7 +11,7 @@ use super::{Case, Combine, Parameter, Range, Study, StudyBasis, MAX_CASES};
 /// engine in memory).
 const MAX_CONCURRENT_CASES: usize = 4;
 use crate::eigen::substructure::SubstructureOptions;
-use crate::model::{load_model_assigned, Assignment, Model, ModelSource};
+use crate::model::{load_model_shown, Assignment, Model, ModelSource};
 use crate::studies::StudiesError;
 
 #[derive(Debug, Deserialize)]
@@ -439,12 +439,22 @@ impl Study {
         o
     }
 
-    /// The assignments of a case: the study's `set`, then the case's own parameters' values.
-    pub fn case_assignments(&self, case: &Case) -> Vec<Assignment> {
-        let mut a = self.set.clone();
-        a.extend(case.assignments.iter().map(|(key, value)| Assignment {
-            key: key.clone(),
-            value: value.clone(),
+    /// The assignments of a case with their text for messages: the study's `set` (as the file
+    /// writes it), then the case's own parameters' values (`key=value`).
+    pub fn case_assignments(&self, case: &Case) -> Vec<(Assignment, String)> {
+        let mut a: Vec<(Assignment, String)> = self
+            .set
+            .iter()
+            .cloned()
+            .zip(self.set_text.iter().cloned())
+            .collect();
+        a.extend(case.assignments.iter().map(|(key, value)| {
+            let a = Assignment {
+                key: key.clone(),
+                value: value.clone(),
+            };
+            let shown = a.to_string();
+            (a, shown)
         }));
         a
     }
@@ -469,14 +479,13 @@ impl Study {
         self.cases()
             .into_iter()
             .map(|c| {
-                let m =
-                    load_model_assigned(&self.base, &self.case_assignments(&c)).map_err(|e| {
-                        StudiesError::StudyCase {
-                            file: self.file.clone(),
-                            case: format!("{} ({})", c.index, c.label()),
-                            message: e.to_string(),
-                        }
-                    })?;
+                let m = load_model_shown(&self.base, &self.case_assignments(&c)).map_err(|e| {
+                    StudiesError::StudyCase {
+                        file: self.file.clone(),
+                        case: format!("{} ({})", c.index, c.label()),
+                        message: e.to_string(),
+                    }
+                })?;
                 Ok((c, m))
             })
             .collect()
