@@ -154,7 +154,7 @@ impl<R: PassageRunner> PassageRunner for Timed<R> {
         &self,
         speed: corrugation::units::Speed,
         profile: Option<&corrugation::dynamics::RailProfile>,
-    ) -> Result<corrugation::dynamics::PassageSummary, corrugation::dynamics::DynamicsError> {
+    ) -> Result<corrugation::dynamics::PassageSummary, corrugation::passage::PassageError> {
         let (t, c) = (Instant::now(), cpu_seconds());
         let r = self.inner.run(speed, profile);
         if let Ok(mut v) = self.times.lock() {

@@ -722,11 +722,11 @@ impl corrugation::dynamics::PassageRecorder for FailsWhenDeep<'_> {
         &self,
         speed: corrugation::units::Speed,
         profile: Option<&corrugation::dynamics::RailProfile>,
-    ) -> Result<corrugation::passage::record::PassageRecord, corrugation::dynamics::DynamicsError>
+    ) -> Result<corrugation::passage::record::PassageRecord, corrugation::passage::PassageError>
     {
         match profile {
             Some(p) if p.peak_to_trough_m() > self.limit_m => {
-                Err(corrugation::dynamics::DynamicsError::Diverged {
+                Err(corrugation::passage::PassageError::Diverged {
                     t_s: 0.0,
                     x_m: 0.0,
                     what: "a test failure over a deep profile".to_string(),
@@ -913,7 +913,13 @@ fn a_profile_off_the_wheels_travel_changes_nothing_or_is_refused() {
     );
     let off = RailProfile::new(vec![t1 + 0.001, t1 + 0.1], vec![0.0, 100e-6]).unwrap();
     let e = p.engine.passage(v, Some(&off), &opts, None).unwrap_err();
-    assert!(matches!(e, DynamicsError::ProfileOffTravel { .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            DynamicsError::Passage(corrugation::passage::PassageError::ProfileOffTravel { .. })
+        ),
+        "{e}"
+    );
     assert!(e.to_string().contains("entirely off"), "{e}");
 }
 
@@ -953,7 +959,12 @@ fn a_cancelled_progress_stops_the_passage_and_the_sweep() {
         .passage(m.run.speed(), None, &opts, Some(&stop))
         .expect_err("cancelled");
     assert!(
-        matches!(e, corrugation::dynamics::DynamicsError::Cancelled(_)),
+        matches!(
+            e,
+            corrugation::dynamics::DynamicsError::Passage(
+                corrugation::passage::PassageError::Cancelled(_)
+            )
+        ),
         "{e}"
     );
     assert_eq!(e.to_string(), "cancelled by the caller");

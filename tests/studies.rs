@@ -11,7 +11,7 @@ use std::sync::Mutex;
 
 use common::tree;
 use corrugation::dynamics::{
-    DynamicsError, PassageRunner, PassageSummary, RailProfile, WavelengthComponent,
+    PassageError, PassageRunner, PassageSummary, RailProfile, WavelengthComponent,
     WavelengthSpectrum,
 };
 use corrugation::model::Model;
@@ -133,7 +133,7 @@ impl PassageRunner for ModeLocked {
         &self,
         speed: corrugation::units::Speed,
         _p: Option<&RailProfile>,
-    ) -> Result<PassageSummary, DynamicsError> {
+    ) -> Result<PassageSummary, PassageError> {
         let speed_kmh = speed.kmh();
         self.calls.fetch_add(1, Ordering::SeqCst);
         self.speeds_run.lock().unwrap().push(speed_kmh);
@@ -141,7 +141,7 @@ impl PassageRunner for ModeLocked {
             if self.panic {
                 panic!("stand-in killed at {speed_kmh} km/h");
             }
-            return Err(DynamicsError::Engine {
+            return Err(PassageError::Engine {
                 engine: "stand-in",
                 source: format!("fails at {speed_kmh} km/h").into(),
             });
@@ -700,7 +700,7 @@ fn initiation_table_applies_the_stated_criterion() {
             &self,
             speed: corrugation::units::Speed,
             _: Option<&RailProfile>,
-        ) -> Result<PassageSummary, DynamicsError> {
+        ) -> Result<PassageSummary, PassageError> {
             Ok(PassageSummary {
                 speed_kmh: speed.kmh(),
                 ..self.0.clone()
@@ -737,7 +737,7 @@ impl PassageRunner for DampingRunner {
         &self,
         speed: corrugation::units::Speed,
         _: Option<&RailProfile>,
-    ) -> Result<PassageSummary, DynamicsError> {
+    ) -> Result<PassageSummary, PassageError> {
         let speed_kmh = speed.kmh();
         let f = selected_mode_hz(speed_kmh);
         Ok(summary(speed_kmh, f, f, 2.0 * f, self.0 / 1e6))

@@ -721,10 +721,12 @@ pub fn static_state(
     let mut contact = super::setup::passage_contact(model, v, None, Default::default())?;
     contact
         .set_series_compliance(engine.series_compliance())
-        .map_err(|source| DynamicsError::Contact {
-            t_s: 0.0,
-            x_m: 0.0,
-            source,
+        .map_err(|source| {
+            DynamicsError::Passage(crate::passage::PassageError::Contact {
+                t_s: 0.0,
+                x_m: 0.0,
+                source,
+            })
         })?;
     let st = steady_contact(&mut contact, loads[0], loads[1], loads[2], None, 0.0)?;
     Ok((contact, loads, st))
@@ -738,10 +740,12 @@ fn hold_inputs(
 ) -> Result<Vec<crate::contact::StepResult>, DynamicsError> {
     (0..steps)
         .map(|_| {
-            contact.step(inp).map_err(|source| DynamicsError::Contact {
-                t_s: 0.0,
-                x_m: 0.0,
-                source,
+            contact.step(inp).map_err(|source| {
+                DynamicsError::Passage(crate::passage::PassageError::Contact {
+                    t_s: 0.0,
+                    x_m: 0.0,
+                    source,
+                })
             })
         })
         .collect()

@@ -130,11 +130,11 @@ impl ModalVerlet {
     pub fn new(sys: &ModalSystem, dt: f64) -> Result<Self, DynamicsError> {
         let m = substeps_for(omega_max(sys), dt);
         if m > MAX_SUBSTEPS {
-            return Err(DynamicsError::OutOfRange {
+            return Err(DynamicsError::Passage(crate::passage::PassageError::OutOfRange {
                 name: "modal sub-steps per contact step (time step × highest mode's ω / 1.8); lower run.fmax",
                 value: m as f64,
                 expected: "at most 4096",
-            });
+            }));
         }
         Self::with_substeps(sys, dt, m)
     }
@@ -149,18 +149,22 @@ impl ModalVerlet {
         let n = sys.len();
         let w_max = omega_max(sys);
         if !(dt > 0.0 && dt.is_finite()) {
-            return Err(DynamicsError::OutOfRange {
-                name: "time step (s)",
-                value: dt,
-                expected: "finite and > 0",
-            });
+            return Err(DynamicsError::Passage(
+                crate::passage::PassageError::OutOfRange {
+                    name: "time step (s)",
+                    value: dt,
+                    expected: "finite and > 0",
+                },
+            ));
         }
         if !(1..=MAX_SUBSTEPS).contains(&substeps) {
-            return Err(DynamicsError::OutOfRange {
-                name: "modal sub-steps per contact step",
-                value: substeps as f64,
-                expected: "1 to 4096",
-            });
+            return Err(DynamicsError::Passage(
+                crate::passage::PassageError::OutOfRange {
+                    name: "modal sub-steps per contact step",
+                    value: substeps as f64,
+                    expected: "1 to 4096",
+                },
+            ));
         }
         let h = dt / substeps as f64;
         if h * w_max >= STEP_LIMIT {

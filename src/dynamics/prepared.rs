@@ -405,13 +405,16 @@ impl super::PassageRunner for PreparedModel {
         &self,
         speed: crate::units::Speed,
         profile: Option<&RailProfile>,
-    ) -> Result<super::PassageSummary, DynamicsError> {
+    ) -> Result<super::PassageSummary, super::PassageError> {
         let opts = PassageOptions {
             energy: false,
             rail_point_offset_m: None,
             overlap: false,
         };
-        let rec = self.engine.passage(speed.m_per_s(), profile, &opts, None)?;
+        let rec = self
+            .engine
+            .passage(speed.m_per_s(), profile, &opts, None)
+            .map_err(DynamicsError::into_passage)?;
         super::analysis::summarise_at(&rec, speed)
     }
 }

@@ -58,11 +58,13 @@ pub fn modal_receptance(
         .iter()
         .find(|f| !(f.is_finite() && **f >= 0.0))
     {
-        return Err(DynamicsError::OutOfRange {
-            name: "receptance frequency (Hz)",
-            value: *f,
-            expected: "finite and ≥ 0",
-        });
+        return Err(DynamicsError::Passage(
+            crate::passage::PassageError::OutOfRange {
+                name: "receptance frequency (Hz)",
+                value: *f,
+                expected: "finite and ≥ 0",
+            },
+        ));
     }
     let rhs = Mat::<c64>::from_fn(m, k, |i, j| c64::new(rows[j][i], 0.0));
     frequencies_hz

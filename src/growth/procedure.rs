@@ -37,10 +37,10 @@ use super::{
     GrowthError, GrowthPhase,
 };
 use crate::dynamics::PassageRecorder;
-use crate::dynamics::{DynamicsError, RailProfile};
 use crate::passage::analysis::{analyse, wear_signal, zone_signal, Analysed};
 use crate::passage::record::PassageRecord;
 use crate::passage::summary::{PassageSummary, WavelengthComponent};
+use crate::passage::{PassageError, RailProfile};
 use crate::spectral::{band_pass, relative_difference, BandPass, Signal};
 use crate::units::Speed;
 
@@ -49,7 +49,7 @@ use crate::units::Speed;
 pub enum ProcedureError {
     /// A passage failed.
     #[error(transparent)]
-    Passage(#[from] DynamicsError),
+    Passage(#[from] PassageError),
     /// The growth analysis failed.
     #[error(transparent)]
     Growth(#[from] GrowthError),
@@ -179,9 +179,7 @@ fn compare(
 }
 
 /// The three analysed signals of a record: (wear, F_L, F_N).
-pub fn analyse_record(
-    rec: &PassageRecord,
-) -> Result<(Analysed, Analysed, Analysed), DynamicsError> {
+pub fn analyse_record(rec: &PassageRecord) -> Result<(Analysed, Analysed, Analysed), PassageError> {
     let v = rec.speed_m_per_s;
     Ok((
         analyse(&wear_signal(rec)?, v)?,

@@ -96,11 +96,13 @@ impl RateOptions {
     fn check(&self) -> Result<(), DynamicsError> {
         let [a, b] = self.band_m;
         let bad = |name, value: f64, expected| {
-            Err(DynamicsError::OutOfRange {
-                name,
-                value,
-                expected,
-            })
+            Err(DynamicsError::Passage(
+                crate::passage::PassageError::OutOfRange {
+                    name,
+                    value,
+                    expected,
+                },
+            ))
         };
         if !(a.is_finite() && a > 0.0 && b > a && b.is_finite()) {
             return bad("growth-rate band (m)", b, "finite, 0 < shortest < longest");
@@ -296,10 +298,12 @@ impl ContactProbe {
                     spin_per_m: self.spin_per_m,
                     rail_height_m: (input == 0).then_some(&heights[..]),
                 })
-                .map_err(|source| DynamicsError::Contact {
-                    t_s: 0.0,
-                    x_m: xc,
-                    source,
+                .map_err(|source| {
+                    DynamicsError::Passage(crate::passage::PassageError::Contact {
+                        t_s: 0.0,
+                        x_m: xc,
+                        source,
+                    })
                 })?;
             wear.add_step(&c, xc);
             if n >= settle {
@@ -636,7 +640,7 @@ pub fn sinusoidal_profile(
             amplitude_m * fade * (k * xi).cos()
         })
         .collect();
-    RailProfile::new(x, h)
+    Ok(RailProfile::new(x, h)?)
 }
 
 /// `G` measured by passages: the harmonic at `2π/λ` of the wear difference (J/m) between a

@@ -55,16 +55,6 @@ pub enum PassageError {
         /// The rail under the contact grid during the passage (m).
         travel_m: [f64; 2],
     },
-    /// The time step is too large for the highest mode kept.
-    #[error("time step {dt_s:.3e} s is unstable for the highest mode ({f_max_hz:.0} Hz): the limit is {dt_limit_s:.3e} s; lower run.fmax or refine the contact grid (contact.grid_nx: the time step is grid dx / speed)")]
-    UnstableTimeStep {
-        /// The time step (s).
-        dt_s: f64,
-        /// The highest natural frequency (Hz).
-        f_max_hz: f64,
-        /// The stable limit (s).
-        dt_limit_s: f64,
-    },
     /// The contact solver failed at a step.
     #[error("contact solver at t = {t_s:.6} s (x = {x_m:.4} m): {source} (model keys: contact.grid_margin sizes the grid around the static patch, contact.grid_nx/grid_ny its resolution)")]
     Contact {
@@ -135,12 +125,6 @@ pub enum PassageError {
     /// Assembling or expanding the FE matrices and vectors failed.
     #[error(transparent)]
     Fe(#[from] crate::fe::FeError),
-    /// The modal basis (eigenmodes, classification, cache) of a substructure failed.
-    #[error(transparent)]
-    Basis(#[from] crate::eigen::basis::BasisError),
-    /// A mode shape or displacement could not be classified.
-    #[error(transparent)]
-    Classify(#[from] crate::eigen::classify::ClassifyError),
     /// The band-pass, PSD or peak search of a record failed.
     #[error(transparent)]
     Spectral(#[from] crate::spectral::SpectralError),
@@ -188,45 +172,6 @@ pub enum PassageError {
         /// The allowed range.
         expected: &'static str,
     },
-    /// Two inputs of different sizes that must match.
-    #[error("{what}: {found} given, {expected} expected")]
-    SizeMismatch {
-        /// Which inputs (and what to change).
-        what: &'static str,
-        /// The size given.
-        found: usize,
-        /// The size required.
-        expected: usize,
-    },
-    /// A modal basis whose shape does not fit the model.
-    #[error("modal basis is {rows}×{cols} but there are {frequencies} frequencies and {dofs} DOFs: the cached modes do not belong to this model; clear the cache entry")]
-    BasisShape {
-        /// Rows of the mode matrix.
-        rows: usize,
-        /// Columns of the mode matrix.
-        cols: usize,
-        /// Frequencies given.
-        frequencies: usize,
-        /// Free DOFs of the substructure.
-        dofs: usize,
-    },
-    /// A track mode at zero frequency: the track floats.
-    #[error("track mode {mode} has ω² = {omega2_rad2_s2} rad²/s² (a rigid-body mode): the track must be supported in every direction (ballast.*_stiffness > 0, and the rail held by the railpad springs fastening.*_stiffness or the fastening's holds, fastening.hold_stiffness)")]
-    TrackNotSupported {
-        /// Index of the mode.
-        mode: usize,
-        /// Its eigenvalue (rad²/s²).
-        omega2_rad2_s2: f64,
-    },
-    /// I + Δt/2·C of the modal integrator is not positive definite.
-    #[error("I + Δt/2·C is not positive definite: the damping matrix has negative eigenvalues; check the damper inputs")]
-    DampingIndefinite,
-    /// The receptance at a frequency is singular.
-    #[error("receptance at {frequency_hz} Hz is singular: the frequency coincides with an undamped (or rigid-body) mode; shift the frequency grid")]
-    SingularReceptance {
-        /// The frequency (Hz).
-        frequency_hz: f64,
-    },
     /// A point outside the rail's node planes.
     #[error("{what} x = {x_m:.4} m is off the rail [{start_m:.3}, {end_m:.3}] m: lengthen the track (track.bays)")]
     OffRail {
@@ -238,68 +183,6 @@ pub enum PassageError {
         start_m: f64,
         /// Last node plane (m).
         end_m: f64,
-    },
-    /// A point outside the rail stretch a residual flexibility was computed for.
-    #[error("residual flexibility: x = {x_m:.4} m is outside the covered part of the rail [{start_m:.3}, {end_m:.3}] m (computed for the passage's travel; recompute for this range)")]
-    OutsideResidual {
-        /// Position (m).
-        x_m: f64,
-        /// First covered plane (m).
-        start_m: f64,
-        /// Last covered plane (m).
-        end_m: f64,
-    },
-    /// A residual flexibility computed for another engine.
-    #[error("residual flexibility of {modes} modes over [{start_m:.3}, {end_m:.3}] m does not fit the engine ({engine_modes} track modes, travel [{travel_start_m:.3}, {travel_end_m:.3}] m): recompute it")]
-    ResidualMismatch {
-        /// Modes it was computed for.
-        modes: usize,
-        /// First covered plane (m).
-        start_m: f64,
-        /// Last covered plane (m).
-        end_m: f64,
-        /// Track modes of the engine.
-        engine_modes: usize,
-        /// Start of the engine's travel (m).
-        travel_start_m: f64,
-        /// End of the engine's travel (m).
-        travel_end_m: f64,
-    },
-    /// A residual flexibility record with inconsistent plane data.
-    #[error("residual flexibility: inconsistent plane data (clear the modal cache entry)")]
-    ResidualPlanes,
-    /// A residual flexibility below its modal part: modes and stiffness do not belong together.
-    #[error("residual flexibility at plane x = {x_m:.4} m, direction {direction}: FE {fe_m_per_n:.4e} m/N < modal {modal_m_per_n:.4e} m/N: the modes do not belong to this stiffness (clear the modal cache entry)")]
-    ResidualBelowModal {
-        /// Plane position (m).
-        x_m: f64,
-        /// Direction (0, 1, 2 = x, t, n of the contact frame).
-        direction: usize,
-        /// The FE flexibility (m/N).
-        fe_m_per_n: f64,
-        /// The modal flexibility (m/N).
-        modal_m_per_n: f64,
-    },
-    /// The wheel's elastic static flexibility at the contact is not above its modal part.
-    #[error("wheel residual flexibility, direction {direction}: FE {fe_m_per_n:.4e} m/N is not above the modal {modal_m_per_n:.4e} m/N: the wheel modes do not belong to this stiffness (clear the modal cache entry), the wheel's support is out of scale (vehicle.primary_stiffness) or run.wheel_residual_flexibility = false")]
-    WheelResidualBelowModal {
-        /// Direction (0, 1, 2 = x, t, n of the contact frame).
-        direction: usize,
-        /// The FE (elastic, inertia-relief) flexibility (m/N).
-        fe_m_per_n: f64,
-        /// The modal flexibility of the kept elastic modes (m/N).
-        modal_m_per_n: f64,
-    },
-    /// The residual flexibility record could not be written or read back as JSON.
-    #[error("residual flexibility record: {0}")]
-    ResidualJson(#[from] serde_json::Error),
-    /// A node plane index beyond the rail.
-    #[error("node plane {plane} is out of range ({planes} planes)")]
-    PlaneOutOfRange {
-        /// The plane asked for.
-        plane: usize,
-        /// Planes of the rail.
-        planes: usize,
     },
     /// A mesh without the nodes a passage needs (running surface, journals, contact line).
     #[error("the mesh has no {what}")]
@@ -318,28 +201,6 @@ pub enum PassageError {
         /// Steps in the zone.
         steps: usize,
     },
-    /// A point of the static compliance check off the rail.
-    #[error("longitudinal compliance: {what} at x = {x_m} m is off the rail (0 to {length_m} m)")]
-    ComplianceOffRail {
-        /// Which point (load, report point).
-        what: &'static str,
-        /// Position (m).
-        x_m: f64,
-        /// Track length (m).
-        length_m: f64,
-    },
-    /// The linearised wheel–rail contact of the coupled modes is not usable.
-    #[error("coupled modes: the contact linearisation is not usable: {reason}")]
-    ContactLinearisation {
-        /// Why, and what to change.
-        reason: &'static str,
-    },
-    /// The dense eigensolver of the coupled wheel–track state matrix failed.
-    #[error("coupled modes: the dense eigensolver failed ({error:?}); lower run.fmax to shrink the state matrix")]
-    CoupledEigen {
-        /// faer's error (not a `std::error::Error`, so a field, not a source).
-        error: faer::linalg::evd::EvdError,
-    },
     /// A passage engine built on this module (the explicit FE path) failed.
     #[error("{engine} passage: {source}")]
     Engine {
@@ -348,6 +209,10 @@ pub enum PassageError {
         /// Its error.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// An error of the engine that ran the passage, outside this floor's (e.g. the reduced
+    /// engine's residual flexibility), shown as that engine words it.
+    #[error(transparent)]
+    Specific(Box<dyn std::error::Error + Send + Sync>),
 }
 
 /// A rail-top height profile along the rail: `height_m[i]` at `x_m[i]`, ascending `x`

@@ -222,6 +222,9 @@ pub enum StudiesError {
     /// The coupled wheel–track modes could not be computed.
     #[error("coupled wheel–track modes: {0}")]
     Coupled(#[from] crate::dynamics::DynamicsError),
+    /// A passage's record could not be analysed.
+    #[error(transparent)]
+    Passage(#[from] crate::passage::PassageError),
     /// A command argument that cannot be used.
     #[error("{flag} {given}: {reason}")]
     Argument {

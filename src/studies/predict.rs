@@ -40,6 +40,9 @@ pub enum PredictError {
     /// The smooth-rail passage or its analysis failed.
     #[error("smooth-rail passage: {0}")]
     Passage(#[from] DynamicsError),
+    /// The smooth-rail record's analysis failed.
+    #[error("smooth-rail passage: {0}")]
+    Analysis(#[from] crate::passage::PassageError),
     /// The trial-amplitude growth failed.
     #[error("trial-amplitude growth: {0}")]
     Growth(#[from] ProcedureError),

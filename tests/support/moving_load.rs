@@ -98,6 +98,9 @@ pub enum MovingLoadError {
     /// The reduced-order path failed (e.g. unstable time step for the highest mode).
     #[error(transparent)]
     Modal(#[from] DynamicsError),
+    /// The passage's shared machinery failed (contact line, load spreading).
+    #[error(transparent)]
+    Passage(#[from] corrugation::passage::PassageError),
     /// A sparse factorisation failed.
     #[error("sparse LLᵀ of {what} failed ({detail}): the matrix is not positive definite; the track must be supported (ballast stiffness > 0) and Δt > 0")]
     Factorisation {
@@ -479,12 +482,14 @@ pub fn modal_response_corrected(
         gen(&rows, &mut f);
         it.complete(&f);
         if !it.q.iter().all(|v| v.is_finite()) {
-            return Err(DynamicsError::Diverged {
-                t_s: n as f64 * load.dt_s,
-                x_m: load.x_at(n),
-                what: "modal coordinates of the moving-load run".into(),
-            }
-            .into());
+            return Err(
+                DynamicsError::Passage(corrugation::passage::PassageError::Diverged {
+                    t_s: n as f64 * load.dt_s,
+                    x_m: load.x_at(n),
+                    what: "modal coordinates of the moving-load run".into(),
+                })
+                .into(),
+            );
         }
         record(&mut h, &it.q, &rows, n);
     }

@@ -230,9 +230,11 @@ impl PassageEngine {
                     .iter()
                     .copied()
                     .max_by(|a, b| a.1.total_cmp(&b.1))
-                    .ok_or(DynamicsError::MissingNodes {
-                        what: "nodes on the contact line",
-                    })?;
+                    .ok_or(DynamicsError::Passage(
+                        crate::passage::PassageError::MissingNodes {
+                            what: "nodes on the contact line",
+                        },
+                    ))?;
                 let mut rows = vec![0.0; 3 * track_modes.ncols()];
                 super::reduced::modal_rows(
                     &[(node, 1.0)],
@@ -292,9 +294,11 @@ impl PassageEngine {
         let px = &self.rail_line.planes_x_m;
         let p = (0..px.len())
             .min_by(|&a, &b| (px[a] - x_m).abs().total_cmp(&(px[b] - x_m).abs()))
-            .ok_or(DynamicsError::MissingNodes {
-                what: "rail contact line",
-            })?;
+            .ok_or(DynamicsError::Passage(
+                crate::passage::PassageError::MissingNodes {
+                    what: "rail contact line",
+                },
+            ))?;
         let mt = self.track_sys.len();
         let mut fr = vec![0.0; 3 * mt];
         self.rail_line.rows_at(px[p], &mut fr)?;
@@ -534,7 +538,7 @@ impl PassageEngine {
     /// The contact configuration of a passage at `speed_m_per_s`: the model's grid around the
     /// static Hertz patch, and the tangential tolerance [`PASSAGE_TANGENTIAL_TOL`](super::setup::PASSAGE_TANGENTIAL_TOL).
     pub fn contact_config(&self, speed_m_per_s: f64) -> Result<TransientConfig, DynamicsError> {
-        contact_config_for(&self.model, speed_m_per_s)
+        Ok(contact_config_for(&self.model, speed_m_per_s)?)
     }
 
     /// Runs one passage at `speed_m_per_s` (m/s) over the rail profile (`None` = smooth) on
@@ -565,8 +569,11 @@ impl PassageEngine {
         let (mut rec, w) = run_widening_grid(
             self.wheel_load_n,
             |w| self.passage_on_grid(speed_m_per_s, profile, opts, progress, w),
-            |e: &DynamicsError| Some(e),
-            |e| e,
+            |e: &DynamicsError| match e {
+                DynamicsError::Passage(p) => Some(p),
+                _ => None,
+            },
+            DynamicsError::Passage,
             |edge, w| {
                 if let Some(p) = progress {
                     let grid = self.widened_grid(speed_m_per_s, profile, w);
@@ -626,7 +633,7 @@ impl PassageEngine {
     /// Position along the rail (m) from which the driving torque and the train's resistance
     /// act ([`torque_onset_m`]).
     pub fn torque_onset_m(&self) -> Result<f64, DynamicsError> {
-        torque_onset_m(&self.model, self.x_start_m, self.zone_m[0])
+        Ok(torque_onset_m(&self.model, self.x_start_m, self.zone_m[0])?)
     }
 
     /// The contact of a passage at `v` (m/s) over `profile` on the grid widened by `widening`
@@ -644,10 +651,12 @@ impl PassageEngine {
         widening: GridWidening,
     ) -> Result<(TransientRolling, crate::contact::StepResult), DynamicsError> {
         let x0 = self.x_start_m;
-        let contact_err = |source| DynamicsError::Contact {
-            t_s: 0.0,
-            x_m: x0,
-            source,
+        let contact_err = |source| {
+            DynamicsError::Passage(crate::passage::PassageError::Contact {
+                t_s: 0.0,
+                x_m: x0,
+                source,
+            })
         };
         let start = || -> Result<_, DynamicsError> {
             let mut contact = passage_contact(
@@ -733,10 +742,12 @@ impl PassageEngine {
             let (c, w) = (r.consistent_at(xc)?, self.wheel_compliance());
             contact
                 .set_series_compliance([0, 1, 2].map(|d| c[d] + w[d]))
-                .map_err(|source| DynamicsError::Contact {
-                    t_s: t,
-                    x_m: xc,
-                    source,
+                .map_err(|source| {
+                    DynamicsError::Passage(crate::passage::PassageError::Contact {
+                        t_s: t,
+                        x_m: xc,
+                        source,
+                    })
                 })?;
         }
         Ok(())

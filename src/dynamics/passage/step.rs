@@ -50,10 +50,12 @@ impl PassageEngine {
                 spin_per_m: spin,
                 rail_height_m: road.heights_at(xc),
             })
-            .map_err(|source| DynamicsError::Contact {
-                t_s: t,
-                x_m: xc,
-                source,
+            .map_err(|source| {
+                DynamicsError::Passage(crate::passage::PassageError::Contact {
+                    t_s: t,
+                    x_m: xc,
+                    source,
+                })
             })?;
         Ok((r, [xi, delta]))
     }
@@ -131,11 +133,13 @@ pub(super) fn check_finite(
     if tr.q.iter().all(|x| x.is_finite()) && wh.q.iter().all(|x| x.is_finite()) {
         return Ok(());
     }
-    Err(DynamicsError::Diverged {
-        t_s: t,
-        x_m: xc,
-        what: "modal coordinates".into(),
-    })
+    Err(DynamicsError::Passage(
+        crate::passage::PassageError::Diverged {
+            t_s: t,
+            x_m: xc,
+            what: "modal coordinates".into(),
+        },
+    ))
 }
 
 /// The displacement at the contact (frame components x, t, n; m) of a modal system whose

@@ -307,10 +307,12 @@ impl StaticFlexibility for CaseStatic<'_> {
             .chain(cross.iter().flatten())
             .any(|v| !v.is_finite())
         {
-            return Err(DynamicsError::StiffnessIndefinite {
-                negative_pivots: 0,
-                min_rel_pivot: 0.0,
-            });
+            return Err(DynamicsError::Passage(
+                crate::passage::PassageError::StiffnessIndefinite {
+                    negative_pivots: 0,
+                    min_rel_pivot: 0.0,
+                },
+            ));
         }
         Ok((g, cross))
     }
