@@ -491,6 +491,169 @@ impl From<Fastening> for FasteningFile {
     }
 }
 
+/// What the track's stiffness and mass read of a fastening: its `[fastening]` table as a model
+/// file writes it, without a damper (no `*_damping` key, none in the custom holds). The
+/// identity of the track's modes ([`super::identity`]) is built from it, so a damping study
+/// reuses the modes.
+#[derive(Serialize)]
+pub(crate) struct FasteningStiffness {
+    model: FasteningModel,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    custom: Option<HoldPatternStiffness>,
+    rows: usize,
+    columns: usize,
+    footprint_length: f64,
+    footprint_width: f64,
+    strip_width: f64,
+    pad_thickness: f64,
+    vertical_stiffness: f64,
+    lateral_stiffness: f64,
+    longitudinal_stiffness: f64,
+    #[serde(skip_serializing_if = "HoldKind::is_rigid")]
+    hold: HoldKind,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hold_stiffness: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hold_directions: Option<Vec<Axis>>,
+}
+
+/// A custom hold pattern without its dampers (see [`FasteningStiffness`]).
+#[derive(Serialize)]
+struct HoldPatternStiffness {
+    x: DirectionHoldStiffness,
+    y: DirectionHoldStiffness,
+    z: DirectionHoldStiffness,
+}
+
+/// One direction's hold without its dampers (see [`FasteningStiffness`]).
+#[derive(Serialize)]
+struct DirectionHoldStiffness {
+    rigid: RigidRegion,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    elastic: Option<RigidRegion>,
+    indices: Vec<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stiffness: Option<f64>,
+    #[serde(skip_serializing_if = "is_false")]
+    node_lines: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    line_stiffness: Option<f64>,
+}
+
+impl From<DirectionHold> for DirectionHoldStiffness {
+    fn from(h: DirectionHold) -> Self {
+        DirectionHoldStiffness {
+            rigid: h.rigid,
+            elastic: h.elastic,
+            indices: h.indices,
+            stiffness: h.stiffness,
+            node_lines: h.node_lines,
+            line_stiffness: h.line_stiffness,
+        }
+    }
+}
+
+/// A fastening's layout: [`FasteningStiffness`] without the railpads' and the holds'
+/// stiffness (a node line's own `line_stiffness` stays), what the track's component bases
+/// read ([`super::identity::IdentityScope::Components`]).
+#[derive(Serialize)]
+pub(crate) struct FasteningLayout {
+    model: FasteningModel,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    custom: Option<HoldPatternLayout>,
+    rows: usize,
+    columns: usize,
+    footprint_length: f64,
+    footprint_width: f64,
+    strip_width: f64,
+    pad_thickness: f64,
+    #[serde(skip_serializing_if = "HoldKind::is_rigid")]
+    hold: HoldKind,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hold_directions: Option<Vec<Axis>>,
+}
+
+/// A custom hold pattern's layout (see [`FasteningLayout`]).
+#[derive(Serialize)]
+struct HoldPatternLayout {
+    x: DirectionHoldLayout,
+    y: DirectionHoldLayout,
+    z: DirectionHoldLayout,
+}
+
+/// One direction's hold layout (see [`FasteningLayout`]).
+#[derive(Serialize)]
+struct DirectionHoldLayout {
+    rigid: RigidRegion,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    elastic: Option<RigidRegion>,
+    indices: Vec<usize>,
+    #[serde(skip_serializing_if = "is_false")]
+    node_lines: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    line_stiffness: Option<f64>,
+}
+
+impl From<DirectionHoldStiffness> for DirectionHoldLayout {
+    fn from(h: DirectionHoldStiffness) -> Self {
+        DirectionHoldLayout {
+            rigid: h.rigid,
+            elastic: h.elastic,
+            indices: h.indices,
+            node_lines: h.node_lines,
+            line_stiffness: h.line_stiffness,
+        }
+    }
+}
+
+impl Fastening {
+    /// The fastening's layout ([`FasteningLayout`]).
+    pub(crate) fn layout_view(&self) -> FasteningLayout {
+        let s = self.stiffness_view();
+        FasteningLayout {
+            model: s.model,
+            custom: s.custom.map(|p| HoldPatternLayout {
+                x: p.x.into(),
+                y: p.y.into(),
+                z: p.z.into(),
+            }),
+            rows: s.rows,
+            columns: s.columns,
+            footprint_length: s.footprint_length,
+            footprint_width: s.footprint_width,
+            strip_width: s.strip_width,
+            pad_thickness: s.pad_thickness,
+            hold: s.hold,
+            hold_directions: s.hold_directions,
+        }
+    }
+
+    /// The fastening as the track's stiffness and mass read it ([`FasteningStiffness`]).
+    pub(crate) fn stiffness_view(&self) -> FasteningStiffness {
+        let f = FasteningFile::from(self.clone());
+        FasteningStiffness {
+            model: f.model,
+            custom: f.custom.map(|p| HoldPatternStiffness {
+                x: p.x.into(),
+                y: p.y.into(),
+                z: p.z.into(),
+            }),
+            rows: f.rows,
+            columns: f.columns,
+            footprint_length: f.footprint_length,
+            footprint_width: f.footprint_width,
+            strip_width: f.strip_width,
+            pad_thickness: f.pad_thickness,
+            vertical_stiffness: f.vertical_stiffness,
+            lateral_stiffness: f.lateral_stiffness,
+            longitudinal_stiffness: f.longitudinal_stiffness,
+            hold: f.hold,
+            hold_stiffness: f.hold_stiffness,
+            hold_directions: f.hold_directions,
+        }
+    }
+}
+
 /// The `[fastening]` table as written in a model file; [`Fastening`] is its checked form.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

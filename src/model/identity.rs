@@ -13,10 +13,20 @@
 //!   keys (the track is built without them).
 //! - [`IdentityScope::Wheel`]: `Modes` restricted to the wheel, the vehicle and the wheel's
 //!   mesh keys (`WheelStructure::build` reads only these).
+//!
+//! Each scope but `Run` is a typed view of the model that names the fields it holds (a new
+//! field is in no modes identity until a view names it); the views give the bytes the earlier
+//! key-removal code gave (tested on every model file of the repository), so every cache key
+//! is unchanged.
 
+use serde::Serialize;
 use serde_json::Value;
 
-use super::Model;
+use super::fastening::{FasteningLayout, FasteningStiffness};
+use super::{
+    is_true, MassKind, MeshParams, Model, NodePlanes, Rail, Run, Sleeper, SpringDampers, Track,
+    Vehicle, WebShape, Wheel,
+};
 
 /// What a model identity covers (see the module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,6 +39,9 @@ pub enum IdentityScope {
     Track,
     /// The sections the wheel's K and M read.
     Wheel,
+    /// `Track` without any spring's stiffness: what the track's component bases read (the
+    /// springs enter their coupling, not the components; `eigen::substructure`).
+    Components,
 }
 
 /// The identity of `m` in `scope`: its JSON, the bytes that are hashed. Equal models give
@@ -51,92 +64,393 @@ pub fn run_key(m: &Model) -> Result<String, serde_json::Error> {
 }
 
 /// The model's sections in `scope` as JSON (keys sorted); for [`IdentityScope::Run`] the whole
-/// model.
+/// model. Each scope is a typed view that names the fields it holds ([`ModesView`],
+/// [`TrackView`], [`WheelView`]): a field added to the model is in no scope's identity until
+/// a view names it.
 pub fn scoped_value(m: &Model, scope: IdentityScope) -> Result<Value, serde_json::Error> {
-    let mut v = serde_json::to_value(m)?;
-    if scope == IdentityScope::Run {
-        return Ok(v);
-    }
-    if let Some(o) = v.as_object_mut() {
-        remove_non_structural(o);
-        match scope {
-            IdentityScope::Wheel => keep_wheel(o),
-            IdentityScope::Track => drop_wheel(o),
-            IdentityScope::Modes | IdentityScope::Run => {}
-        }
-    }
-    Ok(v)
-}
-
-type Object = serde_json::Map<String, Value>;
-
-/// Removes what neither K nor M reads: contact, wear, explicit, the passage settings of `run`
-/// (the solution zone stays: it places the fine mesh) and every damper.
-fn remove_non_structural(o: &mut Object) {
-    for k in ["contact", "wear", "explicit"] {
-        o.remove(k);
-    }
-    if let Some(run) = o.get_mut("run").and_then(|r| r.as_object_mut()) {
-        for k in [
-            "speed_kmh",
-            "fmax",
-            "residual_flexibility",
-            "residual_variation",
-            "wheel_residual_flexibility",
-            "start",
-            "rest_start_distance",
-            "creepage",
-        ] {
-            run.remove(k);
-        }
-    }
-    // the rail ends' dashpots enter C only
-    if let Some(t) = o.get_mut("track").and_then(|r| r.as_object_mut()) {
-        for k in ["ends", "absorbing_layer_length", "absorbing_layer_rate"] {
-            t.remove(k);
-        }
-    }
-    for part in ["fastening", "ballast"] {
-        if let Some(f) = o.get_mut(part).and_then(|r| r.as_object_mut()) {
-            f.retain(|k, _| !k.ends_with("damping"));
-            if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
-                for h in c.values_mut() {
-                    if let Some(h) = h.as_object_mut() {
-                        h.retain(|k, _| !k.ends_with("damping"));
-                    }
-                }
-            }
-        }
-    }
-    if let Some(v) = o.get_mut("vehicle").and_then(|r| r.as_object_mut()) {
-        v.remove("primary_damping");
-    }
-    if let Some(w) = o.get_mut("wheel").and_then(|r| r.as_object_mut()) {
-        w.remove("damping_ratio");
+    match scope {
+        IdentityScope::Run => serde_json::to_value(m),
+        IdentityScope::Modes => serde_json::to_value(ModesView::of(m)),
+        IdentityScope::Track => serde_json::to_value(TrackView::of(m)),
+        IdentityScope::Wheel => serde_json::to_value(WheelView::of(m)),
+        IdentityScope::Components => serde_json::to_value(ComponentsView::of(m)),
     }
 }
 
-/// Keeps the wheel, the vehicle and the wheel's mesh keys only.
-fn keep_wheel(o: &mut Object) {
-    o.retain(|k, _| matches!(k.as_str(), "wheel" | "vehicle" | "mesh"));
-    if let Some(mesh) = o.get_mut("mesh").and_then(|r| r.as_object_mut()) {
-        mesh.retain(|k, _| matches!(k.as_str(), "wheel_segments" | "wheel_element_size" | "mass"));
+/// What the track's component bases read: [`TrackView`] without a spring's stiffness (the
+/// railpads', the ballast's, the holds'; a node line's own `line_stiffness` stays).
+#[derive(Serialize)]
+struct ComponentsView<'a> {
+    track: TrackLayout,
+    rail: &'a Rail,
+    sleeper: &'a Sleeper,
+    fastening: FasteningLayout,
+    /// The ballast holds nothing but its springs.
+    ballast: Nothing,
+    mesh: TrackMesh<'a>,
+    run: SolutionZone,
+}
+
+/// An empty table.
+#[derive(Serialize)]
+struct Nothing {}
+
+impl<'a> ComponentsView<'a> {
+    fn of(m: &'a Model) -> Self {
+        ComponentsView {
+            track: TrackLayout::of(&m.track),
+            rail: &m.rail,
+            sleeper: &m.sleeper,
+            fastening: m.fastening.layout_view(),
+            ballast: Nothing {},
+            mesh: TrackMesh::of(&m.mesh),
+            run: SolutionZone::of(&m.run),
+        }
     }
 }
 
-/// Removes the wheel, the vehicle and the wheel's mesh keys.
-fn drop_wheel(o: &mut Object) {
-    o.remove("wheel");
-    o.remove("vehicle");
-    if let Some(mesh) = o.get_mut("mesh").and_then(|r| r.as_object_mut()) {
-        mesh.remove("wheel_segments");
-        mesh.remove("wheel_element_size");
+/// What the track's and the wheel's K and M read: every structural section, without the
+/// contact, wear and explicit sections, the passage settings of `run` (the solution zone
+/// stays: it places the fine mesh) and every damper.
+#[derive(Serialize)]
+struct ModesView<'a> {
+    track: TrackLayout,
+    rail: &'a Rail,
+    sleeper: &'a Sleeper,
+    fastening: FasteningStiffness,
+    ballast: Stiffnesses,
+    wheel: WheelStiffness<'a>,
+    vehicle: VehicleStiffness,
+    mesh: &'a MeshParams,
+    run: SolutionZone,
+}
+
+impl<'a> ModesView<'a> {
+    fn of(m: &'a Model) -> Self {
+        ModesView {
+            track: TrackLayout::of(&m.track),
+            rail: &m.rail,
+            sleeper: &m.sleeper,
+            fastening: m.fastening.stiffness_view(),
+            ballast: Stiffnesses::of(&m.ballast),
+            wheel: WheelStiffness::of(&m.wheel),
+            vehicle: VehicleStiffness::of(&m.vehicle),
+            mesh: &m.mesh,
+            run: SolutionZone::of(&m.run),
+        }
+    }
+}
+
+/// What the track's K and M read: [`ModesView`] without the wheel, the vehicle and the wheel's
+/// mesh keys (the track is built without them).
+#[derive(Serialize)]
+struct TrackView<'a> {
+    track: TrackLayout,
+    rail: &'a Rail,
+    sleeper: &'a Sleeper,
+    fastening: FasteningStiffness,
+    ballast: Stiffnesses,
+    mesh: TrackMesh<'a>,
+    run: SolutionZone,
+}
+
+impl<'a> TrackView<'a> {
+    fn of(m: &'a Model) -> Self {
+        TrackView {
+            track: TrackLayout::of(&m.track),
+            rail: &m.rail,
+            sleeper: &m.sleeper,
+            fastening: m.fastening.stiffness_view(),
+            ballast: Stiffnesses::of(&m.ballast),
+            mesh: TrackMesh::of(&m.mesh),
+            run: SolutionZone::of(&m.run),
+        }
+    }
+}
+
+/// What the wheel's K and M read (`WheelStructure::build`): the wheel, the vehicle and the
+/// wheel's mesh keys, without the dampers.
+#[derive(Serialize)]
+struct WheelView<'a> {
+    wheel: WheelStiffness<'a>,
+    vehicle: VehicleStiffness,
+    mesh: WheelMesh<'a>,
+}
+
+impl<'a> WheelView<'a> {
+    fn of(m: &'a Model) -> Self {
+        WheelView {
+            wheel: WheelStiffness::of(&m.wheel),
+            vehicle: VehicleStiffness::of(&m.vehicle),
+            mesh: WheelMesh::of(&m.mesh),
+        }
+    }
+}
+
+/// `[track]` without the rail ends' dashpots and their layer (they enter C only).
+#[derive(Serialize)]
+struct TrackLayout {
+    bays: usize,
+    sleeper_spacing: f64,
+}
+
+impl TrackLayout {
+    fn of(t: &Track) -> Self {
+        TrackLayout {
+            bays: t.bays,
+            sleeper_spacing: t.sleeper_spacing,
+        }
+    }
+}
+
+/// A spring-damper set's stiffnesses (N/m).
+#[derive(Serialize)]
+struct Stiffnesses {
+    vertical_stiffness: f64,
+    lateral_stiffness: f64,
+    longitudinal_stiffness: f64,
+}
+
+impl Stiffnesses {
+    fn of(s: &SpringDampers) -> Self {
+        Stiffnesses {
+            vertical_stiffness: s.vertical_stiffness,
+            lateral_stiffness: s.lateral_stiffness,
+            longitudinal_stiffness: s.longitudinal_stiffness,
+        }
+    }
+}
+
+/// `[wheel]` without its modal damping ratio (applied after the modes).
+#[derive(Serialize)]
+struct WheelStiffness<'a> {
+    radius: f64,
+    conicity: f64,
+    youngs_modulus: f64,
+    poisson_ratio: f64,
+    density: f64,
+    #[serde(skip_serializing_if = "WebShape::is_straight")]
+    web_shape: &'a WebShape,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    web_bend: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    web_thickness: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    web_offset: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rim_width: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rim_thickness: Option<f64>,
+    #[serde(skip_serializing_if = "is_true")]
+    brake_disc: bool,
+}
+
+impl<'a> WheelStiffness<'a> {
+    fn of(w: &'a Wheel) -> Self {
+        WheelStiffness {
+            radius: w.radius,
+            conicity: w.conicity,
+            youngs_modulus: w.youngs_modulus,
+            poisson_ratio: w.poisson_ratio,
+            density: w.density,
+            web_shape: &w.web_shape,
+            web_bend: w.web_bend,
+            web_thickness: w.web_thickness,
+            web_offset: w.web_offset,
+            rim_width: w.rim_width,
+            rim_thickness: w.rim_thickness,
+            brake_disc: w.brake_disc,
+        }
+    }
+}
+
+/// `[vehicle]` without the primary suspension's damper.
+#[derive(Serialize)]
+struct VehicleStiffness {
+    wheel_load: f64,
+    primary_stiffness: f64,
+    gravity: f64,
+}
+
+impl VehicleStiffness {
+    fn of(v: &Vehicle) -> Self {
+        VehicleStiffness {
+            wheel_load: v.wheel_load,
+            primary_stiffness: v.primary_stiffness,
+            gravity: v.gravity,
+        }
+    }
+}
+
+/// `[run]`'s solution zone, which places the fine mesh.
+#[derive(Serialize)]
+struct SolutionZone {
+    solution_zone_offset: f64,
+    solution_zone_length: f64,
+}
+
+impl SolutionZone {
+    fn of(r: &Run) -> Self {
+        SolutionZone {
+            solution_zone_offset: r.solution_zone_offset,
+            solution_zone_length: r.solution_zone_length,
+        }
+    }
+}
+
+/// `[mesh]` without the wheel's keys.
+#[derive(Serialize)]
+struct TrackMesh<'a> {
+    element_length: f64,
+    fine_element_length: f64,
+    section_size: f64,
+    head_size: f64,
+    sleeper_elements: [usize; 3],
+    mass: &'a MassKind,
+    #[serde(skip_serializing_if = "NodePlanes::is_graded")]
+    node_planes: &'a NodePlanes,
+}
+
+impl<'a> TrackMesh<'a> {
+    fn of(m: &'a MeshParams) -> Self {
+        TrackMesh {
+            element_length: m.element_length,
+            fine_element_length: m.fine_element_length,
+            section_size: m.section_size,
+            head_size: m.head_size,
+            sleeper_elements: m.sleeper_elements,
+            mass: &m.mass,
+            node_planes: &m.node_planes,
+        }
+    }
+}
+
+/// `[mesh]`'s wheel keys and the mass matrix kind.
+#[derive(Serialize)]
+struct WheelMesh<'a> {
+    wheel_segments: usize,
+    wheel_element_size: f64,
+    mass: &'a MassKind,
+}
+
+impl<'a> WheelMesh<'a> {
+    fn of(m: &'a MeshParams) -> Self {
+        WheelMesh {
+            wheel_segments: m.wheel_segments,
+            wheel_element_size: m.wheel_element_size,
+            mass: &m.mass,
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The identity as the code before the typed views computed it, kept as an independent
+    /// reference: the whole model's JSON with what K and M do not read removed by key name.
+    fn reference_scoped_value(m: &Model, scope: IdentityScope) -> Result<Value, serde_json::Error> {
+        if scope == IdentityScope::Components {
+            // the component key's removal of every spring stiffness from the track's identity
+            let mut v = reference_scoped_value(m, IdentityScope::Track)?;
+            if let Some(o) = v.as_object_mut() {
+                for p in ["fastening", "ballast"] {
+                    if let Some(f) = o.get_mut(p).and_then(|r| r.as_object_mut()) {
+                        f.retain(|k, _| !k.ends_with("stiffness"));
+                        if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
+                            for h in c.values_mut() {
+                                if let Some(h) = h.as_object_mut() {
+                                    h.remove("stiffness");
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            return Ok(v);
+        }
+        let mut v = serde_json::to_value(m)?;
+        if scope == IdentityScope::Run {
+            return Ok(v);
+        }
+        if let Some(o) = v.as_object_mut() {
+            remove_non_structural(o);
+            match scope {
+                IdentityScope::Wheel => keep_wheel(o),
+                IdentityScope::Track => drop_wheel(o),
+                IdentityScope::Modes | IdentityScope::Run | IdentityScope::Components => {}
+            }
+        }
+        Ok(v)
+    }
+
+    type Object = serde_json::Map<String, Value>;
+
+    /// Removes what neither K nor M reads: contact, wear, explicit, the passage settings of `run`
+    /// (the solution zone stays: it places the fine mesh) and every damper.
+    fn remove_non_structural(o: &mut Object) {
+        for k in ["contact", "wear", "explicit"] {
+            o.remove(k);
+        }
+        if let Some(run) = o.get_mut("run").and_then(|r| r.as_object_mut()) {
+            for k in [
+                "speed_kmh",
+                "fmax",
+                "residual_flexibility",
+                "residual_variation",
+                "wheel_residual_flexibility",
+                "start",
+                "rest_start_distance",
+                "creepage",
+            ] {
+                run.remove(k);
+            }
+        }
+        // the rail ends' dashpots enter C only
+        if let Some(t) = o.get_mut("track").and_then(|r| r.as_object_mut()) {
+            for k in ["ends", "absorbing_layer_length", "absorbing_layer_rate"] {
+                t.remove(k);
+            }
+        }
+        for part in ["fastening", "ballast"] {
+            if let Some(f) = o.get_mut(part).and_then(|r| r.as_object_mut()) {
+                f.retain(|k, _| !k.ends_with("damping"));
+                if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
+                    for h in c.values_mut() {
+                        if let Some(h) = h.as_object_mut() {
+                            h.retain(|k, _| !k.ends_with("damping"));
+                        }
+                    }
+                }
+            }
+        }
+        if let Some(v) = o.get_mut("vehicle").and_then(|r| r.as_object_mut()) {
+            v.remove("primary_damping");
+        }
+        if let Some(w) = o.get_mut("wheel").and_then(|r| r.as_object_mut()) {
+            w.remove("damping_ratio");
+        }
+    }
+
+    /// Keeps the wheel, the vehicle and the wheel's mesh keys only.
+    fn keep_wheel(o: &mut Object) {
+        o.retain(|k, _| matches!(k.as_str(), "wheel" | "vehicle" | "mesh"));
+        if let Some(mesh) = o.get_mut("mesh").and_then(|r| r.as_object_mut()) {
+            mesh.retain(|k, _| {
+                matches!(k.as_str(), "wheel_segments" | "wheel_element_size" | "mass")
+            });
+        }
+    }
+
+    /// Removes the wheel, the vehicle and the wheel's mesh keys.
+    fn drop_wheel(o: &mut Object) {
+        o.remove("wheel");
+        o.remove("vehicle");
+        if let Some(mesh) = o.get_mut("mesh").and_then(|r| r.as_object_mut()) {
+            mesh.remove("wheel_segments");
+            mesh.remove("wheel_element_size");
+        }
+    }
 
     fn with(set: &[&str]) -> Model {
         let o: Vec<String> = set.iter().map(|s| s.to_string()).collect();
@@ -153,6 +467,62 @@ mod tests {
         IdentityScope::Track,
         IdentityScope::Wheel,
     ];
+
+    /// The typed views give the bytes the key-removal reference gives, on every model file of
+    /// the repository and on overrides that reach every field a view names or leaves out
+    /// (custom elastic and node-line holds with dampers, absorbing ends, wheel geometry,
+    /// elastic preset holds, a lattice mesh, another start).
+    #[test]
+    fn typed_views_equal_the_key_removal_reference() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+        let mut models: Vec<(String, Model)> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+            .map(|p| {
+                let m = crate::model::load_model(&crate::model::ModelSource::File(p.clone()), &[])
+                    .unwrap();
+                (p.display().to_string(), m)
+            })
+            .collect();
+        assert!(models.len() >= 15, "{} model files", models.len());
+        for set in [
+            &[
+                "fastening.model=custom",
+                "fastening.custom.x={ elastic = \"columns\", indices = [1], stiffness = 1e9, damping = 5e3 }",
+                "fastening.custom.y={ rigid = \"rows\", indices = [0, 3], node_lines = true }",
+                "fastening.custom.z={ elastic = \"columns\", indices = [0, 2], node_lines = true, line_stiffness = 2e8, line_damping = 1e3 }",
+            ][..],
+            &["fastening.hold=elastic", "fastening.hold_stiffness=3e8", "fastening.hold_damping=2e4"],
+            &["track.ends=absorbing", "track.absorbing_layer_length=0.9", "track.bays=20"],
+            &["wheel.web_shape=curved", "wheel.rim_width=0.14", "wheel.brake_disc=false", "wheel.damping_ratio=0.001"],
+            &["mesh.node_planes=lattice", "run.start=rest", "run.speed_kmh=120", "vehicle.primary_damping=9e3"],
+        ] {
+            models.push((format!("{set:?}"), with(set)));
+        }
+        for (name, m) in &models {
+            for scope in [
+                IdentityScope::Modes,
+                IdentityScope::Track,
+                IdentityScope::Wheel,
+                IdentityScope::Components,
+            ] {
+                let typed = serde_json::to_vec(&scoped_value(m, scope).unwrap()).unwrap();
+                let reference =
+                    serde_json::to_vec(&reference_scoped_value(m, scope).unwrap()).unwrap();
+                assert_eq!(
+                    String::from_utf8_lossy(&typed),
+                    String::from_utf8_lossy(&reference),
+                    "{name}, {scope:?}"
+                );
+                assert_eq!(
+                    model_identity(m, scope).unwrap(),
+                    reference,
+                    "{name}, {scope:?}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn equal_models_have_equal_identities_in_every_scope() {

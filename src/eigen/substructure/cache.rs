@@ -10,7 +10,7 @@ use super::{
 pub const COMPONENT_REVISION: u64 = 2;
 
 /// The cache key of a track's component `part` (`rail-component` or `sleeper-component`):
-/// the track's identity ([`crate::model::identity::IdentityScope::Track`]) without any spring stiffness, but
+/// the track's identity without any spring stiffness ([`crate::model::identity::IdentityScope::Components`]), but
 /// with the railpad directions that have springs at all (a direction with zero stiffness and
 /// zero damping has none, which changes the spring layout), f_max and the options. Hold and
 /// ballast springs exist whatever their stiffness.
@@ -20,22 +20,11 @@ pub fn component_key(
     opts: &SubstructureOptions,
     part: &str,
 ) -> Result<CacheKey, BasisError> {
-    let mut v =
-        crate::model::identity::scoped_value(m, crate::model::identity::IdentityScope::Track)?;
-    if let Some(o) = v.as_object_mut() {
-        for p in ["fastening", "ballast"] {
-            if let Some(f) = o.get_mut(p).and_then(|r| r.as_object_mut()) {
-                f.retain(|k, _| !k.ends_with("stiffness"));
-                if let Some(c) = f.get_mut("custom").and_then(|r| r.as_object_mut()) {
-                    for h in c.values_mut() {
-                        if let Some(h) = h.as_object_mut() {
-                            h.remove("stiffness");
-                        }
-                    }
-                }
-            }
-        }
-    }
+    let bytes = crate::model::identity::model_identity(
+        m,
+        crate::model::identity::IdentityScope::Components,
+    )
+    .map_err(BasisError::Json)?;
     let (k, c) = (
         m.fastening.springs.stiffness(),
         m.fastening.springs.damping(),
@@ -44,7 +33,6 @@ pub fn component_key(
         .filter(|&d| k[d] != 0.0 || c[d] != 0.0)
         .map(|d| 1u64 << d)
         .sum();
-    let bytes = serde_json::to_vec(&v).map_err(BasisError::Json)?;
     Ok(CacheKey::new()
         .u64("physics_revision", crate::eigen::basis::PHYSICS_REVISION)
         .u64("component_revision", COMPONENT_REVISION)
