@@ -114,29 +114,20 @@ impl<'a> ComponentsView<'a> {
 /// stays: it places the fine mesh) and every damper.
 #[derive(Serialize)]
 struct ModesView<'a> {
-    track: TrackLayout,
-    rail: &'a Rail,
-    sleeper: &'a Sleeper,
-    fastening: FasteningStiffness,
-    ballast: Stiffnesses,
+    #[serde(flatten)]
+    track: TrackSections<'a>,
     wheel: WheelStiffness<'a>,
     vehicle: VehicleStiffness,
     mesh: &'a MeshParams,
-    run: SolutionZone,
 }
 
 impl<'a> ModesView<'a> {
     fn of(m: &'a Model) -> Self {
         ModesView {
-            track: TrackLayout::of(&m.track),
-            rail: &m.rail,
-            sleeper: &m.sleeper,
-            fastening: m.fastening.stiffness_view(),
-            ballast: Stiffnesses::of(&m.ballast),
+            track: TrackSections::of(m),
             wheel: WheelStiffness::of(&m.wheel),
             vehicle: VehicleStiffness::of(&m.vehicle),
             mesh: &m.mesh,
-            run: SolutionZone::of(&m.run),
         }
     }
 }
@@ -145,24 +136,40 @@ impl<'a> ModesView<'a> {
 /// mesh keys (the track is built without them).
 #[derive(Serialize)]
 struct TrackView<'a> {
-    track: TrackLayout,
-    rail: &'a Rail,
-    sleeper: &'a Sleeper,
-    fastening: FasteningStiffness,
-    ballast: Stiffnesses,
+    #[serde(flatten)]
+    track: TrackSections<'a>,
     mesh: TrackMesh<'a>,
-    run: SolutionZone,
 }
 
 impl<'a> TrackView<'a> {
     fn of(m: &'a Model) -> Self {
         TrackView {
+            track: TrackSections::of(m),
+            mesh: TrackMesh::of(&m.mesh),
+        }
+    }
+}
+
+/// The track's sections but the mesh, as K and M read them (in [`ModesView`] and
+/// [`TrackView`]).
+#[derive(Serialize)]
+struct TrackSections<'a> {
+    track: TrackLayout,
+    rail: &'a Rail,
+    sleeper: &'a Sleeper,
+    fastening: FasteningStiffness,
+    ballast: Stiffnesses,
+    run: SolutionZone,
+}
+
+impl<'a> TrackSections<'a> {
+    fn of(m: &'a Model) -> Self {
+        TrackSections {
             track: TrackLayout::of(&m.track),
             rail: &m.rail,
             sleeper: &m.sleeper,
             fastening: m.fastening.stiffness_view(),
             ballast: Stiffnesses::of(&m.ballast),
-            mesh: TrackMesh::of(&m.mesh),
             run: SolutionZone::of(&m.run),
         }
     }
