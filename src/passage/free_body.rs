@@ -177,12 +177,7 @@ fn held_factor(
         });
     }
     let mean = diag.iter().map(|&p| k.val()[p]).sum::<f64>() / diag.len() as f64;
-    let sym = k
-        .symbolic()
-        .to_owned()
-        .map_err(|_| PassageError::MissingNodes {
-            what: "memory for the wheel's held stiffness",
-        })?;
+    let sym = k.symbolic().to_owned().map_err(crate::fe::FeError::from)?;
     let mut vals = k.val().to_vec();
     for &d in held {
         vals[diag[d]] += mean;
