@@ -64,8 +64,8 @@ pub fn run_key(m: &Model) -> Result<String, serde_json::Error> {
 }
 
 /// The model's sections in `scope` as JSON (keys sorted); for [`IdentityScope::Run`] the whole
-/// model. Each scope is a typed view that names the fields it holds ([`ModesView`],
-/// [`TrackView`], [`WheelView`]): a field added to the model is in no scope's identity until
+/// model. Each scope is a typed view that names the fields it holds (`ModesView`,
+/// `TrackView`, `WheelView`): a field added to the model is in no scope's identity until
 /// a view names it.
 pub fn scoped_value(m: &Model, scope: IdentityScope) -> Result<Value, serde_json::Error> {
     match scope {
