@@ -542,13 +542,24 @@ struct DirectionHoldStiffness {
 
 impl From<DirectionHold> for DirectionHoldStiffness {
     fn from(h: DirectionHold) -> Self {
+        // Every field named, so that a new one does not compile until it is placed.
+        let DirectionHold {
+            rigid,
+            elastic,
+            indices,
+            stiffness,
+            damping: _,
+            node_lines,
+            line_stiffness,
+            line_damping: _,
+        } = h;
         DirectionHoldStiffness {
-            rigid: h.rigid,
-            elastic: h.elastic,
-            indices: h.indices,
-            stiffness: h.stiffness,
-            node_lines: h.node_lines,
-            line_stiffness: h.line_stiffness,
+            rigid,
+            elastic,
+            indices,
+            stiffness,
+            node_lines,
+            line_stiffness,
         }
     }
 }
@@ -630,26 +641,46 @@ impl Fastening {
 
     /// The fastening as the track's stiffness and mass read it ([`FasteningStiffness`]).
     pub(crate) fn stiffness_view(&self) -> FasteningStiffness {
-        let f = FasteningFile::from(self.clone());
+        // Every field named, so that a new one does not compile until it is placed.
+        let FasteningFile {
+            model,
+            custom,
+            rows,
+            columns,
+            footprint_length,
+            footprint_width,
+            strip_width,
+            pad_thickness,
+            vertical_stiffness,
+            vertical_damping: _,
+            lateral_stiffness,
+            lateral_damping: _,
+            longitudinal_stiffness,
+            longitudinal_damping: _,
+            hold,
+            hold_stiffness,
+            hold_damping: _,
+            hold_directions,
+        } = FasteningFile::from(self.clone());
         FasteningStiffness {
-            model: f.model,
-            custom: f.custom.map(|p| HoldPatternStiffness {
+            model,
+            custom: custom.map(|p| HoldPatternStiffness {
                 x: p.x.into(),
                 y: p.y.into(),
                 z: p.z.into(),
             }),
-            rows: f.rows,
-            columns: f.columns,
-            footprint_length: f.footprint_length,
-            footprint_width: f.footprint_width,
-            strip_width: f.strip_width,
-            pad_thickness: f.pad_thickness,
-            vertical_stiffness: f.vertical_stiffness,
-            lateral_stiffness: f.lateral_stiffness,
-            longitudinal_stiffness: f.longitudinal_stiffness,
-            hold: f.hold,
-            hold_stiffness: f.hold_stiffness,
-            hold_directions: f.hold_directions,
+            rows,
+            columns,
+            footprint_length,
+            footprint_width,
+            strip_width,
+            pad_thickness,
+            vertical_stiffness,
+            lateral_stiffness,
+            longitudinal_stiffness,
+            hold,
+            hold_stiffness,
+            hold_directions,
         }
     }
 }

@@ -13,6 +13,8 @@
 //!   keys (the track is built without them).
 //! - [`IdentityScope::Wheel`]: `Modes` restricted to the wheel, the vehicle and the wheel's
 //!   mesh keys (`WheelStructure::build` reads only these).
+//! - [`IdentityScope::Components`]: `Track` without any spring's stiffness (the track's
+//!   component bases; the springs enter only their coupling).
 //!
 //! Each scope but `Run` is a typed view of the model that names the fields it holds (a new
 //! field is in no modes identity until a view names it); the views give the bytes the earlier
@@ -65,8 +67,8 @@ pub fn run_key(m: &Model) -> Result<String, serde_json::Error> {
 
 /// The model's sections in `scope` as JSON (keys sorted); for [`IdentityScope::Run`] the whole
 /// model. Each scope is a typed view that names the fields it holds (`ModesView`,
-/// `TrackView`, `WheelView`): a field added to the model is in no scope's identity until
-/// a view names it.
+/// `TrackView`, `WheelView`, `ComponentsView`); the views take their sources apart field by
+/// field, so a field added to the model does not compile until a view holds or leaves it.
 pub fn scoped_value(m: &Model, scope: IdentityScope) -> Result<Value, serde_json::Error> {
     match scope {
         IdentityScope::Run => serde_json::to_value(m),
@@ -123,6 +125,21 @@ struct ModesView<'a> {
 
 impl<'a> ModesView<'a> {
     fn of(m: &'a Model) -> Self {
+        // Every section named: the contact, wear and explicit ones are read by neither K nor M.
+        let Model {
+            track: _,
+            rail: _,
+            sleeper: _,
+            fastening: _,
+            ballast: _,
+            wheel: _,
+            vehicle: _,
+            contact: _,
+            mesh: _,
+            run: _,
+            wear: _,
+            explicit: _,
+        } = m;
         ModesView {
             track: TrackSections::of(m),
             wheel: WheelStiffness::of(&m.wheel),
@@ -203,9 +220,17 @@ struct TrackLayout {
 
 impl TrackLayout {
     fn of(t: &Track) -> Self {
+        // Every field named, so that a new one does not compile until it is placed.
+        let Track {
+            bays,
+            sleeper_spacing,
+            ends: _,
+            absorbing_layer_length: _,
+            absorbing_layer_rate: _,
+        } = t;
         TrackLayout {
-            bays: t.bays,
-            sleeper_spacing: t.sleeper_spacing,
+            bays: *bays,
+            sleeper_spacing: *sleeper_spacing,
         }
     }
 }
@@ -220,10 +245,18 @@ struct Stiffnesses {
 
 impl Stiffnesses {
     fn of(s: &SpringDampers) -> Self {
+        let SpringDampers {
+            vertical_stiffness,
+            vertical_damping: _,
+            lateral_stiffness,
+            lateral_damping: _,
+            longitudinal_stiffness,
+            longitudinal_damping: _,
+        } = s;
         Stiffnesses {
-            vertical_stiffness: s.vertical_stiffness,
-            lateral_stiffness: s.lateral_stiffness,
-            longitudinal_stiffness: s.longitudinal_stiffness,
+            vertical_stiffness: *vertical_stiffness,
+            lateral_stiffness: *lateral_stiffness,
+            longitudinal_stiffness: *longitudinal_stiffness,
         }
     }
 }
@@ -254,19 +287,34 @@ struct WheelStiffness<'a> {
 
 impl<'a> WheelStiffness<'a> {
     fn of(w: &'a Wheel) -> Self {
+        let Wheel {
+            radius,
+            conicity,
+            youngs_modulus,
+            poisson_ratio,
+            density,
+            damping_ratio: _,
+            web_shape,
+            web_bend,
+            web_thickness,
+            web_offset,
+            rim_width,
+            rim_thickness,
+            brake_disc,
+        } = w;
         WheelStiffness {
-            radius: w.radius,
-            conicity: w.conicity,
-            youngs_modulus: w.youngs_modulus,
-            poisson_ratio: w.poisson_ratio,
-            density: w.density,
-            web_shape: &w.web_shape,
-            web_bend: w.web_bend,
-            web_thickness: w.web_thickness,
-            web_offset: w.web_offset,
-            rim_width: w.rim_width,
-            rim_thickness: w.rim_thickness,
-            brake_disc: w.brake_disc,
+            radius: *radius,
+            conicity: *conicity,
+            youngs_modulus: *youngs_modulus,
+            poisson_ratio: *poisson_ratio,
+            density: *density,
+            web_shape,
+            web_bend: *web_bend,
+            web_thickness: *web_thickness,
+            web_offset: *web_offset,
+            rim_width: *rim_width,
+            rim_thickness: *rim_thickness,
+            brake_disc: *brake_disc,
         }
     }
 }
@@ -281,10 +329,16 @@ struct VehicleStiffness {
 
 impl VehicleStiffness {
     fn of(v: &Vehicle) -> Self {
+        let Vehicle {
+            wheel_load,
+            primary_stiffness,
+            primary_damping: _,
+            gravity,
+        } = v;
         VehicleStiffness {
-            wheel_load: v.wheel_load,
-            primary_stiffness: v.primary_stiffness,
-            gravity: v.gravity,
+            wheel_load: *wheel_load,
+            primary_stiffness: *primary_stiffness,
+            gravity: *gravity,
         }
     }
 }
@@ -298,9 +352,21 @@ struct SolutionZone {
 
 impl SolutionZone {
     fn of(r: &Run) -> Self {
+        let Run {
+            speed_kmh: _,
+            solution_zone_offset,
+            solution_zone_length,
+            fmax: _,
+            residual_flexibility: _,
+            residual_variation: _,
+            wheel_residual_flexibility: _,
+            start: _,
+            rest_start_distance: _,
+            creepage: _,
+        } = r;
         SolutionZone {
-            solution_zone_offset: r.solution_zone_offset,
-            solution_zone_length: r.solution_zone_length,
+            solution_zone_offset: *solution_zone_offset,
+            solution_zone_length: *solution_zone_length,
         }
     }
 }
@@ -320,14 +386,25 @@ struct TrackMesh<'a> {
 
 impl<'a> TrackMesh<'a> {
     fn of(m: &'a MeshParams) -> Self {
+        let MeshParams {
+            element_length,
+            fine_element_length,
+            section_size,
+            head_size,
+            sleeper_elements,
+            wheel_segments: _,
+            wheel_element_size: _,
+            mass,
+            node_planes,
+        } = m;
         TrackMesh {
-            element_length: m.element_length,
-            fine_element_length: m.fine_element_length,
-            section_size: m.section_size,
-            head_size: m.head_size,
-            sleeper_elements: m.sleeper_elements,
-            mass: &m.mass,
-            node_planes: &m.node_planes,
+            element_length: *element_length,
+            fine_element_length: *fine_element_length,
+            section_size: *section_size,
+            head_size: *head_size,
+            sleeper_elements: *sleeper_elements,
+            mass,
+            node_planes,
         }
     }
 }
@@ -468,11 +545,12 @@ mod tests {
         model_identity(a, scope).unwrap() == model_identity(b, scope).unwrap()
     }
 
-    const ALL: [IdentityScope; 4] = [
+    const ALL: [IdentityScope; 5] = [
         IdentityScope::Run,
         IdentityScope::Modes,
         IdentityScope::Track,
         IdentityScope::Wheel,
+        IdentityScope::Components,
     ];
 
     /// The typed views give the bytes the key-removal reference gives, on every model file of
@@ -502,7 +580,16 @@ mod tests {
             ][..],
             &["fastening.hold=elastic", "fastening.hold_stiffness=3e8", "fastening.hold_damping=2e4"],
             &["track.ends=absorbing", "track.absorbing_layer_length=0.9", "track.bays=20"],
-            &["wheel.web_shape=curved", "wheel.rim_width=0.14", "wheel.brake_disc=false", "wheel.damping_ratio=0.001"],
+            &[
+                "wheel.web_shape=curved",
+                "wheel.web_bend=0.03",
+                "wheel.web_thickness=0.035",
+                "wheel.web_offset=-0.02",
+                "wheel.rim_width=0.14",
+                "wheel.rim_thickness=0.06",
+                "wheel.brake_disc=false",
+                "wheel.damping_ratio=0.001",
+            ],
             &["mesh.node_planes=lattice", "run.start=rest", "run.speed_kmh=120", "vehicle.primary_damping=9e3"],
         ] {
             models.push((format!("{set:?}"), with(set)));
@@ -634,6 +721,7 @@ mod tests {
                 IdentityScope::Modes,
                 IdentityScope::Track,
                 IdentityScope::Wheel,
+                IdentityScope::Components,
             ] {
                 assert!(same(&base, &m, s), "{set:?} {s:?}");
             }

@@ -177,7 +177,10 @@ fn held_factor(
         });
     }
     let mean = diag.iter().map(|&p| k.val()[p]).sum::<f64>() / diag.len() as f64;
-    let sym = k.symbolic().to_owned().map_err(crate::fe::FeError::from)?;
+    let sym = k
+        .symbolic()
+        .to_owned()
+        .map_err(|source| PassageError::WheelStiffnessCopy { source })?;
     let mut vals = k.val().to_vec();
     for &d in held {
         vals[diag[d]] += mean;

@@ -209,6 +209,14 @@ pub enum PassageError {
         /// Its error.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// The wheel's stiffness pattern could not be copied to hold it for its static flexibility
+    /// (out of memory).
+    #[error("the wheel's held stiffness for its static flexibility: {source}")]
+    WheelStiffnessCopy {
+        /// faer's error.
+        #[source]
+        source: faer::sparse::FaerError,
+    },
     /// An error of the engine that ran the passage, outside this floor's (e.g. the reduced
     /// engine's residual flexibility), shown as that engine words it.
     #[error(transparent)]
