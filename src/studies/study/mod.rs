@@ -192,11 +192,10 @@ pub struct Study {
     pub title: String,
     /// The base model.
     pub base: ModelSource,
-    /// Overrides applied to every case before the case's own, parsed once from the file's
-    /// `key=value` strings.
-    pub set: Vec<Assignment>,
-    /// The `set` strings as the file gives them (the case files record them so).
-    pub set_text: Vec<String>,
+    /// Overrides applied to every case before the case's own: each parsed once from the
+    /// file's `key=value` string, beside that string as written (messages and the case files
+    /// quote it so).
+    pub set: Vec<(Assignment, String)>,
     /// Speeds (km/h); `None` = the model's `run.speed_kmh`.
     pub speeds_kmh: Option<Vec<f64>>,
     /// How parameters combine.
@@ -378,7 +377,8 @@ mod tests {
             let cli = crate::model::load_model(&ModelSource::Builtin, &text).unwrap();
             assert_eq!(m, cli, "{text:?}");
         }
-        assert_eq!(s.set_text, ["fastening.model=RPM1", "run.speed_kmh=120"]);
+        let text: Vec<&str> = s.set.iter().map(|(_, t)| t.as_str()).collect();
+        assert_eq!(text, ["fastening.model=RPM1", "run.speed_kmh=120"]);
         let e = parse("model = \"builtin:dutch\"\nset = [\"track.bays\"]\n[[parameter]]\nkey = \"track.bays\"\nvalues = [4]\n")
             .unwrap_err()
             .to_string();

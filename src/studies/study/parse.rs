@@ -344,7 +344,10 @@ impl Study {
         let set = raw
             .set
             .iter()
-            .map(|a| Assignment::parse(a).map_err(|e| key_error(file, "set", e.to_string())))
+            .map(|a| match Assignment::parse(a) {
+                Ok(parsed) => Ok((parsed, a.clone())),
+                Err(e) => Err(key_error(file, "set", e.to_string())),
+            })
             .collect::<Result<Vec<_>, _>>()?;
         let parameters = parameters(&raw, file)?;
         let n_cases = check_case_count(&parameters, raw.combine, file)?;
@@ -385,7 +388,6 @@ impl Study {
             title: raw.title.unwrap_or_else(|| default_title.to_string()),
             base,
             set,
-            set_text: raw.set,
             speeds_kmh: raw.speeds_kmh,
             combine: raw.combine,
             growth: raw.growth,
@@ -434,7 +436,7 @@ impl Study {
     /// The overrides of a case as text, recorded in its case file: the study's `set` as the
     /// file gives it, then the case's own.
     pub fn case_overrides(&self, case: &Case) -> Vec<String> {
-        let mut o = self.set_text.clone();
+        let mut o: Vec<String> = self.set.iter().map(|(_, t)| t.clone()).collect();
         o.extend(case.overrides());
         o
     }
@@ -442,12 +444,7 @@ impl Study {
     /// The assignments of a case with their text for messages: the study's `set` (as the file
     /// writes it), then the case's own parameters' values (`key=value`).
     pub fn case_assignments(&self, case: &Case) -> Vec<(Assignment, String)> {
-        let mut a: Vec<(Assignment, String)> = self
-            .set
-            .iter()
-            .cloned()
-            .zip(self.set_text.iter().cloned())
-            .collect();
+        let mut a = self.set.clone();
         a.extend(case.assignments.iter().map(|(key, value)| {
             let a = Assignment {
                 key: key.clone(),

@@ -222,7 +222,12 @@ pub(super) fn write_study(
     if !study.set.is_empty() {
         doc.paragraph(format!(
             "Overrides of every case: {}.",
-            study.set_text.join(" ")
+            study
+                .set
+                .iter()
+                .map(|(_, t)| t.as_str())
+                .collect::<Vec<_>>()
+                .join(" ")
         ));
     }
     doc.paragraph(study_criterion_text(&study.criterion));
