@@ -467,7 +467,7 @@ fn implicit_damping_inverse(c: &Mat<f64>, dt: f64) -> Result<Mat<f64>, DynamicsE
         MemStack::new(&mut mem),
         Default::default(),
     )
-    .map_err(|_| DynamicsError::DampingIndefinite)?;
+    .map_err(DynamicsError::DampingIndefinite)?;
     for j in 1..m {
         for i in 0..j {
             l[(i, j)] = 0.0;

@@ -85,7 +85,7 @@ pub enum DynamicsError {
     },
     /// I + Δt/2·C of the modal integrator is not positive definite.
     #[error("I + Δt/2·C is not positive definite: the damping matrix has negative eigenvalues; check the damper inputs")]
-    DampingIndefinite,
+    DampingIndefinite(#[source] faer::linalg::cholesky::llt::factor::LltError),
     /// The receptance at a frequency is singular.
     #[error("receptance at {frequency_hz} Hz is singular: the frequency coincides with an undamped (or rigid-body) mode; shift the frequency grid")]
     SingularReceptance {

@@ -233,9 +233,10 @@ impl ShiftedSystem {
         let req = self
             .symbolic
             .factorize_numeric_ldlt_scratch::<f64>(par, Spec::default());
-        let mut mem = MemBuffer::try_new(req).map_err(|_| EigenError::Factorization {
+        let mut mem = MemBuffer::try_new(req).map_err(|source| EigenError::FactorWorkspace {
             shift_rad2_s2: shift,
-            reason: "out of memory for the LDLᵀ workspace".into(),
+            bytes: req.size_bytes(),
+            source,
         })?;
         let res = self.symbolic.factorize_numeric_ldlt(
             &mut values,

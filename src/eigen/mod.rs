@@ -361,6 +361,17 @@ pub enum EigenError {
         /// cause
         reason: String,
     },
+    /// The sparse LDLᵀ factorisation's workspace could not be allocated.
+    #[error("out of memory for the LDLᵀ workspace of K − σM at σ = {shift_rad2_s2:e} rad²/s² ({bytes} bytes); lower `modes.f_max_hz` or the mesh size")]
+    FactorWorkspace {
+        /// shift (rad²/s²)
+        shift_rad2_s2: f64,
+        /// the workspace asked for (bytes)
+        bytes: usize,
+        /// the allocator's error
+        #[source]
+        source: faer::dyn_stack::mem::AllocError,
+    },
     /// A dense symmetric eigensolver failed (faer's `EvdError` is not a `std::error::Error`,
     /// so it is a field, not a source).
     #[error("dense symmetric eigensolver of the {what}: {error:?}")]
