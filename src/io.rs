@@ -166,8 +166,7 @@ pub fn write_npy(path: &Path, shape: &[usize], data: &[f64]) -> io::Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{temp_file_pid, write_csv, write_npy};
     fn tmpdir(tag: &str) -> std::path::PathBuf {
         let d = std::env::temp_dir().join(format!("corrugation-io-{tag}-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
@@ -352,8 +351,7 @@ pub fn write_vtu(
 
 #[cfg(test)]
 mod vtu_tests {
-    use super::*;
-
+    use super::{write_vtu, VtuField, VTK_HEXAHEDRON};
     #[test]
     fn vtu_of_one_hexahedron_is_well_formed() {
         let d = std::env::temp_dir().join(format!("corrugation-vtu-{}", std::process::id()));

@@ -71,8 +71,7 @@ fn repeated<T: Display>(list: &str, unit: &str, v: &T) -> RepeatedValue {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{check_no_repeats, check_no_repeats_by_key, strictly_ascending_error};
     #[test]
     fn a_repeated_value_is_named_with_its_list_and_unit() {
         assert_eq!(check_no_repeats("--at", "m", &[1.0, 2.0, 3.0]), Ok(()));

@@ -143,7 +143,7 @@ pub fn cpu_seconds() -> Option<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{Counter, Progress};
     use std::sync::Mutex;
 
     #[derive(Default)]

@@ -130,8 +130,7 @@ pub fn s_to_days(s: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{kmh_to_ms, m_to_mm, m_to_um, mm_to_m, ms_to_kmh, um_to_m, Speed};
     #[test]
     fn reference_speed_is_38_89_m_per_s() {
         // docs/theory.md §1.2: 140 km/h = 38.89 m/s.

@@ -461,3 +461,33 @@ fn the_import_reader_reads_nested_use_trees_and_finds_a_planted_cycle() {
     g.get_mut(&c).unwrap().clear();
     assert!(cycles(&g).is_empty());
 }
+
+/// No glob imports: every `use` names what it brings in (test modules and integration tests
+/// included), so a reader sees where a name comes from and an enum variant never silently
+/// becomes a pattern binding. External crates' `prelude::*` modules are the one exception:
+/// they are written to be glob-imported.
+#[test]
+fn no_glob_imports_but_external_preludes() {
+    let root = Path::new(ROOT);
+    let mut files = Vec::new();
+    for dir in ["src", "tests", "examples", "python/src"] {
+        if root.join(dir).is_dir() {
+            rust_files(&root.join(dir), &mut files);
+        }
+    }
+    let mut found = Vec::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        for (i, line) in text.lines().enumerate() {
+            let t = line.trim_start();
+            let is_use = t.starts_with("use ")
+                || t.starts_with("pub use ")
+                || t.starts_with("pub(crate) use ");
+            if is_use && t.contains("::*") && !t.contains("prelude::*") {
+                found.push(format!("{}:{}: {}", f.display(), i + 1, t));
+            }
+        }
+    }
+    assert!(files.len() > 100, "read {} files", files.len());
+    assert!(found.is_empty(), "glob imports:\n{}", found.join("\n"));
+}

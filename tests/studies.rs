@@ -166,7 +166,7 @@ fn opts() -> MapOptions {
 /// for byte elsewhere).
 fn assert_same_numbers(a: &PassageSummary, b: &PassageSummary) {
     fn walk(a: &serde_json::Value, b: &serde_json::Value, at: &str) {
-        use serde_json::Value::*;
+        use serde_json::Value::{Array, Number, Object};
         match (a, b) {
             (Number(x), Number(y)) => {
                 let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());

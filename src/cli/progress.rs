@@ -232,8 +232,7 @@ impl Drop for Progress {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{plain_line, Duration, Instant, Stage};
     #[test]
     fn plain_line_shows_the_count_only_when_known_and_an_eta_once_started() {
         let st = Stage {

@@ -244,8 +244,7 @@ pub fn lateral_weights(s: &[f64], b: f64) -> Vec<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{combined_modulus, elliptic_ke, lateral_weights, HertzContact, HertzInput, PI};
     #[test]
     fn elliptic_integrals_match_tables() {
         // A&S Table 17.1: K(m=0.5) = 1.854074677, E(m=0.5) = 1.350643881.

@@ -683,8 +683,7 @@ fn project(x: &mut f64, y: &mut f64, g: f64) {
 #[cfg(test)]
 mod tests {
     use super::super::influence::Convolver;
-    use super::*;
-
+    use super::{inner_cg, TangentialInfluence, TangentialSolver};
     /// A 16 × 12 grid (0.5 mm elements, steel) and an elliptic traction bound `µ p` (Pa)
     /// centred `shift` rows from the grid's centre.
     fn grid_and_bound(shift: f64) -> (Convolver, Vec<f64>) {

@@ -56,7 +56,10 @@ use super::normal::{NormalMode, NormalSolver};
 use super::tangential::{TangentialAlgorithm, TangentialSolver};
 use super::{check_positive, combined_modulus, shear_modulus, ContactError};
 
-pub use super::rolling::*;
+pub use super::rolling::{
+    GridSpec, HertzGridParams, Longitudinal, NormalInput, StepInputs, StepResult, TransientConfig,
+    STATE_EXTERIOR, STATE_SLIP, STATE_STICK,
+};
 
 /// The transient rolling engine: all scratch allocated in [`TransientRolling::new`];
 /// [`TransientRolling::step`] allocates nothing and warm-starts from the previous step.

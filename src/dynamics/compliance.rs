@@ -152,8 +152,9 @@ pub fn longitudinal_compliance(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{
+        longitudinal_compliance, ComplianceLoad, LongitudinalCompliance, Model, TrackStructure,
+    };
     fn short(extra: &[&str]) -> Model {
         crate::model::test_problems::small_model(extra).unwrap()
     }

@@ -170,7 +170,7 @@ pub fn peaks(x: &[f64], y: &[f64], max: usize) -> Vec<(f64, f64)> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{c64, modal_receptance, peaks, Mat, ModalSystem};
     use faer::linalg::solvers::Solve;
     use faer::sparse::{SparseColMat, Triplet};
 

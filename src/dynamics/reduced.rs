@@ -189,8 +189,7 @@ fn project_damping(c: SparseColMatRef<'_, usize, f64>, modes: &Mat<f64>) -> Mat<
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{project_damping, Mat};
     /// The projection over the damped DOFs equals the dense `Φᵀ C Φ` on a matrix whose
     /// pattern stores explicit zeros (as the assembled C does) and whose damped DOFs are
     /// scattered.

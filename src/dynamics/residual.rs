@@ -535,8 +535,10 @@ pub fn cached_residual(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{
+        for_each_plane_solution, nodes_dot, static_flexibility, ContactFrame, Mat, RailContactLine,
+        ResidualFlexibility, SharedStiffnessAnalysis, StiffnessFactor, TrackStructure,
+    };
     /// The plane flexibilities from whitened loads (forward substitution over the reached
     /// supernodes) against the same quadratic forms from full solves and the nodes' weighted
     /// displacements (faer's forward and backward substitution), on the small test track:

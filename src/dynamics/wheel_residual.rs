@@ -276,7 +276,7 @@ impl WheelResidual {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{elastic_flexibility, FreeBody, Mat, WheelResidual};
     use faer::sparse::{SparseColMat, Triplet};
 
     /// A free body with a known spectrum: `K = M Φ Λ Φᵀ M` with `Φ = M^{-½} Q` (Q orthogonal,

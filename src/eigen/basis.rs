@@ -309,7 +309,7 @@ pub fn wheel_basis_keyed(
 
 #[cfg(test)]
 mod key_tests {
-    use super::*;
+    use super::{cache_key, Model, Substructure};
     use crate::model::{load_model, ModelSource};
     use crate::structure::track::TrackStructure;
 

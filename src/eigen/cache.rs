@@ -743,8 +743,10 @@ impl CacheMeta {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{
+        fs, manifest, CacheError, CacheKey, CacheLookup, CacheMeta, CorruptEntry, Mat, ModalCache,
+        PathBuf, FREQUENCIES_FILE, MANIFEST_FILE, META_FILE, MODES_FILE, TAG_FILE, TAG_SIGNATURE,
+    };
     fn tmpdir(name: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!(
             "corrugation-cache-test-{name}-{}",

@@ -651,7 +651,7 @@ fn whiten_supernodal(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{Arc, FillOrdering, Mat, Par, ShiftedSystem, SymbolicCholeskyRaw};
     use faer::sparse::{SparseColMat, Triplet};
 
     /// The 7-point Laplacian of an `a × b × c` grid plus `shift` on the diagonal (SPD).

@@ -11,7 +11,10 @@
 //!   `λ_{ij} = (μ_i + μ_j)/m`, `μ_i = 4k sin²(iπ/(2N))`, with exact double eigenvalues
 //!   `λ_{ij} = λ_{ji}`.
 
-use super::*;
+use super::{
+    factor, hz_to_lambda, lambda_to_hz, solve, EigenError, EigenOptions, EigenSolution,
+    FillOrdering,
+};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
 

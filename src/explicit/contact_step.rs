@@ -44,8 +44,7 @@ pub fn unconverged_contact_step(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{unconverged_contact_step, Model};
     /// The default model's grid at 140 km/h: 2 × 10.03 mm / 32 / 38.9 m/s = 16.1 µs, warned
     /// with grid_nx 64 proposed; grid_nx 64 (8.06 µs) and 128 are within; a slower train on
     /// grid_nx 64 is warned again (the step grows as 1/V).

@@ -87,8 +87,7 @@ impl std::fmt::Display for ExplicitEstimate {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{duration_text, ExplicitEstimate};
     /// The default model's measured passage (docs/performance.md §6) is estimated within a
     /// factor 2 of its 418.6 s and accepted; a 1e-10 s step on it is far beyond the bound.
     #[test]

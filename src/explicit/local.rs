@@ -167,7 +167,10 @@ impl LocalCompliance {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{
+        nodes_dot, plane_weights, ContactFrame, LocalCompliance, RailContactLine, StiffnessFactor,
+        TrackStructure,
+    };
     use crate::model::{load_model, ModelSource};
     use crate::passage::contact_line::add_nodes_load;
     use faer::Mat;

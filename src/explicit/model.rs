@@ -391,7 +391,7 @@ impl ExplicitModel {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{ExplicitModel, ExplicitOptions};
     use crate::model::test_problems::all_modes_model;
     use crate::structure::test_problems::all_modes_structures;
 

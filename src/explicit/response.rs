@@ -240,7 +240,7 @@ mod tests {
     //! 4 to 16 µs, as on the 10 mm rail zone. The reference is an independent direct
     //! integration (fourth-order Runge–Kutta, the Hertz force evaluated in every stage, at a
     //! step 4,000 times shorter than the contact step).
-    use super::*;
+    use super::{advance_held, ExplicitOperator, Hold, UnitResponse};
     use faer::sparse::{SparseColMat, Triplet};
 
     const M_C: f64 = 0.005;

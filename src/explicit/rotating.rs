@@ -809,8 +809,7 @@ impl RotatingWheel {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{check_step_turn, to_ground, to_spinning, SpinError};
     /// The step-turn check against hand-computed plane spacings: planes at −0.1, 0 and
     /// 0.2 rad are 0.1, 0.2 and (wrapping round) 2π − 0.3 rad apart, so the smallest spacing
     /// is 0.1 rad: 0.099 rad passes, and 0.1 rad and any backward turn fail.

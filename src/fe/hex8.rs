@@ -425,8 +425,13 @@ pub fn strain_energy(
 
 #[cfg(test)]
 pub(crate) mod tests {
-    use super::*;
-
+    use super::{
+        consistent_mass, consistent_mass_scalar, det3, gauss2, interpolate_vector, inv3, is_inside,
+        jacobian, jacobian_determinant, lumped_mass, map_to_physical, natural_coordinates,
+        shape_derivatives, shape_functions, stiffness, stiffness_impl, stiffness_trilinear,
+        strain_energy, strain_energy_of, volume, FeError, IsotropicElastic, Mat24, Modes, SMatrix,
+        SVector, NODE_ETA, NODE_XI, NODE_ZETA,
+    };
     /// A distorted, non-parallelepiped hexahedron (for tests in this module and others).
     pub(crate) fn distorted() -> [[f64; 3]; 8] {
         [

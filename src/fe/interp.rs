@@ -115,7 +115,7 @@ pub fn interpolate_at(mesh: &Mesh, loc: &Location, u_full: &[f64]) -> Result<[f6
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{interpolate_at, locate_point};
     use crate::fe::block::block_mesh;
     use crate::mesh::Part;
 

@@ -57,8 +57,7 @@ impl IsotropicElastic {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::IsotropicElastic;
     #[test]
     fn steel_bar_wave_speed_is_5190() {
         // docs/theory.md §3.6: √(E/ρ) ≈ 5190 m/s.

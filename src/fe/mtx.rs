@@ -146,7 +146,7 @@ pub fn read(path: &Path) -> Result<SparseColMat<usize, f64>, FeError> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{read, write_symmetric, FeError};
     use crate::fe::block::block_mesh;
     use crate::fe::{assemble, AssemblyOptions, Direction, DofMap, Spring};
     use crate::mesh::Part;

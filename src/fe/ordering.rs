@@ -127,8 +127,7 @@ pub fn nested_dissection(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::nested_dissection;
     /// Lower-triangle CSC of the 5-point Laplacian pattern on an nx × ny grid.
     fn grid(nx: usize, ny: usize) -> (usize, Vec<usize>, Vec<usize>) {
         let n = nx * ny;

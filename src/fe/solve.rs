@@ -224,8 +224,7 @@ pub fn dense_generalised_eigen(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{dense_generalised_eigen, Mat};
     /// A chain of `n` masses alternating between 1 kg and 1 mg, joined by springs of
     /// 1e4 N/m (spring 0 to the ground when `grounded`): `ω_max²/ω_1²` ≈ 1e9, the
     /// conditioning of a stiff FE structure on soft supports, with every matrix entry exact.

@@ -245,8 +245,7 @@ pub struct PointMass {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{Direction, FeError, Spring};
     #[test]
     fn weights_merge_and_sign() {
         let s = Spring::new(

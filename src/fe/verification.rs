@@ -3,7 +3,11 @@
 use faer::{Mat, Side};
 
 use super::block::{block_mesh, block_node};
-use super::*;
+use super::{
+    apply_full_stiffness, assemble, hex8, mass_per_part, reactions, spring_energy, static_solve,
+    strain_energy_per_part, strain_energy_per_part_many, AssemblyOptions, Direction, DofMap,
+    FeError, MassKind, PointMass, Spring,
+};
 use crate::fe::material::IsotropicElastic;
 use crate::mesh::{Mesh, Part};
 

@@ -679,8 +679,10 @@ pub fn passage_gain(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{
+        c64, closed_loop, fit_harmonic, interpolate_transfer, ContactTransfer, GrowthRateSpectrum,
+        RatePoint, Speed,
+    };
     fn c(re: f64, im: f64) -> c64 {
         c64::new(re, im)
     }

@@ -62,7 +62,7 @@ pub fn trial_corrugation(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{trial_corrugation, GrowthError, Signal};
     use crate::spectral::{band_pass, correlation_coefficient, BandPass};
     use std::f64::consts::PI;
 

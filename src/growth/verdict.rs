@@ -454,8 +454,10 @@ pub fn no_initiation_verdict(speed_kmh: f64, initiation: Option<InitiationCheck>
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{
+        nearest_mode, sig, trim_zeros, verdict, InitiationCheck, ModeAttribution, NearestMode,
+        Outcome, PhaseRelation, TrialOutcome, VerdictInput,
+    };
     fn t(a: f64, grows: bool, r: PhaseRelation) -> TrialOutcome {
         TrialOutcome {
             amplitude_um: a,
@@ -601,7 +603,7 @@ mod tests {
 
     #[test]
     fn mixed_phases_are_counted_and_late_growth_is_named() {
-        use PhaseRelation::*;
+        use PhaseRelation::{AntiPhase, InPhase, Indeterminate};
         let trials = [
             t(10.0, false, Indeterminate),
             t(40.0, false, InPhase),
@@ -630,7 +632,7 @@ mod tests {
 
     #[test]
     fn growth_with_a_limiting_amplitude_names_it_and_the_next() {
-        use PhaseRelation::*;
+        use PhaseRelation::{AntiPhase, InPhase};
         let trials = [
             t(10.0, true, AntiPhase),
             t(40.0, true, AntiPhase),

@@ -206,8 +206,7 @@ fn distribute_segment(a: f64, b: f64, s_min: f64, size: &impl Fn(f64) -> f64, ou
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{grade, FineZone, GradingSpec, MeshError};
     fn check(spec: &GradingSpec, nodes: &[f64]) {
         assert_eq!(nodes[0], spec.start_m);
         assert_eq!(*nodes.last().unwrap(), spec.end_m);

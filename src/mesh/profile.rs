@@ -284,8 +284,7 @@ pub fn circumradius(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{polygon_properties, MeshError, RailProfile, UIC54_FOOT_WIDTH_M};
     #[test]
     fn polygon_properties_of_a_rectangle_match_closed_form() {
         // b × h rectangle, corner at origin: A = bh, I = bh³/12, hb³/12.

@@ -174,7 +174,7 @@ pub fn extrude_rail(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{extrude_rail, Mesh, Part, RailTopology, SectionMesh};
     use crate::mesh::grading::{grade, FineZone, GradingSpec};
     use crate::mesh::section::SectionParams;
     use crate::mesh::HEX8_NATURAL;

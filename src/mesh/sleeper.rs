@@ -321,8 +321,7 @@ fn sleeper_faces([xs, ys, zs]: [&[f64]; 3]) -> (Vec<FaceQuad>, Vec<FaceQuad>) {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{half_sleeper, FaceQuad, Part, SleeperParams};
     #[test]
     fn default_block_volume_mass_and_faces() {
         let (m, t) = half_sleeper(&SleeperParams::default(), 1).unwrap();

@@ -633,8 +633,7 @@ fn wheel_topology(p: &WheelParams, meridian: Vec<[f64; 2]>, thetas: Vec<f64>) ->
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{wheel, Part, WheelParams, WheelTopology};
     #[test]
     fn volume_matches_pappus_and_mass_in_range() {
         let p = WheelParams::default();

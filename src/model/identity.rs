@@ -429,8 +429,7 @@ impl<'a> WheelMesh<'a> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{model_identity, run_key, scoped_value, IdentityScope, Model, Value};
     /// The identity as the code before the typed views computed it, kept as an independent
     /// reference: the whole model's JSON with what K and M do not read removed by key name.
     fn reference_scoped_value(m: &Model, scope: IdentityScope) -> Result<Value, serde_json::Error> {
@@ -743,7 +742,7 @@ mod tests {
 
 #[cfg(test)]
 mod default_hash {
-    use super::*;
+    use super::{model_identity, IdentityScope};
     use crate::model::load_model;
     use crate::model::ModelSource;
 

@@ -111,8 +111,7 @@ pub fn all_modes_model(extra: &[&str]) -> Result<Model, ModelError> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{small_model, small_model_with_elements};
     #[test]
     fn the_small_model_is_small_and_extra_overrides_win() {
         let m = small_model(&["track.bays=3"]).unwrap();

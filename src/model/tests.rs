@@ -1,5 +1,8 @@
-use super::*;
-
+use super::{
+    load_model, load_model_str, CreepageKind, FasteningModel, HoldPattern, Model, ModelError,
+    ModelSource, Preset, RigidRegion, StartKind, BUILTIN_DUTCH, DEFAULT_INITIATION_THRESHOLD,
+    DEFAULT_REST_START_DISTANCE_M,
+};
 fn dutch_with(overrides: &[&str]) -> Result<Model, ModelError> {
     let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
     load_model(&ModelSource::Builtin, &o)
@@ -151,20 +154,20 @@ fn custom_pattern_round_trips_and_is_checked() {
 
 #[test]
 fn presets_follow_the_method_table() {
-    use RigidRegion::*;
+    use RigidRegion::{Columns, Continuous, Rows};
     let p = |m| HoldPattern::preset(m, 4, 3);
     // docs/theory.md §3.2 table: vertical / longitudinal / lateral.
     let r1 = p(Preset::Rpm1);
     assert_eq!(
         (r1.z.rigid, r1.x.rigid, &r1.x.indices[..]),
-        (None, Columns, &[0, 1, 2][..])
+        (RigidRegion::None, Columns, &[0, 1, 2][..])
     );
     let r2 = p(Preset::Rpm2);
-    assert_eq!((r2.z.rigid, r2.x.rigid), (None, Continuous));
+    assert_eq!((r2.z.rigid, r2.x.rigid), (RigidRegion::None, Continuous));
     let r3 = p(Preset::Rpm3);
     assert_eq!(
         (r3.z.rigid, r3.x.rigid, &r3.x.indices[..]),
-        (None, Columns, &[1][..])
+        (RigidRegion::None, Columns, &[1][..])
     );
     let r4 = p(Preset::Rpm4);
     assert_eq!(

@@ -193,7 +193,7 @@ pub fn summarise_at(rec: &PassageRecord, speed: Speed) -> Result<PassageSummary,
 
 #[cfg(test)]
 mod contact_tests {
-    use super::*;
+    use super::{check_contact, PassageError};
     use crate::passage::record::Histories;
 
     fn histories(normal_n: &[f64]) -> Histories {

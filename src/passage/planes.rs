@@ -152,7 +152,7 @@ pub fn max_planes(planes_x_m: &[f64], a: f64) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{max_planes, plane_weights, PatchError};
     use approx::assert_relative_eq;
 
     fn planes() -> Vec<f64> {

@@ -280,8 +280,11 @@ pub fn run_widening_grid<T, E>(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{
+        check_profile_on_travel, grid_for_profile, implausible_profile, run_widening_grid,
+        widen_grid, GridSpec, GridWidening, PassageError, RailProfile, GRID_WIDENING,
+        MAX_GRID_WIDENINGS,
+    };
     /// A widened grid keeps its element size and the places of the model grid's elements; a
     /// direction not widened stays bit for bit; 1.25 per widening in half-length, at least.
     #[test]

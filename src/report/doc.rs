@@ -335,8 +335,7 @@ pub fn escape(s: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{is_number, sentences, Document};
     fn sample() -> Document {
         let mut d = Document::new("Report <1>");
         d.heading(2, "Table")

@@ -625,7 +625,10 @@ pub fn least_covered(
     (ax, ay, aw, ah): (i32, i32, i32, i32),
     (bw, bh): (i32, i32),
 ) -> SeriesLabelPosition {
-    use SeriesLabelPosition::*;
+    use SeriesLabelPosition::{
+        LowerLeft, LowerMiddle, LowerRight, MiddleLeft, MiddleRight, UpperLeft, UpperMiddle,
+        UpperRight,
+    };
     let place = |p: &SeriesLabelPosition| -> (i32, i32) {
         let x = match p {
             UpperLeft | MiddleLeft | LowerLeft => 5,

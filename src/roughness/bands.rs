@@ -249,8 +249,7 @@ impl BandSpectrum {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{iso3095_limit_db, third_octave_bands, BandSpectrum};
     /// Nominal centres are the standards' preferred numbers and band edges touch.
     #[test]
     fn nominal_centres_and_edges() {

@@ -41,8 +41,7 @@ pub fn relative_difference(value: f64, reference: f64) -> Result<f64, SpectralEr
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{relative_deviation, relative_difference, SpectralError};
     #[test]
     fn deviation_closed_form() {
         // 41.0 mm vs 40.0 mm reference: 2.5 %; 1400 Hz vs 1000 Hz eigenfrequency: 40 %.

@@ -122,8 +122,7 @@ pub fn short_window_m(x_m: f64) -> [f64; 2] {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{nodal_spectrum, short_window_m, NodalHistory};
     /// Two sines of 780 and 1460 Hz in a 40 ms record at 20 kHz: the peaks are found at
     /// their frequencies within a tenth of the resolution 1/T, the stronger first; the short
     /// window gives the coarser resolution 1/T of its own duration.

@@ -202,8 +202,7 @@ pub(crate) fn check_finite(what: &'static str, v: &[f64]) -> Result<(), Spectral
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{resample_linear, Signal, SpectralError};
     #[test]
     fn time_maps_to_position_by_speed() {
         // x = v t: 38.89 m/s, dt = 20 µs → dx = 0.7778 mm.

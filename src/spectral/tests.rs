@@ -1,6 +1,10 @@
 //! Tests of the spectral toolkit on synthetic signals with known answers.
 
-use super::*;
+use super::{
+    band_pass, correlation_coefficient, cross_phase_rad, detrend, find_peaks,
+    lag_of_max_correlation, relative_deviation, wavelength_resolution_m, BandPass, PeakOptions,
+    Psd, PsdOptions, Signal, SpectralError,
+};
 use std::f64::consts::PI;
 
 /// Deterministic uniform noise in [−1, 1) (xorshift64), variance 1/3.

@@ -171,7 +171,7 @@ pub fn end_dashpots(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{impedances_per_area, nodal_areas, IsotropicElastic};
     use crate::mesh::section::{SectionMesh, SectionParams};
 
     fn section() -> SectionMesh {

@@ -207,8 +207,7 @@ pub fn tributary_lengths(coords: &[f64], a: f64, b: f64) -> Vec<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{tributary_lengths, Layout, Model};
     #[test]
     fn sleepers_and_zone_of_the_default_model() {
         let m = Model::default_model();

@@ -43,7 +43,7 @@ pub fn all_modes_structures(m: &Model) -> Result<(TrackStructure, WheelStructure
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::all_modes_structures;
     use crate::model::test_problems::{all_modes_model, ALL_MODES_ELEMENT_LENGTH_M};
 
     /// The all-modes structures are within reach of a dense eigen-solve (a few thousand

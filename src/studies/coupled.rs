@@ -211,8 +211,10 @@ pub fn sweep_reference_speed_kmh(model_speed_kmh: f64, speeds_kmh: &[f64]) -> f6
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{
+        attribute_one, attribution_columns, attribution_values, sweep_reference_speed_kmh,
+        CoupledMode, ModeShares, TrackFamily,
+    };
     fn mode(f: f64, amp: f64, wheel: f64) -> CoupledMode {
         let mut shares = ModeShares {
             wheel_elastic: wheel,

@@ -447,8 +447,7 @@ pub fn criterion_text(c: &InitiationCriterion) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{check_peaks, check_speed_kmh, run_initiation, InitiationCriterion, MAX_PEAKS};
     /// The library refuses a criterion, a peak count or a speed out of range, naming the flag
     /// and the range, whoever calls it.
     #[test]

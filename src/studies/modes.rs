@@ -270,8 +270,7 @@ pub fn write_mode_vtus<C>(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{sub_summary, ModalBasis};
     /// The printed largest residual leaves out the rigid-body modes below 1 Hz, whose
     /// relative residual is round-off over the measure's floor (0.71 for a 0.84 Hz rotation
     /// of the bare wheelset, where the elastic modes' largest is 3.7e-6).

@@ -417,8 +417,7 @@ impl Receptances {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{ReceptanceError, ReceptanceOptions, MAX_FREQUENCIES};
     /// The grid holds `floor((to − from)/step) + 1` frequencies from `from_hz`, its 0 Hz
     /// point moved to a quarter step, and the highest frequency defaults to
     /// `min(fmax, 3000 Hz)`.

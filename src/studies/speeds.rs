@@ -169,8 +169,7 @@ pub fn speed_file_stem(speed_kmh: f64) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{parse_speeds, speed_file_stem, Shard};
     #[test]
     fn range_excludes_an_off_grid_stop_and_includes_an_on_grid_one() {
         let v = parse_speeds("54.8:219:2").unwrap();

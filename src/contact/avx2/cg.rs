@@ -13,7 +13,11 @@
 //! inside them.
 
 use crate::contact::tangential::LANES;
-use std::arch::x86_64::*;
+use std::arch::x86_64::{
+    __m256d, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd, _mm256_cmp_pd, _mm256_loadu_pd,
+    _mm256_max_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_set_pd,
+    _mm256_setzero_pd, _mm256_storeu_pd, _mm256_sub_pd, _CMP_GT_OQ,
+};
 
 /// The lanes `acc[·][k]` of the partial sums as a vector.
 #[inline(always)]

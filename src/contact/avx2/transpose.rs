@@ -1,7 +1,10 @@
 //! The tiled transpose of `contact::influence::transpose`. Safety: the CPU must support AVX2 and every element of the block
 //! (`rows × cols` with the strides) must lie inside both buffers (`contact::influence::transpose` checks both).
 
-use std::arch::x86_64::*;
+use std::arch::x86_64::{
+    __m256d, _mm256_loadu_pd, _mm256_permute2f128_pd, _mm256_storeu_pd, _mm256_unpackhi_pd,
+    _mm256_unpacklo_pd,
+};
 
 /// The transpose of the block's whole tiles for elements of `W` f64 words: 8-byte
 /// elements (`W = 1`) in 4 × 4 tiles, 16-byte ones (`W = 2`) in 2 × 2 tiles. Returns the

@@ -1,5 +1,7 @@
-use super::*;
-
+use super::{
+    coefficients, next_smooth3, rectangle_integrals, single_body, strip, tangential_kernel_product,
+    tangential_kernel_product_plain, Complex, Complex64, Convolver, FftNum,
+};
 #[test]
 fn centre_of_uniform_square_matches_love() {
     // Love (1929)/Johnson eq. 3.25: centre of a square of side 2c under pressure p:

@@ -70,8 +70,7 @@ fn edges<T: FftNum>(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{edges, transpose, Complex, FftNum};
     fn check<T: FftNum + From<f32>>(rows: usize, cols: usize, ss: usize, ds: usize) {
         let src: Vec<Complex<T>> = (0..rows * ss)
             .map(|k| Complex::new(T::from(k as f32), T::from(-(k as f32) - 0.5)))

@@ -1,9 +1,11 @@
 //! The normal solver against Hertz, the series compliance of the normal contact, and the
 //! normal solve on a fixed contact set.
 
-use super::super::transient::*;
-use super::super::*;
 use super::{reference_hertz, reference_hertz_input, rolling_config};
+use crate::contact::{
+    combined_modulus, influence, normal, report, shear_modulus, HertzGridParams, NormalInput,
+    StepInputs, StepResult, TransientConfig, TransientRolling,
+};
 use std::f64::consts::PI;
 
 fn normal_only(nx: usize, ny: usize, margin: f64) -> (StepResult, f64, f64, f64) {

@@ -4,9 +4,12 @@
 
 use super::super::influence::strip::{half_space_kernel, StripInfluence};
 use super::super::influence::Influence;
-use super::super::transient::*;
-use super::super::*;
 use super::{reference_hertz, rolling_config};
+use crate::contact::{
+    combined_modulus, load_response_curve, shear_modulus, solve_case, transient, ContactCase,
+    ContactError, GridSpec, HertzContact, HertzGridParams, HertzInput, Longitudinal, NormalInput,
+    StepInputs, TangentialAlgorithm, TransientConfig, TransientRolling, WearAccumulator,
+};
 use std::f64::consts::PI;
 
 /// Kalker's table interpolated linearly in b/a between 0.7 and 0.8 at ν = 0.25.

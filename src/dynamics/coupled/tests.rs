@@ -1,4 +1,7 @@
-use super::*;
+use super::{
+    attribute, attribution_text, coupled_modes, coupled_state_modes, ContactLinearisation,
+    CoordinateLabels, CoupledMode, CoupledSystem, Mat, ModalSystem, ModeShares, TrackFamily,
+};
 use std::f64::consts::PI;
 
 fn sys(omega2: &[f64], damping: &[f64]) -> ModalSystem {

@@ -1,4 +1,4 @@
-use super::*;
+use super::{sym_packed_product_f32, Mat, ModalSystem, ModalVerlet};
 use std::f64::consts::PI;
 
 fn sdof(omega: f64, zeta: f64) -> ModalSystem {

@@ -430,8 +430,10 @@ fn worker(s: &Shared) {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{
+        catch_unwind, AssertUnwindSafe, AtomicBool, Duration, FallBack, Instant, Mode, Ordering,
+        SpinPair, ALONE_FIRST, ALONE_MAX, LATE_LIMIT, WINDOW, WORKER_SPIN,
+    };
     #[test]
     fn both_halves_run_and_return_their_results() {
         std::thread::scope(|sc| {

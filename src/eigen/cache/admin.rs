@@ -219,7 +219,7 @@ pub(super) fn touch(dir: &Path) {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{fs, CacheError, Duration, ModalCache, Path, PathBuf, PrunePolicy, SystemTime};
     use crate::eigen::cache::{CacheKey, FE_PATCH_DIR};
     use faer::Mat;
 

@@ -104,8 +104,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Listed, &'static str> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{parse, render, Listed, HEADER};
     fn sample() -> Listed {
         Listed {
             frequencies: "a".repeat(64),

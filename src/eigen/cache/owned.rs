@@ -365,8 +365,7 @@ pub fn ensure_outside_cache(out: &Path, cache_dir: &Path) -> Result<(), CacheErr
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{ensure_outside_cache, fs, is_aux_temp_name, is_leftover_name, CacheError};
     #[test]
     fn names_of_leftovers_and_auxiliary_temporaries() {
         let key = "0123456789abcdef".repeat(4);

@@ -1,6 +1,10 @@
 //! Classification of synthetic displacement fields of known shape on the real rail mesh.
 
-use super::*;
+use super::{
+    classify_wheel_mode, classify_wheel_modes, wavelength_from_crossings, ClassifyError,
+    TrackClassifier, TrackFamily, TrackModeClass, WheelFamily, SLEEPER_KINETIC_SHARE,
+    WEB_BOTTOM_Z_M, WEB_TOP_Z_M,
+};
 use crate::model::{load_model, ModelSource};
 use crate::structure::{TrackStructure, WheelStructure};
 

@@ -95,7 +95,7 @@ pub(super) fn load_component(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{load_component, store_component, CacheKey, ComponentBasis, ModalCache};
     use faer::Mat;
 
     /// A component basis read back from the cache is the stored one bit for bit, its `ω̃²`

@@ -2,8 +2,11 @@
 //! the assembled K, M) on a short track.
 
 use super::components::hz_to_omega2;
-use super::*;
-
+use super::{
+    build_components, classify_modes, expand, passage_track_basis_timed, reduced_modes,
+    reduced_stiffness, solve, substructured_track_basis, EigenOptions, Mat, Model, ReducedShapes,
+    SubstructureOptions, TrackClassifier, TrackStructure,
+};
 /// A 4-bay track with a coarse mesh (the tests' small model).
 fn small(extra: &[&str]) -> Model {
     crate::model::test_problems::small_model(extra).unwrap()

@@ -1,7 +1,11 @@
 //! Tests of the consistency logic on constructed inputs with known deviations, and of the
 //! growth phase on constructed wear signals.
 
-use super::*;
+use super::{
+    classify, consistency_table, growth_phase, match_nearest, relative_deviation, ConsistencyCase,
+    ConsistencyClass, ConsistencyRow, ConsistencyThresholds, GrowthError, Peak, PhaseRelation,
+    Signal,
+};
 use crate::growth::trial_corrugation;
 use crate::spectral::{band_pass, BandPass};
 use std::f64::consts::PI;
@@ -45,15 +49,15 @@ fn each_class_hit_exactly() {
         .iter()
         .map(|r| (r.case, r.class, r.consistent_signals.as_str()))
         .collect();
-    use ConsistencyCase::*;
-    use ConsistencyClass::*;
+    use ConsistencyCase::{Case1, Case2};
+    use ConsistencyClass::{DarkGreen, Grey, LightGreen};
     assert_eq!(
         got,
         vec![
             (Case1, LightGreen, "W_f+F_L+F_N"), // 0.5, 0.5, 0.9 % → all ≤ 1 %
             (Case1, DarkGreen, "W_f+F_L+F_N"),  // 0.5, 2, 0.5 % → governed by 2 %
             (Case2, DarkGreen, "W_f+F_L"),      // 0.5, 2, 10 %
-            (None, Grey, "F_L"),                // 4, 0, 10 %: only one consistent
+            (ConsistencyCase::None, Grey, "F_L"), // 4, 0, 10 %: only one consistent
             (Case2, LightGreen, "W_f+F_L"),     // 0.4, 0.8, 20 %
         ]
     );

@@ -1,5 +1,4 @@
-use super::*;
-
+use super::{bilinear, dist, HashMap, RailProfile, SectionLocator, SectionMesh, SectionParams};
 const EN_AREA_M2: f64 = 6977e-6;
 const EN_ZC_M: f64 = 0.0751;
 const EN_I_VERT_M4: f64 = 2338e-8;

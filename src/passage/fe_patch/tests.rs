@@ -1,7 +1,10 @@
 //! The fe-patch of a passage: its disk entry reads back what was written, and the operators
 //! carry the split as a negative uniform compliance.
 
-use super::*;
+use super::{
+    build_estimate, influence_of, model_patch_cached, patch_dofs, patch_grid, read,
+    refined_influence, write, Influence, Model, PatchGrid, StripKernel, MARKER,
+};
 use crate::structure::contact_patch::of_model::ModelPatch;
 
 /// A small patch made up of known values (not an FE result): enough to check the storage.

@@ -1,3 +1,9 @@
+use super::{
+    colour_map, column_bounds, edges, heat_map, least_covered, line_plot, line_plot_log_y,
+    linear_labels, log_labels, render_line_plot_rgb, FontStyle, HeatMap, LineStyle, OverlayLine,
+    PathBuf, RGBColor, Series, FONT_TTF, HEAT_MAP_SIZE, LINE_PLOT_SIZE, MIN_COLUMNS, TICKS,
+};
+
 /// The ticks plotters would draw: multiples of a 1-2-5 step, at most `n` over the range.
 fn ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
     let raw = (hi - lo) / n as f64;
@@ -43,8 +49,6 @@ fn neighbouring_tick_labels_differ() {
     assert_eq!(linear_labels(-4.5e-6, 0.0, TICKS)(&8.5e-22), "0");
     assert_ne!(linear_labels(-4.5e-6, 0.0, TICKS)(&-5.0e-7), "0");
 }
-use super::*;
-
 fn tmpdir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("corrugation-plot-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();

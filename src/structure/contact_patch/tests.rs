@@ -1,6 +1,8 @@
 //! Checks of the local FE contact patch against closed forms.
 
-use super::*;
+use super::{
+    rail_head, tread, FlatBlockPatch, IsotropicElastic, StripKernel, StructureError, SurfaceKernel,
+};
 use crate::contact::influence::single_body;
 
 /// The largest error of a flat block's kernel against the single-body Boussinesq–Cerruti

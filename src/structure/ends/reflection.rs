@@ -216,8 +216,9 @@ pub fn decompose(w: &[c64], h: f64, frequency_hz: f64) -> Reflection {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{
+        c64, decompose, reflection, FarEnd, IsotropicElastic, ReflectionRail, SectionParams, Wave,
+    };
     /// The decomposition recovers two synthetic waves exactly.
     #[test]
     fn two_synthetic_waves_are_recovered() {

@@ -827,7 +827,7 @@ pub fn study_growth(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{rate_summary, GrowthRateSpectrum};
     use crate::growth::rate::RatePoint;
     use crate::units::Speed;
 

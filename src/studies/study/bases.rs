@@ -341,8 +341,7 @@ fn memoised<T>(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{basis_plan, ModalCache, Path, Study, StudyBasis, SubstructureOptions};
     fn study(basis: &str) -> Study {
         let text = format!(
             "model = \"builtin:dutch\"\nbasis = \"{basis}\"\n[[parameter]]\nkey = \"fastening.vertical_stiffness\"\nvalues = [0.6e9, 1.3e9]\n[[parameter]]\nkey = \"fastening.vertical_damping\"\nvalues = [15e3, 45e3]\n"

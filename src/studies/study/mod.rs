@@ -222,8 +222,9 @@ pub struct Study {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{
+        expand_range, InitiationCriterion, ModelSource, Path, PathBuf, Range, StudiesError, Study,
+    };
     fn parse(text: &str) -> Result<Study, StudiesError> {
         Study::parse_str(text, "s.toml", Path::new("/studies"), "s")
     }

@@ -320,7 +320,10 @@ impl StaticFlexibility for CaseStatic<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{
+        ContactFrame, Mat, RailContactLine, StaticFlexibility, StaticUpdater, StiffnessFactor,
+        TrackStructure,
+    };
     use crate::model::test_problems::small_model;
 
     /// The updated reference against an independent factorisation of each case's own `K`

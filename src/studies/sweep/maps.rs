@@ -147,8 +147,7 @@ fn build_maps(speeds: &[f64], summaries: &[PassageSummary], opts: &MapOptions) -
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
+    use super::{psd_at_wavenumber, WavelengthSpectrum};
     #[test]
     fn wavenumber_interpolation_is_linear_in_k_and_zero_outside() {
         // Samples at λ = 0.08, 0.04, 0.02 m → k = 12.5, 25, 50 1/m.

@@ -288,7 +288,7 @@ fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::{CoupledMode, MapOptions};
     use crate::dynamics::coupled::ModeShares;
 
     fn mode(f: f64) -> CoupledMode {
