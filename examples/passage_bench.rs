@@ -13,15 +13,18 @@
 //! (default 5,000 Hz, 3 repetitions; the CSV gets `t_s, fn_n, fl_n` of the last passage with
 //! the energy balance, to compare force histories between builds). The cache must hold the
 //! default model's modes (`corrugation modes --cache CACHE_DIR`), or they are computed (minutes).
-//! The environment variable `PASSAGE_BENCH_CASES` (a comma list of `energy`, `studies`,
-//! `alone`) runs only those cases, e.g. to profile one of them.
+//! A fourth case runs the studies' passage with the contact on the fe-patch
+//! (`contact.influence = "fe-patch"`; the first run builds the patch into the cache, about 95 s
+//! and 10 GB). The environment variable `PASSAGE_BENCH_CASES` (a comma list of `energy`,
+//! `studies`, `alone`, `fe-patch`) runs only those cases, e.g. to profile one of them.
 
 #[path = "common/mod.rs"]
 mod common;
 
 use common::{bits_digest, cpu_seconds, machine_load, summary_line};
 use corrugation::dynamics::integrator::ModalVerlet;
-use corrugation::dynamics::{passage::PassageOptions, prepared::PreparedModel};
+use corrugation::dynamics::passage::{PassageEngine, PassageOptions};
+use corrugation::dynamics::prepared::PreparedModel;
 use corrugation::eigen::cache::ModalCache;
 use corrugation::model::{load_model, ModelSource};
 use corrugation::passage::analysis::summarise;
@@ -89,8 +92,54 @@ fn main() -> anyhow::Result<()> {
     .map(|(case, _)| case)
     {
         for _ in 0..reps {
+            run_case(engine, name, &opts, csv)?;
+        }
+    }
+    // The same passage with the contact solved on the fe-patch (the rail head's and the
+    // tread's refined kernels less the global meshes' share) instead of the half-space, as the
+    // sweeps and studies run it. The first run builds the patch into the cache (about 95 s and
+    // 10 GB on the default grid); its preparation time is printed apart from the passages'.
+    if cases
+        .as_ref()
+        .is_none_or(|c| c.split(',').any(|k| k == "fe-patch"))
+    {
+        let patched = load_model(
+            &ModelSource::Builtin,
+            &[
+                format!("run.fmax={fmax}"),
+                "contact.influence=\"fe-patch\"".to_string(),
+            ],
+        )?;
+        let t = Instant::now();
+        let prepared = PreparedModel::new(&patched, &cache, &without)?;
+        println!(
+            "fe-patch model prepared in {:.1} s (the patch read from the cache or built)",
+            t.elapsed().as_secs_f64()
+        );
+        for _ in 0..reps {
+            run_case(
+                &prepared.engine,
+                "fe-patch, no energy (studies)",
+                &without,
+                None,
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// One passage of `engine` at the model's speed with `opts`, timed and digested.
+fn run_case(
+    engine: &PassageEngine,
+    name: &str,
+    opts: &PassageOptions,
+    csv: Option<&String>,
+) -> anyhow::Result<()> {
+    let v = engine.model().run.speed();
+    {
+        {
             let (w0, c0, t0) = (Instant::now(), cpu_seconds(), thread_cpu_seconds());
-            let rec = engine.passage(v, None, &opts, None)?;
+            let rec = engine.passage(v, None, opts, None)?;
             let (w, c) = (w0.elapsed().as_secs_f64(), cpu_seconds() - c0);
             let ct = thread_cpu_seconds() - t0;
             println!(
