@@ -45,7 +45,7 @@ where
 /// The process id in the name of a temp file of [`write_atomic`] (`<name>.tmp.<pid>`) or of
 /// the PNG writer of [`crate::report::plot`] (`<stem>.tmp<pid>.png`: the encoder picks the
 /// format from the extension); `None` for any other name.
-pub fn temp_file_pid(name: &str) -> Option<u32> {
+pub(crate) fn temp_file_pid(name: &str) -> Option<u32> {
     let digits = |s: &str| -> Option<u32> {
         (!s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
             .then(|| s.parse().ok())
@@ -66,7 +66,7 @@ pub fn temp_file_pid(name: &str) -> Option<u32> {
 }
 
 /// Removes the temp files `<name>.tmp.<pid>` of [`write_atomic`] and `<stem>.tmp<pid>.png` of
-/// the PNG writer ([`temp_file_pid`]) in `dir` (not in its subdirectories) that a killed
+/// the PNG writer (`temp_file_pid`) in `dir` (not in its subdirectories) that a killed
 /// process left: those of processes no longer running (on Linux, no `/proc/<pid>`; where
 /// that cannot be told, none is removed). Returns how many were removed; a missing `dir` has
 /// none.

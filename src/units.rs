@@ -7,7 +7,7 @@
 /// Metres per millimetre.
 pub const M_PER_MM: f64 = 1.0e-3;
 /// Metres per micrometre.
-pub const M_PER_UM: f64 = 1.0e-6;
+pub(crate) const M_PER_UM: f64 = 1.0e-6;
 /// Pascals per megapascal.
 pub const PA_PER_MPA: f64 = 1.0e6;
 
@@ -91,7 +91,7 @@ pub fn pa_to_mpa(pa: f64) -> f64 {
 }
 
 /// Newtons per kilonewton.
-pub const N_PER_KN: f64 = 1.0e3;
+pub(crate) const N_PER_KN: f64 = 1.0e3;
 
 /// Force in N → kN (for printed tables).
 pub fn n_to_kn(n: f64) -> f64 {
@@ -104,9 +104,9 @@ pub fn s_to_ms(s: f64) -> f64 {
 }
 
 /// Bytes per GB (decimal, as disk sizes are quoted).
-pub const BYTES_PER_GB: f64 = 1.0e9;
+pub(crate) const BYTES_PER_GB: f64 = 1.0e9;
 /// Seconds per day.
-pub const S_PER_DAY: f64 = 86_400.0;
+pub(crate) const S_PER_DAY: f64 = 86_400.0;
 
 /// Size in B → GB (10⁹ B).
 pub fn bytes_to_gb(bytes: u64) -> f64 {

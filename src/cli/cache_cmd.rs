@@ -17,7 +17,7 @@ use corrugation::units::{bytes_to_gb, days_to_s, gb_to_bytes, s_to_days};
 
 /// List the modal cache and remove least recently used entries.
 #[derive(Debug, Args)]
-pub struct CacheCmd {
+pub(crate) struct CacheCmd {
     /// Modal cache directory (default: $XDG_CACHE_HOME/corrugation or ~/.cache/corrugation).
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,

@@ -17,7 +17,7 @@ use super::ModelArgs;
 /// Static longitudinal compliance of the fastening models: u_x of the rail head, web and foot
 /// ahead of a wheel load with a longitudinal force (compliance.csv, compliance.json).
 #[derive(Debug, Args)]
-pub struct ComplianceCmd {
+pub(crate) struct ComplianceCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Fastening models, each applied as --set fastening.model=NAME.

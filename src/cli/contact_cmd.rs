@@ -18,7 +18,7 @@ const MAX_STEPS: usize = 10_000;
 /// for the model's wheel, rail crown, steels (combined as quasi-identical bodies), load,
 /// friction and contact grid (`contact.grid_nx`, `grid_ny`, `grid_margin`).
 #[derive(Debug, Args)]
-pub struct ContactCmd {
+pub(crate) struct ContactCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Normal load (N). Default: vehicle.wheel_load.

@@ -20,7 +20,7 @@ use super::ModelArgs;
 
 /// Coupled wheel–track modes at the contact (linearised contact at the static state).
 #[derive(Debug, Args)]
-pub struct CoupledModesCmd {
+pub(crate) struct CoupledModesCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Contact positions (m along the rail); default: the mid-span and the sleeper nearest

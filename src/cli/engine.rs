@@ -25,7 +25,7 @@ pub enum Engine {
 /// The explicit FE model of `model` (its `[explicit]` options); warns when its contact step at
 /// the model's speed is longer than the converged one
 /// ([`corrugation::explicit::contact_step::unconverged_contact_step`]).
-pub fn explicit_model(model: &Model) -> anyhow::Result<ExplicitModel> {
+pub(crate) fn explicit_model(model: &Model) -> anyhow::Result<ExplicitModel> {
     if let Some(w) =
         corrugation::explicit::contact_step::unconverged_contact_step(model, model.run.speed())?
     {
@@ -36,7 +36,7 @@ pub fn explicit_model(model: &Model) -> anyhow::Result<ExplicitModel> {
 }
 
 /// The passage runner of a model on `engine` (see [`runner_for`]).
-pub fn runner_for_engine(
+pub(crate) fn runner_for_engine(
     model: &Model,
     cache: Option<&Path>,
     engine: Engine,
@@ -74,6 +74,9 @@ pub fn prepared(model: &Model, cache: Option<&Path>) -> anyhow::Result<PreparedM
 
 /// The passage runner of a model: modal basis from the cache in `cache` (default cache
 /// directory when `None`), built once, then any number of passages.
-pub fn runner_for(model: &Model, cache: Option<&Path>) -> anyhow::Result<Box<dyn PassageRunner>> {
+pub(crate) fn runner_for(
+    model: &Model,
+    cache: Option<&Path>,
+) -> anyhow::Result<Box<dyn PassageRunner>> {
     Ok(Box::new(prepared(model, cache)?))
 }

@@ -19,7 +19,7 @@ use super::ModelArgs;
 
 /// One explicit FE passage: contact forces, wear along the rail, PSDs, plots, explicit.json.
 #[derive(Debug, Args)]
-pub struct ExplicitCmd {
+pub(crate) struct ExplicitCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Rail-top profile (CSV with a header: x in m, height in µm), e.g. a corrugation.
@@ -81,7 +81,7 @@ impl ExplicitCmd {
 
 /// One explicit passage of `m` over `profile`, its files in `out` (those of `passage` plus
 /// `explicit.json`) and its summary on stdout (`json`: as JSON).
-pub fn run_explicit(
+pub(crate) fn run_explicit(
     m: &corrugation::model::Model,
     opts: ExplicitOptions,
     profile: Option<&RailProfile>,

@@ -38,7 +38,7 @@ use super::ModelArgs;
 
 /// Trial-amplitude growth: smooth passage, trial corrugations, consistency, limiting amplitude.
 #[derive(Debug, Args)]
-pub struct GrowCmd {
+pub(crate) struct GrowCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Trial amplitudes 2A_max (peak-to-trough, µm), comma separated.
@@ -97,7 +97,7 @@ pub struct GrowCmd {
 }
 
 /// Prints the verdict as the last lines on stdout.
-pub fn print_verdict(v: &Verdict) {
+pub(crate) fn print_verdict(v: &Verdict) {
     println!();
     for l in &v.lines {
         println!("{l}");

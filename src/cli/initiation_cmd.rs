@@ -17,7 +17,7 @@ use super::{engine, ModelArgs};
 
 /// Initiation table of several fastening models (or model files) on the smooth rail.
 #[derive(Debug, Args)]
-pub struct InitiationCmd {
+pub(crate) struct InitiationCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Fastening models compared, each applied to the model as --set fastening.model=NAME.

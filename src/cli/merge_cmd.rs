@@ -10,7 +10,7 @@ use corrugation::studies::sweep::merge;
 
 /// Join shard directories of a sweep into one.
 #[derive(Debug, Args)]
-pub struct MergeCmd {
+pub(crate) struct MergeCmd {
     /// Shard directories (each the --out of one `sweep --shard I/N`).
     #[arg(required = true, value_name = "DIR")]
     dirs: Vec<PathBuf>,

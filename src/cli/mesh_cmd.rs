@@ -15,7 +15,7 @@ use super::ModelArgs;
 
 /// Builds the 3D FE model of the track and prints its summary.
 #[derive(Debug, Args)]
-pub struct MeshCmd {
+pub(crate) struct MeshCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Print the summary as one JSON object.

@@ -3,7 +3,7 @@
 mod cache_cmd;
 mod compliance_cmd;
 mod contact_cmd;
-pub mod coupled_modes_cmd;
+pub(crate) mod coupled_modes_cmd;
 pub mod engine;
 mod explicit_cmd;
 mod grow_cmd;
@@ -16,7 +16,7 @@ mod passage_cmd;
 mod predict_cmd;
 mod progress;
 mod receptance_cmd;
-pub mod reference_outputs;
+pub(crate) mod reference_outputs;
 mod roughness_cmd;
 mod study_cmd;
 mod sweep_cmd;
@@ -37,7 +37,7 @@ pub struct Cli {
 
 /// The model every command works on.
 #[derive(Debug, Clone, Args)]
-pub struct ModelArgs {
+pub(crate) struct ModelArgs {
     /// Model file (TOML). Default: the embedded Dutch track model (RPM3).
     #[arg(long, value_name = "FILE")]
     pub model: Option<PathBuf>,
@@ -71,7 +71,7 @@ impl ModelArgs {
 /// Warns on stderr about the values of `m` (named `name`) whose magnitude looks like a unit
 /// slip ([`Model::unit_slips`]) and about a solution-zone mesh whose element-passing ripple
 /// falls in the analysis band ([`Model::mesh_in_band`]).
-pub fn warn_unit_slips(name: &str, m: &Model) {
+pub(crate) fn warn_unit_slips(name: &str, m: &Model) {
     for slip in m.unit_slips() {
         eprintln!("warning: {name}: {slip}");
     }
@@ -84,7 +84,7 @@ pub fn warn_unit_slips(name: &str, m: &Model) {
 /// any work, that the contact grid a passage of `m` over it needs is within its bound
 /// ([`corrugation::passage::setup::check_profile_grid`]); warns when its depth looks like a
 /// unit slip.
-pub fn read_profile(
+pub(crate) fn read_profile(
     path: &std::path::Path,
     m: &Model,
 ) -> anyhow::Result<corrugation::dynamics::RailProfile> {
@@ -101,7 +101,7 @@ pub fn read_profile(
 /// peak-to-trough) gives a contact grid within its bound on the model `m`
 /// ([`corrugation::passage::setup::check_profile_grid`]); warns when it looks like a unit
 /// slip.
-pub fn check_trial_profile_grid(amplitudes_um: &[f64], m: &Model) -> anyhow::Result<()> {
+pub(crate) fn check_trial_profile_grid(amplitudes_um: &[f64], m: &Model) -> anyhow::Result<()> {
     let Some(a) = amplitudes_um.iter().copied().reduce(f64::max) else {
         return Ok(());
     };
@@ -117,7 +117,7 @@ pub fn check_trial_profile_grid(amplitudes_um: &[f64], m: &Model) -> anyhow::Res
 /// Refuses an `--out` that is the modal cache's directory (`--cache`, or the default one) or
 /// lies inside it, before anything is created or computed (see
 /// [`corrugation::eigen::cache::ensure_outside_cache`]).
-pub fn check_out_outside_cache(
+pub(crate) fn check_out_outside_cache(
     out: &std::path::Path,
     cache: Option<&std::path::Path>,
 ) -> anyhow::Result<()> {
@@ -133,7 +133,7 @@ pub fn check_out_outside_cache(
 /// Refuses a modal cache path that exists and is not a directory (`given`: it is the
 /// `--cache` flag's, else the default): the modes could not be stored there, and every run
 /// would recompute them without a word.
-pub fn check_cache_dir(dir: &std::path::Path, given: bool) -> anyhow::Result<()> {
+pub(crate) fn check_cache_dir(dir: &std::path::Path, given: bool) -> anyhow::Result<()> {
     match std::fs::metadata(dir) {
         Ok(md) if !md.is_dir() => {
             let what = if given {
@@ -155,7 +155,7 @@ pub fn check_cache_dir(dir: &std::path::Path, given: bool) -> anyhow::Result<()>
 /// removes the temp files a killed earlier run left in it
 /// ([`corrugation::io::remove_stale_temp_files`]: the writers' own temp names of dead
 /// processes, in this directory only).
-pub fn check_out_dir(dir: &std::path::Path) -> anyhow::Result<()> {
+pub(crate) fn check_out_dir(dir: &std::path::Path) -> anyhow::Result<()> {
     let fail =
         |e: std::io::Error| anyhow::anyhow!("--out {}: cannot write there: {e}", dir.display());
     std::fs::create_dir_all(dir).map_err(fail)?;

@@ -6,7 +6,7 @@ use super::ModelArgs;
 
 /// Prints the resolved model as TOML (every key, with the values in force).
 #[derive(Debug, Args)]
-pub struct ModelCmd {
+pub(crate) struct ModelCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Print JSON instead of TOML.

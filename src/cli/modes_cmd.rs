@@ -26,7 +26,7 @@ use super::ModelArgs;
 
 /// Eigenmodes of the track and the wheel, classified (CSV, optional VTU), cached.
 #[derive(Debug, Args)]
-pub struct ModesCmd {
+pub(crate) struct ModesCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Upper frequency (Hz): all modes below it.

@@ -28,7 +28,7 @@ use super::ModelArgs;
 
 /// One passage of the wheel over the track: contact forces, wear along the rail, PSDs.
 #[derive(Debug, Args)]
-pub struct PassageCmd {
+pub(crate) struct PassageCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Rail-top profile (CSV with a header: x in m, height in µm), e.g. a corrugation.
@@ -136,7 +136,7 @@ impl PassageCmd {
 }
 
 /// Prints the passage's summary lines and where its outputs are.
-pub fn print_summary(s: &PassageSummary, rec: &PassageRecord, out: &Path) {
+pub(crate) fn print_summary(s: &PassageSummary, rec: &PassageRecord, out: &Path) {
     for line in summary_lines(s, rec) {
         println!("{line}");
     }

@@ -19,7 +19,7 @@ use super::{engine, grow_cmd, ModelArgs};
 
 /// The full prediction: modes, smooth passage, trial growth, short speed sweep, report.
 #[derive(Debug, Args)]
-pub struct PredictCmd {
+pub(crate) struct PredictCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Trial amplitudes 2A_max (peak-to-trough, µm), comma separated.

@@ -14,7 +14,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// Environment variable: seconds between plain progress lines when stderr is not a terminal.
-pub const INTERVAL_VAR: &str = "CORRUGATION_PROGRESS_SECONDS";
+pub(crate) const INTERVAL_VAR: &str = "CORRUGATION_PROGRESS_SECONDS";
 /// Default seconds between plain progress lines.
 const DEFAULT_INTERVAL_S: f64 = 10.0;
 

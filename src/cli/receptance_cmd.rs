@@ -18,7 +18,7 @@ use super::ModelArgs;
 
 /// Receptances of the track and the wheel at the contact, and their peaks.
 #[derive(Debug, Args)]
-pub struct ReceptanceCmd {
+pub(crate) struct ReceptanceCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Lowest frequency (Hz).

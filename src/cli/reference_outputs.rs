@@ -26,7 +26,7 @@ use corrugation::studies::nodal::{nodal_outputs, NodalPoint};
 
 /// Options of the structural outputs of a passage.
 #[derive(Debug, Clone, Args)]
-pub struct ReferenceArgs {
+pub(crate) struct ReferenceArgs {
     /// Skip the coupled wheel–track modes and the attribution of the selected frequencies.
     #[arg(long)]
     pub no_coupled: bool,
@@ -69,7 +69,7 @@ pub fn coupled_attribution(
 
 /// The nodal spectra of the rail-top points of `args` ([`nodal_outputs`], written to
 /// `nodal_spectrum.json`); prints one line per record unless `quiet`.
-pub fn nodal_outputs_printed(
+pub(crate) fn nodal_outputs_printed(
     prepared: &mut PreparedModel,
     speed_m_per_s: f64,
     profile: Option<&RailProfile>,

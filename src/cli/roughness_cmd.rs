@@ -20,7 +20,7 @@ use super::ModelArgs;
 
 /// Which wavelengths of a measured rail roughness grow at which speeds, and how fast.
 #[derive(Debug, Args)]
-pub struct RoughnessCmd {
+pub(crate) struct RoughnessCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// A measured profile: CSV `x_m, height_um` (any sampling; `nan` or an empty height for

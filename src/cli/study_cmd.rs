@@ -16,7 +16,7 @@ use corrugation::studies::BoxError;
 
 /// Design study: initiation indicators (and optionally growth) for every case of a study file.
 #[derive(Debug, Args)]
-pub struct StudyCmd {
+pub(crate) struct StudyCmd {
     /// The study file (TOML).
     #[arg(value_name = "FILE")]
     file: PathBuf,

@@ -14,7 +14,7 @@ use super::{engine, ModelArgs};
 
 /// Speed sweep: frequency-selection maps, dominant wavelength and frequency vs speed.
 #[derive(Debug, Args)]
-pub struct SweepCmd {
+pub(crate) struct SweepCmd {
     #[command(flatten)]
     model: ModelArgs,
     /// Speeds in km/h: START:STOP:STEP (STOP included only when it falls on the grid) or a

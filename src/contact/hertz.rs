@@ -73,7 +73,7 @@ pub struct HertzContact {
 
 /// Complete elliptic integrals `(K(k), E(k))` of modulus `k` (parameter m = k²), by the
 /// arithmetic–geometric mean (Abramowitz & Stegun 17.6). Valid for `0 ≤ k < 1`.
-pub fn elliptic_ke(k: f64) -> (f64, f64) {
+pub(crate) fn elliptic_ke(k: f64) -> (f64, f64) {
     let mut a = 1.0_f64;
     let mut b = (1.0 - k * k).sqrt();
     let mut c = k;

@@ -49,7 +49,7 @@ fn corner_sum(f: impl Fn(f64, f64) -> f64, x1: f64, x2: f64, y1: f64, y2: f64) -
 
 /// Integrals over a source rectangle of half-sizes `hx, hy` (m) centred at the origin, seen from
 /// field point `(x, y)`: returns `(∬1/r, ∬X²/r³, ∬Y²/r³, ∬XY/r³)` (units m, m, m, m).
-pub fn rectangle_integrals(x: f64, y: f64, hx: f64, hy: f64) -> (f64, f64, f64, f64) {
+pub(crate) fn rectangle_integrals(x: f64, y: f64, hx: f64, hy: f64) -> (f64, f64, f64, f64) {
     let (x1, x2, y1, y2) = (x - hx, x + hx, y - hy, y + hy);
     let hxx = |xx: f64, yy: f64| yy * asinh_ratio(xx, yy);
     let hyy = |xx: f64, yy: f64| xx * asinh_ratio(yy, xx);
@@ -96,7 +96,7 @@ pub fn coefficients(
 /// seen from field point `(x, y)`: the kernel of the normal–tangential coupling of one
 /// half-space. Antiderivative `½ Y ln(X² + Y²) + X atan(Y/X)` (the `−Y` term of the exact
 /// antiderivative cancels in the corner sum; `X atan(Y/X)` → 0 as `X` → 0).
-pub fn rectangle_integral_x_over_r2(x: f64, y: f64, hx: f64, hy: f64) -> f64 {
+pub(crate) fn rectangle_integral_x_over_r2(x: f64, y: f64, hx: f64, hy: f64) -> f64 {
     let f = |xx: f64, yy: f64| {
         let r2 = xx * xx + yy * yy;
         let log_part = if r2 > 0.0 { 0.5 * yy * r2.ln() } else { 0.0 };
@@ -332,7 +332,7 @@ impl RealFft2 {
 }
 
 /// Smallest `m ≥ n` whose prime factors are 2, 3 and 5 (fast FFT lengths).
-pub fn next_fast_len(n: usize) -> usize {
+pub(crate) fn next_fast_len(n: usize) -> usize {
     let mut m = n.max(1);
     loop {
         let mut r = m;
@@ -351,7 +351,7 @@ pub fn next_fast_len(n: usize) -> usize {
 /// FFT-based influence products on an `nx × ny` grid (element index `i * ny + j`, `i` along x).
 ///
 /// The padded FFT grid is `m1 × m2` with `m1 ≥ 2nx`, `m2 ≥ 2ny` of fast lengths
-/// ([`next_fast_len`]; 64 × 48 for the default 32 × 24 grid, where `2nx + 1` would need 72
+/// (`next_fast_len`; 64 × 48 for the default 32 × 24 grid, where `2nx + 1` would need 72
 /// rows): the offsets that occur (rows `−(nx−1)..=nx`, columns `−(ny−1)..=ny−1`) map to
 /// distinct periodic indices, and the periodic kernels are exactly even (zz, xx, yy) or
 /// odd–odd (xy), so all four kernel spectra are **real**. The row offset `+nx` (from source

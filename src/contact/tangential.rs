@@ -11,14 +11,14 @@
 //! These are exactly the optimality conditions of the convex programme
 //! `min ½ τᵀCτ + eᵀτ  s.t. |τ_i| ≤ g_i` (C symmetric positive definite; Kalker 1990 §2.4:
 //! the transient problem is a minimum principle). Its gradient is the slip `S`. It is solved by
-//! an active-set conjugate-gradient method with FFT influence products (see [`TangentialSolver::solve`]).
+//! an active-set conjugate-gradient method with FFT influence products (see `TangentialSolver::solve`).
 //!
 //! Series compliance: with the uniform compliances `c_x, c_y` (m/N) of the rail surface under
 //! the patch the slip gains `c_x F_x(t)` (and `c_y F_y(t)`), `F_x = ΔA Σ τx`, the end-of-step
 //! force (implicit); the caller puts the known `−c_x F_x(t − Δt)` into the shift `e`. The operator
 //! becomes `C + diag(c_x, c_y) ΔA 1 1ᵀ` (m/Pa), a rank-one term per component that keeps it
 //! symmetric positive definite, so the problem stays the same convex programme
-//! ([`TangentialSolver::uniform_x_m_per_pa`]).
+//! (`TangentialSolver::uniform_x_m_per_pa`).
 
 use super::influence::TangentialInfluence;
 use super::ContactError;
@@ -30,7 +30,7 @@ pub(in crate::contact) const LANES: usize = 4;
 
 mod inner_cg;
 
-/// How the slip directions are found (see [`TangentialSolver::solve`]).
+/// How the slip directions are found (see `TangentialSolver::solve`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum TangentialAlgorithm {
     /// Slip elements turn (small turns) inside the inner CG along the tangent of their circle,
@@ -54,7 +54,7 @@ struct Problem<'a> {
 
 /// Scratch for the tangential solver (allocated once).
 #[derive(Clone)]
-pub struct TangentialSolver {
+pub(crate) struct TangentialSolver {
     dx_: Vec<f64>,
     dy_: Vec<f64>,
     qx: Vec<f64>,

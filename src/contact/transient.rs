@@ -58,8 +58,8 @@ use super::{check_positive, combined_modulus, shear_modulus, ContactError};
 
 pub use super::rolling::{
     GridSpec, HertzGridParams, Longitudinal, NormalInput, StepInputs, StepResult, TransientConfig,
-    STATE_EXTERIOR, STATE_SLIP, STATE_STICK,
 };
+pub use super::rolling::{STATE_EXTERIOR, STATE_SLIP, STATE_STICK};
 
 /// The transient rolling engine: all scratch allocated in [`TransientRolling::new`];
 /// [`TransientRolling::step`] allocates nothing and warm-starts from the previous step.
@@ -221,7 +221,7 @@ impl TransientRolling {
     }
 
     /// Switch the Jacobi preconditioner of the tangential solver's inner CG (default on; see
-    /// [`TangentialSolver::solve`]); off only to compare.
+    /// `TangentialSolver::solve`); off only to compare.
     pub fn set_tangential_jacobi(&mut self, on: bool) {
         self.tang.jacobi = on;
     }
@@ -234,7 +234,7 @@ impl TransientRolling {
     }
 
     /// Whether the tangential solver takes the slip of a step's start by linearity from the
-    /// last step's exact product (default on; [`TangentialSolver::linear_start`]); off only to
+    /// last step's exact product (default on; `TangentialSolver::linear_start`); off only to
     /// compare. The solution is the same within the solver's tolerance.
     pub fn set_linear_start(&mut self, on: bool) {
         self.tang.linear_start = on;

@@ -125,7 +125,7 @@ pub struct CoupledSystem<'a> {
 
 /// One eigenpair of the state-space problem (oscillatory, `Im λ > 0`).
 #[derive(Clone, Debug)]
-pub struct StateMode {
+pub(crate) struct StateMode {
     /// Eigenvalue λ (1/s).
     pub lambda: c64,
     /// Modal displacements `q = [q_track; q_wheel]` of the eigenvector.
@@ -277,13 +277,13 @@ impl CoupledMode {
 /// strongest mode's peak to the receptance at the contact for the same damping, and is drawn
 /// on the sweep maps. The same share as the wheel lines' contact participation
 /// (`studies::grow::WHEEL_LINE_SHARE`).
-pub const SEEN_SHARE: f64 = 0.03;
+pub(crate) const SEEN_SHARE: f64 = 0.03;
 
 /// Most lines of coupled modes drawn on one sweep map: the strongest by contact residue.
-pub const MAX_SEEN_LINES: usize = 16;
+pub(crate) const MAX_SEEN_LINES: usize = 16;
 
-/// The coupled modes the contact sees (contact residue at least [`SEEN_SHARE`] of the
-/// largest among `modes`) with a frequency in `band_hz` (Hz), at most [`MAX_SEEN_LINES`]
+/// The coupled modes the contact sees (contact residue at least `SEEN_SHARE` of the
+/// largest among `modes`) with a frequency in `band_hz` (Hz), at most `MAX_SEEN_LINES`
 /// (the strongest), ascending in frequency. Modes within 0.5 % of each other in frequency
 /// (the same mode at two contact positions, or a sine–cosine pair of the wheel) are one:
 /// the one with the larger residue.
@@ -466,7 +466,7 @@ fn real_eigen(a: &Mat<f64>) -> Result<(Vec<c64>, Mat<c64>), DynamicsError> {
 /// [`super::passage::RIGID_HZ`] (`Im λ > 0`; the wheel's rigid-body motion on the contact
 /// gives eigenvalues at or near zero), ascending in frequency. Overdamped (real) eigenvalues
 /// are dropped.
-pub fn coupled_state_modes(
+pub(crate) fn coupled_state_modes(
     sys: &CoupledSystem<'_>,
     lin: &ContactLinearisation,
 ) -> Result<Vec<StateMode>, DynamicsError> {
@@ -504,7 +504,7 @@ pub fn coupled_state_modes(
 }
 
 /// Describes a state mode: frequency, damping, energy shares, contact amplitudes.
-pub fn describe_mode(
+pub(crate) fn describe_mode(
     sys: &CoupledSystem<'_>,
     lin: &ContactLinearisation,
     labels: &CoordinateLabels,
@@ -626,7 +626,7 @@ impl ModeAttribution {
 /// in `modes`): among the modes within `window` (relative, e.g. 0.03) of `f`, the one the
 /// contact sees most (largest contact amplitude per √energy, rail or wheel, x or n); when
 /// none is that close, the nearest in frequency among the modes whose contact amplitude is at
-/// least [`MIN_VISIBILITY`] of the largest. A dense cluster of support modes a fraction of a
+/// least `MIN_VISIBILITY` of the largest. A dense cluster of support modes a fraction of a
 /// hertz from `f` that barely moves the contact does not take the attribution from the mode
 /// that carries the contact's motion. Empty when there are no modes.
 pub fn attribute(
@@ -701,7 +701,7 @@ pub fn attribution_text(a: &ModeAttribution) -> String {
 /// Relative size of the perturbations of the static state used to linearise the contact
 /// (of the static creepage, approach): small enough to stay in the linear range of partial
 /// slip, large enough for the solver's tolerance ([`super::setup::PASSAGE_TANGENTIAL_TOL`]).
-pub const LINEARISATION_STEP: f64 = 0.02;
+pub(crate) const LINEARISATION_STEP: f64 = 0.02;
 
 /// The contact of `engine` at `v` (m/s, smooth rail, the engine's series compliance) brought
 /// to the static rolling state of a passage's start; the static inputs
@@ -866,7 +866,7 @@ impl CoupledModes {
     }
 
     /// The modes [`attribute`] can choose: those whose contact amplitude is at least
-    /// [`MIN_VISIBILITY`] of the largest. Attributing to these alone gives the same result
+    /// `MIN_VISIBILITY` of the largest. Attributing to these alone gives the same result
     /// as attributing to all modes, except where every mode within the window is below that
     /// visibility (then the nearest visible mode is taken instead of an invisible one).
     pub fn visible(&self) -> Vec<CoupledMode> {
@@ -886,7 +886,7 @@ impl CoupledModes {
 /// Contact amplitude (per √energy) below which a coupled mode is not a candidate for the
 /// attribution of a selected frequency far from every mode, relative to the largest (−): a
 /// mode the contact does not move cannot select a wavelength there.
-pub const MIN_VISIBILITY: f64 = 0.01;
+pub(crate) const MIN_VISIBILITY: f64 = 0.01;
 
 /// Relative frequency window of the attribution (−): the initiation criterion's wavelength
 /// deviation, 3 % (docs/theory.md §11.4).

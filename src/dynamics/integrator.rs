@@ -33,7 +33,7 @@
 //! by the contact grid, so when `Δt_c ω_max ≥ 1.9` (a basis with high modes, up to a
 //! complete one) the integrator advances the modal system by `m` equal **sub-steps**
 //! `h = Δt_c / m` inside each contact step, with `m = ⌈Δt_c ω_max / 1.8⌉` (`h ω_max ≤ 1.8`,
-//! the explicit path's default safety 0.9 of the limit 2; [`substeps_for`]). The generalised
+//! the explicit path's default safety 0.9 of the limit 2; `substeps_for`). The generalised
 //! force is sampled at the contact steps: the force of `t_n` is held at every sub-step node
 //! of `[t_n, t_{n+1})` and the last sub-step completes with the force of `t_{n+1}`. In the
 //! central-difference sense of node loads (a node's load acting over `t_k ± h/2`) that is
@@ -41,7 +41,7 @@
 //! `m = 1` it is the plain step above, unchanged. The held force acts like the sampled force
 //! delayed by `(Δt_c − h)/2`. Interior sub-steps cost one product with `(I + ½h C_q)⁻¹`
 //! each (a diagonal scaling when `C_q` is diagonal). The constructor refuses more than
-//! [`MAX_SUBSTEPS`] sub-steps (lower f_max or refine the contact grid). The explicit coupling
+//! `MAX_SUBSTEPS` sub-steps (lower f_max or refine the contact grid). The explicit coupling
 //! through the contact force adds the contact stiffness to ω_max; the passage checks its
 //! energy balance.
 //!
@@ -56,7 +56,7 @@ use super::DynamicsError;
 
 /// Largest number of sub-steps per contact step ([`ModalVerlet::new`] refuses more: the
 /// basis is then far above what the contact step can resolve; lower f_max).
-pub const MAX_SUBSTEPS: usize = 4096;
+pub(crate) const MAX_SUBSTEPS: usize = 4096;
 
 /// `Δt ω_max` at and above which one step is refused (the limit is 2).
 const STEP_LIMIT: f64 = 1.9;
@@ -67,7 +67,7 @@ const SUBSTEP_TARGET: f64 = 1.8;
 
 /// Sub-steps per contact step `dt` (s) for a system whose highest frequency is `omega_max`
 /// (rad/s): 1 when `dt ω_max < 1.9`, otherwise `⌈dt ω_max / 1.8⌉` (module doc).
-pub fn substeps_for(omega_max: f64, dt: f64) -> usize {
+pub(crate) fn substeps_for(omega_max: f64, dt: f64) -> usize {
     let x = dt * omega_max;
     if x < STEP_LIMIT {
         1
@@ -126,7 +126,7 @@ pub struct ModalVerlet {
 
 impl ModalVerlet {
     /// An integrator with contact step `dt` (s), at rest, with the sub-step count of
-    /// [`substeps_for`].
+    /// `substeps_for`.
     pub fn new(sys: &ModalSystem, dt: f64) -> Result<Self, DynamicsError> {
         let m = substeps_for(omega_max(sys), dt);
         if m > MAX_SUBSTEPS {

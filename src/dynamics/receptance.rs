@@ -40,7 +40,7 @@ use super::DynamicsError;
 ///
 /// Errors: rows of the wrong length, a negative or non-finite frequency, or a frequency that
 /// coincides with an undamped mode (singular dynamic stiffness: shift the grid).
-pub fn modal_receptance(
+pub(crate) fn modal_receptance(
     sys: &ModalSystem,
     rows: &[&[f64]],
     frequencies_hz: &[f64],

@@ -76,7 +76,7 @@ use crate::structure::TrackStructure;
 use crate::passage::statics::BLOCK;
 
 /// Revision of the cached residual-flexibility format / method; part of the cache name.
-pub const RESIDUAL_REVISION: u64 = 1;
+pub(crate) const RESIDUAL_REVISION: u64 = 1;
 
 /// Residual flexibility along the contact line, per node plane, for the three contact-frame
 /// directions `[x, t, n]` (m/N).
@@ -493,7 +493,7 @@ pub fn lateral_spread_flexibility(
 /// computes it (factorising `K` once, assembled by `k` only then) and stores it there, next to
 /// the modes. The file's name holds what else determines it (the lateral weights'
 /// semi-width and the contact frame's normal).
-pub fn cached_residual(
+pub(crate) fn cached_residual(
     cache: &crate::eigen::cache::ModalCache,
     key: &crate::eigen::cache::CacheKey,
     track: &TrackStructure,

@@ -172,7 +172,7 @@ impl WheelResidual {
 
 /// Revision of [`WheelResidual::cached`]'s file (its name and layout) and of the
 /// computation: bump it when either changes, so that no stale file is read.
-pub const WHEEL_RESIDUAL_REVISION: u64 = 1;
+pub(crate) const WHEEL_RESIDUAL_REVISION: u64 = 1;
 
 impl WheelResidual {
     /// The value's exact bytes: the twelve flexibilities' bit patterns, then the mode and

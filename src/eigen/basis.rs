@@ -76,7 +76,7 @@ pub struct ModalBasis<C> {
 /// change alters the matrices of an unchanged model file, so that no stale cache entry is
 /// reused (the program version alone does not change between development commits).
 /// 2: journal-node weights of the primary suspension balanced about the axle axis.
-pub const PHYSICS_REVISION: u64 = 2;
+pub(crate) const PHYSICS_REVISION: u64 = 2;
 
 /// The substructure a modal basis belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -113,7 +113,7 @@ impl std::fmt::Display for Substructure {
 
 /// The cache key of one substructure's modal basis (see the module doc for what it covers):
 /// the model's identity in the substructure's scope ([`Substructure::scope`]), f_max (Hz),
-/// the substructure's name and [`PHYSICS_REVISION`]. Compute it once per model and pass it
+/// the substructure's name and `PHYSICS_REVISION`. Compute it once per model and pass it
 /// on ([`track_basis_keyed`], [`wheel_basis_keyed`], the residual flexibilities).
 pub fn cache_key(
     m: &Model,

@@ -59,20 +59,19 @@ mod admin;
 mod manifest;
 mod owned;
 mod read;
-pub use admin::{CacheEntryInfo, PrunePolicy, PruneReport, LEFTOVER_AGE_S};
+pub use admin::{CacheEntryInfo, PrunePolicy, PruneReport};
 pub use owned::{
     ensure_outside_cache, quote_names, CacheSurvey, FE_PATCH_DIR, FE_PATCH_FILES, TAG_FILE,
-    TAG_SIGNATURE,
 };
 
 /// An entry's frequencies (Hz), a 1-D `.npy` array.
-pub const FREQUENCIES_FILE: &str = "frequencies_hz.npy";
+pub(crate) const FREQUENCIES_FILE: &str = "frequencies_hz.npy";
 /// An entry's mode shapes, a 2-D C-order `.npy` array (row = DOF).
-pub const MODES_FILE: &str = "modes.npy";
+pub(crate) const MODES_FILE: &str = "modes.npy";
 /// An entry's metadata ([`CacheMeta`] as JSON).
-pub const META_FILE: &str = "meta.json";
+pub(crate) const META_FILE: &str = "meta.json";
 /// An entry's manifest: the blake3 hashes of its files, sealed by its own hash.
-pub const MANIFEST_FILE: &str = "manifest.b3";
+pub(crate) const MANIFEST_FILE: &str = "manifest.b3";
 use serde::{Deserialize, Serialize};
 
 /// Errors of the modal cache.
@@ -745,8 +744,9 @@ impl CacheMeta {
 mod tests {
     use super::{
         fs, manifest, CacheError, CacheKey, CacheLookup, CacheMeta, CorruptEntry, Mat, ModalCache,
-        PathBuf, FREQUENCIES_FILE, MANIFEST_FILE, META_FILE, MODES_FILE, TAG_FILE, TAG_SIGNATURE,
+        PathBuf, FREQUENCIES_FILE, MANIFEST_FILE, META_FILE, MODES_FILE, TAG_FILE,
     };
+    use crate::eigen::cache::owned::TAG_SIGNATURE;
     fn tmpdir(name: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!(
             "corrugation-cache-test-{name}-{}",

@@ -7,7 +7,7 @@
 //!
 //! * `x_head`, `x_web`, `x_foot`: mean u_x (m) of the head, web and foot nodes. The split is by
 //!   height z above the foot underside (section node coordinates): head above
-//!   [`WEB_TOP_Z_M`], foot below [`WEB_BOTTOM_Z_M`], web in between. The limits are the
+//!   `WEB_TOP_Z_M`, foot below `WEB_BOTTOM_Z_M`, web in between. The limits are the
 //!   ends of the straight (8 mm half-thickness) web of the UIC54 profile
 //!   (`data/uic54-half-profile.csv`: z = 38.5 mm where the R16 foot fillet ends, z = 97.1 mm
 //!   where the R22 head fillet starts), so the fillets count to foot and head. With the 1:40
@@ -28,11 +28,11 @@
 //! | `torsion` | θ · r_p, with r_p = √(I_p / A) the polar radius of gyration of the section |
 //!
 //! The largest one gives the family, unless (in this order) the sleepers carry more than
-//! [`SLEEPER_KINETIC_SHARE`] of the kinetic energy (`sleeper`), the section-resultant field
+//! `SLEEPER_KINETIC_SHARE` of the kinetic energy (`sleeper`), the section-resultant field
 //! (group means of u_x, centroid translation + rotation θ in y–z) reproduces less than
-//! [`LOCAL_FIT_MIN`] of the rail's displacement norm (`local`: the cross-section deforms —
+//! `LOCAL_FIT_MIN` of the rail's displacement norm (`local`: the cross-section deforms —
 //! web breathing, foot flapping), or the largest amplitude holds less than
-//! [`OTHER_DOMINANCE`] of the sum of squares (`other`: strongly coupled).
+//! `OTHER_DOMINANCE` of the sum of squares (`other`: strongly coupled).
 //!
 //! Because the sleeper test comes first, a `sleeper` mode says nothing about the rail; its
 //! `rail_family` field holds the family the rail's own motion gets from the remaining rules
@@ -43,9 +43,9 @@
 //! (linear interpolation between planes; the planes may be graded):
 //! `λ = 2 (x_last − x_first)/(n − 1)` for n ≥ 2 crossings; for fewer crossings it is not
 //! defined (`None`). A mode is flagged *pinned-pinned* when it is vertical bending, its
-//! wavelength is within ±[`PINNED_PINNED_WAVELENGTH_TOL`] of twice the mean sleeper spacing,
+//! wavelength is within ±`PINNED_PINNED_WAVELENGTH_TOL` of twice the mean sleeper spacing,
 //! and the RMS of w interpolated at the sleeper centres is below
-//! [`PINNED_PINNED_NODE_RATIO`] × the RMS of w over the planes (nodes at the supports).
+//! `PINNED_PINNED_NODE_RATIO` × the RMS of w over the planes (nodes at the supports).
 //! (Pinned-pinned resonance: Knothe & Grassie, Vehicle Syst. Dyn. 22 (1993) 209–262; Grassie
 //! et al., J. Mech. Eng. Sci. 24 (1982) 77–90.)
 //!
@@ -54,7 +54,7 @@
 //! rigid-body mode whose strain energy is zero).
 //!
 //! **Wheel modes.** Strain-energy share of the wheel (elements) vs the primary suspension
-//! (spring); `rigid` when the wheel's own share is below ½ or f < [`RIGID_BODY_HZ`]; elastic
+//! (spring); `rigid` when the wheel's own share is below ½ or f < `RIGID_BODY_HZ`; elastic
 //! modes are `axial` (umbrella / axial rim motion u_y dominant on the rim nodes), `radial`
 //! (radial rim motion dominant) or `other` (e.g. circumferential), by the share of the squared
 //! rim displacements (rim = nodes with radius ≥ the rim inner radius) above ½.
@@ -70,33 +70,34 @@ use crate::structure::track::SpringKind;
 use crate::structure::TrackStructure;
 
 mod wheel;
+pub(crate) use wheel::classify_wheel_modes;
 pub use wheel::{
-    classify_wheel_mode, classify_wheel_modes, wheel_band_modes, WheelBandModes, WheelFamily,
-    WheelModeClass, WHEEL_SUMMARY_BAND_HZ,
+    classify_wheel_mode, wheel_band_modes, WheelBandModes, WheelFamily, WheelModeClass,
+    WHEEL_SUMMARY_BAND_HZ,
 };
 
 /// Height (m above the foot underside) of the top of the straight UIC54 web (start of the
 /// R22 head fillet); section nodes above it are *head*.
-pub const WEB_TOP_Z_M: f64 = 0.0971;
+pub(crate) const WEB_TOP_Z_M: f64 = 0.0971;
 /// Height (m) of the bottom of the straight UIC54 web (end of the R16 foot fillet); section
 /// nodes below it are *foot*.
-pub const WEB_BOTTOM_Z_M: f64 = 0.0385;
+pub(crate) const WEB_BOTTOM_Z_M: f64 = 0.0385;
 /// Kinetic-energy share of the sleepers above which a mode is `sleeper` (majority of the
 /// moving mass is in the sleepers: sleeper bounce/rocking on the ballast).
-pub const SLEEPER_KINETIC_SHARE: f64 = 0.5;
+pub(crate) const SLEEPER_KINETIC_SHARE: f64 = 0.5;
 /// Minimum fraction of the rail displacement norm reproduced by the section resultants;
 /// below it the cross-section itself deforms and the mode is `local`.
-pub const LOCAL_FIT_MIN: f64 = 0.5;
+pub(crate) const LOCAL_FIT_MIN: f64 = 0.5;
 /// Minimum share (of the sum of squared amplitudes) of the largest amplitude; below it the
 /// mode is `other` (no family dominates; 5 candidates, so ≥ 0.2 always).
-pub const OTHER_DOMINANCE: f64 = 0.4;
+pub(crate) const OTHER_DOMINANCE: f64 = 0.4;
 /// Relative tolerance of the pinned-pinned wavelength against 2 × sleeper spacing.
-pub const PINNED_PINNED_WAVELENGTH_TOL: f64 = 0.25;
+pub(crate) const PINNED_PINNED_WAVELENGTH_TOL: f64 = 0.25;
 /// Max RMS of w at the sleeper centres relative to the RMS of w over the planes for a
 /// pinned-pinned mode (a sine has ratio 1 for random sampling and 0 at its nodes).
-pub const PINNED_PINNED_NODE_RATIO: f64 = 0.35;
+pub(crate) const PINNED_PINNED_NODE_RATIO: f64 = 0.35;
 /// Below this frequency (Hz) a wheel mode counts as rigid-body.
-pub const RIGID_BODY_HZ: f64 = 1.0;
+pub(crate) const RIGID_BODY_HZ: f64 = 1.0;
 
 /// Errors of the classification.
 #[derive(Debug, thiserror::Error)]
@@ -256,7 +257,7 @@ pub struct SectionMotion {
 }
 
 /// Number of section sums per node plane ([`TrackClassifier::section_sum_terms`]).
-pub const SECTION_SUMS: usize = 6;
+pub(crate) const SECTION_SUMS: usize = 6;
 
 /// Quadratic measures of a mode's shape that [`TrackClassifier::classify_measured`] reads.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -371,7 +372,7 @@ fn rms(v: impl Iterator<Item = f64>, w: &[f64]) -> f64 {
 /// Wavelength (m) of a signal `q(x)` sampled at increasing `x` from its zero crossings:
 /// `2 (x_last − x_first)/(n − 1)` for n ≥ 2 crossings, else `None`. Samples with
 /// |q| ≤ 1e-6 max |q| are skipped (no spurious crossings from round-off near nodes).
-pub fn wavelength_from_crossings(x_m: &[f64], q: &[f64]) -> Option<f64> {
+pub(crate) fn wavelength_from_crossings(x_m: &[f64], q: &[f64]) -> Option<f64> {
     let qmax = q.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
     if qmax == 0.0 || !qmax.is_finite() {
         return None;

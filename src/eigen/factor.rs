@@ -325,7 +325,7 @@ impl ShiftedSystem {
 
     /// Overwrites `rhs` with `(K − σM)⁻¹ rhs`, with the parallelism given at construction.
     ///
-    /// The columns are split into [`SOLVE_GROUPS`] contiguous groups, each solved sequentially
+    /// The columns are split into `SOLVE_GROUPS` contiguous groups, each solved sequentially
     /// with its own workspace; with a parallel `par` the groups run concurrently. The result
     /// does not depend on `par` or the thread count.
     pub fn solve_in_place(
@@ -450,7 +450,7 @@ fn union_pattern(
 /// concurrently. A constant, not the thread count: a column's solution depends (in its last
 /// bits) on the width of the group it is solved in, and a fixed split keeps the results the
 /// same on every machine.
-pub const SOLVE_GROUPS: usize = 2;
+pub(crate) const SOLVE_GROUPS: usize = 2;
 
 /// Number of column groups of a block of `ncols` right-hand sides: [`SOLVE_GROUPS`], at most
 /// one per column, whatever `par` (which only decides whether they run concurrently). faer's
@@ -479,7 +479,7 @@ impl ShiftedSystem {
     /// ancestors in the elimination tree (Gilbert & Peierls, SIAM J. Sci. Stat. Comput. 9
     /// (1988) 862–874; Davis, *Direct Methods for Sparse Linear Systems*, SIAM 2006, §3.2):
     /// the supernodes off those paths are skipped, which for loads concentrated on a few
-    /// nodes is most of the factor. The columns are solved in [`SOLVE_GROUPS`] fixed groups
+    /// nodes is most of the factor. The columns are solved in `SOLVE_GROUPS` fixed groups
     /// (concurrently with a parallel `par` given at construction), so the result does not
     /// depend on the thread count.
     ///

@@ -20,7 +20,7 @@
 //!   found that many. For `f_min = 0` the first shift is negative, `σ_0 = −(2π f_rb)²`
 //!   (`K − σ_0 M` is then positive definite, `ν(σ_0)` must be 0), so rigid-body modes
 //!   (λ = 0) are ordinary, well separated eigenvalues of the transformed problem.
-//! * **Shift-invert block Lanczos** in each slice ([`lanczos`]): the operator
+//! * **Shift-invert block Lanczos** in each slice (`lanczos`): the operator
 //!   `Op = (K − σM)⁻¹ M` is self-adjoint in the M-inner product, with eigenvalues
 //!   `θ = 1/(λ − σ)`; the eigenvalues of the slice are the *largest* θ. A block Krylov basis
 //!   (block size b, every block one multi-right-hand-side solve) is kept M-orthonormal by full
@@ -99,7 +99,7 @@ pub mod basis;
 pub mod cache;
 pub mod classify;
 pub mod factor;
-pub mod lanczos;
+pub(crate) mod lanczos;
 pub mod spmm;
 pub mod substructure;
 

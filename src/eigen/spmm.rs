@@ -8,7 +8,7 @@
 //! is read once per group instead of once per column.
 //!
 //! The dense products `Vᵀ Z` (j × b, a reduction over the n rows) and `Z −= V C` with a tall
-//! `V` (n × j) and a thin `Z` (n × b) are split into [`ROW_PARTS`] contiguous row ranges, each
+//! `V` (n × j) and a thin `Z` (n × b) are split into `ROW_PARTS` contiguous row ranges, each
 //! computed by a sequential gemm and run concurrently; the partial `Vᵀ Z` are summed in range
 //! order. faer's own parallel gemm splits these shapes poorly (docs/performance.md §3.2); the
 //! row split has one barrier per product. The number of ranges is fixed, not the number of
@@ -33,7 +33,7 @@ const MIN_ROWS_PER_PART: usize = 8192;
 /// would hold fewer than `MIN_ROWS_PER_PART` rows). A constant, not the thread count, so
 /// that the order of the reductions does not depend on the machine: more threads than
 /// ranges do not speed these products up.
-pub const ROW_PARTS: usize = 2;
+pub(crate) const ROW_PARTS: usize = 2;
 
 /// `y = A x` for symmetric `A` stored in full (both triangles).
 ///
@@ -141,7 +141,7 @@ fn row_ranges(n: usize, threads: usize) -> Vec<(usize, usize)> {
 }
 
 /// `c = vᵀ z` (j × b) for tall `v` (n × j) and `z` (n × b).
-pub fn tall_t_mul(v: MatRef<'_, f64>, z: MatRef<'_, f64>, par: Par) -> Mat<f64> {
+pub(crate) fn tall_t_mul(v: MatRef<'_, f64>, z: MatRef<'_, f64>, par: Par) -> Mat<f64> {
     let (n, j, b) = (v.nrows(), v.ncols(), z.ncols());
     let mut c = Mat::<f64>::zeros(j, b);
     if j == 0 || b == 0 {
@@ -176,7 +176,7 @@ pub fn tall_t_mul(v: MatRef<'_, f64>, z: MatRef<'_, f64>, par: Par) -> Mat<f64> 
 }
 
 /// `z += alpha · v c` for tall `v` (n × j), `c` (j × b), `z` (n × b).
-pub fn tall_mul_add(
+pub(crate) fn tall_mul_add(
     mut z: MatMut<'_, f64>,
     v: MatRef<'_, f64>,
     c: MatRef<'_, f64>,
@@ -209,7 +209,7 @@ pub fn tall_mul_add(
 
 /// `v[:, 0..k] = v[:, 0..j] · s` in place for tall `v` (n × ≥j) and `s` (j × k, k ≤ j), one
 /// row block at a time (parallel over row blocks), so no n × k temporary is allocated.
-pub fn tall_right_mul_in_place(mut v: MatMut<'_, f64>, s: MatRef<'_, f64>, par: Par) {
+pub(crate) fn tall_right_mul_in_place(mut v: MatMut<'_, f64>, s: MatRef<'_, f64>, par: Par) {
     let (j, k) = (s.nrows(), s.ncols());
     debug_assert!(k <= j && j <= v.ncols());
     if j == 0 || k == 0 {
@@ -246,7 +246,7 @@ const FUSE_ROWS: usize = 256;
 /// one sweep over `v` (n × j) by row blocks, so `v` is read from memory once for both
 /// products instead of twice (the first pass's update and the second pass's coefficients of
 /// the block Gram–Schmidt). Parallel over row ranges like [`tall_mul_add`].
-pub fn tall_update_then_t_mul(
+pub(crate) fn tall_update_then_t_mul(
     mut z: MatMut<'_, f64>,
     v: MatRef<'_, f64>,
     c: MatRef<'_, f64>,

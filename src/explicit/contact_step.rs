@@ -18,10 +18,10 @@ use crate::units::ms_to_kmh;
 /// The longest contact step `Δx/V` (s) at which the explicit path's frequency selection has
 /// been shown converged: 8.1 µs, `contact.grid_nx` 64 on the default grid at 140 km/h
 /// (8.06 µs), whose dominant wear frequency is within 0.7 % of grid_nx 128's.
-pub const CONVERGED_CONTACT_STEP_S: f64 = 8.1e-6;
+pub(crate) const CONVERGED_CONTACT_STEP_S: f64 = 8.1e-6;
 
 /// The warning for an explicit passage of `model` at `speed_m_per_s` (m/s) whose contact
-/// step is longer than [`CONVERGED_CONTACT_STEP_S`], with the `contact.grid_nx` that would
+/// step is longer than `CONVERGED_CONTACT_STEP_S`, with the `contact.grid_nx` that would
 /// bring it there; `None` when it is within.
 pub fn unconverged_contact_step(
     model: &Model,

@@ -2,7 +2,7 @@
 //! ([`ExplicitEstimate`]), and the bound beyond which it is refused.
 //!
 //! The estimate is `contact steps × (track sub-steps × track DOFs + wheel sub-steps × wheel
-//! DOFs) × `[`SECONDS_PER_DOF_SUBSTEP`]: the sub-steps' products `K u` dominate (the contact
+//! DOFs) × ``SECONDS_PER_DOF_SUBSTEP`: the sub-steps' products `K u` dominate (the contact
 //! step's own cost is folded into the constant). A rough figure, on the 2-core machine of
 //! docs/performance.md §6; the rotating wheel costs more per wheel sub-step.
 
@@ -10,7 +10,7 @@
 /// estimate. Basis (docs/performance.md §6, 2 cores): the default model, 2,093 contact steps ×
 /// (25 × 152,358 track + 39 × 36,331 wheel) DOF sub-steps in 418.6 s wall, 3.8e-8 s; the small
 /// test track, 2,093 × (20 × 21,144 + 24 × 17,645) in 93.1 s, 5.3e-8 s. Rounded up.
-pub const SECONDS_PER_DOF_SUBSTEP: f64 = 6e-8;
+pub(crate) const SECONDS_PER_DOF_SUBSTEP: f64 = 6e-8;
 
 /// Peak memory of the explicit path per DOF (bytes); an estimate. Basis: 1.53 GB for the
 /// default model's 188,689 DOFs (docs/performance.md §6), 8.1 kB per DOF.
@@ -18,7 +18,7 @@ pub const BYTES_PER_DOF: f64 = 8.1e3;
 
 /// The longest estimated explicit passage accepted (s): 24 hours (the default model takes
 /// about 7 minutes at 140 km/h).
-pub const MAX_EXPLICIT_SECONDS: f64 = 24.0 * 3600.0;
+pub(crate) const MAX_EXPLICIT_SECONDS: f64 = 24.0 * 3600.0;
 
 /// The estimated size of one explicit passage.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -49,14 +49,14 @@ impl ExplicitEstimate {
         }
     }
 
-    /// Whether it is within [`MAX_EXPLICIT_SECONDS`].
+    /// Whether it is within `MAX_EXPLICIT_SECONDS`.
     pub fn within_bound(&self) -> bool {
         self.seconds <= MAX_EXPLICIT_SECONDS
     }
 }
 
 /// `s` seconds as `1 h 02 min`, `3 min 05 s` or `12 s`.
-pub fn duration_text(s: f64) -> String {
+pub(crate) fn duration_text(s: f64) -> String {
     if !s.is_finite() {
         return "an unbounded time".into();
     }

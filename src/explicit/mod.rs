@@ -99,7 +99,7 @@ pub enum ExplicitError {
         omega_max: f64,
     },
     /// The passage's estimated time is beyond
-    /// [`estimate::MAX_EXPLICIT_SECONDS`] ([`estimate::ExplicitEstimate`]).
+    /// `estimate::MAX_EXPLICIT_SECONDS` ([`estimate::ExplicitEstimate`]).
     #[error("{key} = {value}: the explicit passage would take {estimate}, beyond the bound of {limit_h:.0} h; {advice}")]
     TooLong {
         /// The model key that drives the work (`explicit.time_step`, `run.speed_kmh`).

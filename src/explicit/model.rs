@@ -27,7 +27,7 @@ use crate::structure::{TrackStructure, WheelStructure};
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExplicitOptions {
     /// Safety factor on the computed critical step (−), in (0, 1] here (a model file's
-    /// `explicit.safety` is limited to 0.1–1); default [`DEFAULT_SAFETY`] = 0.9.
+    /// `explicit.safety` is limited to 0.1–1); default `DEFAULT_SAFETY` = 0.9.
     pub safety: f64,
     /// A time step for both substructures (s), refused above `safety ×` either one's
     /// computed critical step (the estimate of `ω_max` approaches it from below, so the

@@ -13,14 +13,14 @@ use super::operator::ExplicitOperator;
 use super::ExplicitError;
 
 /// Default safety factor on the estimated critical step (−).
-pub const DEFAULT_SAFETY: f64 = 0.9;
+pub(crate) const DEFAULT_SAFETY: f64 = 0.9;
 
 /// Lanczos steps of the ω_max estimate (at most; it stops earlier when the largest Ritz
 /// value changes by less than [`LANCZOS_TOL`] relative over 5 steps).
-pub const LANCZOS_STEPS: usize = 120;
+pub(crate) const LANCZOS_STEPS: usize = 120;
 
 /// Relative convergence tolerance of the largest Ritz value (−).
-pub const LANCZOS_TOL: f64 = 1e-6;
+pub(crate) const LANCZOS_TOL: f64 = 1e-6;
 
 /// The stable step of one substructure.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]

@@ -34,19 +34,19 @@ use super::material::IsotropicElastic;
 use super::FeError;
 
 /// ξ of the eight nodes.
-pub const NODE_XI: [f64; 8] = [-1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0];
+pub(crate) const NODE_XI: [f64; 8] = [-1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0];
 /// η of the eight nodes.
-pub const NODE_ETA: [f64; 8] = [-1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0];
+pub(crate) const NODE_ETA: [f64; 8] = [-1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0];
 /// ζ of the eight nodes.
-pub const NODE_ZETA: [f64; 8] = [-1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0];
+pub(crate) const NODE_ZETA: [f64; 8] = [-1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0];
 
 /// 24 × 24 element matrix (node-major DOFs).
-pub type Mat24 = SMatrix<f64, 24, 24>;
+pub(crate) type Mat24 = SMatrix<f64, 24, 24>;
 
 const G2: f64 = 0.577_350_269_189_625_8; // 1/√3
 
 /// Trilinear shape functions `N_a(ξ)` at natural coordinates `xi = [ξ, η, ζ]`.
-pub fn shape_functions(xi: [f64; 3]) -> [f64; 8] {
+pub(crate) fn shape_functions(xi: [f64; 3]) -> [f64; 8] {
     let mut n = [0.0; 8];
     for a in 0..8 {
         n[a] = 0.125
@@ -58,7 +58,7 @@ pub fn shape_functions(xi: [f64; 3]) -> [f64; 8] {
 }
 
 /// Natural derivatives `∂N_a/∂ξ_r`, returned as `[r][a]`.
-pub fn shape_derivatives(xi: [f64; 3]) -> [[f64; 8]; 3] {
+pub(crate) fn shape_derivatives(xi: [f64; 3]) -> [[f64; 8]; 3] {
     let mut d = [[0.0; 8]; 3];
     for a in 0..8 {
         let (p, q, r) = (
@@ -115,7 +115,7 @@ fn inv3(m: &[[f64; 3]; 3], det: f64) -> [[f64; 3]; 3] {
 }
 
 /// Jacobian determinant `det J(ξ)` (m³ per unit natural volume) at a natural point.
-pub fn jacobian_determinant(coords: &[[f64; 3]; 8], xi: [f64; 3]) -> f64 {
+pub(crate) fn jacobian_determinant(coords: &[[f64; 3]; 8], xi: [f64; 3]) -> f64 {
     det3(&jacobian(coords, &shape_derivatives(xi)))
 }
 
@@ -408,7 +408,7 @@ pub fn is_inside(xi: [f64; 3], tol: f64) -> bool {
 
 /// Strain energy `½ uᵀ K u` (J) of an element stiffness `k` (N/m) for element displacements
 /// `u` (m, node-major).
-pub fn strain_energy_of(k: &Mat24, u: &[f64; 24]) -> f64 {
+pub(crate) fn strain_energy_of(k: &Mat24, u: &[f64; 24]) -> f64 {
     let u = SVector::<f64, 24>::from_column_slice(u);
     0.5 * u.dot(&(k * u))
 }

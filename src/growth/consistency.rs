@@ -104,7 +104,7 @@ pub enum ConsistencyClass {
 
 /// The nearest peak of one signal to a reference component.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ComponentMatch {
+pub(crate) struct ComponentMatch {
     /// Wavelength of the matched peak, m (`None`: the signal has no peaks).
     pub wavelength_m: Option<f64>,
     /// Frequency `v/λ` of the matched peak, Hz.
@@ -178,7 +178,7 @@ pub struct GrowthPhase {
 }
 
 /// The peak of `peaks` nearest (in relative deviation) to `reference_wavelength_m` (m).
-pub fn match_nearest(
+pub(crate) fn match_nearest(
     reference_wavelength_m: f64,
     peaks: &[Peak],
 ) -> Result<ComponentMatch, GrowthError> {
@@ -232,7 +232,7 @@ pub fn classify(
 
 /// Build the consistency table of one passage (trial amplitude `two_a_max_m`, m): one row per
 /// reference wavelength (m), matching the peaks of `W_f`, `F_L` and `F_N`.
-pub fn consistency_table(
+pub(crate) fn consistency_table(
     two_a_max_m: f64,
     reference_wavelengths_m: &[f64],
     wear_peaks: &[Peak],
@@ -285,7 +285,7 @@ pub fn consistency_table(
 
 /// Growth phase of the band-passed new wear against the corrugation height (same grid), with
 /// indeterminate band `|r| < threshold` (`threshold` in [0, 1), default choice 0.2).
-pub fn growth_phase(
+pub(crate) fn growth_phase(
     new_wear_band: &Signal,
     corrugation_height: &Signal,
     threshold: f64,

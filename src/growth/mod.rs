@@ -19,10 +19,11 @@ pub mod trial;
 pub mod verdict;
 
 pub use consistency::{
-    classify, consistency_table, growth_phase, match_nearest, ComponentMatch, ConsistencyCase,
-    ConsistencyClass, ConsistencyRow, ConsistencyThresholds, GrowthPhase, PhaseRelation,
+    classify, ConsistencyCase, ConsistencyClass, ConsistencyRow, ConsistencyThresholds,
+    GrowthPhase, PhaseRelation,
 };
-pub use trial::{trial_corrugation, TrialCorrugation};
+pub(crate) use consistency::{consistency_table, growth_phase};
+pub(crate) use trial::trial_corrugation;
 
 use crate::spectral::SpectralError;
 

@@ -3,14 +3,14 @@
 //! **Trial-amplitude growth (the reference procedure).** One passage on the smooth rail gives
 //! the initial differential wear `W_band` (20–80 mm) and its wavelength components, the
 //! references λ_ref. For each trial amplitude `2A_max` the rail gets the trial corrugation
-//! `h = −c·W_band` (peak-to-trough 2A_max, [`super::trial_corrugation`]) and one passage is
+//! `h = −c·W_band` (peak-to-trough 2A_max, `super::trial_corrugation`) and one passage is
 //! run over it. For each amplitude:
 //! - the components of `W_f`, `F_L`, `F_N` matched to λ_ref, their deviations and the
 //!   consistency table (Case 1 / Case 2, ≤ 1 % light green, 1–3 % dark green, else grey;
-//!   [`super::consistency_table`]);
+//!   `super::consistency_table`);
 //! - the growth phase: the correlation of the new band-passed wear with the corrugation
 //!   height; anti-phase (r ≤ −0.2) = the wear digs the troughs deeper = growing
-//!   ([`super::growth_phase`]);
+//!   (`super::growth_phase`);
 //! - *consistent growth* = growing phase **and** at least one reference component in
 //!   Case 1 or Case 2.
 //!
@@ -179,7 +179,9 @@ fn compare(
 }
 
 /// The three analysed signals of a record: (wear, F_L, F_N).
-pub fn analyse_record(rec: &PassageRecord) -> Result<(Analysed, Analysed, Analysed), PassageError> {
+pub(crate) fn analyse_record(
+    rec: &PassageRecord,
+) -> Result<(Analysed, Analysed, Analysed), PassageError> {
     let v = rec.speed_m_per_s;
     Ok((
         analyse(&wear_signal(rec)?, v)?,

@@ -5,7 +5,7 @@
 //! perturbation of the steady rolling state is `Re(· e^{ikx})` at the contact position x, and
 //! the new wear (frictional work per metre, J/m, §6.6) is `Re(G(k) r̂ e^{ikx})`:
 //!
-//! 1. **The contact** ([`ContactTransfer`], measured): the transient rolling contact of the
+//! 1. **The contact** (`ContactTransfer`, measured): the transient rolling contact of the
 //!    passage (same grid, friction, traction, spin and series compliance), started in the
 //!    static rolling state, is driven by one small sinusoidal input at a time — the roughness
 //!    under the grid (at fixed approach and creepages), the approach δ, the longitudinal
@@ -42,9 +42,9 @@ use crate::dynamics::{DynamicsError, RailProfile};
 use crate::passage::record::PassageRecord;
 use crate::units::Speed;
 
-/// The contact inputs of a [`ContactTransfer`], in column order.
+/// The contact inputs of a `ContactTransfer`, in column order.
 pub const INPUTS: [&str; 4] = ["roughness", "approach", "creepage_x", "creepage_t"];
-/// The contact outputs of a [`ContactTransfer`], in row order.
+/// The contact outputs of a `ContactTransfer`, in row order.
 pub const OUTPUTS: [&str; 4] = ["F_x", "F_t", "F_n", "W_f"];
 /// The parts of the wear response, in the order of `RatePoint::wear_parts`.
 pub const WEAR_PARTS: [&str; 4] = ["roughness", "approach", "creepage_x", "creepage_t"];
@@ -54,7 +54,7 @@ pub const WEAR_PARTS: [&str; 4] = ["roughness", "approach", "creepage_x", "creep
 /// complex amplitude of input `j` ([`INPUTS`]: roughness and approach in m, creepages −),
 /// phases referred to the rail coordinate.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ContactTransfer {
+pub(crate) struct ContactTransfer {
     /// Wavelength (m).
     pub wavelength_m: f64,
     /// The transfer table, outputs × inputs.
@@ -138,7 +138,12 @@ pub struct RateResponse {
 /// Closes the loop of the module doc for one frequency: contact table `t`, structural
 /// receptance `h` (3 × 3, m/N, `u_wheel − u_rail = h F` for the force `F` on the wheel),
 /// angular frequency `omega` (rad/s) and speed `v` (m/s).
-pub fn closed_loop(t: &[[c64; 4]; 4], h: &[[c64; 3]; 3], omega: f64, v: f64) -> RateResponse {
+pub(crate) fn closed_loop(
+    t: &[[c64; 4]; 4],
+    h: &[[c64; 3]; 3],
+    omega: f64,
+    v: f64,
+) -> RateResponse {
     let iw = c64::new(0.0, omega / v);
     // B: output o per unit relative displacement g_j (x, t, n).
     let b: [[c64; 3]; 3] = std::array::from_fn(|o| [iw * t[o][2], iw * t[o][3], -t[o][1]]);
@@ -199,7 +204,7 @@ fn solve3(mut a: [[c64; 3]; 3], mut rhs: [c64; 3]) -> [c64; 3] {
 
 /// The least-squares fit `y ≈ c + a cos(kx) + b sin(kx)`: the complex amplitude `a − ib` of
 /// the harmonic `Re((a − ib) e^{ikx})`.
-pub fn fit_harmonic(x: &[f64], y: &[f64], k: f64) -> c64 {
+pub(crate) fn fit_harmonic(x: &[f64], y: &[f64], k: f64) -> c64 {
     let mut m = [[0.0; 3]; 3];
     let mut r = [0.0; 3];
     for (&xi, &yi) in x.iter().zip(y) {
@@ -219,7 +224,7 @@ pub fn fit_harmonic(x: &[f64], y: &[f64], k: f64) -> c64 {
 }
 
 /// The passage's contact in its static rolling state, driven by sinusoidal probes.
-pub struct ContactProbe {
+pub(crate) struct ContactProbe {
     steady: TransientRolling,
     normal_approach_m: f64,
     creepage: f64,
@@ -327,7 +332,7 @@ impl ContactProbe {
 
 /// Interpolates the contact tables (ascending in wavenumber) at wavenumber `k` (1/m): cubic
 /// Hermite with Catmull–Rom slopes, entry by entry; clamped to the end tables outside.
-pub fn interpolate_transfer(tables: &[ContactTransfer], k: f64) -> [[c64; 4]; 4] {
+pub(crate) fn interpolate_transfer(tables: &[ContactTransfer], k: f64) -> [[c64; 4]; 4] {
     let ks: Vec<f64> = tables
         .iter()
         .map(|t| 2.0 * std::f64::consts::PI / t.wavelength_m)
@@ -527,7 +532,7 @@ fn structure_receptance(
 
 /// The wavelengths of the spectrum (m, ascending): `points` evenly spaced in frequency over
 /// the band.
-pub fn spectrum_wavelengths(o: &RateOptions) -> Vec<f64> {
+pub(crate) fn spectrum_wavelengths(o: &RateOptions) -> Vec<f64> {
     let [a, b] = o.band_m;
     let (k0, k1) = (1.0 / b, 1.0 / a);
     let mut l: Vec<f64> = (0..o.points)
@@ -539,7 +544,7 @@ pub fn spectrum_wavelengths(o: &RateOptions) -> Vec<f64> {
 
 /// The contact tables at `n` wavelengths evenly spaced in wavenumber over `band_m`,
 /// ascending in wavenumber (the runs in parallel).
-pub fn contact_tables(
+pub(crate) fn contact_tables(
     probe: &ContactProbe,
     band_m: [f64; 2],
     n: usize,
@@ -619,7 +624,7 @@ pub fn growth_rate_spectrum(
 /// The sinusoidal rail-top profile `a cos(2πx/λ)` (m) over the passage's travel, faded in
 /// over the run-in before the solution zone by a raised cosine (so that its onset does not
 /// ring the lightly damped modes through the zone).
-pub fn sinusoidal_profile(
+pub(crate) fn sinusoidal_profile(
     engine: &PassageEngine,
     wavelength_m: f64,
     amplitude_m: f64,
@@ -644,7 +649,7 @@ pub fn sinusoidal_profile(
 }
 
 /// `G` measured by passages: the harmonic at `2π/λ` of the wear difference (J/m) between a
-/// passage over [`sinusoidal_profile`] of amplitude `amplitude_m` and the smooth passage
+/// passage over `sinusoidal_profile` of amplitude `amplitude_m` and the smooth passage
 /// `smooth` (same engine and speed), over the solution zone, per unit amplitude.
 pub fn passage_gain(
     engine: &PassageEngine,

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 /// A trial corrugation: the rail-top height profile and the scale used.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TrialCorrugation {
+pub(crate) struct TrialCorrugation {
     /// Rail-top height `h(x) = −c W_band(x)`, m, on the grid of the wear signal.
     pub height: Signal,
     /// Scale `c` (m per wear unit), ≥ 0.
@@ -23,7 +23,7 @@ pub struct TrialCorrugation {
 }
 
 /// Build the trial corrugation `h = −c · W_band` with peak-to-trough `two_a_max_m` (m).
-pub fn trial_corrugation(
+pub(crate) fn trial_corrugation(
     wear_band: &Signal,
     two_a_max_m: f64,
 ) -> Result<TrialCorrugation, GrowthError> {

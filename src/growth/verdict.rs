@@ -47,7 +47,7 @@ pub struct NearestMode {
 
 /// The mode of `families` (name, eigenfrequencies in Hz) nearest to `f_hz` (Hz) in relative
 /// difference; `None` when every list is empty.
-pub fn nearest_mode(f_hz: f64, families: &[(&str, &[f64])]) -> Option<NearestMode> {
+pub(crate) fn nearest_mode(f_hz: f64, families: &[(&str, &[f64])]) -> Option<NearestMode> {
     families
         .iter()
         .flat_map(|(name, fs)| fs.iter().map(move |&m| (*name, m)))
@@ -371,7 +371,7 @@ pub fn class_label(c: super::ConsistencyClass) -> &'static str {
 /// The legend of the consistency table (docs/theory.md §10.2–§10.4), for reports.
 pub const CONSISTENCY_LEGEND: &str = "How to read the table: for each reference wavelength λ_ref (a wear component of the smooth rail) the nearest spectral peak of W_f, F_L and F_N of the passage over the trial corrugation is matched; the percentage after each is its relative deviation |λ − λ_ref| / λ_ref. A signal is consistent when its deviation is at most 3 %. Case 1: all three signals consistent; Case 2: exactly two; otherwise none. Class: light green = Case 1 or 2 with every consistent signal within 1 % (strong); dark green = Case 1 or 2 with a consistent signal between 1 % and 3 % (weaker); grey = inconsistent. A trial amplitude grows consistently when the new wear is in anti-phase with the corrugation (correlation r ≤ −0.2: it deepens the troughs) and at least one reference is in Case 1 or 2.";
 
-/// The mode families of `modes` by name, for [`nearest_mode`].
+/// The mode families of `modes` by name, for `nearest_mode`.
 pub fn families(modes: &ModeLines) -> [(&'static str, &[f64]); 3] {
     [
         ("wheel", &modes.wheel_hz),

@@ -139,7 +139,7 @@ pub enum MeshError {
 }
 
 /// Natural coordinates (ξ, η, ζ) of the 8 hexahedron nodes (see the module docs).
-pub const HEX8_NATURAL: [[f64; 3]; 8] = [
+pub(crate) const HEX8_NATURAL: [[f64; 3]; 8] = [
     [-1.0, -1.0, -1.0],
     [1.0, -1.0, -1.0],
     [1.0, 1.0, -1.0],
@@ -152,7 +152,7 @@ pub const HEX8_NATURAL: [[f64; 3]; 8] = [
 
 /// Jacobian determinant (m³ per unit natural volume) of the trilinear map of a hexahedron with
 /// corner coordinates `x` (m) at the natural point `p = (ξ, η, ζ)`.
-pub fn hex8_jacobian_det(x: &[[f64; 3]; 8], p: [f64; 3]) -> f64 {
+pub(crate) fn hex8_jacobian_det(x: &[[f64; 3]; 8], p: [f64; 3]) -> f64 {
     let mut j = [[0.0; 3]; 3]; // j[a][b] = d x_a / d ξ_b
     for (n, nat) in HEX8_NATURAL.iter().enumerate() {
         let f = [
@@ -178,7 +178,7 @@ pub fn hex8_jacobian_det(x: &[[f64; 3]; 8], p: [f64; 3]) -> f64 {
 
 /// Volume (m³) of a trilinear hexahedron: 2×2×2 Gauss rule, exact because det J is of degree
 /// ≤ 2 in each natural coordinate.
-pub fn hex8_volume(x: &[[f64; 3]; 8]) -> f64 {
+pub(crate) fn hex8_volume(x: &[[f64; 3]; 8]) -> f64 {
     let g = 1.0 / 3f64.sqrt();
     let mut v = 0.0;
     for a in [-g, g] {

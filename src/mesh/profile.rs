@@ -23,7 +23,7 @@
 use super::MeshError;
 
 /// The embedded UIC54 half profile (mm, header comment line starting with `#`).
-pub const UIC54_HALF_PROFILE_CSV: &str = include_str!("../../data/uic54-half-profile.csv");
+pub(crate) const UIC54_HALF_PROFILE_CSV: &str = include_str!("../../data/uic54-half-profile.csv");
 
 /// Area, centroid and centroidal second moments of a plane section (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,7 +62,7 @@ impl SectionProperties {
 
 /// Section properties of a simple polygon given counter-clockwise (vertices (y, z) in m, not
 /// repeated at the end). A clockwise polygon gives a negative area.
-pub fn polygon_properties(poly: &[[f64; 2]]) -> SectionProperties {
+pub(crate) fn polygon_properties(poly: &[[f64; 2]]) -> SectionProperties {
     let n = poly.len();
     let (mut a, mut sy, mut sz, mut syy, mut szz, mut syz) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     for i in 0..n {

@@ -740,7 +740,7 @@ struct FasteningFile {
 /// Rigid or elastic holds of a preset fastening model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum HoldKind {
+pub(crate) enum HoldKind {
     /// Held DOFs are fixed (the published models).
     #[default]
     Rigid,

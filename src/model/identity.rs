@@ -69,7 +69,7 @@ pub fn run_key(m: &Model) -> Result<String, serde_json::Error> {
 /// model. Each scope is a typed view that names the fields it holds (`ModesView`,
 /// `TrackView`, `WheelView`, `ComponentsView`); the views take their sources apart field by
 /// field, so a field added to the model does not compile until a view holds or leaves it.
-pub fn scoped_value(m: &Model, scope: IdentityScope) -> Result<Value, serde_json::Error> {
+pub(crate) fn scoped_value(m: &Model, scope: IdentityScope) -> Result<Value, serde_json::Error> {
     match scope {
         IdentityScope::Run => serde_json::to_value(m),
         IdentityScope::Modes => serde_json::to_value(ModesView::of(m)),

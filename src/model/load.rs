@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use super::{Model, ModelError};
 
 /// The embedded Dutch base model (`models/dutch-base.toml`), RPM3.
-pub const BUILTIN_DUTCH: &str = include_str!("../../models/dutch-base.toml");
+pub(crate) const BUILTIN_DUTCH: &str = include_str!("../../models/dutch-base.toml");
 
 /// Where a model comes from.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -277,7 +277,7 @@ fn merge(base: &mut toml::Table, over: toml::Table) {
 
 /// Applies one `dotted.key=value` override to a model table ([`Assignment::parse`], then
 /// [`apply_assignment`]).
-pub fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(), ModelError> {
+pub(crate) fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(), ModelError> {
     apply_as(table, &Assignment::parse(arg)?, arg)
 }
 

@@ -19,22 +19,20 @@ mod fastening;
 mod holds;
 pub mod identity;
 mod load;
-pub mod plausibility;
+pub(crate) mod plausibility;
 pub mod test_problems;
 mod validate;
 
 pub use fastening::{
-    Axis, DirectionHold, ElasticHolds, Fastening, FasteningModel, HoldKind, HoldPattern, Holds,
-    Preset, RigidRegion, MAX_HOLD_STIFFNESS, MIN_HOLD_STIFFNESS, PRESET_NAMES,
+    Axis, DirectionHold, ElasticHolds, Fastening, FasteningModel, HoldPattern, Holds, Preset,
+    RigidRegion, MAX_HOLD_STIFFNESS, MIN_HOLD_STIFFNESS, PRESET_NAMES,
 };
+pub(crate) use load::BUILTIN_DUTCH;
 pub use load::{
-    apply_assignment, apply_override, load_model, load_model_assigned, load_model_shown,
-    load_model_str, Assignment, ModelSource, BUILTIN_DUTCH,
+    apply_assignment, load_model, load_model_assigned, load_model_shown, load_model_str,
+    Assignment, ModelSource,
 };
-pub use validate::{
-    DENSITY_KG_M3, FMAX_HZ, MAX_GRID_WORK, MAX_WHEEL_LOAD_N, MIN_PRIMARY_STIFFNESS, POISSON_RATIO,
-    SPEED_KMH, SPEED_KMH_WHY, YOUNGS_MODULUS_PA,
-};
+pub use validate::{FMAX_HZ, MAX_GRID_WORK, MAX_WHEEL_LOAD_N, SPEED_KMH, SPEED_KMH_WHY};
 
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
@@ -356,11 +354,11 @@ pub struct Rail {
     pub profile: String,
     /// Rail cant as tan(angle) (−), 0 to 0.1: 0.025 = 1/40; 0 = upright.
     pub inclination: f64,
-    /// Young's modulus (Pa), 1e9 to 1e13 ([`YOUNGS_MODULUS_PA`]).
+    /// Young's modulus (Pa), 1e9 to 1e13 (`YOUNGS_MODULUS_PA`).
     pub youngs_modulus: f64,
-    /// Poisson's ratio (−), 0 to 0.45 ([`POISSON_RATIO`]).
+    /// Poisson's ratio (−), 0 to 0.45 (`POISSON_RATIO`).
     pub poisson_ratio: f64,
-    /// Density (kg/m³), 1000 to 20000 ([`DENSITY_KG_M3`]).
+    /// Density (kg/m³), 1000 to 20000 (`DENSITY_KG_M3`).
     pub density: f64,
 }
 
@@ -376,11 +374,11 @@ pub struct Sleeper {
     pub height: f64,
     /// Distance from the sleeper's track-centre end to the rail centre line (m).
     pub rail_seat: f64,
-    /// Young's modulus (Pa), 1e9 to 1e13 ([`YOUNGS_MODULUS_PA`]).
+    /// Young's modulus (Pa), 1e9 to 1e13 (`YOUNGS_MODULUS_PA`).
     pub youngs_modulus: f64,
-    /// Poisson's ratio (−), 0 to 0.45 ([`POISSON_RATIO`]).
+    /// Poisson's ratio (−), 0 to 0.45 (`POISSON_RATIO`).
     pub poisson_ratio: f64,
-    /// Density (kg/m³), 1000 to 20000 ([`DENSITY_KG_M3`]).
+    /// Density (kg/m³), 1000 to 20000 (`DENSITY_KG_M3`).
     pub density: f64,
 }
 
@@ -432,15 +430,15 @@ impl SpringDampers {
 pub struct Wheel {
     /// Nominal rolling radius (m), 0.2 to 0.8; default model 0.46. The rim's inner radius
     /// stays at 0.39 m unless `rim_thickness` is set, so without it the radius must be at
-    /// least 0.42 m (a rim of [`MIN_RIM_THICKNESS_M`]); with it, at least 0.23 m.
+    /// least 0.42 m (a rim of `MIN_RIM_THICKNESS_M`); with it, at least 0.23 m.
     pub radius: f64,
     /// Tread conicity (−): 0.025 = 1/40; 0 to 0.1.
     pub conicity: f64,
-    /// Young's modulus (Pa), 1e9 to 1e13 ([`YOUNGS_MODULUS_PA`]).
+    /// Young's modulus (Pa), 1e9 to 1e13 (`YOUNGS_MODULUS_PA`).
     pub youngs_modulus: f64,
-    /// Poisson's ratio (−), 0 to 0.45 ([`POISSON_RATIO`]).
+    /// Poisson's ratio (−), 0 to 0.45 (`POISSON_RATIO`).
     pub poisson_ratio: f64,
-    /// Density (kg/m³), 1000 to 20000 ([`DENSITY_KG_M3`]).
+    /// Density (kg/m³), 1000 to 20000 (`DENSITY_KG_M3`).
     pub density: f64,
     /// Modal damping ratio of the wheel's elastic modes (−), added to the diagonal of the
     /// wheel's projected damping as `2 ζ ω_i` (1/s); default 0, as in the reference (no
@@ -454,18 +452,18 @@ pub struct Wheel {
     pub web_shape: WebShape,
     /// With `web_shape = "curved"`: axial shift of the web's mid-plane from the hub to the rim
     /// (m, + towards the field side), −0.1 to 0.1 and not 0, the web's faces at the rim at
-    /// least [`WEB_RIM_CLEARANCE_M`] inside the rim's faces; default
-    /// [`DEFAULT_WEB_BEND_M`]. Refused with a straight web.
+    /// least `WEB_RIM_CLEARANCE_M` inside the rim's faces; default
+    /// `DEFAULT_WEB_BEND_M`. Refused with a straight web.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub web_bend: Option<f64>,
     /// Axial thickness of the web (m), 0.01 to 0.1 and at most the rim width less twice
-    /// [`WEB_RIM_CLEARANCE_M`]; default [`DEFAULT_WEB_THICKNESS_M`] (30 mm).
+    /// `WEB_RIM_CLEARANCE_M`; default [`DEFAULT_WEB_THICKNESS_M`] (30 mm).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub web_thickness: Option<f64>,
     /// Axial position of the web's mid-plane at the hub, from the rolling-circle plane (m, +
     /// towards the field side); default [`DEFAULT_WEB_OFFSET_M`] (30 mm towards the track
     /// centre). The web's faces must lie within the hub (y −0.12 to 0.065 m) and, at the hub
-    /// and at the rim, at least [`WEB_RIM_CLEARANCE_M`] inside the rim's faces.
+    /// and at the rim, at least `WEB_RIM_CLEARANCE_M` inside the rim's faces.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub web_offset: Option<f64>,
     /// Axial width of the rim (m), 0.11 to 0.2; default [`DEFAULT_RIM_WIDTH_M`] (135 mm). The
@@ -474,8 +472,8 @@ pub struct Wheel {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rim_width: Option<f64>,
     /// Radial thickness of the rim, from the tread's rolling circle to its inner radius (m),
-    /// [`MIN_RIM_THICKNESS_M`] (0.03) to `radius − 0.2` (the web at least
-    /// [`MIN_WEB_HEIGHT_M`] high above the 0.15 m hub). Default: the rim's inner radius stays
+    /// `MIN_RIM_THICKNESS_M` (0.03) to `radius − 0.2` (the web at least
+    /// `MIN_WEB_HEIGHT_M` high above the 0.15 m hub). Default: the rim's inner radius stays
     /// at [`DEFAULT_RIM_INNER_RADIUS_M`] (0.39 m), 0.07 m on the default 0.46 m wheel.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rim_thickness: Option<f64>,
@@ -512,18 +510,18 @@ pub const DEFAULT_WEB_THICKNESS_M: f64 = 0.030;
 /// Default `wheel.web_offset` (m).
 pub const DEFAULT_WEB_OFFSET_M: f64 = -0.030;
 /// Default `wheel.web_bend` of a curved web (m).
-pub const DEFAULT_WEB_BEND_M: f64 = 0.030;
+pub(crate) const DEFAULT_WEB_BEND_M: f64 = 0.030;
 /// Default `wheel.rim_width` (m).
 pub const DEFAULT_RIM_WIDTH_M: f64 = 0.135;
 /// The rim's inner radius when `wheel.rim_thickness` is not given (m).
 pub const DEFAULT_RIM_INNER_RADIUS_M: f64 = 0.39;
 /// Smallest `wheel.rim_thickness` (m): the tread's fine contact zone reaches 30 mm deep.
-pub const MIN_RIM_THICKNESS_M: f64 = 0.03;
+pub(crate) const MIN_RIM_THICKNESS_M: f64 = 0.03;
 /// Smallest radial height of the web, rim inner radius less hub radius (m).
-pub const MIN_WEB_HEIGHT_M: f64 = 0.05;
+pub(crate) const MIN_WEB_HEIGHT_M: f64 = 0.05;
 /// Least axial distance from the web's faces to the rim's faces (m), at the hub and at the
 /// rim: the rim's cells beside the web keep a width.
-pub const WEB_RIM_CLEARANCE_M: f64 = 0.005;
+pub(crate) const WEB_RIM_CLEARANCE_M: f64 = 0.005;
 
 impl Wheel {
     /// The web's faces at the hub (m, wheel frame y): `web_offset ∓ web_thickness/2`, or the
@@ -581,7 +579,7 @@ pub struct Vehicle {
     /// Static vertical wheel load (N), greater than 0 and at most [`MAX_WHEEL_LOAD_N`];
     /// default model 100e3. The sprung mass is (load / g − unsprung mass).
     pub wheel_load: f64,
-    /// Primary suspension stiffness per wheel (N/m), [`MIN_PRIMARY_STIFFNESS`] (1e3) to 1e10;
+    /// Primary suspension stiffness per wheel (N/m), `MIN_PRIMARY_STIFFNESS` (1e3) to 1e10;
     /// default model 1.15e6.
     pub primary_stiffness: f64,
     /// Primary suspension damping per wheel (N·s/m), 0 to 1e9; default model 2.5e3.
@@ -761,7 +759,7 @@ pub struct Run {
     #[serde(default)]
     pub start: StartKind,
     /// With `start = "rest"`: distance before the solution zone at which the driving torque
-    /// comes on (m), default [`DEFAULT_REST_START_DISTANCE_M`], greater than 0 and at most the
+    /// comes on (m), default `DEFAULT_REST_START_DISTANCE_M`, greater than 0 and at most the
     /// run-in (the distance from the wheel's start to the zone, `run.solution_zone_offset`
     /// when the track is long enough).
     #[serde(default = "default_rest_start_distance")]
@@ -809,7 +807,7 @@ pub enum StartKind {
 /// traction after a torque step at 140 km/h (35 mm measured; `m_eff V²/κ`, docs/theory.md
 /// §7.5), so the mean traction is established in the zone while the elastic modes the step
 /// excites still ring.
-pub const DEFAULT_REST_START_DISTANCE_M: f64 = 0.3;
+pub(crate) const DEFAULT_REST_START_DISTANCE_M: f64 = 0.3;
 
 fn default_rest_start_distance() -> f64 {
     DEFAULT_REST_START_DISTANCE_M

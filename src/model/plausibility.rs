@@ -9,14 +9,14 @@ use super::Model;
 /// Below this stiffness (N/m) a railpad, hold or ballast spring is softer than any real one
 /// (soft studded pads are about 1e7–1e8 N/m per fastening; ballast under a half sleeper
 /// about 1e7–1e8 N/m): a value of 1300 is 1300 MN/m or kN/mm typed in the wrong unit.
-pub const MIN_PLAUSIBLE_SPRING_N_M: f64 = 1e6;
+pub(crate) const MIN_PLAUSIBLE_SPRING_N_M: f64 = 1e6;
 
 /// Below this static wheel load (N) the load is under 100 kg: 100 is 100 kN typed in kN.
-pub const MIN_PLAUSIBLE_WHEEL_LOAD_N: f64 = 1e3;
+pub(crate) const MIN_PLAUSIBLE_WHEEL_LOAD_N: f64 = 1e3;
 
 /// Above this speed (km/h) no train runs in service (a record run reaches about 575 km/h, the
 /// model's limit is 500).
-pub const MAX_PLAUSIBLE_SPEED_KMH: f64 = 400.0;
+pub(crate) const MAX_PLAUSIBLE_SPEED_KMH: f64 = 400.0;
 
 /// One value that looks like a unit slip.
 #[derive(Debug, Clone, PartialEq)]
@@ -43,11 +43,11 @@ impl std::fmt::Display for UnitSlip {
 
 /// Shortest wavelength of the analysis band (m): a rail mesh whose node planes in the solution
 /// zone are this far apart or farther puts its element-passing ripple into the band.
-pub const BAND_SHORTEST_WAVELENGTH_M: f64 = 0.02;
+pub(crate) const BAND_SHORTEST_WAVELENGTH_M: f64 = 0.02;
 
 impl Model {
     /// A warning when the rail's node planes in the solution zone
-    /// (`mesh.fine_element_length`) are at least [`BAND_SHORTEST_WAVELENGTH_M`] apart: the
+    /// (`mesh.fine_element_length`) are at least `BAND_SHORTEST_WAVELENGTH_M` apart: the
     /// moving contact then excites the mesh at the element-passing wavelength inside the
     /// 20–80 mm band, and the band's F_L, F_N and wear are the mesh's, not the track's
     /// (both engines; on the small 80 mm test mesh they select 500 and 672 Hz and differ
@@ -63,9 +63,9 @@ impl Model {
     }
 
     /// The values of this (valid) model whose magnitudes look like unit slips: springs
-    /// below [`MIN_PLAUSIBLE_SPRING_N_M`] (a zero stiffness is a deliberate "no spring" and
-    /// not reported), a wheel load below [`MIN_PLAUSIBLE_WHEEL_LOAD_N`], a speed above
-    /// [`MAX_PLAUSIBLE_SPEED_KMH`]. Empty for the default model.
+    /// below `MIN_PLAUSIBLE_SPRING_N_M` (a zero stiffness is a deliberate "no spring" and
+    /// not reported), a wheel load below `MIN_PLAUSIBLE_WHEEL_LOAD_N`, a speed above
+    /// `MAX_PLAUSIBLE_SPEED_KMH`. Empty for the default model.
     pub fn unit_slips(&self) -> Vec<UnitSlip> {
         let mut out = Vec::new();
         let springs = [

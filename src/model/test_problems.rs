@@ -65,7 +65,7 @@ pub fn small_passage_model(extra: &[&str]) -> Result<Model, ModelError> {
 /// fastening (fewest node planes along the rail), one-element sleepers, a 50 mm rail section
 /// throughout, a 0.3 m zone 0.2 m after the wheel's start, every damper off (fastenings,
 /// ballast, rail, primary suspension, wheel modes) and a 32 × 12 contact grid.
-pub const ALL_MODES: [&str; 22] = [
+pub(crate) const ALL_MODES: [&str; 22] = [
     "track.bays=2",
     "fastening.model=\"RPM5\"",
     "mesh.sleeper_elements=[1,1,1]",
@@ -95,7 +95,7 @@ pub const ALL_MODES: [&str; 22] = [
 /// spacing, which keeps the sleeper-pitch bending of a real track resolved).
 pub const ALL_MODES_ELEMENT_LENGTH_M: f64 = 0.3;
 
-/// The all-modes model: [`SMALL_MODEL`], [`ALL_MODES`] and `extra` (the last wins), then the
+/// The all-modes model: [`SMALL_MODEL`], `ALL_MODES` and `extra` (the last wins), then the
 /// rail's element length set to [`ALL_MODES_ELEMENT_LENGTH_M`] *without* the range check of
 /// `mesh.element_length` (the only value outside its key's range). A model for tests that
 /// need every mode of both substructures from a dense eigen-solve (a few thousand DOFs

@@ -596,7 +596,7 @@ pub const SPEED_KMH_WHY: &str = "km/h (below 40 km/h the passage's contact step,
 /// at 0.05 Hz, far below any railway primary suspension (1e5 to 1e7 N/m, 1 to 10 Hz); the
 /// wheel then loses contact at once (a passage says so), and near 1 N/m its free-body
 /// flexibility swamps the elastic one in the wheel's residual-flexibility check.
-pub const MIN_PRIMARY_STIFFNESS: f64 = 1e3;
+pub(crate) const MIN_PRIMARY_STIFFNESS: f64 = 1e3;
 
 /// Largest static wheel load (N): 50 t per wheel, beyond any railway axle load.
 pub const MAX_WHEEL_LOAD_N: f64 = 500e3;
@@ -608,15 +608,15 @@ pub const MAX_GRID_WORK: usize = 12 * 32 * 32 * 24;
 /// Allowed Young's modulus of the rail, sleeper and wheel (Pa): the solids a track is made of
 /// (steel 2.1e11, concrete 3.8e10, polymers from 1e9). Far outside it the modal bases and the
 /// contact grid go out of scale (e.g. E = 1e-12 Pa puts thousands of modes below `run.fmax`).
-pub const YOUNGS_MODULUS_PA: [f64; 2] = [1e9, 1e13];
+pub(crate) const YOUNGS_MODULUS_PA: [f64; 2] = [1e9, 1e13];
 
 /// Allowed Poisson's ratio of the rail, sleeper and wheel (−). Above 0.45 a solid is nearly
 /// incompressible: its dilatational wave speed, hence the explicit time step, runs away and
 /// the linear hexahedra lock.
-pub const POISSON_RATIO: [f64; 2] = [0.0, 0.45];
+pub(crate) const POISSON_RATIO: [f64; 2] = [0.0, 0.45];
 
 /// Allowed density of the rail, sleeper and wheel (kg/m³): steel 7800, concrete 2500.
-pub const DENSITY_KG_M3: [f64; 2] = [1000.0, 20000.0];
+pub(crate) const DENSITY_KG_M3: [f64; 2] = [1000.0, 20000.0];
 
 /// A computed bound as a reader expects it: rounded to 12 significant digits and printed in
 /// the shortest form (0.39 + 0.03 prints 0.42, not 0.42000000000000004).

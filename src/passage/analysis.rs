@@ -136,7 +136,7 @@ pub fn band_spectrum(psd: &Psd) -> WavelengthSpectrum {
 
 /// [`PassageError::ContactLost`] when the normal force is zero (or not positive) at any step:
 /// a wheel off the rail transmits no force and wears nothing, which is no rolling result.
-pub fn check_contact(h: &crate::passage::record::Histories) -> Result<(), PassageError> {
+pub(crate) fn check_contact(h: &crate::passage::record::Histories) -> Result<(), PassageError> {
     let lost: Vec<usize> = (0..h.normal_n.len())
         .filter(|&i| h.normal_n[i].is_nan() || h.normal_n[i] <= 0.0)
         .collect();

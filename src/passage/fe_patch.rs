@@ -71,7 +71,7 @@ pub fn use_cache_dir(dir: &Path) {
 /// The fe-patch grid of a passage's contact configuration `cfg`, its twins loaded with the
 /// lateral weights of the static Hertz patch of semi-axis `hertz_b_m` (m; the model's at its
 /// wheel load, `dynamics::setup::static_hertz`).
-pub fn patch_grid(cfg: &TransientConfig, hertz_b_m: f64) -> PatchGrid {
+pub(crate) fn patch_grid(cfg: &TransientConfig, hertz_b_m: f64) -> PatchGrid {
     PatchGrid {
         nx: cfg.grid.nx,
         ny: cfg.grid.ny,
@@ -84,7 +84,10 @@ pub fn patch_grid(cfg: &TransientConfig, hertz_b_m: f64) -> PatchGrid {
 
 /// The estimated cost of building the patch of `grid`: wall time (s), peak memory (GB) and
 /// the free DOFs of the larger submodel.
-pub fn build_estimate(model: &Model, grid: &PatchGrid) -> Result<(f64, f64, usize), PassageError> {
+pub(crate) fn build_estimate(
+    model: &Model,
+    grid: &PatchGrid,
+) -> Result<(f64, f64, usize), PassageError> {
     let (r, t) = patch_dofs(model, grid)?;
     let n = (r + t) as f64;
     let larger = r.max(t);
@@ -109,7 +112,7 @@ fn key(model: &Model, grid: &PatchGrid) -> String {
 
 /// The fe-patch of `model` on `grid`: from memory, from disk, or built (reported to
 /// `progress` with its estimate first).
-pub fn model_patch_cached(
+pub(crate) fn model_patch_cached(
     model: &Model,
     grid: &PatchGrid,
     progress: Option<&dyn Progress>,
@@ -226,10 +229,10 @@ pub fn prepare(
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Beside {
     /// A passage's global model (modes and series compliance): the split is applied
-    /// ([`influence_of`]); the model's validation has made sure the residual flexibilities,
+    /// (`influence_of`); the model's validation has made sure the residual flexibilities,
     /// which carry the share the split takes off, are on.
     GlobalModel,
-    /// Nothing (the `contact` command): the refined submodels alone ([`refined_influence`]).
+    /// Nothing (the `contact` command): the refined submodels alone (`refined_influence`).
     Nothing,
 }
 
@@ -257,7 +260,7 @@ pub fn influence_for(
 /// crown and the rolling circle to round-off, are left out with the kernel's
 /// normal–tangential ones). Positive definite only beside the global model's compliance at
 /// the contact (the passage's series compliance), from which the twins' share was split.
-pub fn influence_of(p: &ModelPatch) -> Influence {
+pub(crate) fn influence_of(p: &ModelPatch) -> Influence {
     let t = p.twins_m_per_n;
     match refined_influence(p) {
         Influence::Strip(op) => Influence::Strip(op.with_uniform([-t[0][0], -t[1][1], -t[2][2]])),
@@ -270,7 +273,7 @@ pub fn influence_of(p: &ModelPatch) -> Influence {
 /// approach includes the submodels' own structural flexibility; the patch's pressure and
 /// traction are those of the passage's fe-patch in steady rolling (a uniform compliance
 /// changes neither under a prescribed load and creepage).
-pub fn refined_influence(p: &ModelPatch) -> Influence {
+pub(crate) fn refined_influence(p: &ModelPatch) -> Influence {
     let k = &p.refined;
     let (nx, ny) = k.dims();
     Influence::Strip(StripInfluence::new(nx, ny, |o, j, jp| {

@@ -77,7 +77,7 @@ pub enum PassageError {
         reason: String,
     },
     /// A rail profile so deep that the contact grid lengthened for it
-    /// ([`setup::grid_for_profile`]) is beyond [`setup::MAX_PROFILE_GRID_WORK`].
+    /// ([`setup::grid_for_profile`]) is beyond `setup::MAX_PROFILE_GRID_WORK`.
     #[error("a rail profile of peak-to-trough {ptp_um} µm needs a contact grid of {nx:.3e} × {ny} elements (about {memory_gb:.3} GB and {work_ratio:.3e} times the default 32 × 24 grid's passage time; at most {limit_ratio:.0} times): corrugation is tens to hundreds of µm peak-to-trough (heights in µm)")]
     ProfileGrid {
         /// The profile's peak-to-trough (µm).

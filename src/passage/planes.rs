@@ -16,7 +16,7 @@
 //! Hertz one (constant over a passage, so that unit responses can be reused).
 
 /// Most node planes one patch may cover.
-pub const MAX_PLANES: usize = 32;
+pub(crate) const MAX_PLANES: usize = 32;
 
 /// The weights of the node planes under a patch centred at one contact position.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,7 +59,7 @@ pub enum PatchError {
         /// Last plane (m).
         last_m: f64,
     },
-    /// The patch covers more planes than [`MAX_PLANES`].
+    /// The patch covers more planes than `MAX_PLANES`.
     #[error("the contact patch (2a = {length_m:.4} m) covers {planes} node planes, more than {max}: coarsen mesh.fine_element_length or set explicit.load_spread = \"node\"")]
     TooManyPlanes {
         /// Patch length 2a (m).

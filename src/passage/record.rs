@@ -215,7 +215,7 @@ pub struct PassageRecord {
 /// was rerun on this one.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WidenedGrid {
-    /// Widenings along x and y (−), each by [`super::setup::GRID_WIDENING`] in half-length.
+    /// Widenings along x and y (−), each by `super::setup::GRID_WIDENING` in half-length.
     pub widenings: [u32; 2],
     /// Elements along x and y (−).
     pub elements: [usize; 2],

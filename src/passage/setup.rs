@@ -26,20 +26,20 @@ pub const PASSAGE_TANGENTIAL_TOL: f64 = 1e-5;
 /// grid, so over a profile `grid_nx · nx' · grid_ny` with the lengthened `nx'`. Four times the
 /// model grid's bound (48 times the default 32 × 24 grid's passage time): room for the trial
 /// amplitudes up to 5 mm peak-to-trough on the default grid, and for 160 µm on a 64 × 64 grid.
-pub const MAX_PROFILE_GRID_WORK: usize = 4 * crate::model::MAX_GRID_WORK;
+pub(crate) const MAX_PROFILE_GRID_WORK: usize = 4 * crate::model::MAX_GRID_WORK;
 
 /// Memory per element of a passage's contact grid (bytes), an estimate: about 20 state arrays
 /// of `f64` per element plus the FFT influence kernels on the doubled `2nx × 2ny` grid.
-pub const CONTACT_BYTES_PER_ELEMENT: f64 = 600.0;
+pub(crate) const CONTACT_BYTES_PER_ELEMENT: f64 = 600.0;
 
 /// Peak-to-trough of a rail profile (m) above which it is not a corrugation (those are tens
 /// to hundreds of µm): a larger one is likely a unit slip (heights in mm or m where µm are
 /// read) and is warned about ([`implausible_profile`]).
-pub const PLAUSIBLE_PROFILE_PTP_M: f64 = 2e-3;
+pub(crate) const PLAUSIBLE_PROFILE_PTP_M: f64 = 2e-3;
 
 /// A warning when a rail profile's peak-to-trough `ptp_m` (m) is beyond
 /// [`PLAUSIBLE_PROFILE_PTP_M`] (a likely unit slip), else `None`.
-pub fn implausible_profile(ptp_m: f64) -> Option<String> {
+pub(crate) fn implausible_profile(ptp_m: f64) -> Option<String> {
     (ptp_m > PLAUSIBLE_PROFILE_PTP_M).then(|| {
         format!(
             "the rail profile's peak-to-trough is {} µm ({:.4} mm): corrugation is tens to hundreds of µm deep; are the heights in µm (not mm or m)?",
@@ -57,7 +57,7 @@ pub fn implausible_profile(ptp_m: f64) -> Option<String> {
 /// `L_x ≥ √(2 R_x (δ_H + ptp))` with the **same element size** (hence the same time step
 /// `Δt = Δx/V`, so passages over different trial amplitudes stay comparable). Never shrinks
 /// the grid; the lateral extent is unchanged (the profile varies along x only). A grid whose
-/// work is beyond [`MAX_PROFILE_GRID_WORK`] is refused ([`PassageError::ProfileGrid`], with
+/// work is beyond `MAX_PROFILE_GRID_WORK` is refused ([`PassageError::ProfileGrid`], with
 /// its elements, memory and work) before anything is allocated.
 pub fn grid_for_profile(
     grid: GridSpec,
@@ -93,9 +93,9 @@ pub fn grid_for_profile(
 }
 
 /// Checks, before any work, that a passage of `model` over a rail profile of peak-to-trough
-/// `ptp_m` (m) has a contact grid within [`MAX_PROFILE_GRID_WORK`] ([`grid_for_profile`] at
+/// `ptp_m` (m) has a contact grid within `MAX_PROFILE_GRID_WORK` ([`grid_for_profile`] at
 /// the static Hertz approach under the wheel load; the grid's element size does not depend on
-/// the speed); returns the warning of [`implausible_profile`], if any.
+/// the speed); returns the warning of `implausible_profile`, if any.
 pub fn check_profile_grid(model: &Model, ptp_m: f64) -> Result<Option<String>, PassageError> {
     let cfg = contact_config_for(model, model.run.speed())?;
     let hertz = static_hertz(model, model.vehicle.wheel_load)?;
@@ -104,11 +104,11 @@ pub fn check_profile_grid(model: &Model, ptp_m: f64) -> Result<Option<String>, P
 }
 
 /// The factor on a contact grid's half-length per widening (−), see [`widen_grid`].
-pub const GRID_WIDENING: f64 = 1.25;
+pub(crate) const GRID_WIDENING: f64 = 1.25;
 
 /// The most widenings of a passage's contact grid per direction (−): up to
 /// `1.25⁴ ≈ 2.4` times the half-length of the model's grid (and as many reruns).
-pub const MAX_GRID_WIDENINGS: u32 = 4;
+pub(crate) const MAX_GRID_WIDENINGS: u32 = 4;
 
 /// How many times a passage's contact grid is widened along x and along y beyond the grid of
 /// [`passage_contact`] ([`widen_grid`]); the default, none, is the model's grid.
@@ -128,7 +128,7 @@ impl GridWidening {
 }
 
 /// `grid` widened `w.x` times along x and `w.y` times along y: each widening lengthens the
-/// half-length by [`GRID_WIDENING`] at the **same element size** (so the same time step
+/// half-length by `GRID_WIDENING` at the **same element size** (so the same time step
 /// `Δx/V` and resolution), with an even number of elements added, half on either side, so
 /// that the elements of `grid` keep their places and the widened grid only adds room around
 /// them. A direction not widened is left exactly as it is.
@@ -154,7 +154,7 @@ pub fn widen_grid(grid: GridSpec, w: GridWidening) -> GridSpec {
 
 /// Where the contact patch of a failed passage reached its grid, if that is why it failed.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GridEdgeReached {
+pub(crate) struct GridEdgeReached {
     /// The edge: `"x"` or `"y"`.
     pub edge: &'static str,
     /// The normal force then (N).
@@ -167,7 +167,7 @@ pub struct GridEdgeReached {
 
 /// The edge at which the contact patch of a failed passage reached its grid, with the step's
 /// normal force, time and place, if that is why it failed.
-pub fn patch_at_grid_edge(e: &PassageError) -> Option<GridEdgeReached> {
+pub(crate) fn patch_at_grid_edge(e: &PassageError) -> Option<GridEdgeReached> {
     match e {
         PassageError::Contact {
             t_s,
@@ -189,7 +189,7 @@ pub fn patch_at_grid_edge(e: &PassageError) -> Option<GridEdgeReached> {
 /// the static load even at dipped joints and wheel flats; a force beyond twice that is a
 /// passage whose contact coupling has gone unstable, and a wider grid would only let it run
 /// longer. Such a passage is reported as diverged ([`PassageError::Diverged`]).
-pub const MAX_WIDENING_LOAD_FACTOR: f64 = 6.0;
+pub(crate) const MAX_WIDENING_LOAD_FACTOR: f64 = 6.0;
 
 impl WidenedGrid {
     /// The widened grid `grid` after the widenings `w`.
@@ -223,14 +223,14 @@ impl std::fmt::Display for WidenedGrid {
 }
 
 /// Runs a passage (`passage(widening)`) on the grid of [`passage_contact`] and, each time its
-/// contact patch reaches the grid's boundary ([`patch_at_grid_edge`] of the error `dynamics`
+/// contact patch reaches the grid's boundary (`patch_at_grid_edge` of the error `dynamics`
 /// finds in it), once more from the start on a grid widened along that edge
-/// ([`widen_grid`]), at most [`MAX_GRID_WIDENINGS`] times per direction; a passage that never
+/// ([`widen_grid`]), at most `MAX_GRID_WIDENINGS` times per direction; a passage that never
 /// reaches the boundary runs once, on the model's grid, exactly as without this. `on_rerun(edge,
 /// widening)` is told before each rerun. Returns the result and its widening; a passage that
 /// still reaches the boundary after the last widening returns
 /// [`PassageError::GridOutgrown`] (through `outgrown`). A patch that reaches the boundary
-/// under a normal force above [`MAX_WIDENING_LOAD_FACTOR`] times `static_load_n` (N) is not
+/// under a normal force above `MAX_WIDENING_LOAD_FACTOR` times `static_load_n` (N) is not
 /// rerun: the passage diverged, and [`PassageError::Diverged`] says so (through `outgrown`).
 pub fn run_widening_grid<T, E>(
     static_load_n: f64,

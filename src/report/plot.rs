@@ -3,7 +3,7 @@
 //! - [`line_plot`] / [`line_plot_log_y`]: one or more [`Series`] of `(x, y)` points. Non-finite
 //!   points (and, on the log axis, `y ≤ 0`) are gaps: the line is broken there, so a `None`
 //!   dominant wavelength written as `NaN` simply leaves a hole. Series of at most
-//!   [`MARKER_LIMIT`] points also get a marker at every point (parameter studies).
+//!   `MARKER_LIMIT` points also get a marker at every point (parameter studies).
 //! - [`heat_map`]: a value `z(x_i, y_j)` on a rectilinear grid (cells centred on the grid
 //!   values, edges half-way between neighbours), linear or logarithmic colour scale (a
 //!   perceptually uniform blue–green–yellow map, `viridis`-like), a colour bar, and
@@ -27,19 +27,19 @@ use plotters::style::FontStyle;
 use super::ReportError;
 
 /// The embedded font used for all PNG text (DejaVu Sans, Bitstream Vera licence).
-pub const FONT_TTF: &[u8] = include_bytes!("fonts/DejaVuSans.ttf");
+pub(crate) const FONT_TTF: &[u8] = include_bytes!("fonts/DejaVuSans.ttf");
 
 /// Family name under which [`FONT_TTF`] is registered with plotters.
-pub const FONT_FAMILY: &str = "sans-serif";
+pub(crate) const FONT_FAMILY: &str = "sans-serif";
 
 /// Series of at most this many points get markers.
-pub const MARKER_LIMIT: usize = 60;
+pub(crate) const MARKER_LIMIT: usize = 60;
 
 /// Size of a line plot (px) in the PNG and the SVG.
-pub const LINE_PLOT_SIZE: (u32, u32) = (900, 600);
+pub(crate) const LINE_PLOT_SIZE: (u32, u32) = (900, 600);
 
 /// Size of a heat map (px) in the PNG and the SVG, the strip of its style legend included.
-pub const HEAT_MAP_SIZE: (u32, u32) = (1000, 680);
+pub(crate) const HEAT_MAP_SIZE: (u32, u32) = (1000, 680);
 
 /// One named curve of a line plot.
 #[derive(Clone, Debug, PartialEq)]
@@ -620,7 +620,7 @@ fn legend_position<DB: DrawingBackend>(
 /// Of a legend box `(bw, bh)` (px) at its eight places in the plot area `(x, y, w, h)` (px, as
 /// plotters places it, 5 px from the edges), the place covering the fewest of the pixel
 /// points `px`; the upper right on a tie.
-pub fn least_covered(
+pub(crate) fn least_covered(
     px: &[(i32, i32)],
     (ax, ay, aw, ah): (i32, i32, i32, i32),
     (bw, bh): (i32, i32),
@@ -673,7 +673,6 @@ mod heat;
 #[cfg(test)]
 use heat::edges;
 use heat::heat_on;
-pub use heat::{colour_map, column_bounds, LOG_DECADES, MIN_COLUMNS};
 
 #[cfg(test)]
 mod tests;

@@ -11,12 +11,12 @@ use std::path::Path;
 use super::RoughnessError;
 
 /// Reference roughness of the band levels, `r₀` (m): 1 µm.
-pub const REFERENCE_ROUGHNESS_M: f64 = 1e-6;
+pub(crate) const REFERENCE_ROUGHNESS_M: f64 = 1e-6;
 
 /// The upper limit of the rail roughness of a reference track for vehicle noise tests
 /// (ISO 3095:2013, 6.2.5 and Figure 2; the same levels are tabulated in EN 15610): nominal
 /// band centre wavelength (m) and level (dB re 1 µm), 0.4 m to 3.15 mm.
-pub const ISO3095_LIMIT_DB: [(f64, f64); 22] = [
+pub(crate) const ISO3095_LIMIT_DB: [(f64, f64); 22] = [
     (0.4, 17.1),
     (0.315, 15.0),
     (0.25, 13.0),

@@ -188,23 +188,23 @@ pub fn forecast(measured: &BandSpectrum, rates: &GrowthRateSpectrum, passages: f
 
 /// Wheel passages over one rail in `mgt` million gross tonnes of traffic with the wheel load
 /// `wheel_load_n` (N): every axle (two wheels, one on each rail) carries `2W/g`.
-pub fn passages_of_mgt(mgt: f64, wheel_load_n: f64) -> f64 {
+pub(crate) fn passages_of_mgt(mgt: f64, wheel_load_n: f64) -> f64 {
     const G: f64 = 9.81;
     mgt * 1e9 / (2.0 * wheel_load_n / G)
 }
 
 /// Most wheel passages a forecast takes (−).
-pub const MAX_PASSAGES: f64 = 1e12;
+pub(crate) const MAX_PASSAGES: f64 = 1e12;
 
 /// Most traffic a forecast takes (million gross tonnes).
-pub const MAX_MGT: f64 = 1000.0;
+pub(crate) const MAX_MGT: f64 = 1000.0;
 
 /// Default traffic of a forecast when neither is given (million gross tonnes).
-pub const DEFAULT_MGT: f64 = 1.0;
+pub(crate) const DEFAULT_MGT: f64 = 1.0;
 
 /// The wheel passages of a forecast from the traffic given as `passages` (1 to
-/// [`MAX_PASSAGES`]) or `mgt` (million gross tonnes, above 0 to [`MAX_MGT`]; default
-/// [`DEFAULT_MGT`]) at the wheel load `wheel_load_n` (N); not both.
+/// `MAX_PASSAGES`) or `mgt` (million gross tonnes, above 0 to `MAX_MGT`; default
+/// `DEFAULT_MGT`) at the wheel load `wheel_load_n` (N); not both.
 pub fn traffic_passages(
     passages: Option<f64>,
     mgt: Option<f64>,

@@ -33,8 +33,8 @@ pub mod bands;
 pub mod forecast;
 pub mod profile;
 
-pub use bands::{iso3095_limit_db, third_octave_bands, Band, BandSpectrum, ISO3095_LIMIT_DB};
-pub use forecast::{forecast, passages_of_mgt, traffic_passages, BandForecast, Forecast};
+pub use bands::{iso3095_limit_db, third_octave_bands, Band, BandSpectrum};
+pub use forecast::{forecast, traffic_passages, BandForecast, Forecast};
 pub use profile::{MeasuredProfile, SpectrumOptions};
 
 use std::path::PathBuf;

@@ -5,14 +5,14 @@
 //! non-reflecting ends. An absorbing end here has two parts, both pure damping (no stiffness:
 //! the modes and their cache do not change, the reduced passage keeps the full `ΦᵀCΦ`):
 //!
-//! - **Face dashpots** ([`face_dashpots`]): the viscous boundary of Lysmer and Kuhlemeyer
+//! - **Face dashpots** (`face_dashpots`): the viscous boundary of Lysmer and Kuhlemeyer
 //!   (1969). Every node `i` of an end face is tied to the ground, with the consistent nodal
-//!   area `A_i = ∫ N_i dA` ([`nodal_areas`]), by `ρ c_b A_i` in x (normal; `c_b = √(E/ρ)`, the
+//!   area `A_i = ∫ N_i dA` (`nodal_areas`), by `ρ c_b A_i` in x (normal; `c_b = √(E/ρ)`, the
 //!   rail's longitudinal bar wave) and `ρ c_s A_i` in y and z (`c_s = √(G/ρ)`). A plane
 //!   longitudinal wave leaving the face has normal traction `σ = ρ c_b v`, what the dashpots
 //!   apply. For bending waves they give the high-frequency limits of a Timoshenko beam's
 //!   impedances only, and reflect a large part at a few hundred Hz.
-//! - **An absorbing layer** ([`layer_dashpots`]): over the last `L` metres of the rail,
+//! - **An absorbing layer** (`layer_dashpots`): over the last `L` metres of the rail,
 //!   grounded dashpots in y and z of `α(d) m_i` on every node of lumped mass `m_i`,
 //!   `α(d) = α_max (1 − d/L)²` at distance `d` from the face. It takes out the bending waves'
 //!   energy; the longitudinal wave passes it to the face.
@@ -36,7 +36,7 @@ pub mod reflection;
 /// Consistent nodal areas of a section mesh, `A_i = ∫ N_i dA` over its bilinear quads (m²),
 /// by 2 × 2 Gauss points (exact for bilinear shape functions on a bilinear map). They sum to
 /// the section's area, and `Σ A_i y_i`, `Σ A_i z_i` to its first moments.
-pub fn nodal_areas(section: &SectionMesh) -> Vec<f64> {
+pub(crate) fn nodal_areas(section: &SectionMesh) -> Vec<f64> {
     let mut a = vec![0.0; section.nodes.len()];
     let g = 1.0 / 3f64.sqrt();
     for quad in &section.quads {
@@ -78,7 +78,7 @@ pub fn nodal_areas(section: &SectionMesh) -> Vec<f64> {
 
 /// Dashpot constants of an absorbing end per unit area (N·s/m³): `[ρ c_b, ρ c_s, ρ c_s]` for
 /// x (normal), y, z.
-pub fn impedances_per_area(material: &IsotropicElastic) -> [f64; 3] {
+pub(crate) fn impedances_per_area(material: &IsotropicElastic) -> [f64; 3] {
     let (e, nu, rho) = (
         material.youngs_modulus,
         material.poisson_ratio,
@@ -91,7 +91,7 @@ pub fn impedances_per_area(material: &IsotropicElastic) -> [f64; 3] {
 
 /// The dashpots (node to ground, damping only) of an absorbing end face at node `plane` of
 /// `rail`, for the rail's `material`.
-pub fn face_dashpots(
+pub(crate) fn face_dashpots(
     rail: &RailTopology,
     plane: usize,
     material: &IsotropicElastic,
@@ -113,7 +113,7 @@ pub fn face_dashpots(
 /// node's lumped mass `m_i = ρ A_i ℓ_p` (section area `A_i`, tributary length `ℓ_p` of its
 /// plane) and `α(d) = rate (1 − d/length)²` (1/s) at distance `d` from the face. Transverse
 /// only, so that the rail's longitudinal wave, which the face dashpots absorb, passes it.
-pub fn layer_dashpots(
+pub(crate) fn layer_dashpots(
     rail: &RailTopology,
     material: &IsotropicElastic,
     x_end: f64,
@@ -152,7 +152,7 @@ pub fn layer_dashpots(
 
 /// The absorbing ends of `rail` (both end faces' dashpots and both layers) for the rail's
 /// `material`, a layer of `layer_m` (m) and rate `rate_per_s` (1/s) at each end.
-pub fn end_dashpots(
+pub(crate) fn end_dashpots(
     rail: &RailTopology,
     material: &IsotropicElastic,
     layer_m: f64,

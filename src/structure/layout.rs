@@ -173,7 +173,7 @@ impl Layout {
 }
 
 /// Coordinates closer than this are the same point (m).
-pub const GEOMETRY_TOLERANCE: f64 = 1e-9;
+pub(crate) const GEOMETRY_TOLERANCE: f64 = 1e-9;
 
 fn sort_dedup(mut v: Vec<f64>) -> Vec<f64> {
     v.sort_by(f64::total_cmp);
@@ -186,7 +186,7 @@ fn sort_dedup(mut v: Vec<f64>) -> Vec<f64> {
 /// ends at the first and last node). Returns the overlap of each node's interval with
 /// `[a, b]` (m). The lengths sum to the part of `[a, b]` covered by the nodes: this is the
 /// trapezoidal-rule weight, so a uniform pressure on `[a, b]` is distributed exactly.
-pub fn tributary_lengths(coords: &[f64], a: f64, b: f64) -> Vec<f64> {
+pub(crate) fn tributary_lengths(coords: &[f64], a: f64, b: f64) -> Vec<f64> {
     let n = coords.len();
     (0..n)
         .map(|k| {

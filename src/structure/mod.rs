@@ -134,7 +134,7 @@ pub enum StructureError {
 /// Most DOFs (3 per node) of the track or the wheel substructure: 6.6 times the default
 /// track's 152 000. Building and assembling takes about [`BYTES_PER_DOF`] per DOF and the
 /// modal solution several times more, so this keeps a model within a 24 GiB machine.
-pub const MAX_DOFS: usize = 1_000_000;
+pub(crate) const MAX_DOFS: usize = 1_000_000;
 
 /// Memory to build and assemble one substructure, per DOF (bytes): `corrugation mesh` of the
 /// default model peaks at 557 MB for 188 700 DOFs (track and wheel), 2.7 kB each.

@@ -15,7 +15,7 @@ use crate::structure::{StructureError, TrackStructure, WheelStructure};
 /// journal at 0.09–0.13 m with a 0.08 m radius and a 0.05 m bore. About 3,000 free DOFs
 /// instead of 17,645; not a physical wheel (its unsprung mass is smaller, and the sprung
 /// mass makes up the static load).
-pub fn all_modes_wheel_params(m: &Model) -> WheelParams {
+pub(crate) fn all_modes_wheel_params(m: &Model) -> WheelParams {
     WheelParams {
         symmetry_plane_distance_m: 0.15,
         hub_y_m: [-0.1, 0.065],
@@ -34,7 +34,7 @@ pub fn all_modes_wheel_params(m: &Model) -> WheelParams {
 }
 
 /// The track and the wheel of an all-modes model ([`all_modes_model`](crate::model::test_problems::all_modes_model)): the track as the
-/// model builds it, the wheel on [`all_modes_wheel_params`].
+/// model builds it, the wheel on `all_modes_wheel_params`.
 pub fn all_modes_structures(m: &Model) -> Result<(TrackStructure, WheelStructure), StructureError> {
     let track = TrackStructure::build(m)?;
     let wheel = WheelStructure::with_params(m, all_modes_wheel_params(m))?;

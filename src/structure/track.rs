@@ -13,7 +13,7 @@
 //!   rail-foot underside DOFs to the ground, region by region (columns and rows are strips of
 //!   physical width; their edges are node lines, so the held set is exact). Node-line regions
 //!   fix the foot nodes of one node plane (a column line) or one foot node line within the
-//!   footprint (a row line): a constraint of zero width, mesh dependent ([`node_line`]).
+//!   footprint (a row line): a constraint of zero width, mesh dependent (`node_line`).
 //! - **Elastic holds**: a region held elastically is tied to the ground in its direction by
 //!   spring-dampers, the stiffness and damping per fastening spread over the region's nodes by
 //!   tributary area (per bay of one sleeper spacing for the continuous region; evenly over the
@@ -45,7 +45,7 @@ use super::StructureError;
 /// Material index of the rail in [`TrackStructure::materials`].
 pub const RAIL_MATERIAL: usize = 0;
 /// Material index of the sleepers.
-pub const SLEEPER_MATERIAL: usize = 1;
+pub(crate) const SLEEPER_MATERIAL: usize = 1;
 
 /// What a spring represents (for energy shares and output).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -66,7 +66,7 @@ pub enum SpringKind {
 pub struct TrackStructure {
     /// Nodes and hexahedra (rail first, then the sleepers).
     pub mesh: Mesh,
-    /// Materials: [`RAIL_MATERIAL`], [`SLEEPER_MATERIAL`].
+    /// Materials: [`RAIL_MATERIAL`], `SLEEPER_MATERIAL`.
     pub materials: Vec<IsotropicElastic>,
     /// Spring-dampers (railpads and ballast).
     pub springs: Vec<Spring>,
@@ -454,7 +454,7 @@ fn add_ballast(
 }
 
 /// The rail-foot DOFs fixed by a hold pattern (sorted, unique).
-pub fn held_dofs(
+pub(crate) fn held_dofs(
     p: &HoldPattern,
     layout: &Layout,
     rail: &RailTopology,
@@ -600,7 +600,7 @@ fn grid_point_nodes(
 /// `index`, across the whole foot; for [`RigidRegion::Rows`] the nodes on the foot node
 /// line through the centre of row `index`, at the node planes within the footprint length. The
 /// mesh has that plane or line ([`Layout::x_breakpoints`], [`Layout::y_foot_lines`]).
-pub fn node_line(
+pub(crate) fn node_line(
     layout: &Layout,
     rail: &RailTopology,
     region: RigidRegion,
@@ -655,7 +655,7 @@ fn nearest(v: &[f64], x: f64) -> Option<usize> {
 /// direction, the stiffness and damping per fastening spread over the region's foot nodes.
 /// Per fastening the stiffnesses sum to the stated k (per sleeper spacing of rail for the
 /// continuous region); for node lines each held line's sum to the stated k per line.
-pub fn add_elastic_holds(
+pub(crate) fn add_elastic_holds(
     p: &HoldPattern,
     layout: &Layout,
     sleeper_spacing: f64,

@@ -20,7 +20,7 @@ use crate::studies::StudiesError;
 pub const DEFAULT_ELASTIC_N_PER_M: f64 = 1e9;
 
 /// The largest force the check accepts (N), either component.
-pub const MAX_FORCE_N: f64 = 1e7;
+pub(crate) const MAX_FORCE_N: f64 = 1e7;
 
 /// One row of the table: a fastening model with rigid or elastic x-holds (displacements in m).
 #[derive(Debug, Clone, Serialize)]
@@ -61,7 +61,7 @@ fn argument(flag: &'static str, given: impl ToString, reason: impl ToString) -> 
     }
 }
 
-/// Checks the load's forces (finite, at most [`MAX_FORCE_N`], the vertical one pushing down)
+/// Checks the load's forces (finite, at most `MAX_FORCE_N`, the vertical one pushing down)
 /// and the probe's distance ahead (finite, ≥ 0 m).
 pub fn check_compliance_load(load: &ComplianceLoad) -> Result<(), StudiesError> {
     for (flag, v) in [

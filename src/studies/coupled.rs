@@ -44,7 +44,7 @@ pub struct SummaryAttribution {
 /// Attributes every wear, F_L and F_N component of `s` to the coupled modes `modes`
 /// ([`crate::dynamics::coupled::attribute`], window
 /// [`crate::dynamics::coupled::ATTRIBUTION_WINDOW`]).
-pub fn attribute_summary(modes: &[CoupledMode], s: &PassageSummary) -> SummaryAttribution {
+pub(crate) fn attribute_summary(modes: &[CoupledMode], s: &PassageSummary) -> SummaryAttribution {
     let f = |c: &[WavelengthComponent]| {
         crate::dynamics::coupled::attribute(
             &c.iter().map(|c| c.frequency_hz).collect::<Vec<_>>(),
@@ -60,7 +60,10 @@ pub fn attribute_summary(modes: &[CoupledMode], s: &PassageSummary) -> SummaryAt
 }
 
 /// One frequency attributed (`None` without a frequency or without modes).
-pub fn attribute_one(modes: &[CoupledMode], frequency_hz: Option<f64>) -> Option<ModeAttribution> {
+pub(crate) fn attribute_one(
+    modes: &[CoupledMode],
+    frequency_hz: Option<f64>,
+) -> Option<ModeAttribution> {
     let f = frequency_hz.filter(|f| f.is_finite() && *f > 0.0)?;
     crate::dynamics::coupled::attribute(&[f], modes, crate::dynamics::coupled::ATTRIBUTION_WINDOW)
         .pop()
@@ -81,7 +84,7 @@ pub fn passage_attribution(
 
 /// Writes the coupled modes `cm` to `out` ([`write_coupled_modes`]) and the summary's
 /// components attributed to them to `out/coupled_attribution.json`.
-pub fn write_passage_attribution(
+pub(crate) fn write_passage_attribution(
     out: &Path,
     cm: &CoupledModes,
     s: &PassageSummary,
@@ -98,7 +101,7 @@ pub fn write_passage_attribution(
 }
 
 /// The columns of `coupled_modes.csv`.
-pub fn coupled_mode_columns() -> Vec<String> {
+pub(crate) fn coupled_mode_columns() -> Vec<String> {
     let mut c: Vec<String> = ["position_m", "frequency_hz", "damping_ratio"]
         .map(String::from)
         .to_vec();
@@ -153,7 +156,7 @@ pub fn write_coupled_modes(out: &Path, cm: &CoupledModes) -> Result<(), StudiesE
 /// within the attribution window and the nearest visible one was taken), its energy
 /// shares (−) in the wheel (total and elastic), the rail (total and by family), the support
 /// and the contact, and the rail's longitudinal-to-normal motion at the contact (−).
-pub fn attribution_columns(prefix: &str) -> Vec<String> {
+pub(crate) fn attribution_columns(prefix: &str) -> Vec<String> {
     let mut c = vec![
         "coupled_mode_hz".to_string(),
         "coupled_offset".into(),
@@ -176,7 +179,7 @@ pub fn attribution_columns(prefix: &str) -> Vec<String> {
 }
 
 /// The values of [`attribution_columns`]; `NaN` throughout without an attribution.
-pub fn attribution_values(a: Option<&ModeAttribution>) -> Vec<f64> {
+pub(crate) fn attribution_values(a: Option<&ModeAttribution>) -> Vec<f64> {
     let n = attribution_columns("").len();
     let Some(a) = a else {
         return vec![f64::NAN; n];

@@ -83,9 +83,9 @@ impl InitiationCriterion {
 }
 
 /// Most PSD peaks per signal in the initiation table.
-pub const MAX_PEAKS: usize = 20;
+pub(crate) const MAX_PEAKS: usize = 20;
 
-/// Checks the number of PSD peaks per signal: 1 to [`MAX_PEAKS`].
+/// Checks the number of PSD peaks per signal: 1 to `MAX_PEAKS`.
 pub fn check_peaks(peaks: usize) -> Result<(), StudiesError> {
     if (1..=MAX_PEAKS).contains(&peaks) {
         return Ok(());
@@ -280,7 +280,7 @@ pub fn run_initiation(
 }
 
 /// Column names of the indicator part of a table with `peaks` peaks per signal.
-pub fn indicator_header(peaks: usize) -> Vec<String> {
+pub(crate) fn indicator_header(peaks: usize) -> Vec<String> {
     let mut h: Vec<String> = [
         "speed_kmh",
         "mean_fn_n",
@@ -314,7 +314,7 @@ fn opt(v: Option<f64>) -> String {
 }
 
 /// The indicator cells of one row (full precision; empty cells for missing values).
-pub fn indicator_cells(r: &InitiationRow, peaks: usize) -> Vec<String> {
+pub(crate) fn indicator_cells(r: &InitiationRow, peaks: usize) -> Vec<String> {
     let mut c = vec![
         num(r.speed_kmh),
         num(r.mean_fn_n),
@@ -337,7 +337,7 @@ pub fn indicator_cells(r: &InitiationRow, peaks: usize) -> Vec<String> {
 }
 
 /// Writes a table (header + string rows) as CSV, atomically.
-pub fn write_table_csv(
+pub(crate) fn write_table_csv(
     path: &Path,
     header: &[String],
     rows: &[Vec<String>],
@@ -359,7 +359,7 @@ fn peaks_text(p: &[WavelengthComponent]) -> String {
 }
 
 /// Short Markdown/HTML table rows of the indicators (rounded for reading).
-pub fn readable_header() -> Vec<&'static str> {
+pub(crate) fn readable_header() -> Vec<&'static str> {
     vec![
         "name",
         "speed (km/h)",
@@ -376,7 +376,7 @@ pub fn readable_header() -> Vec<&'static str> {
 }
 
 /// One readable row (see [`readable_header`]).
-pub fn readable_cells(r: &InitiationRow) -> Vec<String> {
+pub(crate) fn readable_cells(r: &InitiationRow) -> Vec<String> {
     vec![
         r.name.clone(),
         format!("{}", r.speed_kmh),
@@ -434,7 +434,7 @@ pub fn write_initiation(
 }
 
 /// The criterion in words, for reports.
-pub fn criterion_text(c: &InitiationCriterion) -> String {
+pub(crate) fn criterion_text(c: &InitiationCriterion) -> String {
     format!(
         "Criterion: a case initiates corrugation when the RMS of the 20–80 mm band-passed \
          differential wear is at least {:.2} % of the mean wear, and the dominant wavelength of \

@@ -1,5 +1,5 @@
 //! The files of the `modes` command (and of anyone who wants them): `modes.csv` (one row per
-//! track mode, [`TRACK_HEADER`]), `wheel_modes.csv` ([`WHEEL_HEADER`]), the mode shapes as
+//! track mode, `TRACK_HEADER`), `wheel_modes.csv` (`WHEEL_HEADER`), the mode shapes as
 //! `.vtu` files for ParaView, and the summary of both substructures ([`ModesSummary`], the
 //! command's `--json`).
 //!
@@ -28,7 +28,7 @@ use crate::model::FMAX_HZ;
 use crate::studies::StudiesError;
 
 /// Columns of `modes.csv`.
-pub const TRACK_HEADER: [&str; 21] = [
+pub(crate) const TRACK_HEADER: [&str; 21] = [
     "index",
     "frequency_hz",
     "family",
@@ -53,7 +53,7 @@ pub const TRACK_HEADER: [&str; 21] = [
 ];
 
 /// Columns of `wheel_modes.csv`.
-pub const WHEEL_HEADER: [&str; 9] = [
+pub(crate) const WHEEL_HEADER: [&str; 9] = [
     "index",
     "frequency_hz",
     "family",

@@ -29,10 +29,10 @@ use crate::report::plot::{line_plot_log_y, Series};
 use crate::report::ReportError;
 
 /// Largest number of frequencies of one receptance run.
-pub const MAX_FREQUENCIES: usize = 200_000;
+pub(crate) const MAX_FREQUENCIES: usize = 200_000;
 
 /// Peaks kept per curve.
-pub const PEAKS: usize = 10;
+pub(crate) const PEAKS: usize = 10;
 
 /// Errors of the receptance product.
 #[derive(Debug, thiserror::Error)]
@@ -49,7 +49,7 @@ pub enum ReceptanceError {
         /// The model's frequency limit `run.fmax` (Hz).
         fmax_hz: f64,
     },
-    /// More than [`MAX_FREQUENCIES`] frequencies.
+    /// More than `MAX_FREQUENCIES` frequencies.
     #[error("receptance: {0} frequencies; raise --step-hz")]
     TooManyFrequencies(usize),
     /// The receptances could not be computed.
@@ -114,7 +114,7 @@ pub struct FrequencyGrid {
 impl ReceptanceOptions {
     /// The frequency grid for a model of frequency limit `fmax_hz` (Hz): `from_hz` to the
     /// highest frequency (at most `fmax_hz`, where the modal basis ends) in steps of
-    /// `step_hz`, at most [`MAX_FREQUENCIES`].
+    /// `step_hz`, at most `MAX_FREQUENCIES`.
     pub fn grid(&self, fmax_hz: f64) -> Result<FrequencyGrid, ReceptanceError> {
         let to_hz = self.to_hz.unwrap_or(fmax_hz.min(3000.0));
         let finite = self.from_hz.is_finite() && to_hz.is_finite() && self.step_hz.is_finite();

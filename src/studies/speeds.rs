@@ -10,13 +10,13 @@
 //! **List** `60,80,100` (one value is a list of one). Lists are sorted ascending; duplicates
 //! are an error.
 //!
-//! Every speed must be finite and within [`MIN_SPEED_KMH`] to [`MAX_SPEED_KMH`], the range of
-//! the model's `run.speed_kmh`; at most [`MAX_SPEEDS`].
+//! Every speed must be finite and within `MIN_SPEED_KMH` to `MAX_SPEED_KMH`, the range of
+//! the model's `run.speed_kmh`; at most `MAX_SPEEDS`.
 //!
 //! **Shard** `I/N` (`I = 0 … N−1`): the speeds at positions `I, I+N, I+2N, …` of the sorted
 //! list, so the `N` shards partition the list (every speed in exactly one shard).
 //!
-//! A speed's result file is named by [`speed_file_stem`]: the speed in km/h with six decimals,
+//! A speed's result file is named by `speed_file_stem`: the speed in km/h with six decimals,
 //! zero-padded to four integer digits (`0054.800000`), so names sort like speeds.
 
 /// The speeds of a `sweep` when none are given (km/h): 54.8 to 219 km/h in steps of 2 km/h
@@ -25,18 +25,18 @@ pub const DEFAULT_SWEEP_SPEEDS: &str = "54.8:219:2";
 use super::StudiesError;
 
 /// Lowest accepted speed (km/h): that of `run.speed_kmh` ([`crate::model::SPEED_KMH`]).
-pub const MIN_SPEED_KMH: f64 = crate::model::SPEED_KMH[0];
+pub(crate) const MIN_SPEED_KMH: f64 = crate::model::SPEED_KMH[0];
 
 /// Highest accepted speed (km/h): that of `run.speed_kmh` ([`crate::model::SPEED_KMH`]).
-pub const MAX_SPEED_KMH: f64 = crate::model::SPEED_KMH[1];
+pub(crate) const MAX_SPEED_KMH: f64 = crate::model::SPEED_KMH[1];
 
 /// Most speeds in one speed list (−): a sweep's or `predict`'s `--speeds`, a study's
 /// `speeds_kmh`; checked by [`check_speed_count`].
-pub const MAX_SPEEDS: usize = 100_000;
+pub(crate) const MAX_SPEEDS: usize = 100_000;
 
 /// Refuses a speed list of more than [`MAX_SPEEDS`] speeds (`n`, a float: a range's count may
 /// exceed any index), with the reason naming the cap; the one check of every speed list.
-pub fn check_speed_count(n: f64) -> Result<(), String> {
+pub(crate) fn check_speed_count(n: f64) -> Result<(), String> {
     if n <= MAX_SPEEDS as f64 {
         return Ok(());
     }
@@ -163,7 +163,7 @@ impl Shard {
 }
 
 /// File stem of a speed's result (`0054.800000` for 54.8 km/h).
-pub fn speed_file_stem(speed_kmh: f64) -> String {
+pub(crate) fn speed_file_stem(speed_kmh: f64) -> String {
     format!("{speed_kmh:011.6}")
 }
 

@@ -27,7 +27,7 @@ impl NormalInfluence for Convolver {
 }
 
 /// The tangential influence operator the tangential solver needs
-/// ([`crate::contact::tangential::TangentialSolver`]): the half-space's [`Convolver`] or the kernel of an
+/// (`crate::contact::tangential::TangentialSolver`): the half-space's [`Convolver`] or the kernel of an
 /// FE contact patch invariant along the rail only ([`strip::StripInfluence`]). Components x
 /// (rolling) and y (lateral) of the displacement difference (m) per traction (Pa), on an
 /// `nx × ny` grid (element `i · ny + j`); symmetric positive definite.

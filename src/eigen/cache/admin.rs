@@ -26,7 +26,7 @@ use super::{io_err, CacheError, CacheMeta, ModalCache, META_FILE, TMP_COUNTER};
 
 /// Age after which a hidden `.tmp-*`/`.old-*` leftover is removed by [`ModalCache::prune`]
 /// (s): one day, far longer than any write of an entry takes.
-pub const LEFTOVER_AGE_S: u64 = 86_400;
+pub(crate) const LEFTOVER_AGE_S: u64 = 86_400;
 
 /// One entry of the cache, as listed by [`ModalCache::entries`].
 #[derive(Clone, Debug, serde::Serialize)]
@@ -75,7 +75,7 @@ pub struct PruneReport {
     pub freed_bytes: u64,
     /// Bytes of the entries kept (B).
     pub kept_bytes: u64,
-    /// Hidden leftovers of interrupted writes removed (older than [`LEFTOVER_AGE_S`]).
+    /// Hidden leftovers of interrupted writes removed (older than `LEFTOVER_AGE_S`).
     pub leftovers_removed: usize,
 }
 
@@ -155,7 +155,7 @@ impl ModalCache {
     }
 
     /// Removes the least recently used entries until the policy holds, and leftovers older
-    /// than [`LEFTOVER_AGE_S`]. Each entry is renamed aside before it is deleted. Only the
+    /// than `LEFTOVER_AGE_S`. Each entry is renamed aside before it is deleted. Only the
     /// entries of [`Self::entries`] and the cache's own leftovers are ever removed; nothing
     /// else in the directory is touched, whatever the limits.
     pub fn prune(&self, policy: PrunePolicy) -> Result<PruneReport, CacheError> {

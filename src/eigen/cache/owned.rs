@@ -49,7 +49,7 @@ pub const FE_PATCH_DIR: &str = "fe-patch";
 pub const FE_PATCH_FILES: [&str; 4] = ["kernel.npy", "twins.npy", "grid.txt", "complete"];
 
 /// The Cache Directory Tagging signature: the first line of a valid [`TAG_FILE`].
-pub const TAG_SIGNATURE: &str = "Signature: 8a477f597d28d172789f06886806bc55";
+pub(crate) const TAG_SIGNATURE: &str = "Signature: 8a477f597d28d172789f06886806bc55";
 
 /// The whole tag file the cache writes.
 const TAG_TEXT: &str = "Signature: 8a477f597d28d172789f06886806bc55\n\
@@ -236,7 +236,7 @@ impl CacheSurvey {
 }
 
 /// Most names of other items an error or a note quotes.
-pub const OTHERS_QUOTED: usize = 5;
+pub(crate) const OTHERS_QUOTED: usize = 5;
 
 /// The first `OTHERS_QUOTED` of `names`, back-quoted and comma-separated, and how many more.
 pub fn quote_names(names: &[String]) -> String {

@@ -78,7 +78,7 @@ pub fn classify_wheel_mode(
 /// [`classify_wheel_mode`] of several modes (`f_hz[i]` is the frequency of `u_free[i]`):
 /// the element strain energies of all of them in one pass over the elements (each element
 /// stiffness built once).
-pub fn classify_wheel_modes(
+pub(crate) fn classify_wheel_modes(
     wheel: &WheelStructure,
     u_free: &[&[f64]],
     f_hz: &[f64],

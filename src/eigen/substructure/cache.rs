@@ -7,7 +7,7 @@ use super::{
 };
 
 /// Revision of the component construction (bump when the bases of an unchanged model change).
-pub const COMPONENT_REVISION: u64 = 2;
+pub(crate) const COMPONENT_REVISION: u64 = 2;
 
 /// The cache key of a track's component `part` (`rail-component` or `sleeper-component`):
 /// the track's identity without any spring stiffness ([`crate::model::identity::IdentityScope::Components`]), but

@@ -218,7 +218,7 @@ impl TrackComponents {
 }
 
 /// Builds the component bases of a track (no cache).
-pub fn build_components(
+pub(crate) fn build_components(
     track: &TrackStructure,
     fmax_hz: f64,
     opts: &SubstructureOptions,
@@ -292,7 +292,7 @@ pub fn track_components(
     Ok(c)
 }
 
-/// Wall time (s) of the steps of [`substructured_track_basis_timed`], and the process's CPU
+/// Wall time (s) of the steps of `substructured_track_basis_timed`, and the process's CPU
 /// time (s, all threads; `NaN` where `/proc` is not available) during each: the CPU times
 /// are the steps' own only while nothing else runs in the process.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -329,7 +329,7 @@ pub fn substructured_track_basis(
 }
 
 /// [`substructured_track_basis`] with the wall time of each step.
-pub fn substructured_track_basis_timed(
+pub(crate) fn substructured_track_basis_timed(
     track: &TrackStructure,
     comp: &TrackComponents,
     fmax_hz: f64,
@@ -442,7 +442,7 @@ mod components;
 mod reduced;
 mod shapes;
 
-pub use cache::{component_key, COMPONENT_REVISION};
+pub use cache::component_key;
 use cache::{load_component, store_component};
 use components::{
     attachment_groups, identical_sleepers, patterns, rail_basis, sleeper_basis, solid_matrices,
@@ -450,7 +450,7 @@ use components::{
 };
 use reduced::expand_sleepers;
 pub use reduced::{expand, reduced_modes, reduced_stiffness};
-pub use shapes::{expand_rows, passage_track_basis_timed, ReducedShapes};
+pub use shapes::{passage_track_basis_timed, ReducedShapes};
 
 #[cfg(test)]
 mod tests;

@@ -258,7 +258,7 @@ fn passage_rail_rows(
 /// The modes `Φ = ΨQ` at the rail rows `rail_rows` and at every sleeper DOF, the other rows
 /// `NaN` (n_free × m): a consumer that reads a row not expanded gets `NaN`, never a
 /// plausible number.
-pub fn expand_rows(
+pub(crate) fn expand_rows(
     comp: &TrackComponents,
     n_free: usize,
     q: &Mat<f64>,
@@ -322,7 +322,7 @@ fn energy_shares(
 
 /// The track's classified modes below `fmax_hz` for a passage: the reduced eigenproblem as in
 /// `substructured_track_basis_timed`, the modes expanded only at the rows the passage reads
-/// ([`expand_rows`]; the other rows `NaN`) and classified from the component coordinates
+/// (`expand_rows`; the other rows `NaN`) and classified from the component coordinates
 /// ([`ReducedShapes::classify`]). For a basis whose every row is read (output, cache) use
 /// `substructured_track_basis`.
 pub fn passage_track_basis_timed(

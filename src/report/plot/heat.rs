@@ -14,7 +14,7 @@ use super::{
 };
 
 /// A viridis-like colour map: `t` in `[0, 1]`.
-pub fn colour_map(t: f64) -> RGBColor {
+pub(crate) fn colour_map(t: f64) -> RGBColor {
     const STOPS: [(f64, f64, f64); 5] = [
         (68.0, 1.0, 84.0),
         (59.0, 82.0, 139.0),
@@ -36,18 +36,18 @@ pub fn colour_map(t: f64) -> RGBColor {
 }
 
 /// Decades shown below the maximum on a log colour scale.
-pub const LOG_DECADES: f64 = 6.0;
+pub(crate) const LOG_DECADES: f64 = 6.0;
 
 /// A heat map's column (one abscissa) is at most the axis span over this wide, so that a few
 /// speeds far apart are drawn as narrow columns with "no data" between them, not as wide
 /// blocks claiming the speeds between (a dense grid's cells, narrower, touch as before).
-pub const MIN_COLUMNS: f64 = 40.0;
+pub(crate) const MIN_COLUMNS: f64 = 40.0;
 
 /// The x-interval `[lo, hi]` of each column of the abscissae `v` (ascending): half-way to its
 /// neighbours (half a spacing outside at the ends), narrowed to at most `s / (2 MIN_COLUMNS)`
 /// either side of the value, `s` the span of the axis those bounds give; none for no
 /// abscissae.
-pub fn column_bounds(v: &[f64]) -> Vec<[f64; 2]> {
+pub(crate) fn column_bounds(v: &[f64]) -> Vec<[f64; 2]> {
     if v.is_empty() {
         return Vec::new();
     }
@@ -115,7 +115,7 @@ pub(super) fn heat_on<DB: DrawingBackend>(
 }
 
 /// Height (px) of the strip beneath a heat map that holds the legend of its line styles.
-pub const LEGEND_STRIP_PX: u32 = 30;
+pub(crate) const LEGEND_STRIP_PX: u32 = 30;
 
 /// The rows of the style legend: each style of `map.line_legend` that a line of the map uses.
 fn legend_rows<'m>(map: &'m HeatMap<'_>) -> Vec<&'m (LineStyle, &'m str)> {

@@ -1,7 +1,8 @@
+use super::heat::{colour_map, column_bounds, MIN_COLUMNS};
 use super::{
-    colour_map, column_bounds, edges, heat_map, least_covered, line_plot, line_plot_log_y,
-    linear_labels, log_labels, render_line_plot_rgb, FontStyle, HeatMap, LineStyle, OverlayLine,
-    PathBuf, RGBColor, Series, FONT_TTF, HEAT_MAP_SIZE, LINE_PLOT_SIZE, MIN_COLUMNS, TICKS,
+    edges, heat_map, least_covered, line_plot, line_plot_log_y, linear_labels, log_labels,
+    render_line_plot_rgb, FontStyle, HeatMap, LineStyle, OverlayLine, PathBuf, RGBColor, Series,
+    FONT_TTF, HEAT_MAP_SIZE, LINE_PLOT_SIZE, TICKS,
 };
 
 /// The ticks plotters would draw: multiples of a 1-2-5 step, at most `n` over the range.

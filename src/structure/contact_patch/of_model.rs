@@ -10,7 +10,7 @@
 //! that the contact can carry the twins' share as a (negative) uniform series compliance
 //! beside the refined kernel, which stays positive definite on its own.
 //!
-//! Assumptions: those of the two submodels ([`super::rail_head`], [`super::tread`]): a
+//! Assumptions: those of the two submodels (`super::rail_head`, [`super::tread`]): a
 //! straight segment and a straight rim prism, running surfaces in their projection on the
 //! contact plane, the twins loaded with the lateral weights of the static Hertz patch.
 

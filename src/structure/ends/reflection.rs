@@ -168,7 +168,7 @@ pub fn reflection(
 
 /// Two waves `a z^p + b z^−p` fitted to `w` (samples `h` apart): the energy reflection
 /// `|b/a|²`, the wavenumber and the relative residual.
-pub fn decompose(w: &[c64], h: f64, frequency_hz: f64) -> Reflection {
+pub(crate) fn decompose(w: &[c64], h: f64, frequency_hz: f64) -> Reflection {
     let m = w.len();
     // z + 1/z = 2c by least squares over the three-point relation
     let (mut num, mut den) = (c64::new(0.0, 0.0), 0.0);

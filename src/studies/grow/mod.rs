@@ -25,7 +25,7 @@ mod run;
 
 pub use run::{
     check_amplitudes, run_grow, GrowOptions, GrowOutcome, GrowRun, RatePart,
-    DEFAULT_PASSAGES_PER_ROUND, MAX_ROUNDS, MAX_TRIAL_AMPLITUDE_UM, RATE_CHECK_BAND_MM,
+    DEFAULT_PASSAGES_PER_ROUND,
 };
 
 use std::path::Path;
@@ -197,7 +197,10 @@ pub struct AmplitudeAttribution {
 
 /// The smooth rail's and every trial amplitude's dominant wear frequency attributed to the
 /// coupled modes `modes`.
-pub fn growth_attribution(g: &TrialGrowth, modes: &[CoupledMode]) -> Vec<AmplitudeAttribution> {
+pub(crate) fn growth_attribution(
+    g: &TrialGrowth,
+    modes: &[CoupledMode],
+) -> Vec<AmplitudeAttribution> {
     std::iter::once((0.0, &g.smooth))
         .chain(g.amplitudes.iter().map(|a| (a.amplitude_um, &a.summary)))
         .map(|(amplitude_um, s)| AmplitudeAttribution {
@@ -235,7 +238,7 @@ pub struct RateSummary {
 
 /// The summary of `s`, its fastest wavelength attributed to `modes`; `None` for an empty
 /// spectrum.
-pub fn rate_summary(s: &GrowthRateSpectrum, modes: &[CoupledMode]) -> Option<RateSummary> {
+pub(crate) fn rate_summary(s: &GrowthRateSpectrum, modes: &[CoupledMode]) -> Option<RateSummary> {
     let p = s.fastest()?;
     Some(RateSummary {
         speed_kmh: s.speed.kmh(),
@@ -411,7 +414,7 @@ pub fn widened_passage_name(amplitude_um: f64) -> String {
 
 /// Writes the CSV files of a trial-growth result into `out`: `consistency.csv`,
 /// `phase.csv`, `eigen_comparison.csv` and `trial_shape.csv`.
-pub fn write_growth_files(out: &Path, g: &TrialGrowth) -> Result<(), StudiesError> {
+pub(crate) fn write_growth_files(out: &Path, g: &TrialGrowth) -> Result<(), StudiesError> {
     std::fs::create_dir_all(out).map_err(StudiesError::io(out))?;
     write_consistency_csv(out, g)?;
     write_phase_csv(out, g)?;
@@ -586,7 +589,7 @@ pub fn growth_rate(
 
 /// Writes `growth_rate.csv` and its plot (`growth_rate.svg`, `.png`: growth rate per passage
 /// against wavelength, with the rigid-structure and normal-only variants) into `out`.
-pub fn write_growth_rate(out: &Path, s: &GrowthRateSpectrum) -> Result<(), StudiesError> {
+pub(crate) fn write_growth_rate(out: &Path, s: &GrowthRateSpectrum) -> Result<(), StudiesError> {
     std::fs::create_dir_all(out).map_err(StudiesError::io(out))?;
     let path = out.join("growth_rate.csv");
     let mut header = vec![
@@ -769,7 +772,7 @@ pub fn rate_check(
 
 /// `grow.json` in `out` (the `--json` object of `grow`), atomically: written last, it marks a
 /// complete run.
-pub fn write_grow_json(out: &Path, text: &str) -> Result<(), StudiesError> {
+pub(crate) fn write_grow_json(out: &Path, text: &str) -> Result<(), StudiesError> {
     let p = out.join("grow.json");
     crate::io::write_text(&p, text).map_err(StudiesError::io(&p))
 }

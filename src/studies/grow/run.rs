@@ -24,21 +24,21 @@ use crate::units::{mm_to_m, um_to_m};
 
 /// Largest trial amplitude 2A_max accepted (µm): 5 mm peak-to-trough, far beyond any
 /// corrugation (they are tens of µm).
-pub const MAX_TRIAL_AMPLITUDE_UM: f64 = 5000.0;
+pub(crate) const MAX_TRIAL_AMPLITUDE_UM: f64 = 5000.0;
 
 /// Most rounds of iterative growth: each round runs one passage (about half a second on the
 /// default model, so 1000 rounds take about 10 minutes).
-pub const MAX_ROUNDS: usize = 1000;
+pub(crate) const MAX_ROUNDS: usize = 1000;
 
 /// Default passages per round of the iterative growth: a round's wear is one passage's
 /// times this count.
 pub const DEFAULT_PASSAGES_PER_ROUND: usize = 1000;
 
 /// The wavelength range of the rate check (mm): the analysis band.
-pub const RATE_CHECK_BAND_MM: [f64; 2] = [20.0, 80.0];
+pub(crate) const RATE_CHECK_BAND_MM: [f64; 2] = [20.0, 80.0];
 
 /// Checks trial amplitudes 2A_max (µm) given as `list` (the flag or key, for the message):
-/// at least one, each finite and in (0, [`MAX_TRIAL_AMPLITUDE_UM`]], none twice.
+/// at least one, each finite and in (0, `MAX_TRIAL_AMPLITUDE_UM`], none twice.
 pub fn check_amplitudes(list: &'static str, amplitudes_um: &[f64]) -> Result<(), StudiesError> {
     let bad = amplitudes_um
         .iter()
@@ -62,13 +62,13 @@ pub fn check_amplitudes(list: &'static str, amplitudes_um: &[f64]) -> Result<(),
 pub struct GrowOptions {
     /// Trial amplitudes 2A_max (µm); default [`DEFAULT_AMPLITUDES_UM`].
     pub amplitudes_um: Vec<f64>,
-    /// Rounds of iterative growth, 0 (default: off) to [`MAX_ROUNDS`].
+    /// Rounds of iterative growth, 0 (default: off) to `MAX_ROUNDS`.
     pub rounds: usize,
     /// Passages per round, at least 1; default [`DEFAULT_PASSAGES_PER_ROUND`].
     pub passages_per_round: usize,
     /// The growth-rate spectrum (default on).
     pub rate: bool,
-    /// Wavelengths (mm, within [`RATE_CHECK_BAND_MM`]) at which the spectrum's linear theory
+    /// Wavelengths (mm, within `RATE_CHECK_BAND_MM`) at which the spectrum's linear theory
     /// is checked against passages over 1 µm sinusoidal corrugations; default none.
     pub rate_check_mm: Vec<f64>,
     /// The coupled wheel–track modes and the attribution of the selected frequencies

@@ -172,7 +172,7 @@ pub struct CasePhases {
     /// The passage engine: wheel basis, damping projection, residual flexibilities.
     pub engine_s: f64,
     /// Of `engine_s`, the track's and the wheel's residual flexibilities (with the
-    /// reference factorisation of the study's static flexibility, [`StaticUpdater`], in the
+    /// reference factorisation of the study's static flexibility, `StaticUpdater`, in the
     /// case that made it).
     pub residual_s: f64,
     /// Process CPU time during the structure and the component bases.
@@ -208,7 +208,7 @@ impl CaseRunners {
     }
 
     /// Whether a substructured study's cases get the track's static flexibility at the
-    /// contact by updating one reference factorisation ([`StaticUpdater`]) or each from a
+    /// contact by updating one reference factorisation (`StaticUpdater`) or each from a
     /// factorisation of its own `K` (`false`, the default: on the default track a railpad
     /// stiffness changes several thousand springs, and solving them once costs about as much
     /// as ten cases' own factorisations, docs/log/performance.md §7.1).

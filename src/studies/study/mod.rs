@@ -45,9 +45,9 @@
 //! # Outputs (in the output directory)
 //! - `cases/<NNNN>.json` — each finished case (its overrides, model hash and indicators),
 //!   written atomically; a rerun reuses the cases whose file matches their overrides, resolved
-//!   model ([`model_hash`]) and speeds (resume), and recomputes the others;
+//!   model (`model_hash`) and speeds (resume), and recomputes the others;
 //! - `study.csv` — one row per case and speed: `case`, the parameter values, the indicators
-//!   ([`super::initiation::indicator_header`]) and the growth hook's columns;
+//!   (`super::initiation::indicator_header`) and the growth hook's columns;
 //! - `study.md`, `study.html` — the criterion, a readable table and the plots;
 //! - `study_<indicator>.{svg,png}` — each indicator vs the first parameter (one curve per
 //!   combination of the other parameters and speed); the case index is the abscissa when the
@@ -113,14 +113,13 @@ mod parse;
 mod report;
 pub use report::{study_table, summary_lines};
 mod run;
-pub mod static_update;
+pub(crate) mod static_update;
 
 pub use bases::{basis_plan, BasisPlan, CasePhases, CaseRunners, StudyBasis};
-pub use parse::expand_range;
-pub use run::{model_hash, run_study, GrowthHook, RunnerFactory, StudyOutcome};
+pub use run::{run_study, StudyOutcome};
 
 /// Most cases of one study.
-pub const MAX_CASES: usize = 10_000;
+pub(crate) const MAX_CASES: usize = 10_000;
 
 /// How the parameters are combined into cases.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -179,7 +178,7 @@ impl Case {
 }
 
 /// A value as TOML text (`1300000000.0`, `"RPM1"`, `[0, 2]`).
-pub fn value_text(v: &toml::Value) -> String {
+pub(crate) fn value_text(v: &toml::Value) -> String {
     v.to_string()
 }
 
@@ -222,9 +221,8 @@ pub struct Study {
 
 #[cfg(test)]
 mod tests {
-    use super::{
-        expand_range, InitiationCriterion, ModelSource, Path, PathBuf, Range, StudiesError, Study,
-    };
+    use super::parse::expand_range;
+    use super::{InitiationCriterion, ModelSource, Path, PathBuf, Range, StudiesError, Study};
     fn parse(text: &str) -> Result<Study, StudiesError> {
         Study::parse_str(text, "s.toml", Path::new("/studies"), "s")
     }

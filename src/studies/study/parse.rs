@@ -64,7 +64,7 @@ pub(super) fn key_error(
 }
 
 /// `start + k·step` for `k = 0 … ⌊(stop − start)/step + 10⁻⁹⌋`.
-pub fn expand_range(r: &Range) -> Result<Vec<f64>, String> {
+pub(crate) fn expand_range(r: &Range) -> Result<Vec<f64>, String> {
     if !(r.start.is_finite() && r.stop.is_finite() && r.step.is_finite()) {
         return Err("start, stop and step must be finite".into());
     }

@@ -48,7 +48,7 @@ const INDICATORS: [Indicator; 5] = [
 
 /// The unit of a model key for axis labels ("−" for dimensionless keys), from the naming
 /// conventions of the model file (`models/dutch-base.toml` states each); `None` if unknown.
-pub fn key_unit(key: &str) -> Option<&'static str> {
+pub(crate) fn key_unit(key: &str) -> Option<&'static str> {
     let last = key.rsplit('.').next().unwrap_or(key);
     let ends = |s: &str| last.ends_with(s);
     Some(match last {

@@ -15,12 +15,12 @@ use crate::studies::speeds::Shard;
 use crate::studies::{BoxError, StudiesError};
 
 /// Builds the passage runner `R` of a model (the CLI passes its engine's prepared model).
-pub type RunnerFactory<'a, R> = &'a (dyn Fn(&Model) -> Result<R, BoxError> + Sync);
+pub(crate) type RunnerFactory<'a, R> = &'a (dyn Fn(&Model) -> Result<R, BoxError> + Sync);
 
 /// The growth loop of one case, handed the case's runner as the factory built it (so a
 /// prepared model's loaded modal bases are reused): named scalar results (e.g.
 /// `limiting_amplitude_um`), added as columns to the study table.
-pub type GrowthHook<'a, R> =
+pub(crate) type GrowthHook<'a, R> =
     &'a (dyn Fn(&Model, &R) -> Result<BTreeMap<String, f64>, BoxError> + Sync);
 
 /// The result of [`run_study`].
@@ -36,7 +36,7 @@ pub struct StudyOutcome {
 
 /// blake3 of the program version and the model's whole identity
 /// ([`crate::model::identity::model_identity`], [`IdentityScope::Run`](crate::model::identity::IdentityScope::Run)), hex.
-pub fn model_hash(model: &Model) -> Result<String, StudiesError> {
+pub(crate) fn model_hash(model: &Model) -> Result<String, StudiesError> {
     let json =
         crate::model::identity::model_identity(model, crate::model::identity::IdentityScope::Run)
             .map_err(|source| StudiesError::Json {

@@ -80,7 +80,7 @@ struct Planes {
 
 /// The reference factorisation shared by a study's cases (see the module doc); one per
 /// spring layout.
-pub struct StaticUpdater {
+pub(crate) struct StaticUpdater {
     reference: Mutex<Reference>,
 }
 
@@ -116,7 +116,7 @@ impl StaticUpdater {
 }
 
 /// The static flexibility of one case ([`StaticUpdater::for_track`]).
-pub struct CaseStatic<'a> {
+pub(crate) struct CaseStatic<'a> {
     updater: &'a StaticUpdater,
     stiffness: Vec<f64>,
     vectors: Vec<SpringVector>,

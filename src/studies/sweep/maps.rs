@@ -11,7 +11,7 @@ use crate::dynamics::{PassageSummary, WavelengthSpectrum};
 
 /// PSD per wavenumber of `s` at wavenumber `k` (1/m): linear interpolation in `k` between
 /// the spectrum's samples; 0 outside them.
-pub fn psd_at_wavenumber(s: &WavelengthSpectrum, k: f64) -> f64 {
+pub(crate) fn psd_at_wavenumber(s: &WavelengthSpectrum, k: f64) -> f64 {
     let n = s.wavelength_m.len().min(s.psd.len());
     // Samples sorted by wavenumber ascending = wavelength descending (as stored).
     let kk = |i: usize| 1.0 / s.wavelength_m[i];

@@ -9,7 +9,7 @@ use super::run::{read_summary, same_speed};
 use super::{assemble, speed_file, MapOptions, StudiesError, SweepMaps, SweepRecord, RUN_KEY_FILE};
 
 /// Reads `sweep.json` of a sweep directory.
-pub fn read_record(dir: &Path) -> Result<SweepRecord, StudiesError> {
+pub(crate) fn read_record(dir: &Path) -> Result<SweepRecord, StudiesError> {
     let p = dir.join("sweep.json");
     let text = std::fs::read_to_string(&p).map_err(StudiesError::io(&p))?;
     serde_json::from_str(&text).map_err(|e| StudiesError::BadFile {
@@ -21,12 +21,12 @@ pub fn read_record(dir: &Path) -> Result<SweepRecord, StudiesError> {
 /// The shard plan file in `DIR/speeds`: which shard of which sweep the directory holds
 /// ([`ShardPlan`]), written by [`write_shard_plan`] before the passages and checked by
 /// [`merge`].
-pub const SHARD_PLAN_FILE: &str = "shard.json";
+pub(crate) const SHARD_PLAN_FILE: &str = "shard.json";
 
 /// Which shard of which sweep a sweep directory holds.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ShardPlan {
+pub(crate) struct ShardPlan {
     /// Shard index `I` (0 … count−1).
     pub index: usize,
     /// Shard count `N`.

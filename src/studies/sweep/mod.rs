@@ -10,8 +10,8 @@
 //!   parse (every field is required) and is recomputed.
 //! - `speeds/run.key` — what produced the speed files (a hash of the resolved model and the
 //!   program version, given by the caller): a rerun with another key is refused
-//!   ([`check_run_key`]), so a resume never mixes models; shards must share it to merge.
-//! - `speeds/shard.json` — [`ShardPlan`]: which shard `I/N` of which speeds the directory
+//!   (`check_run_key`), so a resume never mixes models; shards must share it to merge.
+//! - `speeds/shard.json` — `ShardPlan`: which shard `I/N` of which speeds the directory
 //!   holds (written by the `sweep` command, `0/1` for an unsharded sweep); [`merge`] takes
 //!   only directories that form every shard of one sweep once, each finished.
 //! - `sweep.json` — [`SweepRecord`]: the speeds, dominant wavelength and frequency per speed,
@@ -21,7 +21,7 @@
 //!   time of one invocation is reported by the CLI's `--json` as `wall_seconds`.
 //! - `dominant.csv` (`speed_kmh, dominant_wavelength_mm, dominant_frequency_hz,
 //!   fl_dominant_frequency_hz`, then the coupled mode each speed's dominant wear frequency is
-//!   attributed to, [`crate::studies::coupled::attribution_columns`]: `coupled_mode_hz,
+//!   attributed to, `crate::studies::coupled::attribution_columns`: `coupled_mode_hz,
 //!   coupled_damping_ratio, coupled_wheel_share, …, coupled_rail_x_to_n`, and the same for
 //!   F_L prefixed `fl_`; `NaN` where the signal has no peak in the band or the map options
 //!   hold no coupled modes) and the plots `dominant_wavelength.{svg,png}`,
@@ -59,13 +59,11 @@ mod merge;
 mod report;
 mod run;
 
-pub use maps::{assemble, psd_at_wavenumber};
-pub use merge::{merge, read_record, write_shard_plan, ShardPlan, SHARD_PLAN_FILE};
+pub use maps::assemble;
+pub use merge::{merge, write_shard_plan};
 pub use report::summary_lines;
-pub use run::{
-    check_run_key, read_summary, run_passages, speed_file, sweep, sweep_beside, write_summary,
-    RUN_KEY_FILE,
-};
+pub(crate) use run::RUN_KEY_FILE;
+pub use run::{read_summary, run_passages, speed_file, sweep, sweep_beside};
 
 use serde::{Deserialize, Serialize};
 

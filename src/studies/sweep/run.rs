@@ -33,7 +33,7 @@ pub(super) fn same_speed(a: f64, b: f64) -> bool {
 }
 
 /// Writes a summary as pretty JSON, atomically.
-pub fn write_summary(path: &Path, s: &PassageSummary) -> Result<(), StudiesError> {
+pub(crate) fn write_summary(path: &Path, s: &PassageSummary) -> Result<(), StudiesError> {
     crate::io::write_atomic(path, |w| {
         serde_json::to_writer_pretty(&mut *w, s).map_err(std::io::Error::other)?;
         w.write_all(b"\n")
@@ -112,12 +112,12 @@ pub fn run_passages(
 }
 
 /// File (in `DIR/speeds`) naming what produced the speed files: see [`check_run_key`].
-pub const RUN_KEY_FILE: &str = "run.key";
+pub(crate) const RUN_KEY_FILE: &str = "run.key";
 
 /// Guards resume against mixing models: the first run into `dir` writes `run_key` (e.g. a
 /// hash of the resolved model and the program version) to `dir/speeds/run.key`; a later run
 /// with another key is refused, so speed files of another model are never reused.
-pub fn check_run_key(dir: &Path, run_key: &str) -> Result<(), StudiesError> {
+pub(crate) fn check_run_key(dir: &Path, run_key: &str) -> Result<(), StudiesError> {
     let speeds = dir.join("speeds");
     std::fs::create_dir_all(&speeds).map_err(StudiesError::io(&speeds))?;
     let p = speeds.join(RUN_KEY_FILE);
@@ -139,7 +139,7 @@ pub fn check_run_key(dir: &Path, run_key: &str) -> Result<(), StudiesError> {
 }
 
 /// Runs the missing passages ([`run_passages`]) and assembles the outputs ([`assemble`]).
-/// `run_key` identifies the model (see [`check_run_key`]).
+/// `run_key` identifies the model (see `check_run_key`).
 pub fn sweep(
     runner: &dyn PassageRunner,
     speeds_kmh: &[f64],
