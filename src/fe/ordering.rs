@@ -12,9 +12,9 @@
 //! with `cc`; no system library needed). METIS compresses vertices with identical closed
 //! adjacency (the three DOFs of one node) before ordering, so the DOF graph is passed as it is.
 //!
-//! One of the crate's two `unsafe` blocks (the other is the call of the AVX2 kernel product
-//! in `contact::influence`, after its run-time CPU check): one FFI call with buffers whose
-//! lengths are checked here. Calls are serialised (METIS keeps its random generator in process-wide
+//! The crate's only `unsafe` outside the contact step's AVX2 kernels (`contact::avx2` and
+//! their call sites after the run-time CPU check) and the passage's spinning worker
+//! (`dynamics::passage::spin`): one FFI call with buffers whose lengths are checked here. Calls are serialised (METIS keeps its random generator in process-wide
 //! state).
 
 /// Why a nested-dissection ordering could not be computed.
