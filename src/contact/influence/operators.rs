@@ -106,6 +106,9 @@ impl<T: NormalInfluence + TangentialInfluence> Operators for T {}
 /// The influence operators of a contact grid: the quasi-identical half-spaces' (the default)
 /// or an FE contact patch's kernel invariant along the rail only (theory §6.9). Both solvers
 /// take either, through [`Influence::ops_mut`].
+// One value per contact engine, built once per passage and never moved in a loop: the
+// variants' size difference (a few hundred bytes of vector headers) costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone)]
 pub enum Influence {
     /// Kalker's two quasi-identical elastic half-spaces.

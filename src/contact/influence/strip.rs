@@ -54,56 +54,168 @@ pub fn half_space_kernel(
 /// `i` along x) with `c` components per element. A clone shares the FFT plans.
 ///
 /// Layout: the kernel spectra and the source spectra are stored as separate real and
-/// imaginary arrays, frequency-major (`[k][row][source]` and `[k][source]`), so that the
-/// dense product of one frequency is a run of contiguous dot products over the source
-/// columns that carry traction (four partial sums each).
+/// imaginary arrays, frequency-major and source-major (`[k][source][row]` and `[k][source]`),
+/// so that the dense product of one frequency is a sum of contiguous kernel columns, one per
+/// source column that carries traction, each scaled by its source spectrum (`Dense`).
 #[derive(Clone)]
 pub struct StripConvolver {
     nx: usize,
     ny: usize,
     comps: usize,
     m: usize,
-    /// `m/2 + 1` spectra, each a row-major `(c·ny) × (c·ny)` matrix (row: field component and
-    /// column `a·ny + j`; column: source `b·ny + j'`), divided by `m`: real and imaginary parts.
-    spec_re: Vec<f64>,
-    spec_im: Vec<f64>,
+    /// The kernel's and the sources' spectra in double precision, for
+    /// [`Self::product_cols`].
+    double: Spectra<f64>,
     forward: Arc<dyn RealToComplex<f64>>,
     inverse: Arc<dyn ComplexToReal<f64>>,
     line: Vec<f64>,
     /// One column's spectrum (`m/2 + 1`).
     spectrum: Vec<Complex64>,
-    /// Source spectra `[k][b·ny + j']`, real and imaginary parts.
-    src_re: Vec<f64>,
-    src_im: Vec<f64>,
     /// Field spectra, one row of `m/2 + 1` per field column `a·ny + j`.
     field: Vec<Complex64>,
     scratch: Vec<Complex64>,
+    /// [`Self::double`] rounded to single precision, for [`Precision::Single`].
+    single: Spectra<f32>,
 }
 
-/// `Σ (a_re + i a_im)(b_re + i b_im)` over equal-length slices, in four interleaved partial
-/// sums (element `i` to lane `i mod 4`; the last `len mod 4` to lane 0), so that the
-/// additions run in independent chains and vector lanes.
-fn complex_dot(a_re: &[f64], a_im: &[f64], b_re: &[f64], b_im: &[f64]) -> Complex64 {
-    let (mut sr, mut si) = ([0.0_f64; 4], [0.0_f64; 4]);
-    let n4 = a_re.len() / 4 * 4;
-    let chunks = a_re[..n4]
-        .chunks_exact(4)
-        .zip(a_im[..n4].chunks_exact(4))
-        .zip(b_re[..n4].chunks_exact(4).zip(b_im[..n4].chunks_exact(4)));
-    for ((ar, ai), (br, bi)) in chunks {
-        for l in 0..4 {
-            sr[l] += ar[l] * br[l] - ai[l] * bi[l];
-            si[l] += ar[l] * bi[l] + ai[l] * br[l];
+/// The precision of a strip product's dense part ([`StripConvolver::product_cols_in`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// Everything in `f64`.
+    Double,
+    /// The per-frequency products with the kernel's spectra in `f32` (the FFTs in `f64`).
+    Single,
+}
+
+/// The spectra of a strip product in one precision `T`, real and imaginary parts apart.
+#[derive(Clone)]
+struct Spectra<T> {
+    /// The kernel's `m/2 + 1` spectra, each a `(c·ny) × (c·ny)` matrix (row: field component
+    /// and column `a·ny + j`; column: source `b·ny + j'`) stored column by column
+    /// (`[k][source][row]`), divided by `m`.
+    spec_re: Vec<T>,
+    spec_im: Vec<T>,
+    /// The source spectra `[k][b·ny + j']`.
+    src_re: Vec<T>,
+    src_im: Vec<T>,
+    /// The field spectra of one frequency, `c·ny` each (accumulators).
+    acc_re: Vec<T>,
+    acc_im: Vec<T>,
+}
+
+/// The real type of a strip product's dense part: `f64`, or `f32` for the inner loops.
+trait DenseReal:
+    Copy
+    + Default
+    + Into<f64>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::AddAssign
+{
+}
+
+impl DenseReal for f32 {}
+impl DenseReal for f64 {}
+
+/// The dense part of a strip product, in precision `T`: per frequency `k`, the field spectra
+/// of the columns `d0..d1` of every component (computed as one run of rows from the first
+/// component's `d0` to the last one's `d1`), `y = S_k x` over the source columns `c0..c1`
+/// of every component, as a sum of columns of `S_k` (stored source-major, `[k][s][r]`) scaled
+/// by the source spectrum `x_s`: contiguous element-wise updates, no reductions, so any
+/// vector width gives the same bits. Into `field[(a·ny + j)·nk + k]`.
+struct Dense<'a, T> {
+    spectra: &'a mut Spectra<T>,
+    field: &'a mut [Complex64],
+    /// `(nk, comps, ny)`
+    dims: (usize, usize, usize),
+    cols: (usize, usize),
+    field_cols: (usize, usize),
+}
+
+impl<T: DenseReal> Dense<'_, T> {
+    /// The loops, for any instruction set ([`pulp::WithSimd`] compiles them for each).
+    #[inline(always)]
+    fn run(self) {
+        let (nk, c, ny) = self.dims;
+        let ((c0, c1), (d0, d1)) = (self.cols, self.field_cols);
+        let cn = c * ny;
+        let Spectra {
+            spec_re,
+            spec_im,
+            src_re,
+            src_im,
+            acc_re,
+            acc_im,
+        } = self.spectra;
+        let (yr, yi) = (&mut acc_re[..cn], &mut acc_im[..cn]);
+        // one contiguous run of rows from the first component's first field column to the
+        // last one's last (the columns between, outside the field, are computed and unused)
+        let (r0, r1) = (d0, (c - 1) * ny + d1);
+        if r0 >= r1 {
+            return;
+        }
+        for k in 0..nk {
+            yr.fill(T::default());
+            yi.fill(T::default());
+            for b in 0..c {
+                for jp in c0..c1 {
+                    let s = b * ny + jp;
+                    let (xr, xi) = (src_re[k * cn + s], src_im[k * cn + s]);
+                    let col = (k * cn + s) * cn;
+                    let (sr, si) = (&spec_re[col + r0..col + r1], &spec_im[col + r0..col + r1]);
+                    for ((yr, yi), (ar, ai)) in yr[r0..r1]
+                        .iter_mut()
+                        .zip(&mut yi[r0..r1])
+                        .zip(sr.iter().zip(si))
+                    {
+                        *yr += *ar * xr - *ai * xi;
+                        *yi += *ar * xi + *ai * xr;
+                    }
+                }
+            }
+            for a in 0..c {
+                for j in d0..d1 {
+                    let r = a * ny + j;
+                    self.field[r * nk + k] = Complex64::new(yr[r].into(), yi[r].into());
+                }
+            }
         }
     }
-    for i in n4..a_re.len() {
-        sr[0] += a_re[i] * b_re[i] - a_im[i] * b_im[i];
-        si[0] += a_re[i] * b_im[i] + a_im[i] * b_re[i];
+}
+
+impl<T: DenseReal> Dense<'_, T> {
+    /// The dense part of `spectra` into `field` ([`Self::run`]; `dims` = `(nk, comps, ny)`,
+    /// the source and field columns), compiled for the CPU's instruction set (`dispatch`) or
+    /// for the baseline target only.
+    fn apply(
+        spectra: &mut Spectra<T>,
+        field: &mut [Complex64],
+        dims: (usize, usize, usize),
+        (cols, field_cols): ((usize, usize), (usize, usize)),
+        dispatch: bool,
+    ) {
+        let dense = Dense {
+            spectra,
+            field,
+            dims,
+            cols,
+            field_cols,
+        };
+        if dispatch {
+            pulp::Arch::new().dispatch(dense);
+        } else {
+            dense.run();
+        }
     }
-    Complex64::new(
-        (sr[0] + sr[1]) + (sr[2] + sr[3]),
-        (si[0] + si[1]) + (si[2] + si[3]),
-    )
+}
+
+impl<T: DenseReal> pulp::WithSimd for Dense<'_, T> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        self.run();
+    }
 }
 
 impl StripConvolver {
@@ -160,7 +272,7 @@ impl StripConvolver {
                             .expect("lengths from the plan");
                         let (row, col) = (a * ny + j, b * ny + jp);
                         for (k, v) in out.iter().enumerate() {
-                            let e = (k * cn + row) * cn + col;
+                            let e = (k * cn + col) * cn + row;
                             spec_re[e] = v.re * scale;
                             spec_im[e] = v.im * scale;
                         }
@@ -177,12 +289,24 @@ impl StripConvolver {
             ny,
             comps,
             m,
-            spec_re,
-            spec_im,
             line,
             spectrum: vec![Complex64::new(0.0, 0.0); nk],
-            src_re: vec![0.0; nk * cn],
-            src_im: vec![0.0; nk * cn],
+            single: Spectra {
+                spec_re: spec_re.iter().map(|&v| v as f32).collect(),
+                spec_im: spec_im.iter().map(|&v| v as f32).collect(),
+                src_re: vec![0.0; nk * cn],
+                src_im: vec![0.0; nk * cn],
+                acc_re: vec![0.0; cn],
+                acc_im: vec![0.0; cn],
+            },
+            double: Spectra {
+                spec_re,
+                spec_im,
+                src_re: vec![0.0; nk * cn],
+                src_im: vec![0.0; nk * cn],
+                acc_re: vec![0.0; cn],
+                acc_im: vec![0.0; cn],
+            },
             field: vec![Complex64::new(0.0, 0.0); cn * nk],
             scratch: vec![Complex64::new(0.0, 0.0); scratch_len],
             forward,
@@ -230,15 +354,82 @@ impl StripConvolver {
         &mut self,
         f: &[&[f64]],
         u: &mut [&mut [f64]],
+        rows: (usize, usize),
+        src: (usize, usize),
+        field: (usize, usize),
+    ) {
+        self.product_in(f, u, (rows, src, field), (Precision::Double, true));
+    }
+
+    /// [`Self::product_cols`] with its dense part (the per-frequency products with the kernel's
+    /// spectra) in the given precision. [`Precision::Single`]: the kernel's and the sources'
+    /// spectra rounded to `f32` and the sums over the sources in `f32`, the FFTs in double
+    /// precision; the relative error is of the order of single precision's 6e-8 times the
+    /// conditioning of the sums; for the products of an iterative solver's inner loop, as the
+    /// half-space's box products ([`super::Convolver::tangential_box`]). Compiled for each
+    /// instruction set pulp dispatches to; every one gives the same bits.
+    pub fn product_cols_in(
+        &mut self,
+        precision: Precision,
+        f: &[&[f64]],
+        u: &mut [&mut [f64]],
+        (rows, src, field): ((usize, usize), (usize, usize), (usize, usize)),
+    ) {
+        self.product_in(f, u, (rows, src, field), (precision, true));
+    }
+
+    /// [`Self::product_cols_in`], the dense part dispatched to the CPU's instruction set
+    /// (`dispatch`) or compiled for the baseline target only (to check the bits).
+    fn product_in(
+        &mut self,
+        f: &[&[f64]],
+        u: &mut [&mut [f64]],
+        (rows, src, field): ((usize, usize), (usize, usize), (usize, usize)),
+        (precision, dispatch): (Precision, bool),
+    ) {
+        self.check(f, u, rows, src, field);
+        self.forward(f, src);
+        let dims = (self.m / 2 + 1, self.comps, self.ny);
+        let out = &mut self.field[..];
+        if precision == Precision::Single {
+            let (nk, c, ny) = dims;
+            let cn = c * ny;
+            let (d, f32s) = (&self.double, &mut self.single);
+            for k in 0..nk {
+                for b in 0..c {
+                    let e = k * cn + b * ny;
+                    for e in e + src.0..e + src.1 {
+                        f32s.src_re[e] = d.src_re[e] as f32;
+                        f32s.src_im[e] = d.src_im[e] as f32;
+                    }
+                }
+            }
+            Dense::apply(&mut self.single, out, dims, (src, field), dispatch);
+        } else {
+            Dense::apply(&mut self.double, out, dims, (src, field), dispatch);
+        }
+        self.inverse(u, rows, field);
+    }
+
+    /// The argument checks of [`Self::product_cols`].
+    fn check(
+        &self,
+        f: &[&[f64]],
+        u: &[&mut [f64]],
         (shift, rows): (usize, usize),
         (c0, c1): (usize, usize),
         (d0, d1): (usize, usize),
     ) {
-        let (nx, ny, c, m) = (self.nx, self.ny, self.comps, self.m);
-        let nk = m / 2 + 1;
-        let cn = c * ny;
+        let (nx, ny, c) = (self.nx, self.ny, self.comps);
         assert!(f.len() == c && u.len() == c && shift + rows <= nx + 1);
         assert!(c0 <= c1 && c1 <= ny && d0 <= d1 && d1 <= ny);
+    }
+
+    /// The spectra along x of the source columns `c0..c1` of every component, into
+    /// the double-precision source spectra (`[k][b·ny + j']`).
+    fn forward(&mut self, f: &[&[f64]], (c0, c1): (usize, usize)) {
+        let (nx, ny, c) = (self.nx, self.ny, self.comps);
+        let cn = c * ny;
         for b in 0..c {
             for jp in c0..c1 {
                 self.line.fill(0.0);
@@ -250,34 +441,23 @@ impl StripConvolver {
                     .expect("lengths from the plan");
                 let s = b * ny + jp;
                 for (k, v) in self.spectrum.iter().enumerate() {
-                    self.src_re[k * cn + s] = v.re;
-                    self.src_im[k * cn + s] = v.im;
+                    self.double.src_re[k * cn + s] = v.re;
+                    self.double.src_im[k * cn + s] = v.im;
                 }
             }
         }
-        for k in 0..nk {
-            let (sr, si) = (
-                &self.src_re[k * cn..(k + 1) * cn],
-                &self.src_im[k * cn..(k + 1) * cn],
-            );
-            for a in 0..c {
-                for j in d0..d1 {
-                    let r = a * ny + j;
-                    let e = (k * cn + r) * cn;
-                    let mut acc = Complex64::new(0.0, 0.0);
-                    for b in 0..c {
-                        let (s0, s1) = (b * ny + c0, b * ny + c1);
-                        acc += complex_dot(
-                            &self.spec_re[e + s0..e + s1],
-                            &self.spec_im[e + s0..e + s1],
-                            &sr[s0..s1],
-                            &si[s0..s1],
-                        );
-                    }
-                    self.field[r * nk + k] = acc;
-                }
-            }
-        }
+    }
+
+    /// The inverse FFTs of the field spectra of the columns `d0..d1` into the field rows
+    /// `shift..shift + rows` of `u`.
+    fn inverse(
+        &mut self,
+        u: &mut [&mut [f64]],
+        (shift, rows): (usize, usize),
+        (d0, d1): (usize, usize),
+    ) {
+        let (ny, c, m) = (self.ny, self.comps, self.m);
+        let nk = m / 2 + 1;
         for a in 0..c {
             for j in d0..d1 {
                 let row = &mut self.field[(a * ny + j) * nk..(a * ny + j + 1) * nk];
@@ -501,14 +681,103 @@ impl super::TangentialInfluence for StripInfluence {
         let (r1, c1) = (r1.min(nx), c1.min(ny));
         let (r0, c0) = (r0.min(r1), c0.min(c1));
         let (bx, by) = (&mut self.bx[..nx * ny], &mut self.by[..nx * ny]);
-        self.tangential
-            .product_cols(&[tx, ty], &mut [bx, by], (0, nx), (c0, c1), (c0, c1));
+        let (rows, cols) = ((0, nx), (c0, c1));
+        self.tangential.product_cols_in(
+            Precision::Single,
+            &[tx, ty],
+            &mut [bx, by],
+            (rows, cols, cols),
+        );
         for i in r0..r1 {
             for j in 0..ny {
                 let e = i * ny + j;
                 let inside = (c0..c1).contains(&j);
                 ux[e] = if inside { self.bx[e] } else { 0.0 };
                 uy[e] = if inside { self.by[e] } else { 0.0 };
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Precision, StripConvolver};
+
+    /// A kernel coupling all components, not Toeplitz across the rail, decaying along it.
+    fn kernel(o: isize, j: usize, jp: usize) -> [[f64; 3]; 3] {
+        let r = 1.0 + (o * o) as f64 + 0.5 * (j as f64 - jp as f64).powi(2);
+        let w = 1.0 + 0.1 * j as f64 + 0.03 * (jp * jp) as f64;
+        std::array::from_fn(|a| {
+            std::array::from_fn(|b| if a == b { w / r } else { 0.2 * w / r.sqrt() } * 1e-11)
+        })
+    }
+
+    #[test]
+    fn dispatched_products_give_the_plain_loops_bits_and_single_precision_is_within_1e_6() {
+        // every remainder of the eight-lane dot products (source widths 1..=9 and the grid's)
+        for (nx, ny, comps) in [(7, 4, 2), (9, 13, 2), (12, 3, 3), (32, 24, 2)] {
+            let mut conv = StripConvolver::new(nx, ny, comps, kernel);
+            let n = nx * ny;
+            let f: Vec<Vec<f64>> = (0..comps)
+                .map(|b| {
+                    (0..n)
+                        .map(|k| (((k + 3 * b) * 7919) % 13) as f64 * 1e6 - 4e6)
+                        .collect()
+                })
+                .collect();
+            let fr: Vec<&[f64]> = f.iter().map(|v| v.as_slice()).collect();
+            for (c0, c1) in [(0, ny), (1, ny.min(10)), (ny / 2, ny / 2 + 1)] {
+                let mut out = |mode: u8| {
+                    let mut u = vec![vec![0.0; n]; comps];
+                    let mut ur: Vec<&mut [f64]> = u.iter_mut().map(|v| v.as_mut_slice()).collect();
+                    let (rows, cols) = ((0, nx), (c0, c1));
+                    match mode {
+                        0 => conv.product_in(
+                            &fr,
+                            &mut ur,
+                            (rows, cols, cols),
+                            (Precision::Double, true),
+                        ),
+                        1 => conv.product_in(
+                            &fr,
+                            &mut ur,
+                            (rows, cols, cols),
+                            (Precision::Double, false),
+                        ),
+                        2 => conv.product_in(
+                            &fr,
+                            &mut ur,
+                            (rows, cols, cols),
+                            (Precision::Single, true),
+                        ),
+                        _ => conv.product_in(
+                            &fr,
+                            &mut ur,
+                            (rows, cols, cols),
+                            (Precision::Single, false),
+                        ),
+                    }
+                    u
+                };
+                let (double, double_plain) = (out(0), out(1));
+                let (dispatched, plain) = (out(2), out(3));
+                let scale = double.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
+                for a in 0..comps {
+                    for e in 0..n {
+                        assert_eq!(
+                            double[a][e].to_bits(),
+                            double_plain[a][e].to_bits(),
+                            "{nx}×{ny}×{comps} cols {c0}..{c1}: {a} {e}"
+                        );
+                        assert_eq!(
+                            dispatched[a][e].to_bits(),
+                            plain[a][e].to_bits(),
+                            "{nx}×{ny}×{comps} cols {c0}..{c1}: {a} {e}"
+                        );
+                        let d = (dispatched[a][e] - double[a][e]).abs();
+                        assert!(d <= 1e-6 * scale, "{nx}×{ny} {a} {e}: {d:e} of {scale:e}");
+                    }
+                }
             }
         }
     }
