@@ -138,7 +138,7 @@ fn make(name: &str) -> Progress {
 
 impl Progress {
     /// Starts a new stage named `msg` (count and clock restart; total unknown).
-    pub fn set_message(&self, msg: &str) {
+    pub(crate) fn set_message(&self, msg: &str) {
         if let Ok(mut s) = self.stage.lock() {
             s.name = msg.to_string();
             s.start = Instant::now();
@@ -159,7 +159,7 @@ impl Progress {
     }
 
     /// The total count of the current stage.
-    pub fn set_length(&self, n: u64) {
+    pub(crate) fn set_length(&self, n: u64) {
         if self.bar.length() != Some(n) {
             self.bar.set_length(n);
             if n > 0 {
@@ -169,12 +169,12 @@ impl Progress {
     }
 
     /// The count done in the current stage.
-    pub fn set_position(&self, k: u64) {
+    pub(crate) fn set_position(&self, k: u64) {
         self.bar.set_position(k);
     }
 
     /// Ends the current stage: clears the bar, or prints a closing line off a terminal.
-    pub fn finish_and_clear(&self) {
+    pub(crate) fn finish_and_clear(&self) {
         self.bar.finish_and_clear();
         if !self.tty {
             if let Ok(mut s) = self.stage.lock() {

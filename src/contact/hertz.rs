@@ -38,7 +38,7 @@ pub struct HertzInput {
 impl HertzInput {
     /// Wheel (rolling radius `r_wheel`, lateral radius `r_wheel_lat`, `INFINITY` = flat)
     /// on a rail crown of lateral radius `r_crown` (all m).
-    pub fn wheel_on_rail(
+    pub(crate) fn wheel_on_rail(
         r_wheel: f64,
         r_wheel_lat: f64,
         r_crown: f64,

@@ -357,7 +357,7 @@ pub(crate) fn next_fast_len(n: usize) -> usize {
 /// odd–odd (xy), so all four kernel spectra are **real**. The row offset `+nx` (from source
 /// row 0 to the extended row `nx` only) sits on the Nyquist index when `m1 = 2nx`: there the
 /// even kernels are exact (`C(+nx) = C(−nx)`) but the odd xy kernel must be 0, so that one
-/// coupling is added directly ([`Convolver::tangential_ext`]; O(ny²), and nothing at all when
+/// coupling is added directly (`Convolver::tangential_ext`; O(ny²), and nothing at all when
 /// row 0 carries no traction, as in rolling contact where the patch never reaches the grid
 /// edge). Hence a real
 /// kernel product of a complex field acts on real and imaginary parts separately (two real
@@ -542,7 +542,13 @@ impl Convolver {
 
     /// Tangential displacement differences on the extended rows `0..=nx` (row `nx` lies one
     /// cell beyond the leading edge): `ux, uy` have length `(nx + 1) · ny`.
-    pub fn tangential_ext(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64]) {
+    pub(crate) fn tangential_ext(
+        &mut self,
+        tx: &[f64],
+        ty: &[f64],
+        ux: &mut [f64],
+        uy: &mut [f64],
+    ) {
         let (nx, ny, m2) = (self.nx, self.ny, self.m2);
         debug_assert!(ux.len() >= (nx + 1) * ny && uy.len() >= (nx + 1) * ny);
         self.tangential_core(tx, ty, 0, nx + 1);
@@ -558,7 +564,7 @@ impl Convolver {
     /// Tangential displacement differences `(ux, uy)` (m) from tractions `(tx, ty)` (Pa) on
     /// the grid rows `r0..r1` only (`r1 ≤ nx`; the other rows of `ux, uy` are left as they
     /// are): the inverse row transforms of the other rows are skipped.
-    pub fn tangential_rows(
+    pub(crate) fn tangential_rows(
         &mut self,
         tx: &[f64],
         ty: &[f64],
@@ -614,7 +620,7 @@ impl Convolver {
     /// solver's inner conjugate gradients, which reduce a residual a few hundredfold between
     /// exact double-precision products. A box whose padded grid would not be smaller than the
     /// whole grid's takes the whole grid's rows in double precision.
-    pub fn tangential_box(
+    pub(crate) fn tangential_box(
         &mut self,
         tx: &[f64],
         ty: &[f64],

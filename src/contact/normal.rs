@@ -144,7 +144,7 @@ impl NormalSolver {
     }
 
     /// Forget the last solution (call when `p` was changed outside [`Self::solve`]).
-    pub fn invalidate(&mut self) {
+    pub(crate) fn invalidate(&mut self) {
         self.last = None;
         self.have_prev = false;
         self.set.valid = false;
@@ -155,7 +155,7 @@ impl NormalSolver {
     /// gap including the approach ([`Self::gap`]).
     ///
     /// If `h` and `mode` equal those of the previous solve (and `p` is its result, see
-    /// [`Self::invalidate`]) the previous solution is returned without any product. Inside the
+    /// `Self::invalidate`) the previous solution is returned without any product. Inside the
     /// CG the displacement `C p` is carried by the recurrence `C p ← C p − τ C t` while the
     /// contact set does not change (one FFT product per iteration), and recomputed exactly
     /// when it does.

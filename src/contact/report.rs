@@ -82,7 +82,7 @@ impl Default for ContactCase {
 
 impl ContactCase {
     /// Relative lateral radius `1/(1/R_crown + 1/R_wheel,lat)` (m).
-    pub fn relative_lateral_radius_m(&self) -> f64 {
+    pub(crate) fn relative_lateral_radius_m(&self) -> f64 {
         1.0 / (1.0 / self.crown_radius_m + 1.0 / self.wheel_lateral_radius_m)
     }
 

@@ -288,24 +288,24 @@ impl TransientRolling {
         &self.p
     }
     /// Tangential traction on the wheel, x component (Pa).
-    pub fn traction_x_pa(&self) -> &[f64] {
+    pub(crate) fn traction_x_pa(&self) -> &[f64] {
         &self.tx
     }
     /// Tangential traction on the wheel, y component (Pa).
-    pub fn traction_y_pa(&self) -> &[f64] {
+    pub(crate) fn traction_y_pa(&self) -> &[f64] {
         &self.ty
     }
     /// Slip velocity of wheel relative to rail, x (m/s).
-    pub fn slip_x_m_per_s(&self) -> &[f64] {
+    pub(crate) fn slip_x_m_per_s(&self) -> &[f64] {
         &self.sx
     }
     /// Slip velocity of wheel relative to rail, y (m/s).
-    pub fn slip_y_m_per_s(&self) -> &[f64] {
+    pub(crate) fn slip_y_m_per_s(&self) -> &[f64] {
         &self.sy
     }
     /// Frictional power density `−τ̄·s` (W/m²) with the path-mean traction `τ̄` (module doc),
     /// zero in stick.
-    pub fn power_density_w_per_m2(&self) -> &[f64] {
+    pub(crate) fn power_density_w_per_m2(&self) -> &[f64] {
         &self.power
     }
     /// Element states ([`STATE_EXTERIOR`], [`STATE_STICK`], [`STATE_SLIP`]).
@@ -724,7 +724,7 @@ impl TransientRolling {
     /// Steady rolling: step with constant inputs until the forces change by less than
     /// `rel_tol · µ N` between steps and the traction field by less than `rel_tol · µ p_max`
     /// (at most `max_steps` steps). Starts from the current state (warm).
-    pub fn solve_steady(
+    pub(crate) fn solve_steady(
         &mut self,
         inp: &StepInputs,
         rel_tol: f64,

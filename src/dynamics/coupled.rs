@@ -19,7 +19,7 @@
 //!
 //! κ_d, L_d and k_n are measured on the passage's own contact solver (same grid, friction,
 //! traction and series compliance) by small perturbations of the static state
-//! ([`PassageEngine::linearise_contact`]); L_d is the mean delay of the force's step
+//! (`PassageEngine::linearise_contact`); L_d is the mean delay of the force's step
 //! response times V (the first moment, exact for a first-order lag).
 //!
 //! # The eigenproblem
@@ -84,12 +84,12 @@ impl ContactLinearisation {
     }
 
     /// Creep damping `κ_d / V` (N·s/m) of direction `d` (0 = x, 1 = t).
-    pub fn creep_damping_ns_per_m(&self, d: usize) -> f64 {
+    pub(crate) fn creep_damping_ns_per_m(&self, d: usize) -> f64 {
         self.creep_coefficient_n[d] / self.speed_m_per_s
     }
 
     /// Tangential stiffness `κ_d / L_d` (N/m) of direction `d`, `None` without lag.
-    pub fn tangential_stiffness_n_per_m(&self, d: usize) -> Option<f64> {
+    pub(crate) fn tangential_stiffness_n_per_m(&self, d: usize) -> Option<f64> {
         let l = self.relaxation_length_m[d];
         (l > 0.0 && self.creep_coefficient_n[d] > 0.0).then_some(self.creep_coefficient_n[d] / l)
     }
@@ -255,7 +255,7 @@ pub struct CoupledMode {
 
 impl CoupledMode {
     /// Largest contact amplitude per √energy (m/√J): rail or wheel, x or n.
-    pub fn visibility(&self) -> f64 {
+    pub(crate) fn visibility(&self) -> f64 {
         self.contact_amplitudes_m_per_sqrt_j
             .iter()
             .fold(0.0f64, |a, &b| a.max(b))
@@ -266,7 +266,7 @@ impl CoupledMode {
     /// the energy measure `|λ|² + ω² ≈ 2ω²` per unit coordinate, so its contact displacement
     /// per unit coordinate is `φ_c = √2 ω a`, and `φ_c²` is its residue in the receptance
     /// `Σ φ_c² / (ω_r² − ω²)` at the contact (the largest of rail and wheel, x and n).
-    pub fn contact_residue_per_kg(&self) -> f64 {
+    pub(crate) fn contact_residue_per_kg(&self) -> f64 {
         let w = 2.0 * std::f64::consts::PI * self.frequency_hz;
         2.0 * (w * self.visibility()).powi(2)
     }
@@ -328,7 +328,7 @@ pub struct CoordinateLabels {
 impl CoordinateLabels {
     /// From the track modes' classes (the rail share of the strain energy; the family of the
     /// rail's own motion, which differs from the mode's family for sleeper modes).
-    pub fn from_classes(classes: &[TrackModeClass]) -> Self {
+    pub(crate) fn from_classes(classes: &[TrackModeClass]) -> Self {
         Self {
             track: classes
                 .iter()
@@ -767,7 +767,7 @@ fn slope_and_relaxation(plus: &[f64], minus: &[f64], h: f64, dx: f64) -> (f64, f
 impl PassageEngine {
     /// The contact linearised at the static rolling state at `speed_m_per_s` (m/s), measured
     /// on the passage's contact solver (module doc).
-    pub fn linearise_contact(
+    pub(crate) fn linearise_contact(
         &self,
         speed_m_per_s: f64,
     ) -> Result<ContactLinearisation, DynamicsError> {
@@ -822,7 +822,7 @@ impl PassageEngine {
     }
 
     /// The coupled modes with the contact frozen at `position_m` (m) and linearised as `lin`.
-    pub fn coupled_modes_at(
+    pub(crate) fn coupled_modes_at(
         &self,
         labels: &CoordinateLabels,
         lin: &ContactLinearisation,

@@ -27,7 +27,7 @@
 //!   The damper force
 //!   `C_q v_{n+1}` comes with it: the implicit equation says
 //!   `½Δt C_q v_{n+1} = rhs − v_{n+1}`, so the dissipated power `v·C_q v` of the energy
-//!   balance needs no second product ([`ModalVerlet::damping_power`]).
+//!   balance needs no second product (`ModalVerlet::damping_power`).
 //!
 //! Stability: undamped modes need `Δt ω_max < 2`. The contact step `Δt_c = Δx / V` is fixed
 //! by the contact grid, so when `Δt_c ω_max ≥ 1.9` (a basis with high modes, up to a
@@ -141,7 +141,7 @@ impl ModalVerlet {
 
     /// An integrator with contact step `dt` (s) split into `substeps` equal sub-steps, at
     /// rest. Refuses a sub-step `h` with `h ω_max ≥ 1.9`.
-    pub fn with_substeps(
+    pub(crate) fn with_substeps(
         sys: &ModalSystem,
         dt: f64,
         substeps: usize,
@@ -260,7 +260,7 @@ impl ModalVerlet {
 
     /// First half of a contact step: the interior sub-steps under the held force (none with
     /// one sub-step), then the last sub-step's displacement, to `t + Δt`; the predicted
-    /// velocity for the contact is [`Self::predicted_velocity`].
+    /// velocity for the contact is `Self::predicted_velocity`.
     pub fn advance_displacement(&mut self) {
         self.step_damper_work_j = 0.0;
         if self.substeps > 1 {
@@ -285,7 +285,7 @@ impl ModalVerlet {
     /// Predicted velocity at `t + Δt` (after [`Self::advance_displacement`]): `v + h a` of
     /// the last sub-step.
     #[inline]
-    pub fn predicted_velocity(&self, i: usize) -> f64 {
+    pub(crate) fn predicted_velocity(&self, i: usize) -> f64 {
         self.v[i] + self.h * self.a[i]
     }
 
@@ -334,7 +334,7 @@ impl ModalVerlet {
     }
 
     /// Whether the velocity half of a contact step can be split into a part known before
-    /// the contact force and a correction ([`Self::split_begin`], [`Self::complete_split`]):
+    /// the contact force and a correction (`Self::split_begin`, `Self::complete_split`):
     /// one sub-step per contact step and a full damping matrix.
     pub fn splits(&self) -> bool {
         self.substeps == 1 && matches!(self.d_inv, DampingInverse::Packed(_))
@@ -343,7 +343,13 @@ impl ModalVerlet {
     /// `y = E x` in single precision (`E = (I + ½h C)⁻¹ − I`, `x` rounded to `f32`, the
     /// product of `sym_packed_product_f32`), for [`Self::splits`] integrators; `x32` is
     /// scratch of the mode count. `y` (1/s · modal units, as `x`) gets the result in `f64`.
-    pub fn damping_correction(&self, x: &[f64], x32: &mut [f32], y32: &mut [f32], y: &mut [f64]) {
+    pub(crate) fn damping_correction(
+        &self,
+        x: &[f64],
+        x32: &mut [f32],
+        y32: &mut [f32],
+        y: &mut [f64],
+    ) {
         let DampingInverse::Packed(e) = &self.d_inv else {
             y.fill(0.0);
             return;
@@ -362,7 +368,7 @@ impl ModalVerlet {
     /// velocity right-hand side with the force `f_known`, e.g. the last contact force on the
     /// new rows) and its damping correction `e_b = E b` ([`Self::damping_correction`]).
     /// Reads the state only, so it can run beside the contact step.
-    pub fn split_begin(
+    pub(crate) fn split_begin(
         &self,
         f_known: &[f64],
         b: &mut [f64],
@@ -384,7 +390,7 @@ impl ModalVerlet {
     /// the damper force and the dampers' work as [`Self::complete`]. The same implicit step
     /// as [`Self::complete`] with `f = f_known + df` up to the rounding of the single
     /// precision products. For [`Self::splits`] integrators; no allocation.
-    pub fn complete_split(&mut self, b: &[f64], e_b: &[f64], df: &[f64], e_df: &[f64]) {
+    pub(crate) fn complete_split(&mut self, b: &[f64], e_b: &[f64], df: &[f64], e_df: &[f64]) {
         debug_assert!(self.splits());
         let (dt, m) = (self.h, self.len());
         let p_old = self.damping_power();
@@ -402,7 +408,7 @@ impl ModalVerlet {
 
     /// The dampers' work over the last contact step (J): the trapezoidal rule over its
     /// sub-steps, `Σ ½h(q̇ᵀC q̇ |_k + q̇ᵀC q̇ |_{k+1})`.
-    pub fn step_damper_work(&self) -> f64 {
+    pub(crate) fn step_damper_work(&self) -> f64 {
         self.step_damper_work_j
     }
 
@@ -424,7 +430,7 @@ impl ModalVerlet {
     /// Power dissipated by the dampers at the current velocity, q̇ᵀ C q̇ (W). No product: the
     /// damper force `C q̇` is a by-product of [`Self::complete`] (module doc) or of
     /// [`Self::set_state`].
-    pub fn damping_power(&self) -> f64 {
+    pub(crate) fn damping_power(&self) -> f64 {
         self.v.iter().zip(&self.cv).map(|(v, c)| v * c).sum()
     }
 

@@ -181,7 +181,7 @@ pub enum DynamicsError {
 impl DynamicsError {
     /// As a passage error for the engine-neutral traits: a passage's own error as it is, the
     /// engine's own wrapped unchanged in wording ([`PassageError::Specific`]).
-    pub fn into_passage(self) -> PassageError {
+    pub(crate) fn into_passage(self) -> PassageError {
         match self {
             DynamicsError::Passage(p) => p,
             other => PassageError::Specific(Box::new(other)),

@@ -76,7 +76,7 @@ impl ModalSystem {
 
     /// Adds modal damping of ratio `zeta` (−) to every mode with ω > 0: `C_ii += 2 ζ ω_i`
     /// (1/s). Rigid-body modes are left alone.
-    pub fn add_modal_damping(&mut self, zeta: f64) {
+    pub(crate) fn add_modal_damping(&mut self, zeta: f64) {
         if zeta == 0.0 {
             return;
         }

@@ -493,7 +493,7 @@ impl ModalCache {
     }
 
     /// Directory of the entry for `key`.
-    pub fn entry_dir(&self, key: &CacheKey) -> PathBuf {
+    pub(crate) fn entry_dir(&self, key: &CacheKey) -> PathBuf {
         self.dir.join(key.hex())
     }
 
@@ -717,7 +717,7 @@ impl ModalCache {
 impl CacheMeta {
     /// Metadata from a solver result plus the caller's classification value (the hashes,
     /// key and sizes are filled in by [`ModalCache::store`]).
-    pub fn from_solution(
+    pub(crate) fn from_solution(
         sol: &super::EigenSolution,
         f_min_hz: f64,
         f_max_hz: f64,

@@ -220,7 +220,7 @@ pub struct TrackEnergyShares {
 impl TrackEnergyShares {
     /// The shares of the strain energies `[rail, sleepers, fastening, ballast]` (J); all zero
     /// when their sum is not positive.
-    pub fn from_energies(parts: [f64; 4]) -> Self {
+    pub(crate) fn from_energies(parts: [f64; 4]) -> Self {
         let tot: f64 = parts.iter().sum();
         if tot > 0.0 {
             TrackEnergyShares {
@@ -259,10 +259,10 @@ pub struct SectionMotion {
 /// Number of section sums per node plane ([`TrackClassifier::section_sum_terms`]).
 pub(crate) const SECTION_SUMS: usize = 6;
 
-/// Quadratic measures of a mode's shape that [`TrackClassifier::classify_measured`] reads.
+/// Quadratic measures of a mode's shape that `TrackClassifier::classify_measured` reads.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ShapeNorms {
-    /// The rail's `Σ a l |u|²` ([`TrackClassifier::rail_norm_weights`]; m³ times the
+    /// The rail's `Σ a l |u|²` (`TrackClassifier::rail_norm_weights`; m³ times the
     /// displacement unit squared).
     pub rail: f64,
     /// `Σ m |u|²` over the sleepers' nodes (kg times the displacement unit squared).
@@ -538,7 +538,7 @@ impl TrackClassifier {
     /// forms, as linear functionals of the full displacement vector: `(global DOF, sum,
     /// coefficient)` with the sums `Σ a u_x` over the head, the web and the foot nodes,
     /// `Σ a u_y`, `Σ a u_z` and `Σ a (dy u_z − dz u_y)` (indices 0–5; a in m², dy, dz in m).
-    pub fn section_sum_terms(&self, p: usize) -> Vec<(usize, usize, f64)> {
+    pub(crate) fn section_sum_terms(&self, p: usize) -> Vec<(usize, usize, f64)> {
         let mut t = Vec::with_capacity(5 * self.area.len());
         for (j, &n) in self.plane_nodes[p].iter().enumerate() {
             let a = self.area[j];
@@ -557,7 +557,11 @@ impl TrackClassifier {
     }
 
     /// The motion of node plane `p` from its section sums ([`Self::section_sum_terms`]).
-    pub fn section_motion_from_sums(&self, p: usize, s: &[f64; SECTION_SUMS]) -> SectionMotion {
+    pub(crate) fn section_motion_from_sums(
+        &self,
+        p: usize,
+        s: &[f64; SECTION_SUMS],
+    ) -> SectionMotion {
         let atot: f64 = self.group_area.iter().sum();
         SectionMotion {
             x_m: self.planes_x_m[p],
@@ -574,7 +578,7 @@ impl TrackClassifier {
     /// The weight of every rail DOF in the rail's squared norm that [`Self::classify_shape`]
     /// reads (`Σ a l |u|²`: section node area a, m², times the plane's tributary length l,
     /// m): `(global DOF, weight)`.
-    pub fn rail_norm_weights(&self) -> Vec<(usize, f64)> {
+    pub(crate) fn rail_norm_weights(&self) -> Vec<(usize, f64)> {
         let mut w = Vec::with_capacity(3 * self.plane_nodes.len() * self.area.len());
         for (nodes, &l) in self.plane_nodes.iter().zip(&self.plane_len) {
             for (j, &n) in nodes.iter().enumerate() {
@@ -588,7 +592,7 @@ impl TrackClassifier {
 
     /// Lumped mass of every mesh node (kg) and whether it is a sleeper node: the weights of
     /// the sleepers' kinetic share.
-    pub fn node_masses(&self) -> (&[f64], &[bool]) {
+    pub(crate) fn node_masses(&self) -> (&[f64], &[bool]) {
         (&self.node_mass, &self.is_sleeper)
     }
 
@@ -617,7 +621,7 @@ impl TrackClassifier {
 
     /// [`Self::classify`] of several modes at once (one pass over the elements for the
     /// strain energies of all of them).
-    pub fn classify_many(
+    pub(crate) fn classify_many(
         &self,
         track: &TrackStructure,
         u_free: &[&[f64]],
@@ -635,7 +639,7 @@ impl TrackClassifier {
     /// [`Self::classify_many`] with the strain energies of the rail and the sleeper elements
     /// given per mode (`[rail, sleepers]`, J for the mode's amplitude), e.g. from a
     /// substructured basis's component coordinates; the springs' energies are computed.
-    pub fn classify_many_with_solid_energy(
+    pub(crate) fn classify_many_with_solid_energy(
         &self,
         track: &TrackStructure,
         u_free: &[&[f64]],
@@ -682,7 +686,7 @@ impl TrackClassifier {
     /// section resultants (`Self::rail_fit`), the five resultant series along the rail
     /// (`Self::motion_series`), the family of the largest one, its wavelength and the
     /// pinned–pinned test (`Self::is_pinned_pinned`).
-    pub fn classify_shape(
+    pub(crate) fn classify_shape(
         &self,
         u_full: &[f64],
         energy: TrackEnergyShares,
@@ -701,7 +705,7 @@ impl TrackClassifier {
     /// `Σ a l |u|² − Σ_p l_p (2 X_p − Y_p)` with `X_p = Σ a u·fit` and `Y_p = Σ a |fit|²`,
     /// both quadratic in the plane's section motion. Used for modes given by their
     /// component coordinates, whose section motions and norms are products of small matrices.
-    pub fn classify_measured(
+    pub(crate) fn classify_measured(
         &self,
         sm: &[SectionMotion],
         norms: ShapeNorms,

@@ -213,7 +213,11 @@ impl ShiftedSystem {
 
     /// [`Self::factorize`] with the parallelism `par` (e.g. `Par::Seq` while other
     /// factorisations or solves run on the other threads).
-    pub fn factorize_with(&self, shift: f64, par: Par) -> Result<Option<ShiftFactor>, EigenError> {
+    pub(crate) fn factorize_with(
+        &self,
+        shift: f64,
+        par: Par,
+    ) -> Result<Option<ShiftFactor>, EigenError> {
         let mut a_val = vec![0.0f64; self.row_idx.len()];
         for &(p, q) in &self.k_map {
             a_val[q] += self.k_val[p];
@@ -371,7 +375,7 @@ impl ShiftedSystem {
     /// given at construction): faer's supernodal solve then parallelises inside the supernodes
     /// only and gives bitwise the same result for every `par`, which the column groups do not
     /// (a solver switching its parallelism with the load stays reproducible).
-    pub fn solve_in_place_one_group(
+    pub(crate) fn solve_in_place_one_group(
         &self,
         f: &ShiftFactor,
         rhs: MatMut<'_, f64>,

@@ -50,7 +50,7 @@ impl ExplicitEstimate {
     }
 
     /// Whether it is within `MAX_EXPLICIT_SECONDS`.
-    pub fn within_bound(&self) -> bool {
+    pub(crate) fn within_bound(&self) -> bool {
         self.seconds <= MAX_EXPLICIT_SECONDS
     }
 }

@@ -218,7 +218,7 @@ impl ExplicitOperator {
     }
 
     /// `out = C v` (N).
-    pub fn apply_c(&self, v: &[f64], out: &mut [f64]) {
+    pub(crate) fn apply_c(&self, v: &[f64], out: &mut [f64]) {
         out.iter_mut().for_each(|x| *x = 0.0);
         for (r, &row) in self.c_rows.iter().enumerate() {
             let mut s = 0.0;
@@ -361,7 +361,7 @@ impl ExplicitOperator {
     /// Gershgorin's bound on the largest eigenvalue of `M^{-½} K M^{-½}` (1/s²): the largest
     /// row sum `Σ_j |K_ij| / √(m_i m_j)`. An upper bound: a step `2/√bound` is always stable
     /// without damping.
-    pub fn gershgorin_omega2(&self) -> f64 {
+    pub(crate) fn gershgorin_omega2(&self) -> f64 {
         (0..self.n)
             .map(|i| {
                 let mut s = 0.0;
@@ -376,7 +376,7 @@ impl ExplicitOperator {
 
     /// The Rayleigh quotient of the damping in the scaled vector `z` (of `M^{-½}KM^{-½}`):
     /// `zᵀ M^{-½} C M^{-½} z / zᵀz` (1/s), i.e. `2 ξ ω` of that vector.
-    pub fn scaled_damping_quotient(&self, z: &[f64]) -> f64 {
+    pub(crate) fn scaled_damping_quotient(&self, z: &[f64]) -> f64 {
         let zz: f64 = z.iter().map(|x| x * x).sum();
         if zz == 0.0 {
             return 0.0;

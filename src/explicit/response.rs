@@ -42,7 +42,7 @@ impl Hold {
 
     /// The force (N) the predictor applies in a contact step's first sub-step, with `f` the
     /// force it holds over the step (`F_n`) and `f_prev` the previous step's (`F_{n−1}`).
-    pub fn first_load(self, f: [f64; 3], f_prev: [f64; 3]) -> [f64; 3] {
+    pub(crate) fn first_load(self, f: [f64; 3], f_prev: [f64; 3]) -> [f64; 3] {
         let [a, b] = self.boundary_split(f, f_prev);
         [0, 1, 2].map(|d| a[d] + b[d])
     }
@@ -54,7 +54,7 @@ impl Hold {
     /// the new position, the previous step's half would act at the new position, and the
     /// rail's nodal work would differ from the contact force's work on the contact points
     /// (docs/theory.md §8.8).
-    pub fn boundary_split(self, f: [f64; 3], f_prev: [f64; 3]) -> [[f64; 3]; 2] {
+    pub(crate) fn boundary_split(self, f: [f64; 3], f_prev: [f64; 3]) -> [[f64; 3]; 2] {
         match self {
             Hold::Mean => [
                 [0, 1, 2].map(|d| 0.25 * (f_prev[d] + f[d])),

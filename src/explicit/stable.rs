@@ -40,7 +40,7 @@ pub struct StableStep {
 
 impl StableStep {
     /// Estimates the stable step of `op` (no safety factor applied: see
-    /// [`Self::with_safety`]).
+    /// `Self::with_safety`).
     pub fn estimate(op: &ExplicitOperator) -> Result<Self, ExplicitError> {
         Ok(Self::with_ritz_vector(op)?.0)
     }
@@ -67,7 +67,7 @@ impl StableStep {
     }
 
     /// The step to use (s): `safety × critical_s`, `safety` in (0, 1].
-    pub fn with_safety(&self, safety: f64) -> f64 {
+    pub(crate) fn with_safety(&self, safety: f64) -> f64 {
         safety * self.critical_s
     }
 }

@@ -28,7 +28,7 @@ impl IsotropicElastic {
     }
 
     /// Lamé's first parameter λ = E ν / ((1 + ν)(1 − 2ν)) (Pa).
-    pub fn lame_lambda(&self) -> f64 {
+    pub(crate) fn lame_lambda(&self) -> f64 {
         let (e, nu) = (self.youngs_modulus, self.poisson_ratio);
         e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
     }

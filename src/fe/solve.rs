@@ -108,7 +108,7 @@ impl Cholesky {
     }
 
     /// Number of free DOFs.
-    pub fn dim(&self) -> usize {
+    pub(crate) fn dim(&self) -> usize {
         self.n
     }
 

@@ -193,13 +193,13 @@ pub(crate) fn hex8_volume(x: &[[f64; 3]; 8]) -> f64 {
 
 impl Mesh {
     /// Corner coordinates (m) of element `e`.
-    pub fn element_coords(&self, e: usize) -> [[f64; 3]; 8] {
+    pub(crate) fn element_coords(&self, e: usize) -> [[f64; 3]; 8] {
         self.elements[e].nodes.map(|n| self.nodes[n])
     }
 
     /// Smallest Jacobian determinant over the 8 corners of element `e` (positive for a valid
     /// element).
-    pub fn min_corner_jacobian(&self, e: usize) -> f64 {
+    pub(crate) fn min_corner_jacobian(&self, e: usize) -> f64 {
         let x = self.element_coords(e);
         HEX8_NATURAL
             .iter()

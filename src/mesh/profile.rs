@@ -46,7 +46,7 @@ pub struct SectionProperties {
 
 impl SectionProperties {
     /// Properties from the raw integrals A, ∫y, ∫z, ∫y², ∫z², ∫yz (SI units) about the origin.
-    pub fn from_integrals(a: f64, sy: f64, sz: f64, syy: f64, szz: f64, syz: f64) -> Self {
+    pub(crate) fn from_integrals(a: f64, sy: f64, sz: f64, syy: f64, szz: f64, syz: f64) -> Self {
         let yc = sy / a;
         let zc = sz / a;
         SectionProperties {
@@ -106,7 +106,7 @@ impl RailProfile {
 
     /// Reads a half profile in the CSV format of `data/uic54-half-profile.csv`: lines
     /// `lateral_mm,up_mm`, `#` comments, from the foot centre to the head centre.
-    pub fn from_half_csv(text: &str) -> Result<Self, MeshError> {
+    pub(crate) fn from_half_csv(text: &str) -> Result<Self, MeshError> {
         let mut half = Vec::new();
         for (k, line) in text.lines().enumerate() {
             let line = line.trim();
@@ -184,7 +184,7 @@ impl RailProfile {
     }
 
     /// Head width (m): twice the largest lateral coordinate in the upper half.
-    pub fn head_width_m(&self) -> f64 {
+    pub(crate) fn head_width_m(&self) -> f64 {
         let h = self.height_m();
         2.0 * self
             .half
@@ -208,7 +208,7 @@ impl RailProfile {
     /// Index in [`Self::half`] of the start of the head top (running surface): the last vertex
     /// of the head side, i.e. the last point where the head is at (nearly, within 0.5 %) its
     /// full half width.
-    pub fn head_top_start(&self) -> usize {
+    pub(crate) fn head_top_start(&self) -> usize {
         let half_w = 0.5 * self.head_width_m();
         let mut idx = 0;
         for (i, p) in self.half.iter().enumerate() {
@@ -221,7 +221,7 @@ impl RailProfile {
 
     /// The head top (running surface) of the half profile, from the end of the head side to
     /// the head centre (m).
-    pub fn head_top(&self) -> &[[f64; 2]] {
+    pub(crate) fn head_top(&self) -> &[[f64; 2]] {
         &self.half[self.head_top_start()..]
     }
 

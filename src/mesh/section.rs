@@ -395,7 +395,7 @@ impl SectionMesh {
     }
 
     /// Checks every quad is strictly convex and counter-clockwise.
-    pub fn check_quads(&self) -> Result<(), MeshError> {
+    pub(crate) fn check_quads(&self) -> Result<(), MeshError> {
         for (q, quad) in self.quads.iter().enumerate() {
             let p = quad.map(|n| self.nodes[n]);
             for k in 0..4 {

@@ -108,7 +108,7 @@ pub struct ElasticHolds {
 
 impl ElasticHolds {
     /// The damping per fastening (N·s/m).
-    pub fn damping_n_s_per_m(&self) -> f64 {
+    pub(crate) fn damping_n_s_per_m(&self) -> f64 {
         self.damping.unwrap_or(0.0)
     }
 
@@ -158,7 +158,7 @@ pub enum RigidRegion {
 
 impl RigidRegion {
     /// Whether the region can be held on node lines (`node_lines = true`): columns and rows.
-    pub fn has_node_lines(self) -> bool {
+    pub(crate) fn has_node_lines(self) -> bool {
         matches!(self, RigidRegion::Columns | RigidRegion::Rows)
     }
 }

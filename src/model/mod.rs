@@ -332,7 +332,7 @@ pub enum RailEnds {
 
 impl RailEnds {
     /// Whether the ends are free (the default, left out when a model is written).
-    pub fn is_free(&self) -> bool {
+    pub(crate) fn is_free(&self) -> bool {
         *self == RailEnds::Free
     }
 
@@ -496,7 +496,7 @@ pub enum WebShape {
 
 impl WebShape {
     /// Whether the web is straight (the default, left out when a model is written).
-    pub fn is_straight(&self) -> bool {
+    pub(crate) fn is_straight(&self) -> bool {
         *self == WebShape::Straight
     }
 }
@@ -640,7 +640,7 @@ pub enum ContactInfluence {
 
 impl ContactInfluence {
     /// Whether it is the half-space (the default, left out when a model is written).
-    pub fn is_half_space(&self) -> bool {
+    pub(crate) fn is_half_space(&self) -> bool {
         *self == ContactInfluence::HalfSpace
     }
 }
@@ -706,7 +706,7 @@ pub enum NodePlanes {
 
 impl NodePlanes {
     /// Whether the planes are graded (the default, left out when a model is written).
-    pub fn is_graded(&self) -> bool {
+    pub(crate) fn is_graded(&self) -> bool {
         *self == NodePlanes::Graded
     }
 }

@@ -253,7 +253,7 @@ impl RailProfile {
     /// Peak-to-trough height (m) of the profile on the stretch `[a, b]` (m) of the rail: of
     /// its samples inside it and its interpolated heights at `a` and `b` when they lie within
     /// the samples. On a stretch that holds every sample it is [`Self::peak_to_trough_m`].
-    pub fn peak_to_trough_within_m(&self, [a, b]: [f64; 2]) -> f64 {
+    pub(crate) fn peak_to_trough_within_m(&self, [a, b]: [f64; 2]) -> f64 {
         let n = self.x_m.len();
         if n == 0 {
             return 0.0;

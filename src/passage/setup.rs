@@ -769,7 +769,7 @@ pub fn passage_contact(
 /// The grid of [`passage_contact`] from the model's contact configuration `cfg`
 /// ([`contact_config_for`]): lengthened for the peak-to-trough height of the part of the
 /// profile on the rail the contact passes over
-/// ([`RailProfile::peak_to_trough_within_m`]; heights it never meets change nothing), then
+/// (`RailProfile::peak_to_trough_within_m`; heights it never meets change nothing), then
 /// widened.
 pub fn passage_grid(
     cfg: &TransientConfig,

@@ -127,7 +127,7 @@ impl Document {
     }
 
     /// The document as Markdown.
-    pub fn to_markdown(&self) -> String {
+    pub(crate) fn to_markdown(&self) -> String {
         let mut out = format!("# {}\n", self.title);
         for b in &self.blocks {
             out.push('\n');
@@ -174,7 +174,7 @@ impl Document {
     }
 
     /// The document as self-contained HTML (inline CSS; images by relative path).
-    pub fn to_html(&self) -> String {
+    pub(crate) fn to_html(&self) -> String {
         let mut out =
             String::from("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
         out.push_str(&format!("<title>{}</title>\n", escape(&self.title)));

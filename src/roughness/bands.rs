@@ -75,12 +75,12 @@ impl Band {
     }
 
     /// Longer edge (m): `centre · 10^(1/20)`.
-    pub fn longest_m(&self) -> f64 {
+    pub(crate) fn longest_m(&self) -> f64 {
         self.centre_m() * 10f64.powf(0.05)
     }
 
     /// Shorter edge (m): `centre · 10^(−1/20)`.
-    pub fn shortest_m(&self) -> f64 {
+    pub(crate) fn shortest_m(&self) -> f64 {
         self.centre_m() * 10f64.powf(-0.05)
     }
 

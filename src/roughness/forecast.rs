@@ -75,7 +75,7 @@ impl Forecast {
 
     /// Passages until the fastest-growing band reaches its ISO 3095 limit, when it has one, is
     /// below it and grows; 0 when it is already above.
-    pub fn passages_to_limit(&self) -> Option<f64> {
+    pub(crate) fn passages_to_limit(&self) -> Option<f64> {
         let b = self.fastest()?;
         let (limit, rate) = (b.limit_db?, b.db_per_passage?);
         Some(((limit - b.level_db) / rate).max(0.0))

@@ -173,7 +173,7 @@ impl MeasuredProfile {
     }
 
     /// Median sample spacing (m).
-    pub fn median_spacing_m(&self) -> f64 {
+    pub(crate) fn median_spacing_m(&self) -> f64 {
         let mut d: Vec<f64> = self.x_m.windows(2).map(|w| w[1] - w[0]).collect();
         d.sort_by(f64::total_cmp);
         d[d.len() / 2]
@@ -181,7 +181,7 @@ impl MeasuredProfile {
 
     /// The continuous parts of the record, each resampled to the median spacing `dx`:
     /// `(x of the first sample (m), heights (m))`.
-    pub fn continuous_parts(&self, opts: &SpectrumOptions) -> Vec<(f64, Vec<f64>)> {
+    pub(crate) fn continuous_parts(&self, opts: &SpectrumOptions) -> Vec<(f64, Vec<f64>)> {
         let dx = self.median_spacing_m();
         let n = self.x_m.len();
         let mut ranges = Vec::new();

@@ -191,7 +191,7 @@ impl Psd {
 
     /// Amplitude (signal unit) of a pure sine whose Hann-windowed PSD peak is `psd`:
     /// `|X| = A Σw / 2`, so `A = √(2 P Σw² / dx) / Σw`.
-    pub fn sine_amplitude(&self, psd: f64) -> f64 {
+    pub(crate) fn sine_amplitude(&self, psd: f64) -> f64 {
         (2.0 * psd.max(0.0) * self.window_sq_sum / self.dx_m).sqrt() / self.window_sum
     }
 

@@ -98,7 +98,7 @@ impl Signal {
     }
 
     /// Check that `other` is on the same grid (same length, `x0` and `dx` equal to 1e-9 dx).
-    pub fn check_same_grid(&self, other: &Signal) -> Result<(), SpectralError> {
+    pub(crate) fn check_same_grid(&self, other: &Signal) -> Result<(), SpectralError> {
         if self.values.len() != other.values.len() {
             return Err(SpectralError::GridMismatch {
                 reason: "different lengths",

@@ -519,7 +519,7 @@ impl StripKernel {
     /// `global` (m/N, components x, y, inward normal): every coefficient less `global · a²`,
     /// the global twin's displacement under the force `a²` of a unit traction on one element
     /// (theory §6.9, the split). `global` is the same patch's global twin's compliance
-    /// (`rail_head::RailHeadPatch::global_compliance`, [`tread::TreadPatch::global_compliance`]).
+    /// (`rail_head::RailHeadPatch::global_compliance`, `tread::TreadPatch::global_compliance`).
     pub fn split(&self, global: &[[f64; 3]; 3]) -> StripKernel {
         let area = self.element_m * self.element_y_m;
         let mut out = self.clone();

@@ -82,14 +82,14 @@ impl Layout {
     }
 
     /// x-range `[a, b]` of column cell `c` on the sleeper at `xs` (m).
-    pub fn column_cell(&self, xs: f64, c: usize) -> [f64; 2] {
+    pub(crate) fn column_cell(&self, xs: f64, c: usize) -> [f64; 2] {
         let pitch = self.footprint_length / self.columns as f64;
         let a = xs - 0.5 * self.footprint_length + c as f64 * pitch;
         [a, a + pitch]
     }
 
     /// y-range `[a, b]` of row cell `r` (m).
-    pub fn row_cell(&self, r: usize) -> [f64; 2] {
+    pub(crate) fn row_cell(&self, r: usize) -> [f64; 2] {
         let pitch = self.footprint_width / self.rows as f64;
         let a = -0.5 * self.footprint_width + r as f64 * pitch;
         [a, a + pitch]
@@ -97,7 +97,7 @@ impl Layout {
 
     /// Node x of grid column `c` (the railpad grid point) on the sleeper at `xs` (m): the
     /// column centre.
-    pub fn grid_point_x(&self, xs: f64, c: usize) -> f64 {
+    pub(crate) fn grid_point_x(&self, xs: f64, c: usize) -> f64 {
         self.column_centre(xs, c)
     }
 
@@ -106,7 +106,7 @@ impl Layout {
     /// held on node lines), the footprint ends where rows are held and the column centres
     /// where grid points are held, sorted and deduplicated. Spring cells need no node planes: their tributary weights are clipped to
     /// the cell exactly.
-    pub fn x_breakpoints(&self, hold: &HoldPattern) -> Vec<f64> {
+    pub(crate) fn x_breakpoints(&self, hold: &HoldPattern) -> Vec<f64> {
         let mut v = vec![0.0, self.length];
         for h in [&hold.x, &hold.y, &hold.z] {
             if h.region() != RigidRegion::Columns {
@@ -149,7 +149,7 @@ impl Layout {
     /// y-coordinates (rail-section frame, upright) that must be node lines on the foot
     /// underside: the strip edges of every held row of `hold` (rigid or elastic; its centre
     /// when held on node lines) and the row centres where grid points are held.
-    pub fn y_foot_lines(&self, hold: &HoldPattern) -> Vec<f64> {
+    pub(crate) fn y_foot_lines(&self, hold: &HoldPattern) -> Vec<f64> {
         let mut v = Vec::new();
         for h in [&hold.x, &hold.y, &hold.z] {
             match h.region() {

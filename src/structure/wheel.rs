@@ -127,7 +127,10 @@ impl WheelStructure {
     /// [`Self::params_of`]`(m)` (the model gives the material, the loads and the primary
     /// suspension). For meshes the model's keys do not reach, such as the tiny wheels of
     /// [`crate::structure::test_problems::all_modes_structures`].
-    pub fn with_params(m: &Model, params: WheelParams) -> Result<WheelStructure, StructureError> {
+    pub(crate) fn with_params(
+        m: &Model,
+        params: WheelParams,
+    ) -> Result<WheelStructure, StructureError> {
         let (mut mesh, topology) = wheel(&params, 0).map_err(|e| match e {
             crate::mesh::MeshError::TooLarge {
                 nodes,

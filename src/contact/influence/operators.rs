@@ -47,11 +47,11 @@ pub trait TangentialInfluence {
     /// `u[i] = (C τ)(i + shift)` on the grid's rows (`shift` 0 or 1; [`Convolver::tangential`]).
     fn tangential(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64], shift: usize);
     /// `C τ` on the extended rows `0..=nx` (`ux, uy` of length `(nx + 1) · ny`;
-    /// [`Convolver::tangential_ext`]).
+    /// `Convolver::tangential_ext`).
     fn tangential_ext(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64]);
     /// `C τ` for a traction zero outside the box of rows `r0..r1`, columns `c0..c1`, on that
     /// box only: rows `r0..r1` outside the columns get 0, the other rows are left as they are
-    /// ([`Convolver::tangential_box`]; it may be computed in single precision).
+    /// (`Convolver::tangential_box`; it may be computed in single precision).
     fn tangential_box(
         &mut self,
         tx: &[f64],
@@ -119,7 +119,7 @@ pub enum Influence {
 
 impl Influence {
     /// The operators.
-    pub fn ops(&self) -> &dyn Operators {
+    pub(crate) fn ops(&self) -> &dyn Operators {
         match self {
             Influence::HalfSpace(c) => c,
             Influence::Strip(c) => c,

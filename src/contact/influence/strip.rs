@@ -78,7 +78,7 @@ pub struct StripConvolver {
     single: Spectra<f32>,
 }
 
-/// The precision of a strip product's dense part ([`StripConvolver::product_cols_in`]).
+/// The precision of a strip product's dense part (`StripConvolver::product_cols_in`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Precision {
     /// Everything in `f64`.
@@ -337,7 +337,13 @@ impl StripConvolver {
     /// holds `rows · ny` values): [`Self::product`] with the number of rows free, so that
     /// the extended rows `0..=nx` of transient rolling come from one product. Source columns
     /// without traction (outside the contact) are skipped.
-    pub fn product_rows(&mut self, f: &[&[f64]], u: &mut [&mut [f64]], shift: usize, rows: usize) {
+    pub(crate) fn product_rows(
+        &mut self,
+        f: &[&[f64]],
+        u: &mut [&mut [f64]],
+        shift: usize,
+        rows: usize,
+    ) {
         let (nx, ny) = (self.nx, self.ny);
         let nonzero = |j: usize| f.iter().any(|fb| (0..nx).any(|i| fb[i * ny + j] != 0.0));
         let src = match (0..ny).find(|&j| nonzero(j)) {
@@ -350,7 +356,7 @@ impl StripConvolver {
     /// `u = K f` for a traction zero outside the source columns `src = (c0, c1)`, on the field
     /// columns `field = (d0, d1)` of the field rows `shift..shift + rows` (`shift + rows ≤
     /// nx + 1`; `u[a]` holds `rows · ny` values; its other columns are left as they are).
-    pub fn product_cols(
+    pub(crate) fn product_cols(
         &mut self,
         f: &[&[f64]],
         u: &mut [&mut [f64]],
@@ -368,7 +374,7 @@ impl StripConvolver {
     /// conditioning of the sums; for the products of an iterative solver's inner loop, as the
     /// half-space's box products ([`super::Convolver::tangential_box`]). Compiled for each
     /// instruction set pulp dispatches to; every one gives the same bits.
-    pub fn product_cols_in(
+    pub(crate) fn product_cols_in(
         &mut self,
         precision: Precision,
         f: &[&[f64]],

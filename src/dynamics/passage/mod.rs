@@ -360,7 +360,7 @@ impl PassageEngine {
     /// length-weighted mean of its structural part along the travel
     /// ([`ResidualFlexibility::mean_structural_weighted`], x, t, n) is the contact's series
     /// compliance. It must cover [`Self::travel_m`] and belong to this engine's track modes.
-    pub fn set_residual_flexibility(
+    pub(crate) fn set_residual_flexibility(
         &mut self,
         r: Option<ResidualFlexibility>,
     ) -> Result<(), DynamicsError> {
@@ -385,7 +385,10 @@ impl PassageEngine {
     /// Sets (or clears) the wheel's residual flexibility at the contact: when set, its
     /// structural part ([`WheelResidual::structural_m_per_n`]) adds to the contact's series
     /// compliance. It must belong to this engine's wheel modes.
-    pub fn set_wheel_residual(&mut self, r: Option<WheelResidual>) -> Result<(), DynamicsError> {
+    pub(crate) fn set_wheel_residual(
+        &mut self,
+        r: Option<WheelResidual>,
+    ) -> Result<(), DynamicsError> {
         if let Some(r) = &r {
             if r.modes != self.wheel_sys.len() {
                 return Err(DynamicsError::SizeMismatch {

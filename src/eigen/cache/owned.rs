@@ -230,7 +230,7 @@ impl CacheSurvey {
     /// Whether the directory may be taken for a modal cache: it does not exist yet, carries
     /// the tag, or holds nothing but entries and leftovers (an empty directory, or a cache
     /// written before tags).
-    pub fn looks_like_cache(&self) -> bool {
+    pub(crate) fn looks_like_cache(&self) -> bool {
         !self.exists || self.tagged || self.others.is_empty()
     }
 }
@@ -288,7 +288,7 @@ impl ModalCache {
     }
 
     /// The survey of the cache directory if it may be taken for a modal cache
-    /// ([`CacheSurvey::looks_like_cache`]), else [`CacheError::NotACache`]: an existing,
+    /// (`CacheSurvey::looks_like_cache`), else [`CacheError::NotACache`]: an existing,
     /// untagged directory holding other things than entries and leftovers is likely a
     /// mistyped cache directory.
     pub fn check_is_cache(&self) -> Result<CacheSurvey, CacheError> {

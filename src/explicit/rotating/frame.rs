@@ -88,7 +88,7 @@ impl SpinFrame {
 
     /// `½ Ω² uᵀ S u` (J), the centrifugal potential's share of the stored energy with a minus
     /// sign (`S = M_⊥ − M a aᵀ M`, `a` the axial rotation).
-    pub fn softening_energy(&self, u: &[f64]) -> f64 {
+    pub(crate) fn softening_energy(&self, u: &[f64]) -> f64 {
         let perp: f64 = self
             .pairs
             .iter()

@@ -220,7 +220,10 @@ impl RailHeadPatch {
     /// the lateral weights of a Hertz pressure of semi-width `half_width_m` (m, above 0, below
     /// 35 mm), along the rail halfway between two node planes (theory §6.9, §7.7).
     /// [`StripKernel::split`] takes it off the refined kernel.
-    pub fn global_compliance(&self, half_width_m: f64) -> Result<[[f64; 3]; 3], StructureError> {
+    pub(crate) fn global_compliance(
+        &self,
+        half_width_m: f64,
+    ) -> Result<[[f64; 3]; 3], StructureError> {
         self.check()?;
         if !(half_width_m > 0.0 && half_width_m < 0.035) {
             return out_of_range("half_width_m", half_width_m, "above 0, below 35 mm");

@@ -371,7 +371,10 @@ impl TreadPatch {
     /// ([`Self::global`]) and loaded and read as its passage does — on the contact ring's
     /// tread nodes (`x = 0`) with the lateral weights of a Hertz pressure of semi-width
     /// `half_width_m` (m, above 0, below 35 mm) (theory §6.9, §7.7).
-    pub fn global_compliance(&self, half_width_m: f64) -> Result<[[f64; 3]; 3], StructureError> {
+    pub(crate) fn global_compliance(
+        &self,
+        half_width_m: f64,
+    ) -> Result<[[f64; 3]; 3], StructureError> {
         if !(half_width_m > 0.0 && half_width_m < 0.035) {
             return out_of_range("half_width_m", half_width_m, "above 0, below 35 mm");
         }

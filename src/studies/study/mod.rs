@@ -80,7 +80,7 @@ pub struct StudyCriterion {
 
 impl StudyCriterion {
     /// The criterion applied to the case with model `m`.
-    pub fn for_model(&self, m: &crate::model::Model) -> InitiationCriterion {
+    pub(crate) fn for_model(&self, m: &crate::model::Model) -> InitiationCriterion {
         let base = InitiationCriterion::from_model(m);
         InitiationCriterion {
             min_relative_wear: self.min_relative_wear.unwrap_or(base.min_relative_wear),

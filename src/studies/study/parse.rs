@@ -435,7 +435,7 @@ impl Study {
 
     /// The overrides of a case as text, recorded in its case file: the study's `set` as the
     /// file gives it, then the case's own.
-    pub fn case_overrides(&self, case: &Case) -> Vec<String> {
+    pub(crate) fn case_overrides(&self, case: &Case) -> Vec<String> {
         let mut o: Vec<String> = self.set.iter().map(|(_, t)| t.clone()).collect();
         o.extend(case.overrides());
         o
@@ -443,7 +443,7 @@ impl Study {
 
     /// The assignments of a case with their text for messages: the study's `set` (as the file
     /// writes it), then the case's own parameters' values (`key=value`).
-    pub fn case_assignments(&self, case: &Case) -> Vec<(Assignment, String)> {
+    pub(crate) fn case_assignments(&self, case: &Case) -> Vec<(Assignment, String)> {
         let mut a = self.set.clone();
         a.extend(case.assignments.iter().map(|(key, value)| {
             let a = Assignment {

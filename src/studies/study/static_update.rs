@@ -105,7 +105,7 @@ impl StaticUpdater {
 
     /// The static flexibility source of a case's track (same solids and spring layout as
     /// the reference, any spring stiffnesses).
-    pub fn for_track<'a>(&'a self, track: &TrackStructure) -> CaseStatic<'a> {
+    pub(crate) fn for_track<'a>(&'a self, track: &TrackStructure) -> CaseStatic<'a> {
         CaseStatic {
             updater: self,
             stiffness: track.springs.iter().map(|s| s.stiffness).collect(),

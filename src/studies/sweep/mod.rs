@@ -161,7 +161,7 @@ impl MapOptions {
     /// same coupled modes to within 1e-9 relative (a dense eigensolver run on another
     /// machine or thread count may differ in the last bits); the merge uses the first
     /// shard's.
-    pub fn same_as(&self, other: &Self) -> bool {
+    pub(crate) fn same_as(&self, other: &Self) -> bool {
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
         let strip = |o: &Self| Self {
             coupled_modes: Vec::new(),
@@ -181,7 +181,7 @@ impl MapOptions {
     }
 
     /// The wavelength grid (mm), ascending.
-    pub fn wavelength_grid_mm(&self) -> Vec<f64> {
+    pub(crate) fn wavelength_grid_mm(&self) -> Vec<f64> {
         linspace(
             self.wavelength_min_mm,
             self.wavelength_max_mm,
