@@ -341,11 +341,11 @@ impl SectionMesh {
         let o = Outline::new(profile)?;
         let h = params.size_m;
         let lines = foot_lines(params, o.foot_half_w)?;
-        // y_c: web half thickness, snapped to a required line within h/2.
+        // y_c: web half thickness, snapped to a required line within h/4.
         let mut yc = o.pf[0];
         if let Some(&y) = lines
             .iter()
-            .filter(|&&y| y > 0.0 && (y - o.pf[0]).abs() <= 0.5 * h)
+            .filter(|&&y| y > 0.0 && (y - o.pf[0]).abs() <= 0.25 * h)
             .min_by(|a, b| (*a - o.pf[0]).abs().total_cmp(&(*b - o.pf[0]).abs()))
         {
             yc = y;
