@@ -121,11 +121,26 @@ pub fn cache_key(
     substructure: Substructure,
 ) -> Result<CacheKey, BasisError> {
     let bytes = model_identity(m, substructure.scope())?;
-    Ok(CacheKey::new()
+    let key = CacheKey::new()
         .u64("physics_revision", PHYSICS_REVISION)
         .bytes("model", &bytes)
         .f64("f_max_hz", fmax_hz)
-        .str("substructure", substructure.name()))
+        .str("substructure", substructure.name());
+    Ok(match substructure {
+        Substructure::Track => web_snap_keyed(key, m)?,
+        Substructure::Wheel => key,
+    })
+}
+
+/// `key` with the rail section's mesh revision added where the section mesher's web snap
+/// changed the mesh ([`crate::structure::track::web_snap_changed`]), unchanged elsewhere: the
+/// keys of every other model stay as they were, and no basis of a former mesh is read.
+pub(crate) fn web_snap_keyed(key: CacheKey, m: &Model) -> Result<CacheKey, BasisError> {
+    Ok(if crate::structure::track::web_snap_changed(m)? {
+        key.u64("section_web_snap_revision", 2)
+    } else {
+        key
+    })
 }
 
 fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {
@@ -309,7 +324,37 @@ pub fn wheel_basis_keyed(
 
 #[cfg(test)]
 mod key_tests {
-    use super::{cache_key, Model, Substructure};
+    use super::{cache_key, web_snap_keyed, Model, Substructure};
+    use crate::eigen::cache::CacheKey;
+
+    #[test]
+    fn only_models_whose_section_mesh_the_web_snap_changed_get_a_new_track_key() {
+        // The reference-described holds (y rows on node lines at ±17.5 mm, 9.5 mm from the web
+        // face, 20 mm elements) were snapped under the half-element rule and are not now; the
+        // Dutch presets' strip edges (±7.5 mm: snapped under both rules; ±27.5 mm: under
+        // neither) and the default model keep their keys.
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+        let file = |name: &str| {
+            load_model(&ModelSource::File(root.join(name)), &[]).expect("a model file")
+        };
+        let changed = |m: &Model| crate::structure::track::web_snap_changed(m).unwrap();
+        for name in [
+            "reference-described-rpm1.toml",
+            "reference-described-rpm3.toml",
+        ] {
+            assert!(changed(&file(name)), "{name}");
+        }
+        for name in ["dutch-rpm1.toml", "dutch-rpm3.toml", "dutch-rpm5.toml"] {
+            assert!(!changed(&file(name)), "{name}");
+        }
+        assert!(!changed(&load_model(&ModelSource::Builtin, &[]).unwrap()));
+        let m = file("reference-described-rpm3.toml");
+        let plain = CacheKey::new().str("substructure", "track");
+        assert_ne!(
+            web_snap_keyed(plain.clone(), &m).unwrap().hex(),
+            plain.hex()
+        );
+    }
     use crate::model::{load_model, ModelSource};
     use crate::structure::track::TrackStructure;
 

@@ -13,7 +13,9 @@
 //!
 //! M and N are the points of the R16 / R22 fillets 45° from the web, so every block corner
 //! has a reasonable angle. y_c is the web half thickness, snapped to a required foot node line
-//! within half an element of it. The foot arm and foot centre bottoms are graded 1D
+//! within a quarter of an element of it (a line farther off is a node line of the foot arm: a
+//! snap over up to half an element left elements of about a millimetre beside the web, which set
+//! the explicit path's stable step). The foot arm and foot centre bottoms are graded 1D
 //! distributions ([`crate::mesh::grading`]) holding the required foot node lines; the foot
 //! centre's count fixes the web's lateral count. The cap is meshed in vertical columns under
 //! the running-surface nodes (graded along the head top: fine near the centre) with layers
@@ -322,6 +324,37 @@ fn vertex(half: &[[f64; 2]], y_mm: f64, z_mm: f64) -> Result<usize, MeshError> {
 /// 45° from the web.
 const FILLET_SPLIT_FROM_WEB: f64 = 45.0 / 70.0;
 
+/// The share of a section element within which the web's boundary in the foot snaps to a
+/// required foot node line (module doc).
+const WEB_SNAP_SHARE: f64 = 0.25;
+
+/// [`WEB_SNAP_SHARE`] before 2026-11-30: a half. Kept to tell which models' meshes the change
+/// moved ([`uic54_web_snap_changed`]).
+const WEB_SNAP_SHARE_BEFORE: f64 = 0.5;
+
+/// The web's boundary in the foot `y_c` (m): the web half thickness `web_half`, or the required
+/// foot node line (of `lines`, m, `y ≥ 0`) nearest to it within `reach` (m).
+fn web_boundary(lines: &[f64], web_half: f64, reach: f64) -> f64 {
+    lines
+        .iter()
+        .copied()
+        .filter(|&y| y > 0.0 && (y - web_half).abs() <= reach)
+        .min_by(|a, b| (a - web_half).abs().total_cmp(&(b - web_half).abs()))
+        .unwrap_or(web_half)
+}
+
+/// Whether the UIC54 section mesh of `params` differs from the one the snap within half an
+/// element gave ([`WEB_SNAP_SHARE_BEFORE`]): a foot node line between a quarter and a half
+/// element from the web face. The modal cache keys such models apart, so that no basis of the
+/// former mesh is read for them.
+pub(crate) fn uic54_web_snap_changed(params: &SectionParams) -> Result<bool, MeshError> {
+    let o = Outline::new(&RailProfile::uic54()?)?;
+    let lines = foot_lines(params, o.foot_half_w)?;
+    let (web, h) = (o.pf[0], params.size_m);
+    Ok(web_boundary(&lines, web, WEB_SNAP_SHARE * h)
+        != web_boundary(&lines, web, WEB_SNAP_SHARE_BEFORE * h))
+}
+
 impl SectionMesh {
     /// Meshes the embedded UIC54 profile.
     pub fn uic54(params: &SectionParams) -> Result<Self, MeshError> {
@@ -341,15 +374,7 @@ impl SectionMesh {
         let o = Outline::new(profile)?;
         let h = params.size_m;
         let lines = foot_lines(params, o.foot_half_w)?;
-        // y_c: web half thickness, snapped to a required line within h/4.
-        let mut yc = o.pf[0];
-        if let Some(&y) = lines
-            .iter()
-            .filter(|&&y| y > 0.0 && (y - o.pf[0]).abs() <= 0.25 * h)
-            .min_by(|a, b| (*a - o.pf[0]).abs().total_cmp(&(*b - o.pf[0]).abs()))
-        {
-            yc = y;
-        }
+        let yc = web_boundary(&lines, o.pf[0], WEB_SNAP_SHARE * h);
         let mut blocks = Blocks {
             o: &o,
             params,

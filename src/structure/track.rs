@@ -174,13 +174,9 @@ impl TrackStructure {
     }
 }
 
-/// The inclined rail section (foot node lines at the fastenings' holds, within the
-/// footprint and the rail foot) and the properties of the upright one.
-fn rail_section(
-    m: &Model,
-    layout: &Layout,
-    hold: &HoldPattern,
-) -> Result<(SectionMesh, SectionProperties), StructureError> {
+/// The upright rail section's mesh parameters: the model's sizes, and foot node lines at the
+/// fastenings' holds within the footprint and the rail foot.
+fn section_params(m: &Model, layout: &Layout, hold: &HoldPattern) -> SectionParams {
     let foot_lines: Vec<f64> = layout
         .y_foot_lines(hold)
         .into_iter()
@@ -193,13 +189,31 @@ fn rail_section(
                     - 1e-6
         })
         .collect();
-    let mut params = SectionParams {
+    SectionParams {
         size_m: m.mesh.section_size,
         running_surface_size_m: m.mesh.head_size,
         foot_node_lines_m: foot_lines,
         inclination_rad: 0.0,
         ..SectionParams::default()
-    };
+    }
+}
+
+/// Whether the model's rail section mesh is one the section mesher's snap rule changed on
+/// 2026-11-30 ([`crate::mesh::section::uic54_web_snap_changed`]): the modal cache keys such a
+/// track apart from its former mesh.
+pub(crate) fn web_snap_changed(m: &Model) -> Result<bool, StructureError> {
+    let params = section_params(m, &Layout::new(m), &m.fastening.hold_pattern());
+    Ok(crate::mesh::section::uic54_web_snap_changed(&params)?)
+}
+
+/// The inclined rail section (foot node lines at the fastenings' holds, within the
+/// footprint and the rail foot) and the properties of the upright one.
+fn rail_section(
+    m: &Model,
+    layout: &Layout,
+    hold: &HoldPattern,
+) -> Result<(SectionMesh, SectionProperties), StructureError> {
+    let mut params = section_params(m, layout, hold);
     let upright = SectionMesh::uic54(&params)?;
     let section_properties = upright.properties();
     params.inclination_rad = m.rail.inclination.atan();

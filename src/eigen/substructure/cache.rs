@@ -33,7 +33,7 @@ pub fn component_key(
         .filter(|&d| k[d] != 0.0 || c[d] != 0.0)
         .map(|d| 1u64 << d)
         .sum();
-    Ok(CacheKey::new()
+    let key = CacheKey::new()
         .u64("physics_revision", crate::eigen::basis::PHYSICS_REVISION)
         .u64("component_revision", COMPONENT_REVISION)
         .bytes("model", &bytes)
@@ -43,7 +43,8 @@ pub fn component_key(
         .f64("sleeper_cutoff_factor", opts.sleeper_cutoff_factor)
         .u64("pattern_degree", opts.pattern_degree as u64)
         .u64("ballast_pattern_degree", opts.ballast_pattern_degree as u64)
-        .str("substructure", part))
+        .str("substructure", part);
+    crate::eigen::basis::web_snap_keyed(key, m)
 }
 
 pub(super) fn store_component(cache: &ModalCache, key: &CacheKey, c: &ComponentBasis, fmax: f64) {

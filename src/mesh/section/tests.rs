@@ -353,3 +353,54 @@ fn bad_params_are_errors() {
         ..Default::default()
     }));
 }
+
+/// The shortest element edge (m) among the quads whose nodes all lie below `z_max` (m).
+fn shortest_edge_below(m: &SectionMesh, z_max: f64) -> f64 {
+    m.quads
+        .iter()
+        .filter(|q| q.iter().all(|&n| m.nodes[n][1] < z_max))
+        .flat_map(|q| (0..4).map(|k| dist(m.nodes[q[k]], m.nodes[q[(k + 1) % 4]])))
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn a_foot_line_beyond_a_quarter_element_from_the_web_leaves_no_sliver() {
+    // Node lines at the centres of four 35 mm spring rows (±17.5, ±52.5 mm) with 20 mm
+    // elements: 17.5 mm lies 9.5 mm from the web face (8 mm), within h/2 but beyond h/4. Snapped
+    // to the line, the web's foot boundary left 1.11 mm elements in the foot arm (the explicit
+    // step's limit on such a track); unsnapped, the line is a node line of the foot arm and no
+    // foot element is much thinner than the gap to the web.
+    let lines = vec![0.0175, 0.0525];
+    let params = SectionParams {
+        size_m: 0.02,
+        foot_node_lines_m: lines.clone(),
+        ..Default::default()
+    };
+    let m = SectionMesh::uic54(&params).unwrap();
+    for &y in &lines {
+        for y in [y, -y] {
+            assert!(
+                m.foot_underside_s_m.iter().any(|s| (s - y).abs() < 1e-12),
+                "foot line {y} missing"
+            );
+        }
+    }
+    let shortest = shortest_edge_below(&m, 0.04);
+    assert!(
+        shortest > 0.004,
+        "shortest foot edge {:.2} mm",
+        shortest * 1e3
+    );
+    // a line within h/4 of the web face still takes the web's boundary (no thin element there)
+    let near = SectionParams {
+        foot_node_lines_m: vec![0.0115],
+        ..params
+    };
+    let m = SectionMesh::uic54(&near).unwrap();
+    let shortest = shortest_edge_below(&m, 0.04);
+    assert!(
+        shortest > 0.003,
+        "shortest foot edge {:.2} mm",
+        shortest * 1e3
+    );
+}
