@@ -9,6 +9,7 @@ import _thread
 import csv
 import json
 import os
+import signal
 import subprocess
 from pathlib import Path
 
@@ -229,7 +230,17 @@ def test_explicit_passage_equals_the_cli_explicit_files_bit_for_bit(tmp_path):
         corrugation.passage(m, engine="implicit")
 
 
-def test_keyboard_interrupt_stops_an_explicit_passage():
+@pytest.fixture
+def sigint_handled():
+    """Python's own SIGINT handler during the test. A test runner started from a
+    non-interactive shell in the background inherits SIGINT ignored, and then
+    `_thread.interrupt_main()` does nothing; Ctrl-C in a terminal has the handler."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+def test_keyboard_interrupt_stops_an_explicit_passage(sigint_handled):
     m = corrugation.Model(overrides=SHORT_EXPLICIT)
     seen = []
 
@@ -284,7 +295,7 @@ def test_an_exception_in_the_callback_stops_the_work_and_propagates(small, cache
     assert calls[-1] > 0 and calls.count(calls[-1]) == 1
 
 
-def test_keyboard_interrupt_stops_the_work(small, cache):
+def test_keyboard_interrupt_stops_the_work(small, cache, sigint_handled):
     def interrupt(stage, done, total):
         if stage == "passage (time steps)" and done > 0:
             _thread.interrupt_main()  # as Ctrl-C: the signal is seen at the next report
