@@ -136,45 +136,41 @@ fn run_case(
     csv: Option<&String>,
 ) -> anyhow::Result<()> {
     let v = engine.model().run.speed();
-    {
-        {
-            let (w0, c0, t0) = (Instant::now(), cpu_seconds(), thread_cpu_seconds());
-            let rec = engine.passage(v, None, opts, None)?;
-            let (w, c) = (w0.elapsed().as_secs_f64(), cpu_seconds() - c0);
-            let ct = thread_cpu_seconds() - t0;
-            println!(
-                "{name}: {} steps, passage {:.3} s wall, CPU {:.2} s ({:.4} s on the calling thread): set-up {:.3} s, loop {:.3} s ({:.3} ms/step); {}",
-                rec.steps,
-                w,
-                c,
-                ct,
-                w - rec.seconds,
-                rec.seconds,
-                1e3 * rec.seconds / rec.steps as f64,
-                machine_load()
+    let (w0, c0, t0) = (Instant::now(), cpu_seconds(), thread_cpu_seconds());
+    let rec = engine.passage(v, None, opts, None)?;
+    let (w, c) = (w0.elapsed().as_secs_f64(), cpu_seconds() - c0);
+    let ct = thread_cpu_seconds() - t0;
+    println!(
+        "{name}: {} steps, passage {:.3} s wall, CPU {:.2} s ({:.4} s on the calling thread): set-up {:.3} s, loop {:.3} s ({:.3} ms/step); {}",
+        rec.steps,
+        w,
+        c,
+        ct,
+        w - rec.seconds,
+        rec.seconds,
+        1e3 * rec.seconds / rec.steps as f64,
+        machine_load()
+    );
+    let h = &rec.histories;
+    let mut hist = h.normal_n.clone();
+    hist.extend_from_slice(&h.longitudinal_n);
+    hist.extend_from_slice(&rec.wear_j_per_m);
+    println!(
+        "  static creepage {:.9e}, approach {:.9e} m; histories digest {}",
+        rec.static_creepage,
+        rec.static_approach_m,
+        bits_digest(&hist)
+    );
+    println!("  {}", summary_line(&summarise(&rec)?));
+    if let (Some(path), true) = (csv, opts.energy) {
+        let mut s = String::from("t_s,fn_n,fl_n\n");
+        for i in 0..h.t_s.len() {
+            s += &format!(
+                "{:e},{:e},{:e}\n",
+                h.t_s[i], h.normal_n[i], h.longitudinal_n[i]
             );
-            let h = &rec.histories;
-            let mut hist = h.normal_n.clone();
-            hist.extend_from_slice(&h.longitudinal_n);
-            hist.extend_from_slice(&rec.wear_j_per_m);
-            println!(
-                "  static creepage {:.9e}, approach {:.9e} m; histories digest {}",
-                rec.static_creepage,
-                rec.static_approach_m,
-                bits_digest(&hist)
-            );
-            println!("  {}", summary_line(&summarise(&rec)?));
-            if let (Some(path), true) = (csv, opts.energy) {
-                let mut s = String::from("t_s,fn_n,fl_n\n");
-                for i in 0..h.t_s.len() {
-                    s += &format!(
-                        "{:e},{:e},{:e}\n",
-                        h.t_s[i], h.normal_n[i], h.longitudinal_n[i]
-                    );
-                }
-                std::fs::write(path, s)?;
-            }
         }
+        std::fs::write(path, s)?;
     }
     Ok(())
 }

@@ -362,7 +362,7 @@ pub enum EigenError {
         reason: String,
     },
     /// The sparse LDLᵀ factorisation's workspace could not be allocated.
-    #[error("out of memory for the LDLᵀ workspace of K − σM at σ = {shift_rad2_s2:e} rad²/s² ({bytes} bytes); lower `modes.f_max_hz` or the mesh size")]
+    #[error("out of memory for the LDLᵀ workspace of K − σM at σ = {shift_rad2_s2:e} rad²/s² ({bytes} bytes): the model is too large for this machine's memory; coarsen the mesh (`mesh.element_length`, `mesh.section_size`) or shorten the track (`track.bays`)")]
     FactorWorkspace {
         /// shift (rad²/s²)
         shift_rad2_s2: f64,

@@ -80,7 +80,7 @@ pub struct StripConvolver {
 
 /// The precision of a strip product's dense part (`StripConvolver::product_cols_in`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Precision {
+pub(crate) enum Precision {
     /// Everything in `f64`.
     Double,
     /// The per-frequency products with the kernel's spectra in `f32` (the FFTs in `f64`).
