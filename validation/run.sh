@@ -15,7 +15,8 @@ if [[ "$group" == all || "$group" == patch ]]; then
   echo "== patch: the local FE contact patch (validation/contact_patch.md): the flat block against"
   echo "   Boussinesq-Cerruti (P1, ~25 min, up to ~6 GB), the rail head's kernel against the half-space (P2b, ~7 min),"
   echo "   Hertz on the FE kernels (P2, ~8 min, 9 GB), the split (P3: ~20 min and 15 GB at 15 kN, ~32 min and 18 GB at 100 kN; the tread ~1 min),"
-  echo "   the local compliance against the half-space's (P6, ~3 and ~8 min)"
+  echo "   the local compliance against the half-space's (P6, ~3 and ~8 min), the penalty contact's static Hertz problem"
+  echo "   on the refined bodies (P4a, ~2 min, 7 GB) and on the central-difference step (P4b, seconds)"
   cargo test --profile test-opt --lib flat_block_convergence_table -- --ignored --nocapture
   CASE="0.8 3 4 4" cargo test --profile test-opt --lib rail_head_kernel_against_the_half_space -- --ignored --nocapture
   CASE="0.8 3 15" cargo test --profile test-opt --lib hertz_on_the_rail_head_patch -- --ignored --nocapture
@@ -25,6 +26,8 @@ if [[ "$group" == all || "$group" == patch ]]; then
   cargo test --profile test-opt --lib tread_split_against_the_global_mesh -- --ignored --nocapture
   CASE="0.8 3 15" cargo test --profile test-opt --lib local_compliance_against_the_half_space -- --ignored --nocapture
   CASE="0.8 3 100" cargo test --profile test-opt --lib local_compliance_against_the_half_space -- --ignored --nocapture
+  CASE="0.8 0.533 0.4 15" cargo test --profile test-opt --lib penalty_static_case -- --ignored --nocapture
+  cargo test --profile test-opt --lib explicit::penalty_tests -- --nocapture
 fi
 if [[ "$group" == all || "$group" == modes ]]; then
   echo "== modes: bar-like rail longitudinal modes vs n c/2L; pinned-pinned mode on rigid supports"

@@ -59,6 +59,7 @@ mod avx2;
 pub mod hertz;
 pub mod influence;
 pub mod normal;
+pub mod penalty;
 pub mod report;
 pub mod rolling;
 pub mod tangential;

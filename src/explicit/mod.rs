@@ -40,6 +40,9 @@ pub mod rotating;
 pub mod stable;
 mod start;
 
+#[cfg(test)]
+mod penalty_tests;
+
 pub use model::{ExplicitModel, ExplicitOptions};
 pub use operator::ExplicitOperator;
 pub use passage::{ExplicitRecord, ExplicitRunner};

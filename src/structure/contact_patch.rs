@@ -22,7 +22,9 @@
 //! *Three-Dimensional Elastic Bodies in Rolling Contact* (1990), ch. 5 (influence numbers).
 
 use faer::Mat;
+use nalgebra::DMatrix;
 
+use crate::contact::penalty;
 use crate::fe::assembly::{assemble, AssemblyOptions, DofMap};
 use crate::fe::block::{block_node, graded_block_mesh};
 use crate::fe::material::IsotropicElastic;
@@ -148,14 +150,36 @@ impl FlatBlockPatch {
         Ok(block_free_dofs(&self.planes()?))
     }
 
-    /// Builds and solves the submodel: the kernel for offsets `−half..=half` along x and y.
-    /// Refuses a submodel beyond [`MAX_PATCH_DOFS`] before building it.
-    pub fn kernel(&self) -> Result<SurfaceKernel, StructureError> {
+    /// Builds and factorises the submodel: its top face as a [`FactorisedSurface`]. Refuses a
+    /// submodel beyond [`MAX_PATCH_DOFS`] before building it.
+    pub fn factorised_surface(&self) -> Result<FactorisedSurface, StructureError> {
         let planes = self.planes()?;
-        let n_dofs = block_free_dofs(&planes);
-        check_size(n_dofs)?;
+        check_size(block_free_dofs(&planes))?;
         let [xs, ys, zs] = planes;
-        let mesh = graded_block_mesh([&xs, &ys, &zs], 0, Part::Rail);
+        let (dofmap, factor) = self.factorise(&xs, &ys, &zs)?;
+        let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
+        let nodes = (0..=nx)
+            .flat_map(|i| (0..=ny).map(move |j| block_node(nx, ny, i, j, nz)))
+            .collect();
+        Ok(FactorisedSurface {
+            layer_m: zs[nz] - zs[nz - 1],
+            xs,
+            ys,
+            nodes,
+            y_sign: 1.0,
+            dofmap,
+            factor,
+        })
+    }
+
+    /// The block on the node planes, its far faces fixed: the DOF map and the factor.
+    fn factorise(
+        &self,
+        xs: &[f64],
+        ys: &[f64],
+        zs: &[f64],
+    ) -> Result<(DofMap, Cholesky), StructureError> {
+        let mesh = graded_block_mesh([xs, ys, zs], 0, Part::Rail);
         let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
         let mut fixed = Vec::new();
         for k in 0..=nz {
@@ -169,7 +193,18 @@ impl FlatBlockPatch {
                 }
             }
         }
-        let (dofmap, factor) = factorise(&mesh, &fixed, self.material)?;
+        factorise(&mesh, &fixed, self.material)
+    }
+
+    /// Builds and solves the submodel: the kernel for offsets `−half..=half` along x and y.
+    /// Refuses a submodel beyond [`MAX_PATCH_DOFS`] before building it.
+    pub fn kernel(&self) -> Result<SurfaceKernel, StructureError> {
+        let planes = self.planes()?;
+        let n_dofs = block_free_dofs(&planes);
+        check_size(n_dofs)?;
+        let [xs, ys, zs] = planes;
+        let (dofmap, factor) = self.factorise(&xs, &ys, &zs)?;
+        let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
         let a = self.element_m;
         let surface = Surface {
             xs: &xs,
@@ -194,6 +229,98 @@ impl FlatBlockPatch {
             c,
             n_dofs,
         })
+    }
+}
+
+/// A factorised submodel with its contact surface: what the penalty contact's static
+/// solution reads (the surface's point compliance, [`Self::point_compliance`]) and where its
+/// FE surface nodes lie ([`Self::surface_nodes`]), in the contact frame (m: `x` along the
+/// rail, `y` across; a body turned over about x, the tread, has the surface's y mirrored).
+pub struct FactorisedSurface {
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    /// Global node of surface grid point `(i, j)` at index `i · ys.len() + j`.
+    nodes: Vec<usize>,
+    /// +1, or −1 for a surface whose y axis is the contact frame's mirrored.
+    y_sign: f64,
+    /// Thickness of the surface's element layer (m), for the penalty's element volume.
+    layer_m: f64,
+    dofmap: DofMap,
+    factor: Cholesky,
+}
+
+impl FactorisedSurface {
+    /// Free DOFs of the submodel.
+    pub fn n_dofs(&self) -> usize {
+        self.dofmap.n_free()
+    }
+
+    /// Thickness of the element layer under the surface at the contact (m).
+    pub fn layer_m(&self) -> f64 {
+        self.layer_m
+    }
+
+    /// The FE surface nodes within `|x| ≤ half_x_m`, `|y| ≤ half_y_m` (m, contact frame),
+    /// as `(x, y)` with their tributary face area (m²), ordered by x then y.
+    pub fn surface_nodes(&self, half_x_m: f64, half_y_m: f64) -> Vec<([f64; 2], f64)> {
+        let tributary = |p: &[f64], i: usize| {
+            let lo = if i > 0 { p[i] - p[i - 1] } else { 0.0 };
+            let hi = if i + 1 < p.len() {
+                p[i + 1] - p[i]
+            } else {
+                0.0
+            };
+            0.5 * (lo + hi)
+        };
+        let eps = 1e-12;
+        let mut out = Vec::new();
+        for (i, &x) in self.xs.iter().enumerate() {
+            if x.abs() > half_x_m + eps {
+                continue;
+            }
+            let mut column: Vec<([f64; 2], f64)> = (0..self.ys.len())
+                .filter(|&j| self.ys[j].abs() <= half_y_m + eps)
+                .map(|j| {
+                    let area = tributary(&self.xs, i) * tributary(&self.ys, j);
+                    ([x, self.y_sign * self.ys[j]], area)
+                })
+                .collect();
+            column.sort_by(|p, q| p.0[1].total_cmp(&q.0[1]));
+            out.extend(column);
+        }
+        out
+    }
+
+    /// The normal point compliance among `points` (m, contact frame): entry `(i, j)` the
+    /// approach along the inward normal at point `i` per unit force (N) pressing on point
+    /// `j` (m/N), a point's force shared and its displacement read by the bilinear shape
+    /// functions of the surface face that contains it. Symmetric by construction.
+    pub fn point_compliance(&self, points: &[[f64; 2]]) -> Result<DMatrix<f64>, StructureError> {
+        let ny = self.ys.len();
+        let weights: Vec<[(usize, f64); 4]> = points
+            .iter()
+            .map(|p| {
+                let w = penalty::bilinear_weights(&self.xs, &self.ys, [p[0], self.y_sign * p[1]]);
+                w.map(|(i, j, w)| (self.nodes[i * ny + j], w))
+            })
+            .collect();
+        // the inward normal is −z
+        let dof = |node: usize| self.dofmap.free_index(3 * node + 2);
+        let mut rhs = Mat::<f64>::zeros(self.dofmap.n_free(), points.len());
+        for (c, w) in weights.iter().enumerate() {
+            for &(node, wk) in w {
+                if let Some(f) = dof(node) {
+                    rhs[(f, c)] -= wk;
+                }
+            }
+        }
+        self.factor.solve_in_place(&mut rhs)?;
+        Ok(DMatrix::from_fn(points.len(), points.len(), |r, c| {
+            weights[r]
+                .iter()
+                .map(|&(node, wk)| dof(node).map_or(0.0, |f| -wk * rhs[(f, c)]))
+                .sum()
+        }))
     }
 }
 
@@ -650,5 +777,7 @@ pub mod of_model;
 pub(crate) mod rail_head;
 pub mod tread;
 
+#[cfg(test)]
+mod penalty_tests;
 #[cfg(test)]
 mod tests;

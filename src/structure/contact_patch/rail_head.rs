@@ -24,7 +24,7 @@ use crate::model::Model;
 
 use super::{
     check_ratio, check_size, factorise, graded_axis, out_of_range, strip_kernel, twin_compliance,
-    StripKernel, StructureError, Surface,
+    FactorisedSurface, StripKernel, StructureError, Surface,
 };
 
 /// Free DOFs of a segment: every section node of the inner planes but the foot's.
@@ -283,6 +283,34 @@ impl RailHeadPatch {
     fn geometry(&self) -> Result<(SectionMesh, Vec<f64>), StructureError> {
         self.check()?;
         Ok((self.section()?, self.planes()?))
+    }
+
+    /// Builds and factorises the segment: its running surface as a [`FactorisedSurface`]
+    /// (the penalty contact's static solution reads it). Refuses a submodel beyond
+    /// [`super::MAX_PATCH_DOFS`] before building it.
+    pub fn factorised_surface(&self) -> Result<FactorisedSurface, StructureError> {
+        let (section, planes) = self.geometry()?;
+        check_size(free_dofs(&section, &planes))?;
+        let (topo, dofmap, factor) = segment(&section, &planes, self.material)?;
+        let mut running: Vec<(f64, usize)> = section
+            .running_surface
+            .iter()
+            .map(|&j| (section.nodes[j][0], j))
+            .collect();
+        running.sort_by(|p, q| p.0.total_cmp(&q.0));
+        let nodes = (0..planes.len())
+            .flat_map(|i| running.iter().map(move |&(_, j)| (i, j)))
+            .map(|(i, j)| topo.node(i, j))
+            .collect();
+        Ok(FactorisedSurface {
+            xs: planes,
+            ys: running.iter().map(|v| v.0).collect(),
+            nodes,
+            y_sign: 1.0,
+            layer_m: self.element_m.min(self.element_y_m) / self.refine as f64,
+            dofmap,
+            factor,
+        })
     }
 
     /// Builds, factorises and condenses the segment. Refuses a submodel beyond

@@ -118,7 +118,7 @@ fn flat_block_convergence_table() {
 
 /// The numbers of a validation case from the environment variable `CASE` (whitespace
 /// separated), or `default`.
-fn case_from_env(default: &str) -> Vec<f64> {
+pub(super) fn case_from_env(default: &str) -> Vec<f64> {
     std::env::var("CASE")
         .unwrap_or_else(|_| default.into())
         .split_whitespace()

@@ -28,7 +28,7 @@ use crate::model::Model;
 
 use super::{
     check_ratio, check_size, factorise, graded_axis, out_of_range, strip_kernel, twin_compliance,
-    StripKernel, StructureError, Surface,
+    FactorisedSurface, StripKernel, StructureError, Surface,
 };
 
 /// The rim's cross-section (m, wheel frame: y along the axle towards the field side, the
@@ -342,6 +342,28 @@ impl TreadPatch {
     /// Free DOFs of the refined prism (before building it).
     pub fn n_dofs(&self) -> Result<usize, StructureError> {
         Ok(self.refined()?.free_dofs())
+    }
+
+    /// Builds and factorises the prism: its tread as a [`FactorisedSurface`] (y mirrored
+    /// into the rail's frame; the penalty contact's static solution reads it). Refuses a
+    /// submodel beyond [`super::MAX_PATCH_DOFS`] before building it.
+    pub fn factorised_surface(&self) -> Result<FactorisedSurface, StructureError> {
+        let prism = self.refined()?;
+        let (dofmap, factor) = prism.factorise(self.material)?;
+        let [xs, ys, zs] = prism.planes;
+        let (nbx, nby, nbz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
+        let nodes = (0..=nbx)
+            .flat_map(|i| (0..=nby).map(move |j| block_node(nbx, nby, i, j, nbz)))
+            .collect();
+        Ok(FactorisedSurface {
+            layer_m: zs[nbz] - zs[nbz - 1],
+            xs,
+            ys,
+            nodes,
+            y_sign: -1.0,
+            dofmap,
+            factor,
+        })
     }
 
     /// Builds, factorises and condenses the prism. Refuses a submodel beyond
