@@ -35,6 +35,7 @@ mod local;
 pub mod model;
 pub mod operator;
 pub mod passage;
+pub mod penalty;
 mod response;
 pub mod rotating;
 pub mod stable;
@@ -185,4 +186,7 @@ pub enum ExplicitError {
     /// The model's structures could not be built.
     #[error(transparent)]
     Structure(#[from] crate::structure::StructureError),
+    /// The penalty contact's static start or its Kalker reference failed ([`penalty`]).
+    #[error("penalty contact")]
+    Contact(#[from] crate::contact::ContactError),
 }

@@ -3,11 +3,15 @@
 //! the slaves, the lower one's top face the master. Checked against a conservation law (the
 //! step's energy ledger plus the penalty's stored energy and the friction's dissipation stays
 //! the initial kinetic energy) and against Coulomb's closed form (a pressed block sliding on
-//! the other decelerates by `µ F / m`).
+//! the other decelerates by `µ F / m`). And P4c: steady rolling on the refined rail head and
+//! tread against Kalker's steady solution.
 
 use super::operator::ExplicitOperator;
+use super::penalty::{
+    run_rolling, PenaltyPair, RollingCase, RollingResult, RollingStart, Side, Slave,
+};
 use super::stable::StableStep;
-use crate::contact::penalty::{bilinear_weights, segment_stiffness, PenaltyLaw, TangentialState};
+use crate::contact::penalty::{bilinear_weights, segment_stiffness, PenaltyLaw};
 use crate::fe::assembly::{assemble, AssemblyOptions, DofMap};
 use crate::fe::block::{block_node, graded_block_mesh};
 use crate::fe::material::IsotropicElastic;
@@ -80,80 +84,11 @@ impl Block {
         self.dofmap.free_index(3 * node + dir)
     }
 
-    fn value(&self, u: &[f64], node: usize, dir: usize) -> f64 {
-        self.free(node, dir).map_or(0.0, |f| u[f])
-    }
-
-    fn mass_of(&self, node: usize) -> f64 {
-        self.free(node, 2)
-            .map_or(f64::INFINITY, |f| self.op.mass()[f])
-    }
-}
-
-/// The contact of the upper block's bottom nodes (slaves) on the lower block's top face.
-struct Contact {
-    law: PenaltyLaw,
-    /// Initial gap of each slave (m): the blocks' separation plus a Hertzian `r² / 2R`.
-    gap0: Vec<f64>,
-    states: Vec<TangentialState>,
-    /// Each slave's relative displacement (slave less master point, x and y) at the last
-    /// step (m).
-    rel: Vec<[f64; 2]>,
-    /// Each slave's penetration at the last evaluation (m).
-    penetration: Vec<f64>,
-    dissipated_j: f64,
-    /// The springs' energy in the central difference's cross form between the last two
-    /// evaluations, `Σ k_n ⟨p_k⟩⟨p_{k+1}⟩ / 2 + f_k · f_{k+1} / 2 k_t` (J): the penalty's
-    /// counterpart of the step's `u_kᵀ K u_{k+1} / 2`.
-    cross_j: f64,
-}
-
-impl Contact {
-    /// The contact forces at the state `(u_up, u_low)` into `f_up`, `f_low` (N); updates
-    /// the springs, the dissipation and the stored energy.
-    fn forces(
-        &mut self,
-        (up, u_up, f_up): (&Block, &[f64], &mut [f64]),
-        (low, u_low, f_low): (&Block, &[f64], &mut [f64]),
-    ) {
-        f_up.fill(0.0);
-        f_low.fill(0.0);
-        self.cross_j = 0.0;
-        let ny = up.ys.len();
-        for (s, &node) in up.surface.iter().enumerate() {
-            let (i, j) = (s / ny, s % ny);
-            let us = [0, 1, 2].map(|d| up.value(u_up, node, d));
-            let at = [up.xs[i] + us[0], up.ys[j] + us[1]];
-            let w = bilinear_weights(&low.xs, &low.ys, at);
-            let lny = low.ys.len();
-            let um = [0, 1, 2].map(|d| {
-                w.iter()
-                    .map(|&(a, b, wk)| wk * low.value(u_low, low.surface[a * lny + b], d))
-                    .sum::<f64>()
-            });
-            let penetration = -(self.gap0[s] + us[2] - um[2]);
-            let rel = [us[0] - um[0], us[1] - um[1]];
-            let inc = [rel[0] - self.rel[s][0], rel[1] - self.rel[s][1]];
-            self.rel[s] = rel;
-            let old = self.states[s].force_n;
-            let f = self.law.update(penetration, inc, &mut self.states[s]);
-            self.dissipated_j += f.dissipated_j;
-            let new = self.states[s].force_n;
-            self.cross_j +=
-                0.5 * self.law.normal_n_per_m * self.penetration[s].max(0.0) * penetration.max(0.0)
-                    + (old[0] * new[0] + old[1] * new[1]) / (2.0 * self.law.tangential_n_per_m);
-            self.penetration[s] = penetration;
-            let force = [f.tangential_n[0], f.tangential_n[1], f.normal_n];
-            for d in 0..3 {
-                if let Some(k) = up.free(node, d) {
-                    f_up[k] += force[d];
-                }
-                for &(a, b, wk) in &w {
-                    if let Some(k) = low.free(low.surface[a * lny + b], d) {
-                        f_low[k] -= wk * force[d];
-                    }
-                }
-            }
+    /// The block as the contact sees it: its mesh axes are the contact frame's.
+    fn side(&self) -> Side<'_> {
+        Side {
+            dofmap: &self.dofmap,
+            axes: [1.0; 3],
         }
     }
 }
@@ -178,44 +113,61 @@ fn two_blocks(gap_m: f64, radius_m: f64, scale: f64, mu: f64) -> (Block, Block, 
         tangential_n_per_m: k,
         friction: mu,
     };
-    let ny = up.ys.len();
-    let gap0 = (0..up.surface.len())
-        .map(|s| {
-            let (x, y) = (up.xs[s / ny], up.ys[s % ny]);
-            gap_m + up.z_m - low.z_m + (x * x + y * y) / (2.0 * radius_m)
-        })
-        .collect();
-    let n = up.surface.len();
+    let (ny, lny) = (up.ys.len(), low.ys.len());
+    let mut gap0 = Vec::new();
+    let mut slaves = Vec::new();
+    for (s, &node) in up.surface.iter().enumerate() {
+        let (x, y) = (up.xs[s / ny], up.ys[s % ny]);
+        gap0.push(gap_m + up.z_m - low.z_m + (x * x + y * y) / (2.0 * radius_m));
+        let master = bilinear_weights(&low.xs, &low.ys, [x, y])
+            .map(|(a, b, w)| (low.surface[a * lny + b], w));
+        slaves.push(Slave { node, master });
+    }
     let contact = Contact {
-        law,
+        pair: PenaltyPair::new(law, slaves),
         gap0,
-        states: vec![TangentialState::default(); n],
-        rel: vec![[0.0; 2]; n],
-        penetration: vec![f64::NEG_INFINITY; n],
-        dissipated_j: 0.0,
-        cross_j: 0.0,
     };
     (up, low, contact)
 }
 
-/// A stable step (s): 0.9 of the critical step of the stiffer block with the penalty springs
-/// added to its lightest surface node (`ω² ≤ ω_max² + k (1/m_s + 1/m_m)`).
-fn stable_step(up: &Block, low: &Block, k: f64) -> f64 {
+/// The pair and each slave's rigid gap (m).
+struct Contact {
+    pair: PenaltyPair,
+    gap0: Vec<f64>,
+}
+
+impl Contact {
+    /// The contact forces at `(u_up, u_low)` into `f_up`, `f_low` (N).
+    fn forces(
+        &mut self,
+        (up, u_up, f_up): (&Block, &[f64], &mut [f64]),
+        (low, u_low, f_low): (&Block, &[f64], &mut [f64]),
+    ) {
+        let gap0 = &self.gap0;
+        self.pair.forces(
+            |s| gap0[s],
+            [0.0; 2],
+            (up.side(), u_up, f_up),
+            (low.side(), u_low, f_low),
+        );
+    }
+}
+
+/// A stable step (s): 0.9 of the critical step of the stiffer block with the penalty's
+/// bound added ([`PenaltyPair::omega2_bound`]).
+fn stable_step(up: &Block, low: &Block, contact: &Contact) -> f64 {
     let w = |b: &Block| StableStep::estimate(&b.op).unwrap().omega_max_bound;
-    let m_min = |b: &Block| {
-        b.surface
-            .iter()
-            .map(|&n| b.mass_of(n))
-            .fold(f64::INFINITY, f64::min)
-    };
-    let omega2 = w(up).max(w(low)).powi(2) + k * (1.0 / m_min(up) + 1.0 / m_min(low));
+    let omega2 = w(up).max(w(low)).powi(2)
+        + contact
+            .pair
+            .omega2_bound((up.side(), up.op.mass()), (low.side(), low.op.mass()));
     0.9 * 2.0 / omega2.sqrt()
 }
 
 #[test]
 fn penalty_impact_with_friction_closes_the_energy_ledger() {
     let (up, low, mut contact) = two_blocks(1e-6, 0.1, 1.0, 0.3);
-    let dt = stable_step(&up, &low, contact.law.normal_n_per_m);
+    let dt = stable_step(&up, &low, &contact);
     let (nu, nl) = (up.op.n(), low.op.n());
     let (mut u_up, mut u_low) = (vec![0.0; nu], vec![0.0; nl]);
     let mut v_up = vec![0.0; nu];
@@ -240,10 +192,10 @@ fn penalty_impact_with_friction_closes_the_energy_ledger() {
     // until the block has left the base for 200 steps (or 40,000 steps)
     while separated_for < 200 && steps < 40_000 {
         // the dissipation through step k − 1, before the springs update at u_k
-        let dissipated = contact.dissipated_j;
+        let dissipated = contact.pair.dissipated_j();
         contact.forces((&up, &u_up, &mut f_up), (&low, &u_low, &mut f_low));
         // the energy at the half step k − ½: the step's sums and the springs' cross form
-        let closure = before + contact.cross_j + dissipated - e0;
+        let closure = before + contact.pair.cross_energy_j() + dissipated - e0;
         worst = worst.max(closure.abs() / e0);
         let in_contact = f_up.iter().any(|f| *f != 0.0);
         touched |= in_contact;
@@ -260,12 +212,12 @@ fn penalty_impact_with_friction_closes_the_energy_ledger() {
     let ke = up.op.kinetic_energy(&v_up);
     println!(
         "dt {dt:.3e} s, {steps} steps; initial {e0:.4e} J; dissipated {:.4e} J ({:.2} %), left as the block's kinetic energy {ke:.4e} J; worst ledger closure {:.3} %",
-        contact.dissipated_j,
-        100.0 * contact.dissipated_j / e0,
+        contact.pair.dissipated_j(),
+        100.0 * contact.pair.dissipated_j() / e0,
         100.0 * worst
     );
     assert!(touched && separated_for == 200, "the block bounced off");
-    assert!(contact.dissipated_j > 0.0, "friction dissipated");
+    assert!(contact.pair.dissipated_j() > 0.0, "friction dissipated");
     assert!(worst < 0.01, "the ledger closes within 1 %: {worst}");
 }
 
@@ -275,7 +227,7 @@ fn a_pressed_block_sliding_decelerates_by_mu_f_over_m() {
     // µ F (once the normal force's ringing averages to F) takes its momentum at the rate µ F
     let (mu, force) = (0.3, 2.5);
     let (up, low, mut contact) = two_blocks(0.0, f64::INFINITY, 1.0, mu);
-    let dt = stable_step(&up, &low, contact.law.normal_n_per_m);
+    let dt = stable_step(&up, &low, &contact);
     let (nu, nl) = (up.op.n(), low.op.n());
     let mass: f64 = (0..up.dofmap.n_nodes())
         .filter_map(|n| up.free(n, 2))
@@ -329,4 +281,94 @@ fn a_pressed_block_sliding_decelerates_by_mu_f_over_m() {
         -slope / mass
     );
     assert!((slope / closed - 1.0).abs() < 0.02);
+}
+
+fn print_rolling(case: &RollingCase, r: &RollingResult) {
+    println!(
+        "h {:.3} mm, {:.0} kN, ξ {:e}, µ {}, s {}: rail {} DOFs, tread {} DOFs, k_n {:.3e} N/m, dt {:.3e} s, {} steps; Hertz a {:.3} mm",
+        case.element_m * 1e3,
+        case.load_n * 1e-3,
+        case.creepage,
+        case.friction,
+        case.scale,
+        r.dofs[0],
+        r.dofs[1],
+        r.k_n_per_m,
+        r.dt_s,
+        r.steps,
+        r.hertz.a_m * 1e3
+    );
+    let every = (r.history.len() / 12).max(1);
+    for h in r.history.iter().step_by(every) {
+        println!(
+            "  x {:+.3} mm: F_n {:.1} N, F_x {:.2} N (F_x/F_n {:.5}), {} nodes",
+            h.0 * 1e3,
+            h.1,
+            h.2,
+            h.2 / h.1,
+            h.4
+        );
+    }
+    println!(
+        "  steady: F_n {:.1} N, F_x/F_n {:.5} against Kalker's {:.5} ({:+.2} %); frictional power {:.3} W against {:.3} W ({:+.2} %)",
+        r.steady_normal_n,
+        r.steady_traction,
+        r.kalker_traction,
+        100.0 * (r.steady_traction / r.kalker_traction - 1.0),
+        r.steady_power_w,
+        r.kalker_power_w,
+        100.0 * (r.steady_power_w / r.kalker_power_w - 1.0)
+    );
+}
+
+#[test]
+fn penalty_rolling_on_the_refined_bodies_is_kalkers_steady_rolling() {
+    // the CI version of P4c: 2 mm faces at 100 kN, started in Kalker's steady traction
+    // (the structure wound up), over one semi-axis: the penalty contact must hold it
+    let case = RollingCase {
+        element_m: 2e-3,
+        load_n: 100e3,
+        travel_m: 7e-3,
+        start: RollingStart::KalkerTraction,
+        ..RollingCase::p4c()
+    };
+    let r = run_rolling(&case).unwrap();
+    print_rolling(&case, &r);
+    assert!(
+        r.steady_traction < 0.0,
+        "braking: F_x on the wheel backwards"
+    );
+    assert!((r.steady_traction / r.kalker_traction - 1.0).abs() < 0.10);
+    assert!((r.steady_power_w / r.kalker_power_w - 1.0).abs() < 0.20);
+}
+
+/// P4c in validation/contact_patch.md (`CASE="h_mm load_kN creepage scale travel_mm start
+/// safety"`, default "0.8 15 5e-4 10 12 0 0.9"; start 0 from the normal solution, 1 in
+/// Kalker's traction; safety the fraction of the critical step).
+#[test]
+#[ignore = "validation: P4c, steady rolling with the penalty contact (minutes)"]
+fn penalty_rolling_case() {
+    let v: Vec<f64> = std::env::var("CASE")
+        .unwrap_or_else(|_| "0.8 15 5e-4 10 12 0 0.9".into())
+        .split_whitespace()
+        .map(|w| w.parse().expect("CASE holds numbers"))
+        .collect();
+    let case = RollingCase {
+        element_m: v[0] * 1e-3,
+        load_n: v[1] * 1e3,
+        creepage: v[2],
+        scale: v[3],
+        travel_m: v[4] * 1e-3,
+        start: if v.get(5) == Some(&1.0) {
+            RollingStart::KalkerTraction
+        } else {
+            RollingStart::Normal
+        },
+        safety: v.get(6).copied().unwrap_or(0.9),
+        ..RollingCase::p4c()
+    };
+    let t = std::time::Instant::now();
+    let r = run_rolling(&case).unwrap();
+    print_rolling(&case, &r);
+    println!("  {:.0} s", t.elapsed().as_secs_f64());
 }

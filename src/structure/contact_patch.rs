@@ -25,7 +25,7 @@ use faer::Mat;
 use nalgebra::DMatrix;
 
 use crate::contact::penalty;
-use crate::fe::assembly::{assemble, AssemblyOptions, DofMap};
+use crate::fe::assembly::{assemble, AssemblyOptions, DofMap, FeMatrices};
 use crate::fe::block::{block_node, graded_block_mesh};
 use crate::fe::material::IsotropicElastic;
 use crate::fe::solve::Cholesky;
@@ -156,7 +156,7 @@ impl FlatBlockPatch {
         let planes = self.planes()?;
         check_size(block_free_dofs(&planes))?;
         let [xs, ys, zs] = planes;
-        let (dofmap, factor) = self.factorise(&xs, &ys, &zs)?;
+        let (dofmap, matrices, factor) = self.factorise(&xs, &ys, &zs)?;
         let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
         let nodes = (0..=nx)
             .flat_map(|i| (0..=ny).map(move |j| block_node(nx, ny, i, j, nz)))
@@ -168,17 +168,19 @@ impl FlatBlockPatch {
             nodes,
             y_sign: 1.0,
             dofmap,
+            matrices,
             factor,
         })
     }
 
-    /// The block on the node planes, its far faces fixed: the DOF map and the factor.
+    /// The block on the node planes, its far faces fixed: the DOF map, the matrices and the
+    /// factor.
     fn factorise(
         &self,
         xs: &[f64],
         ys: &[f64],
         zs: &[f64],
-    ) -> Result<(DofMap, Cholesky), StructureError> {
+    ) -> Result<(DofMap, FeMatrices, Cholesky), StructureError> {
         let mesh = graded_block_mesh([xs, ys, zs], 0, Part::Rail);
         let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
         let mut fixed = Vec::new();
@@ -193,7 +195,7 @@ impl FlatBlockPatch {
                 }
             }
         }
-        factorise(&mesh, &fixed, self.material)
+        assemble_and_factorise(&mesh, &fixed, self.material)
     }
 
     /// Builds and solves the submodel: the kernel for offsets `−half..=half` along x and y.
@@ -203,7 +205,7 @@ impl FlatBlockPatch {
         let n_dofs = block_free_dofs(&planes);
         check_size(n_dofs)?;
         let [xs, ys, zs] = planes;
-        let (dofmap, factor) = self.factorise(&xs, &ys, &zs)?;
+        let (dofmap, _, factor) = self.factorise(&xs, &ys, &zs)?;
         let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
         let a = self.element_m;
         let surface = Surface {
@@ -234,8 +236,10 @@ impl FlatBlockPatch {
 
 /// A factorised submodel with its contact surface: what the penalty contact's static
 /// solution reads (the surface's point compliance, [`Self::point_compliance`]) and where its
-/// FE surface nodes lie ([`Self::surface_nodes`]), in the contact frame (m: `x` along the
-/// rail, `y` across; a body turned over about x, the tread, has the surface's y mirrored).
+/// FE surface nodes lie ([`Self::surface_points`]), in the contact frame (m: `x` along the
+/// rail, `y` across; a body turned over about x, the tread, has the surface's y mirrored); and
+/// the assembled matrices an explicit integration of the submodel takes
+/// ([`Self::matrices`]).
 pub struct FactorisedSurface {
     xs: Vec<f64>,
     ys: Vec<f64>,
@@ -246,7 +250,19 @@ pub struct FactorisedSurface {
     /// Thickness of the surface's element layer (m), for the penalty's element volume.
     layer_m: f64,
     dofmap: DofMap,
+    matrices: FeMatrices,
     factor: Cholesky,
+}
+
+/// An FE surface node in the contact frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfacePoint {
+    /// Position `(x, y)` (m, contact frame).
+    pub at: [f64; 2],
+    /// Tributary face area (m²).
+    pub area_m2: f64,
+    /// The mesh node.
+    pub node: usize,
 }
 
 impl FactorisedSurface {
@@ -260,9 +276,30 @@ impl FactorisedSurface {
         self.layer_m
     }
 
+    /// The submodel's DOF map (its held DOFs constrained).
+    pub fn dofmap(&self) -> &DofMap {
+        &self.dofmap
+    }
+
+    /// The submodel's assembled stiffness, mass and damping over its free DOFs.
+    pub fn matrices(&self) -> &FeMatrices {
+        &self.matrices
+    }
+
+    /// The mesh's axes in the contact frame: `+1` or `−1` per component (x, y, z), the
+    /// contact frame's `z` the rail's up (a tread, turned over about x, has `[1, −1, −1]`).
+    pub fn axes(&self) -> [f64; 3] {
+        [1.0, self.y_sign, self.y_sign]
+    }
+
+    /// Solves `K u = f` in place for the columns of `rhs` (free DOFs).
+    pub fn solve_in_place(&self, rhs: &mut Mat<f64>) -> Result<(), StructureError> {
+        Ok(self.factor.solve_in_place(rhs)?)
+    }
+
     /// The FE surface nodes within `|x| ≤ half_x_m`, `|y| ≤ half_y_m` (m, contact frame),
-    /// as `(x, y)` with their tributary face area (m²), ordered by x then y.
-    pub fn surface_nodes(&self, half_x_m: f64, half_y_m: f64) -> Vec<([f64; 2], f64)> {
+    /// ordered by x then y.
+    pub fn surface_points(&self, half_x_m: f64, half_y_m: f64) -> Vec<SurfacePoint> {
         let tributary = |p: &[f64], i: usize| {
             let lo = if i > 0 { p[i] - p[i - 1] } else { 0.0 };
             let hi = if i + 1 < p.len() {
@@ -273,22 +310,32 @@ impl FactorisedSurface {
             0.5 * (lo + hi)
         };
         let eps = 1e-12;
+        let ny = self.ys.len();
         let mut out = Vec::new();
         for (i, &x) in self.xs.iter().enumerate() {
             if x.abs() > half_x_m + eps {
                 continue;
             }
-            let mut column: Vec<([f64; 2], f64)> = (0..self.ys.len())
+            let mut column: Vec<SurfacePoint> = (0..ny)
                 .filter(|&j| self.ys[j].abs() <= half_y_m + eps)
-                .map(|j| {
-                    let area = tributary(&self.xs, i) * tributary(&self.ys, j);
-                    ([x, self.y_sign * self.ys[j]], area)
+                .map(|j| SurfacePoint {
+                    at: [x, self.y_sign * self.ys[j]],
+                    area_m2: tributary(&self.xs, i) * tributary(&self.ys, j),
+                    node: self.nodes[i * ny + j],
                 })
                 .collect();
-            column.sort_by(|p, q| p.0[1].total_cmp(&q.0[1]));
+            column.sort_by(|p, q| p.at[1].total_cmp(&q.at[1]));
             out.extend(column);
         }
         out
+    }
+
+    /// The surface nodes that carry the point `p` (m, contact frame) and their bilinear
+    /// weights on the face that contains it.
+    pub fn weights(&self, p: [f64; 2]) -> [(usize, f64); 4] {
+        let ny = self.ys.len();
+        penalty::bilinear_weights(&self.xs, &self.ys, [p[0], self.y_sign * p[1]])
+            .map(|(i, j, w)| (self.nodes[i * ny + j], w))
     }
 
     /// The normal point compliance among `points` (m, contact frame): entry `(i, j)` the
@@ -296,14 +343,7 @@ impl FactorisedSurface {
     /// `j` (m/N), a point's force shared and its displacement read by the bilinear shape
     /// functions of the surface face that contains it. Symmetric by construction.
     pub fn point_compliance(&self, points: &[[f64; 2]]) -> Result<DMatrix<f64>, StructureError> {
-        let ny = self.ys.len();
-        let weights: Vec<[(usize, f64); 4]> = points
-            .iter()
-            .map(|p| {
-                let w = penalty::bilinear_weights(&self.xs, &self.ys, [p[0], self.y_sign * p[1]]);
-                w.map(|(i, j, w)| (self.nodes[i * ny + j], w))
-            })
-            .collect();
+        let weights: Vec<[(usize, f64); 4]> = points.iter().map(|&p| self.weights(p)).collect();
         // the inward normal is −z
         let dof = |node: usize| self.dofmap.free_index(3 * node + 2);
         let mut rhs = Mat::<f64>::zeros(self.dofmap.n_free(), points.len());
@@ -369,6 +409,16 @@ fn factorise(
     fixed: &[usize],
     material: IsotropicElastic,
 ) -> Result<(DofMap, Cholesky), StructureError> {
+    let (dofmap, _, factor) = assemble_and_factorise(mesh, fixed, material)?;
+    Ok((dofmap, factor))
+}
+
+/// As [`factorise`], keeping the assembled matrices (`K`, `M`, `C`).
+fn assemble_and_factorise(
+    mesh: &Mesh,
+    fixed: &[usize],
+    material: IsotropicElastic,
+) -> Result<(DofMap, FeMatrices, Cholesky), StructureError> {
     let dofmap = DofMap::with_constraints(mesh.nodes.len(), fixed)?;
     let fm = assemble(
         mesh,
@@ -379,7 +429,7 @@ fn factorise(
         AssemblyOptions::default(),
     )?;
     let factor = Cholesky::new(&fm.k)?;
-    Ok((dofmap, factor))
+    Ok((dofmap, fm, factor))
 }
 
 /// Node positions (m) over `[start, end]`: elements of at most `size` within `±reach` of 0

@@ -97,11 +97,11 @@ fn penalty_on_patch(
     let rail = rail.factorised_surface().unwrap();
     let tread = tread.factorised_surface().unwrap();
     // the slaves: the tread's surface nodes over the patch and a margin
-    let slaves = tread.surface_nodes(1.4 * hertz.a_m, 1.4 * hertz.b_m);
-    let points: Vec<[f64; 2]> = slaves.iter().map(|s| s.0).collect();
-    let area = slaves[0].1;
+    let slaves = tread.surface_points(1.4 * hertz.a_m, 1.4 * hertz.b_m);
+    let points: Vec<[f64; 2]> = slaves.iter().map(|s| s.at).collect();
+    let area = slaves[0].area_m2;
     assert!(
-        slaves.iter().all(|s| (s.1 / area - 1.0).abs() < 1e-6),
+        slaves.iter().all(|s| (s.area_m2 / area - 1.0).abs() < 1e-6),
         "the slaves' faces are the grid's"
     );
     let c: DMatrix<f64> =

@@ -15,7 +15,7 @@
 //! which the global model carries (the split against it is theory §6.9, not done here).
 
 use crate::contact::hertz::lateral_weights;
-use crate::fe::assembly::DofMap;
+use crate::fe::assembly::{DofMap, FeMatrices};
 use crate::fe::material::IsotropicElastic;
 use crate::fe::solve::Cholesky;
 use crate::mesh::rail::{extrude_rail, RailTopology};
@@ -23,8 +23,8 @@ use crate::mesh::section::{SectionMesh, SectionParams};
 use crate::model::Model;
 
 use super::{
-    check_ratio, check_size, factorise, graded_axis, out_of_range, strip_kernel, twin_compliance,
-    FactorisedSurface, StripKernel, StructureError, Surface,
+    assemble_and_factorise, check_ratio, check_size, graded_axis, out_of_range, strip_kernel,
+    twin_compliance, FactorisedSurface, StripKernel, StructureError, Surface,
 };
 
 /// Free DOFs of a segment: every section node of the inner planes but the foot's.
@@ -39,6 +39,16 @@ fn segment(
     planes: &[f64],
     material: IsotropicElastic,
 ) -> Result<(RailTopology, DofMap, Cholesky), StructureError> {
+    let (topo, dofmap, _, factor) = segment_with_matrices(section, planes, material)?;
+    Ok((topo, dofmap, factor))
+}
+
+/// As [`segment`], keeping the assembled matrices.
+fn segment_with_matrices(
+    section: &SectionMesh,
+    planes: &[f64],
+    material: IsotropicElastic,
+) -> Result<(RailTopology, DofMap, FeMatrices, Cholesky), StructureError> {
     let (mesh, topo) = extrude_rail(section, planes, 0)?;
     let last = planes.len() - 1;
     let mut fixed = Vec::new();
@@ -52,8 +62,8 @@ fn segment(
         };
         fixed.extend(held.iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]));
     }
-    let (dofmap, factor) = factorise(&mesh, &fixed, material)?;
-    Ok((topo, dofmap, factor))
+    let (dofmap, matrices, factor) = assemble_and_factorise(&mesh, &fixed, material)?;
+    Ok((topo, dofmap, matrices, factor))
 }
 
 /// A UIC54 rail-head segment carrying an `nx × ny` contact grid of square elements.
@@ -291,7 +301,8 @@ impl RailHeadPatch {
     pub fn factorised_surface(&self) -> Result<FactorisedSurface, StructureError> {
         let (section, planes) = self.geometry()?;
         check_size(free_dofs(&section, &planes))?;
-        let (topo, dofmap, factor) = segment(&section, &planes, self.material)?;
+        let (topo, dofmap, matrices, factor) =
+            segment_with_matrices(&section, &planes, self.material)?;
         let mut running: Vec<(f64, usize)> = section
             .running_surface
             .iter()
@@ -309,6 +320,7 @@ impl RailHeadPatch {
             y_sign: 1.0,
             layer_m: self.element_m.min(self.element_y_m) / self.refine as f64,
             dofmap,
+            matrices,
             factor,
         })
     }

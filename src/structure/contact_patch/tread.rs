@@ -27,8 +27,8 @@ use crate::mesh::Part;
 use crate::model::Model;
 
 use super::{
-    check_ratio, check_size, factorise, graded_axis, out_of_range, strip_kernel, twin_compliance,
-    FactorisedSurface, StripKernel, StructureError, Surface,
+    assemble_and_factorise, check_ratio, check_size, factorise, graded_axis, out_of_range,
+    strip_kernel, twin_compliance, FactorisedSurface, StripKernel, StructureError, Surface,
 };
 
 /// The rim's cross-section (m, wheel frame: y along the axle towards the field side, the
@@ -349,7 +349,9 @@ impl TreadPatch {
     /// submodel beyond [`super::MAX_PATCH_DOFS`] before building it.
     pub fn factorised_surface(&self) -> Result<FactorisedSurface, StructureError> {
         let prism = self.refined()?;
-        let (dofmap, factor) = prism.factorise(self.material)?;
+        check_size(prism.free_dofs())?;
+        let (dofmap, matrices, factor) =
+            assemble_and_factorise(&prism.mesh(), &prism.holds(), self.material)?;
         let [xs, ys, zs] = prism.planes;
         let (nbx, nby, nbz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
         let nodes = (0..=nbx)
@@ -362,6 +364,7 @@ impl TreadPatch {
             nodes,
             y_sign: -1.0,
             dofmap,
+            matrices,
             factor,
         })
     }
