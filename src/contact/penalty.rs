@@ -8,12 +8,13 @@
 //! the gap, m; `⟨·⟩` the positive part), zero in separation. Friction is Coulomb's through an
 //! elastic tangential spring: the trial force `f* = f_old − k_t Δs` (Δs the slave's tangential
 //! displacement increment relative to the master point, m) is returned radially onto the
-//! circle `|f| ≤ µ F_n`; the step's frictional dissipation (J) is Coulomb's `µ F_n λ`, `λ =
-//! (|f*| − µ F_n) / k_t` the slip the return takes up. In stick and in steady sliding the
-//! stored spring energy plus the dissipation is then exactly the work of the actual forces on
-//! the relative motion (trapezoidal, as the central difference measures it); the energy the
-//! return removes, `(|f*|² − |f|²) / 2 k_t`, would exceed it by `k_t λ² / 2` per step, an
-//! error of first order in the step. A contact that opens releases its spring's energy as
+//! circle `|f| ≤ µ F_n`; the step's frictional dissipation (J) is what the spring loses
+//! beyond the work of the actual forces on the relative motion (trapezoidal, as the central
+//! difference measures it): `|f_old|²/2k_t − |f|²/2k_t − (f_old + f)·Δs/2`. In steady sliding
+//! that is Coulomb's `µ F_n |Δs|`, in stick zero, and when the normal force falls it includes
+//! the energy the lowered limit releases; the energy the return removes, `(|f*|² − |f|²) /
+//! 2 k_t`, would exceed Coulomb's by `k_t λ² / 2` per step (`λ` the slip the return takes up),
+//! an error of first order in the step. A contact that opens releases its spring's energy as
 //! dissipation.
 //!
 //! The penalty per node is the segment stiffness of the codes, [`segment_stiffness`]:
@@ -147,15 +148,19 @@ impl PenaltyLaw {
                 dissipated_j: 0.0,
             };
         }
-        let t = t2.sqrt();
-        let scale = limit / t;
-        state.force_n = [trial[0] * scale, trial[1] * scale];
+        let old = state.force_n;
+        let scale = limit / t2.sqrt();
+        let new = [trial[0] * scale, trial[1] * scale];
+        state.force_n = new;
+        // what the spring lost beyond the work done on it (trapezoidal, the actual forces)
+        let stored = |f: [f64; 2]| (f[0] * f[0] + f[1] * f[1]) / (2.0 * kt);
+        let work = -0.5
+            * ((old[0] + new[0]) * slip_increment_m[0] + (old[1] + new[1]) * slip_increment_m[1]);
         PointForce {
             normal_n: normal,
-            tangential_n: state.force_n,
+            tangential_n: new,
             slipping: true,
-            // Coulomb's µ F_n times the slip the return takes up, (|f*| − µ F_n) / k_t
-            dissipated_j: limit * (t - limit) / kt,
+            dissipated_j: stored(old) + work - stored(new),
         }
     }
 
@@ -244,6 +249,7 @@ pub fn solve_static_normal(
     // start from the points of the smallest gap
     let g_min = gap_m.iter().cloned().fold(f64::INFINITY, f64::min);
     let mut active: Vec<usize> = (0..n).filter(|&i| gap_m[i] <= g_min).collect();
+    let mut violations = 0;
     for it in 1..=MAX_ACTIVE_SET_ITERATIONS {
         let m = active.len();
         let mut a = DMatrix::<f64>::from_fn(m, m, |r, c| compliance[(active[r], active[c])]);
@@ -272,9 +278,15 @@ pub fn solve_static_normal(
             .filter(|&i| forces[i] < 0.0)
             .collect();
         let tol = 1e-12 * delta.abs().max(g_min.abs());
+        // the tolerance guards the joining side only: a point just touching stays out
+        let mut is_active = vec![false; n];
+        for &i in &active {
+            is_active[i] = true;
+        }
         let joining: Vec<usize> = (0..n)
-            .filter(|&i| forces[i] == 0.0 && !active.contains(&i) && penetration[i] > tol)
+            .filter(|&i| !is_active[i] && penetration[i] > tol)
             .collect();
+        violations = negative.len() + joining.len();
         if negative.is_empty() && joining.is_empty() {
             return Ok(StaticNormal {
                 forces_n: forces,
@@ -295,9 +307,9 @@ pub fn solve_static_normal(
         }
     }
     Err(ContactError::NotConverged {
-        solver: "static penalty contact (active set)",
+        solver: "static penalty contact (active set; residual: points still violating)",
         iterations: MAX_ACTIVE_SET_ITERATIONS,
-        residual: f64::NAN,
+        residual: violations as f64,
     })
 }
 
@@ -376,6 +388,17 @@ mod tests {
         let f = LAW.update(-1e-6, [0.0; 2], &mut s);
         assert_eq!(s.force_n, [0.0, 0.0]);
         assert_relative_eq!(f.dissipated_j, stored, max_relative = 1e-12);
+    }
+
+    #[test]
+    fn a_falling_normal_force_releases_the_springs_excess_as_dissipation() {
+        // 10 N in stick at N = 100 N; N falls to 20 N (limit 6 N) without motion: the spring
+        // drops to 6 N and the energy between, (10² − 6²)/2k_t, is dissipated
+        let mut s = TangentialState::default();
+        LAW.update(1e-5, [2e-6, 0.0], &mut s);
+        let f = LAW.update(2e-6, [0.0; 2], &mut s);
+        assert_relative_eq!(f.tangential_n[0], -6.0, epsilon = 1e-12);
+        assert_relative_eq!(f.dissipated_j, (100.0 - 36.0) / 1e7, max_relative = 1e-12);
     }
 
     #[test]

@@ -31,7 +31,7 @@ use crate::contact::penalty::{
     segment_stiffness, solve_static_normal, PenaltyLaw, TangentialState,
 };
 use crate::contact::report::{solve_case, ContactCase, ContactSolution, TangentialLoading};
-use crate::contact::HertzContact;
+use crate::contact::{ContactError, HertzContact};
 use crate::fe::assembly::DofMap;
 use crate::fe::material::IsotropicElastic;
 use crate::structure::contact_patch::rail_head::RailHeadPatch;
@@ -123,12 +123,20 @@ impl PenaltyPair {
     }
 
     /// The pair with the slaves' tangential springs loaded by `forces_n` (N on each slave,
-    /// contact x and y): a start in a steady traction.
-    pub fn with_tangential_forces(mut self, forces_n: &[[f64; 2]]) -> Self {
+    /// contact x and y; one per slave): a start in a steady traction.
+    pub fn with_tangential_forces(mut self, forces_n: &[[f64; 2]]) -> Result<Self, ContactError> {
+        if forces_n.len() != self.slaves.len() {
+            return Err(ContactError::WrongLength {
+                name: "forces_n",
+                got: forces_n.len(),
+                expected: self.slaves.len(),
+                per: "slave",
+            });
+        }
         for (state, f) in self.states.iter_mut().zip(forces_n) {
             state.force_n = *f;
         }
-        self
+        Ok(self)
     }
 
     /// The law.
@@ -143,8 +151,9 @@ impl PenaltyPair {
 
     /// An upper bound on the highest `ω²` (1/s²) the penalty springs add to the two bodies'
     /// (their lumped masses `slave_mass`, `master_mass`, kg per free DOF): Gershgorin's on
-    /// `M⁻¹ K_p`, a slave's row `2k / m_s`, a master node's `2k Σ w / m_m` (the weights of
-    /// every slave it carries), `k` the larger of the normal and tangential penalties. The
+    /// `M⁻¹ K_p`, a slave's row `k (1 + Σ|w|) / m_s`, a master node's `k Σ |w| (|w| + Σ|w'|)
+    /// / m_m` bounded by `k Σ |w| (1 + W) / m_m` (`W` the largest `Σ|w|` of a slave), `k`
+    /// the larger of the normal and tangential penalties. The
     /// stable step takes it on top of the bodies' own (`λ_max(A + B) ≤ λ_max(A) + λ_max(B)`
     /// for the symmetric mass-scaled operators).
     pub fn omega2_bound(
@@ -161,14 +170,17 @@ impl PenaltyPair {
         };
         let mut carried: std::collections::HashMap<usize, f64> = std::collections::HashMap::new();
         let mut bound: f64 = 0.0;
+        let mut widest: f64 = 0.0;
         for s in &self.slaves {
-            bound = bound.max(2.0 * k / mass(&slave, slave_mass, s.node));
+            let sum: f64 = s.master.iter().map(|m| m.1.abs()).sum();
+            widest = widest.max(sum);
+            bound = bound.max(k * (1.0 + sum) / mass(&slave, slave_mass, s.node));
             for &(node, w) in &s.master {
                 *carried.entry(node).or_insert(0.0) += w.abs();
             }
         }
         for (node, w) in carried {
-            bound = bound.max(2.0 * k * w / mass(&master, master_mass, node));
+            bound = bound.max(k * w * (1.0 + widest) / mass(&master, master_mass, node));
         }
         bound
     }
@@ -273,7 +285,7 @@ pub struct RollingCase {
     pub load_n: f64,
     /// Longitudinal creepage ξ (−; positive braking, |ξ| ≤ 0.05).
     pub creepage: f64,
-    /// Coulomb friction µ (−).
+    /// Coulomb friction µ (−, 0–2).
     pub friction: f64,
     /// Segment-stiffness scale of the penalty (−, above 0; the codes' default 0.1).
     pub scale: f64,
@@ -314,10 +326,52 @@ impl RollingCase {
     }
 }
 
+impl RollingCase {
+    /// Checks the ranges (names the key out of range).
+    pub fn check(&self) -> Result<(), ContactError> {
+        let bad = |name: &'static str, value: f64, reason: &'static str| {
+            Err(ContactError::InvalidParameter {
+                name,
+                value,
+                reason,
+            })
+        };
+        if !(2e-4..=5e-3).contains(&self.element_m) {
+            return bad("element_m", self.element_m, "2e-4 to 5e-3 m");
+        }
+        if self.creepage.is_nan() || self.creepage.abs() > 0.05 {
+            return bad("creepage", self.creepage, "|ξ| at most 0.05");
+        }
+        if !(self.safety > 0.0 && self.safety <= 1.0) {
+            return bad("safety", self.safety, "above 0, at most 1");
+        }
+        if !(self.travel_m >= 2.0 * self.element_m && self.travel_m <= 0.1) {
+            return bad("travel_m", self.travel_m, "two elements to 0.1 m");
+        }
+        for (name, v) in [
+            ("load_n", self.load_n),
+            ("scale", self.scale),
+            ("speed_m_per_s", self.speed_m_per_s),
+            ("wheel_radius_m", self.wheel_radius_m),
+            ("crown_radius_m", self.crown_radius_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(name, v, "finite, above 0");
+            }
+        }
+        PenaltyLaw {
+            normal_n_per_m: 1.0,
+            tangential_n_per_m: 1.0,
+            friction: self.friction,
+        }
+        .check()
+    }
+}
+
 /// What a rolling case gives.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RollingResult {
-    /// Time step (s) and steps run.
+    /// Time step (s).
     pub dt_s: f64,
     /// Steps run.
     pub steps: usize,
@@ -328,7 +382,7 @@ pub struct RollingResult {
     /// The history: contact position (m), normal force (N), tangential force on the wheel
     /// (N, x), friction's dissipation so far (J), nodes in contact.
     pub history: Vec<(f64, f64, f64, f64, usize)>,
-    /// Mean normal force and traction coefficient `F_x / F_n` over the last third (N, −).
+    /// Mean normal force over the last third of the travel (N).
     pub steady_normal_n: f64,
     /// Mean `F_x / F_n` over the last third of the travel (−).
     pub steady_traction: f64,
@@ -346,6 +400,7 @@ pub struct RollingResult {
 /// Runs a rolling case (module docs): builds and factorises both submodels, the static
 /// normal start, then the central difference over the travel.
 pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
+    case.check()?;
     let hertz_input = crate::contact::HertzInput {
         radius_x_m: case.wheel_radius_m,
         radius_y_m: case.crown_radius_m,
@@ -375,7 +430,7 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
         .map(|p| p.area_m2)
         .fold(f64::INFINITY, f64::min);
     let layer = tread.layer_m().min(rail.layer_m());
-    let k = segment_stiffness(
+    let k_n = segment_stiffness(
         case.material.youngs_modulus,
         case.material.poisson_ratio,
         area,
@@ -389,7 +444,7 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
     // the static start: the penalty's normal solution on the condensed point compliances
     let c = rail.point_compliance(&at)? + tread.point_compliance(&at)?;
     let gap0: Vec<f64> = at.iter().map(|&p| shape(p, x0)).collect();
-    let start = solve_static_normal(&c, &gap0, k, case.load_n)?;
+    let start = solve_static_normal(&c, &gap0, k_n, case.load_n)?;
     let slaves: Vec<Slave> = points
         .iter()
         .map(|p| Slave {
@@ -401,14 +456,19 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
     let traction: Vec<[f64; 2]> = match case.start {
         RollingStart::Normal => vec![[0.0; 2]; slaves.len()],
         RollingStart::KalkerTraction => {
-            let k = kalker(case, case.load_n)?;
-            let total_k = k.result.fx_n;
+            let steady = kalker(case, case.load_n)?;
+            let total_k = steady.result.fx_n;
             let mut f: Vec<[f64; 2]> = points
                 .iter()
                 .zip(&start.forces_n)
                 .map(|(p, &fz)| {
                     let tx = if fz > 0.0 {
-                        nearest(&k.x_m, &k.y_m, &k.traction_x_pa, [p.at[0] - x0, p.at[1]])
+                        nearest(
+                            &steady.x_m,
+                            &steady.y_m,
+                            &steady.traction_x_pa,
+                            [p.at[0] - x0, p.at[1]],
+                        )
                     } else {
                         0.0
                     };
@@ -459,11 +519,11 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
     };
     let (op_t, op_r) = (op(&tread)?, op(&rail)?);
     let law = PenaltyLaw {
-        normal_n_per_m: k,
-        tangential_n_per_m: k,
+        normal_n_per_m: k_n,
+        tangential_n_per_m: k_n,
         friction: case.friction,
     };
-    let mut pair = PenaltyPair::new(law, slaves).with_tangential_forces(&traction);
+    let mut pair = PenaltyPair::new(law, slaves).with_tangential_forces(&traction)?;
     let w2 = |o: &ExplicitOperator| -> Result<f64, ExplicitError> {
         Ok(StableStep::estimate(o)?.omega_max_estimate.powi(2))
     };
@@ -478,11 +538,11 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
     let slip = [case.creepage * case.speed_m_per_s * dt, 0.0];
     let delta = start.approach_m;
     let mut history = Vec::with_capacity(steps + 1);
-    for k in 0..=steps {
-        let xc = x0 + case.speed_m_per_s * dt * k as f64;
+    for step in 0..=steps {
+        let xc = x0 + case.speed_m_per_s * dt * step as f64;
         let totals = pair.forces(
             |s| shape(at[s], xc) - delta,
-            if k == 0 { [0.0; 2] } else { slip },
+            if step == 0 { [0.0; 2] } else { slip },
             (tread_side, &u_t, &mut f_t),
             (rail_side, &u_r, &mut f_r),
         );
@@ -493,14 +553,14 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
             pair.dissipated_j(),
             totals.nodes,
         ));
-        if k == steps {
+        if step == steps {
             break;
         }
         op_t.step(dt, &mut u_t, &mut v_t, &f_t, &mut s_t);
         op_r.step(dt, &mut u_r, &mut v_r, &f_r, &mut s_r);
         if !(u_t.iter().chain(&u_r).all(|x| x.is_finite())) {
             return Err(ExplicitError::Diverged {
-                t_s: dt * k as f64,
+                t_s: dt * step as f64,
                 x_m: xc,
                 part: "penalty contact",
             });
@@ -518,7 +578,7 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
         dt_s: dt,
         steps,
         dofs: [rail.n_dofs(), tread.n_dofs()],
-        k_n_per_m: k,
+        k_n_per_m: k_n,
         history,
         steady_normal_n,
         steady_traction: steady_fx / steady_normal_n,

@@ -192,10 +192,15 @@ fn penalty_on_the_refined_bodies_converges_to_the_rigid_limit_and_hertz() {
     print_rows(h, &rows, dofs, &hertz);
     let rigid = rows[4];
     for r in &rows[..4] {
-        // a softer penalty penetrates more and spreads the load: larger patch, lower peak
-        assert!(r.penetration_m > rigid.penetration_m);
+        // a softer penalty spreads the load: larger patch, lower peak
         assert!(r.a_m >= rigid.a_m * (1.0 - 1e-9) && r.p0_pa <= rigid.p0_pa * (1.0 + 1e-9));
     }
+    // near the rigid limit the forces settle, so the penetration falls as 1/k
+    let ratio = rows[2].penetration_m / rows[3].penetration_m;
+    assert!(
+        (ratio / 10.0 - 1.0).abs() < 0.05,
+        "penetration s = 10 / s = 100: {ratio}"
+    );
     let close = |v: f64, w: f64| (v / w - 1.0).abs();
     assert!(close(rows[3].a_m, rigid.a_m) < 0.01 && close(rows[3].p0_pa, rigid.p0_pa) < 0.01);
     // the rigid limit on 2 mm faces: a, b within 10 %, p0 within 20 % of Hertz
