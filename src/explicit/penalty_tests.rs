@@ -378,3 +378,72 @@ fn penalty_rolling_case() {
     print_rolling(&case, &r);
     println!("  {:.0} s", t.elapsed().as_secs_f64());
 }
+
+#[test]
+fn a_rolling_case_out_of_range_is_refused_by_name() {
+    use crate::contact::ContactError;
+    let named = |case: RollingCase| match case.check() {
+        Err(ContactError::InvalidParameter { name, .. }) => name,
+        other => panic!("expected a named refusal, got {other:?}"),
+    };
+    let base = RollingCase::p4c();
+    assert!(base.check().is_ok());
+    assert_eq!(
+        named(RollingCase {
+            safety: 0.0,
+            ..base
+        }),
+        "safety"
+    );
+    assert_eq!(
+        named(RollingCase {
+            travel_m: 0.0,
+            ..base
+        }),
+        "travel_m"
+    );
+    assert_eq!(
+        named(RollingCase {
+            element_m: 1e-2,
+            ..base
+        }),
+        "element_m"
+    );
+    assert_eq!(
+        named(RollingCase {
+            creepage: f64::NAN,
+            ..base
+        }),
+        "creepage"
+    );
+    assert_eq!(
+        named(RollingCase {
+            load_n: -1.0,
+            ..base
+        }),
+        "load_n"
+    );
+    assert_eq!(
+        named(RollingCase {
+            friction: 3.0,
+            ..base
+        }),
+        "friction"
+    );
+    // the runner refuses before building anything
+    assert!(run_rolling(&RollingCase {
+        safety: 1.5,
+        ..base
+    })
+    .is_err());
+    // the pair's initial forces must be one per slave
+    let pair = PenaltyPair::new(
+        PenaltyLaw {
+            normal_n_per_m: 1.0,
+            tangential_n_per_m: 1.0,
+            friction: 0.3,
+        },
+        vec![],
+    );
+    assert!(pair.with_tangential_forces(&[[0.0; 2]]).is_err());
+}
