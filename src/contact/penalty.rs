@@ -28,10 +28,11 @@
 //! tangential spring is the regularisation of stick (the codes' "elastic slip"); friction is
 //! isotropic with one coefficient (no static/dynamic distinction, as the reference's µ).
 //!
-//! References: J. O. Hallquist, *LS-DYNA Theory Manual* (2006), §23.8 (penalty segment
-//! stiffness, friction); P. Wriggers, *Computational Contact Mechanics*, 2nd ed. (2006), §5.2
-//! (penalty) and §5.2.3 (return mapping of Coulomb friction); T. Belytschko, W. K. Liu,
-//! B. Moran, *Nonlinear Finite Elements for Continua and Structures* (2000), §10.4.
+//! References: J. O. Hallquist, *LS-DYNA Theory Manual* (2006), the chapter on sliding
+//! interfaces (the penalty segment stiffness, friction); P. Wriggers, *Computational Contact
+//! Mechanics*, 2nd ed. (2006), the penalty method and the return mapping of Coulomb friction;
+//! T. Belytschko, W. K. Liu, B. Moran, *Nonlinear Finite Elements for Continua and
+//! Structures* (2000), ch. 10 (contact-impact).
 
 use nalgebra::{DMatrix, DVector};
 
