@@ -127,20 +127,19 @@ pub fn cache_key(
         .f64("f_max_hz", fmax_hz)
         .str("substructure", substructure.name());
     Ok(match substructure {
-        Substructure::Track => web_snap_keyed(key, m)?,
+        Substructure::Track => section_mesh_keyed(key, m)?,
         Substructure::Wheel => key,
     })
 }
 
-/// `key` with the rail section's mesh revision added where the section mesher's web snap
-/// changed the mesh ([`crate::structure::track::web_snap_changed`]), unchanged elsewhere: the
-/// keys of every other model stay as they were, and no basis of a former mesh is read.
-pub(crate) fn web_snap_keyed(key: CacheKey, m: &Model) -> Result<CacheKey, BasisError> {
-    Ok(if crate::structure::track::web_snap_changed(m)? {
-        key.u64("section_web_snap_revision", 2)
-    } else {
-        key
-    })
+/// `key` with the model's rail section mesh added
+/// ([`crate::structure::track::section_mesh_bytes`]): a track's basis is keyed by the mesh it
+/// was computed on, so a change of the section mesher never reads a basis of a former mesh.
+pub(crate) fn section_mesh_keyed(key: CacheKey, m: &Model) -> Result<CacheKey, BasisError> {
+    Ok(key.bytes(
+        "rail_section_mesh",
+        &crate::structure::track::section_mesh_bytes(m)?,
+    ))
 }
 
 fn column(modes: &Mat<f64>, j: usize) -> Vec<f64> {
@@ -324,36 +323,26 @@ pub fn wheel_basis_keyed(
 
 #[cfg(test)]
 mod key_tests {
-    use super::{cache_key, web_snap_keyed, Model, Substructure};
+    use super::{cache_key, section_mesh_keyed, Model, Substructure};
     use crate::eigen::cache::CacheKey;
 
     #[test]
-    fn only_models_whose_section_mesh_the_web_snap_changed_get_a_new_track_key() {
-        // The reference-described holds (y rows on node lines at ±17.5 mm, 9.5 mm from the web
-        // face, 20 mm elements) were snapped under the half-element rule and are not now; the
-        // Dutch presets' strip edges (±7.5 mm: snapped under both rules; ±27.5 mm: under
-        // neither) and the default model keep their keys.
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
-        let file = |name: &str| {
-            load_model(&ModelSource::File(root.join(name)), &[]).expect("a model file")
-        };
-        let changed = |m: &Model| crate::structure::track::web_snap_changed(m).unwrap();
-        for name in [
-            "reference-described-rpm1.toml",
-            "reference-described-rpm3.toml",
-        ] {
-            assert!(changed(&file(name)), "{name}");
-        }
-        for name in ["dutch-rpm1.toml", "dutch-rpm3.toml", "dutch-rpm5.toml"] {
-            assert!(!changed(&file(name)), "{name}");
-        }
-        assert!(!changed(&load_model(&ModelSource::Builtin, &[]).unwrap()));
-        let m = file("reference-described-rpm3.toml");
+    fn a_track_key_follows_its_rail_section_mesh() {
+        // The same model twice gives the same key; another section mesh (here a finer one)
+        // another key, through the mesh itself; the wheel's key does not carry the rail's.
+        let m = model(&[]);
         let plain = CacheKey::new().str("substructure", "track");
-        assert_ne!(
-            web_snap_keyed(plain.clone(), &m).unwrap().hex(),
-            plain.hex()
-        );
+        let keyed = |m: &Model| section_mesh_keyed(plain.clone(), m).unwrap().hex();
+        assert_eq!(keyed(&m), keyed(&model(&[])));
+        assert_ne!(keyed(&m), plain.hex());
+        let bytes = |m: &Model| crate::structure::track::section_mesh_bytes(m).unwrap();
+        let mut finer = model(&[]);
+        finer.mesh.section_size = 0.01;
+        finer.mesh.head_size = 0.01;
+        assert!(bytes(&m) != bytes(&finer), "a finer section, another mesh");
+        assert_ne!(keyed(&m), keyed(&finer));
+        let w = |m: &Model| cache_key(m, 2000.0, Substructure::Wheel).unwrap().hex();
+        assert_eq!(w(&m), w(&finer));
     }
     use crate::model::{load_model, ModelSource};
     use crate::structure::track::TrackStructure;
@@ -374,7 +363,7 @@ mod key_tests {
         load_model(&ModelSource::Builtin, &sets).unwrap()
     }
 
-    const TRACK_5KHZ: &str = "e0b954c7a1be358d5b886e34dadf76db1b63998ddd8e65456e9a94f688df1344";
+    const TRACK_5KHZ: &str = "02ee7d027310faa50bb1c98fa9c2195a9a69dd0a847d6b5db92efa7777f3011c";
     const WHEEL_5KHZ: &str = "d64f584be6144d9f52b158545295c5d05de966c3c038bc390bad0a66d442fbf1";
 
     fn key(m: &Model, sub: &str) -> String {
@@ -386,8 +375,8 @@ mod key_tests {
     }
 
     /// Regression guard: the default model's cache keys at 5 kHz, the names of the modal
-    /// cache's entries for it, are those the string-named substructures gave (the cache
-    /// computed before [`Substructure`] still loads).
+    /// cache's entries for it. The wheel's is the one the string-named substructures gave; the
+    /// track's changed once on 2026-11-30, when it began to carry the rail section mesh.
     #[test]
     fn the_default_model_s_cache_keys_are_unchanged() {
         let m = Model::default_model();

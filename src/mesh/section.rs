@@ -328,10 +328,6 @@ const FILLET_SPLIT_FROM_WEB: f64 = 45.0 / 70.0;
 /// required foot node line (module doc).
 const WEB_SNAP_SHARE: f64 = 0.25;
 
-/// [`WEB_SNAP_SHARE`] before 2026-11-30: a half. Kept to tell which models' meshes the change
-/// moved ([`uic54_web_snap_changed`]).
-const WEB_SNAP_SHARE_BEFORE: f64 = 0.5;
-
 /// The web's boundary in the foot `y_c` (m): the web half thickness `web_half`, or the required
 /// foot node line (of `lines`, m, `y ≥ 0`) nearest to it within `reach` (m).
 fn web_boundary(lines: &[f64], web_half: f64, reach: f64) -> f64 {
@@ -341,18 +337,6 @@ fn web_boundary(lines: &[f64], web_half: f64, reach: f64) -> f64 {
         .filter(|&y| y > 0.0 && (y - web_half).abs() <= reach)
         .min_by(|a, b| (a - web_half).abs().total_cmp(&(b - web_half).abs()))
         .unwrap_or(web_half)
-}
-
-/// Whether the UIC54 section mesh of `params` differs from the one the snap within half an
-/// element gave ([`WEB_SNAP_SHARE_BEFORE`]): a foot node line between a quarter and a half
-/// element from the web face. The modal cache keys such models apart, so that no basis of the
-/// former mesh is read for them.
-pub(crate) fn uic54_web_snap_changed(params: &SectionParams) -> Result<bool, MeshError> {
-    let o = Outline::new(&RailProfile::uic54()?)?;
-    let lines = foot_lines(params, o.foot_half_w)?;
-    let (web, h) = (o.pf[0], params.size_m);
-    Ok(web_boundary(&lines, web, WEB_SNAP_SHARE * h)
-        != web_boundary(&lines, web, WEB_SNAP_SHARE_BEFORE * h))
 }
 
 impl SectionMesh {

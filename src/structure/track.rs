@@ -198,12 +198,29 @@ fn section_params(m: &Model, layout: &Layout, hold: &HoldPattern) -> SectionPara
     }
 }
 
-/// Whether the model's rail section mesh is one the section mesher's snap rule changed on
-/// 2026-11-30 ([`crate::mesh::section::uic54_web_snap_changed`]): the modal cache keys such a
-/// track apart from its former mesh.
-pub(crate) fn web_snap_changed(m: &Model) -> Result<bool, StructureError> {
-    let params = section_params(m, &Layout::new(m), &m.fastening.hold_pattern());
-    Ok(crate::mesh::section::uic54_web_snap_changed(&params)?)
+/// The model's rail section mesh as bytes (node coordinates, quadrilaterals, foot and
+/// running-surface node lists, inclination): what the modal cache keys a track by beside the
+/// model's values, so that a change of the section mesher keys every model it changes apart
+/// (and every key changes once, when this was added).
+pub(crate) fn section_mesh_bytes(m: &Model) -> Result<Vec<u8>, StructureError> {
+    let (section, _) = rail_section(m, &Layout::new(m), &m.fastening.hold_pattern())?;
+    let mut b = Vec::with_capacity(16 * section.nodes.len() + 32 * section.quads.len() + 64);
+    let mut put = |x: u64| b.extend_from_slice(&x.to_le_bytes());
+    put(section.nodes.len() as u64);
+    for p in &section.nodes {
+        put(p[0].to_bits());
+        put(p[1].to_bits());
+    }
+    put(section.quads.len() as u64);
+    for q in &section.quads {
+        q.iter().for_each(|&n| put(n as u64));
+    }
+    for list in [&section.foot_underside, &section.running_surface] {
+        put(list.len() as u64);
+        list.iter().for_each(|&n| put(n as u64));
+    }
+    put(section.inclination_rad.to_bits());
+    Ok(b)
 }
 
 /// The inclined rail section (foot node lines at the fastenings' holds, within the

@@ -44,7 +44,7 @@ pub fn component_key(
         .u64("pattern_degree", opts.pattern_degree as u64)
         .u64("ballast_pattern_degree", opts.ballast_pattern_degree as u64)
         .str("substructure", part);
-    crate::eigen::basis::web_snap_keyed(key, m)
+    crate::eigen::basis::section_mesh_keyed(key, m)
 }
 
 pub(super) fn store_component(cache: &ModalCache, key: &CacheKey, c: &ComponentBasis, fmax: f64) {
