@@ -368,6 +368,21 @@ impl RollingCase {
     }
 }
 
+/// The contact at one step of a rolling case.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RollingSample {
+    /// Contact position along the rail (m).
+    pub x_m: f64,
+    /// Normal force on the wheel (N).
+    pub normal_n: f64,
+    /// Longitudinal force on the wheel (N; negative braking).
+    pub fx_n: f64,
+    /// Friction's dissipation since the start (J).
+    pub dissipated_j: f64,
+    /// Slave nodes in contact.
+    pub nodes: usize,
+}
+
 /// What a rolling case gives.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RollingResult {
@@ -379,9 +394,8 @@ pub struct RollingResult {
     pub dofs: [usize; 2],
     /// Normal penalty per slave (N/m).
     pub k_n_per_m: f64,
-    /// The history: contact position (m), normal force (N), tangential force on the wheel
-    /// (N, x), friction's dissipation so far (J), nodes in contact.
-    pub history: Vec<(f64, f64, f64, f64, usize)>,
+    /// The contact at every step.
+    pub history: Vec<RollingSample>,
     /// Mean normal force over the last third of the travel (N).
     pub steady_normal_n: f64,
     /// Mean `F_x / F_n` over the last third of the travel (−).
@@ -401,14 +415,7 @@ pub struct RollingResult {
 /// normal start, then the central difference over the travel.
 pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
     case.check()?;
-    let hertz_input = crate::contact::HertzInput {
-        radius_x_m: case.wheel_radius_m,
-        radius_y_m: case.crown_radius_m,
-        youngs_pa: case.material.youngs_modulus,
-        poisson: case.material.poisson_ratio,
-        load_n: case.load_n,
-    };
-    let hertz = HertzContact::solve(&hertz_input)?;
+    let hertz = contact_case(case, case.load_n).hertz()?;
     let h = case.element_m;
     // the refined zone covers the travel and 1.4 semi-axes beyond either end
     let reach_x = 0.5 * case.travel_m + 1.4 * hertz.a_m;
@@ -492,12 +499,14 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
         dofmap: tread.dofmap(),
         axes: tread.axes(),
     };
-    let static_state = |body: &FactorisedSurface, side: Side<'_>, sign: f64| {
+    // the static displacement of a body under the start's contact forces: on the slaves as
+    // they are, on the master nodes shared by the weights and reversed
+    let static_state = |body: &FactorisedSurface, side: Side<'_>, is_slave: bool| {
         let mut f = Mat::<f64>::zeros(body.dofmap().n_free(), 1);
         let mut load = vec![0.0; body.dofmap().n_free()];
         for ((sl, &fz), t) in slaves.iter().zip(&start.forces_n).zip(&traction) {
             let force = [t[0], t[1], fz];
-            if sign > 0.0 {
+            if is_slave {
                 side.add(&mut load, sl.node, force);
             } else {
                 for &(node, w) in &sl.master {
@@ -511,8 +520,8 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
         body.solve_in_place(&mut f)?;
         Ok::<Vec<f64>, ExplicitError>((0..f.nrows()).map(|i| f[(i, 0)]).collect())
     };
-    let mut u_t = static_state(&tread, tread_side, 1.0)?;
-    let mut u_r = static_state(&rail, rail_side, -1.0)?;
+    let mut u_t = static_state(&tread, tread_side, true)?;
+    let mut u_r = static_state(&rail, rail_side, false)?;
     let op = |b: &FactorisedSurface| {
         let m = b.matrices();
         ExplicitOperator::new(m.k.as_ref(), m.m.as_ref(), m.c.as_ref())
@@ -546,33 +555,36 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
             (tread_side, &u_t, &mut f_t),
             (rail_side, &u_r, &mut f_r),
         );
-        history.push((
-            xc,
-            totals.normal_n,
-            totals.tangential_n[0],
-            pair.dissipated_j(),
-            totals.nodes,
-        ));
-        if step == steps {
-            break;
-        }
-        op_t.step(dt, &mut u_t, &mut v_t, &f_t, &mut s_t);
-        op_r.step(dt, &mut u_r, &mut v_r, &f_r, &mut s_r);
-        if !(u_t.iter().chain(&u_r).all(|x| x.is_finite())) {
+        history.push(RollingSample {
+            x_m: xc,
+            normal_n: totals.normal_n,
+            fx_n: totals.tangential_n[0],
+            dissipated_j: pair.dissipated_j(),
+            nodes: totals.nodes,
+        });
+        // a diverged state shows in the contact forces at once; the states are scanned only
+        // then, not every step (a pass over both bodies' DOFs)
+        let forces_finite = totals.normal_n.is_finite() && totals.tangential_n[0].is_finite();
+        if !forces_finite || (step == steps && !u_t.iter().chain(&u_r).all(|x| x.is_finite())) {
             return Err(ExplicitError::Diverged {
                 t_s: dt * step as f64,
                 x_m: xc,
                 part: "penalty contact",
             });
         }
+        if step == steps {
+            break;
+        }
+        op_t.step(dt, &mut u_t, &mut v_t, &f_t, &mut s_t);
+        op_r.step(dt, &mut u_r, &mut v_r, &f_r, &mut s_r);
     }
     // the last third of the travel
     let tail = &history[2 * history.len() / 3..];
     let n = tail.len() as f64;
-    let steady_normal_n = tail.iter().map(|h| h.1).sum::<f64>() / n;
-    let steady_fx = tail.iter().map(|h| h.2).sum::<f64>() / n;
+    let steady_normal_n = tail.iter().map(|h| h.normal_n).sum::<f64>() / n;
+    let steady_fx = tail.iter().map(|h| h.fx_n).sum::<f64>() / n;
     let (first, last) = (tail[0], tail[tail.len() - 1]);
-    let steady_power_w = (last.3 - first.3) / ((tail.len() - 1) as f64 * dt);
+    let steady_power_w = (last.dissipated_j - first.dissipated_j) / ((tail.len() - 1) as f64 * dt);
     let kalker = kalker(case, steady_normal_n)?;
     Ok(RollingResult {
         dt_s: dt,
@@ -589,9 +601,10 @@ pub fn run_rolling(case: &RollingCase) -> Result<RollingResult, ExplicitError> {
     })
 }
 
-/// Kalker's steady rolling on the half-space for the case at the normal load `load_n` (N).
-fn kalker(case: &RollingCase, load_n: f64) -> Result<ContactSolution, ExplicitError> {
-    Ok(solve_case(&ContactCase {
+/// The rolling case as a contact case on the half-space at the normal load `load_n` (N):
+/// Hertz and Kalker's steady rolling for the same bodies and creepage.
+fn contact_case(case: &RollingCase, load_n: f64) -> ContactCase {
+    ContactCase {
         wheel_radius_m: case.wheel_radius_m,
         crown_radius_m: case.crown_radius_m,
         wheel_lateral_radius_m: f64::INFINITY,
@@ -602,7 +615,12 @@ fn kalker(case: &RollingCase, load_n: f64) -> Result<ContactSolution, ExplicitEr
         tangential: TangentialLoading::Creepage(case.creepage),
         speed_m_per_s: case.speed_m_per_s,
         ..ContactCase::default()
-    })?)
+    }
+}
+
+/// Kalker's steady rolling on the half-space for the case at the normal load `load_n` (N).
+fn kalker(case: &RollingCase, load_n: f64) -> Result<ContactSolution, ExplicitError> {
+    Ok(solve_case(&contact_case(case, load_n))?)
 }
 
 /// The value of the element-centre field `v` (index `i · y.len() + j`) of the element

@@ -302,11 +302,11 @@ fn print_rolling(case: &RollingCase, r: &RollingResult) {
     for h in r.history.iter().step_by(every) {
         println!(
             "  x {:+.3} mm: F_n {:.1} N, F_x {:.2} N (F_x/F_n {:.5}), {} nodes",
-            h.0 * 1e3,
-            h.1,
-            h.2,
-            h.2 / h.1,
-            h.4
+            h.x_m * 1e3,
+            h.normal_n,
+            h.fx_n,
+            h.fx_n / h.normal_n,
+            h.nodes
         );
     }
     println!(

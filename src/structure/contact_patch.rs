@@ -155,22 +155,9 @@ impl FlatBlockPatch {
     pub fn factorised_surface(&self) -> Result<FactorisedSurface, StructureError> {
         let planes = self.planes()?;
         check_size(block_free_dofs(&planes))?;
-        let [xs, ys, zs] = planes;
-        let (dofmap, matrices, factor) = self.factorise(&xs, &ys, &zs)?;
-        let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
-        let nodes = (0..=nx)
-            .flat_map(|i| (0..=ny).map(move |j| block_node(nx, ny, i, j, nz)))
-            .collect();
-        Ok(FactorisedSurface {
-            layer_m: zs[nz] - zs[nz - 1],
-            xs,
-            ys,
-            nodes,
-            y_sign: 1.0,
-            dofmap,
-            matrices,
-            factor,
-        })
+        let [xs, ys, zs] = &planes;
+        let factorised = self.factorise(xs, ys, zs)?;
+        Ok(FactorisedSurface::block_top(planes, 1.0, factorised))
     }
 
     /// The block on the node planes, its far faces fixed: the DOF map, the matrices and the
@@ -266,6 +253,31 @@ pub struct SurfacePoint {
 }
 
 impl FactorisedSurface {
+    /// The top face `z = zs.last()` of a tensor-product block on the node planes `planes`
+    /// (m; [`graded_block_mesh`]'s node numbering), `y_sign` −1 for a block turned over about
+    /// x, with the block's DOF map, matrices and factor.
+    fn block_top(
+        planes: [Vec<f64>; 3],
+        y_sign: f64,
+        (dofmap, matrices, factor): (DofMap, FeMatrices, Cholesky),
+    ) -> Self {
+        let [xs, ys, zs] = planes;
+        let (nx, ny, nz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
+        let nodes = (0..=nx)
+            .flat_map(|i| (0..=ny).map(move |j| block_node(nx, ny, i, j, nz)))
+            .collect();
+        FactorisedSurface {
+            layer_m: zs[nz] - zs[nz - 1],
+            xs,
+            ys,
+            nodes,
+            y_sign,
+            dofmap,
+            matrices,
+            factor,
+        }
+    }
+
     /// Free DOFs of the submodel.
     pub fn n_dofs(&self) -> usize {
         self.dofmap.n_free()

@@ -350,23 +350,8 @@ impl TreadPatch {
     pub fn factorised_surface(&self) -> Result<FactorisedSurface, StructureError> {
         let prism = self.refined()?;
         check_size(prism.free_dofs())?;
-        let (dofmap, matrices, factor) =
-            assemble_and_factorise(&prism.mesh(), &prism.holds(), self.material)?;
-        let [xs, ys, zs] = prism.planes;
-        let (nbx, nby, nbz) = (xs.len() - 1, ys.len() - 1, zs.len() - 1);
-        let nodes = (0..=nbx)
-            .flat_map(|i| (0..=nby).map(move |j| block_node(nbx, nby, i, j, nbz)))
-            .collect();
-        Ok(FactorisedSurface {
-            layer_m: zs[nbz] - zs[nbz - 1],
-            xs,
-            ys,
-            nodes,
-            y_sign: -1.0,
-            dofmap,
-            matrices,
-            factor,
-        })
+        let factorised = assemble_and_factorise(&prism.mesh(), &prism.holds(), self.material)?;
+        Ok(FactorisedSurface::block_top(prism.planes, -1.0, factorised))
     }
 
     /// Builds, factorises and condenses the prism. Refuses a submodel beyond
