@@ -214,12 +214,20 @@ fn basis<C: Serialize + DeserializeOwned + Send>(
         )),
         CacheLookup::Miss => {}
     }
-    let mats = mats()?;
+    // Only K and M enter the solve: the dampers' matrix goes, and the mass is kept without
+    // the stored zeros of the pattern it shares with K (a lumped mass fills only its
+    // diagonal; the 34-bay strip-held track: 480 MB each). The factorisations' pattern is
+    // K's with either mass, so the modes are the same to the bit.
+    let FeMatrices { k, m, .. } = mats()?;
+    let m = {
+        let full = m;
+        super::lanczos::drop_stored_zeros(full.as_ref())
+    };
     let progress = cache.progress();
     progress.stage(&format!("{name} modes below {fmax} Hz (Lanczos)"), 0);
     let sol = solve(
-        mats.k.as_ref(),
-        mats.m.as_ref(),
+        k.as_ref(),
+        m.as_ref(),
         &EigenOptions::new(fmax),
         Some(progress),
     )

@@ -52,11 +52,10 @@ struct BandState {
     last_density: Option<f64>,
 }
 
-/// Where a slice starts, what kind of slice it is, and the band it lies in.
-struct SliceStart<'c> {
-    /// The factorisation at the slice's lower bound lo.
-    cur: &'c ShiftFactor,
-    /// Lower bound lo (rad²/s²) = `cur.shift`.
+/// Where a slice starts, what kind of slice it is, and the band it lies in (the
+/// factorisation at its lower bound is handed to [`solve_slice`] by value).
+struct SliceStart {
+    /// Lower bound lo (rad²/s²): the shift of the factorisation there.
     lo: f64,
     /// Sturm count at lo.
     nu_cur: usize,
@@ -74,15 +73,17 @@ struct SliceStart<'c> {
 }
 
 /// A solved slice: the Lanczos result, its upper bound `hi` (rad²/s²) and the Sturm count
-/// there, the factorisation at `hi` when a slice follows, and the midpoint factorisation of
-/// a two-sided solve.
+/// there, the factorisation at `hi` when a slice follows, and the factorisation the slice
+/// was solved with (the one at its lower bound, or at its midpoint for a two-sided solve,
+/// which replaces the lower one: that is dropped before the midpoint is factorised, so a
+/// band holds at most two factors at a time).
 struct SolvedSlice {
     out: SliceOut,
     hi: f64,
     nu_hi: usize,
     next: Option<ShiftFactor>,
-    mid: Option<ShiftFactor>,
-    /// Solved two-sided (with the shift at `mid`).
+    solver: ShiftFactor,
+    /// Solved two-sided (`solver` at the midpoint).
     sided: bool,
 }
 
@@ -130,7 +131,6 @@ pub(super) fn run_band(
         let target = opts.modes_per_slice;
         let t_slice = Instant::now();
         let start = SliceStart {
-            cur: &cur,
             lo: cur.shift,
             nu_cur,
             // A remainder of up to 1.5 targets is one last slice (default track to 5 kHz: a
@@ -150,17 +150,17 @@ pub(super) fn run_band(
             top,
             lam_max,
         };
-        let mut solved = solve_slice(ctx, phi.as_ref(), &st, &start, opts)?;
+        let mut solved = solve_slice(ctx, phi.as_ref(), &st, &start, cur, opts)?;
         let keep = complete_slice(ctx, phi.as_ref(), &st, &start, &mut solved, opts)?;
         let SolvedSlice {
             out,
             hi,
             nu_hi,
             next,
-            mid,
+            solver,
             ..
         } = solved;
-        drop(mid);
+        drop(solver);
         let lo = start.lo;
         let carried_in = st.carried.iter().filter(|&&x| x < hi).count();
         // Layout from the committed columns: the slice's modes (carried ones below hi, then
@@ -215,7 +215,8 @@ fn solve_slice(
     ctx: &mut Ctx<'_>,
     phi: MatRef<'_, f64>,
     st: &BandState,
-    start: &SliceStart<'_>,
+    start: &SliceStart,
+    cur: ShiftFactor,
     opts: &EigenOptions,
 ) -> Result<SolvedSlice, EigenError> {
     let (top_shift, nu_max) = start.top;
@@ -250,6 +251,15 @@ fn solve_slice(
         }
         _ => None,
     };
+    // A cap placed by the previous slice's density can enclose a cluster that slice did not
+    // see (the 34-bay strip-held track to 5 kHz: 312 modes under a cap after a 51-mode slice).
+    let capped = match capped {
+        Some(f) => {
+            let bound = (f.shift, f.negative_count, Some(f));
+            recut(ctx, &st.carried, (lo, nu_cur), bound, target, lam_max)?.2
+        }
+        None => None,
+    };
     // A slice to a bound whose Sturm count is known: the cap, or the band top.
     let known_end = match capped {
         Some(f) => Some((f.shift, f.negative_count, Some(f))),
@@ -265,7 +275,8 @@ fn solve_slice(
         // with the shift at lo, so they converge sooner and more accurately (default
         // track to 5 kHz: 416 instead of 536 solved vectors in the upper band's last
         // slice, and the M-orthogonality across the band bound 5e-8 instead of 2e-7).
-        let (out, mid, sided) = if next.is_none() {
+        let (out, solver, sided) = if next.is_none() {
+            drop(cur);
             let m = factorize(ctx, 0.5 * (lo + hi), 1.0, lam_max)?;
             let slice = SliceParams {
                 fac: &m,
@@ -275,26 +286,27 @@ fn solve_slice(
                 two_sided: Some(lo),
             };
             let o = lanczos_slice(ctx, &slice, opts)?;
-            (o, Some(m), true)
+            (o, m, true)
         } else {
             let slice = SliceParams {
-                fac: start.cur,
+                fac: &cur,
                 locked,
                 want,
                 known: Some((hi, need_new)),
                 two_sided: None,
             };
-            (lanczos_slice(ctx, &slice, opts)?, None, two_sided)
+            (lanczos_slice(ctx, &slice, opts)?, cur, two_sided)
         };
         Ok(SolvedSlice {
             out,
             hi,
             nu_hi,
             next,
-            mid,
+            solver,
             sided,
         })
     } else if two_sided {
+        drop(cur);
         // Width of about `target` modes, corrected once by the Sturm count.
         let (hi, nu_hi, next) =
             two_sided_upper(ctx, lo, (nu_cur, nu_max), top_shift, target, last, lam_max)?;
@@ -314,7 +326,7 @@ fn solve_slice(
             hi,
             nu_hi,
             next,
-            mid: Some(m),
+            solver: m,
             sided: true,
         })
     } else {
@@ -322,7 +334,7 @@ fn solve_slice(
         // the boundary below keeps 2/3 or more of them: 1.25 targets keep about one.
         let want = (target + target / 4).saturating_sub(nc).max(target / 2);
         let slice = SliceParams {
-            fac: start.cur,
+            fac: &cur,
             locked,
             want,
             known: None,
@@ -333,18 +345,20 @@ fn solve_slice(
         // (carried and new; everything below it has converged; a wide gap keeps K − τM
         // well conditioned).
         let tau = gap_boundary(&out.lambdas, lo, &st.carried, top_shift);
-        let (hi, nu_hi, next) = if tau >= top_shift {
+        let bound = if tau >= top_shift {
             (top_shift, nu_max, None)
         } else {
             let f = factorize(ctx, tau, 1.0, lam_max)?;
             (f.shift, f.negative_count, Some(f))
         };
+        let converged: Vec<f64> = out.lambdas.iter().chain(&st.carried).copied().collect();
+        let (hi, nu_hi, next) = recut(ctx, &converged, (lo, nu_cur), bound, target, lam_max)?;
         Ok(SolvedSlice {
             out,
             hi,
             nu_hi,
             next,
-            mid: None,
+            solver: cur,
             sided: two_sided,
         })
     }
@@ -357,7 +371,7 @@ fn complete_slice(
     ctx: &mut Ctx<'_>,
     phi: MatRef<'_, f64>,
     st: &BandState,
-    start: &SliceStart<'_>,
+    start: &SliceStart,
     solved: &mut SolvedSlice,
     opts: &EigenOptions,
 ) -> Result<Vec<usize>, EigenError> {
@@ -373,10 +387,9 @@ fn complete_slice(
     if keep.len() + carried_in != need {
         let locked = phi.subcols(0, st.lambdas.len() + st.carried.len());
         let nl = need.saturating_sub(carried_in);
-        let lf = solved.mid.as_ref().unwrap_or(start.cur);
         let wide = if solved.sided { 2 * nl } else { nl };
         let slice = SliceParams {
-            fac: lf,
+            fac: &solved.solver,
             locked,
             want: wide + opts.block_size,
             known: Some((hi, nl)),
@@ -512,6 +525,53 @@ fn two_sided_upper(
         }
         _ => (top_shift, nu_max, None),
     })
+}
+
+/// Moves an open-ended slice's upper bound `(hi, Sturm count there, its factorisation)` down
+/// while its Sturm count says the slice holds more than [`RECUT_RATIO`] `target` modes
+/// (at most [`RECUT_TRIES`] factorisations): the slice's Lanczos run converged the
+/// eigenvalues below `hi` only in part (the members of a cluster more multiple than the
+/// block, e.g. the sleepers' modes of a long track on identical supports), so a gap of its
+/// converged values `converged` (rad²/s²) can enclose many unseen ones, and the slice's
+/// second run, with the count known, would need a subspace that many times larger (the
+/// 34-bay strip-held track to 5 kHz: 312 modes in one slice, a 3.4 GB basis, 1432 solved
+/// vectors). The new bound is the λ the count predicts for `target` modes (linear in λ
+/// between `lo` and `hi`), moved into the widest relative gap of the converged values in
+/// the upper half below it, if any (a wide gap keeps `K − τM` well conditioned). A bound
+/// whose count is not above `nu_cur` (the Sturm count at `lo`) is not taken.
+fn recut(
+    ctx: &mut Ctx<'_>,
+    converged: &[f64],
+    (lo, nu_cur): (f64, usize),
+    mut bound: (f64, usize, Option<ShiftFactor>),
+    target: usize,
+    lam_max: f64,
+) -> Result<(f64, usize, Option<ShiftFactor>), EigenError> {
+    let mut l: Vec<f64> = converged.iter().copied().filter(|&x| x > lo).collect();
+    l.sort_by(f64::total_cmp);
+    for _ in 0..RECUT_TRIES {
+        let (hi, nu_hi, _) = bound;
+        let count = nu_hi - nu_cur;
+        if (count as f64) <= RECUT_RATIO * target as f64 {
+            break;
+        }
+        let predicted = lo + (hi - lo) * target as f64 / count as f64;
+        let floor = 0.5 * (lo + predicted);
+        let gaps = l.windows(2).filter(|w| w[0] >= floor && w[1] <= predicted);
+        let tau = gaps
+            .max_by(|a, b| {
+                let ga = (a[1] - a[0]) / a[1].abs().max(f64::MIN_POSITIVE);
+                let gb = (b[1] - b[0]) / b[1].abs().max(f64::MIN_POSITIVE);
+                ga.total_cmp(&gb)
+            })
+            .map_or(predicted, |w| 0.5 * (w[0] + w[1]));
+        let f = factorize(ctx, tau, 1.0, lam_max)?;
+        if f.negative_count <= nu_cur || f.negative_count >= nu_hi {
+            break;
+        }
+        bound = (f.shift, f.negative_count, Some(f));
+    }
+    Ok(bound)
 }
 
 /// Boundary τ (rad²/s²) of an open-ended slice at shift `lo`: the middle of the widest
@@ -706,6 +766,15 @@ pub(super) fn choose_splits(
 /// Largest width of a slice in a band above 0 Hz, as a multiple of its distance from the
 /// band's lower bound (see `run_band`).
 pub(super) const CAP_RATIO: f64 = 0.7;
+
+/// An open-ended slice whose Sturm count at its upper bound exceeds this many
+/// `modes_per_slice` gets a lower bound ([`recut`]): the band's last slice may hold 1.5
+/// targets, so a slice above that is one the Lanczos run saw only in part.
+pub(super) const RECUT_RATIO: f64 = 1.5;
+
+/// Factorisations [`recut`] may spend on one slice's bound (each takes one; the count
+/// model is linear in λ and a cluster can defeat it).
+pub(super) const RECUT_TRIES: usize = 3;
 
 /// Widest two-sided last slice of a band above 0 Hz, as a multiple of its distance from the
 /// band's lower bound: the margin of [`CAP_RATIO`] for a shift at the slice's midpoint.

@@ -55,7 +55,7 @@ pub(super) fn rayleigh_ritz_window(
 }
 
 /// A copy of `a` without its stored zero entries (same values, same shape).
-pub(super) fn drop_stored_zeros(a: SparseColMatRef<'_, usize, f64>) -> SparseColMat<usize, f64> {
+pub(crate) fn drop_stored_zeros(a: SparseColMatRef<'_, usize, f64>) -> SparseColMat<usize, f64> {
     let n = a.ncols();
     let mut col_ptr = Vec::with_capacity(n + 1);
     col_ptr.push(0usize);

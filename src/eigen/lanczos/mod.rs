@@ -30,15 +30,15 @@ use super::{
 
 mod band;
 mod check;
+
+pub(crate) use check::drop_stored_zeros;
 mod ctx;
 mod slice;
 #[cfg(test)]
 mod tests;
 
 use band::{choose_splits, lambda_at, run_band, split_probe_x, BandOut, BandParams, GROUNDED_TEST};
-use check::{
-    drop_stored_zeros, rayleigh_ritz_window, validate, verify, BOUND_WINDOW, BOUND_WINDOW_MAX,
-};
+use check::{rayleigh_ritz_window, validate, verify, BOUND_WINDOW, BOUND_WINDOW_MAX};
 use ctx::{diagonal_of, factorize, Ctx, Rng};
 
 /// Smallest model (free DOFs) that is split into concurrent bands by default: below it the
