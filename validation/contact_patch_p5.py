@@ -1,7 +1,9 @@
 """Summary of P5 in validation/contact_patch.md: half-space against fe-patch contact.
 
-Usage: python3 validation/contact_patch_p5.py DIR, where DIR holds the outputs of
-validation/contact_patch_p5.sh: for MODEL in rpm3, rpm1 and CONTACT in half-space, fe-patch,
+Usage: [SET=reference] python3 validation/contact_patch_p5.py DIR, where DIR holds the outputs
+of validation/contact_patch_p5.sh (run with the same SET; with SET=reference the
+reference-described models, their files prefixed ref-): for MODEL in rpm3, rpm1 and CONTACT in
+half-space, fe-patch,
 `passage-MODEL-CONTACT.json` with its directory `passage-MODEL-CONTACT/` (smooth rail) and
 `grow-MODEL-CONTACT.json` (the 10 um trial). Prints per case the registered quantities and
 the registered readings:
@@ -63,7 +65,9 @@ def case(d, model):
 
 def main(d):
     wear_band = {}
-    for model in ["rpm3", "rpm1"]:
+    pre = {"default": "", "reference": "ref-"}[os.environ.get("SET", "default")]
+    for m in ["rpm3", "rpm1"]:
+        model = pre + m
         r = case(d, model)
         if r is None:
             print(f"{model}: incomplete")
@@ -103,7 +107,7 @@ def main(d):
             f" wear {ch['wear_band_rms']:+.1f} %: {sel}, {amp}"
         )
         for c in CONTACTS:
-            wear_band.setdefault(c, {})[model] = r[c]["wear_band_rms"]
+            wear_band.setdefault(c, {})[m] = r[c]["wear_band_rms"]
             g = r[c]["grow"]
             if g:
                 gr = g["growth_rate"]
