@@ -252,13 +252,14 @@ fn solve_slice(
         _ => None,
     };
     // A cap placed by the previous slice's density can enclose a cluster that slice did not
-    // see (the 34-bay strip-held track to 5 kHz: 312 modes under a cap after a 51-mode slice).
-    let capped = match capped {
-        Some(f) => {
-            let bound = (f.shift, f.negative_count, Some(f));
-            recut(ctx, &st.carried, (lo, nu_cur), bound, target, lam_max)?.2
-        }
-        None => None,
+    // see (the 34-bay strip-held track to 5 kHz: 312 modes under a cap after a 51-mode
+    // slice). Such a cap does not end the slice: the slice runs open-ended below it and its
+    // bound goes into a gap of its converged values ([`recut`]).
+    let too_many =
+        |f: &ShiftFactor| (f.negative_count - nu_cur) as f64 > RECUT_RATIO * target as f64;
+    let (capped, over_cap) = match capped {
+        Some(f) if too_many(&f) => (None, Some(f)),
+        c => (c, None),
     };
     // A slice to a bound whose Sturm count is known: the cap, or the band top.
     let known_end = match capped {
@@ -345,11 +346,13 @@ fn solve_slice(
         // (carried and new; everything below it has converged; a wide gap keeps K − τM
         // well conditioned).
         let tau = gap_boundary(&out.lambdas, lo, &st.carried, top_shift);
-        let bound = if tau >= top_shift {
-            (top_shift, nu_max, None)
-        } else {
-            let f = factorize(ctx, tau, 1.0, lam_max)?;
-            (f.shift, f.negative_count, Some(f))
+        let bound = match over_cap {
+            Some(f) if tau >= f.shift => (f.shift, f.negative_count, Some(f)),
+            _ if tau >= top_shift => (top_shift, nu_max, None),
+            _ => {
+                let f = factorize(ctx, tau, 1.0, lam_max)?;
+                (f.shift, f.negative_count, Some(f))
+            }
         };
         let converged: Vec<f64> = out.lambdas.iter().chain(&st.carried).copied().collect();
         let (hi, nu_hi, next) = recut(ctx, &converged, (lo, nu_cur), bound, target, lam_max)?;
@@ -535,10 +538,14 @@ fn two_sided_upper(
 /// converged values `converged` (rad²/s²) can enclose many unseen ones, and the slice's
 /// second run, with the count known, would need a subspace that many times larger (the
 /// 34-bay strip-held track to 5 kHz: 312 modes in one slice, a 3.4 GB basis, 1432 solved
-/// vectors). The new bound is the λ the count predicts for `target` modes (linear in λ
-/// between `lo` and `hi`), moved into the widest relative gap of the converged values in
-/// the upper half below it, if any (a wide gap keeps `K − τM` well conditioned). A bound
-/// whose count is not above `nu_cur` (the Sturm count at `lo`) is not taken.
+/// vectors). The new bound is the middle of the widest relative gap of the converged values
+/// between the λ the count predicts for `target` modes (linear in λ between `lo` and `hi`)
+/// and halfway down to `lo`, or of the highest gap below that λ if none lies there: a bound
+/// only ever sits between converged values, as
+/// [`gap_boundary`]'s, since one on an eigenvalue of a multiple cluster can split the
+/// cluster's Sturm count arbitrarily (an equal-chains test: 1 of 24 below it, and the next
+/// slice's 23 at its own shift). Without such a gap, or when the bound's count is not above
+/// `nu_cur` (the Sturm count at `lo`), the bound stays.
 fn recut(
     ctx: &mut Ctx<'_>,
     converged: &[f64],
@@ -557,15 +564,20 @@ fn recut(
         }
         let predicted = lo + (hi - lo) * target as f64 / count as f64;
         let floor = 0.5 * (lo + predicted);
-        let gaps = l.windows(2).filter(|w| w[0] >= floor && w[1] <= predicted);
-        let tau = gaps
-            .max_by(|a, b| {
-                let ga = (a[1] - a[0]) / a[1].abs().max(f64::MIN_POSITIVE);
-                let gb = (b[1] - b[0]) / b[1].abs().max(f64::MIN_POSITIVE);
-                ga.total_cmp(&gb)
-            })
-            .map_or(predicted, |w| 0.5 * (w[0] + w[1]));
-        let f = factorize(ctx, tau, 1.0, lam_max)?;
+        let mid = |w: &[f64]| 0.5 * (w[0] + w[1]);
+        let below: Vec<&[f64]> = l
+            .windows(2)
+            .filter(|w| w[1] > w[0] && mid(w) <= predicted)
+            .collect();
+        let widest = below.iter().filter(|w| mid(w) >= floor).max_by(|a, b| {
+            let ga = (a[1] - a[0]) / a[1].abs().max(f64::MIN_POSITIVE);
+            let gb = (b[1] - b[0]) / b[1].abs().max(f64::MIN_POSITIVE);
+            ga.total_cmp(&gb)
+        });
+        let Some(w) = widest.or(below.last()) else {
+            break;
+        };
+        let f = factorize(ctx, mid(w), 1.0, lam_max)?;
         if f.negative_count <= nu_cur || f.negative_count >= nu_hi {
             break;
         }
