@@ -914,3 +914,43 @@ fn a_mass_without_its_stored_zeros_gives_the_same_modes_to_the_bit() {
     assert_eq!(a.eigenvalues_rad2_s2, b.eigenvalues_rad2_s2);
     assert_eq!(a.modes, b.modes);
 }
+
+/// A cap placed by a sparse slice's density over a dense cluster (`K = diag(λ)`, `M = I`: the
+/// eigenvalues are the diagonal): 40 sparse eigenvalues, 200 within 0.5 % of each other, 40
+/// sparse again, solved in a band above 0 Hz whose second slice is capped by the first one's
+/// density. The cap encloses about 210 modes (target 40); it must not end the slice (which
+/// would build a subspace for all of them): the slice runs open-ended below it and is cut in a
+/// gap of its converged values, so every slice holds at most 1.5 targets.
+#[test]
+fn a_cap_over_a_dense_cluster_does_not_end_the_slice() {
+    let mut exact: Vec<f64> = (0..40).map(|i| 1e6 * (1.0 + i as f64)).collect();
+    exact.extend((0..200).map(|j| 41e6 + 1e3 * j as f64));
+    exact.extend((0..40).map(|i| 45e6 + 1e6 * i as f64));
+    let n = exact.len();
+    let k = sparse(
+        n,
+        &exact
+            .iter()
+            .enumerate()
+            .map(|(i, &l)| (i, i, l))
+            .collect::<Vec<_>>(),
+    );
+    let m = sparse(n, &(0..n).map(|i| (i, i, 1.0)).collect::<Vec<_>>());
+    let (f_min, f_max) = (lambda_to_hz(10.5e6), lambda_to_hz(60.5e6));
+    let mut o = EigenOptions::new(f_max);
+    o.f_min_hz = f_min;
+    o.block_size = 4;
+    o.modes_per_slice = 40;
+    o.concurrent_bands = Some(1);
+    let sol = solve(k.as_ref(), m.as_ref(), &o, None).unwrap();
+    assert_quality(&sol);
+    assert_slices_tile(&sol);
+    let worst = check_against_dense(&sol, &exact, f_min, f_max);
+    let sizes: Vec<usize> = sol.slices.iter().map(|s| s.modes_found).collect();
+    eprintln!("slices {sizes:?}, worst rel err {worst:e}");
+    assert!(worst < 1e-10, "worst relative eigenvalue error {worst:e}");
+    assert!(
+        sizes.iter().all(|&s| s <= 60),
+        "slice sizes {sizes:?} above 60"
+    );
+}
