@@ -255,8 +255,9 @@ fn solve_slice(
     // see (the 34-bay strip-held track to 5 kHz: 312 modes under a cap after a 51-mode
     // slice). Such a cap does not end the slice: the slice runs open-ended below it and its
     // bound goes into a gap of its converged values ([`recut`]).
-    let too_many =
-        |f: &ShiftFactor| (f.negative_count - nu_cur) as f64 > RECUT_RATIO * target as f64;
+    let too_many = |f: &ShiftFactor| {
+        f.negative_count.saturating_sub(nu_cur) as f64 > RECUT_RATIO * target as f64
+    };
     let (capped, over_cap) = match capped {
         Some(f) if too_many(&f) => (None, Some(f)),
         c => (c, None),
@@ -558,7 +559,7 @@ fn recut(
     l.sort_by(f64::total_cmp);
     for _ in 0..RECUT_TRIES {
         let (hi, nu_hi, _) = bound;
-        let count = nu_hi - nu_cur;
+        let count = nu_hi.saturating_sub(nu_cur);
         if (count as f64) <= RECUT_RATIO * target as f64 {
             break;
         }
