@@ -255,11 +255,8 @@ fn solve_slice(
     // see (the 34-bay strip-held track to 5 kHz: 312 modes under a cap after a 51-mode
     // slice). Such a cap does not end the slice: the slice runs open-ended below it and its
     // bound goes into a gap of its converged values ([`recut`]).
-    let too_many = |f: &ShiftFactor| {
-        f.negative_count.saturating_sub(nu_cur) as f64 > RECUT_RATIO * target as f64
-    };
     let (capped, over_cap) = match capped {
-        Some(f) if too_many(&f) => (None, Some(f)),
+        Some(f) if oversized(f.negative_count.saturating_sub(nu_cur), target) => (None, Some(f)),
         c => (c, None),
     };
     // A slice to a bound whose Sturm count is known: the cap, or the band top.
@@ -560,7 +557,7 @@ fn recut(
     for _ in 0..RECUT_TRIES {
         let (hi, nu_hi, _) = bound;
         let count = nu_hi.saturating_sub(nu_cur);
-        if (count as f64) <= RECUT_RATIO * target as f64 {
+        if !oversized(count, target) {
             break;
         }
         let predicted = lo + (hi - lo) * target as f64 / count as f64;
@@ -585,6 +582,11 @@ fn recut(
         bound = (f.shift, f.negative_count, Some(f));
     }
     Ok(bound)
+}
+
+/// A slice of `count` modes holds more than [`RECUT_RATIO`] `target` modes.
+fn oversized(count: usize, target: usize) -> bool {
+    count as f64 > RECUT_RATIO * target as f64
 }
 
 /// Boundary τ (rad²/s²) of an open-ended slice at shift `lo`: the middle of the widest
