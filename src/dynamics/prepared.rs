@@ -242,9 +242,7 @@ impl PreparedModel {
         } = parts;
         // the fe-patch (if the model asks for it), kept with the modes
         super::fe_patch::use_cache_dir(cache.dir());
-        let cfg = super::setup::contact_config_for(model, model.run.speed())?;
-        let hertz_b_m = super::setup::static_hertz(model, model.vehicle.wheel_load)?.b_m;
-        super::fe_patch::prepare(model, &cfg, hertz_b_m, Some(cache.progress()))?;
+        super::fe_patch::prepare_model(model, Some(cache.progress()))?;
         let mut engine = timed(&mut times.engine, || {
             PassageEngine::new(
                 model,

@@ -1,6 +1,7 @@
 //! The influence operators of a passage's contact grid with `contact.influence = "fe-patch"`
-//! (theory §6.9), for the reduced engine and the `contact` command (the explicit engine
-//! refuses it, [`crate::explicit::ExplicitError::FePatch`]): the model's fe-patch on the grid
+//! (theory §6.9), for both passage engines and the `contact` command (the explicit engine
+//! lags the part of the split its one-step compliance cannot carry, theory §8.6): the model's
+//! fe-patch on the grid
 //! ([`crate::structure::contact_patch::of_model`]) as strip operators with the split as a
 //! negative uniform compliance ([`StripInfluence::with_uniform`]).
 //!
@@ -223,6 +224,14 @@ pub fn prepare(
     }
     model_patch_cached(model, &patch_grid(cfg, hertz_b_m), progress)?;
     Ok(())
+}
+
+/// [`prepare`] for the model's own contact configuration at its speed, its twins loaded as
+/// the static Hertz patch of its wheel load.
+pub fn prepare_model(model: &Model, progress: Option<&dyn Progress>) -> Result<(), PassageError> {
+    let cfg = super::setup::contact_config_for(model, model.run.speed())?;
+    let hertz_b_m = super::setup::static_hertz(model, model.vehicle.wheel_load)?.b_m;
+    prepare(model, &cfg, hertz_b_m, progress)
 }
 
 /// What an fe-patch's operators stand beside.
