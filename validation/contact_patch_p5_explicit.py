@@ -17,7 +17,9 @@ readings:
 - the explicit fe-patch passage's mean F_N and F_L within 1 % of the reduced fe-patch
   passage's (else the start or the lagged split is mis-booked);
 - its energy ledger's residual beside the half-space run's (above 5 % of the contact work:
-  its amplitudes suspect).
+  its amplitudes suspect);
+- with the explicit 10 um trials (`explicit-grow-rpm3-CONTACT.json`), whether the trial's
+  verdict (grows or decays) changes with the contact model, beside the reduced engine's.
 """
 import csv
 import json
@@ -108,6 +110,18 @@ def main():
     for engine in ["explicit", "reduced"]:
         for pre in ["", "ref-"]:
             ranking(runs, engine, pre)
+    # the 10 um trial of the default RPM3 (TRIAL=1), beside the reduced engine's
+    for label, d, name in [("explicit", ex, "explicit-grow-rpm3"), ("reduced", red, "grow-rpm3")]:
+        for c in CONTACTS:
+            p = os.path.join(d, f"{name}-{c}.json")
+            if not os.path.exists(p) or os.path.getsize(p) == 0:
+                continue
+            j = json.load(open(p))
+            print(
+                f"{label} 10 um trial, default RPM3, {c}: {j['verdict']['outcome']['outcome']}, "
+                f"phase {j['phase'][0]}, r = {j['correlation'][0]:+.3f}, "
+                f"F_L band {j['fl_band_rms_n'][0]:.1f} N, F_N band {j['fn_band_rms_n'][0]:.1f} N"
+            )
 
 
 if __name__ == "__main__":

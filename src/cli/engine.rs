@@ -34,7 +34,7 @@ pub(crate) fn prepare_fe_patch(model: &Model, cache: Option<&Path>) -> anyhow::R
         corrugation::passage::fe_patch::use_cache_dir(dir);
     }
     let pb = super::progress::bar("fe-patch influence coefficients");
-    corrugation::passage::fe_patch::prepare_model(model, Some(&pb))
+    corrugation::passage::setup::prepare_fe_patch(model, Some(&pb))
         .context("the fe-patch (contact.influence)")?;
     pb.finish_and_clear();
     Ok(())

@@ -242,7 +242,7 @@ impl PreparedModel {
         } = parts;
         // the fe-patch (if the model asks for it), kept with the modes
         super::fe_patch::use_cache_dir(cache.dir());
-        super::fe_patch::prepare_model(model, Some(cache.progress()))?;
+        super::setup::prepare_fe_patch(model, Some(cache.progress()))?;
         let mut engine = timed(&mut times.engine, || {
             PassageEngine::new(
                 model,

@@ -226,14 +226,6 @@ pub fn prepare(
     Ok(())
 }
 
-/// [`prepare`] for the model's own contact configuration at its speed, its twins loaded as
-/// the static Hertz patch of its wheel load.
-pub fn prepare_model(model: &Model, progress: Option<&dyn Progress>) -> Result<(), PassageError> {
-    let cfg = super::setup::contact_config_for(model, model.run.speed())?;
-    let hertz_b_m = super::setup::static_hertz(model, model.vehicle.wheel_load)?.b_m;
-    prepare(model, &cfg, hertz_b_m, progress)
-}
-
 /// What an fe-patch's operators stand beside.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Beside {

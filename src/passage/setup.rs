@@ -10,6 +10,7 @@ use crate::contact::{
     TransientRolling,
 };
 use crate::model::Model;
+use crate::progress::Progress;
 use crate::structure::WheelStructure;
 
 /// Relative tolerance of the tangential contact solver in a passage (−): the traction error
@@ -764,6 +765,18 @@ pub fn passage_contact(
         Some(op) => TransientRolling::with_influence(cfg, op),
     }
     .map_err(PassageError::ContactGrid)
+}
+
+/// The fe-patch of the model's own contact configuration at its speed (its twins loaded as
+/// the static Hertz patch of its wheel load), built or read before any passage
+/// ([`super::fe_patch::prepare`]; nothing for the half-space).
+pub fn prepare_fe_patch(
+    model: &Model,
+    progress: Option<&dyn Progress>,
+) -> Result<(), PassageError> {
+    let cfg = contact_config_for(model, model.run.speed())?;
+    let hertz_b_m = static_hertz(model, model.vehicle.wheel_load)?.b_m;
+    super::fe_patch::prepare(model, &cfg, hertz_b_m, progress)
 }
 
 /// The grid of [`passage_contact`] from the model's contact configuration `cfg`
