@@ -649,29 +649,41 @@ fn the_small_explicit_preset_warns_that_its_mesh_is_in_the_band() {
     );
 }
 
+/// The fe-patch is the reduced engine's: the explicit engine refuses it by its key before any
+/// work (no patch is built), by `explicit` and by `passage --engine explicit` alike.
+#[test]
+fn the_explicit_engine_refuses_the_fe_patch_by_its_key() {
+    for args in [
+        &["explicit", "--set", "contact.influence=fe-patch"][..],
+        &[
+            "passage",
+            "--engine",
+            "explicit",
+            "--set",
+            "contact.influence=fe-patch",
+        ][..],
+    ] {
+        assert_clean_error(args, &["contact.influence", "fe-patch", "reduced engine"]);
+    }
+}
+
 /// An fe-patch whose submodels would not fit (beyond the submodels' DOF bound, or the
 /// machine's memory) is refused before it is built, naming the grid keys (a 64 × 64 grid:
-/// about 2.4 M DOFs and 90 GB by the estimate): by `contact`, and by the explicit engine
-/// (which takes the fe-patch, lagging the part of the split its one-step compliance cannot
-/// carry) before its set-up, through `explicit` and `passage --engine explicit` alike.
+/// about 2.4 M DOFs and 90 GB by the estimate).
 #[test]
 fn an_fe_patch_beyond_the_machine_is_refused_before_it_is_built() {
-    let big = [
-        "--set",
-        "contact.influence=fe-patch",
-        "--set",
-        "contact.grid_nx=64",
-        "--set",
-        "contact.grid_ny=64",
-    ];
-    for command in [
-        &["contact"][..],
-        &["explicit"][..],
-        &["passage", "--engine", "explicit"][..],
-    ] {
-        let args: Vec<&str> = command.iter().chain(big.iter()).copied().collect();
-        assert_clean_error(&args, &["fe-patch", "GB", "contact.grid_nx", "half-space"]);
-    }
+    assert_clean_error(
+        &[
+            "contact",
+            "--set",
+            "contact.influence=fe-patch",
+            "--set",
+            "contact.grid_nx=64",
+            "--set",
+            "contact.grid_ny=64",
+        ],
+        &["fe-patch", "GB", "contact.grid_nx", "half-space"],
+    );
 }
 
 /// The fe-patch needs the residual flexibilities (its split takes the global mesh's share of

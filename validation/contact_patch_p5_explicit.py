@@ -1,4 +1,5 @@
-"""Summary of P5 on the explicit engine in validation/contact_patch.md: half-space against
+"""Summary of P5 on the explicit engine in validation/contact_patch.md (the exploration of
+the lagged split, outputs of commit ab4a7aa; the explicit engine refuses the fe-patch since): half-space against
 fe-patch contact, 140 km/h, smooth rail, beside the reduced engine's pairs.
 
 Usage: python3 validation/contact_patch_p5_explicit.py EXPLICIT_DIR REDUCED_DIR [REF_DIR],

@@ -1,5 +1,6 @@
 #!/bin/bash
-# P5 of validation/contact_patch.md on the explicit engine: half-space against fe-patch
+# P5 of validation/contact_patch.md on the explicit engine (the exploration of the lagged split:
+# runs on commit ab4a7aa only; the explicit engine refuses the fe-patch since): half-space against fe-patch
 # contact, contact grid 32 x 24 (the fe-patch's; the explicit path's selection is not converged
 # on it, see the page), fixed wheel, 140 km/h, smooth rail: the default model's RPM3 and RPM1
 # (static start), then the reference-described RPM3 and RPM1 (from rest); with TRIAL=1 also the

@@ -22,29 +22,10 @@ pub enum Engine {
     Explicit,
 }
 
-/// The fe-patch of `model` for the explicit engine, if the model asks for it
-/// (`contact.influence = "fe-patch"`), before the explicit set-up: refused before any other
-/// work when it would not fit, otherwise read from the cache (`cache`, default directory when
-/// `None`) or built with its estimate and progress shown, and kept there.
-pub(crate) fn prepare_fe_patch(model: &Model, cache: Option<&Path>) -> anyhow::Result<()> {
-    if model.contact.influence != corrugation::model::ContactInfluence::FePatch {
-        return Ok(());
-    }
-    if let Some(dir) = cache {
-        corrugation::passage::fe_patch::use_cache_dir(dir);
-    }
-    let pb = super::progress::bar("fe-patch influence coefficients");
-    corrugation::passage::setup::prepare_fe_patch(model, Some(&pb))
-        .context("the fe-patch (contact.influence)")?;
-    pb.finish_and_clear();
-    Ok(())
-}
-
-/// The explicit FE model of `model` (its `[explicit]` options), its fe-patch prepared first
-/// ([`prepare_fe_patch`]); warns when its contact step at the model's speed is longer than the
-/// converged one ([`corrugation::explicit::contact_step::unconverged_contact_step`]).
-pub(crate) fn explicit_model(model: &Model, cache: Option<&Path>) -> anyhow::Result<ExplicitModel> {
-    prepare_fe_patch(model, cache)?;
+/// The explicit FE model of `model` (its `[explicit]` options); warns when its contact step at
+/// the model's speed is longer than the converged one
+/// ([`corrugation::explicit::contact_step::unconverged_contact_step`]).
+pub(crate) fn explicit_model(model: &Model) -> anyhow::Result<ExplicitModel> {
     if let Some(w) =
         corrugation::explicit::contact_step::unconverged_contact_step(model, model.run.speed())?
     {
@@ -63,7 +44,7 @@ pub(crate) fn runner_for_engine(
     match engine {
         Engine::Reduced => runner_for(model, cache),
         Engine::Explicit => Ok(Box::new(ExplicitRunner {
-            model: explicit_model(model, cache)?,
+            model: explicit_model(model)?,
         })),
     }
 }

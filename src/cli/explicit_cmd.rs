@@ -89,9 +89,6 @@ pub(crate) fn run_explicit(
     json: bool,
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    // the fe-patch first (if the model asks for it): refused before any other work when it
-    // would not fit, built with its estimate and kept on disk otherwise
-    super::engine::prepare_fe_patch(m, None)?;
     let pb = super::progress::bar("explicit: set-up (assembly, static solves, stable step)");
     let em = ExplicitModel::new(m, opts).context("building the explicit model")?;
     if let Some(w) = em

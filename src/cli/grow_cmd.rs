@@ -160,9 +160,7 @@ impl GrowCmd {
         super::check_out_dir(&self.out)?;
         let prepared = super::engine::prepared(&m, self.cache.as_deref())?;
         let explicit = match self.engine {
-            super::engine::Engine::Explicit => {
-                Some(super::engine::explicit_model(&m, self.cache.as_deref())?)
-            }
+            super::engine::Engine::Explicit => Some(super::engine::explicit_model(&m)?),
             super::engine::Engine::Reduced => None,
         };
         let recorder: &dyn corrugation::dynamics::PassageRecorder = match &explicit {

@@ -106,17 +106,13 @@ pub(super) struct Ledger<'a> {
 }
 
 impl<'a> Ledger<'a> {
-    /// The ledger from the start's state `s` and steady contact `st`, at the contact position
-    /// `x0` (m), with the rotating wheel (`None`: fixed) and the contact operators' uniform
-    /// compliance `uniform` (m/N; the fe-patch's split `−T`, 0 on the half-space), which the
-    /// ledger books as a removed compliance beside `Δg`.
     pub(super) fn new(
         m: &'a ExplicitModel,
         on: bool,
         s: &State,
         st: &crate::contact::StepResult,
         x0: f64,
-        (rot, uniform): (Option<&RotatingWheel>, [f64; 3]),
+        rot: Option<&RotatingWheel>,
     ) -> Result<Self, ExplicitError> {
         let nw = if on && rot.is_some() {
             m.wheel.op.n()
@@ -128,9 +124,9 @@ impl<'a> Ledger<'a> {
             on,
             eb: EnergyBalance::default(),
             e_start: 0.0,
-            e_contact_start: hertz_energy(st.normal_force_n, st.approach_m, uniform[2]),
+            e_contact_start: hertz_energy(st.normal_force_n, st.approach_m, 0.0),
             ur_prev: m.rail_at(&s.ut, x0)?,
-            dg_prev: m.local_variation(x0, &m.weights(x0)?)[2] - uniform[2],
+            dg_prev: m.local_variation(x0, &m.weights(x0)?)[2],
             // The tread's variation is zero at the start's angle, its reference.
             dg_wheel_prev: 0.0,
             before: [0.0; 3],

@@ -16,8 +16,6 @@
 //!
 //! - [`audit`]: the energy audit, a replay of every contact step that sums the nodal work as
 //!   the central difference defines it, against which the passage's energy ledger is checked.
-//! - `split`: the fe-patch's split (`contact.influence = "fe-patch"`) beside the one-step
-//!   compliance: what the step cannot carry acts one contact step late.
 //! - [`rotating`]: the rotating wheel (`explicit.wheel = "rotating"`): its elastic motion in
 //!   a frame spinning at `V/R` with the Coriolis and spin-softening terms, the contact point
 //!   moving around the tread.
@@ -40,7 +38,6 @@ pub mod passage;
 pub mod penalty;
 mod response;
 pub mod rotating;
-mod split;
 pub mod stable;
 mod start;
 
@@ -120,6 +117,9 @@ pub enum ExplicitError {
         /// What to change.
         advice: &'static str,
     },
+    /// `contact.influence = "fe-patch"` asked of the explicit engine.
+    #[error("contact.influence = \"fe-patch\": not available on the explicit engine (its contact sees only the structures' one-step compliance, beside which the fe-patch's split, a negative uniform compliance of the global mesh's local share, is not positive definite; docs/theory.md §6.9): run the reduced engine, or set contact.influence = \"half-space\"")]
+    FePatch,
     /// `explicit.safety` out of its range.
     #[error("explicit.safety = {safety} is out of range: allowed above 0, at most 1 (the fraction of the critical step used)")]
     Safety {

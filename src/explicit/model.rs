@@ -202,6 +202,9 @@ impl ExplicitModel {
         opts: ExplicitOptions,
     ) -> Result<Self, ExplicitError> {
         let t0 = Instant::now();
+        if model.contact.influence == crate::model::ContactInfluence::FePatch {
+            return Err(ExplicitError::FePatch);
+        }
         if !(opts.safety > 0.0 && opts.safety <= 1.0) {
             return Err(ExplicitError::Safety {
                 safety: opts.safety,

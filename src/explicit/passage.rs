@@ -108,13 +108,6 @@ pub struct ExplicitInfo {
     /// Contact steps at which the series compliance `G − Δg` was negative and clamped to 0
     /// (−; docs/theory.md §8.6).
     pub clamped_steps: usize,
-    /// The fe-patch's split as the contact's operators carry it, `T` (m/N; x, y, normal; the
-    /// global meshes' share of the local compliance, 0 on the half-space; docs/theory.md §6.9).
-    pub split_twins_m_per_n: [f64; 3],
-    /// The largest part of `T` that the one-step compliance could not carry and that acted one
-    /// contact step late over the passage (m/N; x, y, normal; 0 on the half-space;
-    /// docs/theory.md §8.6).
-    pub split_lag_m_per_n: [f64; 3],
     /// The wheel treatment: `"fixed"` or `"rotating"` (`explicit.wheel`).
     pub wheel: &'static str,
     /// The rotating wheel's spin rate (rad/s; 0 for the fixed wheel).

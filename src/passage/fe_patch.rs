@@ -1,7 +1,6 @@
 //! The influence operators of a passage's contact grid with `contact.influence = "fe-patch"`
-//! (theory §6.9), for both passage engines and the `contact` command (the explicit engine
-//! lags the part of the split its one-step compliance cannot carry, theory §8.6): the model's
-//! fe-patch on the grid
+//! (theory §6.9), for the reduced engine and the `contact` command (the explicit engine
+//! refuses it, [`crate::explicit::ExplicitError::FePatch`]): the model's fe-patch on the grid
 //! ([`crate::structure::contact_patch::of_model`]) as strip operators with the split as a
 //! negative uniform compliance ([`StripInfluence::with_uniform`]).
 //!

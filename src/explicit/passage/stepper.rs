@@ -14,7 +14,6 @@ use crate::explicit::model::ExplicitModel;
 use crate::explicit::operator::StepScratch;
 use crate::explicit::response::{advance_held, Hold, RailResponses, UnitResponse};
 use crate::explicit::rotating::RotatingWheel;
-use crate::explicit::split::SplitStep;
 use crate::explicit::start::add_line_force;
 use crate::explicit::ExplicitError;
 use crate::passage::contact_line::add_nodes_load;
@@ -79,21 +78,7 @@ impl ExplicitModel {
         let f_l0 = start_longitudinal_force_n(&self.model);
         let f_n0 = w_load / self.frame.n[2];
         let x_torque = torque_onset_m(&self.model, plan.x0, self.zone_m[0])?;
-        // On the fe-patch the steady contact is solved with the split's uniform compliance
-        // taken back to 0 (beside nothing the operator would be indefinite; steady forces do
-        // not depend on it), and the wheel placed at that approach less the twins' share
-        // `T F_N`, so that the first step's contact sees the steady approach (split.rs).
-        let uniform = contact.uniform_compliance();
-        let lifted = SplitStep::new([0.0; 3], uniform);
-        contact
-            .set_series_compliance(lifted.series)
-            .map_err(|source| PassageError::Contact {
-                t_s: 0.0,
-                x_m: plan.x0,
-                source,
-            })?;
-        let mut st = steady_contact(contact, f_n0, f_l0, plan.spin, heights.at(plan.x0), plan.x0)?;
-        st.approach_m += uniform[2] * st.normal_force_n;
+        let st = steady_contact(contact, f_n0, f_l0, plan.spin, heights.at(plan.x0), plan.x0)?;
         let mut state = self.start_state(plan.v, st.creepage, st.approach_m)?;
         // The rotating wheel (rotating.rs); `None` for the fixed wheel.
         let rot = self.rotating_wheel(plan.v, plan.nw, plan.dtw)?;
@@ -223,9 +208,8 @@ struct Solved {
     r: StepResult,
     /// The longitudinal creepage from the predicted kinematics (−).
     xi: f64,
-    /// The approach given to the contact (m), and the lagged split's share of it (m).
+    /// The approach given to the contact (m).
     delta: f64,
-    delta_lag: f64,
     /// The removed local compliance variation at the position (m/N per direction): the
     /// rail's and the rotating tread's, and the tread's share.
     dg: [f64; 3],
@@ -271,8 +255,6 @@ pub(super) struct Stepper<'a> {
     series_c: [f64; 3],
     /// Contact steps at which the series compliance was clamped.
     clamped: usize,
-    /// The largest lagged part of the fe-patch's split so far (m/N; split.rs).
-    lag_max: [f64; 3],
     last_delta: f64,
     /// Whether the energy ledger is kept.
     keep: bool,
@@ -314,14 +296,7 @@ impl<'a> Stepper<'a> {
         let rail_point = m.rail_point(popts, plan.n_steps);
         let wear = WearAccumulator::new(&contact, m.zone_m[0], plan.nbins);
         let keep = popts.energy;
-        let ledger = Ledger::new(
-            m,
-            keep,
-            &s,
-            &st,
-            plan.x0,
-            (rot.as_ref(), contact.uniform_compliance()),
-        )?;
+        let ledger = Ledger::new(m, keep, &s, &st, plan.x0, rot.as_ref())?;
         let mut audit = (keep && m.opts.audit && rot.is_none()).then(|| Audit::new(m, &s));
         if let Some(a) = audit.as_mut() {
             a.start(m, &s, [plan.dtt, plan.dtw]);
@@ -361,7 +336,6 @@ impl<'a> Stepper<'a> {
             series: [0.0; 3],
             series_c: [0.0; 3],
             clamped: 0,
-            lag_max: [0.0; 3],
             last_delta: st.approach_m,
             keep,
             ledger,
@@ -418,7 +392,6 @@ impl<'a> Stepper<'a> {
         }
         // With the corrector the structures carry the mean of F_n and F_{n+1} (exactly, with
         // the mean hold; as the ramp's mean, with the first-order hold); without it F_n.
-        let uniform = self.contact.uniform_compliance();
         let f_work = if self.corrected {
             [0, 1, 2].map(|d| 0.5 * (f[d] + f_new[d]))
         } else {
@@ -437,8 +410,7 @@ impl<'a> Stepper<'a> {
                     .old_at_previous
                     .map(|o| [o, self.m.rail_under(&self.s.ut, &self.pw_prev)]),
                 forces: [f, f_new],
-                // the split's twins (−uniform) act as a removed compliance, as Δg does
-                dg: [0, 1, 2].map(|d| sol.dg[d] - uniform[d]),
+                dg: sol.dg,
                 dg_wheel: sol.dg_wheel,
                 damper_j: pred.damper_j,
                 t: [t - p.dt_c, t],
@@ -604,24 +576,17 @@ impl<'a> Stepper<'a> {
                 self.clamped += 1;
             }
         }
-        // The fe-patch's split where the step cannot carry it acts a step late (split.rs).
-        let split = SplitStep::new(self.series_c, self.contact.uniform_compliance());
-        self.series_c = split.series;
-        self.lag_max = [0, 1, 2].map(|d| self.lag_max[d].max(split.lag[d]));
         self.contact
             .set_series_compliance(self.series_c)
             .map_err(to_contact)?;
-        let (dxi, deta, dd) = split.shifts(f, self.f_prev, p.v * p.dt_c);
         let [ur_old, uw_old] = pred.old;
         let [ur_new, uw_new] = pred.new;
-        let delta = ur_new[2] - uw_new[2] + self.series[2] * f[2] + dd;
+        let delta = ur_new[2] - uw_new[2] + self.series[2] * f[2];
         // The rotating wheel's contact is relieved of the faceted tread's convective static
         // deflection, as the fixed wheel's contact (which does not move on the wheel) is.
         let conv = self.rot.as_ref().map_or([0.0; 3], |r| r.convective(f));
-        let xi =
-            ((uw_new[0] - uw_old[0] - conv[0]) - (ur_new[0] - ur_old[0])) / (p.v * p.dt_c) + dxi;
-        let eta =
-            ((uw_new[1] - uw_old[1] - conv[1]) - (ur_new[1] - ur_old[1])) / (p.v * p.dt_c) + deta;
+        let xi = ((uw_new[0] - uw_old[0] - conv[0]) - (ur_new[0] - ur_old[0])) / (p.v * p.dt_c);
+        let eta = ((uw_new[1] - uw_old[1] - conv[1]) - (ur_new[1] - ur_old[1])) / (p.v * p.dt_c);
         let r = self
             .contact
             .step(&StepInputs {
@@ -636,7 +601,6 @@ impl<'a> Stepper<'a> {
             r,
             xi,
             delta,
-            delta_lag: dd,
             dg,
             dg_wheel,
             conv,
@@ -665,7 +629,7 @@ impl<'a> Stepper<'a> {
     /// The recorder: the step's histories (the force already the new one) and the rail
     /// point's displacement.
     fn record(&mut self, t: f64, xc: f64, sol: &Solved) {
-        let approach = sol.delta - sol.delta_lag - self.series[2] * self.f[2];
+        let approach = sol.delta - self.series[2] * self.f[2];
         self.h.push_step(
             &self.contact,
             &sol.r,
@@ -687,11 +651,7 @@ impl<'a> Stepper<'a> {
         let (by_direction, rail_wheel) = (self.ledger.by_direction, self.ledger.rail_wheel);
         let eb = self.ledger.finish(
             &self.s,
-            (
-                self.f[2],
-                self.last_delta,
-                self.series_c[2] + self.contact.uniform_compliance()[2],
-            ),
+            (self.f[2], self.last_delta, self.series_c[2]),
             self.rot.as_ref(),
             p.n_steps as f64 * p.dt_c,
         );
@@ -732,8 +692,6 @@ impl<'a> Stepper<'a> {
             dofs: m.dofs(),
             setup_seconds: m.setup_seconds,
             clamped_steps: self.clamped,
-            split_twins_m_per_n: self.contact.uniform_compliance().map(|u| -u),
-            split_lag_m_per_n: self.lag_max,
             wheel: m.opts.wheel.as_str(),
             spin_rate_rad_s: self.rot.as_ref().map_or(0.0, |r| r.omega()),
             wheel_local_seconds: m.wheel_local_seconds,
