@@ -48,6 +48,16 @@ fn assert_load_traction_and_energy(
     s: &corrugation::dynamics::PassageSummary,
     e: &corrugation::passage::record::EnergyBalance,
 ) {
+    assert_load_and_traction(m, s);
+    assert!(e.relative_error().abs() < 0.01, "{e:?}");
+}
+
+/// Mean normal force `W / cos α` and mean longitudinal force `μ_t W` in the zone within 1 %
+/// (docs/theory.md §7.4–§7.5).
+fn assert_load_and_traction(
+    m: &corrugation::model::Model,
+    s: &corrugation::dynamics::PassageSummary,
+) {
     let w = m.vehicle.wheel_load;
     let cos_a = m.rail.inclination.atan().cos();
     assert!(
@@ -61,7 +71,6 @@ fn assert_load_traction_and_energy(
         "{}",
         s.mean_fl_n
     );
-    assert!(e.relative_error().abs() < 0.01, "{e:?}");
 }
 
 /// Static equilibrium and the driving torque: in the solution zone the mean normal force is
@@ -108,6 +117,35 @@ fn passage_holds_the_static_load_and_the_traction_and_balances_energy() {
         .map(|u| u[2])
         .fold(f64::INFINITY, f64::min);
     assert!(min_uz < -1e-5, "rail point min u_z {min_uz}");
+}
+
+/// The passage on the fe-patch (`contact.influence = "fe-patch"`; a 12 × 10 contact grid so
+/// that the patch builds in seconds, and the default wheel mesh, which the tread's twin needs)
+/// holds the static load and the traction within 1 %, as on the half-space. Its static start
+/// used to fail: the creepage for the prescribed F_L stalled at 1.7e-6 µN of the force, above
+/// the secant's 1e-6 but within the force's own precision (the passage's tangential
+/// tolerance, 1e-5), which it now accepts. The energy ledger closes within 5 % only (measured
+/// −4.2 %; the half-space passages close within 1 %): on this coarse mesh the split is large
+/// against the compliance beside it, and the ledger's frictional work carries part of the
+/// series spring's exchange (docs/theory.md §6.7); open, see
+/// validation/contact_patch.md.
+#[test]
+fn fe_patch_passage_holds_the_static_load_and_the_traction() {
+    let m = corrugation::model::test_problems::small_model(&[
+        "run.solution_zone_offset=0.2",
+        "run.solution_zone_length=0.3",
+        "contact.influence=\"fe-patch\"",
+        "contact.grid_nx=12",
+        "contact.grid_ny=10",
+        "mesh.wheel_element_size=0.06",
+    ])
+    .expect("valid model");
+    let rec = smooth_passage(&m);
+    let s = corrugation::passage::analysis::summarise(&rec).unwrap();
+    assert_load_and_traction(&m, &s);
+    let e = rec.energy.relative_error();
+    eprintln!("fe-patch passage: energy balance {:+.2} %", 100.0 * e);
+    assert!(e.abs() < 0.05, "{:?}", rec.energy);
 }
 
 /// The small model as `--set` arguments for the CLI (a wider contact grid: trial
