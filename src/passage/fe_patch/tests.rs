@@ -191,3 +191,29 @@ fn creep_curve_on_the_fe_patch() {
         "creep curve on the fe-patch differs by {worst}"
     );
 }
+
+/// The energy ledger of the default model's smooth passage at its speed on the half-space
+/// and on the fe-patch (printed: the relative error and the terms). Reads the modal cache and
+/// the fe-patch (building either if absent: minutes, up to 10 GB). `cargo test --profile
+/// test-opt --lib default_fe_patch_passage_energy -- --ignored --nocapture`
+#[test]
+#[ignore = "reads or builds the default model's modes and fe-patch (minutes)"]
+fn default_fe_patch_passage_energy() {
+    use crate::dynamics::{passage::PassageOptions, prepared::PreparedModel};
+    let cache = crate::eigen::cache::ModalCache::new(crate::eigen::cache::default_cache_dir());
+    for influence in ["half-space", "fe-patch"] {
+        let m = crate::model::load_model(
+            &crate::model::ModelSource::Builtin,
+            &[format!("contact.influence=\"{influence}\"")],
+        )
+        .unwrap();
+        let opts = PassageOptions::default();
+        let p = PreparedModel::new(&m, &cache, &opts).unwrap();
+        let rec = p.engine.passage(m.run.speed(), None, &opts, None).unwrap();
+        let e = &rec.energy;
+        println!(
+            "{influence}: energy balance {:+.3} % ({e:?})",
+            100.0 * e.relative_error()
+        );
+    }
+}
