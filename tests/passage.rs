@@ -127,9 +127,8 @@ fn passage_holds_the_static_load_and_the_traction_and_balances_energy() {
 /// tolerance, 1e-5), which it now accepts. The energy ledger closes within 5 % only (measured
 /// −4.2 %; the half-space passages close within 1 %): on this coarse mesh the split is large
 /// against the compliance beside it (the default model's fe-patch passage closes within
-/// 0.11 %), and the ledger's frictional work carries part of the
-/// series spring's exchange (docs/theory.md §6.7); open, see
-/// validation/contact_patch.md.
+/// 0.11 %), probably because the ledger's frictional work carries part of the series
+/// spring's exchange (docs/theory.md §6.7), not shown; open in validation/contact_patch.md.
 #[test]
 fn fe_patch_passage_holds_the_static_load_and_the_traction() {
     let m = corrugation::model::test_problems::small_model(&[
