@@ -716,9 +716,9 @@ impl TransientRolling {
         }
         // The force is known only to the tangential solver's precision (a traction error of
         // about `tangential_tol · µ p_max` per element, of order `tangential_tol · µN` summed;
-        // a passage solves at 1e-5): a secant that stalls within it, as on the fe-patch's
-        // operators with their single-precision inner products on a coarse grid, has found
-        // the creepage as well as the force allows. The state is the last iterate's.
+        // a passage solves at 1e-5): a secant that stalls within it, as it did on the
+        // fe-patch's operators on a coarse 12 × 10 grid (at 1.7e-6), has found the creepage
+        // as well as the force allows. The state is the last iterate's.
         if fb.abs() <= self.cfg.tangential_tol * limit {
             return Ok(b);
         }
