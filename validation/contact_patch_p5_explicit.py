@@ -22,19 +22,13 @@ readings:
 - with the explicit 10 um trials (`explicit-grow-rpm3-CONTACT.json`), whether the trial's
   verdict (grows or decays) changes with the contact model, beside the reduced engine's.
 """
-import csv
 import json
 import os
 import sys
 
-from contact_patch_p5 import correlation
+from contact_patch_p5 import column, correlation
 
 CONTACTS = ["half-space", "fe-patch"]
-
-
-def column(path, name):
-    with open(path) as f:
-        return [float(r[name]) for r in csv.DictReader(f)]
 
 
 def load(d, prefix, model, c):

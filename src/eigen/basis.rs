@@ -220,6 +220,7 @@ fn basis<C: Serialize + DeserializeOwned + Send>(
     // K's with either mass, so the modes are the same to the bit.
     let FeMatrices { k, m, .. } = mats()?;
     let m = {
+        // moved in here so that the full mass is freed at the block's end, not kept shadowed
         let full = m;
         super::lanczos::drop_stored_zeros(full.as_ref())
     };

@@ -76,7 +76,8 @@ struct SliceStart {
 /// there, the factorisation at `hi` when a slice follows, and the factorisation the slice
 /// was solved with (the one at its lower bound, or at its midpoint for a two-sided solve,
 /// which replaces the lower one: that is dropped before the midpoint is factorised, so a
-/// band holds at most two factors at a time).
+/// band holds at most two factors while Lanczos runs; [`recut`] factorises a candidate bound
+/// beside the slice's and the old bound's factors, three for that moment).
 struct SolvedSlice {
     out: SliceOut,
     hi: f64,
@@ -343,7 +344,8 @@ fn solve_slice(
         // Boundary in the widest relative gap of the last third of the converged λ
         // (carried and new; everything below it has converged; a wide gap keeps K − τM
         // well conditioned).
-        let tau = gap_boundary(&out.lambdas, lo, &st.carried, top_shift);
+        let converged = converged_above(&out.lambdas, lo, &st.carried);
+        let tau = gap_boundary(&converged, top_shift);
         let bound = match over_cap {
             Some(f) if tau >= f.shift => (f.shift, f.negative_count, Some(f)),
             _ if tau >= top_shift => (top_shift, nu_max, None),
@@ -352,7 +354,6 @@ fn solve_slice(
                 (f.shift, f.negative_count, Some(f))
             }
         };
-        let converged: Vec<f64> = out.lambdas.iter().chain(&st.carried).copied().collect();
         let (hi, nu_hi, next) = recut(ctx, &converged, (lo, nu_cur), bound, target, lam_max)?;
         Ok(SolvedSlice {
             out,
@@ -533,7 +534,8 @@ fn two_sided_upper(
 /// (at most [`RECUT_TRIES`] factorisations): the slice's Lanczos run converged the
 /// eigenvalues below `hi` only in part (the members of a cluster more multiple than the
 /// block, e.g. the sleepers' modes of a long track on identical supports), so a gap of its
-/// converged values `converged` (rad²/s²) can enclose many unseen ones, and the slice's
+/// converged values `converged` (rad²/s², ascending, [`converged_above`]) can enclose many
+/// unseen ones, and the slice's
 /// second run, with the count known, would need a subspace that many times larger (the
 /// 34-bay strip-held track to 5 kHz: 312 modes in one slice, a 3.4 GB basis, 1432 solved
 /// vectors). The new bound is the middle of the widest relative gap of the converged values
@@ -552,8 +554,6 @@ fn recut(
     target: usize,
     lam_max: f64,
 ) -> Result<(f64, usize, Option<ShiftFactor>), EigenError> {
-    let mut l: Vec<f64> = converged.iter().copied().filter(|&x| x > lo).collect();
-    l.sort_by(f64::total_cmp);
     for _ in 0..RECUT_TRIES {
         let (hi, nu_hi, _) = bound;
         let count = nu_hi.saturating_sub(nu_cur);
@@ -563,15 +563,14 @@ fn recut(
         let predicted = lo + (hi - lo) * target as f64 / count as f64;
         let floor = 0.5 * (lo + predicted);
         let mid = |w: &[f64]| 0.5 * (w[0] + w[1]);
-        let below: Vec<&[f64]> = l
+        let below: Vec<&[f64]> = converged
             .windows(2)
             .filter(|w| w[1] > w[0] && mid(w) <= predicted)
             .collect();
-        let widest = below.iter().filter(|w| mid(w) >= floor).max_by(|a, b| {
-            let ga = (a[1] - a[0]) / a[1].abs().max(f64::MIN_POSITIVE);
-            let gb = (b[1] - b[0]) / b[1].abs().max(f64::MIN_POSITIVE);
-            ga.total_cmp(&gb)
-        });
+        let widest = below
+            .iter()
+            .filter(|w| mid(w) >= floor)
+            .max_by(|a, b| relative_gap(a[0], a[1]).total_cmp(&relative_gap(b[0], b[1])));
         let Some(w) = widest.or(below.last()) else {
             break;
         };
@@ -589,22 +588,30 @@ fn oversized(count: usize, target: usize) -> bool {
     count as f64 > RECUT_RATIO * target as f64
 }
 
-/// Boundary τ (rad²/s²) of an open-ended slice at shift `lo`: the middle of the widest
-/// relative gap in the last third of the converged eigenvalues at or above `lo`
-/// (`lambdas`, with the `carried` ones; everything below τ has converged, and a wide gap
-/// keeps K − τM well conditioned). `top_shift` if fewer than two are known.
-fn gap_boundary(lambdas: &[f64], lo: f64, carried: &[f64], top_shift: f64) -> f64 {
+/// The converged eigenvalues of an open-ended slice at shift `lo` (rad²/s²), ascending: the
+/// slice's own at or above `lo` (`lambdas`) and the `carried` ones (found by the slice
+/// below, all above `lo`).
+fn converged_above(lambdas: &[f64], lo: f64, carried: &[f64]) -> Vec<f64> {
     let mut l: Vec<f64> = lambdas.iter().copied().filter(|&x| x >= lo).collect();
     l.extend_from_slice(carried);
     l.sort_by(f64::total_cmp);
+    l
+}
+
+/// The relative gap `(b − a)/|b|` between consecutive eigenvalues `a ≤ b` (rad²/s²; −).
+fn relative_gap(a: f64, b: f64) -> f64 {
+    (b - a) / b.abs().max(1e-300)
+}
+
+/// Boundary τ (rad²/s²) of an open-ended slice: the middle of the widest relative gap in
+/// the last third of its converged eigenvalues `l` (ascending, [`converged_above`];
+/// everything below τ has converged, and a wide gap keeps K − τM well conditioned).
+/// `top_shift` if fewer than two are known.
+fn gap_boundary(l: &[f64], top_shift: f64) -> f64 {
     if l.len() >= 2 {
         let k0 = (2 * l.len() / 3).min(l.len() - 2);
         let kbest = (k0..l.len() - 1)
-            .max_by(|&a, &b| {
-                let ga = (l[a + 1] - l[a]) / l[a + 1].abs().max(1e-300);
-                let gb = (l[b + 1] - l[b]) / l[b + 1].abs().max(1e-300);
-                ga.total_cmp(&gb)
-            })
+            .max_by(|&a, &b| relative_gap(l[a], l[a + 1]).total_cmp(&relative_gap(l[b], l[b + 1])))
             .unwrap_or(k0);
         0.5 * (l[kbest] + l[kbest + 1])
     } else {

@@ -30,12 +30,12 @@ use super::{
 
 mod band;
 mod check;
-
-pub(crate) use check::drop_stored_zeros;
 mod ctx;
 mod slice;
 #[cfg(test)]
 mod tests;
+
+pub(crate) use check::drop_stored_zeros;
 
 use band::{choose_splits, lambda_at, run_band, split_probe_x, BandOut, BandParams, GROUNDED_TEST};
 use check::{rayleigh_ritz_window, validate, verify, BOUND_WINDOW, BOUND_WINDOW_MAX};
