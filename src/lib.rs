@@ -16,7 +16,7 @@
 //!
 //! | layer | modules |
 //! |---|---|
-//! | 0, the foundation | [`units`] (mm, µm, km/h converted to SI in one place), [`io`], [`lists`], [`progress`], [`spectral`], [`report`], [`mesh`], [`fe`], [`contact`] |
+//! | 0, the foundation | [`units`] (mm, µm, km/h converted to SI in one place), [`huge_pages`] (the binary's allocator), [`io`], [`lists`], [`progress`], [`spectral`], [`report`], [`mesh`], [`fe`], [`contact`] |
 //! | 1 | [`model`] (the TOML model file) → [`structure`] (track and wheel substructures) |
 //! | 2 | [`eigen`] (Lanczos, Sturm check, classification, modal cache) |
 //! | 3, the passage floor | [`passage`] (what a passage is, whichever engine runs it: runner traits, rail profile, records, contact line, set-up, statics) |
@@ -35,6 +35,7 @@ pub mod eigen;
 pub mod explicit;
 pub mod fe;
 pub mod growth;
+pub mod huge_pages;
 pub mod io;
 pub mod lists;
 pub mod mesh;

@@ -4,7 +4,8 @@
 //! ([`crate::structure::contact_patch::of_model`]) as strip operators with the split as a
 //! negative uniform compliance ([`StripInfluence::with_uniform`]).
 //!
-//! A patch is built once per model and grid (four sparse factorisations, minutes) and kept:
+//! A patch is built once per model and grid (sparse factorisations of the two submodels' half
+//! problems and of the two twins, a minute or more) and kept:
 //! in memory for the process, and on disk in `fe-patch/<key>/` of the directory given to
 //! [`use_cache_dir`] (the modal cache's; [`crate::dynamics::prepared::PreparedModel`] sets
 //! it), written atomically with its completion marker last. The key is the hash of
@@ -30,15 +31,16 @@ use crate::structure::contact_patch::{StripKernel, MAX_PATCH_DOFS};
 use super::PassageError;
 
 /// Measured cost of a patch per free DOF on two cores: wall time (s) per DOF of both
-/// submodels together, and peak memory (bytes) per DOF of the larger — the default model's
-/// 32 × 24 grid (rail head 519,555 DOFs, tread 592,740; FE faces 0.31 mm) took 94.9 s and
-/// peaked at 9.74 GB with the nested-dissection ordering (392 s and 19.8 GB with minimum
-/// degree; validation/contact_patch.md, P5): 8.5e-5 s per DOF and 16.4 kB per DOF of the
-/// tread. The factor's fill grows faster than the DOFs: `predict` on the fe-patch, building the
-/// 40 µm trial's 37 × 24 patch (672,660 DOFs) beside its modal bases, peaked at 15.0 GB, about
-/// 20 kB per DOF with the bases' share taken off; hence 22 kB.
-const SECONDS_PER_DOF: f64 = 9.0e-5;
-const PEAK_BYTES_PER_DOF: f64 = 2.2e4;
+/// submodels together, and peak memory (bytes) per DOF of the larger. The default model's
+/// 32 × 24 grid (rail head 519,555 DOFs, tread 592,740; FE faces 0.31 mm), each submodel solved
+/// as its two mirror half problems, with huge pages advised for the factors (the binary's
+/// allocator), took 82.1 s and peaked at 4.21 GB on a 2-core machine on which it had taken
+/// 146.9 s and 9.69 GB as whole submodels (validation/contact_patch.md, P5; docs/performance.md):
+/// 7.4e-5 s per DOF and 7.1 kB per DOF of the tread. The factor's fill grows faster than the
+/// DOFs (a 37 × 24 patch of 672,660 DOFs needed about a fifth more per DOF than the 32 × 24
+/// one), hence 10 kB.
+const SECONDS_PER_DOF: f64 = 8.0e-5;
+const PEAK_BYTES_PER_DOF: f64 = 1.0e4;
 
 /// The share of the machine's memory (`MemTotal`) a patch build may be estimated to need;
 /// beyond it the build is refused before it starts.

@@ -510,18 +510,39 @@ pub(crate) fn condense(
     sources: &[[f64; 4]],
     field: &[[f64; 2]],
 ) -> Result<Vec<Vec<[[f64; 3]; 3]>>, StructureError> {
+    condense_loads(
+        (dofmap, factor, surface),
+        sources,
+        field,
+        (&[0, 1, 2], None),
+    )
+}
+
+/// [`condense`] for the traction components `loads` only (the other columns zero), and, with
+/// `mirror`, on the half `x ≥ 0` of a submodel mirror-symmetric about the plane `x = 0`
+/// loaded by sources symmetric about it: the half model's surface starts at `x = 0`, a
+/// source's share of `x < 0` is its mirror's (so the plane's nodes carry half their load, by
+/// the interval weights), and the field at `x < 0` is the mirror image of the half's
+/// ([`Mirror::sign`]).
+fn condense_loads(
+    (dofmap, factor, surface): (&DofMap, &Cholesky, &Surface<'_>),
+    sources: &[[f64; 4]],
+    field: &[[f64; 2]],
+    (loads, mirror): (&[usize], Option<Mirror>),
+) -> Result<Vec<Vec<[[f64; 3]; 3]>>, StructureError> {
     // the inward normal is −z
     const SIGN: [f64; 3] = [1.0, 1.0, -1.0];
-    let mut rhs = Mat::<f64>::zeros(dofmap.n_free(), 3 * sources.len());
+    let nl = loads.len();
+    let mut rhs = Mat::<f64>::zeros(dofmap.n_free(), nl * sources.len());
     for (s, r) in sources.iter().enumerate() {
         let wx = interval_weights(surface.xs, r[0], r[1]);
         let wy = interval_weights(surface.ys, r[2], r[3]);
         for &(i, fx) in &wx {
             for &(j, fy) in &wy {
                 let node = (surface.node)(i, j);
-                for (dir, sign) in SIGN.into_iter().enumerate() {
+                for (col, &dir) in loads.iter().enumerate() {
                     if let Some(f) = dofmap.free_index(3 * node + dir) {
-                        rhs[(f, 3 * s + dir)] += sign * fx * fy;
+                        rhs[(f, nl * s + col)] += SIGN[dir] * fx * fy;
                     }
                 }
             }
@@ -535,13 +556,18 @@ pub(crate) fn condense(
                 .map(|&[px, py]| {
                     let mut cij = [[0.0; 3]; 3];
                     for (dir, row) in cij.iter_mut().enumerate() {
-                        for (load, value) in row.iter_mut().enumerate() {
-                            *value = SIGN[dir]
-                                * surface_value(surface.xs, surface.ys, px, py, |i, j| {
+                        for (col, &load) in loads.iter().enumerate() {
+                            let (qx, sign) = match mirror {
+                                Some(m) if px < 0.0 => (-px, m.sign(dir)),
+                                _ => (px, 1.0),
+                            };
+                            row[load] = sign
+                                * SIGN[dir]
+                                * surface_value(surface.xs, surface.ys, qx, py, |i, j| {
                                     let node = (surface.node)(i, j);
                                     dofmap
                                         .free_index(3 * node + dir)
-                                        .map_or(0.0, |f| rhs[(f, 3 * s + load)])
+                                        .map_or(0.0, |f| rhs[(f, nl * s + col)])
                                 });
                         }
                     }
@@ -551,6 +577,87 @@ pub(crate) fn condense(
         })
         .collect();
     Ok(out)
+}
+
+/// The two half problems of a submodel mirror-symmetric about the plane `x = 0` under loads
+/// placed symmetrically about it (the contact grid's source row): a traction across or
+/// normal is symmetric (`u_x` odd in x, `u_y`, `u_z` even: `u_x = 0` on the plane), one
+/// along x antisymmetric (`u_y = u_z = 0` on the plane). Each half model has about half the
+/// DOFs, and its factorisation about a quarter of the whole one's work (a 3D nested
+/// dissection's grows about as the square of the DOFs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Mirror {
+    /// Tractions across and normal.
+    Symmetric,
+    /// Traction along x.
+    Antisymmetric,
+}
+
+impl Mirror {
+    /// Both halves.
+    pub(crate) const BOTH: [Mirror; 2] = [Mirror::Symmetric, Mirror::Antisymmetric];
+
+    /// The displacement components held on the plane `x = 0` (0 = x, 1 = y, 2 = z).
+    pub(crate) fn held(self) -> &'static [usize] {
+        match self {
+            Mirror::Symmetric => &[0],
+            Mirror::Antisymmetric => &[1, 2],
+        }
+    }
+
+    /// The traction components of the half problem.
+    fn loads(self) -> &'static [usize] {
+        match self {
+            Mirror::Symmetric => &[1, 2],
+            Mirror::Antisymmetric => &[0],
+        }
+    }
+
+    /// The displacement component `dir`'s sign at `(−x, y)` against `(x, y)`: the held
+    /// components are odd in x.
+    fn sign(self, dir: usize) -> f64 {
+        if self.held().contains(&dir) {
+            -1.0
+        } else {
+            1.0
+        }
+    }
+}
+
+/// The node planes `x ≥ 0` of `planes` (m, ascending), when they are mirror-symmetric about
+/// `x = 0` with a plane there, each pair within `1e-9` of the span (grading rounds), the one
+/// at the middle set to 0; `None` otherwise (an odd number of FE faces across the source row,
+/// or an unsymmetric grading).
+pub(crate) fn half_planes(planes: &[f64]) -> Option<Vec<f64>> {
+    let n = planes.len();
+    if n < 3 || n % 2 == 0 {
+        return None;
+    }
+    let tol = 1e-9 * (planes[n - 1] - planes[0]);
+    let mid = n / 2;
+    let symmetric = (0..=mid).all(|k| (planes[mid + k] + planes[mid - k]).abs() <= tol);
+    if !symmetric || planes[mid].abs() > tol {
+        return None;
+    }
+    let mut half = planes[mid..].to_vec();
+    half[0] = 0.0;
+    Some(half)
+}
+
+/// The DOFs of the nodes `plane_nodes` that the half problem `mirror` holds on the plane
+/// `x = 0` (beside `fixed`, the submodel's own holds).
+pub(crate) fn with_mirror_holds(
+    fixed: &[usize],
+    plane_nodes: &[usize],
+    mirror: Mirror,
+) -> Vec<usize> {
+    let mut out = fixed.to_vec();
+    out.extend(
+        plane_nodes
+            .iter()
+            .flat_map(|&n| mirror.held().iter().map(move |&d| 3 * n + d)),
+    );
+    out
 }
 
 /// The bilinear interpolation at `(px, py)` (m) of a nodal field on the top surface's
@@ -771,6 +878,53 @@ fn strip_kernel(
     y_sign: f64,
     n_dofs: usize,
 ) -> Result<StripKernel, StructureError> {
+    let (sources, field) = strip_sources_and_field((nx, ny, a, b), y_sign);
+    let per_source = condense(dofmap, factor, surface, &sources, &field)?;
+    strip_from_condensed(per_source, (nx, ny, a, b), y_sign, n_dofs)
+}
+
+/// The strip kernel of a submodel mirror-symmetric about the plane `x = 0`, from its two half
+/// problems ([`Mirror`]): `factorise(mirror)` builds and factorises the half `x ≥ 0` with the
+/// plane's holds of `mirror`, one at a time, and `surface` is the half's running surface
+/// (its `xs` from 0). The same kernel as [`strip_kernel`] on the whole submodel, to rounding,
+/// at about half its work and memory; `n_dofs` is the whole submodel's.
+fn strip_kernel_by_halves(
+    factorise: impl Fn(Mirror) -> Result<(DofMap, Cholesky), StructureError>,
+    surface: &Surface<'_>,
+    (nx, ny, a, b): (usize, usize, f64, f64),
+    y_sign: f64,
+    n_dofs: usize,
+) -> Result<StripKernel, StructureError> {
+    let (sources, field) = strip_sources_and_field((nx, ny, a, b), y_sign);
+    let mut per_source = vec![vec![[[0.0; 3]; 3]; field.len()]; sources.len()];
+    for mirror in Mirror::BOTH {
+        let (dofmap, factor) = factorise(mirror)?;
+        let part = condense_loads(
+            (&dofmap, &factor, surface),
+            &sources,
+            &field,
+            (mirror.loads(), Some(mirror)),
+        )?;
+        for (acc, values) in per_source.iter_mut().zip(part) {
+            for (c, v) in acc.iter_mut().zip(values) {
+                for (cr, vr) in c.iter_mut().zip(v) {
+                    for (x, y) in cr.iter_mut().zip(vr) {
+                        *x += y;
+                    }
+                }
+            }
+        }
+    }
+    strip_from_condensed(per_source, (nx, ny, a, b), y_sign, n_dofs)
+}
+
+/// The source row's elements (rectangles `[x0, x1, y0, y1]`, m) and the field points (the
+/// element centres of every row offset `−(nx−1)..=nx`) of a strip kernel, y mirrored by
+/// `y_sign`.
+fn strip_sources_and_field(
+    (nx, ny, a, b): (usize, usize, f64, f64),
+    y_sign: f64,
+) -> (Vec<[f64; 4]>, Vec<[f64; 2]>) {
     let y_of = |j: usize| y_sign * (j as f64 - 0.5 * (ny as f64 - 1.0)) * b;
     let sources: Vec<[f64; 4]> = (0..ny)
         .map(|jp| [-0.5 * a, 0.5 * a, y_of(jp) - 0.5 * b, y_of(jp) + 0.5 * b])
@@ -779,7 +933,16 @@ fn strip_kernel(
     let field: Vec<[f64; 2]> = rows
         .flat_map(|o| (0..ny).map(move |j| [o as f64 * a, y_of(j)]))
         .collect();
-    let per_source = condense(dofmap, factor, surface, &sources, &field)?;
+    (sources, field)
+}
+
+/// The strip kernel from the condensed coefficients `per_source[jp][field point]`.
+fn strip_from_condensed(
+    per_source: Vec<Vec<[[f64; 3]; 3]>>,
+    (nx, ny, a, b): (usize, usize, f64, f64),
+    y_sign: f64,
+    n_dofs: usize,
+) -> Result<StripKernel, StructureError> {
     let sign = [1.0, y_sign, 1.0];
     // reorder [jp][o][j] → [o][j][jp]
     let mut c = vec![[[0.0; 3]; 3]; 2 * nx * ny * ny];

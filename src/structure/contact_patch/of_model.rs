@@ -91,7 +91,8 @@ pub fn patch_dofs(model: &Model, grid: &PatchGrid) -> Result<(usize, usize), Str
     Ok((rail.n_dofs()?, tread.n_dofs()?))
 }
 
-/// Builds the fe-patch of `model` on `grid`: both submodels and both twins (four sparse
+/// Builds the fe-patch of `model` on `grid`: both submodels (each as two half problems where
+/// it is mirror-symmetric) and both twins (sparse
 /// factorisations; minutes and several GB on the default grid, see [`patch_dofs`]).
 pub fn model_patch(model: &Model, grid: &PatchGrid) -> Result<ModelPatch, StructureError> {
     let (rail, tread) = patches(model, grid);

@@ -23,8 +23,9 @@ use crate::mesh::section::{SectionMesh, SectionParams};
 use crate::model::Model;
 
 use super::{
-    assemble_and_factorise, check_ratio, check_size, graded_axis, out_of_range, strip_kernel,
-    twin_compliance, FactorisedSurface, StripKernel, StructureError, Surface,
+    assemble_and_factorise, check_ratio, check_size, graded_axis, half_planes, out_of_range,
+    strip_kernel, strip_kernel_by_halves, twin_compliance, with_mirror_holds, FactorisedSurface,
+    StripKernel, StructureError, Surface,
 };
 
 /// Free DOFs of a segment: every section node of the inner planes but the foot's.
@@ -50,20 +51,32 @@ fn segment_with_matrices(
     material: IsotropicElastic,
 ) -> Result<(RailTopology, DofMap, FeMatrices, Cholesky), StructureError> {
     let (mesh, topo) = extrude_rail(section, planes, 0)?;
-    let last = planes.len() - 1;
+    let fixed = holds(&topo, [true, true]);
+    let (dofmap, matrices, factor) = assemble_and_factorise(&mesh, &fixed, material)?;
+    Ok((topo, dofmap, matrices, factor))
+}
+
+/// The held DOFs of a segment of topology `topo`: the foot underside of every plane, and
+/// every node of the first and the last plane where `ends` says so.
+fn holds(topo: &RailTopology, ends: [bool; 2]) -> Vec<usize> {
+    let last = topo.n_planes() - 1;
     let mut fixed = Vec::new();
     for p in 0..=last {
-        let held: Vec<usize> = if p == 0 || p == last {
-            (0..topo.n_section_nodes())
-                .map(|j| topo.node(p, j))
-                .collect()
+        let held: Vec<usize> = if (p == 0 && ends[0]) || (p == last && ends[1]) {
+            plane_nodes(topo, p)
         } else {
             topo.foot_underside_nodes(p)
         };
         fixed.extend(held.iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]));
     }
-    let (dofmap, matrices, factor) = assemble_and_factorise(&mesh, &fixed, material)?;
-    Ok((topo, dofmap, matrices, factor))
+    fixed
+}
+
+/// Every node of plane `p`.
+fn plane_nodes(topo: &RailTopology, p: usize) -> Vec<usize> {
+    (0..topo.n_section_nodes())
+        .map(|j| topo.node(p, j))
+        .collect()
 }
 
 /// A UIC54 rail-head segment carrying an `nx × ny` contact grid of square elements.
@@ -327,24 +340,46 @@ impl RailHeadPatch {
 
     /// Builds, factorises and condenses the segment. Refuses a submodel beyond
     /// [`super::MAX_PATCH_DOFS`] before building it.
+    /// The segment is mirror-symmetric about the source row's middle plane when the grid's
+    /// source row has an even number of FE faces (`refine` even): it is then solved as its
+    /// two half problems (`super::Mirror`), at about half the work and memory, to the same
+    /// kernel to rounding.
     pub fn kernel(&self) -> Result<StripKernel, StructureError> {
+        self.kernel_solved(true)
+    }
+
+    /// [`Self::kernel`], by the two half problems only when `by_halves` (and the mirror
+    /// symmetry) allows.
+    pub(crate) fn kernel_solved(&self, by_halves: bool) -> Result<StripKernel, StructureError> {
         let (section, planes) = self.geometry()?;
         let n_dofs = free_dofs(&section, &planes);
         check_size(n_dofs)?;
-        let (topo, dofmap, factor) = segment(&section, &planes, self.material)?;
         let running = &section.running_surface;
         let ys: Vec<f64> = running.iter().map(|&j| section.nodes[j][0]).collect();
+        let grid = (self.nx, self.ny, self.element_m, self.element_y_m);
+        if let Some(half) = half_planes(&planes).filter(|_| by_halves) {
+            let (mesh, topo) = extrude_rail(&section, &half, 0)?;
+            let (fixed, middle) = (holds(&topo, [false, true]), plane_nodes(&topo, 0));
+            let node = |i: usize, j: usize| topo.node(i, running[j]);
+            let surface = Surface {
+                xs: &half,
+                ys: &ys,
+                node: &node,
+            };
+            let half_factor = |mirror| {
+                let held = with_mirror_holds(&fixed, &middle, mirror);
+                let (dofmap, _, factor) = assemble_and_factorise(&mesh, &held, self.material)?;
+                Ok((dofmap, factor))
+            };
+            return strip_kernel_by_halves(half_factor, &surface, grid, 1.0, n_dofs);
+        }
+        let (topo, dofmap, factor) = segment(&section, &planes, self.material)?;
         let node = |i: usize, j: usize| topo.node(i, running[j]);
         let surface = Surface {
             xs: &planes,
             ys: &ys,
             node: &node,
         };
-        strip_kernel(
-            (&dofmap, &factor, &surface),
-            (self.nx, self.ny, self.element_m, self.element_y_m),
-            1.0,
-            n_dofs,
-        )
+        strip_kernel((&dofmap, &factor, &surface), grid, 1.0, n_dofs)
     }
 }

@@ -190,6 +190,67 @@ fn rail_head_kernel_is_mirror_symmetric() {
     assert!(k.patch_compliance(&shape[1..]).is_none());
 }
 
+/// The largest difference of two kernels' coefficients over the largest coefficient (−).
+fn kernel_difference(a: &StripKernel, b: &StripKernel) -> f64 {
+    let (va, vb) = (a.values(), b.values());
+    assert_eq!(va.len(), vb.len());
+    let flat =
+        |v: &[[[f64; 3]; 3]]| -> Vec<f64> { v.iter().flatten().flatten().copied().collect() };
+    let (fa, fb) = (flat(va), flat(vb));
+    let scale = fa.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    fa.iter()
+        .zip(&fb)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+        / scale
+}
+
+/// With an even number of FE faces across the source row the rail head's segment and the
+/// tread's prism are mirror-symmetric about the row's middle plane, and their kernels are
+/// solved as two half problems (symmetric: tractions across and normal, `u_x = 0` on the
+/// plane; antisymmetric: traction along x, `u_y = u_z = 0`): every coefficient equals the
+/// whole submodel's solved directly (the independent computation) to rounding, 1e-9 of the
+/// largest — the x terms, the couplings and the offsets behind the source (`x < 0`, read
+/// from the mirror image) included. With an odd number no plane lies there and the whole
+/// submodel is solved.
+#[test]
+fn kernels_by_half_problems_equal_the_whole_submodels() {
+    let mut rail = rail_head::RailHeadPatch::steel(0.8e-3, 3, 4);
+    rail.refine = 2;
+    rail.half_length_m = 0.05;
+    let mut tread = tread::TreadPatch::steel(2e-3, 3, 4);
+    tread.refine = 2;
+    tread.half_length_m = 0.06;
+    let pairs = [
+        (
+            "rail head",
+            rail.kernel_solved(true),
+            rail.kernel_solved(false),
+        ),
+        (
+            "tread",
+            tread.kernel_solved(true),
+            tread.kernel_solved(false),
+        ),
+    ];
+    for (name, halves, whole) in pairs {
+        let d = kernel_difference(&halves.unwrap(), &whole.unwrap());
+        eprintln!("{name}: halves against whole {d:.2e}");
+        assert!(d < 1e-9, "{name} {d}");
+    }
+    // the rows behind the source carry x terms of the opposite sign to those ahead
+    let k = rail.kernel().unwrap();
+    let (ahead, behind) = (k.get(1, 1, 1).unwrap(), k.get(-1, 1, 1).unwrap());
+    assert!(ahead[0][2] * behind[0][2] < 0.0, "{ahead:?} {behind:?}");
+    // odd: no middle plane
+    assert!(super::half_planes(&[-1.0, -0.5, 0.5, 1.0]).is_none());
+    assert_eq!(
+        super::half_planes(&[-1.0, -0.25, 1e-17, 0.25, 1.0]),
+        Some(vec![0.0, 0.25, 1.0])
+    );
+    assert!(super::half_planes(&[-1.0, -0.3, 0.0, 0.25, 1.0]).is_none());
+}
+
 /// The ratio of the rail head's diagonal terms to the half-space's at the source element and
 /// at the farthest offset along and across the grid.
 fn print_rail_head_ratios(k: &StripKernel, material: IsotropicElastic) {
