@@ -363,6 +363,7 @@ impl TreadPatch {
 
     /// Builds, factorises and condenses the prism. Refuses a submodel beyond
     /// [`super::MAX_PATCH_DOFS`] before building it.
+    ///
     /// The prism is mirror-symmetric about the source row's middle plane when the grid's
     /// source row has an even number of FE faces (`refine` even): it is then solved as its
     /// two half problems (`super::Mirror`), at about half the work and memory, to the same
