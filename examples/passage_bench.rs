@@ -14,8 +14,8 @@
 //! the energy balance, to compare force histories between builds). The cache must hold the
 //! default model's modes (`corrugation modes --cache CACHE_DIR`), or they are computed (minutes).
 //! A fourth case runs the studies' passage with the contact on the fe-patch
-//! (`contact.influence = "fe-patch"`; the first run builds the patch into the cache, about 80 s
-//! and 4.2 GB). The environment variable `PASSAGE_BENCH_CASES` (a comma list of `energy`,
+//! (`contact.influence = "fe-patch"`; the first run builds the patch into the cache, about 70 s
+//! and 8.4 GB). The environment variable `PASSAGE_BENCH_CASES` (a comma list of `energy`,
 //! `studies`, `alone`, `fe-patch`) runs only those cases, e.g. to profile one of them.
 
 #[path = "common/mod.rs"]
@@ -97,8 +97,8 @@ fn main() -> anyhow::Result<()> {
     }
     // The same passage with the contact solved on the fe-patch (the rail head's and the
     // tread's refined kernels less the global meshes' share) instead of the half-space, as the
-    // sweeps and studies run it. The first run builds the patch into the cache (about 80 s and
-    // 4.2 GB on the default grid); its preparation time is printed apart from the passages'.
+    // sweeps and studies run it. The first run builds the patch into the cache (about 70 s and
+    // 8.4 GB on the default grid); its preparation time is printed apart from the passages'.
     if cases
         .as_ref()
         .is_none_or(|c| c.split(',').any(|k| k == "fe-patch"))

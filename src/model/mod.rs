@@ -631,7 +631,7 @@ pub enum ContactInfluence {
     /// tread's (the model's rim) influence coefficients condensed from refined FE submodels
     /// on the contact grid, each less its global twin's compliance (what the global model
     /// already carries at the contact), summed. Built once per contact grid (default model:
-    /// about 80 s and 4.2 GB peak on two cores) and cached beside the modes. The
+    /// about 70 s and 8.4 GB peak on two cores) and cached beside the modes. The
     /// normal–tangential couplings of the two different bodies are left out, as for
     /// quasi-identical bodies. The reduced engine and the `contact` command only: the
     /// explicit engine refuses it.

@@ -33,14 +33,14 @@ use super::PassageError;
 /// Measured cost of a patch per free DOF on two cores: wall time (s) per DOF of both
 /// submodels together, and peak memory (bytes) per DOF of the larger. The default model's
 /// 32 × 24 grid (rail head 519,555 DOFs, tread 592,740; FE faces 0.31 mm), each submodel solved
-/// as its two mirror half problems, with huge pages advised for the factors (the binary's
-/// allocator), took 82.1 s and peaked at 4.21 GB on a 2-core machine on which it had taken
-/// 146.9 s and 9.69 GB as whole submodels (validation/contact_patch.md, P5; docs/performance.md):
-/// 7.4e-5 s per DOF and 7.1 kB per DOF of the tread. The factor's fill grows faster than the
-/// DOFs (a 37 × 24 patch of 672,660 DOFs needed about a fifth more per DOF than the 32 × 24
-/// one), hence 10 kB.
-const SECONDS_PER_DOF: f64 = 8.0e-5;
-const PEAK_BYTES_PER_DOF: f64 = 1.0e4;
+/// as its two mirror half problems side by side, with huge pages advised for the factors (the
+/// binary's allocator), took 71.1 s and peaked at 8.40 GB on a 2-core machine on which it had
+/// taken 146.9 s and 9.69 GB as whole submodels (validation/contact_patch.md, P5;
+/// docs/performance.md): 6.4e-5 s per DOF and 14.2 kB per DOF of the tread. The factor's fill
+/// grows faster than the DOFs (a 37 × 24 patch of 672,660 DOFs needed about a fifth more per
+/// DOF than the 32 × 24 one), hence 17 kB.
+const SECONDS_PER_DOF: f64 = 7.0e-5;
+const PEAK_BYTES_PER_DOF: f64 = 1.7e4;
 
 /// The share of the machine's memory (`MemTotal`) a patch build may be estimated to need;
 /// beyond it the build is refused before it starts.

@@ -117,7 +117,7 @@ fn default_patch_sizes() {
 
 /// The steady creep curve and the normal patch of the default model at its wheel load on
 /// the fe-patch against the half-space on the same grid (validation/contact_patch.md, the
-/// creep curve: registered within 3 %). Builds the default fe-patch (about 80 s, 4.2 GB)
+/// creep curve: registered within 3 %). Builds the default fe-patch (about 70 s, 8.4 GB)
 /// unless it is cached. `cargo test --profile test-opt --lib creep_curve_on_the_fe_patch --
 /// --ignored --nocapture`
 #[test]

@@ -343,7 +343,7 @@ impl RailHeadPatch {
     ///
     /// The segment is mirror-symmetric about the source row's middle plane when the grid's
     /// source row has an even number of FE faces (`refine` even): it is then solved as its
-    /// two half problems (`super::Mirror`), at about half the work and memory, to the same
+    /// two half problems (`super::Mirror`), side by side, at about half the work, to the same
     /// kernel to rounding.
     pub fn kernel(&self) -> Result<StripKernel, StructureError> {
         self.kernel_solved(true)
