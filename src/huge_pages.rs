@@ -8,7 +8,8 @@
 //! `madvise` or `always`; with `never` the advice does nothing), so touching it costs one
 //! page fault per 2 MiB instead of per 4 KiB, and the dense kernels that sweep it miss the TLB
 //! less. The sparse factors of the contact patch's submodels (GBs) are where it shows: the
-//! default model's patch built in 85 s instead of 103 s (docs/performance.md).
+//! default model's patch built in 82 s instead of 103 s (its half problems one after the
+//! other; docs/log/performance.md §8.1).
 //!
 //! Assumptions: a block's memory is the system allocator's to return (it is: the advice
 //! changes how pages are backed, not what the block holds); smaller blocks keep the system's
