@@ -2,12 +2,14 @@
 //! blocks across: `contact::influence::strip`) against the half-space's two-dimensional FFT
 //! products (`contact::influence::Convolver`), per product, on the default passage grid
 //! (32 × 24) and the contact bench's 44 × 32. The kernel is the half-space's in both, so the
-//! results are compared too (largest relative difference).
+//! results are compared too (largest relative difference). The last two columns are the
+//! tangential products of the tangential solver's inner loop: on the contact's box only, in
+//! single precision (`TangentialInfluence::tangential_box`).
 //!
 //! Run: `cargo run --release --example strip_bench [repeats]` (default 2,000 products each).
 
-use corrugation::contact::influence::strip::{half_space_kernel, StripConvolver};
-use corrugation::contact::influence::Convolver;
+use corrugation::contact::influence::strip::{half_space_kernel, StripConvolver, StripInfluence};
+use corrugation::contact::influence::{Convolver, TangentialInfluence};
 use std::time::Instant;
 
 #[path = "common/mod.rs"]
@@ -43,14 +45,17 @@ fn main() -> anyhow::Result<()> {
         machine_load()
     );
     println!(
-        "{:>8} {:>22} {:>22} {:>22} {:>22} {:>22} {:>10}",
+        "{:>8} {:>22} {:>22} {:>22} {:>22} {:>22} {:>10} {:>14} {:>22} {:>22}",
         "grid",
         "half-space normal",
         "strip normal",
         "half-space tangential",
         "strip tangential",
         "strip coupled (3 comp)",
-        "max rel"
+        "max rel",
+        "box",
+        "half-space box (f32)",
+        "strip box (f32)"
     );
     for (nx, ny) in [(32, 24), (44, 32)] {
         let (dx, dy) = (0.45e-3, 0.5e-3);
@@ -60,6 +65,7 @@ fn main() -> anyhow::Result<()> {
         let mut sn = StripConvolver::new(nx, ny, 1, kernel(1));
         let mut st = StripConvolver::new(nx, ny, 2, kernel(2));
         let mut s3 = StripConvolver::new(nx, ny, 3, kernel(3));
+        let mut si = StripInfluence::new(nx, ny, kernel(3));
         let n = nx * ny;
         // a Hertz-like pressure over the middle of the grid and a traction of the same shape
         let p: Vec<f64> = (0..n)
@@ -86,16 +92,38 @@ fn main() -> anyhow::Result<()> {
         let diff = rel_diff(&u1, &u2)
             .max(rel_diff(&v1, &w1))
             .max(rel_diff(&v2, &w2));
+        // the box of the loaded elements
+        let loaded = |i: usize, j: usize| p[i * ny + j] > 0.0;
+        let rows: Vec<usize> = (0..nx).filter(|&i| (0..ny).any(|j| loaded(i, j))).collect();
+        let cols: Vec<usize> = (0..ny).filter(|&j| (0..nx).any(|i| loaded(i, j))).collect();
+        let (rb, cb) = (
+            (rows[0], rows[rows.len() - 1] + 1),
+            (cols[0], cols[cols.len() - 1] + 1),
+        );
+        let hb = time(reps, || {
+            TangentialInfluence::tangential_box(&mut conv, &p, &q, &mut v1, &mut v2, rb, cb)
+        });
+        let sb = time(reps, || si.tangential_box(&p, &q, &mut w1, &mut w2, rb, cb));
+        // both box products on zeroed fields: they write the box's rows only
+        for v in [&mut v1, &mut v2, &mut w1, &mut w2] {
+            v.fill(0.0);
+        }
+        TangentialInfluence::tangential_box(&mut conv, &p, &q, &mut v1, &mut v2, rb, cb);
+        si.tangential_box(&p, &q, &mut w1, &mut w2, rb, cb);
+        let box_diff = rel_diff(&v1, &w1).max(rel_diff(&v2, &w2));
         let f = |(w, c): (f64, f64)| format!("{w:.1} / {c:.1}");
         println!(
-            "{:>8} {:>22} {:>22} {:>22} {:>22} {:>22} {:>10.1e}",
+            "{:>8} {:>22} {:>22} {:>22} {:>22} {:>22} {:>10.1e} {:>14} {:>22} {:>22}",
             format!("{nx}×{ny}"),
             f(hn),
             f(sn_t),
             f(ht),
             f(st_t),
             f(s3_t),
-            diff
+            diff,
+            format!("{}×{}", rb.1 - rb.0, cb.1 - cb.0),
+            f(hb),
+            format!("{} ({box_diff:.0e})", f(sb))
         );
     }
     Ok(())

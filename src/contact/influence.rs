@@ -337,7 +337,7 @@ pub(crate) fn next_fast_len(n: usize) -> usize {
     loop {
         let mut r = m;
         for p in [2, 3, 5] {
-            while r % p == 0 {
+            while r.is_multiple_of(p) {
                 r /= p;
             }
         }
@@ -772,7 +772,7 @@ fn next_smooth3(n: usize) -> usize {
     loop {
         let mut r = m;
         for p in [2, 3] {
-            while r % p == 0 {
+            while r.is_multiple_of(p) {
                 r /= p;
             }
         }

@@ -56,6 +56,8 @@
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+#[cfg(target_arch = "x86_64")]
+mod avx512;
 pub mod hertz;
 pub mod influence;
 pub mod normal;

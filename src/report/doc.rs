@@ -302,7 +302,7 @@ fn is_number(cell: &str) -> bool {
 /// `<strong>…</strong>`; an unpaired `**` stays as written.
 fn inline_html(text: &str) -> String {
     let parts: Vec<&str> = text.split("**").collect();
-    if parts.len() % 2 == 0 {
+    if parts.len().is_multiple_of(2) {
         return escape(text);
     }
     parts

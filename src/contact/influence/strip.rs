@@ -18,10 +18,13 @@
 //! Assumption: the kernel is real; its spectra are computed once.
 
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
-use rustfft::num_complex::Complex64;
+use rustfft::num_complex::Complex;
+use rustfft::FftNum;
 use std::sync::Arc;
 
 use super::{coefficients, next_fast_len};
+#[cfg(target_arch = "x86_64")]
+use crate::contact::avx512::strip::Sums;
 
 /// The quasi-identical half-space's kernel ([`coefficients`]; element `dx × dy` in m, `E*`,
 /// `G` in Pa, ν) in the form [`StripConvolver::new`] takes, for `comps` components: 1 → the
@@ -64,18 +67,106 @@ pub struct StripConvolver {
     comps: usize,
     m: usize,
     /// The kernel's and the sources' spectra in double precision, for
-    /// [`Self::product_cols`].
+    /// [`Self::product_cols`], and their FFTs.
     double: Spectra<f64>,
-    forward: Arc<dyn RealToComplex<f64>>,
-    inverse: Arc<dyn ComplexToReal<f64>>,
-    line: Vec<f64>,
-    /// One column's spectrum (`m/2 + 1`).
-    spectrum: Vec<Complex64>,
-    /// Field spectra, one row of `m/2 + 1` per field column `a·ny + j`.
-    field: Vec<Complex64>,
-    scratch: Vec<Complex64>,
-    /// [`Self::double`] rounded to single precision, for [`Precision::Single`].
+    fft64: Ffts<f64>,
+    /// [`Self::double`]'s kernel spectra rounded to single precision, and FFTs in single
+    /// precision, for [`Precision::Single`].
     single: Spectra<f32>,
+    fft32: Ffts<f32>,
+}
+
+/// The FFTs along x of a strip product in one precision `T` and their buffers.
+#[derive(Clone)]
+struct Ffts<T: FftNum> {
+    forward: Arc<dyn RealToComplex<T>>,
+    inverse: Arc<dyn ComplexToReal<T>>,
+    line: Vec<T>,
+    /// One column's spectrum (`m/2 + 1`).
+    spectrum: Vec<Complex<T>>,
+    /// Field spectra, one row of `m/2 + 1` per field column `a·ny + j`.
+    field: Vec<Complex<T>>,
+    scratch: Vec<Complex<T>>,
+}
+
+impl<T: FftNum + DenseReal> Ffts<T> {
+    /// The plans of length `m` and the buffers for `cn` field columns.
+    fn new(m: usize, cn: usize) -> Self {
+        let mut planner = RealFftPlanner::<T>::new();
+        let forward = planner.plan_fft_forward(m);
+        let inverse = planner.plan_fft_inverse(m);
+        let nk = m / 2 + 1;
+        let zero = Complex::new(T::default(), T::default());
+        let scratch_len = forward
+            .get_scratch_len()
+            .max(inverse.get_scratch_len())
+            .max(1);
+        Ffts {
+            line: forward.make_input_vec(),
+            spectrum: vec![zero; nk],
+            field: vec![zero; cn * nk],
+            scratch: vec![zero; scratch_len],
+            forward,
+            inverse,
+        }
+    }
+
+    /// The spectra along x of the source columns `c0..c1` of every component, `nx` rows of
+    /// `ny` columns each, into `spectra`'s source spectra (`[k][b·ny + j']`).
+    fn forward(
+        &mut self,
+        f: &[&[f64]],
+        (nx, ny): (usize, usize),
+        (c0, c1): (usize, usize),
+        spectra: &mut Spectra<T>,
+    ) {
+        let cn = f.len() * ny;
+        for (b, fb) in f.iter().enumerate() {
+            for jp in c0..c1 {
+                self.line.fill(T::default());
+                for i in 0..nx {
+                    self.line[i] = <T as DenseReal>::from_f64(fb[i * ny + jp]);
+                }
+                self.forward
+                    .process_with_scratch(&mut self.line, &mut self.spectrum, &mut self.scratch)
+                    .expect("lengths from the plan");
+                let s = b * ny + jp;
+                for (k, v) in self.spectrum.iter().enumerate() {
+                    spectra.src_re[k * cn + s] = v.re;
+                    spectra.src_im[k * cn + s] = v.im;
+                }
+            }
+        }
+    }
+
+    /// The inverse FFTs of the field spectra of the columns `d0..d1` into the field rows
+    /// `shift..shift + rows` of `u` (`ny` columns each).
+    fn inverse(
+        &mut self,
+        u: &mut [&mut [f64]],
+        ny: usize,
+        (shift, rows): (usize, usize),
+        (d0, d1): (usize, usize),
+    ) {
+        let nk = self.spectrum.len();
+        let even = self.line.len().is_multiple_of(2);
+        for (a, ua) in u.iter_mut().enumerate() {
+            for j in d0..d1 {
+                let row = &mut self.field[(a * ny + j) * nk..(a * ny + j + 1) * nk];
+                // the imaginary parts of the zero and Nyquist bins are round-off of a real kernel
+                row[0].im = T::default();
+                if even {
+                    row[nk - 1].im = T::default();
+                }
+                self.inverse
+                    .process_with_scratch(row, &mut self.line, &mut self.scratch)
+                    .expect("lengths from the plan");
+                for i in 0..rows {
+                    ua[i * ny + j] = self.line[i + shift].into();
+                }
+            }
+        }
+    }
 }
 
 /// The precision of a strip product's dense part (`StripConvolver::product_cols_in`).
@@ -92,7 +183,7 @@ pub(crate) enum Precision {
 struct Spectra<T> {
     /// The kernel's `m/2 + 1` spectra, each a `(c·ny) × (c·ny)` matrix (row: field component
     /// and column `a·ny + j`; column: source `b·ny + j'`) stored column by column
-    /// (`[k][source][row]`), divided by `m`.
+    /// (`[k][source][row]`), divided by `m`; then [`PAD`] zeros.
     spec_re: Vec<T>,
     spec_im: Vec<T>,
     /// The source spectra `[k][b·ny + j']`.
@@ -113,10 +204,36 @@ trait DenseReal:
     + std::ops::Sub<Output = Self>
     + std::ops::AddAssign
 {
+    /// `v` rounded to this precision.
+    fn from_f64(v: f64) -> Self;
+    /// `contact::avx512::strip`'s sums in this precision.
+    ///
+    /// # Safety
+    /// That module's contract: AVX-512F, and the bounds it states.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn sums_avx512(sums: Sums<'_, Self>, sources: impl Iterator<Item = usize> + Clone);
 }
 
-impl DenseReal for f32 {}
-impl DenseReal for f64 {}
+impl DenseReal for f32 {
+    fn from_f64(v: f64) -> Self {
+        v as f32
+    }
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn sums_avx512(sums: Sums<'_, f32>, sources: impl Iterator<Item = usize> + Clone) {
+        // SAFETY: the caller's contract is the kernel's.
+        unsafe { crate::contact::avx512::strip::sums_f32(sums, sources) }
+    }
+}
+impl DenseReal for f64 {
+    fn from_f64(v: f64) -> Self {
+        v
+    }
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn sums_avx512(sums: Sums<'_, f64>, sources: impl Iterator<Item = usize> + Clone) {
+        // SAFETY: the caller's contract is the kernel's.
+        unsafe { crate::contact::avx512::strip::sums_f64(sums, sources) }
+    }
+}
 
 /// The dense part of a strip product, in precision `T`: per frequency `k`, the field spectra
 /// of the columns `d0..d1` of every component (computed as one run of rows from the first
@@ -126,17 +243,87 @@ impl DenseReal for f64 {}
 /// vector width gives the same bits. Into `field[(a·ny + j)·nk + k]`.
 struct Dense<'a, T> {
     spectra: &'a mut Spectra<T>,
-    field: &'a mut [Complex64],
+    field: &'a mut [Complex<T>],
     /// `(nk, comps, ny)`
     dims: (usize, usize, usize),
     cols: (usize, usize),
     field_cols: (usize, usize),
 }
 
+/// The kernel's spectra below this fraction of their largest are zero in single precision
+/// (`to_single`): far below its resolution (6e-8). They are the round-off of the imaginary
+/// parts of kernel rows even in x (about 1e-16 of the largest), and their products with the
+/// sources' spectra would be subnormal, which the CPU computes many times slower (the box
+/// product of `strip_bench` took 3.5 times as long with them).
+const FLUSH: f64 = 1e-12;
+
+/// `v` rounded to `f32`, the values below [`FLUSH`] times the largest made zero.
+fn to_single(v: &[f64]) -> Vec<f32> {
+    let tiny = FLUSH * v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    v.iter()
+        .map(|&x| if x.abs() < tiny { 0.0 } else { x as f32 })
+        .collect()
+}
+
+/// Zeros after the kernel's spectra: the AVX-512 sums' last block reads up to four vectors
+/// (64 `f32`, 32 `f64`) past a column's run (`contact::avx512::strip`).
+const PAD: usize = 64;
+
 impl<T: DenseReal> Dense<'_, T> {
-    /// The loops, for any instruction set ([`pulp::WithSimd`] compiles them for each).
+    /// [`Self::run_reference`] on AVX-512 (`contact::avx512::strip`): per frequency, the sums
+    /// over the sources in blocks of rows held in registers, the same operations in the same
+    /// order per element, so the same bits.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn run_avx512(self) {
+        let (nk, c, ny) = self.dims;
+        let ((c0, c1), (d0, d1)) = (self.cols, self.field_cols);
+        let cn = c * ny;
+        let Spectra {
+            spec_re,
+            spec_im,
+            src_re,
+            src_im,
+            acc_re,
+            acc_im,
+        } = self.spectra;
+        let (r0, r1) = (d0, (c - 1) * ny + d1);
+        if r0 >= r1 {
+            return;
+        }
+        let sources = (0..c).flat_map(|b| (c0..c1).map(move |jp| b * ny + jp));
+        for k in 0..nk {
+            let sums = Sums {
+                spec_re: &spec_re[k * cn * cn..],
+                spec_im: &spec_im[k * cn * cn..],
+                src_re: &src_re[k * cn..(k + 1) * cn],
+                src_im: &src_im[k * cn..(k + 1) * cn],
+                acc_re: &mut acc_re[..cn],
+                acc_im: &mut acc_im[..cn],
+                cn,
+                rows: (r0, r1),
+            };
+            // the kernel's contract: every column's run and two vectors beyond lie inside
+            assert!((cn - 1) * cn + r1 + PAD <= sums.spec_re.len().min(sums.spec_im.len()));
+            assert!(r1 <= cn);
+            // SAFETY: AVX-512F is the caller's contract; the bounds are checked above.
+            unsafe { T::sums_avx512(sums, sources.clone()) };
+            for a in 0..c {
+                for j in d0..d1 {
+                    let r = a * ny + j;
+                    self.field[r * nk + k] = Complex::new(acc_re[r], acc_im[r]);
+                }
+            }
+        }
+    }
+
+    /// The loops, for any instruction set ([`pulp::WithSimd`] compiles them for each), and the
+    /// scalar reference the AVX-512 kernel's bits are tested against: per frequency `k`, the
+    /// field spectra of the run of rows, a sum of kernel columns scaled by the source spectra.
     #[inline(always)]
-    fn run(self) {
+    fn run_reference(self) {
         let (nk, c, ny) = self.dims;
         let ((c0, c1), (d0, d1)) = (self.cols, self.field_cols);
         let cn = c * ny;
@@ -149,8 +336,6 @@ impl<T: DenseReal> Dense<'_, T> {
             acc_im,
         } = self.spectra;
         let (yr, yi) = (&mut acc_re[..cn], &mut acc_im[..cn]);
-        // one contiguous run of rows from the first component's first field column to the
-        // last one's last (the columns between, outside the field, are computed and unused)
         let (r0, r1) = (d0, (c - 1) * ny + d1);
         if r0 >= r1 {
             return;
@@ -177,7 +362,7 @@ impl<T: DenseReal> Dense<'_, T> {
             for a in 0..c {
                 for j in d0..d1 {
                     let r = a * ny + j;
-                    self.field[r * nk + k] = Complex64::new(yr[r].into(), yi[r].into());
+                    self.field[r * nk + k] = Complex::new(yr[r], yi[r]);
                 }
             }
         }
@@ -186,11 +371,11 @@ impl<T: DenseReal> Dense<'_, T> {
 
 impl<T: DenseReal> Dense<'_, T> {
     /// The dense part of `spectra` into `field` ([`Self::run`]; `dims` = `(nk, comps, ny)`,
-    /// the source and field columns), compiled for the CPU's instruction set (`dispatch`) or
-    /// for the baseline target only.
+    /// the source and field columns), compiled for the CPU's instruction set (`dispatch`), or
+    /// the scalar reference [`Self::run_reference`].
     fn apply(
         spectra: &mut Spectra<T>,
-        field: &mut [Complex64],
+        field: &mut [Complex<T>],
         dims: (usize, usize, usize),
         (cols, field_cols): ((usize, usize), (usize, usize)),
         dispatch: bool,
@@ -203,35 +388,24 @@ impl<T: DenseReal> Dense<'_, T> {
             field_cols,
         };
         if !dispatch {
-            dense.run();
+            dense.run_reference();
             return;
         }
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU has AVX-512F, checked on the line above.
-            unsafe { run_avx512(dense) };
+            unsafe { dense.run_avx512() };
             return;
         }
         pulp::Arch::new().dispatch(dense);
     }
 }
 
-/// [`Dense::run`] compiled for AVX-512 (pulp 0.22 dispatches up to AVX2 on stable Rust; the
-/// loops are element-wise, so the wider vectors give the same bits).
-///
-/// # Safety
-/// The CPU must have AVX-512F.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx2,fma")]
-unsafe fn run_avx512<T: DenseReal>(dense: Dense<'_, T>) {
-    dense.run();
-}
-
 impl<T: DenseReal> pulp::WithSimd for Dense<'_, T> {
     type Output = ();
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
-        self.run();
+        self.run_reference();
     }
 }
 
@@ -249,12 +423,12 @@ impl StripConvolver {
         assert!(nx >= 1 && ny >= 1 && (1..=3).contains(&comps));
         let m = next_fast_len(2 * nx);
         let nk = m / 2 + 1;
-        let mut planner = RealFftPlanner::<f64>::new();
-        let forward = planner.plan_fft_forward(m);
-        let inverse = planner.plan_fft_inverse(m);
         let cn = comps * ny;
-        let mut spec_re = vec![0.0; nk * cn * cn];
-        let mut spec_im = vec![0.0; nk * cn * cn];
+        let fft64 = Ffts::<f64>::new(m, cn);
+        let forward = fft64.forward.clone();
+        // the spectra and `PAD` zeros
+        let mut spec_re = vec![0.0; nk * cn * cn + PAD];
+        let mut spec_im = vec![0.0; nk * cn * cn + PAD];
         let mut line = forward.make_input_vec();
         let mut out = forward.make_output_vec();
         let scale = 1.0 / m as f64;
@@ -297,20 +471,16 @@ impl StripConvolver {
                 }
             }
         }
-        let scratch_len = forward
-            .get_scratch_len()
-            .max(inverse.get_scratch_len())
-            .max(1);
         StripConvolver {
             nx,
             ny,
             comps,
             m,
-            line,
-            spectrum: vec![Complex64::new(0.0, 0.0); nk],
+            fft64,
+            fft32: Ffts::new(m, cn),
             single: Spectra {
-                spec_re: spec_re.iter().map(|&v| v as f32).collect(),
-                spec_im: spec_im.iter().map(|&v| v as f32).collect(),
+                spec_re: to_single(&spec_re),
+                spec_im: to_single(&spec_im),
                 src_re: vec![0.0; nk * cn],
                 src_im: vec![0.0; nk * cn],
                 acc_re: vec![0.0; cn],
@@ -324,10 +494,6 @@ impl StripConvolver {
                 acc_re: vec![0.0; cn],
                 acc_im: vec![0.0; cn],
             },
-            field: vec![Complex64::new(0.0, 0.0); cn * nk],
-            scratch: vec![Complex64::new(0.0, 0.0); scratch_len],
-            forward,
-            inverse,
         }
     }
 
@@ -402,7 +568,7 @@ impl StripConvolver {
     }
 
     /// [`Self::product_cols_in`], the dense part dispatched to the CPU's instruction set
-    /// (`dispatch`) or compiled for the baseline target only (to check the bits).
+    /// (`dispatch`) or run by the scalar reference loops (to check the bits).
     fn product_in(
         &mut self,
         f: &[&[f64]],
@@ -411,27 +577,34 @@ impl StripConvolver {
         (precision, dispatch): (Precision, bool),
     ) {
         self.check(f, u, rows, src, field);
-        self.forward(f, src);
-        let dims = (self.m / 2 + 1, self.comps, self.ny);
-        let out = &mut self.field[..];
-        if precision == Precision::Single {
-            let (nk, c, ny) = dims;
-            let cn = c * ny;
-            let (d, f32s) = (&self.double, &mut self.single);
-            for k in 0..nk {
-                for b in 0..c {
-                    let e = k * cn + b * ny;
-                    for e in e + src.0..e + src.1 {
-                        f32s.src_re[e] = d.src_re[e] as f32;
-                        f32s.src_im[e] = d.src_im[e] as f32;
-                    }
-                }
+        let (nx, ny) = (self.nx, self.ny);
+        let dims = (self.m / 2 + 1, self.comps, ny);
+        match precision {
+            Precision::Single => {
+                let ffts = &mut self.fft32;
+                ffts.forward(f, (nx, ny), src, &mut self.single);
+                Dense::apply(
+                    &mut self.single,
+                    &mut ffts.field,
+                    dims,
+                    (src, field),
+                    dispatch,
+                );
+                ffts.inverse(u, ny, rows, field);
             }
-            Dense::apply(&mut self.single, out, dims, (src, field), dispatch);
-        } else {
-            Dense::apply(&mut self.double, out, dims, (src, field), dispatch);
+            Precision::Double => {
+                let ffts = &mut self.fft64;
+                ffts.forward(f, (nx, ny), src, &mut self.double);
+                Dense::apply(
+                    &mut self.double,
+                    &mut ffts.field,
+                    dims,
+                    (src, field),
+                    dispatch,
+                );
+                ffts.inverse(u, ny, rows, field);
+            }
         }
-        self.inverse(u, rows, field);
     }
 
     /// The argument checks of [`Self::product_cols`].
@@ -446,57 +619,6 @@ impl StripConvolver {
         let (nx, ny, c) = (self.nx, self.ny, self.comps);
         assert!(f.len() == c && u.len() == c && shift + rows <= nx + 1);
         assert!(c0 <= c1 && c1 <= ny && d0 <= d1 && d1 <= ny);
-    }
-
-    /// The spectra along x of the source columns `c0..c1` of every component, into
-    /// the double-precision source spectra (`[k][b·ny + j']`).
-    fn forward(&mut self, f: &[&[f64]], (c0, c1): (usize, usize)) {
-        let (nx, ny, c) = (self.nx, self.ny, self.comps);
-        let cn = c * ny;
-        for b in 0..c {
-            for jp in c0..c1 {
-                self.line.fill(0.0);
-                for i in 0..nx {
-                    self.line[i] = f[b][i * ny + jp];
-                }
-                self.forward
-                    .process_with_scratch(&mut self.line, &mut self.spectrum, &mut self.scratch)
-                    .expect("lengths from the plan");
-                let s = b * ny + jp;
-                for (k, v) in self.spectrum.iter().enumerate() {
-                    self.double.src_re[k * cn + s] = v.re;
-                    self.double.src_im[k * cn + s] = v.im;
-                }
-            }
-        }
-    }
-
-    /// The inverse FFTs of the field spectra of the columns `d0..d1` into the field rows
-    /// `shift..shift + rows` of `u`.
-    fn inverse(
-        &mut self,
-        u: &mut [&mut [f64]],
-        (shift, rows): (usize, usize),
-        (d0, d1): (usize, usize),
-    ) {
-        let (ny, c, m) = (self.ny, self.comps, self.m);
-        let nk = m / 2 + 1;
-        for a in 0..c {
-            for j in d0..d1 {
-                let row = &mut self.field[(a * ny + j) * nk..(a * ny + j + 1) * nk];
-                // the imaginary parts of the zero and Nyquist bins are round-off of a real kernel
-                row[0].im = 0.0;
-                if m % 2 == 0 {
-                    row[nk - 1].im = 0.0;
-                }
-                self.inverse
-                    .process_with_scratch(row, &mut self.line, &mut self.scratch)
-                    .expect("lengths from the plan");
-                for i in 0..rows {
-                    u[a][i * ny + j] = self.line[i + shift];
-                }
-            }
-        }
     }
 }
 
@@ -549,9 +671,19 @@ pub struct StripInfluence {
     coupling: f64,
     asymmetry: f64,
     uniform: [f64; 3],
+    /// The symmetrised tangential kernel (x, y) at the offsets `−(nx−1)..=nx−1`,
+    /// `[(o + nx − 1)·ny² + j·ny + j'][a][b]` (m/Pa), for [`Self::boxes`].
+    kernel_t: Vec<[[f64; 2]; 2]>,
+    /// Single-precision box products on fewer rows than the grid's: convolvers of `L` rows on
+    /// the padded length `2L` (even, 5-smooth), built when a box first needs one, ascending in
+    /// `L` (a box of `L' ≤ L` rows uses the first that holds it).
+    boxes: Vec<StripConvolver>,
     /// Scratch of the box and extended products, `(nx + 1) · ny` each.
     bx: Vec<f64>,
     by: Vec<f64>,
+    /// Scratch of the box products' sources, `nx · ny` each.
+    sx: Vec<f64>,
+    sy: Vec<f64>,
 }
 
 impl StripInfluence {
@@ -593,6 +725,15 @@ impl StripInfluence {
         };
         let normal = StripNormal::new(nx, ny, |o, j, jp| kernel(o, j, jp)[2][2]);
         let tangential = StripConvolver::new(nx, ny, 2, kernel);
+        let mut kernel_t = Vec::with_capacity((2 * nx - 1) * ny * ny);
+        for o in -(nx as isize - 1)..nx as isize {
+            for j in 0..ny {
+                for jp in 0..ny {
+                    let k = kernel(o, j, jp);
+                    kernel_t.push([[k[0][0], k[0][1]], [k[1][0], k[1][1]]]);
+                }
+            }
+        }
         let mut diag = [f64::MIN; 2];
         let mut rows = vec![0.0_f64; 2 * ny];
         let (mut coupled, mut direct) = (0.0_f64, 0.0_f64);
@@ -621,9 +762,41 @@ impl StripInfluence {
             coupling: if direct > 0.0 { coupled / direct } else { 0.0 },
             asymmetry: if largest > 0.0 { asym / largest } else { 0.0 },
             uniform: [0.0; 3],
+            kernel_t,
+            boxes: Vec::new(),
             bx: vec![0.0; (nx + 1) * ny],
             by: vec![0.0; (nx + 1) * ny],
+            sx: vec![0.0; nx * ny],
+            sy: vec![0.0; nx * ny],
         }
+    }
+
+    /// The index in [`Self::boxes`] of the convolver for a box of `rows` rows (`1 ≤ rows <
+    /// nx`), built if none holds it; `None` when its padded length would be the whole grid's.
+    fn box_convolver(&mut self, rows: usize) -> Option<usize> {
+        let (nx, ny, _) = self.tangential.dims();
+        // an even length: the real FFTs of odd lengths take a complex FFT of the whole length
+        let m = (2 * rows..).step_by(2).find(|&m| next_fast_len(m) == m);
+        let m = m.expect("a 5-smooth even length exists");
+        if m >= self.tangential.fft_len() {
+            return None;
+        }
+        let lb = m / 2;
+        if let Some(k) = self.boxes.iter().position(|b| b.nx >= rows) {
+            if self.boxes[k].nx == lb {
+                return Some(k);
+            }
+        }
+        let kt = &self.kernel_t;
+        let kernel = |o: isize, j: usize, jp: usize| -> [[f64; 3]; 3] {
+            // offsets up to `lb < nx`; `+lb` reaches beyond a box's rows and is never read
+            let k = kt[(o + nx as isize - 1) as usize * ny * ny + j * ny + jp];
+            [[k[0][0], k[0][1], 0.0], [k[1][0], k[1][1], 0.0], [0.0; 3]]
+        };
+        let conv = StripConvolver::new(lb, ny, 2, kernel);
+        let at = self.boxes.partition_point(|b| b.nx < lb);
+        self.boxes.insert(at, conv);
+        Some(at)
     }
 
     /// These operators with a uniform compliance `c = (c_x, c_y, c_n)` (m/N, finite, of
@@ -703,20 +876,48 @@ impl super::TangentialInfluence for StripInfluence {
         let (nx, ny, _) = self.tangential.dims();
         let (r1, c1) = (r1.min(nx), c1.min(ny));
         let (r0, c0) = (r0.min(r1), c0.min(c1));
+        let cols = (c0, c1);
+        let rows = r1 - r0;
+        let found = if rows > 0 {
+            self.box_convolver(rows)
+        } else {
+            None
+        };
         let (bx, by) = (&mut self.bx[..nx * ny], &mut self.by[..nx * ny]);
-        let (rows, cols) = ((0, nx), (c0, c1));
-        self.tangential.product_cols_in(
-            Precision::Single,
-            &[tx, ty],
-            &mut [bx, by],
-            (rows, cols, cols),
-        );
+        let offset = match found {
+            Some(k) => {
+                // the box's rows first, then zeros to the convolver's rows
+                let conv = &mut self.boxes[k];
+                let n = conv.nx * ny;
+                let (sx, sy) = (&mut self.sx[..n], &mut self.sy[..n]);
+                sx[..rows * ny].copy_from_slice(&tx[r0 * ny..r1 * ny]);
+                sy[..rows * ny].copy_from_slice(&ty[r0 * ny..r1 * ny]);
+                sx[rows * ny..].fill(0.0);
+                sy[rows * ny..].fill(0.0);
+                conv.product_cols_in(
+                    Precision::Single,
+                    &[sx, sy],
+                    &mut [&mut bx[..n], &mut by[..n]],
+                    ((0, rows), cols, cols),
+                );
+                r0
+            }
+            None => {
+                self.tangential.product_cols_in(
+                    Precision::Single,
+                    &[tx, ty],
+                    &mut [bx, by],
+                    ((0, nx), cols, cols),
+                );
+                0
+            }
+        };
         for i in r0..r1 {
             for j in 0..ny {
-                let e = i * ny + j;
+                let (e, b) = (i * ny + j, (i - offset) * ny + j);
                 let inside = (c0..c1).contains(&j);
-                ux[e] = if inside { self.bx[e] } else { 0.0 };
-                uy[e] = if inside { self.by[e] } else { 0.0 };
+                ux[e] = if inside { self.bx[b] } else { 0.0 };
+                uy[e] = if inside { self.by[b] } else { 0.0 };
             }
         }
     }
@@ -724,7 +925,8 @@ impl super::TangentialInfluence for StripInfluence {
 
 #[cfg(test)]
 mod tests {
-    use super::{Precision, StripConvolver};
+    use super::{Precision, StripConvolver, StripInfluence};
+    use crate::contact::influence::TangentialInfluence;
 
     /// A kernel coupling all components, not Toeplitz across the rail, decaying along it.
     fn kernel(o: isize, j: usize, jp: usize) -> [[f64; 3]; 3] {
@@ -737,8 +939,8 @@ mod tests {
 
     #[test]
     fn dispatched_products_give_the_plain_loops_bits_and_single_precision_is_within_1e_6() {
-        // every remainder of the eight-lane dot products (source widths 1..=9 and the grid's)
-        for (nx, ny, comps) in [(7, 4, 2), (9, 13, 2), (12, 3, 3), (32, 24, 2)] {
+        // runs of field rows shorter and longer than a chunk, and every kind of last chunk
+        for (nx, ny, comps) in [(7, 4, 2), (9, 13, 2), (12, 3, 3), (32, 24, 2), (5, 40, 2)] {
             let mut conv = StripConvolver::new(nx, ny, comps, kernel);
             let n = nx * ny;
             let f: Vec<Vec<f64>> = (0..comps)
@@ -799,6 +1001,79 @@ mod tests {
                         );
                         let d = (dispatched[a][e] - double[a][e]).abs();
                         assert!(d <= 1e-6 * scale, "{nx}×{ny} {a} {e}: {d:e} of {scale:e}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn box_products_equal_a_direct_sum_of_the_symmetrised_kernel() {
+        // boxes of the whole grid and of fewer rows (their own padded lengths, built in turn,
+        // and one reused by a smaller box), against `Σ K_sym(i − i', j, j') τ(i', j')`
+        let (nx, ny) = (32, 24);
+        let mut op = StripInfluence::new(nx, ny, kernel);
+        let sym = |o: isize, j: usize, jp: usize, a: usize, b: usize| {
+            0.5 * (kernel(o, j, jp)[a][b] + kernel(-o, jp, j)[b][a])
+        };
+        let n = nx * ny;
+        for (rows, cols) in [
+            ((0, nx), (0, ny)),
+            ((3, 10), (2, 20)),
+            ((5, 26), (4, 19)),
+            ((0, 7), (0, 24)),
+            ((31, 32), (11, 12)),
+            ((2, 30), (6, 18)),
+        ] {
+            let inside = |e: usize| {
+                (rows.0..rows.1).contains(&(e / ny)) && (cols.0..cols.1).contains(&(e % ny))
+            };
+            let t = |b: usize| -> Vec<f64> {
+                (0..n)
+                    .map(|e| {
+                        let v = (((e + 5 * b) * 7919) % 13) as f64 * 1e6 - 4e6;
+                        if inside(e) {
+                            v
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect()
+            };
+            let (tx, ty) = (t(0), t(1));
+            let (mut ux, mut uy) = (vec![7.0; n], vec![7.0; n]);
+            op.tangential_box(&tx, &ty, &mut ux, &mut uy, rows, cols);
+            let direct = |e: usize, a: usize| -> f64 {
+                let (i, j) = (e / ny, e % ny);
+                (0..n)
+                    .filter(|&s| inside(s))
+                    .map(|s| {
+                        let o = i as isize - (s / ny) as isize;
+                        sym(o, j, s % ny, a, 0) * tx[s] + sym(o, j, s % ny, a, 1) * ty[s]
+                    })
+                    .sum()
+            };
+            let expect: Vec<[f64; 2]> = (0..n).map(|e| [direct(e, 0), direct(e, 1)]).collect();
+            let scale = expect.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
+            for e in 0..n {
+                let got = [ux[e], uy[e]];
+                for a in 0..2 {
+                    if inside(e) {
+                        let d = (got[a] - expect[e][a]).abs();
+                        assert!(
+                            d <= 1e-6 * scale,
+                            "{rows:?} {cols:?} {e} {a}: {d:e} of {scale:e}"
+                        );
+                    } else if (rows.0..rows.1).contains(&(e / ny)) {
+                        assert_eq!(
+                            got[a], 0.0,
+                            "{rows:?} {cols:?} {e} {a}: outside the columns"
+                        );
+                    } else {
+                        assert_eq!(
+                            got[a], 7.0,
+                            "{rows:?} {cols:?} {e} {a}: a row outside the box"
+                        );
                     }
                 }
             }

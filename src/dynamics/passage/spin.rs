@@ -353,7 +353,7 @@ impl Wait<'_> {
                 break;
             }
             k += 1;
-            if k % 64 == 0 && t0.elapsed() > CALLER_SPIN {
+            if k.is_multiple_of(64) && t0.elapsed() > CALLER_SPIN {
                 s.caller_parked.store(true, Ordering::SeqCst);
                 while s.state.load(Ordering::SeqCst) != DONE {
                     std::thread::park();
@@ -407,7 +407,7 @@ fn worker(s: &Shared) {
             QUIT => return,
             _ => {
                 k = k.wrapping_add(1);
-                if k % 64 != 0 {
+                if !k.is_multiple_of(64) {
                     std::hint::spin_loop();
                     continue;
                 }

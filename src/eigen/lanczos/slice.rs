@@ -296,7 +296,10 @@ impl Krylov {
             std::mem::swap(&mut self.q, &mut self.z);
             std::mem::swap(&mut self.mq, &mut self.mz);
             j += b;
-            if j < m_max && j >= early_from && ((j - early_from) / b) % EARLY_CHECK_BLOCKS == 0 {
+            if j < m_max
+                && j >= early_from
+                && ((j - early_from) / b).is_multiple_of(EARLY_CHECK_BLOCKS)
+            {
                 break;
             }
         }

@@ -64,7 +64,7 @@ impl Mirror {
 /// or an unsymmetric grading).
 pub(crate) fn half_planes(planes: &[f64]) -> Option<Vec<f64>> {
     let n = planes.len();
-    if n < 3 || n % 2 == 0 {
+    if n < 3 || n.is_multiple_of(2) {
         return None;
     }
     let tol = 1e-9 * (planes[n - 1] - planes[0]);

@@ -1,0 +1,11 @@
+//! The AVX-512 kernels of the contact step, in one place: the dense part of the strip
+//! influence products ([`strip`]), the per-frequency sums over the source columns of an FE
+//! contact patch's kernel (`contact::influence::strip`).
+//!
+//! Every kernel is an `unsafe fn` with `#[target_feature(enable = "avx512f")]`: its caller
+//! checks `is_x86_feature_detected!("avx512f")` at run time first and takes the plain loops
+//! otherwise. Each gives the bits of its plain loop (the same operations in the same order per
+//! element, no fused multiply-add), which the caller's tests check bit for bit against the
+//! scalar reference loops on runs of every length and every kind of last block.
+
+pub(crate) mod strip;
