@@ -23,8 +23,12 @@ use rustfft::FftNum;
 use std::sync::Arc;
 
 use super::{coefficients, next_fast_len};
-#[cfg(target_arch = "x86_64")]
-use crate::contact::avx512::strip::Sums;
+
+mod dense;
+mod operators;
+
+use dense::{to_single, Dense, DenseReal, Spectra, PAD};
+pub use operators::{StripInfluence, StripNormal};
 
 /// The quasi-identical half-space's kernel ([`coefficients`]; element `dx × dy` in m, `E*`,
 /// `G` in Pa, ν) in the form [`StripConvolver::new`] takes, for `comps` components: 1 → the
@@ -174,239 +178,9 @@ impl<T: FftNum + DenseReal> Ffts<T> {
 pub(crate) enum Precision {
     /// Everything in `f64`.
     Double,
-    /// The per-frequency products with the kernel's spectra in `f32` (the FFTs in `f64`).
+    /// The tractions rounded to `f32`, then the FFTs along x and the per-frequency products
+    /// with the kernel's spectra in `f32`.
     Single,
-}
-
-/// The spectra of a strip product in one precision `T`, real and imaginary parts apart.
-#[derive(Clone)]
-struct Spectra<T> {
-    /// The kernel's `m/2 + 1` spectra, each a `(c·ny) × (c·ny)` matrix (row: field component
-    /// and column `a·ny + j`; column: source `b·ny + j'`) stored column by column
-    /// (`[k][source][row]`), divided by `m`; then [`PAD`] zeros.
-    spec_re: Vec<T>,
-    spec_im: Vec<T>,
-    /// The source spectra `[k][b·ny + j']`.
-    src_re: Vec<T>,
-    src_im: Vec<T>,
-    /// The field spectra of one frequency, `c·ny` each (accumulators).
-    acc_re: Vec<T>,
-    acc_im: Vec<T>,
-}
-
-/// The real type of a strip product's dense part: `f64`, or `f32` for the inner loops.
-trait DenseReal:
-    Copy
-    + Default
-    + Into<f64>
-    + std::ops::Mul<Output = Self>
-    + std::ops::Add<Output = Self>
-    + std::ops::Sub<Output = Self>
-    + std::ops::AddAssign
-{
-    /// `v` rounded to this precision.
-    fn from_f64(v: f64) -> Self;
-    /// `contact::avx512::strip`'s sums in this precision.
-    ///
-    /// # Safety
-    /// That module's contract: AVX-512F, and the bounds it states.
-    #[cfg(target_arch = "x86_64")]
-    unsafe fn sums_avx512(sums: Sums<'_, Self>, sources: impl Iterator<Item = usize> + Clone);
-}
-
-impl DenseReal for f32 {
-    fn from_f64(v: f64) -> Self {
-        v as f32
-    }
-    #[cfg(target_arch = "x86_64")]
-    unsafe fn sums_avx512(sums: Sums<'_, f32>, sources: impl Iterator<Item = usize> + Clone) {
-        // SAFETY: the caller's contract is the kernel's.
-        unsafe { crate::contact::avx512::strip::sums_f32(sums, sources) }
-    }
-}
-impl DenseReal for f64 {
-    fn from_f64(v: f64) -> Self {
-        v
-    }
-    #[cfg(target_arch = "x86_64")]
-    unsafe fn sums_avx512(sums: Sums<'_, f64>, sources: impl Iterator<Item = usize> + Clone) {
-        // SAFETY: the caller's contract is the kernel's.
-        unsafe { crate::contact::avx512::strip::sums_f64(sums, sources) }
-    }
-}
-
-/// The dense part of a strip product, in precision `T`: per frequency `k`, the field spectra
-/// of the columns `d0..d1` of every component (computed as one run of rows from the first
-/// component's `d0` to the last one's `d1`), `y = S_k x` over the source columns `c0..c1`
-/// of every component, as a sum of columns of `S_k` (stored source-major, `[k][s][r]`) scaled
-/// by the source spectrum `x_s`: contiguous element-wise updates, no reductions, so any
-/// vector width gives the same bits. Into `field[(a·ny + j)·nk + k]`.
-struct Dense<'a, T> {
-    spectra: &'a mut Spectra<T>,
-    field: &'a mut [Complex<T>],
-    /// `(nk, comps, ny)`
-    dims: (usize, usize, usize),
-    cols: (usize, usize),
-    field_cols: (usize, usize),
-}
-
-/// The kernel's spectra below this fraction of their largest are zero in single precision
-/// (`to_single`): far below its resolution (6e-8). They are the round-off of the imaginary
-/// parts of kernel rows even in x (about 1e-16 of the largest), and their products with the
-/// sources' spectra would be subnormal, which the CPU computes many times slower (the box
-/// product of `strip_bench` took 3.5 times as long with them).
-const FLUSH: f64 = 1e-12;
-
-/// `v` rounded to `f32`, the values below [`FLUSH`] times the largest made zero.
-fn to_single(v: &[f64]) -> Vec<f32> {
-    let tiny = FLUSH * v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-    v.iter()
-        .map(|&x| if x.abs() < tiny { 0.0 } else { x as f32 })
-        .collect()
-}
-
-/// Zeros after the kernel's spectra: the AVX-512 sums' last block reads up to four vectors
-/// (64 `f32`, 32 `f64`) past a column's run (`contact::avx512::strip`).
-const PAD: usize = 64;
-
-impl<T: DenseReal> Dense<'_, T> {
-    /// [`Self::run_reference`] on AVX-512 (`contact::avx512::strip`): per frequency, the sums
-    /// over the sources in blocks of rows held in registers, the same operations in the same
-    /// order per element, so the same bits.
-    ///
-    /// # Safety
-    /// The CPU must have AVX-512F.
-    #[cfg(target_arch = "x86_64")]
-    unsafe fn run_avx512(self) {
-        let (nk, c, ny) = self.dims;
-        let ((c0, c1), (d0, d1)) = (self.cols, self.field_cols);
-        let cn = c * ny;
-        let Spectra {
-            spec_re,
-            spec_im,
-            src_re,
-            src_im,
-            acc_re,
-            acc_im,
-        } = self.spectra;
-        let (r0, r1) = (d0, (c - 1) * ny + d1);
-        if r0 >= r1 {
-            return;
-        }
-        let sources = (0..c).flat_map(|b| (c0..c1).map(move |jp| b * ny + jp));
-        for k in 0..nk {
-            let sums = Sums {
-                spec_re: &spec_re[k * cn * cn..],
-                spec_im: &spec_im[k * cn * cn..],
-                src_re: &src_re[k * cn..(k + 1) * cn],
-                src_im: &src_im[k * cn..(k + 1) * cn],
-                acc_re: &mut acc_re[..cn],
-                acc_im: &mut acc_im[..cn],
-                cn,
-                rows: (r0, r1),
-            };
-            // the kernel's contract: every column's run and two vectors beyond lie inside
-            assert!((cn - 1) * cn + r1 + PAD <= sums.spec_re.len().min(sums.spec_im.len()));
-            assert!(r1 <= cn);
-            // SAFETY: AVX-512F is the caller's contract; the bounds are checked above.
-            unsafe { T::sums_avx512(sums, sources.clone()) };
-            for a in 0..c {
-                for j in d0..d1 {
-                    let r = a * ny + j;
-                    self.field[r * nk + k] = Complex::new(acc_re[r], acc_im[r]);
-                }
-            }
-        }
-    }
-
-    /// The loops, for any instruction set ([`pulp::WithSimd`] compiles them for each), and the
-    /// scalar reference the AVX-512 kernel's bits are tested against: per frequency `k`, the
-    /// field spectra of the run of rows, a sum of kernel columns scaled by the source spectra.
-    #[inline(always)]
-    fn run_reference(self) {
-        let (nk, c, ny) = self.dims;
-        let ((c0, c1), (d0, d1)) = (self.cols, self.field_cols);
-        let cn = c * ny;
-        let Spectra {
-            spec_re,
-            spec_im,
-            src_re,
-            src_im,
-            acc_re,
-            acc_im,
-        } = self.spectra;
-        let (yr, yi) = (&mut acc_re[..cn], &mut acc_im[..cn]);
-        let (r0, r1) = (d0, (c - 1) * ny + d1);
-        if r0 >= r1 {
-            return;
-        }
-        for k in 0..nk {
-            yr.fill(T::default());
-            yi.fill(T::default());
-            for b in 0..c {
-                for jp in c0..c1 {
-                    let s = b * ny + jp;
-                    let (xr, xi) = (src_re[k * cn + s], src_im[k * cn + s]);
-                    let col = (k * cn + s) * cn;
-                    let (sr, si) = (&spec_re[col + r0..col + r1], &spec_im[col + r0..col + r1]);
-                    for ((yr, yi), (ar, ai)) in yr[r0..r1]
-                        .iter_mut()
-                        .zip(&mut yi[r0..r1])
-                        .zip(sr.iter().zip(si))
-                    {
-                        *yr += *ar * xr - *ai * xi;
-                        *yi += *ar * xi + *ai * xr;
-                    }
-                }
-            }
-            for a in 0..c {
-                for j in d0..d1 {
-                    let r = a * ny + j;
-                    self.field[r * nk + k] = Complex::new(yr[r], yi[r]);
-                }
-            }
-        }
-    }
-}
-
-impl<T: DenseReal> Dense<'_, T> {
-    /// The dense part of `spectra` into `field` ([`Self::run`]; `dims` = `(nk, comps, ny)`,
-    /// the source and field columns), compiled for the CPU's instruction set (`dispatch`), or
-    /// the scalar reference [`Self::run_reference`].
-    fn apply(
-        spectra: &mut Spectra<T>,
-        field: &mut [Complex<T>],
-        dims: (usize, usize, usize),
-        (cols, field_cols): ((usize, usize), (usize, usize)),
-        dispatch: bool,
-    ) {
-        let dense = Dense {
-            spectra,
-            field,
-            dims,
-            cols,
-            field_cols,
-        };
-        if !dispatch {
-            dense.run_reference();
-            return;
-        }
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F, checked on the line above.
-            unsafe { dense.run_avx512() };
-            return;
-        }
-        pulp::Arch::new().dispatch(dense);
-    }
-}
-
-impl<T: DenseReal> pulp::WithSimd for Dense<'_, T> {
-    type Output = ();
-    #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _simd: S) {
-        self.run_reference();
-    }
 }
 
 impl StripConvolver {
@@ -550,13 +324,14 @@ impl StripConvolver {
         self.product_in(f, u, (rows, src, field), (Precision::Double, true));
     }
 
-    /// [`Self::product_cols`] with its dense part (the per-frequency products with the kernel's
-    /// spectra) in the given precision. [`Precision::Single`]: the kernel's and the sources'
-    /// spectra rounded to `f32` and the sums over the sources in `f32`, the FFTs in double
-    /// precision; the relative error is of the order of single precision's 6e-8 times the
-    /// conditioning of the sums; for the products of an iterative solver's inner loop, as the
-    /// half-space's box products ([`super::Convolver::tangential_box`]). Compiled for each
-    /// instruction set pulp dispatches to; every one gives the same bits.
+    /// [`Self::product_cols`] in the given precision. [`Precision::Single`]: the tractions and
+    /// the kernel's spectra rounded to `f32`, the FFTs along x and the sums over the sources
+    /// in `f32`; the relative error is of the order of single precision's 6e-8 times the
+    /// FFTs' length's logarithm and the conditioning of the sums; for the products of an
+    /// iterative solver's inner loop, as the half-space's box products
+    /// ([`super::Convolver::tangential_box`]). The dense part runs on AVX-512 where the CPU
+    /// has it, else compiled for each instruction set pulp dispatches to; every one gives the
+    /// same bits.
     pub(crate) fn product_cols_in(
         &mut self,
         precision: Precision,
@@ -622,320 +397,24 @@ impl StripConvolver {
     }
 }
 
-/// The normal influence operator of a kernel invariant along x only: a one-component
-/// [`StripConvolver`] and its largest self-influence, for [`super::NormalInfluence`].
-#[derive(Clone)]
-pub struct StripNormal {
-    conv: StripConvolver,
-    diag: f64,
-}
-
-impl StripNormal {
-    /// The operator of `kernel(offset, j, j')` (m/Pa): the normal displacement at column `j`
-    /// per unit pressure on an element of column `j'`, `offset` rows behind it
-    /// (`−(nx−1)..=nx`); `nx, ny ≥ 1`.
-    pub fn new(nx: usize, ny: usize, kernel: impl Fn(isize, usize, usize) -> f64) -> Self {
-        let diag = (0..ny).map(|j| kernel(0, j, j)).fold(f64::MIN, f64::max);
-        let conv = StripConvolver::new(nx, ny, 1, |o, j, jp| {
-            let mut k = [[0.0; 3]; 3];
-            k[0][0] = kernel(o, j, jp);
-            k
-        });
-        StripNormal { conv, diag }
-    }
-}
-
-impl super::NormalInfluence for StripNormal {
-    fn normal(&mut self, p: &[f64], u: &mut [f64]) {
-        self.conv.product(&[p], &mut [u], 0);
-    }
-
-    fn diag_n(&self) -> f64 {
-        self.diag
-    }
-}
-
-/// The normal and tangential influence operators of a three-component kernel invariant
-/// along x only (an FE contact patch, theory §6.9): the normal term `K_nn` for
-/// [`super::NormalInfluence`], the tangential block `K_xx, K_xy, K_yx, K_yy` for
-/// [`super::TangentialInfluence`]. The normal–tangential couplings `K_xn, K_yn, K_nx, K_ny`
-/// are not used: the normal and the tangential problems are solved one after the other, as
-/// for quasi-identical bodies (the couplings' size is reported by
-/// [`StripInfluence::coupling_ratio`]).
-#[derive(Clone)]
-pub struct StripInfluence {
-    normal: StripNormal,
-    tangential: StripConvolver,
-    diag: [f64; 2],
-    lambda_t: f64,
-    coupling: f64,
-    asymmetry: f64,
-    uniform: [f64; 3],
-    /// The symmetrised tangential kernel (x, y) at the offsets `−(nx−1)..=nx−1`,
-    /// `[(o + nx − 1)·ny² + j·ny + j'][a][b]` (m/Pa), for [`Self::boxes`].
-    kernel_t: Vec<[[f64; 2]; 2]>,
-    /// Single-precision box products on fewer rows than the grid's: convolvers of `L` rows on
-    /// the padded length `2L` (even, 5-smooth), built when a box first needs one, ascending in
-    /// `L` (a box of `L' ≤ L` rows uses the first that holds it).
-    boxes: Vec<StripConvolver>,
-    /// Scratch of the box and extended products, `(nx + 1) · ny` each.
-    bx: Vec<f64>,
-    by: Vec<f64>,
-    /// Scratch of the box products' sources, `nx · ny` each.
-    sx: Vec<f64>,
-    sy: Vec<f64>,
-}
-
-impl StripInfluence {
-    /// The operators of `kernel(offset, j, j')[a][b]` (m/Pa; components x, y, normal; the
-    /// displacement difference `a` at column `j` per unit traction `b` on an element of column
-    /// `j'`, `offset` rows behind it, `−(nx−1)..=nx`); `nx, ny ≥ 1`. The largest eigenvalue
-    /// of the tangential operator is bounded by its largest absolute row sum (Gershgorin).
-    pub fn new(
-        nx: usize,
-        ny: usize,
-        kernel: impl Fn(isize, usize, usize) -> [[f64; 3]; 3],
-    ) -> Self {
-        // The solvers need a symmetric operator (reciprocity, `K_ab(o, j, j') = K_ba(−o, j',
-        // j)`); an FE kernel collocated at element centres under uniform element loads holds
-        // it only to its discretisation: its symmetric part is used (offsets within the grid;
-        // `+nx` reaches the row beyond it only), and the departure is reported.
-        let mut asym = 0.0_f64;
-        let mut largest = 0.0_f64;
-        for o in -(nx as isize - 1)..nx as isize {
-            for j in 0..ny {
-                for jp in 0..ny {
-                    let (k, m) = (kernel(o, j, jp), kernel(-o, jp, j));
-                    for a in 0..3 {
-                        for b in 0..3 {
-                            asym = asym.max((k[a][b] - m[b][a]).abs());
-                            largest = largest.max(k[a][b].abs());
-                        }
-                    }
-                }
-            }
-        }
-        let kernel = |o: isize, j: usize, jp: usize| -> [[f64; 3]; 3] {
-            let k = kernel(o, j, jp);
-            if o.unsigned_abs() >= nx {
-                return k;
-            }
-            let m = kernel(-o, jp, j);
-            std::array::from_fn(|a| std::array::from_fn(|b| 0.5 * (k[a][b] + m[b][a])))
-        };
-        let normal = StripNormal::new(nx, ny, |o, j, jp| kernel(o, j, jp)[2][2]);
-        let tangential = StripConvolver::new(nx, ny, 2, kernel);
-        let mut kernel_t = Vec::with_capacity((2 * nx - 1) * ny * ny);
-        for o in -(nx as isize - 1)..nx as isize {
-            for j in 0..ny {
-                for jp in 0..ny {
-                    let k = kernel(o, j, jp);
-                    kernel_t.push([[k[0][0], k[0][1]], [k[1][0], k[1][1]]]);
-                }
-            }
-        }
-        let mut diag = [f64::MIN; 2];
-        let mut rows = vec![0.0_f64; 2 * ny];
-        let (mut coupled, mut direct) = (0.0_f64, 0.0_f64);
-        for o in -(nx as isize - 1)..nx as isize {
-            for j in 0..ny {
-                for jp in 0..ny {
-                    let k = kernel(o, j, jp);
-                    for a in 0..2 {
-                        rows[a * ny + j] += k[a][0].abs() + k[a][1].abs();
-                        coupled = coupled.max(k[a][2].abs()).max(k[2][a].abs());
-                        direct = direct.max(k[a][a].abs());
-                    }
-                    if o == 0 && j == jp {
-                        diag[0] = diag[0].max(k[0][0]);
-                        diag[1] = diag[1].max(k[1][1]);
-                    }
-                }
-            }
-        }
-        let lambda_t = rows.iter().fold(0.0_f64, |m, &v| m.max(v));
-        StripInfluence {
-            normal,
-            tangential,
-            diag,
-            lambda_t,
-            coupling: if direct > 0.0 { coupled / direct } else { 0.0 },
-            asymmetry: if largest > 0.0 { asym / largest } else { 0.0 },
-            uniform: [0.0; 3],
-            kernel_t,
-            boxes: Vec::new(),
-            bx: vec![0.0; (nx + 1) * ny],
-            by: vec![0.0; (nx + 1) * ny],
-            sx: vec![0.0; nx * ny],
-            sy: vec![0.0; nx * ny],
-        }
-    }
-
-    /// The index in [`Self::boxes`] of the convolver for a box of `rows` rows (`1 ≤ rows <
-    /// nx`), built if none holds it; `None` when its padded length would be the whole grid's.
-    fn box_convolver(&mut self, rows: usize) -> Option<usize> {
-        let (nx, ny, _) = self.tangential.dims();
-        // an even length: the real FFTs of odd lengths take a complex FFT of the whole length
-        let m = (2 * rows..).step_by(2).find(|&m| next_fast_len(m) == m);
-        let m = m.expect("a 5-smooth even length exists");
-        if m >= self.tangential.fft_len() {
-            return None;
-        }
-        let lb = m / 2;
-        if let Some(k) = self.boxes.iter().position(|b| b.nx >= rows) {
-            if self.boxes[k].nx == lb {
-                return Some(k);
-            }
-        }
-        let kt = &self.kernel_t;
-        let kernel = |o: isize, j: usize, jp: usize| -> [[f64; 3]; 3] {
-            // offsets up to `lb < nx`; `+lb` reaches beyond a box's rows and is never read
-            let k = kt[(o + nx as isize - 1) as usize * ny * ny + j * ny + jp];
-            [[k[0][0], k[0][1], 0.0], [k[1][0], k[1][1], 0.0], [0.0; 3]]
-        };
-        let conv = StripConvolver::new(lb, ny, 2, kernel);
-        let at = self.boxes.partition_point(|b| b.nx < lb);
-        self.boxes.insert(at, conv);
-        Some(at)
-    }
-
-    /// These operators with a uniform compliance `c = (c_x, c_y, c_n)` (m/N, finite, of
-    /// either sign) under the whole patch: the displacement `c_d F_d` of every element per
-    /// total force `F_d`, i.e. `c_d ΔA` added to every coefficient of component `d`. The
-    /// contact adds it to its series compliance ([`crate::contact::TransientRolling`]); the
-    /// fe-patch's split against the global model is such a term, negative (theory §6.9).
-    pub fn with_uniform(mut self, c_m_per_n: [f64; 3]) -> Self {
-        self.uniform = c_m_per_n;
-        self
-    }
-
-    /// The uniform compliance of [`Self::with_uniform`] (m/N; 0 unless set).
-    pub fn uniform(&self) -> [f64; 3] {
-        self.uniform
-    }
-
-    /// The largest departure of the given kernel from reciprocity, `|K_ab(o, j, j') − K_ba(−o,
-    /// j', j)|`, over its largest coefficient (−): what symmetrising it changed (0 for the
-    /// half-space).
-    pub fn asymmetry(&self) -> f64 {
-        self.asymmetry
-    }
-
-    /// The largest normal–tangential coupling coefficient over the largest direct tangential
-    /// one (−): the size of what [`StripInfluence`] leaves out (0 for quasi-identical bodies).
-    pub fn coupling_ratio(&self) -> f64 {
-        self.coupling
-    }
-}
-
-impl super::NormalInfluence for StripInfluence {
-    fn normal(&mut self, p: &[f64], u: &mut [f64]) {
-        self.normal.normal(p, u);
-    }
-
-    fn diag_n(&self) -> f64 {
-        self.normal.diag_n()
-    }
-}
-
-impl super::TangentialInfluence for StripInfluence {
-    fn dims(&self) -> (usize, usize) {
-        let (nx, ny, _) = self.tangential.dims();
-        (nx, ny)
-    }
-    fn diag_xx(&self) -> f64 {
-        self.diag[0]
-    }
-    fn diag_yy(&self) -> f64 {
-        self.diag[1]
-    }
-    fn lambda_max_t(&self) -> f64 {
-        self.lambda_t
-    }
-    fn tangential(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64], shift: usize) {
-        self.tangential.product(&[tx, ty], &mut [ux, uy], shift);
-    }
-    fn tangential_ext(&mut self, tx: &[f64], ty: &[f64], ux: &mut [f64], uy: &mut [f64]) {
-        let n = (self.tangential.nx + 1) * self.tangential.ny;
-        self.tangential.product_rows(
-            &[tx, ty],
-            &mut [&mut ux[..n], &mut uy[..n]],
-            0,
-            self.tangential.nx + 1,
-        );
-    }
-    fn tangential_box(
-        &mut self,
-        tx: &[f64],
-        ty: &[f64],
-        ux: &mut [f64],
-        uy: &mut [f64],
-        (r0, r1): (usize, usize),
-        (c0, c1): (usize, usize),
-    ) {
-        let (nx, ny, _) = self.tangential.dims();
-        let (r1, c1) = (r1.min(nx), c1.min(ny));
-        let (r0, c0) = (r0.min(r1), c0.min(c1));
-        let cols = (c0, c1);
-        let rows = r1 - r0;
-        let found = if rows > 0 {
-            self.box_convolver(rows)
-        } else {
-            None
-        };
-        let (bx, by) = (&mut self.bx[..nx * ny], &mut self.by[..nx * ny]);
-        let offset = match found {
-            Some(k) => {
-                // the box's rows first, then zeros to the convolver's rows
-                let conv = &mut self.boxes[k];
-                let n = conv.nx * ny;
-                let (sx, sy) = (&mut self.sx[..n], &mut self.sy[..n]);
-                sx[..rows * ny].copy_from_slice(&tx[r0 * ny..r1 * ny]);
-                sy[..rows * ny].copy_from_slice(&ty[r0 * ny..r1 * ny]);
-                sx[rows * ny..].fill(0.0);
-                sy[rows * ny..].fill(0.0);
-                conv.product_cols_in(
-                    Precision::Single,
-                    &[sx, sy],
-                    &mut [&mut bx[..n], &mut by[..n]],
-                    ((0, rows), cols, cols),
-                );
-                r0
-            }
-            None => {
-                self.tangential.product_cols_in(
-                    Precision::Single,
-                    &[tx, ty],
-                    &mut [bx, by],
-                    ((0, nx), cols, cols),
-                );
-                0
-            }
-        };
-        for i in r0..r1 {
-            for j in 0..ny {
-                let (e, b) = (i * ny + j, (i - offset) * ny + j);
-                let inside = (c0..c1).contains(&j);
-                ux[e] = if inside { self.bx[b] } else { 0.0 };
-                uy[e] = if inside { self.by[b] } else { 0.0 };
-            }
-        }
-    }
+/// A kernel coupling all components, not Toeplitz across the rail, decaying along it: the
+/// tests' (here and in `operators`).
+#[cfg(test)]
+fn test_kernel(o: isize, j: usize, jp: usize) -> [[f64; 3]; 3] {
+    let r = 1.0 + (o * o) as f64 + 0.5 * (j as f64 - jp as f64).powi(2);
+    let w = 1.0 + 0.1 * j as f64 + 0.03 * (jp * jp) as f64;
+    std::array::from_fn(|a| {
+        std::array::from_fn(|b| if a == b { w / r } else { 0.2 * w / r.sqrt() } * 1e-11)
+    })
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{Precision, StripConvolver, StripInfluence};
-    use crate::contact::influence::TangentialInfluence;
+    use super::{Precision, StripConvolver};
 
-    /// A kernel coupling all components, not Toeplitz across the rail, decaying along it.
-    fn kernel(o: isize, j: usize, jp: usize) -> [[f64; 3]; 3] {
-        let r = 1.0 + (o * o) as f64 + 0.5 * (j as f64 - jp as f64).powi(2);
-        let w = 1.0 + 0.1 * j as f64 + 0.03 * (jp * jp) as f64;
-        std::array::from_fn(|a| {
-            std::array::from_fn(|b| if a == b { w / r } else { 0.2 * w / r.sqrt() } * 1e-11)
-        })
-    }
+    /// A kernel coupling all components, not Toeplitz across the rail, decaying along it
+    /// (also the operators' tests').
+    pub(super) use super::test_kernel as kernel;
 
     #[test]
     fn dispatched_products_give_the_plain_loops_bits_and_single_precision_is_within_1e_6() {
@@ -1001,79 +480,6 @@ mod tests {
                         );
                         let d = (dispatched[a][e] - double[a][e]).abs();
                         assert!(d <= 1e-6 * scale, "{nx}×{ny} {a} {e}: {d:e} of {scale:e}");
-                    }
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn box_products_equal_a_direct_sum_of_the_symmetrised_kernel() {
-        // boxes of the whole grid and of fewer rows (their own padded lengths, built in turn,
-        // and one reused by a smaller box), against `Σ K_sym(i − i', j, j') τ(i', j')`
-        let (nx, ny) = (32, 24);
-        let mut op = StripInfluence::new(nx, ny, kernel);
-        let sym = |o: isize, j: usize, jp: usize, a: usize, b: usize| {
-            0.5 * (kernel(o, j, jp)[a][b] + kernel(-o, jp, j)[b][a])
-        };
-        let n = nx * ny;
-        for (rows, cols) in [
-            ((0, nx), (0, ny)),
-            ((3, 10), (2, 20)),
-            ((5, 26), (4, 19)),
-            ((0, 7), (0, 24)),
-            ((31, 32), (11, 12)),
-            ((2, 30), (6, 18)),
-        ] {
-            let inside = |e: usize| {
-                (rows.0..rows.1).contains(&(e / ny)) && (cols.0..cols.1).contains(&(e % ny))
-            };
-            let t = |b: usize| -> Vec<f64> {
-                (0..n)
-                    .map(|e| {
-                        let v = (((e + 5 * b) * 7919) % 13) as f64 * 1e6 - 4e6;
-                        if inside(e) {
-                            v
-                        } else {
-                            0.0
-                        }
-                    })
-                    .collect()
-            };
-            let (tx, ty) = (t(0), t(1));
-            let (mut ux, mut uy) = (vec![7.0; n], vec![7.0; n]);
-            op.tangential_box(&tx, &ty, &mut ux, &mut uy, rows, cols);
-            let direct = |e: usize, a: usize| -> f64 {
-                let (i, j) = (e / ny, e % ny);
-                (0..n)
-                    .filter(|&s| inside(s))
-                    .map(|s| {
-                        let o = i as isize - (s / ny) as isize;
-                        sym(o, j, s % ny, a, 0) * tx[s] + sym(o, j, s % ny, a, 1) * ty[s]
-                    })
-                    .sum()
-            };
-            let expect: Vec<[f64; 2]> = (0..n).map(|e| [direct(e, 0), direct(e, 1)]).collect();
-            let scale = expect.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
-            for e in 0..n {
-                let got = [ux[e], uy[e]];
-                for a in 0..2 {
-                    if inside(e) {
-                        let d = (got[a] - expect[e][a]).abs();
-                        assert!(
-                            d <= 1e-6 * scale,
-                            "{rows:?} {cols:?} {e} {a}: {d:e} of {scale:e}"
-                        );
-                    } else if (rows.0..rows.1).contains(&(e / ny)) {
-                        assert_eq!(
-                            got[a], 0.0,
-                            "{rows:?} {cols:?} {e} {a}: outside the columns"
-                        );
-                    } else {
-                        assert_eq!(
-                            got[a], 7.0,
-                            "{rows:?} {cols:?} {e} {a}: a row outside the box"
-                        );
                     }
                 }
             }
