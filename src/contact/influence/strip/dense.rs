@@ -37,6 +37,8 @@ pub(super) trait DenseReal:
 {
     /// `v` rounded to this precision.
     fn from_f64(v: f64) -> Self;
+    /// The values in an AVX-512 vector.
+    const LANES_512: usize;
     /// `contact::avx512::strip`'s sums in this precision.
     ///
     /// # Safety
@@ -49,6 +51,7 @@ impl DenseReal for f32 {
     fn from_f64(v: f64) -> Self {
         v as f32
     }
+    const LANES_512: usize = 16;
     #[cfg(target_arch = "x86_64")]
     unsafe fn sums_avx512(sums: Sums<'_, f32>, sources: impl Iterator<Item = usize> + Clone) {
         // SAFETY: the caller's contract is the kernel's.
@@ -59,6 +62,7 @@ impl DenseReal for f64 {
     fn from_f64(v: f64) -> Self {
         v
     }
+    const LANES_512: usize = 8;
     #[cfg(target_arch = "x86_64")]
     unsafe fn sums_avx512(sums: Sums<'_, f64>, sources: impl Iterator<Item = usize> + Clone) {
         // SAFETY: the caller's contract is the kernel's.
@@ -110,29 +114,39 @@ impl<T: DenseReal> Dense<'_, T> {
     #[cfg(target_arch = "x86_64")]
     unsafe fn run_avx512(mut self) {
         let (nk, c, ny) = self.dims;
-        let (c0, c1) = self.cols;
+        let ((c0, c1), (d0, d1)) = (self.cols, self.field_cols);
         let cn = c * ny;
         let Some((r0, r1)) = self.run_rows() else {
             return;
         };
+        // one run across the components, or one per component where that takes fewer
+        // vectors (a box narrower than the grid: the columns between are not computed)
+        let vectors = |n: usize| n.div_ceil(T::LANES_512);
+        let runs: Vec<(usize, usize)> = if c * vectors(d1 - d0) < vectors(r1 - r0) {
+            (0..c).map(|a| (a * ny + d0, a * ny + d1)).collect()
+        } else {
+            vec![(r0, r1)]
+        };
         let sources = (0..c).flat_map(|b| (c0..c1).map(move |jp| b * ny + jp));
         for k in 0..nk {
-            let s = &mut *self.spectra;
-            let sums = Sums {
-                spec_re: &s.spec_re[k * cn * cn..],
-                spec_im: &s.spec_im[k * cn * cn..],
-                src_re: &s.src_re[k * cn..(k + 1) * cn],
-                src_im: &s.src_im[k * cn..(k + 1) * cn],
-                acc_re: &mut s.acc_re[..cn],
-                acc_im: &mut s.acc_im[..cn],
-                cn,
-                rows: (r0, r1),
-            };
-            // the kernel's contract: every column's run and four vectors beyond lie inside
-            assert!((cn - 1) * cn + r1 + PAD <= sums.spec_re.len().min(sums.spec_im.len()));
-            assert!(r1 <= cn);
-            // SAFETY: AVX-512F is the caller's contract; the bounds are checked above.
-            unsafe { T::sums_avx512(sums, sources.clone()) };
+            for &rows in &runs {
+                let s = &mut *self.spectra;
+                let sums = Sums {
+                    spec_re: &s.spec_re[k * cn * cn..],
+                    spec_im: &s.spec_im[k * cn * cn..],
+                    src_re: &s.src_re[k * cn..(k + 1) * cn],
+                    src_im: &s.src_im[k * cn..(k + 1) * cn],
+                    acc_re: &mut s.acc_re[..cn],
+                    acc_im: &mut s.acc_im[..cn],
+                    cn,
+                    rows,
+                };
+                // the kernel's contract: every column's run and four vectors beyond lie inside
+                assert!((cn - 1) * cn + rows.1 + PAD <= sums.spec_re.len().min(sums.spec_im.len()));
+                assert!(rows.1 <= cn);
+                // SAFETY: AVX-512F is the caller's contract; the bounds are checked above.
+                unsafe { T::sums_avx512(sums, sources.clone()) };
+            }
             self.store(k);
         }
     }
