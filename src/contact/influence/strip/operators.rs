@@ -261,11 +261,10 @@ impl crate::contact::influence::TangentialInfluence for StripInfluence {
         let (r0, c0) = (r0.min(r1), c0.min(c1));
         let cols = (c0, c1);
         let rows = r1 - r0;
-        let found = if rows > 0 {
-            self.box_convolver(rows)
-        } else {
-            None
-        };
+        if rows == 0 {
+            return;
+        }
+        let found = self.box_convolver(rows);
         let (bx, by) = (&mut self.bx[..nx * ny], &mut self.by[..nx * ny]);
         let offset = match found {
             Some(k) => {
