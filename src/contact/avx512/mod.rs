@@ -6,6 +6,7 @@
 //! checks `is_x86_feature_detected!("avx512f")` at run time first and takes the plain loops
 //! otherwise. Each gives the bits of its plain loop (the same operations in the same order per
 //! element, no fused multiply-add), which the caller's tests check bit for bit against the
-//! scalar reference loops on runs of every length and every kind of last block.
+//! scalar reference loops on runs of one to four blocks, several lengths, and one run across the
+//! components or one per component.
 
 pub(crate) mod strip;

@@ -6,7 +6,7 @@
 //!
 //! Safety (both kernels): the CPU must support AVX-512F; every source `s` of `sources` must
 //! have its column `s · cn` with `s · cn + r1 + 4 · lanes ≤ spec.len()` (a last block reads
-//! up to four vectors past the run, into lanes it does not store), `s < src.len()`, and
+//! less than one vector past the run, into lanes it does not store; the bound keeps a margin), `s < src.len()`, and
 //! `r1 ≤ acc.len()`.
 
 use std::arch::x86_64::{

@@ -245,6 +245,11 @@ impl StripConvolver {
                 }
             }
         }
+        // the largest spectral value, real or imaginary (the scale of the flush to zero)
+        let largest = spec_re
+            .iter()
+            .chain(&spec_im)
+            .fold(0.0_f64, |m, v| m.max(v.abs()));
         StripConvolver {
             nx,
             ny,
@@ -253,8 +258,8 @@ impl StripConvolver {
             fft64,
             fft32: Ffts::new(m, cn),
             single: Spectra {
-                spec_re: to_single(&spec_re),
-                spec_im: to_single(&spec_im),
+                spec_re: to_single(&spec_re, largest),
+                spec_im: to_single(&spec_im, largest),
                 src_re: vec![0.0; nk * cn],
                 src_im: vec![0.0; nk * cn],
                 acc_re: vec![0.0; cn],

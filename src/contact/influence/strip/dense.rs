@@ -72,7 +72,8 @@ impl DenseReal for f64 {
 
 /// The dense part of a strip product, in precision `T`: per frequency `k`, the field spectra
 /// of the columns `d0..d1` of every component (computed as one run of rows from the first
-/// component's `d0` to the last one's `d1`), `y = S_k x` over the source columns `c0..c1`
+/// component's `d0` to the last one's `d1`, or on AVX-512 one run per component where that
+/// takes fewer vectors), `y = S_k x` over the source columns `c0..c1`
 /// of every component, as a sum of columns of `S_k` (stored source-major, `[k][s][r]`) scaled
 /// by the source spectrum `x_s`: contiguous element-wise updates, no reductions, so any
 /// vector width gives the same bits. Into `field[(a·ny + j)·nk + k]`.
@@ -89,19 +90,19 @@ pub(super) struct Dense<'a, T> {
 /// (`to_single`): far below its resolution (6e-8). They are the round-off of the imaginary
 /// parts of kernel rows even in x (about 1e-16 of the largest), and their products with the
 /// sources' spectra would be subnormal, which the CPU computes many times slower (the box
-/// product of `strip_bench` took 3.5 times as long with them).
+/// product of `strip_bench` took about three times as long with them).
 const FLUSH: f64 = 1e-12;
 
-/// `v` rounded to `f32`, the values below [`FLUSH`] times the largest made zero.
-pub(super) fn to_single(v: &[f64]) -> Vec<f32> {
-    let tiny = FLUSH * v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+/// `v` rounded to `f32`, the values below [`FLUSH`] times `largest` made zero.
+pub(super) fn to_single(v: &[f64], largest: f64) -> Vec<f32> {
+    let tiny = FLUSH * largest;
     v.iter()
         .map(|&x| if x.abs() < tiny { 0.0 } else { x as f32 })
         .collect()
 }
 
-/// Zeros after the kernel's spectra: the AVX-512 sums' last block reads up to four vectors
-/// (64 `f32`, 32 `f64`) past a column's run (`contact::avx512::strip`).
+/// Zeros after the kernel's spectra: the AVX-512 sums' last block reads less than one vector
+/// (16 `f32`, 8 `f64`) past a column's run (`contact::avx512::strip`); the margin is four.
 pub(super) const PAD: usize = 64;
 
 impl<T: DenseReal> Dense<'_, T> {
@@ -116,6 +117,8 @@ impl<T: DenseReal> Dense<'_, T> {
         let (nk, c, ny) = self.dims;
         let ((c0, c1), (d0, d1)) = (self.cols, self.field_cols);
         let cn = c * ny;
+        // the sources' columns inside the kernel's (the kernel reads them unchecked)
+        assert!(c0 <= c1 && c1 <= ny && d1 <= ny);
         let Some((r0, r1)) = self.run_rows() else {
             return;
         };
@@ -141,7 +144,7 @@ impl<T: DenseReal> Dense<'_, T> {
                     cn,
                     rows,
                 };
-                // the kernel's contract: every column's run and four vectors beyond lie inside
+                // the kernel's contract: every column's run and the margin beyond lie inside
                 assert!((cn - 1) * cn + rows.1 + PAD <= sums.spec_re.len().min(sums.spec_im.len()));
                 assert!(rows.1 <= cn);
                 // SAFETY: AVX-512F is the caller's contract; the bounds are checked above.
@@ -193,9 +196,9 @@ impl<T: DenseReal> Dense<'_, T> {
         }
     }
 
-    /// The run of field rows the sums cover: from the first component's first field column
-    /// to the last one's last (the columns between, outside the field, are computed and
-    /// unused); `None` if empty.
+    /// The run of field rows the plain loops' sums cover: from the first component's first
+    /// field column to the last one's last (the columns between, outside the field, are
+    /// computed and unused); `None` if empty.
     fn run_rows(&self) -> Option<(usize, usize)> {
         let (_, c, ny) = self.dims;
         let (d0, d1) = self.field_cols;

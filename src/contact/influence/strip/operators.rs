@@ -58,13 +58,13 @@ pub struct StripInfluence {
     /// `[(o + nx − 1)·ny² + j·ny + j'][a][b]` (m/Pa), for [`Self::boxes`].
     kernel_t: Vec<[[f64; 2]; 2]>,
     /// Single-precision box products on fewer rows than the grid's: convolvers of `L` rows on
-    /// the padded length `2L` (even, 5-smooth), built when a box first needs one, ascending in
-    /// `L` (a box of `L' ≤ L` rows uses the first that holds it).
+    /// the padded length `2L` (even, 5-smooth, below the grid's), ascending in `L`; a box of
+    /// `L'` rows uses the one with the smallest such `L ≥ L'`, built when a box first needs it.
     boxes: Vec<StripConvolver>,
     /// Scratch of the box and extended products, `(nx + 1) · ny` each.
     bx: Vec<f64>,
     by: Vec<f64>,
-    /// Scratch of the box products' sources, `nx · ny` each.
+    /// Scratch of the box products' sources (the box's rows, zeros elsewhere), `nx · ny` each.
     sx: Vec<f64>,
     sy: Vec<f64>,
 }
@@ -264,39 +264,31 @@ impl crate::contact::influence::TangentialInfluence for StripInfluence {
         if rows == 0 {
             return;
         }
+        // the box's rows of the traction, zeros to the convolver's rows: the rows outside
+        // the box may hold anything (the trait's contract is a traction zero there)
         let found = self.box_convolver(rows);
-        let (bx, by) = (&mut self.bx[..nx * ny], &mut self.by[..nx * ny]);
-        let offset = match found {
-            Some(k) => {
-                // the box's rows first, then zeros to the convolver's rows
-                let conv = &mut self.boxes[k];
-                let n = conv.nx * ny;
-                let (sx, sy) = (&mut self.sx[..n], &mut self.sy[..n]);
-                sx[..rows * ny].copy_from_slice(&tx[r0 * ny..r1 * ny]);
-                sy[..rows * ny].copy_from_slice(&ty[r0 * ny..r1 * ny]);
-                sx[rows * ny..].fill(0.0);
-                sy[rows * ny..].fill(0.0);
-                conv.product_cols_in(
-                    Precision::Single,
-                    &[sx, sy],
-                    &mut [&mut bx[..n], &mut by[..n]],
-                    ((0, rows), cols, cols),
-                );
-                r0
-            }
-            None => {
-                self.tangential.product_cols_in(
-                    Precision::Single,
-                    &[tx, ty],
-                    &mut [bx, by],
-                    ((0, nx), cols, cols),
-                );
-                0
-            }
+        let (conv, offset) = match found {
+            Some(k) => (&mut self.boxes[k], r0),
+            None => (&mut self.tangential, 0),
         };
+        let n = conv.dims().0 * ny;
+        let (sx, sy) = (&mut self.sx[..n], &mut self.sy[..n]);
+        sx.fill(0.0);
+        sy.fill(0.0);
+        let at = (r0 - offset) * ny;
+        sx[at..at + rows * ny].copy_from_slice(&tx[r0 * ny..r1 * ny]);
+        sy[at..at + rows * ny].copy_from_slice(&ty[r0 * ny..r1 * ny]);
+        let (bx, by) = (&mut self.bx[..n], &mut self.by[..n]);
+        conv.product_cols_in(
+            Precision::Single,
+            &[sx, sy],
+            &mut [bx, by],
+            ((at / ny, rows), cols, cols),
+        );
+        // the field rows `r0..r1` are the products' rows `0..rows`
         for i in r0..r1 {
             for j in 0..ny {
-                let (e, b) = (i * ny + j, (i - offset) * ny + j);
+                let (e, b) = (i * ny + j, (i - r0) * ny + j);
                 let inside = (c0..c1).contains(&j);
                 ux[e] = if inside { self.bx[b] } else { 0.0 };
                 uy[e] = if inside { self.by[b] } else { 0.0 };
@@ -314,7 +306,8 @@ mod tests {
     #[test]
     fn box_products_equal_a_direct_sum_of_the_symmetrised_kernel() {
         // boxes of the whole grid and of fewer rows (their own padded lengths, built in turn,
-        // and one reused by a smaller box), against `Σ K_sym(i − i', j, j') τ(i', j')`
+        // and one reused), against `Σ K_sym(i − i', j, j') τ(i', j')` over the box; the
+        // traction outside the box's rows is not read (it holds other values here)
         let (nx, ny) = (32, 24);
         let mut op = StripInfluence::new(nx, ny, kernel);
         let sym = |o: isize, j: usize, jp: usize, a: usize, b: usize| {
@@ -338,8 +331,10 @@ mod tests {
                         let v = (((e + 5 * b) * 7919) % 13) as f64 * 1e6 - 4e6;
                         if inside(e) {
                             v
-                        } else {
+                        } else if (rows.0..rows.1).contains(&(e / ny)) {
                             0.0
+                        } else {
+                            9e7 // stale: not part of the box's traction
                         }
                     })
                     .collect()
