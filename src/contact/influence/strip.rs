@@ -115,6 +115,23 @@ impl<T: FftNum + DenseReal> Ffts<T> {
         }
     }
 
+    /// `u = K f` in this precision ([`StripConvolver::product_in`]): the sources' FFTs into
+    /// `spectra`, the dense part, the inverse FFTs (`dims` = `(nk, comps, ny)`).
+    fn product(
+        &mut self,
+        spectra: &mut Spectra<T>,
+        f: &[&[f64]],
+        u: &mut [&mut [f64]],
+        (nx, dims): (usize, (usize, usize, usize)),
+        (rows, src, field): ((usize, usize), (usize, usize), (usize, usize)),
+        dispatch: bool,
+    ) {
+        let ny = dims.2;
+        self.forward(f, (nx, ny), src, spectra);
+        Dense::apply(spectra, &mut self.field, dims, (src, field), dispatch);
+        self.inverse(u, ny, rows, field);
+    }
+
     /// The spectra along x of the source columns `c0..c1` of every component, `nx` rows of
     /// `ny` columns each, into `spectra`'s source spectra (`[k][b·ny + j']`).
     fn forward(
@@ -359,30 +376,15 @@ impl StripConvolver {
         self.check(f, u, rows, src, field);
         let (nx, ny) = (self.nx, self.ny);
         let dims = (self.m / 2 + 1, self.comps, ny);
+        let (rows_src_field, dispatch) = ((rows, src, field), dispatch);
         match precision {
             Precision::Single => {
-                let ffts = &mut self.fft32;
-                ffts.forward(f, (nx, ny), src, &mut self.single);
-                Dense::apply(
-                    &mut self.single,
-                    &mut ffts.field,
-                    dims,
-                    (src, field),
-                    dispatch,
-                );
-                ffts.inverse(u, ny, rows, field);
+                self.fft32
+                    .product(&mut self.single, f, u, (nx, dims), rows_src_field, dispatch)
             }
             Precision::Double => {
-                let ffts = &mut self.fft64;
-                ffts.forward(f, (nx, ny), src, &mut self.double);
-                Dense::apply(
-                    &mut self.double,
-                    &mut ffts.field,
-                    dims,
-                    (src, field),
-                    dispatch,
-                );
-                ffts.inverse(u, ny, rows, field);
+                self.fft64
+                    .product(&mut self.double, f, u, (nx, dims), rows_src_field, dispatch)
             }
         }
     }

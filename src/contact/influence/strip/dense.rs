@@ -125,14 +125,17 @@ impl<T: DenseReal> Dense<'_, T> {
         // one run across the components, or one per component where that takes fewer
         // vectors (a box narrower than the grid: the columns between are not computed)
         let vectors = |n: usize| n.div_ceil(T::LANES_512);
-        let runs: Vec<(usize, usize)> = if c * vectors(d1 - d0) < vectors(r1 - r0) {
-            (0..c).map(|a| (a * ny + d0, a * ny + d1)).collect()
-        } else {
-            vec![(r0, r1)]
-        };
+        let per_component = c * vectors(d1 - d0) < vectors(r1 - r0);
+        let runs = (0..if per_component { c } else { 1 }).map(|a| {
+            if per_component {
+                (a * ny + d0, a * ny + d1)
+            } else {
+                (r0, r1)
+            }
+        });
         let sources = (0..c).flat_map(|b| (c0..c1).map(move |jp| b * ny + jp));
         for k in 0..nk {
-            for &rows in &runs {
+            for rows in runs.clone() {
                 let s = &mut *self.spectra;
                 let sums = Sums {
                     spec_re: &s.spec_re[k * cn * cn..],
