@@ -58,6 +58,8 @@
 mod avx2;
 #[cfg(target_arch = "x86_64")]
 mod avx512;
+#[cfg(target_arch = "x86_64")]
+mod column_sums;
 pub mod hertz;
 pub mod influence;
 pub mod normal;

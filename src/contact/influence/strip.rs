@@ -27,7 +27,8 @@ use super::{coefficients, next_fast_len};
 mod dense;
 mod operators;
 
-use dense::{to_single, Dense, DenseReal, Spectra, PAD};
+pub(crate) use dense::Part;
+use dense::{flush, to_single, Dense, DenseReal, Route, Spectra, PAD};
 pub use operators::{StripInfluence, StripNormal};
 
 /// The quasi-identical half-space's kernel ([`coefficients`]; element `dx × dy` in m, `E*`,
@@ -88,14 +89,12 @@ struct Ffts<T: FftNum> {
     line: Vec<T>,
     /// One column's spectrum (`m/2 + 1`).
     spectrum: Vec<Complex<T>>,
-    /// Field spectra, one row of `m/2 + 1` per field column `a·ny + j`.
-    field: Vec<Complex<T>>,
     scratch: Vec<Complex<T>>,
 }
 
 impl<T: FftNum + DenseReal> Ffts<T> {
-    /// The plans of length `m` and the buffers for `cn` field columns.
-    fn new(m: usize, cn: usize) -> Self {
+    /// The plans of length `m` and their buffers.
+    fn new(m: usize) -> Self {
         let mut planner = RealFftPlanner::<T>::new();
         let forward = planner.plan_fft_forward(m);
         let inverse = planner.plan_fft_inverse(m);
@@ -108,7 +107,6 @@ impl<T: FftNum + DenseReal> Ffts<T> {
         Ffts {
             line: forward.make_input_vec(),
             spectrum: vec![zero; nk],
-            field: vec![zero; cn * nk],
             scratch: vec![zero; scratch_len],
             forward,
             inverse,
@@ -124,12 +122,12 @@ impl<T: FftNum + DenseReal> Ffts<T> {
         u: &mut [&mut [f64]],
         (nx, dims): (usize, (usize, usize, usize)),
         (rows, src, field): ((usize, usize), (usize, usize), (usize, usize)),
-        dispatch: bool,
+        route: Option<Route>,
     ) {
         let ny = dims.2;
         self.forward(f, (nx, ny), src, spectra);
-        Dense::apply(spectra, &mut self.field, dims, (src, field), dispatch);
-        self.inverse(u, ny, rows, field);
+        Dense::apply(spectra, dims, (src, field), route);
+        self.inverse(spectra, u, ny, rows, field);
     }
 
     /// The spectra along x of the source columns `c0..c1` of every component, `nx` rows of
@@ -160,20 +158,26 @@ impl<T: FftNum + DenseReal> Ffts<T> {
         }
     }
 
-    /// The inverse FFTs of the field spectra of the columns `d0..d1` into the field rows
-    /// `shift..shift + rows` of `u` (`ny` columns each).
+    /// The inverse FFTs of `spectra`'s field spectra of the columns `d0..d1` into the field
+    /// rows `shift..shift + rows` of `u` (`ny` columns each).
     fn inverse(
         &mut self,
+        spectra: &Spectra<T>,
         u: &mut [&mut [f64]],
         ny: usize,
         (shift, rows): (usize, usize),
         (d0, d1): (usize, usize),
     ) {
         let nk = self.spectrum.len();
+        let cn = u.len() * ny;
         let even = self.line.len().is_multiple_of(2);
         for (a, ua) in u.iter_mut().enumerate() {
             for j in d0..d1 {
-                let row = &mut self.field[(a * ny + j) * nk..(a * ny + j + 1) * nk];
+                let r = a * ny + j;
+                let row = &mut self.spectrum;
+                for (k, v) in row.iter_mut().enumerate() {
+                    *v = Complex::new(spectra.field_re[k * cn + r], spectra.field_im[k * cn + r]);
+                }
                 // the imaginary parts of the zero and Nyquist bins are round-off of a real kernel
                 row[0].im = T::default();
                 if even {
@@ -215,7 +219,7 @@ impl StripConvolver {
         let m = next_fast_len(2 * nx);
         let nk = m / 2 + 1;
         let cn = comps * ny;
-        let fft64 = Ffts::<f64>::new(m, cn);
+        let fft64 = Ffts::<f64>::new(m);
         let forward = fft64.forward.clone();
         // the spectra and `PAD` zeros
         let mut spec_re = vec![0.0; nk * cn * cn + PAD];
@@ -262,34 +266,23 @@ impl StripConvolver {
                 }
             }
         }
-        // the largest spectral value, real or imaginary (the scale of the flush to zero)
+        // the largest spectral value, real or imaginary: the scale of the flush to zero of
+        // the round-off parts (of rows even or odd in x)
         let largest = spec_re
             .iter()
             .chain(&spec_im)
             .fold(0.0_f64, |m, v| m.max(v.abs()));
+        flush(&mut spec_re, largest);
+        flush(&mut spec_im, largest);
         StripConvolver {
             nx,
             ny,
             comps,
             m,
             fft64,
-            fft32: Ffts::new(m, cn),
-            single: Spectra {
-                spec_re: to_single(&spec_re, largest),
-                spec_im: to_single(&spec_im, largest),
-                src_re: vec![0.0; nk * cn],
-                src_im: vec![0.0; nk * cn],
-                acc_re: vec![0.0; cn],
-                acc_im: vec![0.0; cn],
-            },
-            double: Spectra {
-                spec_re,
-                spec_im,
-                src_re: vec![0.0; nk * cn],
-                src_im: vec![0.0; nk * cn],
-                acc_re: vec![0.0; cn],
-                acc_im: vec![0.0; cn],
-            },
+            fft32: Ffts::new(m),
+            single: Spectra::new(to_single(&spec_re), to_single(&spec_im), (nk, comps, ny)),
+            double: Spectra::new(spec_re, spec_im, (nk, comps, ny)),
         }
     }
 
@@ -343,7 +336,12 @@ impl StripConvolver {
         src: (usize, usize),
         field: (usize, usize),
     ) {
-        self.product_in(f, u, (rows, src, field), (Precision::Double, true));
+        self.product_in(
+            f,
+            u,
+            (rows, src, field),
+            (Precision::Double, Some(Route::best())),
+        );
     }
 
     /// [`Self::product_cols`] in the given precision. [`Precision::Single`]: the tractions and
@@ -351,9 +349,9 @@ impl StripConvolver {
     /// in `f32`; the relative error is of the order of single precision's 6e-8 times the
     /// FFTs' length's logarithm and the conditioning of the sums; for the products of an
     /// iterative solver's inner loop, as the half-space's box products
-    /// ([`super::Convolver::tangential_box`]). The dense part runs on AVX-512 where the CPU
-    /// has it, else compiled for each instruction set pulp dispatches to; every one gives the
-    /// same bits.
+    /// ([`super::Convolver::tangential_box`]). The dense part runs in vector registers on
+    /// AVX-512 or AVX2 where the CPU has either, else compiled for each instruction set pulp
+    /// dispatches to ([`Route::best`]); every one gives the same bits.
     pub(crate) fn product_cols_in(
         &mut self,
         precision: Precision,
@@ -361,30 +359,30 @@ impl StripConvolver {
         u: &mut [&mut [f64]],
         (rows, src, field): ((usize, usize), (usize, usize), (usize, usize)),
     ) {
-        self.product_in(f, u, (rows, src, field), (precision, true));
+        self.product_in(f, u, (rows, src, field), (precision, Some(Route::best())));
     }
 
-    /// [`Self::product_cols_in`], the dense part dispatched to the CPU's instruction set
-    /// (`dispatch`) or run by the scalar reference loops (to check the bits).
+    /// [`Self::product_cols_in`], the dense part by `route`, or by the scalar reference loops
+    /// (`None`, to check the bits).
     fn product_in(
         &mut self,
         f: &[&[f64]],
         u: &mut [&mut [f64]],
         (rows, src, field): ((usize, usize), (usize, usize), (usize, usize)),
-        (precision, dispatch): (Precision, bool),
+        (precision, route): (Precision, Option<Route>),
     ) {
         self.check(f, u, rows, src, field);
         let (nx, ny) = (self.nx, self.ny);
         let dims = (self.m / 2 + 1, self.comps, ny);
-        let (rows_src_field, dispatch) = ((rows, src, field), dispatch);
+        let rows_src_field = (rows, src, field);
         match precision {
             Precision::Single => {
                 self.fft32
-                    .product(&mut self.single, f, u, (nx, dims), rows_src_field, dispatch)
+                    .product(&mut self.single, f, u, (nx, dims), rows_src_field, route)
             }
             Precision::Double => {
                 self.fft64
-                    .product(&mut self.double, f, u, (nx, dims), rows_src_field, dispatch)
+                    .product(&mut self.double, f, u, (nx, dims), rows_src_field, route)
             }
         }
     }
@@ -417,17 +415,81 @@ fn test_kernel(o: isize, j: usize, jp: usize) -> [[f64; 3]; 3] {
 
 #[cfg(test)]
 mod tests {
-    use super::{Precision, StripConvolver};
+    use super::{Part, Precision, Route, StripConvolver};
 
     /// A kernel coupling all components, not Toeplitz across the rail, decaying along it
     /// (also the operators' tests').
     pub(super) use super::test_kernel as kernel;
 
+    type Kernel<'a> = &'a dyn Fn(isize, usize, usize) -> [[f64; 3]; 3];
+
+    /// `k` with zeros at the offsets `+nx` and beyond.
+    fn zero_beyond(nx: usize, k: Kernel<'_>) -> impl Fn(isize, usize, usize) -> [[f64; 3]; 3] + '_ {
+        move |o, j, jp| {
+            if o >= nx as isize {
+                [[0.0; 3]; 3]
+            } else {
+                k(o, j, jp)
+            }
+        }
+    }
+
     #[test]
-    fn dispatched_products_give_the_plain_loops_bits_and_single_precision_is_within_1e_6() {
-        // runs of field rows shorter and longer than a chunk, and every kind of last chunk
-        for (nx, ny, comps) in [(7, 4, 2), (9, 13, 2), (12, 3, 3), (32, 24, 2), (5, 40, 2)] {
-            let mut conv = StripConvolver::new(nx, ny, comps, kernel);
+    fn every_routes_products_give_the_plain_loops_bits_and_single_precision_is_within_1e_6() {
+        // runs of field rows shorter and longer than a block of every instruction set, and
+        // every kind of last block
+        // kernels even in x (real spectra), without couplings (none), with couplings odd in x
+        // (imaginary ones) and neither (complex), each zero at the offset +nx (which would break the symmetry in
+        // x, as the box products' convolvers have it): the spectra's parts
+        let odd = |o: isize, j, jp| {
+            let mut k = kernel(o, j, jp);
+            for (a, b) in [(0, 1), (1, 0), (0, 2), (2, 0), (1, 2), (2, 1)] {
+                k[a][b] *= o.signum() as f64;
+            }
+            k
+        };
+        let uncoupled = |o: isize, j, jp| {
+            let k = kernel(o, j, jp);
+            std::array::from_fn(|a| std::array::from_fn(|b| if a == b { k[a][b] } else { 0.0 }))
+        };
+        let neither =
+            |o: isize, j, jp| kernel(o, j, jp).map(|r| r.map(|v| v * (1.0 + 0.1 * o as f64)));
+        let kernels: [(Kernel, [Part; 2]); 4] = [
+            (&kernel, [Part::Real, Part::Real]),
+            (&uncoupled, [Part::Real, Part::Zero]),
+            (&odd, [Part::Real, Part::Imaginary]),
+            (&neither, [Part::Complex, Part::Complex]),
+        ];
+        // (4, 56, 2): per-component runs of four AVX-512 vectors of f32; (6, 5, 1): the normal
+        // product's one component
+        let grids = [
+            (7, 4, 2),
+            (9, 13, 2),
+            (12, 3, 3),
+            (32, 24, 2),
+            (5, 40, 2),
+            (4, 56, 2),
+            (6, 5, 1),
+        ];
+        for ((nx, ny, comps), (kernel, [direct, coupling])) in grids
+            .into_iter()
+            .flat_map(|g| kernels.iter().map(move |k| (g, k)))
+        {
+            let mut conv = StripConvolver::new(nx, ny, comps, zero_beyond(nx, kernel));
+            for (ab, (single, double)) in
+                conv.single.parts.iter().zip(&conv.double.parts).enumerate()
+            {
+                let want = if ab / comps == ab % comps {
+                    direct
+                } else {
+                    coupling
+                };
+                assert_eq!(
+                    (*single, *double),
+                    (*want, *want),
+                    "{nx}×{ny}×{comps} block {ab}"
+                );
+            }
             let n = nx * ny;
             let f: Vec<Vec<f64>> = (0..comps)
                 .map(|b| {
@@ -438,55 +500,41 @@ mod tests {
                 .collect();
             let fr: Vec<&[f64]> = f.iter().map(|v| v.as_slice()).collect();
             for (c0, c1) in [(0, ny), (1, ny.min(10)), (ny / 2, ny / 2 + 1)] {
-                let mut out = |mode: u8| {
+                let mut out = |precision: Precision, route: Option<Route>| {
                     let mut u = vec![vec![0.0; n]; comps];
                     let mut ur: Vec<&mut [f64]> = u.iter_mut().map(|v| v.as_mut_slice()).collect();
-                    let (rows, cols) = ((0, nx), (c0, c1));
-                    match mode {
-                        0 => conv.product_in(
-                            &fr,
-                            &mut ur,
-                            (rows, cols, cols),
-                            (Precision::Double, true),
-                        ),
-                        1 => conv.product_in(
-                            &fr,
-                            &mut ur,
-                            (rows, cols, cols),
-                            (Precision::Double, false),
-                        ),
-                        2 => conv.product_in(
-                            &fr,
-                            &mut ur,
-                            (rows, cols, cols),
-                            (Precision::Single, true),
-                        ),
-                        _ => conv.product_in(
-                            &fr,
-                            &mut ur,
-                            (rows, cols, cols),
-                            (Precision::Single, false),
-                        ),
-                    }
+                    let cols = (c0, c1);
+                    conv.product_in(&fr, &mut ur, ((0, nx), cols, cols), (precision, route));
                     u
                 };
-                let (double, double_plain) = (out(0), out(1));
-                let (dispatched, plain) = (out(2), out(3));
-                let scale = double.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
-                for a in 0..comps {
-                    for e in 0..n {
-                        assert_eq!(
-                            double[a][e].to_bits(),
-                            double_plain[a][e].to_bits(),
-                            "{nx}×{ny}×{comps} cols {c0}..{c1}: {a} {e}"
-                        );
-                        assert_eq!(
-                            dispatched[a][e].to_bits(),
-                            plain[a][e].to_bits(),
-                            "{nx}×{ny}×{comps} cols {c0}..{c1}: {a} {e}"
-                        );
-                        let d = (dispatched[a][e] - double[a][e]).abs();
-                        assert!(d <= 1e-6 * scale, "{nx}×{ny} {a} {e}: {d:e} of {scale:e}");
+                let (double_plain, single_plain) =
+                    (out(Precision::Double, None), out(Precision::Single, None));
+                let scale = double_plain
+                    .iter()
+                    .flatten()
+                    .fold(0.0_f64, |m, v| m.max(v.abs()));
+                for route in Route::available() {
+                    let (double, single) = (
+                        out(Precision::Double, Some(route)),
+                        out(Precision::Single, Some(route)),
+                    );
+                    for a in 0..comps {
+                        for e in 0..n {
+                            let at =
+                                format!("{route:?} {nx}×{ny}×{comps} cols {c0}..{c1}: {a} {e}");
+                            assert_eq!(
+                                double[a][e].to_bits(),
+                                double_plain[a][e].to_bits(),
+                                "{at}"
+                            );
+                            assert_eq!(
+                                single[a][e].to_bits(),
+                                single_plain[a][e].to_bits(),
+                                "{at}"
+                            );
+                            let d = (single[a][e] - double[a][e]).abs();
+                            assert!(d <= 1e-6 * scale, "{at}: {d:e} of {scale:e}");
+                        }
                     }
                 }
             }

@@ -172,7 +172,12 @@ impl StripInfluence {
         }
         let kt = &self.kernel_t;
         let kernel = |o: isize, j: usize, jp: usize| -> [[f64; 3]; 3] {
-            // offsets up to `lb < nx`; `+lb` reaches beyond a box's rows and is never read
+            // offsets up to `lb < nx`; `+lb` reaches beyond a box's rows and is never read:
+            // zero, so that the rows even or odd in x keep spectra real or imaginary (the
+            // dense sums then skip the other part's products)
+            if o == lb as isize {
+                return [[0.0; 3]; 3];
+            }
             let k = kt[(o + nx as isize - 1) as usize * ny * ny + j * ny + jp];
             [[k[0][0], k[0][1], 0.0], [k[1][0], k[1][1], 0.0], [0.0; 3]]
         };
@@ -301,13 +306,52 @@ impl crate::contact::influence::TangentialInfluence for StripInfluence {
 mod tests {
     use super::StripInfluence;
     use crate::contact::influence::strip::tests::kernel;
+    use crate::contact::influence::strip::Part;
     use crate::contact::influence::TangentialInfluence;
 
     #[test]
     fn box_products_equal_a_direct_sum_of_the_symmetrised_kernel() {
-        // boxes of the whole grid and of fewer rows (their own padded lengths, built in turn,
-        // and one reused), against `Σ K_sym(i − i', j, j') τ(i', j')` over the box; the
-        // traction outside the box's rows is not read (it holds other values here)
+        box_products_against_direct_sums(kernel);
+    }
+
+    #[test]
+    fn box_convolvers_of_a_kernel_with_couplings_odd_in_x_have_real_and_imaginary_blocks() {
+        // the direct terms even in x, the couplings odd (as a body symmetric about a plane
+        // across the rail): the box convolvers' spectra are real and imaginary (their `+lb`
+        // offset is zero), so the sums skip half the products; the products stay right
+        let odd = |o: isize, j: usize, jp: usize| {
+            let mut k = kernel(o, j, jp);
+            for (a, b) in [(0, 1), (1, 0)] {
+                k[a][b] *= o.signum() as f64;
+            }
+            k
+        };
+        let op = box_products_against_direct_sums(odd);
+        assert!(
+            op.boxes.len() >= 2,
+            "box convolvers built: {}",
+            op.boxes.len()
+        );
+        for b in &op.boxes {
+            // a box of one row reads the offset 0 only, where odd couplings vanish
+            let c = if b.nx == 1 {
+                Part::Zero
+            } else {
+                Part::Imaginary
+            };
+            let want = [Part::Real, c, c, Part::Real];
+            assert_eq!(b.single.parts, want, "box of {} rows", b.nx);
+            assert_eq!(b.double.parts, want, "box of {} rows", b.nx);
+        }
+    }
+
+    /// Boxes of the whole grid and of fewer rows (their own padded lengths, built in turn, and
+    /// one reused) against `Σ K_sym(i − i', j, j') τ(i', j')` over the box; the traction
+    /// outside the box's rows is not read (it holds other values here). The operators, with
+    /// their box convolvers.
+    fn box_products_against_direct_sums(
+        kernel: impl Fn(isize, usize, usize) -> [[f64; 3]; 3] + Copy,
+    ) -> StripInfluence {
         let (nx, ny) = (32, 24);
         let mut op = StripInfluence::new(nx, ny, kernel);
         let sym = |o: isize, j: usize, jp: usize, a: usize, b: usize| {
@@ -377,5 +421,6 @@ mod tests {
                 }
             }
         }
+        op
     }
 }
