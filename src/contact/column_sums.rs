@@ -56,6 +56,12 @@ pub(crate) unsafe trait Lanes {
     unsafe fn add(a: Self::V, b: Self::V) -> Self::V;
     unsafe fn sub(a: Self::V, b: Self::V) -> Self::V;
     unsafe fn mul(a: Self::V, b: Self::V) -> Self::V;
+    /// [`sums`] on these lanes, compiled for their instruction set (the entry point the
+    /// dense part calls).
+    ///
+    /// # Safety
+    /// The module's contract.
+    unsafe fn run(a: Sums<'_, Self::T>, groups: &[Group]);
 }
 
 /// The sums of `B` vectors of rows (`yr`, `yi`) over the sources of one group, the products
@@ -164,13 +170,29 @@ pub(crate) unsafe fn sums<W: Lanes>(mut a: Sums<'_, W::T>, groups: &[Group]) {
 }
 
 /// A [`Lanes`] implementation `$name` from an instruction set's intrinsics (`$feature` its
-/// name as in `#[target_feature]`, for the safety comments): precision `$t`, `$l` lanes,
-/// vector `$v`, and its zero, splat, unaligned load and store, add, sub and mul.
+/// name as in `#[target_feature]`): precision `$t`, `$l` lanes, vector `$v`, and its zero,
+/// splat, unaligned load and store, add, sub and mul; [`Lanes::run`] calls [`sums`] inside a
+/// function compiled for `$feature`.
 macro_rules! lanes {
     ($name:ident, $feature:literal, $t:ty, $l:literal, $v:ty,
      $zero:ident, $splat:ident, $load:ident, $store:ident, $add:ident, $sub:ident, $mul:ident) => {
         #[doc = concat!("`", stringify!($t), "` in ", $l, " lanes of `", stringify!($v), "` (", $feature, ").")]
         pub(crate) struct $name;
+
+        impl $name {
+            /// [`sums`](crate::contact::column_sums::sums) compiled for this instruction set.
+            ///
+            /// # Safety
+            /// `contact::column_sums`' contract.
+            #[target_feature(enable = $feature)]
+            unsafe fn sums(
+                a: $crate::contact::column_sums::Sums<'_, $t>,
+                groups: &[$crate::contact::column_sums::Group],
+            ) {
+                // SAFETY: the caller's contract.
+                unsafe { $crate::contact::column_sums::sums::<$name>(a, groups) }
+            }
+        }
 
         // SAFETY: every method is an intrinsic of `$feature`, which the trait's contract
         // requires; `load` and `store` touch `$l` values at the pointer, which it requires too.
@@ -212,6 +234,13 @@ macro_rules! lanes {
             unsafe fn mul(a: $v, b: $v) -> $v {
                 // SAFETY: the trait's contract.
                 unsafe { $mul(a, b) }
+            }
+            unsafe fn run(
+                a: $crate::contact::column_sums::Sums<'_, $t>,
+                groups: &[$crate::contact::column_sums::Group],
+            ) {
+                // SAFETY: the trait's contract.
+                unsafe { Self::sums(a, groups) }
             }
         }
     };

@@ -1,8 +1,8 @@
 //! The dense part of a strip product on AVX-512 (`contact::column_sums`, which holds the
-//! blocks and their contract): its vector operations in 16 `f32` or 8 `f64` lanes, and the
-//! two entry points compiled for AVX-512F.
+//! blocks and their contract): its vector operations in 16 `f32` or 8 `f64` lanes, each with
+//! its entry point compiled for AVX-512F (`Lanes::run`).
 
-use crate::contact::column_sums::{lanes, sums, Group, Sums};
+use crate::contact::column_sums::lanes;
 use std::arch::x86_64::{
     __m512, __m512d, _mm512_add_pd, _mm512_add_ps, _mm512_loadu_pd, _mm512_loadu_ps, _mm512_mul_pd,
     _mm512_mul_ps, _mm512_set1_pd, _mm512_set1_ps, _mm512_setzero_pd, _mm512_setzero_ps,
@@ -37,23 +37,3 @@ lanes!(
     _mm512_sub_pd,
     _mm512_mul_pd
 );
-
-/// The sums in single precision.
-///
-/// # Safety
-/// `contact::column_sums`' contract, on a CPU with AVX-512F.
-#[target_feature(enable = "avx512f")]
-pub(crate) unsafe fn sums_f32(a: Sums<'_, f32>, groups: &[Group]) {
-    // SAFETY: the caller's contract.
-    unsafe { sums::<F32x16>(a, groups) }
-}
-
-/// The sums in double precision.
-///
-/// # Safety
-/// `contact::column_sums`' contract, on a CPU with AVX-512F.
-#[target_feature(enable = "avx512f")]
-pub(crate) unsafe fn sums_f64(a: Sums<'_, f64>, groups: &[Group]) {
-    // SAFETY: the caller's contract.
-    unsafe { sums::<F64x8>(a, groups) }
-}

@@ -5,7 +5,7 @@
 //! every route gives the plain loops' bits.
 
 #[cfg(target_arch = "x86_64")]
-use crate::contact::column_sums::{Group, Sums};
+use crate::contact::column_sums::{Lanes, Sums};
 
 /// The spectra of a strip product in one precision `T`, real and imaginary parts apart.
 #[derive(Clone)]
@@ -98,13 +98,11 @@ pub(super) trait DenseReal:
 {
     /// `v` rounded to this precision.
     fn from_f64(v: f64) -> Self;
-    /// The sums of `contact::column_sums` in this precision on `isa`, which must be a vector
-    /// instruction set ([`Route::Avx2`] or [`Route::Avx512`]).
-    ///
-    /// # Safety
-    /// That module's contract: the CPU supports `isa`, and the bounds it states.
+    /// The vector lanes of this precision on AVX2 and on AVX-512 (`contact::column_sums`).
     #[cfg(target_arch = "x86_64")]
-    unsafe fn sums(isa: Route, sums: Sums<'_, Self>, groups: &[Group]);
+    type Avx2: Lanes<T = Self>;
+    #[cfg(target_arch = "x86_64")]
+    type Avx512: Lanes<T = Self>;
 }
 
 impl DenseReal for f32 {
@@ -112,34 +110,18 @@ impl DenseReal for f32 {
         v as f32
     }
     #[cfg(target_arch = "x86_64")]
-    unsafe fn sums(isa: Route, sums: Sums<'_, f32>, groups: &[Group]) {
-        use crate::contact::{avx2, avx512};
-        // SAFETY: the caller's contract is the kernels'.
-        unsafe {
-            match isa {
-                Route::Avx512 => avx512::strip::sums_f32(sums, groups),
-                Route::Avx2 => avx2::strip::sums_f32(sums, groups),
-                Route::Plain => unreachable!("the plain loops have no vector sums"),
-            }
-        }
-    }
+    type Avx2 = crate::contact::avx2::strip::F32x8;
+    #[cfg(target_arch = "x86_64")]
+    type Avx512 = crate::contact::avx512::strip::F32x16;
 }
 impl DenseReal for f64 {
     fn from_f64(v: f64) -> Self {
         v
     }
     #[cfg(target_arch = "x86_64")]
-    unsafe fn sums(isa: Route, sums: Sums<'_, f64>, groups: &[Group]) {
-        use crate::contact::{avx2, avx512};
-        // SAFETY: the caller's contract is the kernels'.
-        unsafe {
-            match isa {
-                Route::Avx512 => avx512::strip::sums_f64(sums, groups),
-                Route::Avx2 => avx2::strip::sums_f64(sums, groups),
-                Route::Plain => unreachable!("the plain loops have no vector sums"),
-            }
-        }
-    }
+    type Avx2 = crate::contact::avx2::strip::F64x4;
+    #[cfg(target_arch = "x86_64")]
+    type Avx512 = crate::contact::avx512::strip::F64x8;
 }
 
 /// Which code computes the dense part: the plain loops (compiled by pulp for the CPU's
@@ -297,7 +279,13 @@ impl<T: DenseReal> Dense<'_, T> {
                 assert!(rows.1 + PAD <= sums.acc_re.len().min(sums.acc_im.len()));
                 // SAFETY: the instruction set is the caller's contract; the bounds are checked
                 // above.
-                unsafe { T::sums(isa, sums, groups) };
+                unsafe {
+                    match isa {
+                        Route::Avx512 => T::Avx512::run(sums, groups),
+                        Route::Avx2 => T::Avx2::run(sums, groups),
+                        Route::Plain => unreachable!("the plain loops have no vector sums"),
+                    }
+                }
             }
         }
     }
